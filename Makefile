@@ -1,0 +1,59 @@
+# The README's entry points. `make demo` and `make test` set up the machine
+# (scripts/install-deps.sh), configure, build and run.
+BUILD_DIR ?= build
+ASAN_DIR  ?= build-asan
+JOBS      ?= $(shell nproc)
+CTEST_ARGS ?=
+
+.PHONY: all deps configure build demo test test-fast test-asan eval bench format tidy clean
+
+all: build
+
+deps:
+	@bash scripts/install-deps.sh
+
+# Ninja when it is there, else Makefiles.
+define cmake_configure
+	@if [ ! -f $(1)/CMakeCache.txt ]; then \
+	  gen=""; command -v ninja >/dev/null 2>&1 && gen="-G Ninja"; \
+	  cmake -S . -B $(1) $$gen -DCMAKE_BUILD_TYPE=$(2) $(3); \
+	fi
+endef
+
+configure: deps
+	$(call cmake_configure,$(BUILD_DIR),Release,)
+
+build: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+demo: build
+	./$(BUILD_DIR)/tools/rigcal demo
+
+# Whole suite, then the calib tests once more under ASan+UBSan.
+test: build test-asan
+	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
+
+test-fast: build
+	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
+
+test-asan: deps
+	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,-DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
+	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_calib_tests
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --test-dir $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib -LE eval
+
+# Long evaluations (not part of make test).
+eval: build
+	ctest --test-dir $(BUILD_DIR) --output-on-failure -L eval
+
+bench: build
+	./$(BUILD_DIR)/tests/bench/rigcal_calib_bench
+
+format:
+	find calib tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
+
+tidy: build
+	find calib/src tools/src -name '*.cc' | xargs clang-tidy -p $(BUILD_DIR) --quiet
+
+clean:
+	rm -rf $(BUILD_DIR) $(ASAN_DIR)

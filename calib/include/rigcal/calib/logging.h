@@ -1,0 +1,19 @@
+#pragma once
+// One named spdlog logger per module ("calib", "tools", ...), all writing to stderr.
+// The level comes from SetLogLevel (the command line's --log-level) or, before that, from the
+// environment variable RIGCAL_LOG_LEVEL (trace, debug, info, warn, error, off).
+
+#include <spdlog/spdlog.h>
+
+#include <memory>
+#include <string>
+
+namespace rigcal {
+
+std::shared_ptr<spdlog::logger> ModuleLogger(const std::string& module);
+
+// Sets the level of every module logger, present and future. Returns false (and leaves the
+// level unchanged) for an unknown level name.
+bool SetLogLevel(const std::string& level);
+
+}  // namespace rigcal

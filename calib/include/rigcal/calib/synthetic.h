@@ -1,0 +1,70 @@
+#pragma once
+// Synthetic rigs and motions shared by tests, experiments, benchmarks and the demo.
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/types.h"
+
+namespace rigcal {
+
+// Thesis 5.1.2 generator: dC uniform in [-10, 10]^3, dR about a uniform axis by an angle
+// uniform in [-pi, pi], scale uniform in [0.01, 1].
+Similarity RandomRigParameters(std::mt19937_64& rng);
+
+// Slave pose from master pose and rig parameters, eq. (5.1) and (5.2).
+Pose SlavePoseFromMaster(const Pose& master, const Similarity& rig);
+
+// Thesis 5.1.2 perturbation: rotate R by eps about a uniform random axis and rotate the
+// direction of C by eps about another uniform axis (lengths unchanged).
+Pose PerturbPose(const Pose& pose, double eps_rad, std::mt19937_64& rng);
+
+// Uniform random rotation axis.
+Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng);
+
+struct ThesisSampleOptions {
+  int num_poses = 4;             // K
+  int num_slaves = 1;            // N
+  double eps_deg = 0.0;          // orientation error level
+  double max_rotation_deg = 180; // master rotation angle of pose k: uniform in [0, max]
+  // When > 0, pose k rotates by (k/K) * fixed_rotation_deg instead (thesis 5.2).
+  double fixed_rotation_deg = 0.0;
+  // Slave position of pose k scaled by 1 + (k/K) * max_scale_error (thesis 5.3).
+  double max_scale_error = 0.0;
+  double translation_extent = 10.0;  // master positions uniform in [-e, e]^3
+};
+
+// One thesis sample: K random master poses since start (pose 0 is the identity), slaves
+// from random rig parameters, all poses perturbed. `truth` gets one entry per slave.
+RigRecording ThesisSample(const ThesisSampleOptions& options, std::mt19937_64& rng,
+                          std::vector<Similarity>* truth);
+
+// A smooth rig drive for demos and tests: the master follows a closed, rotating trajectory
+// (sum of sinusoids in position and orientation, general 6-DoF), each slave sees it through
+// its rig parameters, and every camera's poses get odometry-like errors.
+struct DriveOptions {
+  int num_frames = 1200;
+  double frame_rate_hz = 20.0;
+  double rotation_amplitude_deg = 35.0;
+  double translation_amplitude = 2.0;  // master units
+  double rotation_noise_deg = 0.05;    // white noise per pose
+  double position_noise = 0.002;       // white noise per pose, master units
+  double drift_deg_per_frame = 0.0;    // random-walk rotation drift
+  uint64_t seed = 1;
+};
+
+struct SyntheticDrive {
+  RigRecording recording;
+  std::vector<Similarity> truth;  // per slave
+};
+
+// Builds a drive for the given rig (names[0] is the master, rigs[i] for names[i+1]).
+SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
+                             const std::vector<Similarity>& rigs, const DriveOptions& options);
+
+// The default 3-camera rig of the demo: master looking forward, one slave looking left and
+// one looking backwards, with different odometry scales.
+std::vector<Similarity> DemoRig();
+
+}  // namespace rigcal

@@ -1,0 +1,46 @@
+#include "rigcal/calib/logging.h"
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+
+#include <cstdlib>
+#include <mutex>
+
+namespace rigcal {
+namespace {
+
+std::mutex g_mutex;
+spdlog::level::level_enum g_level = spdlog::level::info;
+bool g_level_from_env_done = false;
+
+void LevelFromEnvironmentLocked() {
+  if (g_level_from_env_done) return;
+  g_level_from_env_done = true;
+  if (const char* env = std::getenv("RIGCAL_LOG_LEVEL")) {
+    const auto level = spdlog::level::from_str(env);
+    if (level != spdlog::level::off || std::string(env) == "off") g_level = level;
+  }
+}
+
+}  // namespace
+
+std::shared_ptr<spdlog::logger> ModuleLogger(const std::string& module) {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  LevelFromEnvironmentLocked();
+  if (auto existing = spdlog::get(module)) return existing;
+  auto logger = spdlog::stderr_color_mt(module);
+  logger->set_pattern("[%H:%M:%S.%e] [%n] [%^%l%$] %v");
+  logger->set_level(g_level);
+  return logger;
+}
+
+bool SetLogLevel(const std::string& level) {
+  const auto parsed = spdlog::level::from_str(level);
+  if (parsed == spdlog::level::off && level != "off") return false;
+  std::lock_guard<std::mutex> lock(g_mutex);
+  g_level_from_env_done = true;
+  g_level = parsed;
+  spdlog::apply_all([parsed](const std::shared_ptr<spdlog::logger>& l) { l->set_level(parsed); });
+  return true;
+}
+
+}  // namespace rigcal

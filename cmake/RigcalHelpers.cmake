@@ -1,0 +1,31 @@
+# Helpers that give every module the same shape (one library target per folder,
+# tests registered as <module>/<name>).
+
+# rigcal_add_library(NAME <target> SRCS ... PUBLIC_DEPS ... PRIVATE_DEPS ...)
+# Public headers live in <folder>/include/rigcal/<folder>/.
+function(rigcal_add_library)
+  cmake_parse_arguments(ARG "" "NAME" "SRCS;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(${ARG_NAME} ${ARG_SRCS})
+  target_include_directories(${ARG_NAME} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  target_link_libraries(${ARG_NAME} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  target_compile_options(${ARG_NAME} PRIVATE ${RIGCAL_WARNING_FLAGS})
+endfunction()
+
+# rigcal_add_test(MODULE <module> NAME <name> SRCS ... DEPS ... [LABELS ...] [TIMEOUT s])
+# Builds <module>_<name>_test and registers it with ctest as <module>/<name>.
+function(rigcal_add_test)
+  cmake_parse_arguments(ARG "" "MODULE;NAME;TIMEOUT" "SRCS;DEPS;LABELS" ${ARGN})
+  set(target ${ARG_MODULE}_${ARG_NAME}_test)
+  add_executable(${target} ${ARG_SRCS})
+  target_link_libraries(${target} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main GTest::gmock)
+  target_compile_options(${target} PRIVATE ${RIGCAL_WARNING_FLAGS})
+  target_compile_definitions(${target} PRIVATE
+    RIGCAL_SHARED_DATA_DIR="${RIGCAL_SHARED_DATA_DIR}"
+    RIGCAL_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  add_test(NAME ${ARG_MODULE}/${ARG_NAME} COMMAND ${target})
+  set(labels ${ARG_MODULE} ${ARG_LABELS})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 300)
+  endif()
+  set_tests_properties(${ARG_MODULE}/${ARG_NAME} PROPERTIES LABELS "${labels}" TIMEOUT ${ARG_TIMEOUT})
+endfunction()

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Installs the Debian packages rigcal needs to build and test. Idempotent: packages
+# already present are skipped, so a second run changes nothing and needs no network.
+# Works as root, or through sudo for a normal user.
+set -euo pipefail
+
+# One line per package, with why it is there (see README "Dependencies").
+PACKAGES=(
+  build-essential      # compiler
+  cmake                # build system
+  ninja-build          # faster builds
+  pkg-config           # finds libraries without CMake configs
+  libeigen3-dev        # linear algebra of calib/
+  libceres-dev         # non-linear refinement and covariance
+  libyaml-cpp-dev      # config, truth and result files
+  libcli11-dev         # command line of the rigcal tool
+  libspdlog-dev        # logging, one logger per module
+  nlohmann-json3-dev   # --json output
+  libopencv-dev        # tests: OpenCV hand-eye peer and PnP on real data
+  libgtest-dev         # unit tests
+  libgmock-dev         # unit tests (matchers)
+  libbenchmark-dev     # benchmarks under tests/bench
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "install-deps: need root or sudo to install: ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "install-deps: done"

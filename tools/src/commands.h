@@ -1,0 +1,13 @@
+#pragma once
+// Subcommands of the rigcal command. Each Register* adds one subcommand to `app`; its
+// callback stores the process exit code in *exit_code (0 success, 1 failure, 2 usage).
+
+#include <CLI/CLI.hpp>
+
+namespace rigcal::cli {
+
+void RegisterSolve(CLI::App& app, int* exit_code);
+void RegisterExperiment(CLI::App& app, int* exit_code);
+void RegisterDemo(CLI::App& app, int* exit_code);
+
+}  // namespace rigcal::cli
