@@ -1,0 +1,66 @@
+#include "rigcal/calib/calibration_options.h"
+
+#include <sstream>
+
+namespace rigcal {
+
+bool CalibrationOptions::Check(std::string* error) const {
+  std::ostringstream e;
+  std::string pair_error;
+  if (!pairs.Check(&pair_error)) e << pair_error;
+  else if (scale_model == ScaleModel::kPartitions && partitions < 1)
+    e << "partitions must be >= 1 for the partition scale model, got " << partitions;
+  else if (alpha_threshold_deg < 0.0 || alpha_threshold_deg >= 180.0)
+    e << "alpha_threshold_deg must be in [0, 180), got " << alpha_threshold_deg;
+  else if (alpha_maxrot_deg < 0.0 || alpha_maxrot_deg >= 180.0)
+    e << "alpha_maxrot_deg must be in [0, 180), got " << alpha_maxrot_deg;
+  else if (!(scale_deviation_threshold > 0.0))
+    e << "scale_deviation_threshold must be > 0, got " << scale_deviation_threshold;
+  else if (min_motions_per_partition < 2)
+    e << "min_motions_per_partition must be >= 2, got " << min_motions_per_partition;
+  else if (scale_dot_epsilon < 0.0)
+    e << "scale_dot_epsilon must be >= 0 (0 = automatic), got " << scale_dot_epsilon;
+  else if (!(outlier_mad_factor > 0.0))
+    e << "outlier_mad_factor must be > 0, got " << outlier_mad_factor;
+  else if (angle_invariant_floor_deg < 0.0)
+    e << "angle_invariant_floor_deg must be >= 0, got " << angle_invariant_floor_deg;
+  else if (max_outlier_rounds < 0)
+    e << "max_outlier_rounds must be >= 0, got " << max_outlier_rounds;
+  else if (!(robust_scale > 0.0)) e << "robust_scale must be > 0, got " << robust_scale;
+  else if (max_iterations < 1) e << "max_iterations must be >= 1, got " << max_iterations;
+  else if (planar_axis_spread_deg < 0.0)
+    e << "planar_axis_spread_deg must be >= 0, got " << planar_axis_spread_deg;
+  else if (min_motions < 2) e << "min_motions must be >= 2, got " << min_motions;
+  if (error) *error = e.str();
+  return e.str().empty();
+}
+
+std::string ToString(Method m) { return m == Method::kLinear ? "lls" : "nl"; }
+
+std::string ToString(MotionModel m) {
+  switch (m) {
+    case MotionModel::kAuto:
+      return "auto";
+    case MotionModel::kGeneral:
+      return "general";
+    case MotionModel::kTranslational:
+      return "translational";
+  }
+  return "?";
+}
+
+std::string ToString(ScaleModel m) {
+  switch (m) {
+    case ScaleModel::kAuto:
+      return "auto";
+    case ScaleModel::kFixed:
+      return "fixed";
+    case ScaleModel::kSegments:
+      return "segments";
+    case ScaleModel::kPartitions:
+      return "partitions";
+  }
+  return "?";
+}
+
+}  // namespace rigcal

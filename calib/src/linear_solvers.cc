@@ -1,0 +1,132 @@
+#include "linear_solvers.h"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include "rigcal/calib/quaternion.h"
+
+namespace rigcal::internal {
+namespace {
+
+Eigen::Matrix4d RotationSystem(const std::vector<MotionData>& motions) {
+  Eigen::Matrix4d sum = Eigen::Matrix4d::Zero();
+  for (const auto& m : motions) {
+    const Eigen::Matrix4d a = RotationConstraintMatrix(m);
+    sum.noalias() += a.transpose() * a;
+  }
+  return sum;
+}
+
+LinearRotation SmallestEigenvector(const Eigen::Matrix4d& system) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(system);
+  LinearRotation out;
+  out.eigenvalues = eig.eigenvalues();
+  out.q = FromWxyz(eig.eigenvectors().col(0)).normalized();  // (4.11)
+  return out;
+}
+
+}  // namespace
+
+Eigen::Matrix4d RotationConstraintMatrix(const MotionData& m) {
+  return LeftMultiplicationMatrix(m.q0) - RightMultiplicationMatrix(m.qi);  // (4.7)
+}
+
+LinearRotation SolveLinearRotation(std::vector<MotionData>* motions) {
+  LinearRotation first = SmallestEigenvector(RotationSystem(*motions));
+  AlignSignsWith(ToWxyz(first.q), motions);
+  LinearRotation second = SmallestEigenvector(RotationSystem(*motions));
+  second.q = Canonical(second.q);
+  return second;
+}
+
+Eigen::Quaterniond SolveAbsoluteOrientation(const std::vector<Eigen::Vector3d>& source,
+                                            const std::vector<Eigen::Vector3d>& target) {
+  // Horn (A.21): S_ab = sum a_k b'_k with a from source, b from target.
+  Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+  for (size_t k = 0; k < source.size(); ++k) s += source[k] * target[k].transpose();
+  const double sxx = s(0, 0), sxy = s(0, 1), sxz = s(0, 2);
+  const double syx = s(1, 0), syy = s(1, 1), syz = s(1, 2);
+  const double szx = s(2, 0), szy = s(2, 1), szz = s(2, 2);
+  Eigen::Matrix4d n;
+  n << sxx + syy + szz, syz - szy, szx - sxz, sxy - syx,  //
+      syz - szy, sxx - syy - szz, sxy + syx, szx + sxz,   //
+      szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy,  //
+      sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(n);
+  return Canonical(FromWxyz(eig.eigenvectors().col(3)).normalized());
+}
+
+LinearPositionScale SolveLinearPositionScale(const std::vector<MotionData>& motions,
+                                             const Eigen::Quaterniond& dq, int num_scales) {
+  // Normal equations of (4.16) with unknowns x = (dC, dλ^(1..n)), B_i^k of eq. (4.15).
+  const int dim = 3 + num_scales;
+  Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(dim, dim);
+  Eigen::VectorXd jtr = Eigen::VectorXd::Zero(dim);
+  const Eigen::Matrix3d dr = dq.toRotationMatrix();
+  for (const auto& m : motions) {
+    Eigen::Matrix<double, 3, 4> b;
+    b.leftCols<3>() = Eigen::Matrix3d::Identity() - m.R0;
+    b.col(3) = dr * m.Ci;
+    const int s = 3 + m.scale_index;
+    // Accumulate B^T B and B^T C_0 into the blocks of (dC, dλ^(s)).
+    jtj.topLeftCorner<3, 3>().noalias() += b.leftCols<3>().transpose() * b.leftCols<3>();
+    const Eigen::Vector3d cross = b.leftCols<3>().transpose() * b.col(3);
+    jtj.block<3, 1>(0, s) += cross;
+    jtj.block<1, 3>(s, 0) += cross.transpose();
+    jtj(s, s) += b.col(3).squaredNorm();
+    jtr.head<3>().noalias() += b.leftCols<3>().transpose() * m.C0;
+    jtr(s) += b.col(3).dot(m.C0);
+  }
+  LinearPositionScale out;
+  // Column normalisation (Jacobi scaling) so the eigenvalue is a unit-free condition figure.
+  Eigen::VectorXd d = jtj.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd normalized = d.asDiagonal() * jtj * d.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(normalized);
+  out.min_eigenvalue = eig.eigenvalues()(0);
+  const Eigen::VectorXd y = normalized.ldlt().solve(d.asDiagonal() * jtr);
+  const Eigen::VectorXd x = d.asDiagonal() * y;
+  if (!x.allFinite()) return out;
+  out.C = x.head<3>();
+  out.scales.assign(x.data() + 3, x.data() + dim);
+  out.ok = true;
+  return out;
+}
+
+Eigen::Quaterniond SolveTranslationalRotation(const std::vector<MotionData>& motions) {
+  std::vector<Eigen::Vector3d> source, target;
+  for (const auto& m : motions) {
+    const double ni = m.Ci.norm(), n0 = m.C0.norm();
+    if (ni <= 0.0 || n0 <= 0.0) continue;
+    source.push_back(m.Ci / ni);  // c_i^k (4.29)
+    target.push_back(m.C0 / n0);  // c_0^k
+  }
+  return SolveAbsoluteOrientation(source, target);
+}
+
+std::vector<double> SolveTranslationalScales(const std::vector<MotionData>& motions,
+                                             int num_scales) {
+  std::vector<double> ab(num_scales, 0.0), aa(num_scales, 0.0);
+  for (const auto& m : motions) {
+    const double a = m.Ci.norm(), b = m.C0.norm();  // (4.32): a_k = |C_i|, b_k = |C_0|
+    ab[m.scale_index] += a * b;
+    aa[m.scale_index] += a * a;
+  }
+  std::vector<double> scales(num_scales, 0.0);
+  for (int s = 0; s < num_scales; ++s) scales[s] = aa[s] > 0.0 ? ab[s] / aa[s] : 0.0;
+  return scales;
+}
+
+double RotationResidual(const MotionData& m, const Eigen::Vector4d& dq) {
+  return (RotationConstraintMatrix(m) * dq).norm();
+}
+
+double PositionResidual(const MotionData& m, const Eigen::Quaterniond& dq,
+                        const Eigen::Vector3d& dC, double scale) {
+  return ((Eigen::Matrix3d::Identity() - m.R0) * dC + scale * (dq * m.Ci) - m.C0).norm();
+}
+
+double TranslationalResidual(const MotionData& m, const Eigen::Quaterniond& dq, double scale) {
+  return (scale * (dq * m.Ci) - m.C0).norm();
+}
+
+}  // namespace rigcal::internal

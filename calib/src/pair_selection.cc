@@ -1,0 +1,135 @@
+#include "rigcal/calib/pair_selection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "rigcal/calib/quaternion.h"
+
+namespace rigcal {
+namespace {
+
+int SegmentOf(const CameraTrack& track, size_t k) {
+  return track.segment.empty() ? 0 : track.segment[k];
+}
+
+double TrajectoryExtent(const std::vector<Pose>& poses) {
+  if (poses.empty()) return 0.0;
+  Eigen::Vector3d lo = poses.front().C, hi = poses.front().C;
+  for (const auto& p : poses) {
+    lo = lo.cwiseMin(p.C);
+    hi = hi.cwiseMax(p.C);
+  }
+  return (hi - lo).norm();
+}
+
+std::vector<IndexPair> SinceStartPairs(const RigRecording& rec) {
+  std::vector<IndexPair> pairs;
+  const int n = static_cast<int>(rec.size());
+  for (int b = 1; b < n; ++b) {
+    if (SegmentOf(rec.master, b) == SegmentOf(rec.master, 0)) pairs.push_back({0, b});
+  }
+  return pairs;
+}
+
+std::vector<IndexPair> RelativePairs(const RigRecording& rec, int step) {
+  std::vector<IndexPair> pairs;
+  const int n = static_cast<int>(rec.size());
+  for (int a = 0; a + step < n; ++a) {
+    if (SegmentOf(rec.master, a) == SegmentOf(rec.master, a + step)) pairs.push_back({a, a + step});
+  }
+  return pairs;
+}
+
+std::vector<IndexPair> AutoPairs(const RigRecording& rec, const PairOptions& opt) {
+  std::vector<IndexPair> pairs;
+  const int n = static_cast<int>(rec.size());
+  if (n < 2) return pairs;
+  const auto& poses = rec.master.poses;
+  const double extent = std::max(TrajectoryExtent(poses), 1e-300);
+  const double target_angle = opt.target_angle_deg * kRadPerDeg;
+  const double target_trans = opt.target_translation_fraction * extent;
+  const double min_angle = opt.min_angle_deg * kRadPerDeg;
+  const double min_trans = opt.min_translation_fraction * extent;
+  const int max_span = std::max(1, static_cast<int>(opt.max_span_fraction * n));
+  const int stride = std::max(1, (n + opt.max_pairs - 1) / opt.max_pairs);
+
+  for (int a = 0; a + 1 < n; a += stride) {
+    const int seg = SegmentOf(rec.master, a);
+    int chosen = -1;
+    double chosen_angle = 0.0, chosen_trans = 0.0;
+    for (int b = a + 1; b < n && b - a <= max_span; ++b) {
+      if (SegmentOf(rec.master, b) != seg) break;
+      const double angle = AngleBetween(poses[a].q, poses[b].q);
+      const double trans = (poses[b].C - poses[a].C).norm();
+      chosen = b;
+      chosen_angle = angle;
+      chosen_trans = trans;
+      if (angle >= target_angle || trans >= target_trans) break;
+    }
+    if (chosen < 0) continue;
+    if (chosen_angle >= min_angle || chosen_trans >= min_trans) pairs.push_back({a, chosen});
+  }
+  return pairs;
+}
+
+}  // namespace
+
+bool PairOptions::Check(std::string* error) const {
+  std::ostringstream e;
+  if (step < 1) e << "pairs.step must be >= 1, got " << step;
+  else if (!(target_angle_deg > 0.0)) e << "pairs.target_angle_deg must be > 0";
+  else if (!(target_translation_fraction > 0.0)) e << "pairs.target_translation_fraction must be > 0";
+  else if (min_angle_deg < 0.0) e << "pairs.min_angle_deg must be >= 0";
+  else if (min_translation_fraction < 0.0) e << "pairs.min_translation_fraction must be >= 0";
+  else if (!(max_span_fraction > 0.0 && max_span_fraction <= 1.0))
+    e << "pairs.max_span_fraction must be in (0, 1], got " << max_span_fraction;
+  else if (max_pairs < 1) e << "pairs.max_pairs must be >= 1";
+  if (error) *error = e.str();
+  return e.str().empty();
+}
+
+std::vector<IndexPair> SelectPairs(const RigRecording& recording, const PairOptions& options) {
+  switch (options.policy) {
+    case PairOptions::Policy::kSinceStart:
+      return SinceStartPairs(recording);
+    case PairOptions::Policy::kRelative:
+      return RelativePairs(recording, options.step);
+    case PairOptions::Policy::kAuto:
+      return AutoPairs(recording, options);
+  }
+  return {};
+}
+
+std::vector<RigMotion> MotionsForSlave(const RigRecording& recording, int slave_index,
+                                       const std::vector<IndexPair>& pairs) {
+  std::vector<RigMotion> motions;
+  const CameraTrack& slave = recording.slaves.at(slave_index);
+  motions.reserve(pairs.size());
+  for (const auto& p : pairs) {
+    const int seg = SegmentOf(slave, p.a);
+    if (SegmentOf(slave, p.b) != seg) continue;
+    RigMotion m;
+    m.master = recording.master.poses[p.a].Between(recording.master.poses[p.b]);
+    m.slave = slave.poses[p.a].Between(slave.poses[p.b]);
+    m.segment = seg;
+    m.t_a_ns = recording.t_ns[p.a];
+    m.t_b_ns = recording.t_ns[p.b];
+    motions.push_back(m);
+  }
+  return motions;
+}
+
+std::string ToString(PairOptions::Policy policy) {
+  switch (policy) {
+    case PairOptions::Policy::kSinceStart:
+      return "start";
+    case PairOptions::Policy::kRelative:
+      return "relative";
+    case PairOptions::Policy::kAuto:
+      return "auto";
+  }
+  return "?";
+}
+
+}  // namespace rigcal

@@ -1,0 +1,52 @@
+#pragma once
+// Non-linear refinement of all parameters of one slave (thesis 4.4) with Ceres, and the
+// covariance of the refined parameters.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "motion_data.h"
+#include "rigcal/calib/calibration_options.h"
+
+namespace rigcal::internal {
+
+struct ScalePrior {
+  double value = 0.0;
+  double sigma = 0.0;  // <= 0: no prior for this scale
+};
+
+struct RefinementInput {
+  Eigen::Quaterniond q;
+  Eigen::Vector3d C = Eigen::Vector3d::Zero();
+  std::vector<double> scales;
+  std::vector<ScalePrior> priors;  // one per scale
+  bool translational = false;      // (4.28) residuals, no position parameter
+  // Noise levels used to whiten the residuals (from the linear solution's residuals).
+  double sigma_rotation = 1.0;  // of the 4-vector A dq
+  double sigma_position = 1.0;  // of the 3-vector position residual
+};
+
+struct RefinementResult {
+  Eigen::Quaterniond q;
+  Eigen::Vector3d C = Eigen::Vector3d::Zero();
+  std::vector<double> scales;
+  bool converged = false;
+  std::string message;  // Ceres termination message
+  // Covariance (0 when not computed or rank deficient).
+  bool covariance_ok = false;
+  Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Zero();  // rotation vector, rad^2
+  Eigen::Matrix3d cov_position = Eigen::Matrix3d::Zero();
+  std::vector<double> scale_std;
+};
+
+// Minimises eq. (4.26)+(4.27): rotation residuals q0·dq - dq·qi and position residuals
+// (I - R0) dC + dλ dR C_i - C_0, each whitened by its sigma, plus the scale priors. The unit
+// norm of dq is kept by Ceres's quaternion manifold instead of the thesis's penalty term.
+// With compute_covariance, the covariance is scaled by the reduced chi-square of the fit.
+RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
+                                 const RefinementInput& input, const CalibrationOptions& options,
+                                 bool solve = true);
+
+}  // namespace rigcal::internal

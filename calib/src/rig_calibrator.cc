@@ -1,0 +1,419 @@
+#include "rigcal/calib/rig_calibrator.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+#include "linear_solvers.h"
+#include "motion_data.h"
+#include "motion_geometry.h"
+#include "refinement.h"
+#include "rigcal/calib/logging.h"
+#include "rigcal/calib/pair_selection.h"
+#include "rigcal/calib/quaternion.h"
+#include "scale_measurement.h"
+
+namespace rigcal {
+namespace {
+
+using internal::MotionData;
+
+std::string Fmt(double v, int precision = 2) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+// Keeps the motions for which keep(m) is true; returns how many were removed.
+template <typename Pred>
+int KeepIf(std::vector<MotionData>* motions, Pred keep) {
+  const size_t before = motions->size();
+  motions->erase(std::remove_if(motions->begin(), motions->end(),
+                                [&](const MotionData& m) { return !keep(m); }),
+                 motions->end());
+  return static_cast<int>(before - motions->size());
+}
+
+// Removes motions whose value exceeds median + factor * sigma (one-sided, for residual norms),
+// or whose |value - median| does (two-sided). Never removes below `floor`.
+int RemoveOutliers(std::vector<MotionData>* motions, const std::vector<double>& values,
+                   double factor, double floor, bool two_sided) {
+  const internal::RobustStats stats = internal::Robust(values);
+  const double threshold = std::max(factor * stats.sigma, floor);
+  std::vector<MotionData> kept;
+  kept.reserve(motions->size());
+  for (size_t k = 0; k < motions->size(); ++k) {
+    const double d = two_sided ? std::abs(values[k] - stats.median) : values[k] - stats.median;
+    if (d <= threshold) kept.push_back((*motions)[k]);
+  }
+  const int removed = static_cast<int>(motions->size() - kept.size());
+  *motions = std::move(kept);
+  return removed;
+}
+
+// Scale keys per motion: segment ids, or partition numbers of the time-ordered motions.
+void AssignScaleKeys(ScaleModel model, int partitions, std::vector<MotionData>* motions) {
+  if (model == ScaleModel::kSegments) {
+    for (auto& m : *motions) m.scale_key = m.segment;
+    return;
+  }
+  if (model != ScaleModel::kPartitions || partitions <= 1) {
+    for (auto& m : *motions) m.scale_key = 0;
+    return;
+  }
+  std::vector<size_t> order(motions->size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return (*motions)[a].t_ns < (*motions)[b].t_ns; });
+  // |K^(ν)| = ceil(K / n), as the thesis's SetScalesPerCamera(n).
+  const size_t per = (motions->size() + partitions - 1) / partitions;
+  for (size_t rank = 0; rank < order.size(); ++rank) {
+    (*motions)[order[rank]].scale_key = static_cast<int>(rank / std::max<size_t>(per, 1));
+  }
+}
+
+// Maps the scale keys present to consecutive indices; returns the keys in index order.
+std::vector<int> CompactScaleIndices(std::vector<MotionData>* motions) {
+  std::map<int, int> index;
+  for (const auto& m : *motions) index.emplace(m.scale_key, 0);
+  std::vector<int> keys;
+  for (auto& [key, idx] : index) {
+    idx = static_cast<int>(keys.size());
+    keys.push_back(key);
+  }
+  for (auto& m : *motions) m.scale_index = index[m.scale_key];
+  return keys;
+}
+
+int CountSegments(const std::vector<MotionData>& motions) {
+  std::map<int, int> seen;
+  for (const auto& m : motions) seen[m.segment]++;
+  return static_cast<int>(seen.size());
+}
+
+// Thesis 5.5: measured scales (4.18 / 4.31) that drift by more than the threshold (and by
+// more than their own noise) call for time-dependent scales. Returns the partition count
+// (1 = time-fixed).
+int ChoosePartitions(const std::vector<MotionData>& motions, double epsilon, bool translational,
+                     const CalibrationOptions& options, std::string* why) {
+  std::vector<MotionData> sorted = motions;
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [](const MotionData& a, const MotionData& b) { return a.t_ns < b.t_ns; });
+  const auto measurements = internal::MeasureScales(sorted, epsilon, translational);
+  const int count = static_cast<int>(measurements.size());
+  const int parts = std::min(10, count / options.min_motions_per_partition);
+  if (parts < 2) {
+    *why = "time-fixed scale (" + std::to_string(count) + " scale measurements, too few to test drift)";
+    return 1;
+  }
+  std::vector<double> all;
+  for (const auto& m : measurements) all.push_back(m.value);
+  const double overall = internal::Robust(all).median;
+  double worst = 0.0;
+  bool significant = false;
+  for (int p = 0; p < parts; ++p) {
+    const int lo = p * count / parts, hi = (p + 1) * count / parts;
+    std::vector<double> v;
+    for (int k = lo; k < hi; ++k) v.push_back(measurements[k].value);
+    const auto stats = internal::Robust(v);
+    const double dev = std::abs(stats.median - overall) / std::abs(overall);
+    const double standard_error = 1.2533 * stats.sigma / std::sqrt(static_cast<double>(v.size()));
+    worst = std::max(worst, dev);
+    if (dev > options.scale_deviation_threshold &&
+        std::abs(stats.median - overall) > 3.0 * standard_error) {
+      significant = true;
+    }
+  }
+  if (significant) {
+    *why = "time-dependent scale: measured scales deviate by up to " + Fmt(100 * worst, 1) +
+           " % over time (threshold " + Fmt(100 * options.scale_deviation_threshold, 1) + " %)";
+    return parts;
+  }
+  *why = "time-fixed scale: measured scales deviate by at most " + Fmt(100 * worst, 1) + " %";
+  return 1;
+}
+
+SlaveCalibration Fail(SlaveCalibration r, Termination t, const std::string& message) {
+  r.termination = t;
+  r.message = message;
+  return r;
+}
+
+}  // namespace
+
+SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
+                                const CalibrationOptions& options, const std::string& name) {
+  auto log = ModuleLogger("calib");
+  SlaveCalibration r;
+  r.name = name;
+  std::string error;
+  if (!options.Check(&error)) return Fail(r, Termination::kInvalidInput, "invalid options: " + error);
+
+  std::vector<MotionData> data = internal::ToMotionData(motions);
+  r.motions.total = static_cast<int>(data.size());
+  const int non_finite = KeepIf(&data, [](const MotionData& m) {
+    return m.q0.allFinite() && m.qi.allFinite() && m.C0.allFinite() && m.Ci.allFinite();
+  });
+  r.motions.residual_outlier += non_finite;
+
+  double max_rotation = 0.0;
+  for (const auto& m : data) max_rotation = std::max(max_rotation, m.angle0);
+  r.observability.max_rotation_deg = max_rotation * kDegPerRad;
+
+  MotionModel model = options.motion_model;
+  if (model == MotionModel::kAuto) {
+    model = max_rotation * kDegPerRad >= options.alpha_maxrot_deg ? MotionModel::kGeneral
+                                                                  : MotionModel::kTranslational;
+  }
+  r.motion_model = model;
+  const bool translational = model == MotionModel::kTranslational;
+
+  if (!translational) {
+    const double alpha = options.alpha_threshold_deg * kRadPerDeg;
+    r.motions.small_rotation = KeepIf(&data, [alpha](const MotionData& m) {
+      return m.angle0 >= alpha && m.anglei >= alpha;
+    });
+  } else {
+    r.motions.small_rotation = KeepIf(&data, [](const MotionData& m) {
+      return m.C0.norm() > 0.0 && m.Ci.norm() > 0.0;
+    });
+  }
+  // Scale-free invariant: master and slave motions rotate by the same angle.
+  {
+    std::vector<double> diff;
+    for (const auto& m : data) diff.push_back((m.angle0 - m.anglei) * kDegPerRad);
+    r.motions.angle_mismatch = RemoveOutliers(&data, diff, options.outlier_mad_factor,
+                                              options.angle_invariant_floor_deg, true);
+  }
+
+  const int min_motions = options.min_motions;
+  if (static_cast<int>(data.size()) < min_motions) {
+    std::ostringstream msg;
+    if (translational) {
+      msg << "need >= " << min_motions << " motions with translation, got " << data.size();
+    } else {
+      msg << "need >= " << min_motions << " motions with rotation >= "
+          << Fmt(options.alpha_threshold_deg, 1) << " deg, got " << data.size()
+          << " (largest rotation " << Fmt(r.observability.max_rotation_deg, 2) << " deg)";
+    }
+    r.motions.used = static_cast<int>(data.size());
+    return Fail(r, Termination::kInsufficientMotion, msg.str());
+  }
+
+  if (!translational) {
+    const auto spread = internal::MasterAxisSpread(data);
+    r.observability.axis_spread_deg = spread.spread_deg;
+    if (spread.spread_deg < options.planar_axis_spread_deg) {
+      r.observability.planar = true;
+      r.observability.planar_axis = spread.principal_axis;
+      r.unobservable.push_back(spread.principal_axis);
+      r.motions.used = static_cast<int>(data.size());
+      return Fail(r, Termination::kDegenerate,
+                  "planar motion: every rotation is about one axis (spread " +
+                      Fmt(spread.spread_deg, 3) +
+                      " deg), so the rotation about that axis and the translation along it are "
+                      "unobservable with the general model");
+    }
+  }
+
+  // Scale model.
+  double rms_ci = 0.0;
+  for (const auto& m : data) rms_ci += m.Ci.squaredNorm();
+  rms_ci = std::sqrt(rms_ci / data.size());
+  const double epsilon = options.scale_dot_epsilon > 0.0 ? options.scale_dot_epsilon : 1e-3 * rms_ci;
+  ScaleModel scale_model = options.scale_model;
+  int partitions = options.partitions;
+  std::string scale_why;
+  if (scale_model == ScaleModel::kAuto) {
+    if (CountSegments(data) > 1) {
+      scale_model = ScaleModel::kSegments;
+      scale_why = "one scale per odometry segment (" + std::to_string(CountSegments(data)) + ")";
+    } else {
+      partitions = ChoosePartitions(data, epsilon, translational, options, &scale_why);
+      scale_model = partitions > 1 ? ScaleModel::kPartitions : ScaleModel::kFixed;
+    }
+  }
+  r.scale_model = scale_model;
+  AssignScaleKeys(scale_model, partitions, &data);
+
+  // Linear estimate with misfit removal (rounds of solve, residuals, outlier test).
+  Eigen::Quaterniond dq = Eigen::Quaterniond::Identity();
+  internal::LinearPositionScale pos;
+  std::vector<int> scale_keys;
+  internal::LinearRotation rot;
+  for (int round = 0;; ++round) {
+    scale_keys = CompactScaleIndices(&data);
+    const int num_scales = static_cast<int>(scale_keys.size());
+    if (!translational) {
+      rot = internal::SolveLinearRotation(&data);
+      dq = rot.q;
+      pos = internal::SolveLinearPositionScale(data, dq, num_scales);
+    } else {
+      dq = internal::SolveTranslationalRotation(data);
+      pos.C.setZero();
+      pos.scales = internal::SolveTranslationalScales(data, num_scales);
+      pos.ok = true;
+    }
+    if (!pos.ok || round >= options.max_outlier_rounds) break;
+    std::vector<double> res_pos, res_rot;
+    double typical = 0.0;
+    for (const auto& m : data) {
+      const double s = pos.scales[m.scale_index];
+      res_pos.push_back(translational ? internal::TranslationalResidual(m, dq, s)
+                                      : internal::PositionResidual(m, dq, pos.C, s));
+      if (!translational) res_rot.push_back(internal::RotationResidual(m, ToWxyz(dq)));
+      typical = std::max(typical, m.C0.norm());
+    }
+    int removed = RemoveOutliers(&data, res_pos, options.outlier_mad_factor, 1e-9 * (1 + typical),
+                                 false);
+    if (!translational && removed == 0) {
+      removed = RemoveOutliers(&data, res_rot, options.outlier_mad_factor, 1e-9, false);
+    }
+    r.motions.residual_outlier += removed;
+    if (removed == 0) break;
+    if (static_cast<int>(data.size()) < min_motions) break;
+  }
+  r.motions.used = static_cast<int>(data.size());
+  if (static_cast<int>(data.size()) < min_motions) {
+    return Fail(r, Termination::kInsufficientMotion,
+                "need >= " + std::to_string(min_motions) + " consistent motions, got " +
+                    std::to_string(data.size()) + " after misfit removal");
+  }
+  if (!pos.ok) {
+    return Fail(r, Termination::kDegenerate,
+                "the position/scale equations (4.16) are singular: the motions do not determine "
+                "position and scale");
+  }
+  r.observability.rotation_eigenvalues = rot.eigenvalues;
+  r.observability.position_min_eigenvalue = pos.min_eigenvalue;
+
+  // Noise levels from the linear residuals whiten the non-linear problem.
+  const int num_scales = static_cast<int>(scale_keys.size());
+  const int k = static_cast<int>(data.size());
+  double ss_rot = 0.0, ss_pos = 0.0, typical = 0.0;
+  for (const auto& m : data) {
+    const double s = pos.scales[m.scale_index];
+    if (!translational) ss_rot += std::pow(internal::RotationResidual(m, ToWxyz(dq)), 2);
+    ss_pos += std::pow(translational ? internal::TranslationalResidual(m, dq, s)
+                                     : internal::PositionResidual(m, dq, pos.C, s),
+                       2);
+    typical = std::max(typical, m.C0.norm());
+  }
+  internal::RefinementInput input;
+  input.q = dq;
+  input.C = pos.C;
+  input.scales = pos.scales;
+  input.translational = translational;
+  input.sigma_rotation = std::max(std::sqrt(ss_rot / std::max(1, 4 * k - 3)), 1e-12);
+  const int pos_dof = std::max(1, 3 * k - (translational ? 0 : 3) - num_scales - 3);
+  input.sigma_position = std::max(std::sqrt(ss_pos / pos_dof), 1e-12 * (1.0 + typical));
+
+  const auto measurements = internal::MeasureScales(data, epsilon, translational);
+  std::vector<internal::ScaleSummary> summaries;
+  for (int s = 0; s < num_scales; ++s) {
+    summaries.push_back(internal::SummarizeScales(measurements, data, s));
+    // Prior of (4.27), σ² = sum (λ - λ^k)² as in the thesis.
+    input.priors.push_back({summaries[s].mean,
+                            summaries[s].count >= 2 ? summaries[s].sigma_thesis : 0.0});
+  }
+
+  const bool solve = options.method == Method::kNonlinear;
+  const internal::RefinementResult refined = internal::RefineNonlinear(data, input, options, solve);
+
+  r.estimate.q = refined.q;
+  r.estimate.C = translational ? Eigen::Vector3d::Zero() : refined.C;
+  r.estimate.scale = refined.scales.empty() ? 1.0 : refined.scales[0];
+  for (int s = 0; s < num_scales; ++s) {
+    SegmentScale seg;
+    seg.segment = scale_keys[s];
+    seg.scale = refined.scales[s];
+    seg.std = refined.scale_std[s];
+    seg.measured_mean = summaries[s].mean;
+    seg.measured_std = summaries[s].std;
+    seg.measured_count = summaries[s].count;
+    r.scales.push_back(seg);
+  }
+  if (refined.covariance_ok) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(refined.cov_rotation);
+    r.rot_std_deg = std::sqrt(std::max(0.0, eig.eigenvalues()(2))) * kDegPerRad;
+    r.pos_std = refined.cov_position.diagonal().cwiseMax(0.0).cwiseSqrt();
+  }
+  if (translational) {
+    r.position_observable = false;
+    r.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
+                      Eigen::Vector3d::UnitZ()};
+  }
+
+  std::ostringstream msg;
+  msg << r.motions.used << " motions used, " << r.motions.rejected() << " rejected ("
+      << r.motions.small_rotation << (translational ? " without translation" : " small rotation")
+      << ", " << r.motions.angle_mismatch << " angle mismatch, " << r.motions.residual_outlier
+      << " outliers); " << ToString(model) << " motion";
+  if (translational) {
+    msg << " (largest rotation " << Fmt(r.observability.max_rotation_deg, 2)
+        << " deg < " << Fmt(options.alpha_maxrot_deg, 1)
+        << " deg): rotation and scale only, position unobservable";
+  }
+  msg << "; " << (scale_why.empty() ? ToString(scale_model) + " scale model" : scale_why);
+  if (solve) msg << "; refinement: " << refined.message;
+  r.message = msg.str();
+  r.termination = (solve && !refined.converged) ? Termination::kNoConvergence
+                                                : Termination::kConverged;
+  log->debug("slave '{}': {}", name, r.message);
+  return r;
+}
+
+RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOptions& options) {
+  RigCalibration out;
+  out.master = recording.master.name;
+  const std::string invalid = recording.Validate();
+  std::string option_error;
+  const bool options_ok = options.Check(&option_error);
+  std::vector<IndexPair> pairs;
+  if (invalid.empty() && options_ok) pairs = SelectPairs(recording, options.pairs);
+  out.pairs_selected = static_cast<int>(pairs.size());
+  for (size_t i = 0; i < recording.slaves.size(); ++i) {
+    const auto& name = recording.slaves[i].name;
+    if (!invalid.empty()) {
+      SlaveCalibration r;
+      r.name = name;
+      out.slaves.push_back(Fail(r, Termination::kInvalidInput, "invalid recording: " + invalid));
+      continue;
+    }
+    out.slaves.push_back(
+        CalibrateSlave(MotionsForSlave(recording, static_cast<int>(i), pairs), options, name));
+  }
+  return out;
+}
+
+std::string ToString(Termination t) {
+  switch (t) {
+    case Termination::kConverged:
+      return "converged";
+    case Termination::kNoConvergence:
+      return "no_convergence";
+    case Termination::kInsufficientMotion:
+      return "insufficient_motion";
+    case Termination::kDegenerate:
+      return "degenerate";
+    case Termination::kInvalidInput:
+      return "invalid_input";
+  }
+  return "?";
+}
+
+std::string RigCalibration::BriefReport() const {
+  std::ostringstream s;
+  s << "master " << master << ", " << pairs_selected << " time pairs\n";
+  for (const auto& r : slaves) {
+    s << "  " << r.name << ": " << ToString(r.termination) << " - " << r.message << "\n";
+  }
+  return s.str();
+}
+
+}  // namespace rigcal

@@ -1,0 +1,165 @@
+#include "rigcal/calib/synthetic.h"
+
+#include <cmath>
+
+#include "rigcal/calib/quaternion.h"
+
+namespace rigcal {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double Uniform(std::mt19937_64& rng, double lo, double hi) {
+  return std::uniform_real_distribution<double>(lo, hi)(rng);
+}
+
+Eigen::Quaterniond ExpMap(const Eigen::Vector3d& rotation_vector) {
+  return AxisAngle(rotation_vector, rotation_vector.norm());
+}
+
+}  // namespace
+
+Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Eigen::Vector3d v;
+  do {
+    v = Eigen::Vector3d(n(rng), n(rng), n(rng));
+  } while (v.norm() < 1e-9);
+  return v.normalized();
+}
+
+Similarity RandomRigParameters(std::mt19937_64& rng) {
+  Similarity s;
+  s.C = Eigen::Vector3d(Uniform(rng, -10, 10), Uniform(rng, -10, 10), Uniform(rng, -10, 10));
+  s.q = AxisAngle(RandomUnitVector(rng), Uniform(rng, -kPi, kPi));
+  s.scale = Uniform(rng, 0.01, 1.0);
+  return s;
+}
+
+Pose SlavePoseFromMaster(const Pose& master, const Similarity& rig) {
+  Pose slave;
+  slave.q = (rig.q.conjugate() * master.q * rig.q).normalized();  // (5.1)
+  const Eigen::Vector3d rhs = (master.R() - Eigen::Matrix3d::Identity()) * rig.C + master.C;
+  slave.C = (rig.q.conjugate() * rhs) / rig.scale;  // (5.2)
+  return slave;
+}
+
+Pose PerturbPose(const Pose& pose, double eps_rad, std::mt19937_64& rng) {
+  Pose out = pose;
+  if (eps_rad == 0.0) return out;
+  out.q = (AxisAngle(RandomUnitVector(rng), eps_rad) * pose.q).normalized();
+  out.C = AxisAngle(RandomUnitVector(rng), eps_rad) * pose.C;
+  return out;
+}
+
+RigRecording ThesisSample(const ThesisSampleOptions& options, std::mt19937_64& rng,
+                          std::vector<Similarity>* truth) {
+  const int k_count = options.num_poses;
+  std::vector<Similarity> rigs;
+  for (int i = 0; i < options.num_slaves; ++i) rigs.push_back(RandomRigParameters(rng));
+
+  std::vector<Pose> master(k_count + 1);
+  for (int k = 1; k <= k_count; ++k) {
+    const double angle = options.fixed_rotation_deg > 0.0
+                             ? options.fixed_rotation_deg * kRadPerDeg * k / k_count
+                             : Uniform(rng, 0.0, options.max_rotation_deg * kRadPerDeg);
+    master[k].q = AxisAngle(RandomUnitVector(rng), angle);
+    const double e = options.translation_extent;
+    master[k].C = Eigen::Vector3d(Uniform(rng, -e, e), Uniform(rng, -e, e), Uniform(rng, -e, e));
+  }
+
+  RigRecording rec;
+  rec.master.name = "cam0";
+  for (int k = 0; k <= k_count; ++k) rec.t_ns.push_back(static_cast<int64_t>(k) * 50'000'000);
+  const double eps = options.eps_deg * kRadPerDeg;
+  rec.master.poses.push_back(master[0]);
+  for (int k = 1; k <= k_count; ++k) rec.master.poses.push_back(PerturbPose(master[k], eps, rng));
+  rec.master.segment.assign(k_count + 1, 0);
+  for (int i = 0; i < options.num_slaves; ++i) {
+    CameraTrack track;
+    track.name = "cam" + std::to_string(i + 1);
+    track.poses.push_back(Pose{});
+    for (int k = 1; k <= k_count; ++k) {
+      Pose slave = SlavePoseFromMaster(master[k], rigs[i]);
+      slave.C *= 1.0 + options.max_scale_error * k / k_count;  // thesis 5.3 scale drift
+      track.poses.push_back(PerturbPose(slave, eps, rng));
+    }
+    track.segment.assign(k_count + 1, 0);
+    rec.slaves.push_back(std::move(track));
+  }
+  if (truth) *truth = rigs;
+  return rec;
+}
+
+SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
+                             const std::vector<Similarity>& rigs, const DriveOptions& options) {
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const int n = options.num_frames;
+  const double amp_rot = options.rotation_amplitude_deg * kRadPerDeg;
+  const double amp_pos = options.translation_amplitude;
+  const double period = n / options.frame_rate_hz;
+
+  // Master trajectory: incommensurate sinusoids so every axis keeps rotating and moving.
+  std::vector<Pose> truth_master(n);
+  for (int k = 0; k < n; ++k) {
+    const double t = 2.0 * kPi * k / options.frame_rate_hz / period;
+    const Eigen::Vector3d rv(amp_rot * std::sin(3.0 * t), amp_rot * std::sin(5.0 * t + 1.0),
+                             amp_rot * 0.8 * std::sin(2.0 * t + 2.0));
+    const Eigen::Vector3d pos(amp_pos * std::sin(2.0 * t), amp_pos * std::sin(3.0 * t + 0.5),
+                              amp_pos * 0.5 * std::sin(4.0 * t + 1.5));
+    truth_master[k].q = ExpMap(rv);
+    truth_master[k].C = pos;
+  }
+  const Pose first_inverse = truth_master.front().Inverse();
+  for (auto& p : truth_master) p = first_inverse * p;  // camera-local: pose 0 is identity
+
+  SyntheticDrive drive;
+  drive.truth = rigs;
+  auto& rec = drive.recording;
+  for (int k = 0; k < n; ++k) {
+    rec.t_ns.push_back(static_cast<int64_t>(std::llround(k * 1e9 / options.frame_rate_hz)));
+  }
+  const double sigma_rot = options.rotation_noise_deg * kRadPerDeg;
+  const double drift = options.drift_deg_per_frame * kRadPerDeg;
+  auto make_track = [&](const std::string& name, const Similarity* rig) {
+    CameraTrack track;
+    track.name = name;
+    Eigen::Quaterniond walk = Eigen::Quaterniond::Identity();
+    const double unit = rig ? rig->scale : 1.0;  // master units per slave unit
+    for (int k = 0; k < n; ++k) {
+      Pose p = rig ? SlavePoseFromMaster(truth_master[k], *rig) : truth_master[k];
+      if (k > 0) {
+        walk = (ExpMap(drift * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) * walk)
+                   .normalized();
+        p.q = (walk * ExpMap(sigma_rot * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) *
+               p.q)
+                  .normalized();
+        p.C += options.position_noise / unit *
+               Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+      }
+      track.poses.push_back(p);
+    }
+    track.segment.assign(n, 0);
+    return track;
+  };
+  rec.master = make_track(names.at(0), nullptr);
+  for (size_t i = 0; i < rigs.size(); ++i) rec.slaves.push_back(make_track(names.at(i + 1), &rigs[i]));
+  return drive;
+}
+
+std::vector<Similarity> DemoRig() {
+  Similarity left;  // looking left (rotated about the camera's vertical axis), metre-ish units
+  left.q = AxisAngle(Eigen::Vector3d::UnitY(), -90.0 * kRadPerDeg) *
+           AxisAngle(Eigen::Vector3d::UnitX(), 5.0 * kRadPerDeg);
+  left.C = Eigen::Vector3d(-0.85, 0.05, -0.6);
+  left.scale = 0.5;
+  Similarity back;  // looking backwards
+  back.q = AxisAngle(Eigen::Vector3d::UnitY(), 180.0 * kRadPerDeg) *
+           AxisAngle(Eigen::Vector3d::UnitZ(), -3.0 * kRadPerDeg);
+  back.C = Eigen::Vector3d(0.1, -0.1, -2.2);
+  back.scale = 2.0;
+  return {left, back};
+}
+
+}  // namespace rigcal

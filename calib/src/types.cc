@@ -1,0 +1,51 @@
+#include "rigcal/calib/types.h"
+
+#include <sstream>
+
+namespace rigcal {
+
+Pose Pose::Inverse() const {
+  Pose inv;
+  inv.q = q.conjugate();
+  inv.C = -(inv.q * C);
+  return inv;
+}
+
+Pose Pose::operator*(const Pose& other) const {
+  Pose out;
+  out.q = (q * other.q).normalized();
+  out.C = q * other.C + C;
+  return out;
+}
+
+Pose Pose::Between(const Pose& other) const { return Inverse() * other; }
+
+std::string RigRecording::Validate() const {
+  std::ostringstream err;
+  auto check = [&](const CameraTrack& track) {
+    if (track.poses.size() != t_ns.size()) {
+      err << "camera '" << track.name << "' has " << track.poses.size() << " poses for "
+          << t_ns.size() << " stamps";
+      return false;
+    }
+    if (!track.segment.empty() && track.segment.size() != t_ns.size()) {
+      err << "camera '" << track.name << "' has " << track.segment.size()
+          << " segment ids for " << t_ns.size() << " stamps";
+      return false;
+    }
+    return true;
+  };
+  if (!check(master)) return err.str();
+  for (const auto& s : slaves) {
+    if (!check(s)) return err.str();
+  }
+  for (size_t k = 1; k < t_ns.size(); ++k) {
+    if (t_ns[k] <= t_ns[k - 1]) {
+      err << "stamps not increasing at index " << k;
+      return err.str();
+    }
+  }
+  return "";
+}
+
+}  // namespace rigcal

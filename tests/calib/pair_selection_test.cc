@@ -1,0 +1,76 @@
+#include "rigcal/calib/pair_selection.h"
+
+#include <gtest/gtest.h>
+
+#include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/synthetic.h"
+
+namespace rigcal {
+namespace {
+
+RigRecording Drive(int frames) {
+  DriveOptions opt;
+  opt.num_frames = frames;
+  return GenerateDrive({"m", "s1", "s2"}, DemoRig(), opt).recording;
+}
+
+TEST(PairSelection, SinceStartAndRelative) {
+  const RigRecording rec = Drive(50);
+  const auto start = SelectPairs(rec, {.policy = PairOptions::Policy::kSinceStart});
+  ASSERT_EQ(start.size(), 49u);
+  EXPECT_EQ(start.front().a, 0);
+  EXPECT_EQ(start.back().b, 49);
+  const auto rel = SelectPairs(rec, {.policy = PairOptions::Policy::kRelative, .step = 5});
+  ASSERT_EQ(rel.size(), 45u);
+  for (const auto& p : rel) EXPECT_EQ(p.b - p.a, 5);
+}
+
+TEST(PairSelection, AutoReachesTargetWithinSpan) {
+  const RigRecording rec = Drive(1000);
+  PairOptions opt;  // auto
+  const auto pairs = SelectPairs(rec, opt);
+  ASSERT_GT(pairs.size(), 500u);
+  const int max_span = static_cast<int>(opt.max_span_fraction * rec.size());
+  int reached = 0;
+  for (const auto& p : pairs) {
+    ASSERT_LT(p.a, p.b);
+    ASSERT_LE(p.b - p.a, max_span);
+    const double angle = AngleBetween(rec.master.poses[p.a].q, rec.master.poses[p.b].q);
+    if (angle * kDegPerRad >= opt.target_angle_deg) ++reached;
+    // The pair is the first b reaching a target: b - 1 must not have reached both.
+    if (p.b - p.a > 1) {
+      const double prev = AngleBetween(rec.master.poses[p.a].q, rec.master.poses[p.b - 1].q);
+      EXPECT_LT(prev * kDegPerRad, opt.target_angle_deg);
+    }
+  }
+  EXPECT_GT(reached, 0);
+}
+
+TEST(PairSelection, NeverCrossesSegments) {
+  RigRecording rec = Drive(300);
+  for (size_t k = 150; k < rec.size(); ++k) rec.master.segment[k] = 1;
+  for (size_t k = 100; k < rec.size(); ++k) rec.slaves[0].segment[k] = 4;
+  for (auto policy : {PairOptions::Policy::kAuto, PairOptions::Policy::kRelative,
+                      PairOptions::Policy::kSinceStart}) {
+    PairOptions opt;
+    opt.policy = policy;
+    opt.step = 20;
+    const auto pairs = SelectPairs(rec, opt);
+    ASSERT_FALSE(pairs.empty());
+    for (const auto& p : pairs) EXPECT_EQ(rec.master.segment[p.a], rec.master.segment[p.b]);
+    for (const auto& m : MotionsForSlave(rec, 0, pairs)) {
+      EXPECT_TRUE((m.t_a_ns < rec.t_ns[100]) == (m.t_b_ns < rec.t_ns[100]));
+    }
+  }
+}
+
+TEST(PairSelection, OptionsCheckNamesField) {
+  PairOptions opt;
+  opt.max_span_fraction = 0.0;
+  std::string error;
+  EXPECT_FALSE(opt.Check(&error));
+  EXPECT_NE(error.find("max_span_fraction"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rigcal
