@@ -62,4 +62,15 @@ struct RigMotion {
   int64_t t_b_ns = 0;
 };
 
+// One camera's pose from its odometry, as it travels from a VO thread (or an LCM channel) to
+// the estimator. `pose` is camera-local (the camera's own reference frame and unit).
+struct CameraPose {
+  int camera = 0;             // index in the rig: 0 = master, 1..N = slaves
+  int64_t t_ns = 0;           // capture time, CLOCK_MONOTONIC of the capturing host
+  int64_t trigger_seq = -1;   // hardware trigger pulse number, -1 when unknown
+  int segment = 0;            // odometry scale segment (a VO re-initialisation opens a new one)
+  Pose pose;
+  double quality = 1.0;       // tracking quality in [0, 1]
+};
+
 }  // namespace rigcal
