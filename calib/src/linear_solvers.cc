@@ -44,6 +44,10 @@ Eigen::Quaterniond SolveAbsoluteOrientation(const std::vector<Eigen::Vector3d>& 
   // Horn (A.21): S_ab = sum a_k b'_k with a from source, b from target.
   Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
   for (size_t k = 0; k < source.size(); ++k) s += source[k] * target[k].transpose();
+  return SolveAbsoluteOrientation(s);
+}
+
+Eigen::Quaterniond SolveAbsoluteOrientation(const Eigen::Matrix3d& s) {
   const double sxx = s(0, 0), sxy = s(0, 1), sxz = s(0, 2);
   const double syx = s(1, 0), syy = s(1, 1), syz = s(1, 2);
   const double szx = s(2, 0), szy = s(2, 1), szz = s(2, 2);

@@ -25,6 +25,8 @@ LinearRotation SolveLinearRotation(std::vector<MotionData>* motions);
 // sum target_k^T R source_k.
 Eigen::Quaterniond SolveAbsoluteOrientation(const std::vector<Eigen::Vector3d>& source,
                                             const std::vector<Eigen::Vector3d>& target);
+// The same from the correlation S = sum source_k target_k^T.
+Eigen::Quaterniond SolveAbsoluteOrientation(const Eigen::Matrix3d& s);
 
 struct LinearPositionScale {
   Eigen::Vector3d C = Eigen::Vector3d::Zero();

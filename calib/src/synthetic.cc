@@ -1,6 +1,7 @@
 #include "rigcal/calib/synthetic.h"
 
 #include <cmath>
+#include <limits>
 
 #include "rigcal/calib/quaternion.h"
 
@@ -104,10 +105,17 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
   std::vector<Pose> truth_master(n);
   for (int k = 0; k < n; ++k) {
     const double t = 2.0 * kPi * k / options.frame_rate_hz / period;
-    const Eigen::Vector3d rv(amp_rot * std::sin(3.0 * t), amp_rot * std::sin(5.0 * t + 1.0),
-                             amp_rot * 0.8 * std::sin(2.0 * t + 2.0));
-    const Eigen::Vector3d pos(amp_pos * std::sin(2.0 * t), amp_pos * std::sin(3.0 * t + 0.5),
-                              amp_pos * 0.5 * std::sin(4.0 * t + 1.5));
+    Eigen::Vector3d rv(amp_rot * std::sin(3.0 * t), amp_rot * std::sin(5.0 * t + 1.0),
+                       amp_rot * 0.8 * std::sin(2.0 * t + 2.0));
+    Eigen::Vector3d pos(amp_pos * std::sin(2.0 * t), amp_pos * std::sin(3.0 * t + 0.5),
+                        amp_pos * 0.5 * std::sin(4.0 * t + 1.5));
+    if (options.motion == DriveOptions::Motion::kPlanarYaw) {
+      rv = Eigen::Vector3d(0.0, 2.0 * amp_rot * std::sin(3.0 * t) + amp_rot * std::sin(7.0 * t),
+                           0.0);
+      pos.y() = 0.0;
+    } else if (options.motion == DriveOptions::Motion::kTranslationOnly) {
+      rv.setZero();
+    }
     truth_master[k].q = ExpMap(rv);
     truth_master[k].C = pos;
   }
@@ -122,29 +130,57 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
   }
   const double sigma_rot = options.rotation_noise_deg * kRadPerDeg;
   const double drift = options.drift_deg_per_frame * kRadPerDeg;
-  auto make_track = [&](const std::string& name, const Similarity* rig) {
+  // Pose of a slave in its own reference frame (its pose at frame 0, rig `at_start`) when the
+  // rig is `now`: inv(dT_start) T_0 dT_now, eq. (5.1)/(5.2) when both are equal.
+  auto slave_pose = [](const Pose& master, const Similarity& at_start, const Similarity& now) {
+    Pose p;
+    p.q = (at_start.q.conjugate() * master.q * now.q).normalized();
+    p.C = (at_start.q.conjugate() * (master.q * now.C + master.C - at_start.C)) / at_start.scale;
+    return p;
+  };
+  std::uniform_real_distribution<double> unit_factor(std::log(0.5), std::log(2.0));
+  auto make_track = [&](const std::string& name, int slave) {
     CameraTrack track;
     track.name = name;
     Eigen::Quaterniond walk = Eigen::Quaterniond::Identity();
+    const Similarity* rig = slave >= 0 ? &rigs[slave] : nullptr;
     const double unit = rig ? rig->scale : 1.0;  // master units per slave unit
+    int segment = 0;
+    double unit_change = 1.0;
+    int64_t next_reset = options.segment_period_s > 0.0
+                             ? static_cast<int64_t>(options.segment_period_s * 1e9)
+                             : std::numeric_limits<int64_t>::max();
     for (int k = 0; k < n; ++k) {
-      Pose p = rig ? SlavePoseFromMaster(truth_master[k], *rig) : truth_master[k];
+      Pose p = truth_master[k];
+      if (rig) {
+        const bool changed = options.change_frame >= 0 && k >= options.change_frame &&
+                             slave < static_cast<int>(options.changed_rigs.size());
+        p = slave_pose(truth_master[k], *rig, changed ? options.changed_rigs[slave] : *rig);
+        if (rec.t_ns[k] >= next_reset) {
+          ++segment;
+          unit_change = std::exp(unit_factor(rng));
+          next_reset += static_cast<int64_t>(options.segment_period_s * 1e9);
+        }
+        p.C *= unit_change;  // the segment's odometry unit is 1/unit_change of the first's
+      }
       if (k > 0) {
         walk = (ExpMap(drift * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) * walk)
                    .normalized();
         p.q = (walk * ExpMap(sigma_rot * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) *
                p.q)
                   .normalized();
-        p.C += options.position_noise / unit *
+        p.C += options.position_noise / unit * unit_change *
                Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
       }
       track.poses.push_back(p);
+      track.segment.push_back(segment);
     }
-    track.segment.assign(n, 0);
     return track;
   };
-  rec.master = make_track(names.at(0), nullptr);
-  for (size_t i = 0; i < rigs.size(); ++i) rec.slaves.push_back(make_track(names.at(i + 1), &rigs[i]));
+  rec.master = make_track(names.at(0), -1);
+  for (size_t i = 0; i < rigs.size(); ++i) {
+    rec.slaves.push_back(make_track(names.at(i + 1), static_cast<int>(i)));
+  }
   return drive;
 }
 

@@ -44,6 +44,12 @@ RigRecording ThesisSample(const ThesisSampleOptions& options, std::mt19937_64& r
 // (sum of sinusoids in position and orientation, general 6-DoF), each slave sees it through
 // its rig parameters, and every camera's poses get odometry-like errors.
 struct DriveOptions {
+  enum class Motion {
+    kGeneral,          // 6-DoF: every axis rotates and moves
+    kPlanarYaw,        // a car: yaw about the master camera's y axis, moves in its x-z plane
+    kTranslationOnly,  // no rotation at all
+  };
+  Motion motion = Motion::kGeneral;
   int num_frames = 1200;
   double frame_rate_hz = 20.0;
   double rotation_amplitude_deg = 35.0;
@@ -52,6 +58,13 @@ struct DriveOptions {
   double position_noise = 0.002;       // white noise per pose, master units
   double drift_deg_per_frame = 0.0;    // random-walk rotation drift
   uint64_t seed = 1;
+  // From frame change_frame on, the slaves sit at changed_rigs (a bumped camera); the odometry
+  // of every camera continues undisturbed. -1 = never.
+  int change_frame = -1;
+  std::vector<Similarity> changed_rigs;
+  // Every slave's odometry re-initialises every segment_period_s seconds (0 = never): a new
+  // segment id and an odometry unit multiplied by a random factor in [0.5, 2].
+  double segment_period_s = 0.0;
 };
 
 struct SyntheticDrive {

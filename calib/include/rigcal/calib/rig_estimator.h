@@ -1,0 +1,169 @@
+#pragma once
+// RigEstimator: the recursive, bounded-memory online counterpart of the batch calibrator.
+//
+// Feed it time-corresponding sets of camera poses (master + slaves, from the SyncBuffer); it
+// picks keyframes, forms motion pairs between keyframes, gates them with the scale-free
+// invariants, and accumulates fixed-size sufficient statistics per slave whose linear
+// solution equals the batch linear least squares of the same motions. Closed odometry scale
+// segments are marginalised, old information is forgotten exponentially, and a short-window
+// twin of the statistics detects a camera that moved (decalibration).
+//
+// Not thread-safe: one estimator thread owns it (see OnlineCalibrator for the threads).
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/calibration_result.h"
+#include "rigcal/calib/types.h"
+
+namespace rigcal {
+
+struct RigEstimatorOptions {
+  // Keyframes (per slave): a set becomes a keyframe when the master has rotated by
+  // keyframe_min_angle_deg or moved by keyframe_min_translation (master units) since the last
+  // keyframe, or keyframe_max_interval_ns has passed.
+  double keyframe_min_angle_deg = 2.0;
+  double keyframe_min_translation = 0.05;
+  int64_t keyframe_max_interval_ns = 1'000'000'000;
+  int keyframe_history = 64;  // keyframes kept per slave to pair with
+
+  // Motion pairs: each new keyframe b pairs with the latest older keyframe a for which the
+  // master motion a->b reaches pair_target_angle_deg or pair_target_translation_fraction of
+  // the extent of the keyframe history, within pair_max_span_ns (bounded drift).
+  double pair_target_angle_deg = 30.0;
+  double pair_target_translation_fraction = 0.5;
+  int64_t pair_max_span_ns = 30'000'000'000;
+  double pair_min_angle_deg = 2.0;  // general model: smaller motions are not used
+
+  // Gating (after gate_after_motions accepted motions): rotation-angle invariant within
+  // max(angle_gate_floor_deg, gate_sigmas * running sigma); screw-pitch scale (4.18) within
+  // scale_gate (relative) of the current scale; residuals beyond gate_sigmas rejected and
+  // Huber-weighted beyond huber_sigmas.
+  int gate_after_motions = 15;
+  double angle_gate_floor_deg = 0.5;
+  double gate_sigmas = 6.0;
+  double huber_sigmas = 2.5;
+  double scale_gate = 0.3;
+
+  // Forgetting: half-life of the information, seconds of stream time (0 = never forget).
+  double half_life_s = 0.0;
+  // Short-window twin for decalibration detection.
+  double short_half_life_s = 20.0;
+  double decalibration_sigmas = 5.0;
+  double decalibration_min_deg = 0.5;
+  double decalibration_min_translation = 0.0;  // 0 = only rotation triggers
+  int decalibration_confirmations = 3;  // consecutive keyframes in disagreement
+
+  // Odometry segments kept open (their scale is a variable); older ones are marginalised.
+  int max_open_segments = 2;
+
+  // Models.
+  double alpha_maxrot_deg = 10.0;         // below: purely translational (rotation + scale)
+  double planar_axis_spread_deg = 1.0;    // below: all rotation axes parallel (planar)
+
+  // Convergence: enough motions, small uncertainty, stable over the last keyframes.
+  int converged_min_motions = 30;
+  double converged_rot_std_deg = 0.3;
+  double converged_pos_std_fraction = 0.05;  // of |C|, or absolute when |C| < 1
+  int converged_stable_keyframes = 5;
+
+  // Motions kept per slave for the background non-linear refinement window.
+  int window_size = 400;
+
+  // Nominal extrinsics per slave (from the rig config), used for what the motion cannot
+  // determine (e.g. the offset along the rotation axis of planar motion). Empty = none.
+  std::vector<std::optional<Similarity>> nominal;
+
+  bool Check(std::string* error) const;
+};
+
+// Flags of a slave's online state (bitmask, also the LCM flags).
+enum SlaveFlags : uint32_t {
+  kFlagInitialising = 1u << 0,
+  kFlagConverged = 1u << 1,
+  kFlagTranslationalOnly = 1u << 2,
+  kFlagPlanar = 1u << 3,
+  kFlagDecalibrated = 1u << 4,
+  kFlagRefined = 1u << 5,  // the published value comes from the non-linear window refinement
+};
+
+struct SlaveOnlineState {
+  uint32_t flags = kFlagInitialising;
+  int segment = 0;            // current odometry segment of the slave
+  int64_t last_update_ns = 0; // stream time of the last accepted motion
+  double short_long_rot_deg = 0.0;  // disagreement of the short and long windows
+  int keyframes = 0;
+  int gated_scale = 0;        // rejected by the screw-pitch scale gate
+  int decalibration_events = 0;
+};
+
+struct RigEstimate {
+  int64_t t_ns = 0;             // stream time of the last set
+  uint64_t sets = 0;            // sets consumed
+  uint64_t rejected_sets = 0;   // sets ignored: time not increasing, no or non-finite master
+  RigCalibration rig;           // per slave: the result in the batch schema
+  std::vector<SlaveOnlineState> online;  // per slave
+};
+
+// One slave's refinement job: a copy of the window and the linear estimate to start from.
+struct RefinementJob {
+  int slave = 0;
+  std::vector<RigMotion> motions;
+  std::vector<double> weights;
+  SlaveCalibration start;
+  uint64_t generation = 0;  // estimator generation when the job was made
+};
+
+class RigEstimator {
+ public:
+  // camera_names[0] is the master. Options are checked by the caller (Check()).
+  RigEstimator(std::vector<std::string> camera_names, RigEstimatorOptions options);
+  ~RigEstimator();
+  RigEstimator(const RigEstimator&) = delete;
+  RigEstimator& operator=(const RigEstimator&) = delete;
+
+  // Consumes one time-corresponding set: poses[0] master, poses[i] slave i (nullopt when the
+  // slave is missing from this set). Sets must come in increasing time. Non-finite poses are
+  // counted as rejected and ignored.
+  void AddSet(int64_t t_ns, const std::vector<std::optional<CameraPose>>& poses);
+
+  // The current estimate of every slave (cheap: cached at each accepted motion).
+  const RigEstimate& Estimate() const;
+
+  // Background refinement support: a copy of a slave's window, and the outcome to publish
+  // when it is consistent with the current linear estimate (within gate_sigmas).
+  RefinementJob MakeRefinementJob(int slave) const;
+  bool ApplyRefinement(const RefinementJob& job, const SlaveCalibration& refined);
+
+  // State files: the whole statistics as text (versioned, with a checksum).
+  std::string SerializeState() const;
+  // Restores a serialised state; on a corrupt, version-mismatched or foreign (different
+  // cameras) text returns false with a message and leaves the estimator unchanged.
+  bool RestoreState(const std::string& text, std::string* error);
+
+  static constexpr int kStateVersion = 1;
+
+ private:
+  struct Slave;
+  void UpdateSlave(int index, int64_t t_ns, const CameraPose& master, const CameraPose& slave);
+  void Publish(int index);
+  void PublishCounts(int index);
+
+  std::vector<std::string> names_;
+  RigEstimatorOptions options_;
+  std::vector<std::unique_ptr<Slave>> slaves_;
+  RigEstimate estimate_;
+  int master_segment_ = 0;
+  bool have_master_segment_ = false;
+  uint64_t generation_ = 0;
+};
+
+// Runs the non-linear refinement (thesis 4.26/4.27 with Ceres) of a job. Pure function:
+// safe to call from a background thread on a copied job.
+SlaveCalibration RefineWindow(const RefinementJob& job);
+
+}  // namespace rigcal

@@ -1,0 +1,97 @@
+#pragma once
+// Fixed-size sufficient statistics of the linear rig equations of one slave, so that a
+// recursive estimate equals the batch linear least squares of the same motions (thesis
+// 4.10 and 4.16/4.17) without keeping the motions.
+//
+// Rotation: M = sum w A^T A (4.10).
+// Position/scale with a rotation dR chosen only at solve time: the normal equations of
+// (I - R_0) dC + dλ_s dR C_i = C_0 need
+//   H_cc = sum w (I-R0)^T (I-R0),        g_c = sum w (I-R0)^T C_0,
+//   per segment s: P_s = sum w (I-R0)^T (C_i^T ⊗ I3)   so that  sum w (I-R0)^T dR C_i = P_s vec(dR),
+//                  n_s = sum w |C_i|^2,   Q_s = sum w C_0 C_i^T   so that  sum w C_0^T dR C_i = <dR, Q_s>.
+// Purely translational model (4.29-4.32): S = sum w c_i c_0^T and per segment sum w |C_i||C_0|.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "motion_data.h"
+
+namespace rigcal::internal {
+
+struct SegmentStatistics {
+  Eigen::Matrix<double, 3, 9> P = Eigen::Matrix<double, 3, 9>::Zero();
+  double n = 0.0;
+  Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();
+  double len_cross = 0.0;  // sum w |C_i| |C_0|   (4.32)
+  double len_sq = 0.0;     // sum w |C_i|^2       (4.32), equals n
+  double weight = 0.0;     // sum of motion weights
+  double last_scale = 0.0; // scale at the last solve (reported after marginalisation)
+};
+
+struct PositionSolution {
+  bool ok = false;
+  Eigen::Vector3d C = Eigen::Vector3d::Zero();
+  std::map<int, double> scales;  // open segments
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // of C, scales marginalised
+  double residual_ss = 0.0;  // weighted sum of squared position residuals
+  double min_eigenvalue = 0.0;  // of the column-normalised system
+};
+
+class MotionStatistics {
+ public:
+  // Adds one motion (sign-aligned quaternions) with weight w to segment `segment`.
+  void Add(const MotionData& m, int segment, double w);
+  // Exponential forgetting: every accumulated sum is multiplied by `factor` in (0, 1].
+  void Decay(double factor);
+
+  // Smallest eigenvector of M (4.11); eigenvalues ascending.
+  Eigen::Quaterniond SolveRotation(Eigen::Vector4d* eigenvalues) const;
+  // Horn on translation directions (4.29-4.30).
+  Eigen::Quaterniond SolveTranslationalRotation() const;
+  // Normal equations of (4.16)/(4.17) for the given rotation, with the closed segments'
+  // marginalised information added.
+  PositionSolution SolvePosition(const Eigen::Quaterniond& dq) const;
+  // (4.32) per open segment.
+  std::map<int, double> SolveTranslationalScales() const;
+
+  // Folds segment s into the marginal information on C (Schur complement at rotation dq) and
+  // forgets its per-segment sums. The segment's last scale stays available in closed_scales().
+  void MarginaliseSegment(int segment, const Eigen::Quaterniond& dq);
+  // Drops the position/scale statistics (master odometry re-initialised: new master unit).
+  void ResetPosition();
+
+  const Eigen::Matrix4d& rotation_information() const { return M_; }
+  const Eigen::Matrix3d& axis_scatter() const { return axis_scatter_; }
+  double weight() const { return weight_; }
+  double max_rotation() const { return max_rotation_; }
+  const std::map<int, SegmentStatistics>& segments() const { return segments_; }
+  const std::map<int, double>& closed_scales() const { return closed_scales_; }
+  int motions() const { return motions_; }
+  void SetSegmentScale(int segment, double scale);
+
+  // Plain-text serialisation of every sum (for state files); Parse returns false on a
+  // malformed text.
+  std::string Serialize() const;
+  bool Parse(const std::string& text);
+
+ private:
+  Eigen::Matrix4d M_ = Eigen::Matrix4d::Zero();
+  Eigen::Matrix3d axis_scatter_ = Eigen::Matrix3d::Zero();  // sum w r0 r0^T (planar test)
+  Eigen::Matrix3d H_cc_ = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d g_c_ = Eigen::Vector3d::Zero();
+  double c0_sq_ = 0.0;  // sum w |C_0|^2
+  Eigen::Matrix3d S_dir_ = Eigen::Matrix3d::Zero();  // sum w c_i c_0^T
+  Eigen::Matrix3d H_marg_ = Eigen::Matrix3d::Zero();  // marginalised segments
+  Eigen::Vector3d g_marg_ = Eigen::Vector3d::Zero();
+  double c0_sq_marg_ = 0.0;
+  std::map<int, SegmentStatistics> segments_;
+  std::map<int, double> closed_scales_;
+  double weight_ = 0.0;
+  double max_rotation_ = 0.0;  // largest master rotation angle seen, radians
+  int motions_ = 0;
+};
+
+}  // namespace rigcal::internal

@@ -1,0 +1,685 @@
+#include "rigcal/calib/rig_estimator.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "linear_solvers.h"
+#include "motion_data.h"
+#include "motion_statistics.h"
+#include "refinement.h"
+#include "rigcal/calib/logging.h"
+#include "rigcal/calib/quaternion.h"
+
+namespace rigcal {
+namespace {
+
+using internal::MotionData;
+using internal::MotionStatistics;
+
+struct Keyframe {
+  int64_t t_ns = 0;
+  Pose master;
+  Pose slave;
+  int segment = 0;
+};
+
+struct WindowEntry {
+  RigMotion motion;
+  double weight = 1.0;
+};
+
+// Running mean of a squared quantity over roughly the last 50 samples.
+struct RunningVariance {
+  double value = 0.0;
+  int count = 0;
+  void Add(double sq) {
+    ++count;
+    const double alpha = 1.0 / std::min(count, 50);
+    value += alpha * (sq - value);
+  }
+};
+
+double Forget(int64_t dt_ns, double half_life_s) {
+  if (half_life_s <= 0.0 || dt_ns <= 0) return 1.0;
+  return std::pow(0.5, static_cast<double>(dt_ns) * 1e-9 / half_life_s);
+}
+
+uint64_t Fnv1a(const std::string& s) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// Linear solution of one set of statistics, in the batch result schema.
+SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimatorOptions& opt,
+                                 const std::optional<Similarity>& nominal, int current_segment) {
+  SlaveCalibration r;
+  r.motions.used = stats.motions();
+  r.observability.max_rotation_deg = stats.max_rotation() * kDegPerRad;
+  if (stats.motions() < 2 || stats.weight() <= 0.0) {
+    r.termination = Termination::kInsufficientMotion;
+    r.message = "initialising: " + std::to_string(stats.motions()) + " motions so far";
+    return r;
+  }
+  const bool translational = r.observability.max_rotation_deg < opt.alpha_maxrot_deg;
+  r.motion_model = translational ? MotionModel::kTranslational : MotionModel::kGeneral;
+  const double w = stats.weight();
+  std::map<int, double> scales;
+  if (translational) {
+    r.estimate.q = stats.SolveTranslationalRotation();
+    scales = stats.SolveTranslationalScales();
+    r.position_observable = false;
+    r.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
+    if (nominal) r.estimate.C = nominal->C;
+  } else {
+    Eigen::Vector4d eig;
+    r.estimate.q = stats.SolveRotation(&eig);
+    r.observability.rotation_eigenvalues = eig;
+    // Rotation covariance from the eigen-gaps: q = q0 + eps e_j rotates by 2 eps.
+    const double sigma2 = std::max(eig(0), 0.0) / std::max(1.0, 4.0 * w - 3.0);
+    double var = 0.0;
+    for (int j = 1; j < 4; ++j) {
+      var = std::max(var, 4.0 * sigma2 / std::max(eig(j) - eig(0), 1e-300));
+    }
+    r.rot_std_deg = std::sqrt(var) * kDegPerRad;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(stats.axis_scatter());
+    const Eigen::Vector3d e = axes.eigenvalues().cwiseMax(0.0);
+    r.observability.axis_spread_deg =
+        e(2) > 0.0 ? std::atan(std::sqrt((e(0) + e(1)) / e(2))) * kDegPerRad : 0.0;
+    if (r.observability.axis_spread_deg < opt.planar_axis_spread_deg) {
+      r.observability.planar = true;
+      r.observability.planar_axis = axes.eigenvectors().col(2);
+      r.unobservable.push_back(r.observability.planar_axis);
+    }
+    const internal::PositionSolution pos = stats.SolvePosition(r.estimate.q);
+    r.observability.position_min_eigenvalue = pos.min_eigenvalue;
+    if (pos.ok) {
+      r.estimate.C = pos.C;
+      scales = pos.scales;
+      const double dof = std::max(1.0, 3.0 * w - 3.0 - static_cast<double>(scales.size()));
+      const Eigen::Matrix3d cov = pos.residual_ss / dof * pos.information.inverse();
+      r.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+    } else if (nominal) {
+      r.estimate.C = nominal->C;
+    }
+    if (r.observability.planar && nominal) {
+      // The offset along the axis is not determined: keep the configured nominal value.
+      const Eigen::Vector3d a = r.observability.planar_axis;
+      r.estimate.C += (nominal->C.dot(a) - r.estimate.C.dot(a)) * a;
+    }
+  }
+  for (const auto& [id, v] : stats.closed_scales()) {
+    SegmentScale s;
+    s.segment = id;
+    s.scale = v;
+    r.scales.push_back(s);
+  }
+  for (const auto& [id, v] : scales) {
+    SegmentScale s;
+    s.segment = id;
+    s.scale = v;
+    r.scales.push_back(s);
+  }
+  std::sort(r.scales.begin(), r.scales.end(),
+            [](const SegmentScale& a, const SegmentScale& b) { return a.segment < b.segment; });
+  r.estimate.scale = 1.0;
+  for (const auto& s : r.scales) {
+    if (s.segment == current_segment) r.estimate.scale = s.scale;
+  }
+  r.scale_model = r.scales.size() > 1 ? ScaleModel::kSegments : ScaleModel::kFixed;
+  const bool finite = r.estimate.q.coeffs().allFinite() && r.estimate.C.allFinite() &&
+                      std::isfinite(r.estimate.scale);
+  r.termination = finite ? Termination::kConverged : Termination::kDegenerate;
+  return r;
+}
+
+}  // namespace
+
+struct RigEstimator::Slave {
+  std::deque<Keyframe> keyframes;
+  MotionStatistics long_stats;
+  MotionStatistics short_stats;
+  int64_t last_decay_ns = -1;
+  RunningVariance angle_var, rot_var, pos_var, ci_sq;
+  MotionCounts counts;
+  SlaveOnlineState online;
+  std::deque<WindowEntry> window;
+  SlaveCalibration linear;       // latest linear solution of the long statistics
+  std::optional<SlaveCalibration> refined;
+  int disagreements = 0;
+  int stable = 0;
+  bool general = false;      // some motion rotated by alpha_maxrot: general motion model
+  int accepted_in_model = 0; // accepted motions since the motion model last changed
+  int64_t decalibrated_at_ns = -1;
+  Eigen::Quaterniond last_q = Eigen::Quaterniond::Identity();
+};
+
+bool RigEstimatorOptions::Check(std::string* error) const {
+  std::ostringstream e;
+  if (!(keyframe_min_angle_deg >= 0.0)) e << "keyframe_min_angle_deg must be >= 0";
+  else if (!(keyframe_min_translation >= 0.0)) e << "keyframe_min_translation must be >= 0";
+  else if (keyframe_max_interval_ns <= 0) e << "keyframe_max_interval_ns must be > 0";
+  else if (keyframe_history < 2) e << "keyframe_history must be >= 2, got " << keyframe_history;
+  else if (!(pair_target_angle_deg > 0.0)) e << "pair_target_angle_deg must be > 0";
+  else if (!(pair_target_translation_fraction > 0.0))
+    e << "pair_target_translation_fraction must be > 0";
+  else if (pair_max_span_ns <= 0) e << "pair_max_span_ns must be > 0";
+  else if (!(angle_gate_floor_deg > 0.0)) e << "angle_gate_floor_deg must be > 0";
+  else if (!(gate_sigmas > 0.0)) e << "gate_sigmas must be > 0";
+  else if (!(huber_sigmas > 0.0)) e << "huber_sigmas must be > 0";
+  else if (!(scale_gate > 0.0)) e << "scale_gate must be > 0";
+  else if (half_life_s < 0.0) e << "half_life_s must be >= 0 (0 = never forget)";
+  else if (!(short_half_life_s > 0.0)) e << "short_half_life_s must be > 0";
+  else if (max_open_segments < 1) e << "max_open_segments must be >= 1";
+  else if (window_size < 2) e << "window_size must be >= 2";
+  else if (converged_min_motions < 2) e << "converged_min_motions must be >= 2";
+  if (error) *error = e.str();
+  return e.str().empty();
+}
+
+RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOptions options)
+    : names_(std::move(camera_names)), options_(std::move(options)) {
+  estimate_.rig.master = names_.empty() ? "" : names_[0];
+  for (size_t i = 1; i < names_.size(); ++i) {
+    slaves_.push_back(std::make_unique<Slave>());
+    SlaveCalibration c;
+    c.name = names_[i];
+    c.message = "initialising: no motion yet";
+    estimate_.rig.slaves.push_back(c);
+    estimate_.online.emplace_back();
+  }
+}
+
+RigEstimator::~RigEstimator() = default;
+
+const RigEstimate& RigEstimator::Estimate() const { return estimate_; }
+
+void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPose>>& poses) {
+  if ((estimate_.sets > 0 && t_ns <= estimate_.t_ns) || poses.empty() || !poses[0] ||
+      !poses[0]->pose.q.coeffs().allFinite() || !poses[0]->pose.C.allFinite()) {
+    ++estimate_.rejected_sets;
+    return;
+  }
+  estimate_.t_ns = t_ns;
+  ++estimate_.sets;
+  const CameraPose& master = *poses[0];
+  if (have_master_segment_ && master.segment != master_segment_) {
+    // New master unit: positions and scales restart; rotations are unit-free and stay.
+    ModuleLogger("calib")->info("master odometry re-initialised (segment {} -> {}): position "
+                                "and scales restart in the new master unit",
+                                master_segment_, master.segment);
+    for (auto& s : slaves_) {
+      s->long_stats.ResetPosition();
+      s->short_stats.ResetPosition();
+      s->keyframes.clear();
+      s->window.clear();
+      s->refined.reset();
+    }
+    ++generation_;
+  }
+  master_segment_ = master.segment;
+  have_master_segment_ = true;
+  for (size_t i = 0; i < slaves_.size() && i + 1 < poses.size(); ++i) {
+    if (!poses[i + 1]) continue;
+    const CameraPose& slave = *poses[i + 1];
+    if (!slave.pose.q.coeffs().allFinite() || !slave.pose.C.allFinite()) {
+      ++slaves_[i]->counts.residual_outlier;
+      PublishCounts(static_cast<int>(i));
+      continue;
+    }
+    UpdateSlave(static_cast<int>(i), t_ns, master, slave);
+  }
+}
+
+void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master,
+                               const CameraPose& slave) {
+  Slave& s = *slaves_[index];
+  const RigEstimatorOptions& o = options_;
+  if (!s.keyframes.empty() && s.keyframes.back().segment != slave.segment) {
+    s.keyframes.clear();  // pairs never cross a scale segment
+  }
+  s.online.segment = slave.segment;
+  if (!s.keyframes.empty()) {
+    const Keyframe& last = s.keyframes.back();
+    const double angle = AngleBetween(last.master.q, master.pose.q) * kDegPerRad;
+    const double trans = (master.pose.C - last.master.C).norm();
+    if (angle < o.keyframe_min_angle_deg && trans < o.keyframe_min_translation &&
+        t_ns - last.t_ns < o.keyframe_max_interval_ns) {
+      return;
+    }
+  }
+  s.keyframes.push_back({t_ns, master.pose, slave.pose, slave.segment});
+  if (static_cast<int>(s.keyframes.size()) > o.keyframe_history) s.keyframes.pop_front();
+  ++s.online.keyframes;
+  if (s.keyframes.size() < 2) return;
+
+  // Pair the new keyframe b with the latest a that gives a large enough motion.
+  const Keyframe& b = s.keyframes.back();
+  Eigen::Vector3d lo = b.master.C, hi = b.master.C;
+  for (const auto& k : s.keyframes) {
+    lo = lo.cwiseMin(k.master.C);
+    hi = hi.cwiseMax(k.master.C);
+  }
+  const double target_trans = o.pair_target_translation_fraction * (hi - lo).norm();
+  const double target_angle = o.pair_target_angle_deg * kRadPerDeg;
+  int chosen = -1;
+  for (int j = static_cast<int>(s.keyframes.size()) - 2; j >= 0; --j) {
+    const Keyframe& a = s.keyframes[j];
+    if (b.t_ns - a.t_ns > o.pair_max_span_ns) break;
+    chosen = j;
+    if (AngleBetween(a.master.q, b.master.q) >= target_angle ||
+        (b.master.C - a.master.C).norm() >= target_trans) {
+      break;
+    }
+  }
+  if (chosen < 0) return;
+  const Keyframe& a = s.keyframes[chosen];
+  RigMotion m;
+  m.master = a.master.Between(b.master);
+  m.slave = a.slave.Between(b.slave);
+  m.segment = b.segment;
+  m.t_a_ns = a.t_ns;
+  m.t_b_ns = b.t_ns;
+
+  std::vector<MotionData> data = internal::ToMotionData({m});
+  MotionData& md = data[0];
+  ++s.counts.total;
+  auto reject = [&](int* counter) {
+    ++*counter;
+    PublishCounts(index);
+  };
+  // The motion model follows every formed motion (not only accepted ones): once the rig has
+  // rotated by alpha_maxrot the general model applies, and the residual statistics restart.
+  if (!s.general && md.angle0 * kDegPerRad >= o.alpha_maxrot_deg) {
+    s.general = true;
+    s.accepted_in_model = 0;
+    s.rot_var = {};
+    s.pos_var = {};
+  }
+  const bool general = s.general;
+  if (general && md.angle0 * kDegPerRad < o.pair_min_angle_deg) {
+    reject(&s.counts.small_rotation);
+    return;
+  }
+  const bool have_estimate =
+      s.linear.usable() && (s.linear.motion_model == MotionModel::kGeneral) == general;
+  if (s.linear.usable()) internal::AlignSignsWith(ToWxyz(s.linear.estimate.q), &data);
+
+  // Gates.
+  const bool gating = s.accepted_in_model >= o.gate_after_motions && have_estimate;
+  const double angle_diff = std::abs(md.angle0 - md.anglei) * kDegPerRad;
+  const double angle_gate = gating ? std::max(o.angle_gate_floor_deg,
+                                              o.gate_sigmas * std::sqrt(s.angle_var.value))
+                                   : 4.0 * o.angle_gate_floor_deg;
+  if (angle_diff > angle_gate) {
+    reject(&s.counts.angle_mismatch);
+    return;
+  }
+  double weight = 1.0;
+  double r_rot = 0.0, r_pos = -1.0;
+  if (have_estimate) {
+    const Similarity& e = s.linear.estimate;
+    r_rot = internal::RotationResidual(md, ToWxyz(e.q));
+    double scale = 0.0;
+    for (const auto& sc : s.linear.scales) {
+      if (sc.segment == md.segment) scale = sc.scale;
+    }
+    if (scale > 0.0) {
+      r_pos = general ? internal::PositionResidual(md, e.q, e.C, scale)
+                      : internal::TranslationalResidual(md, e.q, scale);
+      // Screw-pitch invariant (4.18): the measured scale agrees with the current one.
+      const double vi = md.qi.tail<3>().norm(), v0 = md.q0.tail<3>().norm();
+      const double delta = 30.0 * 1e-3 * std::sqrt(s.ci_sq.value);  // 10x the 3-eps threshold
+      if (gating && general && vi > 1e-9 && v0 > 1e-9) {
+        const double si = md.Ci.dot(md.qi.tail<3>() / vi);
+        if (std::abs(si) > delta) {
+          const double measured = md.C0.dot(md.q0.tail<3>() / v0) / si;
+          if (std::abs(measured / scale - 1.0) > o.scale_gate) {
+            ++s.online.gated_scale;
+            reject(&s.counts.residual_outlier);
+            return;
+          }
+        }
+      }
+    }
+    if (gating) {
+      double worst = general ? r_rot / std::sqrt(std::max(s.rot_var.value, 1e-300)) : 0.0;
+      if (r_pos >= 0.0) worst = std::max(worst, r_pos / std::sqrt(std::max(s.pos_var.value, 1e-300)));
+      if (worst > o.gate_sigmas) {
+        reject(&s.counts.residual_outlier);
+        return;
+      }
+      if (worst > o.huber_sigmas) weight = o.huber_sigmas / worst;  // Huber
+    }
+  }
+  s.angle_var.Add(angle_diff * angle_diff);
+  s.ci_sq.Add(md.Ci.squaredNorm());
+  if (have_estimate) {
+    s.rot_var.Add(r_rot * r_rot);
+    if (r_pos >= 0.0) s.pos_var.Add(r_pos * r_pos);
+  }
+  ++s.accepted_in_model;
+
+  // Forgetting, then accumulate.
+  if (s.last_decay_ns >= 0) {
+    const int64_t dt = m.t_b_ns - s.last_decay_ns;
+    s.long_stats.Decay(Forget(dt, o.half_life_s));
+    s.short_stats.Decay(Forget(dt, o.short_half_life_s));
+  }
+  s.last_decay_ns = m.t_b_ns;
+  s.long_stats.Add(md, md.segment, weight);
+  s.short_stats.Add(md, md.segment, weight);
+  for (MotionStatistics* stats : {&s.long_stats, &s.short_stats}) {
+    while (static_cast<int>(stats->segments().size()) > o.max_open_segments) {
+      int oldest = stats->segments().begin()->first;
+      if (oldest == md.segment) oldest = std::next(stats->segments().begin())->first;
+      stats->MarginaliseSegment(oldest, have_estimate ? s.linear.estimate.q
+                                                      : Eigen::Quaterniond::Identity());
+    }
+  }
+  s.window.push_back({m, weight});
+  if (static_cast<int>(s.window.size()) > o.window_size) s.window.pop_front();
+  ++s.counts.used;
+  s.online.last_update_ns = m.t_b_ns;
+  Publish(index);
+}
+
+void RigEstimator::PublishCounts(int index) {
+  const MotionCounts& c = slaves_[index]->counts;
+  MotionCounts& p = estimate_.rig.slaves[index].motions;
+  p.total = c.total;
+  p.small_rotation = c.small_rotation;
+  p.angle_mismatch = c.angle_mismatch;
+  p.residual_outlier = c.residual_outlier;
+}
+
+void RigEstimator::Publish(int index) {
+  Slave& s = *slaves_[index];
+  const RigEstimatorOptions& o = options_;
+  const std::optional<Similarity> nominal =
+      index < static_cast<int>(o.nominal.size()) ? o.nominal[index] : std::nullopt;
+  s.linear = SolveStatistics(s.long_stats, o, nominal, s.online.segment);
+  for (const auto& [id, stats] : s.long_stats.segments()) {
+    for (const auto& sc : s.linear.scales) {
+      if (sc.segment == id) s.long_stats.SetSegmentScale(id, sc.scale);
+    }
+  }
+  SlaveOnlineState& online = s.online;
+  online.flags = 0;
+
+  // Decalibration: the short window disagrees with the long one for several keyframes.
+  const SlaveCalibration short_est = SolveStatistics(s.short_stats, o, nominal, online.segment);
+  online.short_long_rot_deg = 0.0;
+  // Planar motion leaves the rotation about the axis free: the windows may differ there.
+  if (s.linear.usable() && short_est.usable() && !s.linear.observability.planar &&
+      !short_est.observability.planar && short_est.motions.used >= o.converged_min_motions / 2) {
+    const double diff = AngleBetween(s.linear.estimate.q, short_est.estimate.q) * kDegPerRad;
+    online.short_long_rot_deg = diff;
+    const double sigma = std::hypot(s.linear.rot_std_deg, short_est.rot_std_deg);
+    bool disagree = diff > std::max(o.decalibration_min_deg, o.decalibration_sigmas * sigma);
+    if (o.decalibration_min_translation > 0.0 && s.linear.position_observable) {
+      disagree = disagree || (s.linear.estimate.C - short_est.estimate.C).norm() >
+                                 o.decalibration_min_translation;
+    }
+    s.disagreements = disagree ? s.disagreements + 1 : 0;
+    if (s.disagreements >= o.decalibration_confirmations) {
+      ModuleLogger("calib")->warn(
+          "slave '{}' decalibrated: short and long windows differ by {:.2f} deg; following the "
+          "new calibration",
+          names_[index + 1], diff);
+      s.long_stats = s.short_stats;  // re-converge on the recent motions
+      s.window.clear();
+      s.refined.reset();
+      s.disagreements = 0;
+      s.stable = 0;
+      s.decalibrated_at_ns = online.last_update_ns;
+      ++online.decalibration_events;
+      ++generation_;
+      s.linear = SolveStatistics(s.long_stats, o, nominal, online.segment);
+    }
+  }
+  const bool decalibrated = s.decalibrated_at_ns >= 0 &&
+                            online.last_update_ns - s.decalibrated_at_ns <
+                                static_cast<int64_t>(o.short_half_life_s * 1e9);
+  if (decalibrated) online.flags |= kFlagDecalibrated;
+
+  SlaveCalibration published = s.linear;
+  if (s.refined && s.linear.usable()) {
+    const double sigma = std::max(s.linear.rot_std_deg, 1e-3);
+    if (AngleBetween(s.refined->estimate.q, s.linear.estimate.q) * kDegPerRad <=
+        o.gate_sigmas * sigma) {
+      published = *s.refined;
+      published.motions = s.linear.motions;
+      online.flags |= kFlagRefined;
+    }
+  }
+  published.name = names_[index + 1];
+  published.motions.used = s.counts.used;
+
+  if (!published.usable()) {
+    online.flags |= kFlagInitialising;
+  } else {
+    const double change = AngleBetween(published.estimate.q, s.last_q) * kDegPerRad;
+    s.stable = change <= std::max(published.rot_std_deg, 0.01) ? s.stable + 1 : 0;
+    s.last_q = published.estimate.q;
+    if (published.motion_model == MotionModel::kTranslational) online.flags |= kFlagTranslationalOnly;
+    if (published.observability.planar) online.flags |= kFlagPlanar;
+    const double c_ref = std::max(1.0, published.estimate.C.norm());
+    const bool position_ok = !published.position_observable || published.observability.planar ||
+                             published.pos_std.maxCoeff() <= o.converged_pos_std_fraction * c_ref;
+    if (published.motions.used >= o.converged_min_motions &&
+        published.rot_std_deg <= o.converged_rot_std_deg && position_ok &&
+        s.stable >= o.converged_stable_keyframes && !decalibrated) {
+      online.flags |= kFlagConverged;
+    }
+  }
+  std::ostringstream msg;
+  msg << (online.flags & kFlagConverged ? "converged" : "converging") << ": "
+      << published.motions.used << " motions used, " << published.motions.rejected()
+      << " rejected; " << ToString(published.motion_model) << " motion";
+  if (online.flags & kFlagTranslationalOnly) msg << " (rotation and scale only)";
+  if (online.flags & kFlagPlanar) {
+    msg << "; planar motion: offset along the rotation axis unobservable"
+        << (o.nominal.size() > static_cast<size_t>(index) && o.nominal[index]
+                ? " (nominal value kept)"
+                : "");
+  }
+  if (decalibrated) msg << "; DECALIBRATED (camera moved), re-converging";
+  if (!published.usable()) msg.str(published.message);
+  published.message = msg.str();
+  estimate_.rig.slaves[index] = published;
+  estimate_.online[index] = online;
+  PublishCounts(index);
+}
+
+RefinementJob RigEstimator::MakeRefinementJob(int slave) const {
+  RefinementJob job;
+  job.slave = slave;
+  job.generation = generation_;
+  const Slave& s = *slaves_.at(slave);
+  for (const auto& w : s.window) {
+    job.motions.push_back(w.motion);
+    job.weights.push_back(w.weight);
+  }
+  job.start = s.linear;
+  return job;
+}
+
+bool RigEstimator::ApplyRefinement(const RefinementJob& job, const SlaveCalibration& refined) {
+  if (job.generation != generation_ || !refined.usable()) return false;
+  Slave& s = *slaves_.at(job.slave);
+  s.refined = refined;
+  Publish(job.slave);
+  return (estimate_.online[job.slave].flags & kFlagRefined) != 0;
+}
+
+SlaveCalibration RefineWindow(const RefinementJob& job) {
+  SlaveCalibration out = job.start;
+  if (!job.start.usable() || job.motions.size() < 3) return out;
+  std::vector<MotionData> data = internal::ToMotionData(job.motions);
+  internal::AlignSignsWith(ToWxyz(job.start.estimate.q), &data);
+  std::map<int, int> index;
+  internal::RefinementInput input;
+  input.q = job.start.estimate.q;
+  input.C = job.start.estimate.C;
+  input.translational = job.start.motion_model == MotionModel::kTranslational;
+  for (auto& m : data) {
+    auto [it, inserted] = index.emplace(m.segment, static_cast<int>(index.size()));
+    if (inserted) {
+      double scale = job.start.estimate.scale;
+      for (const auto& sc : job.start.scales) {
+        if (sc.segment == m.segment) scale = sc.scale;
+      }
+      input.scales.push_back(scale);
+    }
+    m.scale_index = it->second;
+  }
+  double ss_rot = 0.0, ss_pos = 0.0;
+  for (const auto& m : data) {
+    const double s = input.scales[m.scale_index];
+    ss_rot += std::pow(internal::RotationResidual(m, ToWxyz(input.q)), 2);
+    ss_pos += std::pow(input.translational ? internal::TranslationalResidual(m, input.q, s)
+                                           : internal::PositionResidual(m, input.q, input.C, s),
+                       2);
+  }
+  const double k = static_cast<double>(data.size());
+  input.sigma_rotation = std::max(std::sqrt(ss_rot / std::max(1.0, 4 * k - 3)), 1e-12);
+  input.sigma_position = std::max(std::sqrt(ss_pos / std::max(1.0, 3 * k - 7)), 1e-12);
+  CalibrationOptions options;
+  options.robust_loss = RobustLoss::kHuber;
+  const internal::RefinementResult r = internal::RefineNonlinear(data, input, options);
+  if (!r.q.coeffs().allFinite() || !r.C.allFinite()) return out;
+  out.estimate.q = r.q;
+  if (!input.translational) out.estimate.C = r.C;
+  for (auto& sc : out.scales) {
+    auto it = index.find(sc.segment);
+    if (it != index.end()) {
+      sc.scale = r.scales[it->second];
+      sc.std = r.scale_std[it->second];
+    }
+  }
+  const auto current = index.find(job.motions.back().segment);
+  if (current != index.end()) out.estimate.scale = r.scales[current->second];
+  if (r.covariance_ok) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(r.cov_rotation);
+    out.rot_std_deg = std::sqrt(std::max(0.0, eig.eigenvalues()(2))) * kDegPerRad;
+    if (!input.translational) out.pos_std = r.cov_position.diagonal().cwiseMax(0.0).cwiseSqrt();
+  }
+  out.termination = r.converged ? Termination::kConverged : Termination::kNoConvergence;
+  return out;
+}
+
+std::string RigEstimator::SerializeState() const {
+  std::ostringstream body;
+  body.precision(17);
+  body << "cameras " << names_.size();
+  for (const auto& n : names_) body << ' ' << n;
+  body << "\nmaster_segment " << master_segment_ << ' ' << (have_master_segment_ ? 1 : 0) << '\n';
+  for (size_t i = 0; i < slaves_.size(); ++i) {
+    const Slave& s = *slaves_[i];
+    body << "slave " << i << "\ncounts " << s.counts.total << ' ' << s.counts.used << ' '
+         << s.counts.small_rotation << ' ' << s.counts.angle_mismatch << ' '
+         << s.counts.residual_outlier << "\nnoise " << s.angle_var.value << ' '
+         << s.angle_var.count << ' ' << s.rot_var.value << ' ' << s.rot_var.count << ' '
+         << s.pos_var.value << ' ' << s.pos_var.count << ' ' << s.ci_sq.value << ' '
+         << s.ci_sq.count << "\nsegment " << s.online.segment << "\nlong\n"
+         << s.long_stats.Serialize() << "short\n"
+         << s.short_stats.Serialize();
+  }
+  const std::string text = body.str();
+  std::ostringstream out;
+  out << "rigcal-estimator-state " << kStateVersion << '\n'
+      << text << "checksum " << std::hex << Fnv1a(text) << '\n';
+  return out.str();
+}
+
+bool RigEstimator::RestoreState(const std::string& text, std::string* error) {
+  auto fail = [error](const std::string& why) {
+    if (error) *error = why;
+    return false;
+  };
+  std::istringstream in(text);
+  std::string magic;
+  int version = 0;
+  if (!(in >> magic >> version) || magic != "rigcal-estimator-state") {
+    return fail("not a rigcal estimator state (bad header)");
+  }
+  if (version != kStateVersion) {
+    return fail("state version " + std::to_string(version) + ", this build reads version " +
+                std::to_string(kStateVersion));
+  }
+  const size_t body_start = text.find('\n') + 1;
+  const size_t sum_pos = text.rfind("checksum ");
+  if (sum_pos == std::string::npos || sum_pos < body_start) return fail("missing checksum");
+  const std::string body = text.substr(body_start, sum_pos - body_start);
+  std::istringstream sum_in(text.substr(sum_pos + 9));
+  uint64_t stored = 0;
+  if (!(sum_in >> std::hex >> stored) || stored != Fnv1a(body)) {
+    return fail("checksum mismatch (file corrupt or truncated)");
+  }
+  std::istringstream b(body);
+  std::string word;
+  size_t count = 0;
+  if (!(b >> word >> count) || word != "cameras" || count != names_.size()) {
+    return fail("state is for a different rig (camera count)");
+  }
+  for (const auto& n : names_) {
+    if (!(b >> word) || word != n) return fail("state is for a different rig (camera '" + n + "')");
+  }
+  int master_segment = 0, have = 0;
+  if (!(b >> word >> master_segment >> have) || word != "master_segment") {
+    return fail("malformed master_segment");
+  }
+  std::vector<std::unique_ptr<Slave>> restored;
+  std::string rest((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
+  for (size_t i = 0; i < slaves_.size(); ++i) {
+    auto s = std::make_unique<Slave>();
+    std::istringstream sin(rest);
+    size_t idx = 0;
+    if (!(sin >> word >> idx) || word != "slave" || idx != i) return fail("malformed slave block");
+    if (!(sin >> word >> s->counts.total >> s->counts.used >> s->counts.small_rotation >>
+          s->counts.angle_mismatch >> s->counts.residual_outlier) ||
+        word != "counts") {
+      return fail("malformed counts of slave " + names_[i + 1]);
+    }
+    if (!(sin >> word >> s->angle_var.value >> s->angle_var.count >> s->rot_var.value >>
+          s->rot_var.count >> s->pos_var.value >> s->pos_var.count >> s->ci_sq.value >>
+          s->ci_sq.count) ||
+        word != "noise") {
+      return fail("malformed noise of slave " + names_[i + 1]);
+    }
+    if (!(sin >> word >> s->online.segment) || word != "segment") return fail("malformed segment");
+    std::string remaining((std::istreambuf_iterator<char>(sin)), std::istreambuf_iterator<char>());
+    const size_t long_pos = remaining.find("long\n");
+    const size_t short_pos = remaining.find("short\n");
+    if (long_pos == std::string::npos || short_pos == std::string::npos) {
+      return fail("malformed statistics of slave " + names_[i + 1]);
+    }
+    const size_t next = remaining.find("\nslave ", short_pos);
+    const std::string long_text = remaining.substr(long_pos + 5, short_pos - long_pos - 5);
+    const std::string short_text = remaining.substr(
+        short_pos + 6, next == std::string::npos ? std::string::npos : next + 1 - short_pos - 6);
+    if (!s->long_stats.Parse(long_text) || !s->short_stats.Parse(short_text)) {
+      return fail("malformed statistics of slave " + names_[i + 1]);
+    }
+    rest = next == std::string::npos ? "" : remaining.substr(next + 1);
+    restored.push_back(std::move(s));
+  }
+  slaves_ = std::move(restored);
+  master_segment_ = master_segment;
+  have_master_segment_ = have != 0;
+  ++generation_;
+  for (size_t i = 0; i < slaves_.size(); ++i) {
+    slaves_[i]->online.segment = slaves_[i]->online.segment;
+    Publish(static_cast<int>(i));
+  }
+  return true;
+}
+
+}  // namespace rigcal

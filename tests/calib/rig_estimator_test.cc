@@ -1,0 +1,348 @@
+#include "rigcal/calib/rig_estimator.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "rigcal/calib/error_model.h"
+#include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/rig_calibrator.h"
+#include "rigcal/calib/synthetic.h"
+
+namespace rigcal {
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+
+std::vector<std::string> Names(const RigRecording& rec) {
+  std::vector<std::string> names = {rec.master.name};
+  for (const auto& s : rec.slaves) names.push_back(s.name);
+  return names;
+}
+
+std::vector<std::optional<CameraPose>> SetAt(const RigRecording& rec, size_t k,
+                                             int64_t time_offset = 0) {
+  std::vector<std::optional<CameraPose>> set;
+  auto make = [&](const CameraTrack& t, int cam) {
+    CameraPose p;
+    p.camera = cam;
+    p.t_ns = rec.t_ns[k] + time_offset;
+    p.segment = t.segment.empty() ? 0 : t.segment[k];
+    p.pose = t.poses[k];
+    return p;
+  };
+  set.push_back(make(rec.master, 0));
+  for (size_t i = 0; i < rec.slaves.size(); ++i) set.push_back(make(rec.slaves[i], i + 1));
+  return set;
+}
+
+void Feed(RigEstimator* est, const RigRecording& rec, size_t from = 0, size_t to = SIZE_MAX) {
+  for (size_t k = from; k < std::min(to, rec.size()); ++k) est->AddSet(rec.t_ns[k], SetAt(rec, k));
+}
+
+SyntheticDrive NoisyDrive(int frames, uint64_t seed = 1, int slaves = 2) {
+  DriveOptions d;
+  d.num_frames = frames;
+  d.seed = seed;
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.002;
+  std::vector<Similarity> rigs = DemoRig();
+  rigs.resize(slaves, rigs[0]);
+  std::vector<std::string> names = {"front", "left", "back", "right"};
+  names.resize(slaves + 1);
+  return GenerateDrive(names, rigs, d);
+}
+
+// Online estimate == batch linear least squares of the same motions (forgetting, gating and
+// Huber weights off). The sums are the same; only the summation order differs, so the
+// difference is at rounding level.
+TEST(RigEstimator, EqualsBatchLinearSolution) {
+  for (double segment_period : {0.0, 20.0}) {
+    DriveOptions d;
+    d.num_frames = 1200;
+    d.rotation_noise_deg = 0.05;
+    d.position_noise = 0.002;
+    d.segment_period_s = segment_period;
+    const SyntheticDrive drive = GenerateDrive({"m", "a", "b"}, DemoRig(), d);
+    RigEstimatorOptions o;
+    o.gate_after_motions = 1 << 30;
+    o.half_life_s = 0.0;
+    o.window_size = 1 << 20;
+    o.max_open_segments = 100;
+    RigEstimator est(Names(drive.recording), o);
+    Feed(&est, drive.recording);
+    for (int i = 0; i < 2; ++i) {
+      const RefinementJob job = est.MakeRefinementJob(i);
+      ASSERT_GT(job.motions.size(), 50u);
+      CalibrationOptions batch;
+      batch.method = Method::kLinear;
+      batch.motion_model = MotionModel::kGeneral;
+      batch.scale_model = ScaleModel::kSegments;
+      batch.alpha_threshold_deg = 0.0;
+      batch.outlier_mad_factor = 1e12;
+      batch.max_outlier_rounds = 0;
+      batch.compute_covariance = false;
+      const SlaveCalibration b = CalibrateSlave(job.motions, batch);
+      const SlaveCalibration& online = est.Estimate().rig.slaves[i];
+      ASSERT_TRUE(b.usable()) << b.message;
+      ASSERT_TRUE(online.usable()) << online.message;
+      EXPECT_LT(AngleBetween(online.estimate.q, b.estimate.q), 1e-9);
+      EXPECT_LT((online.estimate.C - b.estimate.C).norm(), 1e-9 * b.estimate.C.norm());
+      ASSERT_EQ(online.scales.size(), b.scales.size());
+      for (size_t s = 0; s < b.scales.size(); ++s) {
+        EXPECT_EQ(online.scales[s].segment, b.scales[s].segment);
+        EXPECT_NEAR(online.scales[s].scale, b.scales[s].scale, 1e-9 * b.scales[s].scale);
+      }
+    }
+  }
+}
+
+long ResidentKiB() {
+  std::ifstream statm("/proc/self/statm");
+  long pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * 4;
+}
+
+// 1e6 sets: memory must stay flat after the first keyframes fill the bounded buffers.
+TEST(RigEstimator, MemoryStaysBounded) {
+  const SyntheticDrive drive = NoisyDrive(2000);  // periodic: frame 2000 == frame 0
+  RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+  const int64_t period = drive.recording.t_ns.back() + 50'000'000;
+  const size_t total = kSanitized ? 200'000 : 1'000'000;
+  long rss_after_warmup = 0;
+  for (size_t n = 0; n < total; ++n) {
+    const size_t k = n % drive.recording.size();
+    const int64_t offset = static_cast<int64_t>(n / drive.recording.size()) * period;
+    est.AddSet(drive.recording.t_ns[k] + offset, SetAt(drive.recording, k, offset));
+    if (n == total / 10) rss_after_warmup = ResidentKiB();
+  }
+  const long growth = ResidentKiB() - rss_after_warmup;
+  EXPECT_LT(growth, 2048) << "RSS grew by " << growth << " KiB";
+  EXPECT_EQ(est.Estimate().sets, total);
+  EXPECT_TRUE(est.Estimate().rig.slaves[0].usable());
+}
+
+TEST(RigEstimator, ConvergesOnGeneralDrive) {
+  const SyntheticDrive drive = NoisyDrive(2400);
+  RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&est, drive.recording);
+  for (int i = 0; i < 2; ++i) {
+    const auto& r = est.Estimate().rig.slaves[i];
+    const auto& online = est.Estimate().online[i];
+    ASSERT_TRUE(r.usable()) << r.message;
+    EXPECT_TRUE(online.flags & kFlagConverged) << r.message;
+    EXPECT_FALSE(online.flags & kFlagDecalibrated);
+    const auto e = CompareToTruth(r.estimate, drive.truth[i]);
+    EXPECT_LT(e.rot_deg, 0.2) << r.message;
+    EXPECT_LT(e.trans_err, 0.03);
+    EXPECT_LT(e.scale_pct, 1.0);
+    // The reported sigma is of the right order: the error is within 6 sigma per axis.
+    EXPECT_LT(e.rot_deg, 6 * std::sqrt(3.0) * r.rot_std_deg + 0.01);
+  }
+}
+
+TEST(RigEstimator, PlanarDriveFlagsVerticalOffset) {
+  DriveOptions d;
+  d.motion = DriveOptions::Motion::kPlanarYaw;
+  d.num_frames = 1600;
+  d.rotation_noise_deg = 0.02;
+  d.position_noise = 0.001;
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {DemoRig()[0]}, d);
+  RigEstimatorOptions o;
+  Similarity nominal = drive.truth[0];
+  nominal.C.y() += 0.05;  // CAD value 5 cm off along the (unobservable) vertical
+  o.nominal = {nominal};
+  RigEstimator est(Names(drive.recording), o);
+  Feed(&est, drive.recording);
+  const auto& r = est.Estimate().rig.slaves[0];
+  EXPECT_TRUE(est.Estimate().online[0].flags & kFlagPlanar) << r.message;
+  ASSERT_FALSE(r.unobservable.empty());
+  EXPECT_NEAR(std::abs(r.unobservable.back().dot(Eigen::Vector3d::UnitY())), 1.0, 1e-3);
+  EXPECT_NE(r.message.find("unobservable"), std::string::npos);
+  const Eigen::Vector3d axis = r.unobservable.back().normalized();
+  EXPECT_NEAR(r.estimate.C.dot(axis), nominal.C.dot(axis), 1e-9);
+}
+
+TEST(RigEstimator, PureTranslationGivesRotationAndScaleOnly) {
+  DriveOptions d;
+  d.motion = DriveOptions::Motion::kTranslationOnly;
+  d.num_frames = 1200;
+  d.rotation_noise_deg = 0.02;
+  d.position_noise = 0.001;
+  const SyntheticDrive drive = GenerateDrive({"front", "back"}, {DemoRig()[1]}, d);
+  RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&est, drive.recording);
+  const auto& r = est.Estimate().rig.slaves[0];
+  ASSERT_TRUE(r.usable()) << r.message;
+  EXPECT_TRUE(est.Estimate().online[0].flags & kFlagTranslationalOnly);
+  EXPECT_FALSE(r.position_observable);
+  const auto e = CompareToTruth(r.estimate, drive.truth[0]);
+  EXPECT_LT(e.rot_deg, 0.5);
+  EXPECT_LT(e.scale_pct, 2.0);
+}
+
+TEST(RigEstimator, ScaleSegmentsFromOdometryResets) {
+  DriveOptions d;
+  d.num_frames = 3600;  // 3 minutes, a reset every 30 s
+  d.segment_period_s = 30.0;
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.002;
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {DemoRig()[0]}, d);
+  DriveOptions clean = d;
+  clean.rotation_noise_deg = 0.0;
+  clean.position_noise = 0.0;
+  const SyntheticDrive exact = GenerateDrive({"front", "left"}, {DemoRig()[0]}, clean);
+  // Noise-free batch calibration recovers the segment scales exactly (rig_calibrator_test).
+  const SlaveCalibration truth = CalibrateRig(exact.recording, CalibrationOptions{}).slaves[0];
+  ASSERT_EQ(truth.scales.size(), 6u) << truth.message;
+
+  RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&est, drive.recording);
+  const auto& r = est.Estimate().rig.slaves[0];
+  ASSERT_TRUE(r.usable()) << r.message;
+  EXPECT_EQ(est.Estimate().online[0].segment, 5);
+  ASSERT_EQ(r.scales.size(), 6u);  // closed (marginalised) and open segments
+  for (size_t s = 0; s < 6; ++s) {
+    EXPECT_EQ(r.scales[s].segment, static_cast<int>(s));
+    EXPECT_NEAR(r.scales[s].scale / truth.scales[s].scale, 1.0, 0.02) << "segment " << s;
+  }
+  EXPECT_NEAR(r.estimate.scale / truth.scales[5].scale, 1.0, 0.02);
+  EXPECT_LT(CompareToTruth(r.estimate, drive.truth[0]).rot_deg, 0.2);
+}
+
+TEST(RigEstimator, BumpedCameraIsFlaggedAndFollowed) {
+  DriveOptions d;
+  d.num_frames = 4800;  // 4 minutes; the left camera is knocked by 2 deg at 2 minutes
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.002;
+  Similarity bumped = DemoRig()[0];
+  bumped.q = AxisAngle(Eigen::Vector3d(0.3, 1.0, -0.2), 2.0 * kRadPerDeg) * bumped.q;
+  d.change_frame = 2400;
+  d.changed_rigs = {bumped};
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {DemoRig()[0]}, d);
+  RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&est, drive.recording, 0, 2400);
+  ASSERT_TRUE(est.Estimate().online[0].flags & kFlagConverged);
+  EXPECT_LT(CompareToTruth(est.Estimate().rig.slaves[0].estimate, drive.truth[0]).rot_deg, 0.2);
+  bool flagged = false;
+  for (size_t k = 2400; k < drive.recording.size(); ++k) {
+    est.AddSet(drive.recording.t_ns[k], SetAt(drive.recording, k));
+    flagged = flagged || (est.Estimate().online[0].flags & kFlagDecalibrated);
+  }
+  EXPECT_TRUE(flagged);
+  EXPECT_GE(est.Estimate().online[0].decalibration_events, 1);
+  const auto& r = est.Estimate().rig.slaves[0];
+  EXPECT_LT(CompareToTruth(r.estimate, bumped).rot_deg, 0.3) << r.message;
+  EXPECT_TRUE(est.Estimate().online[0].flags & kFlagConverged) << r.message;
+}
+
+TEST(RigEstimator, GarbagePosesDoNotMoveTheEstimate) {
+  SyntheticDrive drive = NoisyDrive(2400, 3, 1);
+  RigEstimator clean(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&clean, drive.recording);
+  std::mt19937_64 rng(5);
+  auto& poses = drive.recording.slaves[0].poses;
+  for (size_t k = 7; k < poses.size(); k += 20) {  // 5 % garbage
+    poses[k].q = AxisAngle(RandomUnitVector(rng), 0.8) * poses[k].q;
+    poses[k].C += RandomUnitVector(rng) * 1.5;
+  }
+  RigEstimator dirty(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&dirty, drive.recording);
+  const auto e_clean = CompareToTruth(clean.Estimate().rig.slaves[0].estimate, drive.truth[0]);
+  const auto& r = dirty.Estimate().rig.slaves[0];
+  const auto e_dirty = CompareToTruth(r.estimate, drive.truth[0]);
+  EXPECT_GT(r.motions.rejected(), 0);
+  EXPECT_LT(e_dirty.rot_deg, 3 * e_clean.rot_deg + 0.05) << r.message;
+  EXPECT_LT(e_dirty.trans_err, 3 * e_clean.trans_err + 0.01);
+}
+
+TEST(RigEstimator, WindowRefinementIsPublishedWhenConsistent) {
+  const SyntheticDrive drive = NoisyDrive(1600, 8, 1);
+  RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&est, drive.recording);
+  const auto linear = est.Estimate().rig.slaves[0];
+  const RefinementJob job = est.MakeRefinementJob(0);
+  const SlaveCalibration refined = RefineWindow(job);
+  ASSERT_TRUE(refined.usable());
+  EXPECT_TRUE(est.ApplyRefinement(job, refined));
+  EXPECT_TRUE(est.Estimate().online[0].flags & kFlagRefined);
+  const auto e_lin = CompareToTruth(linear.estimate, drive.truth[0]);
+  const auto e_nl = CompareToTruth(est.Estimate().rig.slaves[0].estimate, drive.truth[0]);
+  EXPECT_LT(e_nl.rot_deg, 2 * e_lin.rot_deg + 0.02);
+  // A job made before a reset of the statistics is refused.
+  RefinementJob stale = job;
+  stale.generation = job.generation + 1;
+  EXPECT_FALSE(est.ApplyRefinement(stale, refined));
+}
+
+TEST(RigEstimator, StateRoundTripAndCorruptFiles) {
+  const SyntheticDrive drive = NoisyDrive(1200, 4, 2);
+  const auto names = Names(drive.recording);
+  RigEstimator est(names, RigEstimatorOptions{});
+  Feed(&est, drive.recording);
+  const std::string state = est.SerializeState();
+
+  RigEstimator restored(names, RigEstimatorOptions{});
+  std::string error;
+  ASSERT_TRUE(restored.RestoreState(state, &error)) << error;
+  for (int i = 0; i < 2; ++i) {
+    const auto& a = est.Estimate().rig.slaves[i].estimate;
+    const auto& b = restored.Estimate().rig.slaves[i].estimate;
+    EXPECT_LT(AngleBetween(a.q, b.q), 1e-12);
+    EXPECT_LT((a.C - b.C).norm(), 1e-12);
+    EXPECT_NEAR(a.scale, b.scale, 1e-12);
+  }
+
+  RigEstimator fresh(names, RigEstimatorOptions{});
+  std::string corrupt = state;
+  corrupt[corrupt.size() / 2] = corrupt[corrupt.size() / 2] == '1' ? '2' : '1';
+  EXPECT_FALSE(fresh.RestoreState(corrupt, &error));
+  EXPECT_NE(error.find("checksum"), std::string::npos) << error;
+  EXPECT_FALSE(fresh.RestoreState(state.substr(0, state.size() / 3), &error));
+  std::string other_version = state;
+  other_version.replace(other_version.find(" 1\n"), 3, " 9\n");
+  EXPECT_FALSE(fresh.RestoreState(other_version, &error));
+  EXPECT_NE(error.find("version 9"), std::string::npos) << error;
+  RigEstimator other_rig({"front", "left", "rear"}, RigEstimatorOptions{});
+  EXPECT_FALSE(other_rig.RestoreState(state, &error));
+  EXPECT_NE(error.find("different rig"), std::string::npos) << error;
+  EXPECT_FALSE(fresh.RestoreState("garbage", &error));
+  EXPECT_EQ(fresh.Estimate().rig.slaves[0].motions.used, 0);  // unchanged
+}
+
+TEST(RigEstimator, BadSetsAreCountedAndIgnored) {
+  const SyntheticDrive drive = NoisyDrive(1200, 6, 1);
+  RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&est, drive.recording, 0, 800);
+  const auto before = est.Estimate().rig.slaves[0].estimate;
+  auto set = SetAt(drive.recording, 10);  // time going backwards
+  est.AddSet(drive.recording.t_ns[10], set);
+  auto nan_master = SetAt(drive.recording, 801);
+  nan_master[0]->pose.C.x() = std::nan("");
+  est.AddSet(drive.recording.t_ns[801], nan_master);
+  est.AddSet(drive.recording.t_ns[802], {});  // empty set
+  EXPECT_EQ(est.Estimate().rejected_sets, 3u);
+  auto nan_slave = SetAt(drive.recording, 803);
+  nan_slave[1]->pose.q.w() = std::nan("");
+  est.AddSet(drive.recording.t_ns[803], nan_slave);
+  const auto after = est.Estimate().rig.slaves[0].estimate;
+  EXPECT_LT(AngleBetween(before.q, after.q), 1e-12);
+  EXPECT_GE(est.Estimate().rig.slaves[0].motions.residual_outlier, 1);
+}
+
+TEST(RigEstimatorOptions, CheckNamesField) {
+  RigEstimatorOptions o;
+  o.window_size = 1;
+  std::string error;
+  EXPECT_FALSE(o.Check(&error));
+  EXPECT_NE(error.find("window_size"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rigcal
