@@ -20,6 +20,9 @@ PACKAGES=(
   libgtest-dev         # unit tests
   libgmock-dev         # unit tests (matchers)
   libbenchmark-dev     # benchmarks under tests/bench
+  liblcm-dev           # LCM messaging: RIGCAL_EXTRINSICS/STATUS/POSE/IMAGE (lcmtypes/, tools/)
+  liblcm-bin           # lcm-gen (build-time message generation), lcm-logger, lcm-logplayer
+  libglib2.0-dev       # lcm.pc requires glib-2.0 and gthread-2.0
 )
 
 missing=()

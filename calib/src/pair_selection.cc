@@ -41,7 +41,7 @@ std::vector<IndexPair> RelativePairs(const RigRecording& rec, int step) {
   return pairs;
 }
 
-std::vector<IndexPair> AutoPairs(const RigRecording& rec, const PairOptions& opt) {
+std::vector<IndexPair> WalkPairs(const RigRecording& rec, const PairOptions& opt) {
   std::vector<IndexPair> pairs;
   const int n = static_cast<int>(rec.size());
   if (n < 2) return pairs;
@@ -60,6 +60,12 @@ std::vector<IndexPair> AutoPairs(const RigRecording& rec, const PairOptions& opt
     double chosen_angle = 0.0, chosen_trans = 0.0;
     for (int b = a + 1; b < n && b - a <= max_span; ++b) {
       if (SegmentOf(rec.master, b) != seg) break;
+      // A pair across any slave's re-initialisation would be lost for that slave.
+      bool slave_boundary = false;
+      for (const auto& slave : rec.slaves) {
+        slave_boundary = slave_boundary || SegmentOf(slave, b) != SegmentOf(slave, a);
+      }
+      if (slave_boundary) break;
       const double angle = AngleBetween(poses[a].q, poses[b].q);
       const double trans = (poses[b].C - poses[a].C).norm();
       chosen = b;
@@ -73,7 +79,64 @@ std::vector<IndexPair> AutoPairs(const RigRecording& rec, const PairOptions& opt
   return pairs;
 }
 
+// Scale-free noise of the motions of one span: the rotation angles of master and slave motion
+// must be equal, so the spread of their difference measures the pose noise plus the drift
+// accumulated over the span, while the master angle measures the signal.
+struct SpanFigures {
+  double median_angle = 0.0;  // radians
+  double noise = 0.0;         // 1.4826 MAD of (master angle - slave angle), radians
+};
+
+SpanFigures MeasureSpan(const RigRecording& rec, int span, int samples) {
+  const int n = static_cast<int>(rec.size());
+  const int stride = std::max(1, (n - span) / samples);
+  std::vector<double> angles, diffs;
+  for (int a = 0; a + span < n; a += stride) {
+    if (SegmentOf(rec.master, a) != SegmentOf(rec.master, a + span)) continue;
+    const double angle = AngleBetween(rec.master.poses[a].q, rec.master.poses[a + span].q);
+    angles.push_back(angle);
+    for (const auto& slave : rec.slaves) {
+      if (SegmentOf(slave, a) != SegmentOf(slave, a + span)) continue;
+      diffs.push_back(angle - AngleBetween(slave.poses[a].q, slave.poses[a + span].q));
+    }
+  }
+  SpanFigures f;
+  if (angles.empty()) return f;
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  f.median_angle = median(angles);
+  if (!diffs.empty()) {
+    const double m = median(diffs);
+    for (double& d : diffs) d = std::abs(d - m);
+    f.noise = 1.4826 * median(diffs);
+  }
+  return f;
+}
+
 }  // namespace
+
+int AutoPairSpan(const RigRecording& recording, const PairOptions& options) {
+  const int n = static_cast<int>(recording.size());
+  const int max_span = std::max(1, static_cast<int>(options.max_span_fraction * n));
+  const double cap = options.target_angle_deg * kRadPerDeg;
+  int best_span = 0;
+  double best_score = 0.0, best_angle = 0.0;
+  for (int span = 1; span <= max_span && span < n; span *= 2) {
+    const SpanFigures f = MeasureSpan(recording, span, 200);
+    // Signal to noise of the span's motions; angles beyond the cap add no information
+    // (and approach the 180-degree sign ambiguity).
+    const double score = std::min(f.median_angle, cap) / std::max(f.noise, 1e-6);
+    if (score > best_score) {
+      best_score = score;
+      best_span = span;
+      best_angle = f.median_angle;
+    }
+  }
+  if (best_angle < options.min_angle_deg * kRadPerDeg) return 0;  // no rotation to speak of
+  return best_span;
+}
 
 bool PairOptions::Check(std::string* error) const {
   std::ostringstream e;
@@ -95,8 +158,18 @@ std::vector<IndexPair> SelectPairs(const RigRecording& recording, const PairOpti
       return SinceStartPairs(recording);
     case PairOptions::Policy::kRelative:
       return RelativePairs(recording, options.step);
-    case PairOptions::Policy::kAuto:
-      return AutoPairs(recording, options);
+    case PairOptions::Policy::kAuto: {
+      // Walk to the target angle, but not beyond the spans whose motions are still better
+      // than noise (twice the best span).
+      PairOptions walk = options;
+      const int span = AutoPairSpan(recording, options);
+      const int n = static_cast<int>(recording.size());
+      if (span > 0 && n > 0) {
+        walk.max_span_fraction =
+            std::min(options.max_span_fraction, std::max(2.0 * span, 2.0) / n);
+      }
+      return WalkPairs(recording, walk);
+    }
   }
   return {};
 }

@@ -198,8 +198,8 @@ std::string Table(const PeerResults& r, const std::string& title) {
   out << std::fixed << std::setprecision(4);
   out << "  method        mean rot [deg]  mean |C err|  mean scale err [%]  failures\n";
   out << "  rigcal NL     " << std::setw(14) << r.rigcal.rot_deg << "  " << std::setw(12)
-      << r.rigcal.trans << "  " << std::setw(18) << r.rigcal.scale_pct << "  "
-      << r.rigcal.failures << "\n";
+      << r.rigcal.trans << "  " << std::setw(18) << r.rigcal.scale_pct << "  " << r.rigcal.failures
+      << "\n";
   for (int m = 0; m < kNumMethods; ++m) {
     out << "  OpenCV " << std::left << std::setw(10) << ToString(kAllHandEyeMethods[m])
         << std::right << std::setw(10) << r.opencv[m].rot_deg << "  " << std::setw(12)
@@ -218,8 +218,8 @@ std::string Table(const PeerResults& r, const std::string& title) {
 // rotations; TSAI (Rodrigues-type parameters, singular at 180 deg), HORAUD and DANIILIDIS
 // (OpenCV's rot2quat does not align the quaternion signs of the two cameras' motions, which
 // breaks for motions beyond ~90-120 deg) fail on large rotations, so all five are checked on
-// motions and rig rotations up to 60 deg and PARK, ANDREFF also up to 180 deg. 1e-9 leaves ~6 orders of magnitude above the
-// double round-off of these small problems (observed ~1e-14).
+// motions and rig rotations up to 60 deg and PARK, ANDREFF also up to 180 deg. 1e-9 leaves ~6
+// orders of magnitude above the double round-off of these small problems (observed ~1e-14).
 TEST(OpenCvPeerTest, MappingRecoversMasterFromSlaveOnExactData) {
   for (const double max_deg : {60.0, 180.0}) {
     for (int seed = 0; seed < 5; ++seed) {
@@ -268,9 +268,9 @@ TEST(OpenCvPeerTest, WrongMappingIsDetected) {
   }
   const auto he = support::OpenCvHandEye(master, slave_inverse, HandEyeMethod::kPark);
   ASSERT_TRUE(he.ok);
-  EXPECT_GT(AngleBetween(he.master_from_slave.q, truth.q) +
-                (he.master_from_slave.C - truth.C).norm(),
-            1e-3);
+  EXPECT_GT(
+      AngleBetween(he.master_from_slave.q, truth.q) + (he.master_from_slave.C - truth.C).norm(),
+      1e-3);
 }
 
 // Metric data: rigcal NL vs the best OpenCV method per metric.
@@ -341,8 +341,8 @@ TEST(OpenCvPeerTest, ScaledSlaveRigcalRecoversScaleOpenCvDoesNot) {
   EXPECT_LT(r.max_scale_equivariance, 1e-9);
 
   // Rigid translation step: fails by far.
-  for (HandEyeMethod method : {HandEyeMethod::kTsai, HandEyeMethod::kPark,
-                               HandEyeMethod::kHoraud}) {
+  for (HandEyeMethod method :
+       {HandEyeMethod::kTsai, HandEyeMethod::kPark, HandEyeMethod::kHoraud}) {
     const int m = static_cast<int>(method);
     EXPECT_GT(r.opencv[m].trans, 10.0 * r.rigcal.trans) << ToString(method);
   }

@@ -27,10 +27,13 @@ TEST(PairSelection, SinceStartAndRelative) {
 
 TEST(PairSelection, AutoReachesTargetWithinSpan) {
   const RigRecording rec = Drive(1000);
-  PairOptions opt;  // auto
+  PairOptions opt;  // auto, with a target the demo drive (35 deg amplitude) reaches
+  opt.target_angle_deg = 30.0;
   const auto pairs = SelectPairs(rec, opt);
   ASSERT_GT(pairs.size(), 500u);
-  const int max_span = static_cast<int>(opt.max_span_fraction * rec.size());
+  const int span = AutoPairSpan(rec, opt);
+  ASSERT_GT(span, 0);
+  const int max_span = std::min(static_cast<int>(opt.max_span_fraction * rec.size()), 2 * span);
   int reached = 0;
   for (const auto& p : pairs) {
     ASSERT_LT(p.a, p.b);
@@ -44,6 +47,29 @@ TEST(PairSelection, AutoReachesTargetWithinSpan) {
     }
   }
   EXPECT_GT(reached, 0);
+}
+
+// White pose noise: longer spans only add signal, so the best span is long. Random-walk drift
+// makes the noise grow with the span, so the best span is shorter.
+TEST(PairSelection, AutoSpanFollowsNoiseKind) {
+  DriveOptions white;
+  white.num_frames = 2000;
+  white.rotation_noise_deg = 0.2;
+  white.position_noise = 0.0;
+  DriveOptions drift = white;
+  drift.rotation_noise_deg = 0.01;
+  drift.drift_deg_per_frame = 0.05;
+  const auto rec_white = GenerateDrive({"m", "s"}, {DemoRig()[0]}, white).recording;
+  const auto rec_drift = GenerateDrive({"m", "s"}, {DemoRig()[0]}, drift).recording;
+  const int span_white = AutoPairSpan(rec_white, PairOptions{});
+  const int span_drift = AutoPairSpan(rec_drift, PairOptions{});
+  EXPECT_GE(span_white, 128);
+  EXPECT_LT(span_drift, span_white);
+  // No rotation: 0, the walk goes by translation.
+  DriveOptions still = white;
+  still.motion = DriveOptions::Motion::kTranslationOnly;
+  still.rotation_noise_deg = 0.0;
+  EXPECT_EQ(AutoPairSpan(GenerateDrive({"m", "s"}, {DemoRig()[0]}, still).recording, {}), 0);
 }
 
 TEST(PairSelection, NeverCrossesSegments) {

@@ -25,14 +25,17 @@ struct PairOptions {
   // kAuto. For anchors a spread evenly over the recording, b walks forward from a until the
   // master motion a->b is "large enough": its rotation angle reaches target_angle_deg or its
   // translation reaches target_translation_fraction of the master trajectory's extent
-  // (bounding-box diagonal). A pair whose span would exceed max_span_fraction of the
-  // recording stops there (bounded drift). Pairs whose motion stays below both
-  // min_angle_deg and min_translation_fraction are not used.
-  double target_angle_deg = 30.0;
+  // (bounding-box diagonal). The walk stops at the longest useful span: twice the span whose
+  // motions have the best signal-to-noise ratio (AutoPairSpan below: white pose noise favours
+  // long spans, drift short ones), and never beyond max_span_fraction of the recording.
+  // Pairs whose motion stays below both min_angle_deg and min_translation_fraction are not
+  // used. Large rotations inform both rotation and position ((I - R_0) grows with the angle);
+  // beyond ~120 degrees the quaternion sign becomes ambiguous under noise.
+  double target_angle_deg = 120.0;
   double target_translation_fraction = 0.5;
   double min_angle_deg = 3.0;
   double min_translation_fraction = 0.05;
-  double max_span_fraction = 0.25;
+  double max_span_fraction = 0.5;
   int max_pairs = 4000;  // anchors are thinned to at most this many pairs
 
   // Empty when valid, else the offending field and constraint.
@@ -54,5 +57,13 @@ std::vector<RigMotion> MotionsForSlave(const RigRecording& recording, int slave_
                                        const std::vector<IndexPair>& pairs);
 
 std::string ToString(PairOptions::Policy policy);
+
+// The span (in poses) that kAuto uses when the rig rotates: among the spans 1, 2, 4, ... up to
+// max_span_fraction of the recording, the one whose motions have the best ratio of master
+// rotation angle (capped at target_angle_deg) to scale-free noise (the spread of the
+// difference of master and slave rotation angles, which must be equal). White pose noise
+// favours long spans, accumulating drift short ones. 0 when the rig hardly rotates (median
+// angle below min_angle_deg at every span): kAuto then walks by translation instead.
+int AutoPairSpan(const RigRecording& recording, const PairOptions& options);
 
 }  // namespace rigcal

@@ -1,0 +1,196 @@
+#pragma once
+// SyncBuffer: matches the odometry poses of all cameras of a rig by capture time (or by
+// hardware trigger sequence number) and hands time-corresponding sets to the estimator.
+//
+// Threads: producers (one VO thread per camera, or an LCM receive thread) call Push, possibly
+// concurrently; one consumer (the estimator thread) calls Pop/TryPop. The buffer owns no
+// thread and starts none. Every member function is thread-safe.
+//
+// Memory: everything is allocated in the constructor: one fixed ring of `capacity` entries per
+// camera and a fixed queue of `ready_capacity` matched sets. Nothing grows afterwards; a full
+// ring or queue drops its oldest element, and every drop is counted in SyncStats by cause.
+//
+// Matching rule. Entries of each camera form a stream strictly increasing in t_ns (Push rejects
+// the rest). Only the OLDEST buffered master entry m is ever resolved, so sets leave in strictly
+// increasing master time; it is resolved (emitted or dropped) as soon as one of these holds:
+//
+//  * Partner of m in slave j: the entry s of j's ring that matches m with the smallest distance
+//    (ties: the earlier entry). s matches m when, in trigger mode (match_by_trigger_seq) and both
+//    carry a sequence number (>= 0), s.trigger_seq == m.trigger_seq (distance 0, stamps ignored);
+//    otherwise when |s.t_ns - m.t_ns| <= tolerance (distance = |s.t_ns - m.t_ns|).
+//  * The partner of j is FINAL when no entry still to come from j could be strictly closer: it
+//    is exact (distance 0), or j's newest entry already lies at or beyond m.t_ns + distance - 1
+//    (later entries are later still), or, without a partner, j's newest entry lies beyond
+//    m.t_ns + tolerance. In trigger mode, when j's newest entry carries a sequence number, future
+//    entries of j are assumed to carry increasing numbers too: a match can still arrive iff j's
+//    newest number is < m's. An OPTIONAL slave that has fallen more than max_wait behind the
+//    newest stamp of any camera (dead or badly lagging; stamp mode only) is final as it is.
+//  * Emit m when every slave is final and every required slave has a partner; the set holds the
+//    partners (an optional slave without one is left empty and counted optional_missing).
+//  * Drop m (never_matched) as soon as a required slave is final without a partner.
+//  * Timeout: when m has waited longer than max_wait in stream time (newest stamp of any camera
+//    minus m.t_ns; in trigger mode the newest MASTER stamp, as slave clocks may be offset), m is
+//    emitted with the partners it has if every required slave has one, else dropped
+//    (never_matched).
+//
+// After m is resolved, each used slave entry and every older entry of its ring leave the ring
+// (the older ones count never_matched: entries are used at most once, in time order), and slave
+// entries that can no longer match any later master (stamp < m.t_ns - tolerance + 1, or in
+// trigger mode sequence <= m's) are dropped as never_matched. Everything is deterministic: the
+// same sequence of Push calls gives the same sets.
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/types.h"
+
+namespace rigcal {
+
+struct SyncOptions {
+  // Cameras of the rig: index 0 is the master, 1..num_cameras-1 the slaves. In [1, 256].
+  int num_cameras = 2;
+  // Entries buffered per camera (a fixed ring allocated once). In [1, 2^20]. A push into a full
+  // ring drops that ring's oldest entry (counted as overflow).
+  int capacity = 64;
+  // Nominal frame period of the cameras [ns] (50 ms: 20 Hz). Sets the defaults of tolerance_ns
+  // and max_wait_ns. In (0, 1 h].
+  int64_t frame_period_ns = 50'000'000;
+  // Largest |t_slave - t_master| of a stamp match [ns], inclusive. 0 (default) means
+  // frame_period_ns / 2. In [0, 1 h].
+  int64_t tolerance_ns = 0;
+  // How long a master entry waits for its partners [ns], measured in stream time (see the rule
+  // above), before it is emitted with the partners it has or dropped as never matched.
+  // 0 (default) means 3 * frame_period_ns. In [0, 1 h].
+  int64_t max_wait_ns = 0;
+  // required[i]: camera i must be in every set. Empty (default) = every camera. Otherwise one
+  // flag per camera, and required[0] (the master) must be true. Optional slaves are included
+  // when they have a partner when the set is emitted.
+  std::vector<bool> required;
+  // Trigger mode: entries that both carry a trigger sequence number (>= 0) match iff the numbers
+  // are equal, whatever their stamps (cameras on different clocks). Entries without a number
+  // still match by stamp. Sequence numbers must increase with t_ns within each camera.
+  bool match_by_trigger_seq = false;
+  // Matched sets held for the consumer (a fixed queue). In [1, 2^20]. When the consumer is too
+  // slow the oldest ready set is dropped (counted as consumer_overflow).
+  int ready_capacity = 32;
+
+  // tolerance_ns, or frame_period_ns / 2 when it is 0.
+  int64_t EffectiveToleranceNs() const;
+  // max_wait_ns, or 3 * frame_period_ns when it is 0.
+  int64_t EffectiveMaxWaitNs() const;
+  // Whether camera `camera` must be in every set (the master always is).
+  bool IsRequired(int camera) const;
+  // True when valid. Otherwise false, and *error (if not null) names the offending field and
+  // the violated constraint.
+  bool Check(std::string* error) const;
+};
+
+// The outcome of one Push. Drops of OTHER entries caused by a push (overflow, never_matched)
+// are only counted in SyncStats.
+enum class PushResult {
+  kAccepted,       // buffered (the ring's oldest entry may have been dropped as overflow)
+  kStopped,        // Stop() was called
+  kUnknownCamera,  // camera index outside [0, num_cameras)
+  kInvalid,        // t_ns < 0, a non-finite or zero quaternion / centre, or non-finite quality
+  kLate,           // can never be matched any more: not newer than this camera's member of the
+                   // last emitted set, or (slaves) too old for any master still to come
+  kDuplicate,      // same stamp, or same trigger_seq (>= 0), as a buffered entry of the camera
+                   // (or as its newest entry ever accepted)
+  kOutOfOrder,     // older than the newest entry accepted for the camera, but not late (in
+                   // trigger mode also: a lower sequence number than the newest)
+};
+const char* ToString(PushResult result);
+
+// One time-corresponding set: the master entry and its partners.
+struct MatchedSet {
+  int64_t t_ns = 0;  // the master's stamp [ns]
+  // Indexed by camera; poses[0] (the master) and every required camera are always set, an
+  // optional camera without a partner is empty. Sized num_cameras by Pop.
+  std::vector<std::optional<CameraPose>> poses;
+};
+
+// Counters of one camera since construction. For every camera:
+//   pushed == used + Dropped() + fill.
+struct SyncCameraStats {
+  uint64_t pushed = 0;            // Push calls for this camera, whatever their outcome
+  uint64_t used = 0;              // entries that became members of an emitted set
+  uint64_t stopped = 0;           // rejected: Push after Stop
+  uint64_t invalid = 0;           // rejected: PushResult::kInvalid
+  uint64_t late = 0;              // rejected: PushResult::kLate
+  uint64_t duplicate = 0;         // rejected: PushResult::kDuplicate
+  uint64_t out_of_order = 0;      // rejected: PushResult::kOutOfOrder
+  uint64_t overflow = 0;          // accepted, then dropped as the oldest entry of a full ring
+  uint64_t never_matched = 0;     // accepted, then dropped unused (see the matching rule)
+  uint64_t optional_missing = 0;  // emitted sets without this (optional) camera
+  uint64_t fill = 0;              // entries buffered now (<= capacity)
+
+  uint64_t Dropped() const {
+    return stopped + invalid + late + duplicate + out_of_order + overflow + never_matched;
+  }
+};
+
+// A snapshot of the counters. Sets: sets_emitted == sets_popped + consumer_overflow +
+// ready_fill, and sets_emitted == cameras[0].used.
+struct SyncStats {
+  std::vector<SyncCameraStats> cameras;  // indexed by camera
+  SyncCameraStats total;                 // sum over cameras
+  uint64_t unknown_camera = 0;           // pushes with a camera index out of range
+  uint64_t sets_emitted = 0;             // sets put into the ready queue
+  uint64_t sets_popped = 0;              // sets handed to the consumer
+  uint64_t consumer_overflow = 0;        // ready sets dropped because the queue was full
+  uint64_t ready_fill = 0;               // ready sets waiting for the consumer now
+
+  // One line for logs: sets, fills and the non-zero drop counters.
+  std::string BriefReport() const;
+};
+
+class SyncBuffer {
+ public:
+  // Allocates all storage. Throws std::invalid_argument with Check()'s message when `options`
+  // is invalid. Starts no thread.
+  explicit SyncBuffer(const SyncOptions& options);
+  ~SyncBuffer();
+  SyncBuffer(const SyncBuffer&) = delete;
+  SyncBuffer& operator=(const SyncBuffer&) = delete;
+
+  const SyncOptions& options() const;
+
+  // Offers one pose (copied). Any thread; concurrent calls are serialised. Never blocks on the
+  // consumer and never allocates. Matched sets are emitted into the ready queue by this call
+  // (see the matching rule); a full ready queue drops its oldest set. Returns kAccepted or the
+  // reason the pose was rejected.
+  PushResult Push(const CameraPose& pose);
+
+  // Waits up to `timeout` for a ready set, copies the oldest one into *out and removes it from
+  // the queue. out's storage is reused: no allocation once out->poses has held num_cameras
+  // entries. Returns false on
+  // timeout, or at once when Stop() was called and no ready set is left. `out` must not be null.
+  // Meant for one consumer thread (several are safe, each set goes to one of them).
+  bool Pop(MatchedSet* out, std::chrono::milliseconds timeout);
+  // Pop without waiting: false when no set is ready.
+  bool TryPop(MatchedSet* out);
+
+  // End of stream (e.g. the end of a log): resolves every buffered master entry now, without
+  // waiting for closer partners, as if its max_wait had passed (emitted with the partners it
+  // has, or dropped as never_matched). Slave entries stay. Any thread; pushes may continue.
+  void Flush();
+
+  // Wakes every waiting Pop. Afterwards Push returns kStopped, and Pop returns the sets that are
+  // still ready, then false. Buffered master entries are not flushed (call Flush first to get
+  // them). Idempotent; any thread.
+  void Stop();
+  bool stopped() const;
+
+  // A consistent snapshot of the counters (allocates the per-camera vector). Any thread.
+  SyncStats stats() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rigcal

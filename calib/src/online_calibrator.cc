@@ -1,0 +1,127 @@
+#include "rigcal/calib/online_calibrator.h"
+
+#include <stdexcept>
+
+#include "rigcal/calib/logging.h"
+
+namespace rigcal {
+namespace {
+
+SyncOptions WithCameraCount(SyncOptions sync, size_t cameras) {
+  sync.num_cameras = static_cast<int>(cameras);
+  return sync;
+}
+
+}  // namespace
+
+bool OnlineOptions::Check(std::string* error) const {
+  std::string e;
+  if (!sync.Check(&e)) {
+    if (error) *error = "sync." + e;
+    return false;
+  }
+  if (!estimator.Check(&e)) {
+    if (error) *error = "estimator." + e;
+    return false;
+  }
+  if (refine_period_s < 0.0) {
+    if (error) *error = "refine_period_s must be >= 0 (0 = no refinement)";
+    return false;
+  }
+  return true;
+}
+
+OnlineCalibrator::OnlineCalibrator(std::vector<std::string> camera_names, OnlineOptions options)
+    : names_(std::move(camera_names)),
+      options_(std::move(options)),
+      sync_(WithCameraCount(options_.sync, names_.size())),
+      estimator_(names_, options_.estimator) {
+  std::string error;
+  if (!options_.estimator.Check(&error)) throw std::invalid_argument("estimator." + error);
+  if (options_.refine_period_s < 0.0) throw std::invalid_argument("refine_period_s must be >= 0");
+}
+
+OnlineCalibrator::~OnlineCalibrator() { Stop(); }
+
+void OnlineCalibrator::Start() {
+  estimator_thread_ = std::thread(&OnlineCalibrator::EstimatorLoop, this);
+  if (options_.refine_period_s > 0.0) {
+    refinement_thread_ = std::thread(&OnlineCalibrator::RefinementLoop, this);
+  }
+}
+
+PushResult OnlineCalibrator::Push(const CameraPose& pose) { return sync_.Push(pose); }
+
+void OnlineCalibrator::Flush() {
+  sync_.Flush();
+  const uint64_t target = sync_.stats().sets_emitted;
+  std::unique_lock<std::mutex> lock(estimator_mutex_);
+  // Sets dropped by a full ready queue never arrive: wait for the queue to drain instead.
+  consumed_.wait_for(lock, std::chrono::seconds(30), [&] {
+    return sets_consumed_ >= target || sync_.stats().ready_fill == 0;
+  });
+}
+
+void OnlineCalibrator::Stop() {
+  {
+    std::lock_guard<std::mutex> lock(stop_mutex_);
+    stopping_ = true;
+  }
+  stop_cv_.notify_all();
+  sync_.Stop();
+  if (estimator_thread_.joinable()) estimator_thread_.join();
+  if (refinement_thread_.joinable()) refinement_thread_.join();
+}
+
+RigEstimate OnlineCalibrator::Estimate() const {
+  std::lock_guard<std::mutex> lock(estimator_mutex_);
+  return estimator_.Estimate();
+}
+
+std::string OnlineCalibrator::SerializeState() const {
+  std::lock_guard<std::mutex> lock(estimator_mutex_);
+  return estimator_.SerializeState();
+}
+
+bool OnlineCalibrator::RestoreState(const std::string& text, std::string* error) {
+  std::lock_guard<std::mutex> lock(estimator_mutex_);
+  return estimator_.RestoreState(text, error);
+}
+
+void OnlineCalibrator::EstimatorLoop() {
+  MatchedSet set;
+  while (sync_.Pop(&set, std::chrono::milliseconds(200)) || !sync_.stopped()) {
+    if (set.poses.empty()) continue;
+    {
+      std::lock_guard<std::mutex> lock(estimator_mutex_);
+      estimator_.AddSet(set.t_ns, set.poses);
+      ++sets_consumed_;
+    }
+    consumed_.notify_all();
+    set.poses.clear();
+  }
+  consumed_.notify_all();
+}
+
+void OnlineCalibrator::RefinementLoop() {
+  auto log = ModuleLogger("calib");
+  const auto period = std::chrono::duration<double>(options_.refine_period_s);
+  std::unique_lock<std::mutex> stop_lock(stop_mutex_);
+  while (!stop_cv_.wait_for(stop_lock, period, [this] { return stopping_; })) {
+    stop_lock.unlock();
+    for (size_t i = 0; i + 1 < names_.size(); ++i) {
+      RefinementJob job;
+      {
+        std::lock_guard<std::mutex> lock(estimator_mutex_);
+        job = estimator_.MakeRefinementJob(static_cast<int>(i));
+      }
+      if (!job.start.usable() || job.motions.size() < 10) continue;
+      const SlaveCalibration refined = RefineWindow(job);
+      std::lock_guard<std::mutex> lock(estimator_mutex_);
+      if (estimator_.ApplyRefinement(job, refined)) ++refinements_applied_;
+    }
+    stop_lock.lock();
+  }
+}
+
+}  // namespace rigcal

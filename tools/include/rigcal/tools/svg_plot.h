@@ -1,0 +1,58 @@
+#pragma once
+// A small standalone SVG line-plot writer for the experiment figures: one or more panels, each
+// with axes, "nice" ticks, axis labels, a title, a legend and any number of line series.
+// No external library; the output is a valid standalone SVG 1.1 document with XML-escaped text.
+
+#include <string>
+#include <vector>
+
+namespace rigcal {
+
+struct PlotSeries {
+  std::string label;      // legend text (empty: not in the legend)
+  std::vector<double> x;  // same length as y
+  std::vector<double> y;  // a non-finite value breaks the line into separate pieces
+  std::string color;      // CSS colour; empty = the palette colour of the series index
+  bool dashed = false;
+  bool markers = true;  // a small circle at every finite point
+};
+
+enum class LegendPosition {
+  kTopLeft,       // inside the plot area
+  kTopRight,      // inside the plot area
+  kOutsideRight,  // right of the plot area (which gets narrower), never covers data
+};
+
+struct PlotPanel {
+  std::string title;
+  std::string x_label;
+  std::string y_label;
+  std::vector<PlotSeries> series;
+  bool y_from_zero = true;  // the y range always includes 0 (error plots)
+  LegendPosition legend = LegendPosition::kTopLeft;
+};
+
+struct PlotFigure {
+  std::string title;              // above all panels (may be empty)
+  std::vector<PlotPanel> panels;  // laid out left to right, top to bottom
+  int columns = 0;                // panels per row; 0 = all panels in one row
+  int panel_width = 400;          // pixels, including the panel's axis margins
+  int panel_height = 320;
+};
+
+// The figure as an SVG document. Every series is drawn as one <g class="series"> element (also
+// when it has no finite point), so a reader can count the series of a figure. Thread-safe.
+std::string RenderSvg(const PlotFigure& figure);
+
+// Renders `figure` and writes it to `path` atomically (temporary file in the same directory,
+// then rename). Returns false and sets *error (if not null) when the file cannot be written.
+bool WriteSvg(const PlotFigure& figure, const std::string& path, std::string* error);
+
+// `text` with &, <, >, " and ' replaced by XML entities.
+std::string XmlEscape(const std::string& text);
+
+// Tick positions covering [lo, hi] with a step of 1, 2 or 5 times a power of ten, about
+// `target_count` ticks. The first tick is <= lo and the last >= hi. lo < hi, both finite.
+std::vector<double> NiceTicks(double lo, double hi, int target_count);
+
+}  // namespace rigcal
