@@ -2,6 +2,8 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 #include "rigcal/calib/quaternion.h"
 
@@ -32,6 +34,62 @@ Eigen::Matrix4d RotationConstraintMatrix(const MotionData& m) {
 }
 
 LinearRotation SolveLinearRotation(std::vector<MotionData>* motions) {
+  // Near 180 degrees the scalar parts are below the noise and canonical signs may disagree
+  // between master and slave; one such motion spoils the first estimate. Resolve those signs
+  // first: by trying every combination when there are few, else from the other motions.
+  constexpr double kAmbiguousW = 0.2588;  // cos(75 deg): rotations beyond 150 degrees
+  std::vector<size_t> ambiguous;
+  for (size_t k = 0; k < motions->size(); ++k) {
+    const auto& m = (*motions)[k];
+    if (std::min(std::abs(m.q0[0]), std::abs(m.qi[0])) < kAmbiguousW) ambiguous.push_back(k);
+  }
+  if (!ambiguous.empty() && ambiguous.size() <= 10) {
+    const Eigen::Matrix4d base = [&] {
+      Eigen::Matrix4d sum = Eigen::Matrix4d::Zero();
+      size_t next = 0;
+      for (size_t k = 0; k < motions->size(); ++k) {
+        if (next < ambiguous.size() && ambiguous[next] == k) {
+          ++next;
+          continue;
+        }
+        const Eigen::Matrix4d a = RotationConstraintMatrix((*motions)[k]);
+        sum.noalias() += a.transpose() * a;
+      }
+      return sum;
+    }();
+    double best = std::numeric_limits<double>::infinity();
+    uint32_t best_mask = 0;
+    for (uint32_t mask = 0; mask < (1u << ambiguous.size()); ++mask) {
+      Eigen::Matrix4d sum = base;
+      for (size_t j = 0; j < ambiguous.size(); ++j) {
+        MotionData m = (*motions)[ambiguous[j]];
+        if (mask & (1u << j)) m.qi = -m.qi;
+        const Eigen::Matrix4d a = RotationConstraintMatrix(m);
+        sum.noalias() += a.transpose() * a;
+      }
+      const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(
+                                  sum, Eigen::EigenvaluesOnly)
+                                  .eigenvalues()(0);
+      if (smallest < best) {
+        best = smallest;
+        best_mask = mask;
+      }
+    }
+    for (size_t j = 0; j < ambiguous.size(); ++j) {
+      if (best_mask & (1u << j)) (*motions)[ambiguous[j]].qi = -(*motions)[ambiguous[j]].qi;
+    }
+  } else if (!ambiguous.empty() && motions->size() - ambiguous.size() >= 2) {
+    std::vector<MotionData> clear;
+    size_t next = 0;
+    for (size_t k = 0; k < motions->size(); ++k) {
+      if (next < ambiguous.size() && ambiguous[next] == k) {
+        ++next;
+      } else {
+        clear.push_back((*motions)[k]);
+      }
+    }
+    AlignSignsWith(ToWxyz(SmallestEigenvector(RotationSystem(clear)).q), motions);
+  }
   LinearRotation first = SmallestEigenvector(RotationSystem(*motions));
   AlignSignsWith(ToWxyz(first.q), motions);
   LinearRotation second = SmallestEigenvector(RotationSystem(*motions));
