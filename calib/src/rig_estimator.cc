@@ -465,9 +465,10 @@ void RigEstimator::Publish(int index) {
   if (!published.usable()) {
     online.flags |= kFlagInitialising;
   } else {
-    const double change = AngleBetween(published.estimate.q, s.last_q) * kDegPerRad;
-    s.stable = change <= std::max(published.rot_std_deg, 0.01) ? s.stable + 1 : 0;
-    s.last_q = published.estimate.q;
+    // Stability of the linear estimate (a refinement being published is no change).
+    const double change = AngleBetween(s.linear.estimate.q, s.last_q) * kDegPerRad;
+    s.stable = change <= std::max(s.linear.rot_std_deg, 0.01) ? s.stable + 1 : 0;
+    s.last_q = s.linear.estimate.q;
     if (published.motion_model == MotionModel::kTranslational) online.flags |= kFlagTranslationalOnly;
     if (published.observability.planar) online.flags |= kFlagPlanar;
     const double c_ref = std::max(1.0, published.estimate.C.norm());

@@ -11,6 +11,7 @@
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/rig_calibrator.h"
+#include "rigcal/tools/online_replay.h"
 #include "rigcal/tools/result_json.h"
 #include "rigcal/tools/rig_files.h"
 #include "rigcal/tools/trajectory_io.h"
@@ -36,6 +37,8 @@ struct SolveArgs {
   std::string out;
   std::string camchain;
   bool json = false;
+  bool online = false;
+  double report_every_s = 10.0;
 };
 
 // Parses the positive integer after `prefix` in `text` ("partitions:4" -> 4), else 0.
@@ -139,8 +142,20 @@ int RunSolve(const SolveArgs& args) {
             slaves.size() + 1, args.tolerance_ms);
 
   RigCalibration result;
+  const std::map<std::string, Similarity>* truth_for_replay = args.truth.empty() ? nullptr : &truth;
   try {
-    result = CalibrateRig(*recording, options);
+    if (args.online) {
+      tools::OnlineReplayOptions replay;
+      replay.report_every_s = args.report_every_s;
+      const tools::OnlineReplayResult online =
+          tools::ReplayOnline(*recording, replay, truth_for_replay);
+      // Convergence goes to stderr with --json so stdout stays one JSON object.
+      (args.json ? std::cerr : std::cout) << tools::FormatConvergence(online.history) << "\n";
+      log->info("sync buffer: {}", online.sync.BriefReport());
+      result = online.estimate.rig;
+    } else {
+      result = CalibrateRig(*recording, options);
+    }
   } catch (const std::exception& e) {
     return Fail(std::string("calibration failed: ") + e.what());
   }
@@ -263,6 +278,15 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
                   "the usable slaves in --slave order, each with T_cn_cnm1\n"
                   "(extrinsics only, no intrinsics).")
       ->type_name("FILE");
+  cmd->add_flag("--online", args->online,
+                "Feed the trajectories through the online path instead (sync buffer and "
+                "recursive estimator, as `rigcal calib` does live) and print how the estimate "
+                "converges over time (errors too with --truth). --method/--pairs/--scale do "
+                "not apply: the online estimator picks keyframe pairs and segment scales.");
+  cmd->add_option("--report-every", args->report_every_s,
+                  "With --online: seconds of stream time between convergence lines")
+      ->default_val(10.0)
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--json", args->json,
                 "Print only the result, as one JSON object, on stdout (logs stay\n"
                 "on stderr).");
