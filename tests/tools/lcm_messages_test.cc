@@ -1,6 +1,6 @@
 // The rigcal LCM messages: encode/decode round trips of every type, conversion from and to the
 // calib types, every rejection cause of the validator, in-process publish/subscribe (memq://)
-// and LCM log files. Never udpm:// (DESIGN.md "LCM").
+// and LCM log files. Never UDP multicast (DESIGN.md "LCM").
 #include "rigcal/tools/lcm_messages.h"
 
 #include <gmock/gmock.h>
