@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "motion_geometry.h"
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal {
@@ -102,16 +103,8 @@ SpanFigures MeasureSpan(const RigRecording& rec, int span, int samples) {
   }
   SpanFigures f;
   if (angles.empty()) return f;
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  f.median_angle = median(angles);
-  if (!diffs.empty()) {
-    const double m = median(diffs);
-    for (double& d : diffs) d = std::abs(d - m);
-    f.noise = 1.4826 * median(diffs);
-  }
+  f.median_angle = internal::Robust(angles).median;
+  if (!diffs.empty()) f.noise = internal::Robust(diffs).sigma;
   return f;
 }
 
