@@ -1,0 +1,1 @@
+#include "rigcal/drivers/frame.h"

@@ -1,0 +1,1 @@
+#include "rigcal/vo/camera_model.h"
