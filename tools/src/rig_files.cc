@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "rigcal/tools/atomic_file.h"
+#include "rigcal/tools/yaml_fields.h"
 
 namespace rigcal::tools {
 namespace {
@@ -50,97 +51,6 @@ void EmitRigEntry(YAML::Emitter& out, const Similarity& rig) {
   EmitVector(out, rig.C.data(), 3);
   out << YAML::Key << "scale" << YAML::Value << Num(rig.scale);
 }
-
-Expected<std::string> ReadWholeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{path + ": cannot open: " + std::strerror(errno)};
-  std::ostringstream contents;
-  contents << in.rdbuf();
-  if (in.bad()) return Error{path + ": read error"};
-  return contents.str();
-}
-
-Expected<YAML::Node> LoadYaml(const std::string& path) {
-  auto text = ReadWholeFile(path);
-  if (!text) return Error{text.error()};
-  try {
-    return YAML::Load(*text);
-  } catch (const YAML::ParserException& e) {
-    return Error{path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg};
-  } catch (const YAML::Exception& e) {
-    return Error{path + ": YAML error: " + e.what()};
-  }
-}
-
-// Field access with errors of the form `<path>:<line>: <field>: <what>`.
-class FieldReader {
- public:
-  explicit FieldReader(const std::string& path) : path_(path) {}
-
-  std::string At(const YAML::Node& node) const {
-    const YAML::Mark mark = node.Mark();
-    if (mark.is_null()) return path_ + ": ";
-    return path_ + ":" + std::to_string(mark.line + 1) + ": ";
-  }
-
-  Error Fail(const YAML::Node& node, const std::string& field, const std::string& what) const {
-    return Error{At(node) + field + ": " + what};
-  }
-
-  Expected<double> Number(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) return Fail(node, field, "expected a number");
-    const std::string& text = node.Scalar();
-    std::string_view view(text);
-    if (view.size() > 1 && view[0] == '+') view.remove_prefix(1);
-    double value = 0.0;
-    const auto [ptr, ec] = std::from_chars(view.data(), view.data() + view.size(), value);
-    if (view.empty() || ec != std::errc() || ptr != view.data() + view.size()) {
-      return Fail(node, field, "'" + text + "' is not a number");
-    }
-    if (!std::isfinite(value)) return Fail(node, field, "'" + text + "' is not finite");
-    return value;
-  }
-
-  Expected<int> Integer(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) return Fail(node, field, "expected an integer");
-    const std::string& text = node.Scalar();
-    int value = 0;
-    const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (text.empty() || ec != std::errc() || ptr != text.data() + text.size()) {
-      return Fail(node, field, "'" + text + "' is not an integer");
-    }
-    return value;
-  }
-
-  // A sequence of exactly `n` numbers at parent[key]; missing key is an error at the parent.
-  Expected<std::vector<double>> Numbers(const YAML::Node& parent, const std::string& key,
-                                        const std::string& field, size_t n) const {
-    const YAML::Node node = parent[key];
-    if (!node) return Fail(parent, field, "missing (expected " + std::to_string(n) + " numbers)");
-    return NumbersOf(node, field, n);
-  }
-
-  Expected<std::vector<double>> NumbersOf(const YAML::Node& node, const std::string& field,
-                                          size_t n) const {
-    if (!node.IsSequence()) {
-      return Fail(node, field, "expected a list of " + std::to_string(n) + " numbers");
-    }
-    if (node.size() != n) {
-      return Fail(node, field,
-                  "expected " + std::to_string(n) + " numbers, got " + std::to_string(node.size()));
-    }
-    std::vector<double> values;
-    for (size_t i = 0; i < n; ++i) {
-      auto v = Number(node[i], field + "[" + std::to_string(i) + "]");
-      if (!v) return Error{v.error()};
-      values.push_back(*v);
-    }
-    return values;
-  }
-
- private:
-  const std::string& path_;
-};
 
 Expected<Similarity> ReadSlave(const FieldReader& r, const std::string& name,
                                const YAML::Node& node) {
