@@ -9,5 +9,7 @@ namespace rigcal::cli {
 void RegisterSolve(CLI::App& app, int* exit_code);
 void RegisterExperiment(CLI::App& app, int* exit_code);
 void RegisterDemo(CLI::App& app, int* exit_code);
+void RegisterCalib(CLI::App& app, int* exit_code);
+void RegisterSynthLog(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# Multi-process test over real udpm:// LCM: `rigcal calib` listens, lcm-logplayer publishes the
+# poses of a simulated drive, lcm-logger records the bus. Everything runs inside a private
+# network namespace this script creates (unshare --net), with a multicast route on its own lo;
+# nothing is ever sent in the host's network namespace.
+# Usage: lcm_udpm_netns_test.sh <path to rigcal>. Exit 77 = skipped (no namespace support).
+set -euo pipefail
+rigcal=$(readlink -f "$1")
+
+if [ "${RIGCAL_IN_PRIVATE_NETNS:-}" != 1 ]; then
+  for tool in unshare ip lcm-logger lcm-logplayer; do
+    command -v "$tool" >/dev/null || { echo "skip: $tool not found"; exit 77; }
+  done
+  if ! unshare --net true 2>/dev/null; then
+    echo "skip: cannot create a network namespace here (needs root or user namespaces)"
+    exit 77
+  fi
+  RIGCAL_IN_PRIVATE_NETNS=1 exec unshare --net --fork bash "$0" "$@"
+fi
+
+# Inside the new namespace: lo must be the only link, or this is not a private namespace.
+links=$(ip -o link show | awk -F': ' '{print $2}' | tr '\n' ' ')
+if [ "$links" != "lo " ]; then
+  echo "FAIL: expected only lo in the private namespace, found: $links"
+  exit 1
+fi
+ip link set lo up
+ip link set lo multicast on
+ip route add 224.0.0.0/4 dev lo
+url='udpm://239.255.76.67:7667?ttl=0'
+
+dir=$(mktemp -d)
+pids=()
+cleanup() {
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  rm -rf "$dir"
+}
+trap cleanup EXIT
+
+cat > "$dir/rig.yaml" <<YAML
+rig: {name: netns_test, master: front}
+cameras:
+  - name: front
+  - name: left
+    truth: {q_wxyz: [0.7071068, 0, 0.7071068, 0], C: [0.5, 0, -0.2], scale: 2}
+  - name: back
+    truth: {q_wxyz: [0, 0, 1, 0], C: [0, 0.1, -1.5], scale: 0.5}
+publish: {extrinsics_rate_hz: 5, status_rate_hz: 2}
+state: {path: $dir/state.txt, save_interval_s: 1}
+YAML
+
+"$rigcal" synth-log --config "$dir/rig.yaml" --out "$dir/poses.lcmlog" --frames 1200 \
+  --truth-out "$dir/truth.yaml"
+
+lcm-logger --lcm-url="$url" "$dir/bus.lcmlog" >/dev/null 2>&1 &
+logger_pid=$!
+pids+=("$logger_pid")
+"$rigcal" calib --config "$dir/rig.yaml" --lcm "$url" --out "$dir/result.yaml" \
+  --report-every 2 --json > "$dir/result.json" &
+node_pid=$!
+pids+=("$node_pid")
+sleep 1
+# 60 s of poses at 6x speed.
+lcm-logplayer --lcm-url="$url" --speed=6 "$dir/poses.lcmlog"
+sleep 1
+
+stop() {  # stop a process we started, by PID: SIGINT, then SIGTERM if it does not end
+  local pid=$1
+  kill -INT "$pid" 2>/dev/null || return 0
+  for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.1; done
+  kill -TERM "$pid" 2>/dev/null || true
+}
+stop "$node_pid"
+node_rc=0
+wait "$node_pid" || node_rc=$?
+stop "$logger_pid"
+wait "$logger_pid" || true
+pids=()
+
+fail=0
+check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
+check "rigcal calib exits 0 after SIGINT (got $node_rc)" '[ "$node_rc" -eq 0 ]'
+check "result YAML written" '[ -s "$dir/result.yaml" ]'
+check "both slaves usable in the result" \
+  '[ "$(grep -c "usable: true" "$dir/result.yaml")" -eq 2 ]'
+check "state file saved" '[ -s "$dir/state.txt" ]'
+check "RIGCAL_EXTRINSICS seen on the bus" 'grep -aq RIGCAL_EXTRINSICS "$dir/bus.lcmlog"'
+check "RIGCAL_STATUS seen on the bus" 'grep -aq RIGCAL_STATUS "$dir/bus.lcmlog"'
+# Accuracy against the truth, from the JSON "errors" of each slave: rotation error < 0.3 deg.
+rot_errors=$(awk '/"errors": \{/ {inside=1} inside && /"rot_deg"/ {gsub(/[",]/, "", $2); print $2; inside=0}' \
+  "$dir/result.json" | tr '\n' ' ')
+echo "rotation errors (deg): $rot_errors"
+check "two slaves with rotation errors below 0.3 deg" \
+  '[ "$(echo $rot_errors | wc -w)" -eq 2 ] && awk -v e="$rot_errors" "BEGIN { n = split(e, a, \" \"); for (i = 1; i <= n; ++i) if (a[i] + 0 >= 0.3) exit 1 }"'
+exit $fail
