@@ -14,6 +14,7 @@
 #include "rigcal/tools/online_replay.h"
 #include "rigcal/tools/process_stats.h"
 #include "rigcal/tools/rig_files.h"
+#include "rigcal/tools/rig_status.h"
 #include "rigcal/tools/yaml_fields.h"
 
 namespace rigcal::tools {
@@ -46,41 +47,6 @@ Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t ut
     if (online & rigcal::kFlagTranslationalOnly) flags |= tools::kFlagTranslationalOnly;
   }
   return msg;
-}
-
-int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
-  int converged = 0;
-  int decalibrated = 0;
-  const int slaves = static_cast<int>(estimate.online.size());
-  std::string decalibrated_names;
-  for (int i = 0; i < slaves; ++i) {
-    if (estimate.online[i].flags & rigcal::kFlagConverged) ++converged;
-    if (estimate.online[i].flags & rigcal::kFlagDecalibrated) {
-      ++decalibrated;
-      if (i < static_cast<int>(estimate.rig.slaves.size())) {
-        decalibrated_names += (decalibrated_names.empty() ? "" : ", ") + estimate.rig.slaves[i].name;
-      }
-    }
-  }
-  std::ostringstream text;
-  int8_t state = rig_status_t::ESTIMATOR_INITIALISING;
-  if (estimate.sets == 0) {
-    state = rig_status_t::ESTIMATOR_IDLE;
-    text << "no synchronised pose sets yet";
-  } else if (decalibrated > 0) {
-    state = rig_status_t::ESTIMATOR_DECALIBRATED;
-    text << "decalibrated: " << decalibrated_names << " moved; re-estimating";
-  } else if (converged == slaves) {
-    state = rig_status_t::ESTIMATOR_CONVERGED;
-    text << "all " << slaves << " slaves converged";
-  } else if (converged > 0) {
-    state = rig_status_t::ESTIMATOR_DEGRADED;
-    text << converged << " of " << slaves << " slaves converged";
-  } else {
-    text << "collecting motion (" << estimate.sets << " sets)";
-  }
-  if (message != nullptr) *message = text.str();
-  return state;
 }
 
 struct CalibNode::Impl {
@@ -196,52 +162,27 @@ struct CalibNode::Impl {
     const Clock::time_point now = Clock::now();
     const double period_s = std::chrono::duration<double>(now - last_status_wall).count();
     last_status_wall = now;
-    rig_status_t msg{};
-    msg.version = rig_status_t::VERSION;
-    msg.utime = MonotonicMicros();
-    msg.num_cameras = static_cast<int32_t>(names.size());
+    std::vector<CameraStatusInput> cameras;
     for (size_t i = 0; i < names.size(); ++i) {
-      camera_status_t cam{};
+      CameraStatusInput cam;
       const CameraInputStats& input = summary.cameras[i];
       cam.name = names[i];
       cam.frames_received = input.received;
       cam.fps = period_s > 0.0 ? (input.received - received_at_last_status[i]) / period_s : 0.0;
       received_at_last_status[i] = input.received;
-      if (i < sync.cameras.size()) {
-        const SyncCameraStats& s = sync.cameras[i];
-        cam.dropped_late = static_cast<int64_t>(s.late);
-        cam.dropped_duplicate = static_cast<int64_t>(s.duplicate);
-        cam.dropped_out_of_order = static_cast<int64_t>(s.out_of_order);
-        cam.dropped_overflow = static_cast<int64_t>(s.overflow);
-        cam.dropped_never_matched = static_cast<int64_t>(s.never_matched);
-        cam.dropped_invalid = input.invalid + static_cast<int64_t>(s.invalid);
-      }
+      cam.dropped_invalid = input.invalid;
       // The VO runs elsewhere: its state is inferred from the pose stream.
-      if (input.received == 0) {
-        cam.vo_state = camera_status_t::VO_INITIALISING;
-        cam.last_pose_age_ms = -1;
-      } else {
+      if (input.received > 0) {
         const double age_s = std::chrono::duration<double>(now - last_pose_wall[i]).count();
         cam.last_pose_age_ms = static_cast<int64_t>(age_s * 1e3);
         cam.vo_state = options.log_path.empty() && age_s > options.camera_timeout_s
                            ? camera_status_t::VO_DEAD
                            : camera_status_t::VO_TRACKING;
       }
-      msg.cameras.push_back(cam);
+      cameras.push_back(cam);
     }
-    msg.sync_sets_emitted = static_cast<int64_t>(sync.sets_emitted);
-    const SyncCameraStats& total = sync.total;
-    const int64_t dropped = static_cast<int64_t>(total.invalid + total.late + total.duplicate +
-                                                 total.out_of_order + total.overflow +
-                                                 total.never_matched + total.stopped);
-    msg.sync_fill = static_cast<int32_t>(std::max<int64_t>(
-        0, static_cast<int64_t>(total.pushed) - static_cast<int64_t>(total.used) - dropped));
-    msg.sync_capacity = config.online.sync.capacity * static_cast<int32_t>(names.size());
-    msg.sync_fill = std::min(msg.sync_fill, msg.sync_capacity);
-    msg.estimator_state = EstimatorState(estimate, &msg.estimator_message);
-    msg.cpu_percent = cpu.Sample();
-    msg.rss_bytes = ResidentSetBytes();
-    return msg;
+    return MakeRigStatus(cameras, sync, config.online.sync.capacity * static_cast<int32_t>(names.size()),
+                         estimate, cpu.Sample(), MonotonicMicros());
   }
 
   void PublishStatus(const RigEstimate& estimate) {

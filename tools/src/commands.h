@@ -11,5 +11,6 @@ void RegisterExperiment(CLI::App& app, int* exit_code);
 void RegisterDemo(CLI::App& app, int* exit_code);
 void RegisterCalib(CLI::App& app, int* exit_code);
 void RegisterSynthLog(CLI::App& app, int* exit_code);
+void RegisterRun(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   rigcal::cli::RegisterSolve(app, &exit_code);
   rigcal::cli::RegisterExperiment(app, &exit_code);
+  rigcal::cli::RegisterRun(app, &exit_code);
   rigcal::cli::RegisterCalib(app, &exit_code);
   rigcal::cli::RegisterSynthLog(app, &exit_code);
   rigcal::cli::RegisterDemo(app, &exit_code);

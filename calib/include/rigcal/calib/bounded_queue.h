@@ -1,7 +1,8 @@
 #pragma once
 // BoundedQueue: a fixed-capacity multi-producer queue between pipeline threads. Push never
 // blocks: when full, the oldest element is dropped and counted (capture must never wait for
-// a slow consumer). Pop blocks until an element arrives or the queue is stopped.
+// a slow consumer); PushWait waits for room instead (sources that can wait). Pop blocks until
+// an element arrives or the queue is stopped. Every member is thread-safe.
 
 #include <condition_variable>
 #include <cstdint>
@@ -33,6 +34,20 @@ class BoundedQueue {
     return true;
   }
 
+  // Appends `value`, waiting while the queue is full (lossless hand-over for sources that can
+  // wait, e.g. recordings). Returns false when stopped (the value is discarded).
+  bool PushWait(T value) {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      space_.wait(lock, [&] { return stopped_ || items_.size() < capacity_; });
+      if (stopped_) return false;
+      items_.push_back(std::move(value));
+      ++pushed_;
+    }
+    ready_.notify_one();
+    return true;
+  }
+
   // Next element; blocks until one is available. nullopt once stopped and drained.
   std::optional<T> Pop() {
     std::unique_lock<std::mutex> lock(mutex_);
@@ -40,6 +55,7 @@ class BoundedQueue {
     if (items_.empty()) return std::nullopt;
     T value = std::move(items_.front());
     items_.pop_front();
+    space_.notify_one();
     return value;
   }
 
@@ -51,6 +67,7 @@ class BoundedQueue {
     if (items_.empty()) return std::nullopt;
     T value = std::move(items_.front());
     items_.pop_front();
+    space_.notify_one();
     return value;
   }
 
@@ -61,6 +78,7 @@ class BoundedQueue {
       stopped_ = true;
     }
     ready_.notify_all();
+    space_.notify_all();
   }
 
   size_t size() const {
@@ -81,6 +99,7 @@ class BoundedQueue {
   const size_t capacity_;
   mutable std::mutex mutex_;
   std::condition_variable ready_;
+  std::condition_variable space_;
   std::deque<T> items_;
   bool stopped_ = false;
   uint64_t dropped_ = 0;

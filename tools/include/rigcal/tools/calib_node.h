@@ -18,6 +18,7 @@
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/tools/lcm_messages.h"
 #include "rigcal/tools/rig_config.h"
+#include "rigcal/tools/rig_status.h"
 
 namespace lcm {
 class LCM;
@@ -100,9 +101,5 @@ class CalibNode {
 // The rig_extrinsics_t of an online estimate: the batch conversion plus the estimator's online
 // flags (decalibrated, ...). Fails as RigCalibrationToLcm does.
 Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t utime);
-
-// rig_status_t estimator_state of an estimate (IDLE, INITIALISING, CONVERGED, DEGRADED,
-// DECALIBRATED) and a one-line message.
-int8_t EstimatorState(const RigEstimate& estimate, std::string* message);
 
 }  // namespace rigcal::tools

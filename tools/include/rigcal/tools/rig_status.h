@@ -1,0 +1,36 @@
+#pragma once
+// The RIGCAL_STATUS message (rig_status_t) of a running calibration, shared by `rigcal calib`
+// (poses from the bus) and `rigcal run` (the live pipeline).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/sync_buffer.h"
+#include "rigcal/rig_status_t.hpp"
+
+namespace rigcal::tools {
+
+// What the caller knows of one camera beyond the sync buffer's counters.
+struct CameraStatusInput {
+  std::string name;
+  double fps = 0.0;                 // over the last status period
+  int64_t frames_received = 0;      // cumulative
+  int64_t dropped_invalid = 0;      // rejected before the sync buffer (decoder, ...)
+  int64_t dropped_backlog = 0;      // dropped before the sync buffer because a stage fell behind
+  int8_t vo_state = camera_status_t::VO_INITIALISING;
+  int64_t last_pose_age_ms = -1;    // -1 when no pose yet
+};
+
+// rig_status_t from the caller's per-camera view, the sync buffer's counters (drops by cause,
+// fill), the estimate (estimator state and message) and the process's CPU and RSS.
+rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const SyncStats& sync,
+                           int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
+                           int64_t utime);
+
+// rig_status_t estimator_state of an estimate (IDLE, INITIALISING, CONVERGED, DEGRADED,
+// DECALIBRATED) and a one-line message.
+int8_t EstimatorState(const RigEstimate& estimate, std::string* message);
+
+}  // namespace rigcal::tools
