@@ -1,6 +1,7 @@
 #include "rigcal/tools/rig_config.h"
 
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <set>
@@ -355,9 +356,28 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
     if (!source.IsMap() || !source["type"]) return r.Fail(source, "source.type", "missing");
     auto type = r.String(source["type"], "source.type");
     if (!type) return Error{type.error()};
+    if (*type == "image_folders") {
+      if (auto e = r.CheckKeys(source, "source.", {"type"})) return *e;
+      const std::filesystem::path base = std::filesystem::path(path).parent_path();
+      for (size_t i = 0; i < config.cameras.size(); ++i) {
+        const CameraConfig& camera = config.cameras[i];
+        const YAML::Node entry = cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)];
+        if (camera.device.empty()) {
+          return r.Fail(entry, camera.name + ".device",
+                        "missing: image_folders needs the camera's folder (e.g. mav0/cam0)");
+        }
+        if (!camera.spec) {
+          return r.Fail(entry, camera.name, "a camera of image_folders needs a model and intrinsics");
+        }
+        const std::filesystem::path folder(camera.device);
+        config.image_folders.push_back(folder.is_absolute() ? folder.string()
+                                                            : (base / folder).string());
+      }
+      return config;
+    }
     if (*type != "simulated") {
       return r.Fail(source["type"], "source.type",
-                    "'" + *type + "' is not supported (supported: simulated)");
+                    "'" + *type + "' is not supported (supported: simulated, image_folders)");
     }
     auto spec = ParseSimulatedSource(source, path);
     if (!spec) return Error{spec.error()};

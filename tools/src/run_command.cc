@@ -7,13 +7,16 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
 
 #include "commands.h"
 #include "rigcal/calib/logging.h"
+#include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/vo/camera_spec.h"
 #include "rigcal/tools/calib_node.h"
 #include "rigcal/tools/lcm_messages.h"
 #include "rigcal/tools/online_replay.h"
@@ -147,26 +150,64 @@ int RunRun(const RunArgs& args) {
     std::cerr << "rigcal run: " << config.error() << "\n";
     return kExitError;
   }
-  if (!config->simulated_source) {
-    std::cerr << "rigcal run: " << args.config
-              << ": no `source:` section (supported: type: simulated)\n";
-    return kExitError;
-  }
-  drivers::SimulatedRigSpec spec = *config->simulated_source;
-  if (args.fast) spec.realtime = false;
-  const bool realtime = spec.realtime;
-  std::cerr << "rigcal run: building the simulated rig (" << spec.names.size() << " cameras, "
-            << drivers::ToString(spec.scene.type) << " scene)...\n";
-  auto rig = drivers::MakeSimulatedRig(spec);
-  if (!rig) {
-    std::cerr << "rigcal run: " << args.config << ": " << rig.error() << "\n";
-    return kExitError;
-  }
-  if (!args.truth_dir.empty()) {
-    if (const std::string error = rig->WriteGroundTruth(args.truth_dir); !error.empty()) {
-      std::cerr << "rigcal run: " << error << "\n";
+  const std::vector<std::string> names = config->CameraNames();
+  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::shared_ptr<const vo::CameraModel>> models;
+  std::vector<drivers::ImageFolderDevice*> folders;  // not owned: for the end report
+  std::optional<drivers::SimulatedRig> rig;
+  bool realtime = false;
+  if (config->simulated_source) {
+    drivers::SimulatedRigSpec spec = *config->simulated_source;
+    if (args.fast) spec.realtime = false;
+    realtime = spec.realtime;
+    std::cerr << "rigcal run: building the simulated rig (" << spec.names.size() << " cameras, "
+              << drivers::ToString(spec.scene.type) << " scene)...\n";
+    auto made = drivers::MakeSimulatedRig(spec);
+    if (!made) {
+      std::cerr << "rigcal run: " << args.config << ": " << made.error() << "\n";
       return kExitError;
     }
+    rig = std::move(*made);
+    if (!args.truth_dir.empty()) {
+      if (const std::string error = rig->WriteGroundTruth(args.truth_dir); !error.empty()) {
+        std::cerr << "rigcal run: " << error << "\n";
+        return kExitError;
+      }
+    }
+    devices = rig->MakeDevices();
+    models = spec.cameras;
+    std::cerr << "rigcal run: " << rig->num_frames() << " frames per camera at "
+              << rig->frame_rate_hz() << " Hz"
+              << (realtime ? " (real time)" : " (as fast as possible)") << "\n";
+  } else if (!config->image_folders.empty()) {
+    if (args.eval) {
+      std::cerr << "rigcal run: --eval needs a simulated source (ground truth)\n";
+      return kExitError;
+    }
+    for (size_t i = 0; i < names.size(); ++i) {
+      auto device = drivers::ImageFolderDevice::Open(config->image_folders[i], names[i],
+                                                     static_cast<int>(i));
+      if (!device) {
+        std::cerr << "rigcal run: " << args.config << ": camera '" << names[i]
+                  << "': " << device.error() << "\n";
+        return kExitError;
+      }
+      auto model = vo::MakeCameraModel(*config->cameras[i].spec);
+      if (!model) {
+        std::cerr << "rigcal run: " << args.config << ": camera '" << names[i]
+                  << "': " << model.error() << "\n";
+        return kExitError;
+      }
+      std::cerr << "rigcal run: camera '" << names[i] << "': " << (*device)->size()
+                << " images listed in " << config->image_folders[i] << "\n";
+      folders.push_back(device->get());
+      devices.push_back(std::move(*device));
+      models.push_back(std::shared_ptr<const vo::CameraModel>(std::move(*model)));
+    }
+  } else {
+    std::cerr << "rigcal run: " << args.config
+              << ": no `source:` section (supported: simulated, image_folders)\n";
+    return kExitError;
   }
   std::unique_ptr<lcm::LCM> bus;
   if (!args.lcm_url.empty()) {
@@ -178,17 +219,13 @@ int RunRun(const RunArgs& args) {
   }
   tools::PipelineOptions options;
   options.lossless = !realtime;
-  options.record_poses = args.eval || args.json;
-  const std::vector<std::string> names = config->CameraNames();
-  tools::Pipeline pipeline(names, rig->MakeDevices(), spec.cameras, config->online, options,
-                           bus.get());
+  options.record_poses = rig.has_value() && (args.eval || args.json);
+  tools::Pipeline pipeline(names, std::move(devices), models, config->online, options, bus.get());
 
   StopSignal stop_signal;
   const auto start = std::chrono::steady_clock::now();
   pipeline.Start();
-  std::cerr << "rigcal run: " << rig->num_frames() << " frames per camera at "
-            << rig->frame_rate_hz() << " Hz" << (realtime ? " (real time)" : " (as fast as possible)")
-            << "; Ctrl-C stops cleanly\n";
+  std::cerr << "rigcal run: running; Ctrl-C stops cleanly\n";
   std::vector<int64_t> frames_before(names.size(), 0);
   auto last_status = start;
   tools::CpuMeter cpu;
@@ -224,6 +261,17 @@ int RunRun(const RunArgs& args) {
                 << " frames dropped because its VO fell behind\n";
     }
   }
+  for (const drivers::ImageFolderDevice* folder : folders) {
+    const std::vector<std::string> skipped = folder->skipped_files();
+    if (!skipped.empty()) {
+      std::cerr << "rigcal run: camera '" << folder->name() << "': " << skipped.size()
+                << " listed images missing or unreadable, skipped:\n";
+      for (const std::string& file : skipped) std::cerr << "  " << file << "\n";
+    }
+    for (const std::string& problem : folder->csv_problems()) {
+      std::cerr << "rigcal run: " << problem << "\n";
+    }
+  }
   std::fprintf(stderr, "rigcal run: %.1f s, %llu sets; RSS %.0f MB\n", elapsed,
                static_cast<unsigned long long>(final_state.estimate.sets),
                static_cast<double>(tools::ResidentSetBytes()) / (1 << 20));
@@ -238,7 +286,7 @@ int RunRun(const RunArgs& args) {
   bool any_usable = false;
   for (const SlaveCalibration& slave : result.slaves) any_usable = any_usable || slave.usable();
   std::optional<tools::RunEvaluation> evaluation;
-  if (args.eval || args.json) {
+  if (rig && (args.eval || args.json)) {
     std::vector<std::vector<CameraPose>> poses;
     for (size_t i = 0; i < names.size(); ++i) {
       poses.push_back(pipeline.RecordedPoses(static_cast<int>(i)));

@@ -45,6 +45,9 @@ struct RigConfig {
   PublishOptions publish;
   StateOptions state;
   std::optional<drivers::SimulatedRigSpec> simulated_source;  // `source: {type: simulated}`
+  // `source: {type: image_folders}`: one EuRoC-format camera folder per camera (its `device`,
+  // resolved against the config file's directory), camera index order.
+  std::vector<std::string> image_folders;
 
   std::vector<std::string> CameraNames() const;
   const std::string& master() const { return cameras.front().name; }
