@@ -26,8 +26,10 @@ configure: deps
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
+# The whole live pipeline on the built-in simulated rig (thesis 5.4 virtual scene): rendered
+# images -> VO per camera -> SyncBuffer -> RigEstimator, errors against the truth at the end.
 demo: build
-	./$(BUILD_DIR)/tools/rigcal demo
+	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
 # Whole suite, then the calib tests once more under ASan+UBSan.
 test: build test-asan
@@ -50,10 +52,10 @@ bench: build
 	./$(BUILD_DIR)/tests/bench/rigcal_calib_bench
 
 format:
-	find calib tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
+	find calib vo drivers tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
 
 tidy: build
-	find calib/src tools/src -name '*.cc' | xargs clang-tidy -p $(BUILD_DIR) --quiet
+	find calib/src vo/src drivers/src tools/src -name '*.cc' | xargs clang-tidy -p $(BUILD_DIR) --quiet
 
 clean:
 	rm -rf $(BUILD_DIR) $(ASAN_DIR)
