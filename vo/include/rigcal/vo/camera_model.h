@@ -4,6 +4,11 @@
 // pinhole, fisheye (Kannala–Brandt) and omnidirectional (Scaramuzza, thesis 3.2.2) lenses.
 //
 // Camera frame: x right, y down, z forward (optical axis), as OpenCV and Kalibr.
+// Pixels: (u, v) = (column, row); (0, 0) is the centre of the top-left pixel, so the image
+// covers [-0.5, width - 0.5] x [-0.5, height - 0.5].
+// Models are built from a CameraSpec by MakeCameraModel (camera_spec.h, which documents the
+// three models' equations). A model is immutable after construction: every const method may be
+// called concurrently from any thread; Project and Unproject do not allocate.
 
 #include <Eigen/Core>
 #include <memory>
@@ -27,7 +32,8 @@ class CameraModel {
   virtual std::optional<Eigen::Vector2d> Project(
       const Eigen::Vector3d& point, Eigen::Matrix<double, 2, 3>* jacobian = nullptr) const = 0;
 
-  // Unit bearing vector of a pixel, or nullopt outside the model's valid domain.
+  // Unit bearing vector of a pixel, or nullopt outside the model's valid domain (beyond the
+  // max field angle). Pixels outside the image but inside the domain are unprojected too.
   // `jacobian` (optional): d bearing / d pixel, 3x2.
   virtual std::optional<Eigen::Vector3d> Unproject(
       const Eigen::Vector2d& pixel, Eigen::Matrix<double, 3, 2>* jacobian = nullptr) const = 0;
@@ -39,6 +45,12 @@ class CameraModel {
   virtual double PixelAngle() const = 0;
 
   virtual std::unique_ptr<CameraModel> Clone() const = 0;
+
+  // True when `pixel` lies inside the image shrunk by `border` pixels on every side.
+  bool InImage(const Eigen::Vector2d& pixel, double border = 0.0) const {
+    return pixel.x() >= border - 0.5 && pixel.x() <= width_ - 0.5 - border &&
+           pixel.y() >= border - 0.5 && pixel.y() <= height_ - 0.5 - border;
+  }
 
  protected:
   CameraModel(int width, int height) : width_(width), height_(height) {}

@@ -1,1 +1,0 @@
-#include "rigcal/vo/camera_model.h"
