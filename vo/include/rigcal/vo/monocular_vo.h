@@ -1,0 +1,155 @@
+#pragma once
+// MonocularVo: visual odometry of one camera (thesis 3.5, made robust). It turns a stream of
+// grey images into the camera's poses T^k = [R^k | C^k] in its own reference frame (R^0 = I,
+// C^0 = 0) and its own arbitrary unit (the first baseline has length 1), one scale segment at
+// a time.
+//
+// Method (details in vo/src/):
+//  - KLT pyramidal tracking (OpenCV) with a forward-backward check; new features from FAST
+//    corners, at most one per grid cell, at keyframes.
+//  - Initialisation: 5-point essential matrix in a RANSAC on unit bearing vectors (so it works
+//    for lenses wider than 180 degrees), accepted only with enough parallax left after the
+//    best pure rotation is removed; triangulation; two-view bundle adjustment; ||C^1|| = 1.
+//  - Tracking: P3P RANSAC on bearings (angular residuals) + motion-only refinement; keyframes;
+//    new points triangulated at keyframes; a windowed local bundle adjustment (Ceres).
+//  - Failure (too few inliers, degenerate geometry, blank images) -> state kLost, then a new
+//    initialisation that opens a new scale segment whose reference frame is again the
+//    identity.
+//
+// Thread: a MonocularVo is used by one thread at a time (the pipeline's VO thread of its
+// camera); it starts no thread itself.
+
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+
+#include "rigcal/calib/types.h"
+#include "rigcal/vo/camera_model.h"
+
+namespace rigcal::vo {
+
+struct VoOptions {
+  // --- Features and KLT ---
+  // Image grid for feature replenishment: one feature per cell of this size, pixels.
+  int grid_cell_px = 32;
+  // Upper bound of tracked features.
+  int max_features = 150;
+  // FAST corner threshold (grey levels); lowered automatically in low-texture images.
+  int fast_threshold = 20;
+  // KLT window side, pixels (odd), and number of pyramid levels above the base image.
+  int klt_window_px = 15;
+  int klt_pyramid_levels = 2;
+  // Forward-backward check: a track is dropped when tracking back lands farther than this
+  // from where it started, pixels.
+  double klt_max_fb_error_px = 0.5;
+  // Features closer than this to the image border or to the edge of the lens's valid area
+  // are not detected, pixels.
+  int border_px = 12;
+
+  // --- Robust estimation (angles in pixels of the camera's centre resolution) ---
+  // RANSAC inlier threshold of the essential matrix (epipolar angle) and of PnP (angle
+  // between observed and predicted bearings), in pixels (converted with PixelAngle()).
+  double ransac_threshold_px = 1.5;
+  int ransac_max_iterations = 200;
+  double ransac_confidence = 0.999;
+
+  // --- Initialisation ---
+  // Minimum tracks to the reference frame; below it the reference frame is renewed.
+  int min_init_tracks = 60;
+  // Minimum essential-matrix inliers and triangulated points to accept an initialisation.
+  int min_init_inliers = 50;
+  // Parallax needed before the two views are accepted: median angle between the rays of the
+  // inlier tracks once the essential matrix's rotation is removed, degrees.
+  double min_init_parallax_deg = 1.5;
+  // The views are not even tried while the best pure rotation explains the tracks to within
+  // this median residual, pixels: pure rotation or no motion never produces a translation.
+  double min_init_rotation_residual_px = 3.0;
+  // Fraction of essential-matrix inliers that must triangulate in front of both views.
+  double min_init_cheirality_fraction = 0.9;
+
+  // --- Tracking ---
+  // Fewer PnP inliers than this, or an inlier ratio below min_inlier_ratio -> lost.
+  int min_tracking_inliers = 20;
+  double min_inlier_ratio = 0.3;
+  // Smallest angle between the two rays of a new triangulated point, degrees.
+  double min_triangulation_angle_deg = 1.0;
+
+  // --- Keyframes and local bundle adjustment ---
+  // A new keyframe when the tracked map points fall below this fraction of those the last
+  // keyframe saw, when the rotation-compensated parallax to it exceeds keyframe_parallax_deg,
+  // or after keyframe_max_frames frames.
+  double keyframe_track_ratio = 0.7;
+  double keyframe_parallax_deg = 3.0;
+  int keyframe_max_frames = 8;
+  // Keyframes in the local bundle adjustment window (the two oldest are held fixed, which
+  // fixes the gauge and the scale), and its iteration limit.
+  int ba_window = 6;
+  int ba_max_iterations = 8;
+  // Huber loss scale of bearing residuals, pixels.
+  double ba_huber_px = 2.0;
+
+  // Seed of the RANSAC sampling (the VO is deterministic for a given input).
+  uint32_t seed = 42;
+
+  // True when every field is valid; otherwise false and *error (may be null) names the
+  // fields and the violated constraints.
+  bool Check(std::string* error) const;
+};
+
+enum class VoState {
+  kInitialising,  // waiting for enough parallax to the reference frame
+  kTracking,      // poses are reported
+  kLost,          // tracking failed; the next initialisation opens a new segment
+};
+
+std::string ToString(VoState state);
+
+// The outcome of one Process() call.
+struct VoResult {
+  // The camera's pose at this frame (camera-local reference frame and unit of its segment);
+  // nullopt while initialising or lost.
+  std::optional<CameraPose> pose;
+  // Set on the frame that opens a segment (successful initialisation): the identity pose of
+  // the segment's reference frame, whose t_ns is earlier than this frame's. A consumer that
+  // wants every pose of the segment puts it before `pose`.
+  std::optional<CameraPose> segment_start;
+  VoState state = VoState::kInitialising;
+  int tracked_features = 0;  // KLT tracks alive after this frame
+  int inliers = 0;           // PnP (tracking) or essential-matrix (initialisation) inliers
+  bool keyframe = false;     // this frame became a keyframe
+  double processing_ms = 0.0;
+  std::string message;  // why the VO is initialising or lost (empty when tracking)
+};
+
+class MonocularVo {
+ public:
+  // `camera` must not be null; `camera_index` is written into every CameraPose. Invalid
+  // options are logged and replaced by the defaults (see Check()).
+  MonocularVo(std::shared_ptr<const CameraModel> camera, int camera_index, VoOptions options = {});
+  ~MonocularVo();
+  MonocularVo(const MonocularVo&) = delete;
+  MonocularVo& operator=(const MonocularVo&) = delete;
+  MonocularVo(MonocularVo&&) noexcept;
+  MonocularVo& operator=(MonocularVo&&) noexcept;
+
+  // Processes the next image of the camera, taken at `t_ns` (increasing). `grey` is CV_8UC1
+  // (CV_8UC3/4 are converted) of the camera model's size; an empty or wrongly sized image
+  // counts as a frame without features (never a crash). Not thread-safe: one thread at a
+  // time.
+  VoResult Process(int64_t t_ns, const cv::Mat& grey);
+
+  // Current state, scale segment id (0 for the first; incremented by every initialisation
+  // after a loss) and number of frames processed.
+  VoState state() const;
+  int segment() const;
+  int64_t frames_processed() const;
+  const VoOptions& options() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rigcal::vo

@@ -1,0 +1,52 @@
+#include "klt_tracker.h"
+
+#include <opencv2/video/tracking.hpp>
+
+namespace rigcal::vo {
+
+void KltTracker::AddImage(const cv::Mat& grey) {
+  std::swap(previous_pyramid_, current_pyramid_);
+  has_previous_ = has_current_ && grey.size() == size_;
+  const cv::Size window(options_.window_px, options_.window_px);
+  cv::buildOpticalFlowPyramid(grey, current_pyramid_, window, options_.pyramid_levels, true);
+  size_ = grey.size();
+  has_current_ = true;
+}
+
+void KltTracker::Reset() {
+  has_current_ = false;
+  has_previous_ = false;
+}
+
+void KltTracker::Track(const std::vector<cv::Point2f>& previous,
+                       const std::vector<cv::Point2f>& guesses, std::vector<cv::Point2f>* tracked,
+                       std::vector<unsigned char>* ok) const {
+  const size_t n = previous.size();
+  ok->assign(n, 0);
+  *tracked = guesses.size() == n ? guesses : previous;
+  if (!has_previous_ || n == 0) return;
+  const cv::Size window(options_.window_px, options_.window_px);
+  const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
+                                  options_.max_iterations, options_.epsilon);
+  std::vector<unsigned char> forward_ok, backward_ok;
+  std::vector<float> errors;
+  cv::calcOpticalFlowPyrLK(previous_pyramid_, current_pyramid_, previous, *tracked, forward_ok,
+                           errors, window, options_.pyramid_levels, criteria,
+                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  std::vector<cv::Point2f> back = previous;
+  cv::calcOpticalFlowPyrLK(current_pyramid_, previous_pyramid_, *tracked, back, backward_ok, errors,
+                           window, options_.pyramid_levels, criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
+  const double max_fb2 = options_.max_fb_error_px * options_.max_fb_error_px;
+  const float w = static_cast<float>(size_.width - 1);
+  const float h = static_cast<float>(size_.height - 1);
+  for (size_t i = 0; i < n; ++i) {
+    if (!forward_ok[i] || !backward_ok[i]) continue;
+    const cv::Point2f& p = (*tracked)[i];
+    if (!(p.x >= 0.f && p.y >= 0.f && p.x <= w && p.y <= h)) continue;
+    const cv::Point2f d = back[i] - previous[i];
+    if (d.x * d.x + d.y * d.y > max_fb2) continue;
+    (*ok)[i] = 1;
+  }
+}
+
+}  // namespace rigcal::vo
