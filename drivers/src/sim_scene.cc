@@ -99,8 +99,11 @@ inline __m128 BilinearPair4(const uint8_t* pairs, __m128i x, __m128i y) {
 // in that level's texels), shifted by half a texel and reduced modulo the level size.
 inline uint32_t ToFixed(float coordinate, int log2n) {
   const float size = static_cast<float>(1 << log2n);
+  const uint32_t inverse_bits = static_cast<uint32_t>(127 - log2n) << 23;  // 2^-log2n
+  float inverse;
+  std::memcpy(&inverse, &inverse_bits, sizeof(inverse));
   float c = coordinate - 0.5f;
-  c -= size * static_cast<float>(FloorToInt(c / size));
+  c -= size * static_cast<float>(FloorToInt(c * inverse));
   return static_cast<uint32_t>(static_cast<int64_t>(c * 65536.f));
 }
 inline uint32_t ToFixedStep(float step) {
@@ -229,7 +232,8 @@ size_t Scene::TextureBytes() const {
 }
 
 template <typename T>
-int32_t Scene::Intersect(const T o[3], const T d[3], T* t_hit) const {
+int32_t Scene::Intersect(const T o[3], const T d[3], T* t_hit, const int* boxes,
+                         int num_boxes) const {
   T best = std::numeric_limits<T>::infinity();
   int32_t surface = kSky;
   if (has_enclosure_) {
@@ -282,7 +286,9 @@ int32_t Scene::Intersect(const T o[3], const T d[3], T* t_hit) const {
       };
       const bool inner = o[0] > static_cast<T>(band_[0]) && o[0] < static_cast<T>(band_[1]) &&
                          o[1] > static_cast<T>(band_[2]) && o[1] < static_cast<T>(band_[3]);
-      if (!inner) {
+      if (boxes != nullptr) {
+        for (int i = 0; i < num_boxes; ++i) test_box(boxes_[boxes[i]]);
+      } else if (!inner) {
         for (const Box& box : boxes_) test_box(box);
       } else {
         const T margin = T(1e-3);  // against rounding of the exit point
@@ -337,6 +343,17 @@ int32_t Scene::Intersect(const T o[3], const T d[3], T* t_hit) const {
 Hit Scene::Cast(const float o[3], const float d[3], float pixel_angle) const {
   float t = 0.f;
   const int32_t s = Intersect(o, d, &t);
+  return Shade(o, d, pixel_angle, s, t);
+}
+
+Hit Scene::CastAmong(const float o[3], const float d[3], float pixel_angle, const int* boxes,
+                     int num_boxes) const {
+  float t = 0.f;
+  const int32_t s = Intersect(o, d, &t, boxes, num_boxes);
+  return Shade(o, d, pixel_angle, s, t);
+}
+
+Hit Scene::Shade(const float o[3], const float d[3], float pixel_angle, int32_t s, float t) const {
   Hit hit;
   hit.surface = s;
   if (s < 0) {
@@ -466,16 +483,40 @@ struct FixedBilinear2d {
         b(ToFixedStep(f.b * scale)),
         c(ToFixedStep(f.c * scale)),
         d(ToFixedStep(f.d * scale)) {}
-  // Value at (0, y) and the step along x in row y.
-  uint32_t RowStart(int y) const { return a + static_cast<uint32_t>(y) * c; }
-  uint32_t RowStep(int y) const { return b + static_cast<uint32_t>(y) * d; }
 };
 
-// Lanes 0..3 of a 16.16 coordinate row: start + i * step.
-inline __m128i Lanes(uint32_t start, uint32_t step) {
-  return _mm_setr_epi32(static_cast<int>(start), static_cast<int>(start + step),
-                        static_cast<int>(start + 2 * step), static_cast<int>(start + 3 * step));
-}
+// The 16.16 coordinates of pixels x0 .. x0 + 3 of a block's row y, walked down the rows:
+// lane i at row y is a + (x0 + i) b + y (c + (x0 + i) d), so each row adds a constant vector.
+struct FixedLanes {
+  __m128i value;
+  __m128i row_step;
+  FixedLanes(const FixedBilinear2d& f, int x0) {
+    uint32_t v[4], s[4];
+    for (int i = 0; i < 4; ++i) {
+      const auto x = static_cast<uint32_t>(x0 + i);
+      v[i] = f.a + x * f.b;
+      s[i] = f.c + x * f.d;
+    }
+    value = _mm_setr_epi32(static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]),
+                           static_cast<int>(v[3]));
+    row_step = _mm_setr_epi32(static_cast<int>(s[0]), static_cast<int>(s[1]),
+                              static_cast<int>(s[2]), static_cast<int>(s[3]));
+  }
+  void NextRow() { value = _mm_add_epi32(value, row_step); }
+};
+
+// The same for a float interpolant.
+struct FloatLanes {
+  __m128 value;
+  __m128 row_step;
+  FloatLanes(const Bilinear2d& f, int x0) {
+    const __m128 x = _mm_setr_ps(static_cast<float>(x0), static_cast<float>(x0 + 1),
+                                 static_cast<float>(x0 + 2), static_cast<float>(x0 + 3));
+    value = _mm_add_ps(_mm_set1_ps(f.a), _mm_mul_ps(x, _mm_set1_ps(f.b)));
+    row_step = _mm_add_ps(_mm_set1_ps(f.c), _mm_mul_ps(x, _mm_set1_ps(f.d)));
+  }
+  void NextRow() { value = _mm_add_ps(value, row_step); }
+};
 
 // out[i] += lanes i < n of v.
 inline void AddLanes(__m128 v, int n, float* out) {
@@ -493,12 +534,12 @@ template <int log2n>
 void FillMagnified(const uint8_t* level, const FixedBilinear2d& fu, const FixedBilinear2d& fv,
                    int nx, int ny, float weight, float* out, int stride) {
   const __m128 scale = _mm_set1_ps(weight * (1.f / 256.f));
-  for (int y = 0; y < ny; ++y, out += stride) {
-    uint32_t xu = fu.RowStart(y), xv = fv.RowStart(y);
-    const uint32_t su = fu.RowStep(y), sv = fv.RowStep(y);
-    for (int x = 0; x < nx; x += 4, xu += 4 * su, xv += 4 * sv) {
-      const __m128 value = BilinearPair4<log2n>(level, Lanes(xu, su), Lanes(xv, sv));
-      AddLanes(_mm_mul_ps(value, scale), std::min(4, nx - x), out + x);
+  for (int x0 = 0; x0 < nx; x0 += 4) {
+    const int n = std::min(4, nx - x0);
+    FixedLanes u(fu, x0), v(fv, x0);
+    float* row = out + x0;
+    for (int y = 0; y < ny; ++y, row += stride, u.NextRow(), v.NextRow()) {
+      AddLanes(_mm_mul_ps(BilinearPair4<log2n>(level, u.value, v.value), scale), n, row);
     }
   }
 }
@@ -517,21 +558,18 @@ void FillTrilinear(const uint8_t* const levels[3], const FixedBilinear2d& fu,
   const __m128 zero = _mm_setzero_ps();
   const __m128i quarter = _mm_set1_epi32(16384);
   auto half = [&quarter](__m128i c) { return _mm_sub_epi32(_mm_srli_epi32(c, 1), quarter); };
-  for (int y = 0; y < ny; ++y, out += stride) {
-    uint32_t xu = fu.RowStart(y), xv = fv.RowStart(y);
-    const uint32_t su = fu.RowStep(y), sv = fv.RowStep(y);
-    const float f_start = frac.a + static_cast<float>(y) * frac.c;
-    const float f_step = frac.b + static_cast<float>(y) * frac.d;
-    for (int x = 0; x < nx; x += 4, xu += 4 * su, xv += 4 * sv) {
-      const float f0 = f_start + static_cast<float>(x) * f_step;
-      const __m128 f = _mm_min_ps(
-          _mm_max_ps(_mm_setr_ps(f0, f0 + f_step, f0 + 2 * f_step, f0 + 3 * f_step), zero), two);
-      const __m128i u0 = Lanes(xu, su), v0 = Lanes(xv, sv);
-      const __m128i u1 = half(u0), v1 = half(v0);
+  for (int x0 = 0; x0 < nx; x0 += 4) {
+    const int n = std::min(4, nx - x0);
+    FixedLanes u(fu, x0), v(fv, x0);
+    FloatLanes fl(frac, x0);
+    float* row = out + x0;
+    for (int y = 0; y < ny; ++y, row += stride, u.NextRow(), v.NextRow(), fl.NextRow()) {
+      const __m128 f = _mm_min_ps(_mm_max_ps(fl.value, zero), two);
+      const __m128i u1 = half(u.value), v1 = half(v.value);
       const int coarse = _mm_movemask_ps(_mm_cmpge_ps(f, one));  // lanes in [l + 1, l + 2]
       __m128 value;
       if (coarse == 0) {
-        const __m128 a = BilinearPair4<log2l>(levels[0], u0, v0);
+        const __m128 a = BilinearPair4<log2l>(levels[0], u.value, v.value);
         const __m128 b = BilinearPair4<log2l - 1>(levels[1], u1, v1);
         value = _mm_add_ps(a, _mm_mul_ps(f, _mm_sub_ps(b, a)));
       } else if (coarse == 0xF) {
@@ -539,7 +577,7 @@ void FillTrilinear(const uint8_t* const levels[3], const FixedBilinear2d& fu,
         const __m128 b = BilinearPair4<log2l - 2>(levels[2], half(u1), half(v1));
         value = _mm_add_ps(a, _mm_mul_ps(_mm_sub_ps(f, one), _mm_sub_ps(b, a)));
       } else {  // the level boundary runs through these four pixels
-        const __m128 a = BilinearPair4<log2l>(levels[0], u0, v0);
+        const __m128 a = BilinearPair4<log2l>(levels[0], u.value, v.value);
         const __m128 b = BilinearPair4<log2l - 1>(levels[1], u1, v1);
         const __m128 c = BilinearPair4<log2l - 2>(levels[2], half(u1), half(v1));
         const __m128 fine = _mm_add_ps(a, _mm_mul_ps(f, _mm_sub_ps(b, a)));
@@ -547,7 +585,7 @@ void FillTrilinear(const uint8_t* const levels[3], const FixedBilinear2d& fu,
         const __m128 use_rough = _mm_cmpge_ps(f, one);
         value = _mm_or_ps(_mm_and_ps(use_rough, rough), _mm_andnot_ps(use_rough, fine));
       }
-      AddLanes(_mm_mul_ps(value, scale), std::min(4, nx - x), out + x);
+      AddLanes(_mm_mul_ps(value, scale), n, row);
     }
   }
 }
@@ -702,6 +740,9 @@ void RenderAccumulate(const Scene& scene, const CameraTables& camera, const Node
     if (hit.surface == kSky) return hit.u;
     return scene.Sample(hit.surface, hit.u, hit.v, hit.lod);
   };
+  // Boxes a fallback block may show: those its corners hit (null: unknown, test all).
+  const int* candidates = nullptr;
+  int num_candidates = 0;
   auto cast_pixel = [&](int x, int y) -> float {
     const float* b = &camera.bearings[3 * (static_cast<size_t>(y) * w + x)];
     if (b[0] != b[0]) return 0.f;
@@ -716,7 +757,9 @@ void RenderAccumulate(const Scene& scene, const CameraTables& camera, const Node
     if (pixel_angle <= 0.f) pixel_angle = 1e-3f;
     float d[3];
     xf.Apply(b, d);
-    return shade(scene.Cast(xf.o, d, pixel_angle));
+    return shade(candidates != nullptr
+                     ? scene.CastAmong(xf.o, d, pixel_angle, candidates, num_candidates)
+                     : scene.Cast(xf.o, d, pixel_angle));
   };
 
   if (grid == nullptr || grid->block < 2) {
@@ -763,10 +806,24 @@ void RenderAccumulate(const Scene& scene, const CameraTables& camera, const Node
         }
       }
       if (!uniform) {
+        // Cast every pixel, against the boxes the corners hit when every corner hits a
+        // surface (an object seen by no corner is missed, as in uniform blocks).
+        int boxes[4];
+        num_candidates = 0;
+        bool all_surfaces = true;
+        for (const Hit* corner : {&h00, &h10, &h01, &h11}) {
+          all_surfaces = all_surfaces && corner->surface >= 0;
+          const int box = scene.BoxOfSurface(corner->surface);
+          if (box >= 0 && std::find(boxes, boxes + num_candidates, box) == boxes + num_candidates) {
+            boxes[num_candidates++] = box;
+          }
+        }
+        candidates = all_surfaces ? boxes : nullptr;
         for (int y = y0; y < y1; ++y) {
           float* row = acc + static_cast<size_t>(y) * w;
           for (int x = x0; x < x1; ++x) row[x] += weight * cast_pixel(x, y);
         }
+        candidates = nullptr;
         continue;
       }
       if (s == kInvalid) continue;
@@ -776,7 +833,9 @@ void RenderAccumulate(const Scene& scene, const CameraTables& camera, const Node
   }
 }
 
-template int32_t Scene::Intersect<float>(const float[3], const float[3], float*) const;
-template int32_t Scene::Intersect<double>(const double[3], const double[3], double*) const;
+template int32_t Scene::Intersect<float>(const float[3], const float[3], float*, const int*,
+                                         int) const;
+template int32_t Scene::Intersect<double>(const double[3], const double[3], double*, const int*,
+                                          int) const;
 
 }  // namespace rigcal::drivers::internal

@@ -56,6 +56,14 @@ class Scene {
   // Casts ray o + t d (d unit, world frame). `pixel_angle`: angle subtended by one pixel along
   // the ray, radians (selects the mip level).
   Hit Cast(const float o[3], const float d[3], float pixel_angle) const;
+  // The same, testing only the boxes listed in `boxes` (indices, -1 ends the list early) besides
+  // the enclosure or pipe: for rays between rays known to hit only those boxes.
+  Hit CastAmong(const float o[3], const float d[3], float pixel_angle, const int* boxes,
+                int num_boxes) const;
+  // The box a surface belongs to, or -1 (enclosure faces, pipe, sky).
+  int BoxOfSurface(int32_t surface) const {
+    return has_enclosure_ && surface >= 6 ? (surface - 6) / 6 : -1;
+  }
   // First hit distance in units of |d|, double precision; nullopt when the ray hits nothing.
   std::optional<double> Distance(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
   // Empty when p is in free space at least `clearance` away from every surface; else what p
@@ -98,8 +106,12 @@ class Scene {
   };
   static float SampleTile(const TileView& tile, float u, float v, float lod);
 
+  // First surface along o + t d; `boxes`: null = every box that can be hit (band culling),
+  // else only these `num_boxes` boxes.
   template <typename T>
-  int32_t Intersect(const T o[3], const T d[3], T* t_hit) const;
+  int32_t Intersect(const T o[3], const T d[3], T* t_hit, const int* boxes = nullptr,
+                    int num_boxes = 0) const;
+  Hit Shade(const float o[3], const float d[3], float pixel_angle, int32_t surface, float t) const;
 
   std::string description_;
   float inv_texel_ = 100.f;

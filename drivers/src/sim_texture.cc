@@ -80,11 +80,11 @@ TextureTile MakeDeadLeavesTile(int log2_size, uint64_t seed) {
   Rng rng(seed);
   // Dead leaves (Matheron; Lee, Mumford & Huang 2001): opaque shapes of random grey fall on
   // the tile one after the other. Half sizes follow a density ~ r^-3 between 1.5 texels and
-  // n / 8, which makes the visible pattern scale invariant: every scale, and so every mip level
+  // n / 16, which makes the visible pattern scale invariant: every scale, and so every mip level
   // and viewing distance, shows edges and corners. Five coverages leave < 1% uncovered.
   std::vector<int8_t> layer(texels, 0);
   constexpr double kCoverage = 5.0;
-  const double r_min = 1.5, r_max = n / 8.0;
+  const double r_min = 1.5, r_max = n / 16.0;
   const double inv_min2 = 1.0 / (r_min * r_min), inv_max2 = 1.0 / (r_max * r_max);
   const double mean_r2 = std::log(r_max / r_min) / (0.5 * (inv_min2 - inv_max2));
   const int count = static_cast<int>(kCoverage * static_cast<double>(texels) / (3.7 * mean_r2));

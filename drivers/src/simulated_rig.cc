@@ -86,16 +86,17 @@ struct SimulatedRigData {
     for (int y = 0; y < height; ++y) {
       const float* in = acc.data() + static_cast<size_t>(y) * width;
       uint8_t* out = image.ptr<uint8_t>(y);
+      // Rounds and saturates (a loop the compiler vectorises).
       if (sigma > 0.f) {
         const float* n = noise.data() + rng.Below(static_cast<uint32_t>(noise.size() - width));
         for (int x = 0; x < width; ++x) {
-          const float v = in[x] + sigma * n[x] + 0.5f;
-          out[x] = static_cast<uint8_t>(v <= 0.f ? 0 : (v >= 255.f ? 255 : static_cast<int>(v)));
+          const float v = std::min(std::max(in[x] + sigma * n[x] + 0.5f, 0.f), 255.f);
+          out[x] = static_cast<uint8_t>(static_cast<int>(v));
         }
       } else {
         for (int x = 0; x < width; ++x) {
-          const float v = in[x] + 0.5f;
-          out[x] = static_cast<uint8_t>(v <= 0.f ? 0 : (v >= 255.f ? 255 : static_cast<int>(v)));
+          const float v = std::min(std::max(in[x] + 0.5f, 0.f), 255.f);
+          out[x] = static_cast<uint8_t>(static_cast<int>(v));
         }
       }
     }
