@@ -110,7 +110,8 @@ void Report(const char* name, const Sequence& s, const SegmentErrors& e) {
   std::sort(ms.begin(), ms.end());
   std::printf(
       "%s: %d poses, frame-to-frame rotation error max %.4f deg rms %.4f deg, Sim(3)-aligned "
-      "centre rms %.4f = %.3f %% of path %.3f; median %.2f ms/frame (unoptimised timing)\n",
+      "centre rms %.4f = %.3f %% of path %.3f; median %.2f ms/frame (wall clock, depends on "
+      "machine load)\n",
       name, e.poses, e.max_relative_rotation_deg, e.rms_relative_rotation_deg, e.aligned_rms,
       100.0 * e.aligned_rms / e.path_length, e.path_length, ms[ms.size() / 2]);
 }

@@ -80,7 +80,7 @@ struct VoOptions {
   // A new keyframe when the tracked map points fall below this fraction of those the last
   // keyframe saw, when the rotation-compensated parallax to it exceeds keyframe_parallax_deg,
   // or after keyframe_max_frames frames.
-  double keyframe_track_ratio = 0.7;
+  double keyframe_track_ratio = 0.8;
   double keyframe_parallax_deg = 3.0;
   int keyframe_max_frames = 8;
   // Keyframes in the local bundle adjustment window (the two oldest are held fixed, which
