@@ -57,9 +57,8 @@ void OnlineCalibrator::Flush() {
   const uint64_t target = sync_.stats().sets_emitted;
   std::unique_lock<std::mutex> lock(estimator_mutex_);
   // Sets dropped by a full ready queue never arrive: wait for the queue to drain instead.
-  consumed_.wait_for(lock, std::chrono::seconds(30), [&] {
-    return sets_consumed_ >= target || sync_.stats().ready_fill == 0;
-  });
+  consumed_.wait_for(lock, std::chrono::seconds(30),
+                     [&] { return sets_consumed_ >= target || sync_.stats().ready_fill == 0; });
 }
 
 void OnlineCalibrator::Stop() {
@@ -109,18 +108,23 @@ void OnlineCalibrator::RefinementLoop() {
   std::unique_lock<std::mutex> stop_lock(stop_mutex_);
   while (!stop_cv_.wait_for(stop_lock, period, [this] { return stopping_; })) {
     stop_lock.unlock();
-    for (size_t i = 0; i + 1 < names_.size(); ++i) {
-      RefinementJob job;
-      {
-        std::lock_guard<std::mutex> lock(estimator_mutex_);
-        job = estimator_.MakeRefinementJob(static_cast<int>(i));
-      }
-      if (!job.start.usable() || job.motions.size() < 10) continue;
-      const SlaveCalibration refined = RefineWindow(job);
-      std::lock_guard<std::mutex> lock(estimator_mutex_);
-      if (estimator_.ApplyRefinement(job, refined)) ++refinements_applied_;
-    }
+    RefineNow();
     stop_lock.lock();
+  }
+}
+
+void OnlineCalibrator::RefineNow() {
+  std::lock_guard<std::mutex> serial(refine_mutex_);
+  for (size_t i = 0; i + 1 < names_.size(); ++i) {
+    RefinementJob job;
+    {
+      std::lock_guard<std::mutex> lock(estimator_mutex_);
+      job = estimator_.MakeRefinementJob(static_cast<int>(i));
+    }
+    if (!job.start.usable() || job.motions.size() < 10) continue;
+    const SlaveCalibration refined = RefineWindow(job);
+    std::lock_guard<std::mutex> lock(estimator_mutex_);
+    if (estimator_.ApplyRefinement(job, refined)) ++refinements_applied_;
   }
 }
 

@@ -3,17 +3,18 @@
 #include "rigcal/tools/calib_node.h"
 
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <mutex>
 #include <thread>
 
 #include "rigcal/calib/error_model.h"
+#include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/tools/lcm_messages.h"
 #include "rigcal/tools/pose_log.h"
@@ -294,14 +295,13 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
       last = *msg;
     }
     ASSERT_TRUE(last.has_value());
-    EXPECT_NEAR(FindSlave(*last, "left")->C[1],
-                first.estimate.rig.slaves[0].estimate.C.y(), 1e-12);
+    EXPECT_NEAR(FindSlave(*last, "left")->C[1], first.estimate.rig.slaves[0].estimate.C.y(), 1e-12);
   }
 
   // Resume from the saved state with an empty log: the estimate continues from the state.
   const std::string empty_log = dir / "empty.lcmlog";
-  ASSERT_EQ(WritePoseLog(empty_log, RigRecording{{}, {"front", {}, {}}, {{"left", {}, {}},
-                                                                         {"back", {}, {}}}}),
+  ASSERT_EQ(WritePoseLog(empty_log,
+                         RigRecording{{}, {"front", {}, {}}, {{"left", {}, {}}, {"back", {}, {}}}}),
             "");
   options.log_path = empty_log;
   options.publish_url.clear();
@@ -315,8 +315,14 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
     EXPECT_TRUE(resumed.resumed);
     EXPECT_EQ(resumed.estimate.rig.slaves[0].motions.used,
               first.estimate.rig.slaves[0].motions.used);
-    EXPECT_NEAR(resumed.estimate.rig.slaves[0].estimate.C.x(),
-                first.estimate.rig.slaves[0].estimate.C.x(), 1e-9);
+    // The state holds the statistics, not the refinement window: the resumed estimate is the
+    // linear solution of the same statistics, within the first run's uncertainty of the
+    // refined one it published at the end.
+    const SlaveCalibration& a = first.estimate.rig.slaves[0];
+    const SlaveCalibration& b = resumed.estimate.rig.slaves[0];
+    ASSERT_GT(a.pos_std.x(), 0.0);
+    EXPECT_NEAR(b.estimate.C.x(), a.estimate.C.x(), 3.0 * a.pos_std.x());
+    EXPECT_LT(AngleBetween(a.estimate.q, b.estimate.q) * kDegPerRad, 3.0 * a.rot_std_deg);
   }
 
   // A corrupt state file is reported and ignored: the node starts afresh and does not crash.

@@ -1,12 +1,11 @@
 #include "rigcal/tools/calib_node.h"
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <sstream>
 
 #include "rigcal/calib/logging.h"
@@ -54,7 +53,7 @@ struct CalibNode::Impl {
   CalibNodeOptions options;
   CameraNames names;
   std::shared_ptr<spdlog::logger> log = ModuleLogger("tools");
-  lcm::LCM* bus = nullptr;           // input + output for live runs (owned or external)
+  lcm::LCM* bus = nullptr;  // input + output for live runs (owned or external)
   std::unique_ptr<lcm::LCM> owned_bus;
   std::unique_ptr<lcm::LCM> output;  // replay: optional output
   std::unique_ptr<lcm::LogFile> log_file;
@@ -181,8 +180,9 @@ struct CalibNode::Impl {
       }
       cameras.push_back(cam);
     }
-    return MakeRigStatus(cameras, sync, config.online.sync.capacity * static_cast<int32_t>(names.size()),
-                         estimate, cpu.Sample(), MonotonicMicros());
+    return MakeRigStatus(cameras, sync,
+                         config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
+                         cpu.Sample(), MonotonicMicros());
   }
 
   void PublishStatus(const RigEstimate& estimate) {
@@ -215,7 +215,8 @@ struct CalibNode::Impl {
                       slave.estimate.C.y(), slave.estimate.C.z(), slave.rot_std_deg);
         line << buf;
       }
-      if (i < estimate.online.size()) line << " [" << FlagsToString(estimate.online[i].flags) << "]";
+      if (i < estimate.online.size())
+        line << " [" << FlagsToString(estimate.online[i].flags) << "]";
     }
     log->info("{}", line.str());
   }
@@ -309,7 +310,8 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
   }
   const Clock::time_point start = Clock::now();
   auto every = [](double rate_hz) {
-    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate_hz));
+    return std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(1.0 / rate_hz));
   };
   const Clock::duration extrinsics_period = every(m.config.publish.extrinsics_rate_hz);
   const Clock::duration status_period = every(m.config.publish.status_rate_hz);
@@ -363,6 +365,7 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
 
   // Clean stop: everything received is estimated, published, saved and written.
   m.calibrator.Flush();
+  m.calibrator.RefineNow();
   m.calibrator.Stop();
   const RigEstimate estimate = m.calibrator.Estimate();
   m.PublishExtrinsics(estimate);

@@ -1,11 +1,11 @@
 #include "rigcal/tools/pipeline.h"
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <algorithm>
 #include <array>
+#include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
+#include "pose_merge.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/tools/lcm_messages.h"
 
@@ -17,8 +17,7 @@ constexpr size_t kTimingWindow = 64;
 double Median(std::vector<double> values) {
   if (values.empty()) return 0.0;
   const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid),
-                   values.end());
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
   return values[mid];
 }
 
@@ -73,7 +72,12 @@ Pipeline::Pipeline(std::vector<std::string> names,
   // A dead or lagging slave must not stop the others: only the master is required.
   online.sync.required.assign(names_.size(), false);
   online.sync.required[0] = true;
+  const int64_t lead_ns = online.sync.EffectiveMaxWaitNs() / 3;
   calibrator_ = std::make_unique<OnlineCalibrator>(names_, online);
+  if (options_.lossless) {
+    merge_ = std::make_unique<PoseMerge>(static_cast<int>(names_.size()), lead_ns,
+                                         [this](const CameraPose& pose) { Forward(pose); });
+  }
   for (size_t i = 0; i < names_.size(); ++i) {
     auto camera = std::make_unique<Camera>(static_cast<int>(i), std::move(devices[i]),
                                            std::move(cameras[i]), options_);
@@ -136,9 +140,26 @@ void Pipeline::CaptureLoop(int index) {
   camera.frames.Stop();  // the VO thread drains what is queued, then ends
 }
 
+void Pipeline::Forward(const CameraPose& pose) {
+  const auto index = static_cast<size_t>(pose.camera);
+  const PushResult pushed = calibrator_->Push(pose);
+  if (pushed != PushResult::kAccepted) {
+    Camera& camera = *cameras_[index];
+    std::lock_guard<std::mutex> lock(camera.mutex);
+    ++camera.health.sync_rejected;
+  }
+  if (lcm_ != nullptr) {
+    auto msg = CameraPoseToLcm(pose, names_, pose.t_ns / 1000);
+    if (msg) {
+      const std::string channel = PoseChannel(names_[index]);
+      auto bytes = EncodeMessage(channel, names_, *msg);
+      if (bytes) lcm_->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
+    }
+  }
+}
+
 void Pipeline::VoLoop(int index) {
   Camera& camera = *cameras_[static_cast<size_t>(index)];
-  auto log = ModuleLogger("vo");
   while (std::optional<drivers::Frame> frame = camera.frames.Pop()) {
     const vo::VoResult result = camera.vo.Process(frame->t_ns, frame->image);
     std::vector<CameraPose> poses;
@@ -147,34 +168,28 @@ void Pipeline::VoLoop(int index) {
       poses.push_back(*result.pose);
       poses.back().trigger_seq = frame->seq;
     }
-    int64_t rejected = 0;
-    for (CameraPose& pose : poses) {
-      pose.camera = index;
-      const PushResult pushed = calibrator_->Push(pose);
-      if (pushed != PushResult::kAccepted) ++rejected;
-      if (lcm_ != nullptr) {
-        auto msg = CameraPoseToLcm(pose, names_, pose.t_ns / 1000);
-        if (msg) {
-          const std::string channel = PoseChannel(names_[static_cast<size_t>(index)]);
-          auto bytes = EncodeMessage(channel, names_, *msg);
-          if (bytes) lcm_->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
-        }
+    for (CameraPose& pose : poses) pose.camera = index;
+    {
+      std::lock_guard<std::mutex> lock(camera.mutex);
+      CameraHealth& h = camera.health;
+      ++h.frames_processed;
+      h.poses += static_cast<int64_t>(poses.size());
+      h.vo_state = result.state;
+      h.segment = camera.vo.segment();
+      h.vo_message = result.message;
+      if (result.pose) h.last_pose_t_ns = result.pose->t_ns;
+      camera.timings[camera.timing_count++ % kTimingWindow] = result.processing_ms;
+      if (options_.record_poses) {
+        for (const CameraPose& pose : poses) camera.recorded.push_back(pose);
       }
     }
-    std::lock_guard<std::mutex> lock(camera.mutex);
-    CameraHealth& h = camera.health;
-    ++h.frames_processed;
-    h.poses += static_cast<int64_t>(poses.size());
-    h.sync_rejected += rejected;
-    h.vo_state = result.state;
-    h.segment = camera.vo.segment();
-    h.vo_message = result.message;
-    if (result.pose) h.last_pose_t_ns = result.pose->t_ns;
-    camera.timings[camera.timing_count++ % kTimingWindow] = result.processing_ms;
-    if (options_.record_poses) {
-      for (const CameraPose& pose : poses) camera.recorded.push_back(pose);
+    if (merge_) {
+      merge_->Deliver(index, frame->t_ns, std::move(poses));
+    } else {
+      for (const CameraPose& pose : poses) Forward(pose);
     }
   }
+  if (merge_) merge_->End(index);
   --vo_threads_running_;
 }
 
@@ -184,9 +199,8 @@ PipelineSnapshot Pipeline::Snapshot() const {
     std::lock_guard<std::mutex> lock(camera->mutex);
     CameraHealth h = camera->health;
     const size_t n = std::min(camera->timing_count, kTimingWindow);
-    h.vo_ms_median = Median(std::vector<double>(camera->timings.begin(),
-                                                camera->timings.begin() +
-                                                    static_cast<std::ptrdiff_t>(n)));
+    h.vo_ms_median = Median(std::vector<double>(
+        camera->timings.begin(), camera->timings.begin() + static_cast<std::ptrdiff_t>(n)));
     snapshot.cameras.push_back(std::move(h));
   }
   snapshot.sync = calibrator_->sync_stats();
@@ -206,11 +220,13 @@ void Pipeline::Stop() {
     camera->device->Interrupt();
     camera->frames.Stop();
   }
+  if (merge_) merge_->Stop();
   for (auto& camera : cameras_) {
     if (camera->capture_thread.joinable()) camera->capture_thread.join();
     if (camera->vo_thread.joinable()) camera->vo_thread.join();
   }
   calibrator_->Flush();
+  calibrator_->RefineNow();
   calibrator_->Stop();
 }
 

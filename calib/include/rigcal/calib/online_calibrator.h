@@ -42,6 +42,12 @@ class OnlineCalibrator {
   // Stops the threads (after consuming what is ready) and joins them. Idempotent.
   void Stop();
 
+  // Runs the window refinement of every slave now, on the calling thread, and publishes it
+  // when consistent (as the refinement thread does every refine_period_s). Call after Flush at
+  // the end of a stream, so the final estimate is the refinement of the final window whatever
+  // the refinement thread's timing was. Any thread; refinements are serialised.
+  void RefineNow();
+
   // Consistent snapshot of the estimate (any thread).
   RigEstimate Estimate() const;
   SyncStats sync_stats() const { return sync_.stats(); }
@@ -64,7 +70,8 @@ class OnlineCalibrator {
   uint64_t sets_consumed_ = 0;  // guarded by estimator_mutex_
   std::mutex stop_mutex_;
   std::condition_variable stop_cv_;
-  bool stopping_ = false;  // guarded by stop_mutex_
+  bool stopping_ = false;    // guarded by stop_mutex_
+  std::mutex refine_mutex_;  // serialises RefineNow
   std::atomic<int> refinements_applied_{0};
   std::thread estimator_thread_;
   std::thread refinement_thread_;

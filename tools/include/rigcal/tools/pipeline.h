@@ -6,8 +6,9 @@
 //
 // One object owns and joins every thread. Capture never waits for VO in live mode: a full
 // frame queue drops its oldest frame and counts it (VO backlog). In lossless mode (recorded or
-// simulated sources that are not paced in real time) capture waits for room instead, so a run
-// is deterministic. Slaves are optional members of a sync set, so a dead slave camera leaves
+// simulated sources that are not paced in real time) capture waits for room instead, and the
+// poses reach the calibrator in one canonical order whatever the thread timing (PoseMerge), so
+// a run is deterministic. Slaves are optional members of a sync set, so a dead slave camera leaves
 // the others calibrating; a dead master stops the calibration (the status says so).
 
 #include <atomic>
@@ -51,13 +52,13 @@ struct CameraHealth {
   int64_t sync_rejected = 0;     // poses the sync buffer refused (late, out of order, ...)
   vo::VoState vo_state = vo::VoState::kInitialising;
   int segment = 0;
-  double vo_ms_median = 0.0;     // over the last 64 frames
+  double vo_ms_median = 0.0;  // over the last 64 frames
   int64_t last_frame_t_ns = -1;
   int64_t last_pose_t_ns = -1;
-  bool ended = false;            // end of stream
-  bool dead = false;             // the device failed
+  bool ended = false;  // end of stream
+  bool dead = false;   // the device failed
   std::string dead_reason;
-  std::string vo_message;        // why the VO is initialising or lost
+  std::string vo_message;  // why the VO is initialising or lost
 };
 
 struct PipelineSnapshot {
@@ -66,6 +67,8 @@ struct PipelineSnapshot {
   RigEstimate estimate;
   bool finished = false;  // every camera ended or died and its frames were processed
 };
+
+class PoseMerge;
 
 class Pipeline {
  public:
@@ -99,12 +102,15 @@ class Pipeline {
   struct Camera;
   void CaptureLoop(int camera);
   void VoLoop(int camera);
+  // Hands one pose to the calibrator (and LCM); counts a rejection.
+  void Forward(const CameraPose& pose);
 
   std::vector<std::string> names_;
   PipelineOptions options_;
   lcm::LCM* lcm_ = nullptr;
   std::unique_ptr<OnlineCalibrator> calibrator_;
   std::vector<std::unique_ptr<Camera>> cameras_;
+  std::unique_ptr<PoseMerge> merge_;  // lossless runs only
   std::atomic<int> vo_threads_running_{0};
   bool started_ = false;
   bool stopped_ = false;
