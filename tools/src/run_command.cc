@@ -1,10 +1,10 @@
 // `rigcal run`: the whole live pipeline on a configured source: capture -> VO per camera ->
 // SyncBuffer -> RigEstimator -> LCM, with a status line per second.
-#include <lcm/lcm-cpp.hpp>
-
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
 #include <optional>
@@ -16,7 +16,6 @@
 #include "rigcal/calib/logging.h"
 #include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/vo/camera_spec.h"
 #include "rigcal/tools/calib_node.h"
 #include "rigcal/tools/lcm_messages.h"
 #include "rigcal/tools/online_replay.h"
@@ -27,6 +26,8 @@
 #include "rigcal/tools/rig_files.h"
 #include "rigcal/tools/rig_status.h"
 #include "rigcal/tools/run_evaluation.h"
+#include "rigcal/tools/trajectory_io.h"
+#include "rigcal/vo/camera_spec.h"
 #include "stop_signal.h"
 
 namespace rigcal::cli {
@@ -45,6 +46,7 @@ struct RunArgs {
   bool fast = false;
   std::string out = "rigcal_result.yaml";
   std::string truth_dir;
+  std::string poses_dir;
   double status_every_s = 1.0;
 };
 
@@ -143,6 +145,32 @@ void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
   }
 }
 
+// Writes every recorded VO pose of camera i to <dir>/<name>.txt in the rigcal native format
+// (`t_ns qw qx qy qz Cx Cy Cz segment`), which `rigcal solve` reads. Returns an error or "".
+std::string WritePoses(const std::string& dir, const std::vector<std::string>& names,
+                       const tools::Pipeline& pipeline) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return "cannot create '" + dir + "': " + ec.message();
+  for (size_t i = 0; i < names.size(); ++i) {
+    tools::TimedTrajectory trajectory;
+    trajectory.name = names[i];
+    for (const CameraPose& p : pipeline.RecordedPoses(static_cast<int>(i))) {
+      // A segment's reference pose and its first pose are distinct stamps; keep stamps
+      // strictly increasing (a reader rejects anything else).
+      if (!trajectory.t_ns.empty() && p.t_ns <= trajectory.t_ns.back()) continue;
+      trajectory.t_ns.push_back(p.t_ns);
+      trajectory.poses.push_back(p.pose);
+      trajectory.segment.push_back(p.segment);
+    }
+    const std::string path = (std::filesystem::path(dir) / (names[i] + ".txt")).string();
+    if (std::string error = tools::WriteTrajectoryNative(path, trajectory); !error.empty()) {
+      return error;
+    }
+  }
+  return {};
+}
+
 int RunRun(const RunArgs& args) {
   auto log = ModuleLogger("tools");
   auto config = tools::LoadRigConfig(args.config);
@@ -185,8 +213,8 @@ int RunRun(const RunArgs& args) {
       return kExitError;
     }
     for (size_t i = 0; i < names.size(); ++i) {
-      auto device = drivers::ImageFolderDevice::Open(config->image_folders[i], names[i],
-                                                     static_cast<int>(i));
+      auto device =
+          drivers::ImageFolderDevice::Open(config->image_folders[i], names[i], static_cast<int>(i));
       if (!device) {
         std::cerr << "rigcal run: " << args.config << ": camera '" << names[i]
                   << "': " << device.error() << "\n";
@@ -219,7 +247,7 @@ int RunRun(const RunArgs& args) {
   }
   tools::PipelineOptions options;
   options.lossless = !realtime;
-  options.record_poses = rig.has_value() && (args.eval || args.json);
+  options.record_poses = (rig.has_value() && (args.eval || args.json)) || !args.poses_dir.empty();
   tools::Pipeline pipeline(names, std::move(devices), models, config->online, options, bus.get());
 
   StopSignal stop_signal;
@@ -238,7 +266,8 @@ int RunRun(const RunArgs& args) {
     const double period = std::chrono::duration<double>(now - last_status).count();
     if (period >= (args.status_every_s > 0 ? args.status_every_s : 1.0)) {
       const tools::PipelineSnapshot snapshot = pipeline.Snapshot();
-      if (args.status_every_s > 0) std::cerr << StatusLine(elapsed, snapshot, frames_before, period) << "\n";
+      if (args.status_every_s > 0)
+        std::cerr << StatusLine(elapsed, snapshot, frames_before, period) << "\n";
       if (bus) PublishStatus(bus.get(), snapshot, frames_before, period, capacity, &cpu, names);
       for (size_t i = 0; i < names.size(); ++i) {
         frames_before[i] = snapshot.cameras[i].frames_processed;
@@ -255,7 +284,8 @@ int RunRun(const RunArgs& args) {
 
   // What happened to the cameras.
   for (const tools::CameraHealth& h : final_state.cameras) {
-    if (h.dead) std::cerr << "rigcal run: camera '" << h.name << "' died: " << h.dead_reason << "\n";
+    if (h.dead)
+      std::cerr << "rigcal run: camera '" << h.name << "' died: " << h.dead_reason << "\n";
     if (h.dropped_backlog > 0) {
       std::cerr << "rigcal run: camera '" << h.name << "': " << h.dropped_backlog
                 << " frames dropped because its VO fell behind\n";
@@ -283,6 +313,21 @@ int RunRun(const RunArgs& args) {
     log->info("result written to {}", args.out);
   }
 
+  if (!args.poses_dir.empty()) {
+    if (const std::string error = WritePoses(args.poses_dir, names, pipeline); !error.empty()) {
+      std::cerr << "rigcal run: " << error << "\n";
+      return kExitError;
+    }
+  }
+  if (rig && !args.truth_dir.empty() && !args.poses_dir.empty()) {
+    // In real time the devices' stamps start with the rig clock: rewrite the truth now that
+    // it runs, so its stamps match the written poses (before the run they count from 0).
+    if (const std::string error = rig->WriteGroundTruth(args.truth_dir); !error.empty()) {
+      std::cerr << "rigcal run: " << error << "\n";
+      return kExitError;
+    }
+  }
+
   bool any_usable = false;
   for (const SlaveCalibration& slave : result.slaves) any_usable = any_usable || slave.usable();
   std::optional<tools::RunEvaluation> evaluation;
@@ -301,7 +346,8 @@ int RunRun(const RunArgs& args) {
   if (args.json) {
     std::map<std::string, Similarity> truth;
     if (evaluation) {
-      for (const tools::SlaveEvaluation& e : evaluation->slaves) truth[e.name] = e.truth_master_units;
+      for (const tools::SlaveEvaluation& e : evaluation->slaves)
+        truth[e.name] = e.truth_master_units;
     }
     std::cout << tools::ResultToJson(result, evaluation ? &truth : nullptr).dump(2) << "\n";
   } else {
@@ -345,8 +391,10 @@ void RegisterRun(CLI::App& app, int* exit_code) {
       ->default_val("rigcal_result.yaml");
   cmd->add_option("--truth-out", args->truth_dir,
                   "Simulated source: write the ground truth (TUM per camera, truth.yaml) here");
-  cmd->add_option("--status-every", args->status_every_s,
-                  "Seconds between status lines (0 = none)")
+  cmd->add_option("--poses-out", args->poses_dir,
+                  "Write every VO pose of every camera to DIR/<camera>.txt (rigcal native format "
+                  "with the scale segment column, read by `rigcal solve`)");
+  cmd->add_option("--status-every", args->status_every_s, "Seconds between status lines (0 = none)")
       ->check(CLI::NonNegativeNumber)
       ->default_val(1.0);
   cmd->callback([args, exit_code]() { *exit_code = RunRun(*args); });
