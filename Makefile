@@ -2,10 +2,11 @@
 # (scripts/install-deps.sh), configure, build and run.
 BUILD_DIR ?= build
 ASAN_DIR  ?= build-asan
+TSAN_DIR  ?= build-tsan
 JOBS      ?= $(shell nproc)
 CTEST_ARGS ?=
 
-.PHONY: all deps configure build demo test test-fast test-asan eval bench format tidy clean
+.PHONY: all deps configure build demo test test-fast test-asan test-tsan eval bench format tidy clean
 
 all: build
 
@@ -31,8 +32,9 @@ build: configure
 demo: build
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
-# Whole suite, then the calib tests once more under ASan+UBSan.
-test: build test-asan
+# Whole suite, then the calib tests once more under ASan+UBSan and the threaded ones under TSan
+# (sanitizer builds compile only the calib library and its own tests: label calib_core).
+test: build test-asan test-tsan
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
 
 test-fast: build
@@ -42,7 +44,14 @@ test-asan: deps
 	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,-DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
 	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_calib_tests
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  ctest --test-dir $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib -LE eval
+	  ctest --test-dir $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval
+
+# The multi-threaded calib tests (SyncBuffer producers, OnlineCalibrator threads) under TSan.
+test-tsan: deps
+	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,-DRIGCAL_TSAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
+	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test
+	TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+	  ctest --test-dir $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator)'
 
 # Long evaluations (not part of make test).
 eval: build
@@ -58,4 +67,4 @@ tidy: build
 	find calib/src vo/src drivers/src tools/src -name '*.cc' | xargs clang-tidy -p $(BUILD_DIR) --quiet
 
 clean:
-	rm -rf $(BUILD_DIR) $(ASAN_DIR)
+	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(TSAN_DIR)

@@ -5,7 +5,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
-#include "pose_merge.h"
+#include "rigcal/tools/pose_merge.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/tools/lcm_messages.h"
 

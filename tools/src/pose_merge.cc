@@ -1,4 +1,4 @@
-#include "pose_merge.h"
+#include "rigcal/tools/pose_merge.h"
 
 #include <limits>
 
