@@ -9,6 +9,7 @@
 #include <unordered_set>
 
 #include "absolute_pose.h"
+#include "affine_patch.h"
 #include "feature_grid.h"
 #include "klt_tracker.h"
 #include "local_bundle_adjustment.h"
@@ -31,6 +32,9 @@ struct Track {
   // anchor_keyframe = -1), and its bearing there (for triangulation and parallax).
   int anchor_keyframe = -1;
   Eigen::Vector3d anchor_bearing = Eigen::Vector3d::UnitZ();
+  // Reference patch (affine refinement) and its current warp into the image; null: none.
+  std::shared_ptr<const PatchTemplate> patch;
+  Eigen::Matrix2d warp = Eigen::Matrix2d::Identity();
 };
 
 double Median(std::vector<double> v) {
@@ -73,6 +77,8 @@ bool VoOptions::Check(std::string* error) const {
   require(klt_pyramid_levels >= 0 && klt_pyramid_levels <= 8, "klt_pyramid_levels", "in [0, 8]");
   require(klt_max_fb_error_px > 0.0, "klt_max_fb_error_px", "> 0");
   require(border_px >= 0, "border_px", ">= 0");
+  require(affine_half_size >= 0 && affine_half_size <= 15, "affine_half_size", "in [0, 15]");
+  require(affine_max_shift_px > 0.0, "affine_max_shift_px", "> 0");
   require(ransac_threshold_px > 0.0, "ransac_threshold_px", "> 0");
   require(ransac_max_iterations >= 1, "ransac_max_iterations", ">= 1");
   require(ransac_confidence > 0.0 && ransac_confidence < 1.0, "ransac_confidence", "in (0, 1)");
@@ -121,7 +127,11 @@ class MonocularVo::Impl {
 
  private:
   void StartReference(int64_t t_ns, const cv::Mat& grey);
-  void TrackFeatures(const CameraPoseRC* predicted);
+  void TrackFeatures(const cv::Mat& grey, const CameraPoseRC* predicted);
+  // Refines the KLT position of `track` by aligning its reference patch (affine) in `grey`;
+  // renews the patch where it cannot be aligned or has deformed too much.
+  void RefineTrack(const cv::Mat& grey, Track* track) const;
+  std::shared_ptr<const PatchTemplate> MakePatch(const cv::Mat& grey, const cv::Point2f& px) const;
   void Initialise(int64_t t_ns, const cv::Mat& grey, VoResult* result);
   void TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* result);
   void CreateKeyframe(int64_t t_ns, const cv::Mat& grey);
@@ -301,6 +311,7 @@ void MonocularVo::Impl::AddNewTracks(const cv::Mat& grey, int anchor_keyframe) {
     Track t;
     t.px = px;
     if (!Unproject(px, &t.bearing)) continue;
+    t.patch = MakePatch(grey, px);
     t.anchor_keyframe = anchor_keyframe;
     t.anchor_bearing = t.bearing;
     tracks_.push_back(t);
@@ -321,7 +332,38 @@ void MonocularVo::Impl::StartReference(int64_t t_ns, const cv::Mat& grey) {
   }
 }
 
-void MonocularVo::Impl::TrackFeatures(const CameraPoseRC* predicted) {
+std::shared_ptr<const PatchTemplate> MonocularVo::Impl::MakePatch(const cv::Mat& grey,
+                                                                  const cv::Point2f& px) const {
+  if (options_.affine_half_size <= 0) return nullptr;
+  auto patch = std::make_shared<PatchTemplate>();
+  if (!MakePatchTemplate(grey, px, options_.affine_half_size, patch.get())) return nullptr;
+  return patch;
+}
+
+void MonocularVo::Impl::RefineTrack(const cv::Mat& grey, Track* track) const {
+  if (options_.affine_half_size <= 0) return;
+  if (track->patch != nullptr) {
+    AffinePatchOptions affine;
+    affine.half_size = options_.affine_half_size;
+    Eigen::Matrix2d warp = track->warp;
+    Eigen::Vector2d centre(track->px.x, track->px.y);
+    if (AlignPatch(*track->patch, grey, affine, &warp, &centre) &&
+        (centre - Eigen::Vector2d(track->px.x, track->px.y)).norm() <=
+            options_.affine_max_shift_px) {
+      track->px = cv::Point2f(static_cast<float>(centre.x()), static_cast<float>(centre.y()));
+      track->warp = warp;
+      // Keep the reference close to the current view: the patch is sampled anew once it
+      // appears at a very different size or shape.
+      const double area = warp.determinant();
+      const double shear = (warp / std::sqrt(std::abs(area)) - Eigen::Matrix2d::Identity()).norm();
+      if (area > 0.6 && area < 1.7 && shear < 0.4) return;
+    }
+  }
+  track->patch = MakePatch(grey, track->px);
+  track->warp.setIdentity();
+}
+
+void MonocularVo::Impl::TrackFeatures(const cv::Mat& grey, const CameraPoseRC* predicted) {
   std::vector<cv::Point2f> previous, guesses, tracked;
   std::vector<unsigned char> ok;
   previous.reserve(tracks_.size());
@@ -346,7 +388,8 @@ void MonocularVo::Impl::TrackFeatures(const CameraPoseRC* predicted) {
     if (!ok[i] || !InMask(tracked[i])) continue;
     Track t = tracks_[i];
     t.px = tracked[i];
-    if (!Unproject(t.px, &t.bearing)) continue;
+    RefineTrack(grey, &t);
+    if (!InMask(t.px) || !Unproject(t.px, &t.bearing)) continue;
     kept.push_back(t);
   }
   tracks_.swap(kept);
@@ -360,7 +403,7 @@ void MonocularVo::Impl::Initialise(int64_t t_ns, const cv::Mat& grey, VoResult* 
     result->message = has_reference_ ? "reference frame set" : "too few features";
     return;
   }
-  TrackFeatures(nullptr);
+  TrackFeatures(grey, nullptr);
   if (static_cast<int>(tracks_.size()) < options_.min_init_tracks) {
     StartReference(t_ns, grey);
     result->state = state_;
@@ -524,7 +567,7 @@ void MonocularVo::Impl::Lose(const std::string& reason, int64_t t_ns, const cv::
 
 void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* result) {
   const CameraPoseRC predicted = has_velocity_ ? Compose(pose_, velocity_) : pose_;
-  TrackFeatures(&predicted);
+  TrackFeatures(grey, &predicted);
   ++frames_since_keyframe_;
 
   std::vector<int> index;

@@ -5,8 +5,9 @@
 // a time.
 //
 // Method (details in vo/src/):
-//  - KLT pyramidal tracking (OpenCV) with a forward-backward check; new features from FAST
-//    corners, at most one per grid cell, at keyframes.
+//  - KLT pyramidal tracking (OpenCV) with a forward-backward check, refined by aligning each
+//    track's reference patch with an affine warp (no drift where patches deform); new
+//    features from FAST corners, at most one per grid cell, at keyframes.
 //  - Initialisation: 5-point essential matrix in a RANSAC on unit bearing vectors (so it works
 //    for lenses wider than 180 degrees), accepted only with enough parallax left after the
 //    best pure rotation is removed; triangulation; two-view bundle adjustment; ||C^1|| = 1.
@@ -47,6 +48,13 @@ struct VoOptions {
   // Features closer than this to the image border or to the edge of the lens's valid area
   // are not detected, pixels.
   int border_px = 12;
+  // Affine refinement of every KLT track: the track's reference patch, (2 h + 1)^2 pixels
+  // with h = affine_half_size, is aligned into each new image with an affine warp (0: off).
+  // Frame-to-frame KLT alone drifts where patches deform (zoom, perspective, fisheye), which
+  // biases triangulation and makes the scale drift. A refinement that moves the KLT position
+  // by more than affine_max_shift_px is refused and the patch is sampled anew.
+  int affine_half_size = 5;
+  double affine_max_shift_px = 1.5;
 
   // --- Robust estimation (angles in pixels of the camera's centre resolution) ---
   // RANSAC inlier threshold of the essential matrix (epipolar angle) and of PnP (angle

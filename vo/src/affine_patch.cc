@@ -1,0 +1,127 @@
+#include "affine_patch.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+namespace rigcal::vo {
+namespace {
+
+// Bilinear sample of a CV_8UC1 image; false outside [0, cols - 1) x [0, rows - 1).
+inline bool Sample(const cv::Mat& grey, double x, double y, float* value) {
+  if (!(x >= 0.0 && y >= 0.0 && x < grey.cols - 1 && y < grey.rows - 1)) return false;
+  const int x0 = static_cast<int>(x);
+  const int y0 = static_cast<int>(y);
+  const float ax = static_cast<float>(x - x0);
+  const float ay = static_cast<float>(y - y0);
+  const uint8_t* row0 = grey.ptr<uint8_t>(y0) + x0;
+  const uint8_t* row1 = row0 + grey.step[0];
+  const float top = row0[0] + ax * (row0[1] - row0[0]);
+  const float bottom = row1[0] + ax * (row1[1] - row1[0]);
+  *value = top + ay * (bottom - top);
+  return true;
+}
+
+}  // namespace
+
+bool MakePatchTemplate(const cv::Mat& grey, const cv::Point2f& centre, int half_size,
+                       PatchTemplate* patch) {
+  patch->valid = false;
+  patch->half_size = half_size;
+  const int n = 2 * half_size + 1;
+  const int m = n + 2;  // with a one-pixel ring for the gradients
+  std::vector<float> grid(static_cast<size_t>(m) * m);
+  for (int v = 0; v < m; ++v) {
+    for (int u = 0; u < m; ++u) {
+      if (!Sample(grey, centre.x + u - half_size - 1, centre.y + v - half_size - 1,
+                  &grid[static_cast<size_t>(v) * m + u])) {
+        return false;
+      }
+    }
+  }
+  patch->values.resize(static_cast<size_t>(n) * n);
+  patch->sd.resize(static_cast<size_t>(n) * n * 7);
+  Eigen::Matrix<double, 7, 7> hessian = Eigen::Matrix<double, 7, 7>::Zero();
+  for (int v = 0; v < n; ++v) {
+    for (int u = 0; u < n; ++u) {
+      const size_t g = static_cast<size_t>(v + 1) * m + (u + 1);
+      const float gx = 0.5f * (grid[g + 1] - grid[g - 1]);
+      const float gy = 0.5f * (grid[g + m] - grid[g - m]);
+      const float x = static_cast<float>(u - half_size);
+      const float y = static_cast<float>(v - half_size);
+      const size_t k = static_cast<size_t>(v) * n + u;
+      patch->values[k] = grid[g];
+      float* sd = &patch->sd[7 * k];
+      sd[0] = gx * x;
+      sd[1] = gx * y;
+      sd[2] = gy * x;
+      sd[3] = gy * y;
+      sd[4] = gx;
+      sd[5] = gy;
+      sd[6] = 1.f;
+      Eigen::Map<const Eigen::Matrix<float, 7, 1>> j(sd);
+      hessian.noalias() += (j * j.transpose()).cast<double>();
+    }
+  }
+  // Texture enough for the translation (the structure tensor) and the whole warp.
+  const Eigen::Matrix2d tensor = hessian.block<2, 2>(4, 4) / (n * n);
+  const double min_gradient =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(tensor).eigenvalues()(0);
+  if (!(min_gradient > 4.0)) return false;  // (grey levels / px)^2: a flat or edge-only patch
+  Eigen::LDLT<Eigen::Matrix<double, 7, 7>> ldlt(hessian);
+  if (ldlt.info() != Eigen::Success ||
+      !(ldlt.vectorD().minCoeff() > 1e-9 * ldlt.vectorD().maxCoeff())) {
+    return false;
+  }
+  patch->inverse_hessian = ldlt.solve(Eigen::Matrix<double, 7, 7>::Identity());
+  patch->valid = patch->inverse_hessian.allFinite();
+  return patch->valid;
+}
+
+bool AlignPatch(const PatchTemplate& patch, const cv::Mat& grey, const AffinePatchOptions& options,
+                Eigen::Matrix2d* warp, Eigen::Vector2d* centre, double* rms) {
+  if (!patch.valid) return false;
+  const int h = patch.half_size;
+  const int n = 2 * h + 1;
+  double offset = 0.0;
+  double sum2 = 0.0;
+  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
+    Eigen::Matrix<double, 7, 1> g = Eigen::Matrix<double, 7, 1>::Zero();
+    sum2 = 0.0;
+    const Eigen::Matrix2d& a = *warp;
+    for (int v = 0; v < n; ++v) {
+      const double y = v - h;
+      // Row start and step of the warped coordinates.
+      double px = centre->x() + a(0, 0) * (-h) + a(0, 1) * y;
+      double py = centre->y() + a(1, 0) * (-h) + a(1, 1) * y;
+      for (int u = 0; u < n; ++u, px += a(0, 0), py += a(1, 0)) {
+        float value;
+        if (!Sample(grey, px, py, &value)) return false;
+        const size_t k = static_cast<size_t>(v) * n + u;
+        const double e = value - patch.values[k] - offset;
+        sum2 += e * e;
+        const float* sd = &patch.sd[7 * k];
+        for (int i = 0; i < 7; ++i) g[i] += sd[i] * e;
+      }
+    }
+    const Eigen::Matrix<double, 7, 1> dq = patch.inverse_hessian * g;
+    Eigen::Matrix2d increment;
+    increment << 1.0 + dq[0], dq[1], dq[2], 1.0 + dq[3];
+    const double det = increment.determinant();
+    if (!(std::abs(det) > 1e-6)) return false;
+    const Eigen::Matrix2d new_warp = (*warp) * increment.inverse();
+    const Eigen::Vector2d new_centre = *centre - new_warp * Eigen::Vector2d(dq[4], dq[5]);
+    const double step = (new_centre - *centre).norm();
+    *warp = new_warp;
+    *centre = new_centre;
+    offset += dq[6];
+    if (!warp->allFinite() || !centre->allFinite()) return false;
+    const double area = warp->determinant();
+    if (!(area > 1.0 / options.max_area_ratio && area < options.max_area_ratio)) return false;
+    if (step < options.min_step_px) break;
+  }
+  const double residual = std::sqrt(sum2 / (n * n));
+  if (rms != nullptr) *rms = residual;
+  return residual <= options.max_rms;
+}
+
+}  // namespace rigcal::vo
