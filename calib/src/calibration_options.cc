@@ -1,5 +1,6 @@
 #include "rigcal/calib/calibration_options.h"
 
+#include <cmath>
 #include <sstream>
 
 namespace rigcal {
@@ -7,7 +8,8 @@ namespace rigcal {
 bool CalibrationOptions::Check(std::string* error) const {
   std::ostringstream e;
   std::string pair_error;
-  if (!pairs.Check(&pair_error)) e << pair_error;
+  if (!pairs.Check(&pair_error))
+    e << pair_error;
   else if (scale_model == ScaleModel::kPartitions && partitions < 1)
     e << "partitions must be >= 1 for the partition scale model, got " << partitions;
   else if (alpha_threshold_deg < 0.0 || alpha_threshold_deg >= 180.0)
@@ -26,11 +28,20 @@ bool CalibrationOptions::Check(std::string* error) const {
     e << "angle_invariant_floor_deg must be >= 0, got " << angle_invariant_floor_deg;
   else if (max_outlier_rounds < 0)
     e << "max_outlier_rounds must be >= 0, got " << max_outlier_rounds;
-  else if (!(robust_scale > 0.0)) e << "robust_scale must be > 0, got " << robust_scale;
-  else if (max_iterations < 1) e << "max_iterations must be >= 1, got " << max_iterations;
-  else if (planar_axis_spread_deg < 0.0)
+  else if (!(robust_scale > 0.0))
+    e << "robust_scale must be > 0, got " << robust_scale;
+  else if (max_iterations < 1)
+    e << "max_iterations must be >= 1, got " << max_iterations;
+  else if (!(planar_axis_spread_deg >= 0.0))
     e << "planar_axis_spread_deg must be >= 0, got " << planar_axis_spread_deg;
-  else if (min_motions < 2) e << "min_motions must be >= 2, got " << min_motions;
+  else if (!(min_tilt_snr >= 0.0))
+    e << "min_tilt_snr must be >= 0, got " << min_tilt_snr;
+  else if (!(max_axis_std_ratio > 0.0))
+    e << "max_axis_std_ratio must be > 0, got " << max_axis_std_ratio;
+  else if (!(nominal_sigma >= 0.0) || std::isinf(nominal_sigma))
+    e << "nominal_sigma must be finite and >= 0 (0 = no weighted prior), got " << nominal_sigma;
+  else if (min_motions < 2)
+    e << "min_motions must be >= 2, got " << min_motions;
   if (error) *error = e.str();
   return e.str().empty();
 }
@@ -45,6 +56,8 @@ std::string ToString(MotionModel m) {
       return "general";
     case MotionModel::kTranslational:
       return "translational";
+    case MotionModel::kPlanar:
+      return "planar";
   }
   return "?";
 }

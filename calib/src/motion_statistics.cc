@@ -48,11 +48,7 @@ bool ReadScalar(std::istream& in, const char* label, double* v) {
 void MotionStatistics::Add(const MotionData& m, int segment, double w) {
   const Eigen::Matrix4d a = RotationConstraintMatrix(m);
   M_.noalias() += w * a.transpose() * a;  // (4.10)
-  const double v0 = m.q0.tail<3>().norm();
-  if (v0 > 1e-12) {
-    const Eigen::Vector3d r0 = m.q0.tail<3>() / v0;
-    axis_scatter_.noalias() += w * r0 * r0.transpose();
-  }
+  planar_.Add(m, w);
   const Eigen::Matrix3d i_r0 = Eigen::Matrix3d::Identity() - m.R0;
   H_cc_.noalias() += w * i_r0.transpose() * i_r0;
   g_c_.noalias() += w * i_r0.transpose() * m.C0;
@@ -61,6 +57,7 @@ void MotionStatistics::Add(const MotionData& m, int segment, double w) {
   s.P.noalias() += w * i_r0.transpose() * KronTransposeIdentity(m.Ci);
   s.n += w * m.Ci.squaredNorm();
   s.Q.noalias() += w * m.C0 * m.Ci.transpose();
+  s.N.noalias() += w * m.Ci * m.Ci.transpose();
   const double ni = m.Ci.norm(), n0 = m.C0.norm();
   s.len_cross += w * ni * n0;
   s.len_sq += w * ni * ni;
@@ -73,7 +70,7 @@ void MotionStatistics::Add(const MotionData& m, int segment, double w) {
 
 void MotionStatistics::Decay(double f) {
   M_ *= f;
-  axis_scatter_ *= f;
+  planar_.Decay(f);
   H_cc_ *= f;
   g_c_ *= f;
   c0_sq_ *= f;
@@ -86,6 +83,7 @@ void MotionStatistics::Decay(double f) {
     s.P *= f;
     s.n *= f;
     s.Q *= f;
+    s.N *= f;
     s.len_cross *= f;
     s.len_sq *= f;
     s.weight *= f;
@@ -102,46 +100,87 @@ Eigen::Quaterniond MotionStatistics::SolveTranslationalRotation() const {
   return SolveAbsoluteOrientation(S_dir_);  // (4.30)
 }
 
-PositionSolution MotionStatistics::SolvePosition(const Eigen::Quaterniond& dq) const {
+PositionSolution MotionStatistics::SolvePosition(const Eigen::Quaterniond& dq,
+                                                 const PositionConstraint* constraint) const {
   PositionSolution out;
+  // C = fixed + T y with y the free position unknowns: T = I (general) or the plane basis.
+  const int m = constraint ? 2 : 3;
+  Eigen::MatrixXd t = Eigen::MatrixXd::Identity(3, m);
+  Eigen::Vector3d fixed = Eigen::Vector3d::Zero();
+  if (constraint) {
+    t = constraint->basis;
+    fixed = constraint->fixed;
+  }
   const int n_open = static_cast<int>(segments_.size());
-  const int dim = 3 + n_open;
-  const Eigen::Matrix<double, 9, 1> r = Vec(dq.toRotationMatrix());
+  const int dim = m + n_open;
+  out.unknowns = dim;
+  const Eigen::Matrix3d dr = dq.toRotationMatrix();
+  const Eigen::Matrix<double, 9, 1> r = Vec(dr);
+  const Eigen::Matrix3d h_full = H_cc_ + H_marg_;
+  const Eigen::Vector3d g_full = g_c_ + g_marg_;
+  // Residual (I - R0)(fixed + T y) + dλ dR C_i - C_0 = (I - R0) T y + dλ dR C_i - C_0', with
+  // C_0' = C_0 - (I - R0) fixed.
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(dim, dim);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(dim);
-  h.topLeftCorner<3, 3>() = H_cc_ + H_marg_;
-  b.head<3>() = g_c_ + g_marg_;
-  int j = 3;
+  h.topLeftCorner(m, m) = t.transpose() * h_full * t;
+  b.head(m) = t.transpose() * (g_full - h_full * fixed);
+  const double constant =
+      c0_sq_ + c0_sq_marg_ - 2.0 * fixed.dot(g_full) + fixed.dot(h_full * fixed);
+  int j = m;
   std::vector<int> ids;
   for (const auto& [id, s] : segments_) {
     const Eigen::Vector3d cross = s.P * r;  // sum w (I-R0)^T dR C_i
-    h.block<3, 1>(0, j) = cross;
-    h.block<1, 3>(j, 0) = cross.transpose();
+    h.block(0, j, m, 1) = t.transpose() * cross;
+    h.block(j, 0, 1, m) = (t.transpose() * cross).transpose();
     h(j, j) = s.n;
-    b(j) = (dq.toRotationMatrix().array() * s.Q.array()).sum();  // sum w C_0^T dR C_i
+    b(j) = (dr.array() * s.Q.array()).sum() - fixed.dot(cross);  // sum w C_0'^T dR C_i
     ids.push_back(id);
     ++j;
   }
   if (weight_ <= 0.0) return out;
   const Eigen::VectorXd d = h.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
   const Eigen::MatrixXd hn = d.asDiagonal() * h * d.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(hn);
-  out.min_eigenvalue = eig.eigenvalues()(0);
-  if (!(out.min_eigenvalue > 1e-12)) return out;
-  const Eigen::VectorXd x = d.asDiagonal() * hn.ldlt().solve(d.asDiagonal() * b);
-  if (!x.allFinite()) return out;
-  out.C = x.head<3>();
-  for (int k = 0; k < n_open; ++k) out.scales[ids[k]] = x(3 + k);
-  // Information of C with the open scales marginalised (Schur complement).
-  Eigen::Matrix3d info = h.topLeftCorner<3, 3>();
-  for (int k = 0; k < n_open; ++k) {
-    const Eigen::Vector3d cross = h.block<3, 1>(0, 3 + k);
-    if (h(3 + k, 3 + k) > 0.0) info -= cross * cross.transpose() / h(3 + k, 3 + k);
+  out.min_eigenvalue =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(hn, Eigen::EigenvaluesOnly).eigenvalues()(0);
+  const bool regular = out.min_eigenvalue > 1e-12;
+  Eigen::VectorXd x;
+  if (regular) {
+    x = d.asDiagonal() * hn.ldlt().solve(d.asDiagonal() * b);
+  } else {
+    // Least-squares minimum on the determined directions (pseudo-inverse): the residual is
+    // still meaningful, the solution is not.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(hn);
+    const double cut = 1e-12 * std::max(eig.eigenvalues().maxCoeff(), 1e-300);
+    Eigen::VectorXd inv = eig.eigenvalues();
+    for (Eigen::Index k = 0; k < inv.size(); ++k) inv(k) = inv(k) > cut ? 1.0 / inv(k) : 0.0;
+    x = d.asDiagonal() * (eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose() *
+                          (d.asDiagonal() * b));
   }
-  out.information = info;
-  out.residual_ss = std::max(0.0, c0_sq_ + c0_sq_marg_ - 2.0 * x.dot(b) + x.dot(h * x));
-  out.ok = true;
+  if (!x.allFinite()) return out;
+  out.residual_ss = std::max(0.0, constant - 2.0 * x.dot(b) + x.dot(h * x));
+  if (!regular) return out;
+  out.C = fixed + t * x.head(m);
+  for (int k = 0; k < n_open; ++k) out.scales[ids[k]] = x(m + k);
+  // Information of the free position unknowns with the open scales marginalised (Schur).
+  Eigen::MatrixXd info = h.topLeftCorner(m, m);
+  for (int k = 0; k < n_open; ++k) {
+    const Eigen::VectorXd cross = h.block(0, m + k, m, 1);
+    if (h(m + k, m + k) > 0.0) info -= cross * cross.transpose() / h(m + k, m + k);
+  }
+  out.information = t * info * t.transpose();
+  out.covariance = t * info.inverse() * t.transpose();
+  out.ok = out.covariance.allFinite();
   return out;
+}
+
+PlanarFrame MotionStatistics::SolvePlanarFrame() const {
+  return internal::SolvePlanarFrame(planar_);
+}
+
+PlanarSystemSolution MotionStatistics::SolvePlanarSystem(const PlanarFrame& frame) const {
+  std::vector<PlanarSegmentView> views;
+  for (const auto& [id, s] : segments_) views.push_back({id, &s.P, &s.Q, &s.N});
+  return internal::SolvePlanarSystem(planar_, H_cc_, g_c_, views, frame);
 }
 
 std::map<int, double> MotionStatistics::SolveTranslationalScales() const {
@@ -152,10 +191,12 @@ std::map<int, double> MotionStatistics::SolveTranslationalScales() const {
   return scales;
 }
 
-void MotionStatistics::MarginaliseSegment(int segment, const Eigen::Quaterniond& dq) {
+void MotionStatistics::MarginaliseSegment(int segment, const Eigen::Quaterniond& dq,
+                                          const PlanarFrame& frame) {
   auto it = segments_.find(segment);
   if (it == segments_.end()) return;
   const SegmentStatistics& s = it->second;
+  MarginalisePlanarSegment({segment, &s.P, &s.Q, &s.N}, frame, &planar_);
   if (s.n > 0.0) {
     const Eigen::Matrix3d dr = dq.toRotationMatrix();
     const Eigen::Vector3d h = s.P * Vec(dr);
@@ -176,6 +217,7 @@ void MotionStatistics::ResetPosition() {
   g_marg_.setZero();
   c0_sq_marg_ = 0.0;
   S_dir_.setZero();
+  planar_.ResetPosition();
   segments_.clear();
 }
 
@@ -188,7 +230,14 @@ std::string MotionStatistics::Serialize() const {
   std::ostringstream out;
   out.precision(17);
   Write(out, "M", M_);
-  Write(out, "axis", axis_scatter_);
+  Write(out, "v00", planar_.v00);
+  Write(out, "vii", planar_.vii);
+  Write(out, "v0i", planar_.v0i);
+  Write(out, "K", planar_.k);
+  Write(out, "c0c0", planar_.c0c0);
+  Write(out, "Hplmarg", planar_.h_marg);
+  Write(out, "gplmarg", planar_.g_marg);
+  out << "cplmarg " << planar_.c_marg << '\n';
   Write(out, "Hcc", H_cc_);
   Write(out, "gc", g_c_);
   out << "c0sq " << c0_sq_ << '\n';
@@ -202,6 +251,7 @@ std::string MotionStatistics::Serialize() const {
     out << "segment " << id << '\n';
     Write(out, "P", s.P);
     Write(out, "Q", s.Q);
+    Write(out, "N", s.N);
     out << "n " << s.n << "\nlc " << s.len_cross << "\nls " << s.len_sq << "\nw " << s.weight
         << "\nscale " << s.last_scale << '\n';
   }
@@ -214,8 +264,11 @@ bool MotionStatistics::Parse(const std::string& text) {
   std::istringstream in(text);
   MotionStatistics s;
   double motions = 0.0, count = 0.0;
-  if (!Read(in, "M", s.M_) || !Read(in, "axis", s.axis_scatter_) || !Read(in, "Hcc", s.H_cc_) ||
-      !Read(in, "gc", s.g_c_) || !ReadScalar(in, "c0sq", &s.c0_sq_) ||
+  if (!Read(in, "M", s.M_) || !Read(in, "v00", s.planar_.v00) || !Read(in, "vii", s.planar_.vii) ||
+      !Read(in, "v0i", s.planar_.v0i) || !Read(in, "K", s.planar_.k) ||
+      !Read(in, "c0c0", s.planar_.c0c0) || !Read(in, "Hplmarg", s.planar_.h_marg) ||
+      !Read(in, "gplmarg", s.planar_.g_marg) || !ReadScalar(in, "cplmarg", &s.planar_.c_marg) ||
+      !Read(in, "Hcc", s.H_cc_) || !Read(in, "gc", s.g_c_) || !ReadScalar(in, "c0sq", &s.c0_sq_) ||
       !Read(in, "Sdir", s.S_dir_) || !Read(in, "Hmarg", s.H_marg_) ||
       !Read(in, "gmarg", s.g_marg_) || !ReadScalar(in, "c0sqmarg", &s.c0_sq_marg_) ||
       !ReadScalar(in, "weight", &s.weight_) || !ReadScalar(in, "maxrot", &s.max_rotation_) ||
@@ -228,9 +281,9 @@ bool MotionStatistics::Parse(const std::string& text) {
     double id = 0.0;
     SegmentStatistics seg;
     if (!ReadScalar(in, "segment", &id) || !Read(in, "P", seg.P) || !Read(in, "Q", seg.Q) ||
-        !ReadScalar(in, "n", &seg.n) || !ReadScalar(in, "lc", &seg.len_cross) ||
-        !ReadScalar(in, "ls", &seg.len_sq) || !ReadScalar(in, "w", &seg.weight) ||
-        !ReadScalar(in, "scale", &seg.last_scale)) {
+        !Read(in, "N", seg.N) || !ReadScalar(in, "n", &seg.n) ||
+        !ReadScalar(in, "lc", &seg.len_cross) || !ReadScalar(in, "ls", &seg.len_sq) ||
+        !ReadScalar(in, "w", &seg.weight) || !ReadScalar(in, "scale", &seg.last_scale)) {
       return false;
     }
     s.segments_[static_cast<int>(id)] = seg;

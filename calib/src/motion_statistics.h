@@ -7,9 +7,12 @@
 // Position/scale with a rotation dR chosen only at solve time: the normal equations of
 // (I - R_0) dC + dλ_s dR C_i = C_0 need
 //   H_cc = sum w (I-R0)^T (I-R0),        g_c = sum w (I-R0)^T C_0,
-//   per segment s: P_s = sum w (I-R0)^T (C_i^T ⊗ I3)   so that  sum w (I-R0)^T dR C_i = P_s vec(dR),
-//                  n_s = sum w |C_i|^2,   Q_s = sum w C_0 C_i^T   so that  sum w C_0^T dR C_i = <dR, Q_s>.
+//   per segment s: P_s = sum w (I-R0)^T (C_i^T ⊗ I3)   so that  sum w (I-R0)^T dR C_i = P_s
+//   vec(dR),
+//                  n_s = sum w |C_i|^2,   Q_s = sum w C_0 C_i^T   so that  sum w C_0^T dR C_i =
+//                  <dR, Q_s>.
 // Purely translational model (4.29-4.32): S = sum w c_i c_0^T and per segment sum w |C_i||C_0|.
+// Planar model (planar_solver.h): PlanarSums and per segment N_s = sum w C_i C_i^T.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -18,6 +21,7 @@
 #include <vector>
 
 #include "motion_data.h"
+#include "planar_solver.h"
 
 namespace rigcal::internal {
 
@@ -25,19 +29,33 @@ struct SegmentStatistics {
   Eigen::Matrix<double, 3, 9> P = Eigen::Matrix<double, 3, 9>::Zero();
   double n = 0.0;
   Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();
-  double len_cross = 0.0;  // sum w |C_i| |C_0|   (4.32)
-  double len_sq = 0.0;     // sum w |C_i|^2       (4.32), equals n
-  double weight = 0.0;     // sum of motion weights
-  double last_scale = 0.0; // scale at the last solve (reported after marginalisation)
+  double len_cross = 0.0;                       // sum w |C_i| |C_0|   (4.32)
+  double len_sq = 0.0;                          // sum w |C_i|^2       (4.32), equals n
+  double weight = 0.0;                          // sum of motion weights
+  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();  // sum w C_i C_i^T (planar solver)
+  double last_scale = 0.0;  // scale at the last solve (reported after marginalisation)
+};
+
+// C restricted to fixed + basis * p (the plane of planar motion, a fixed offset along the axis).
+struct PositionConstraint {
+  Eigen::Matrix<double, 3, 2> basis;
+  Eigen::Vector3d fixed = Eigen::Vector3d::Zero();
 };
 
 struct PositionSolution {
-  bool ok = false;
+  bool ok = false;  // the system is well conditioned (min_eigenvalue > 1e-12) and solved
   Eigen::Vector3d C = Eigen::Vector3d::Zero();
   std::map<int, double> scales;  // open segments
-  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // of C, scales marginalised
-  double residual_ss = 0.0;  // weighted sum of squared position residuals
+  // Information of C with the scales marginalised (Schur complement); rank 2 when restricted
+  // to a plane. covariance: its inverse on the free directions (0 along the fixed one), per
+  // unit residual variance; multiply by residual_ss / dof.
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  // Weighted sum of squared position residuals; valid also when !ok (least-squares minimum by
+  // a pseudo-inverse), so rotations can be compared by how well they fit the translations.
+  double residual_ss = 0.0;
   double min_eigenvalue = 0.0;  // of the column-normalised system
+  int unknowns = 0;
 };
 
 class MotionStatistics {
@@ -52,19 +70,24 @@ class MotionStatistics {
   // Horn on translation directions (4.29-4.30).
   Eigen::Quaterniond SolveTranslationalRotation() const;
   // Normal equations of (4.16)/(4.17) for the given rotation, with the closed segments'
-  // marginalised information added.
-  PositionSolution SolvePosition(const Eigen::Quaterniond& dq) const;
+  // marginalised information added; C restricted by `constraint` when not null.
+  PositionSolution SolvePosition(const Eigen::Quaterniond& dq,
+                                 const PositionConstraint* constraint = nullptr) const;
   // (4.32) per open segment.
   std::map<int, double> SolveTranslationalScales() const;
 
-  // Folds segment s into the marginal information on C (Schur complement at rotation dq) and
-  // forgets its per-segment sums. The segment's last scale stays available in closed_scales().
-  void MarginaliseSegment(int segment, const Eigen::Quaterniond& dq);
+  // Folds segment s into the marginal information on C (Schur complement at rotation dq, and
+  // of the planar system in `frame` when it is ok) and forgets its per-segment sums. The
+  // segment's last scale stays available in closed_scales().
+  void MarginaliseSegment(int segment, const Eigen::Quaterniond& dq, const PlanarFrame& frame);
   // Drops the position/scale statistics (master odometry re-initialised: new master unit).
   void ResetPosition();
 
   const Eigen::Matrix4d& rotation_information() const { return M_; }
-  const Eigen::Matrix3d& axis_scatter() const { return axis_scatter_; }
+  const PlanarSums& planar() const { return planar_; }
+  // Stage 1 and 2 of the planar solver on these sums (planar_solver.h).
+  PlanarFrame SolvePlanarFrame() const;
+  PlanarSystemSolution SolvePlanarSystem(const PlanarFrame& frame) const;
   double weight() const { return weight_; }
   double max_rotation() const { return max_rotation_; }
   const std::map<int, SegmentStatistics>& segments() const { return segments_; }
@@ -79,11 +102,11 @@ class MotionStatistics {
 
  private:
   Eigen::Matrix4d M_ = Eigen::Matrix4d::Zero();
-  Eigen::Matrix3d axis_scatter_ = Eigen::Matrix3d::Zero();  // sum w r0 r0^T (planar test)
+  PlanarSums planar_;
   Eigen::Matrix3d H_cc_ = Eigen::Matrix3d::Zero();
   Eigen::Vector3d g_c_ = Eigen::Vector3d::Zero();
-  double c0_sq_ = 0.0;  // sum w |C_0|^2
-  Eigen::Matrix3d S_dir_ = Eigen::Matrix3d::Zero();  // sum w c_i c_0^T
+  double c0_sq_ = 0.0;                                // sum w |C_0|^2
+  Eigen::Matrix3d S_dir_ = Eigen::Matrix3d::Zero();   // sum w c_i c_0^T
   Eigen::Matrix3d H_marg_ = Eigen::Matrix3d::Zero();  // marginalised segments
   Eigen::Vector3d g_marg_ = Eigen::Vector3d::Zero();
   double c0_sq_marg_ = 0.0;

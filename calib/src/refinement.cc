@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "linear_solvers.h"
+#include "planar_solver.h"
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal::internal {
@@ -52,6 +53,31 @@ struct PositionCost {
   Eigen::Matrix3d i_minus_r0;
   Eigen::Vector3d ci, c0;
   double w;
+};
+
+// Position residual of (4.26) with C = B p + h a (the axis parameterisation).
+struct AxisPositionCost {
+  AxisPositionCost(const MotionData& m, double inv_sigma, const Eigen::Matrix3d& basis_and_axis)
+      : cost(m, inv_sigma), t(basis_and_axis) {}
+  template <typename T>
+  bool operator()(const T* q, const T* p, const T* h, const T* scale, T* residual) const {
+    T c[3];
+    for (int r = 0; r < 3; ++r) c[r] = T(t(r, 0)) * p[0] + T(t(r, 1)) * p[1] + T(t(r, 2)) * h[0];
+    return cost(q, c, scale, residual);
+  }
+  PositionCost cost;
+  Eigen::Matrix3d t;  // columns b_1, b_2, a
+};
+
+// Prior on the axis offset: (h - value) / σ.
+struct AxisPriorCost {
+  AxisPriorCost(double value, double sigma) : v(value), inv_sigma(1.0 / sigma) {}
+  template <typename T>
+  bool operator()(const T* h, T* residual) const {
+    residual[0] = (h[0] - T(v)) * T(inv_sigma);
+    return true;
+  }
+  double v, inv_sigma;
 };
 
 // Purely translational residual, eq. (4.28): (dλ dR C_i - C_0) / sigma.
@@ -107,7 +133,23 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   problem.AddParameterBlock(q.data(), 4, new ceres::QuaternionManifold());
-  if (!input.translational) problem.AddParameterBlock(c.data(), 3);
+  // Axis parameterisation: C = t (p, h) with t = [b_1 b_2 a].
+  const bool use_axis = !input.translational && input.axis.norm() > 0.5;
+  Eigen::Matrix3d t = Eigen::Matrix3d::Identity();
+  Eigen::Vector2d p = Eigen::Vector2d::Zero();
+  double h = 0.0;
+  if (use_axis) {
+    const Eigen::Vector3d a = input.axis.normalized();
+    t.leftCols<2>() = PlaneBasis(a);
+    t.col(2) = a;
+    p = t.leftCols<2>().transpose() * c;
+    h = a.dot(c);
+    problem.AddParameterBlock(p.data(), 2);
+    problem.AddParameterBlock(&h, 1);
+    if (input.axis_offset_fixed) problem.SetParameterBlockConstant(&h);
+  } else if (!input.translational) {
+    problem.AddParameterBlock(c.data(), 3);
+  }
   for (auto& s : scales) problem.AddParameterBlock(&s, 1);
 
   const double w_rot = 1.0 / input.sigma_rotation;
@@ -117,9 +159,15 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   for (const auto& m : motions) {
     if (!input.translational) {
       problem.AddResidualBlock(new RotationCost(m, w_rot), MakeLoss(options), q.data());
-      problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<PositionCost, 3, 4, 3, 1>(new PositionCost(m, w_pos)),
-          MakeLoss(options), q.data(), c.data(), &scales[m.scale_index]);
+      if (use_axis) {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AxisPositionCost, 3, 4, 2, 1, 1>(
+                                     new AxisPositionCost(m, w_pos, t)),
+                                 MakeLoss(options), q.data(), p.data(), &h, &scales[m.scale_index]);
+      } else {
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<PositionCost, 3, 4, 3, 1>(new PositionCost(m, w_pos)),
+            MakeLoss(options), q.data(), c.data(), &scales[m.scale_index]);
+      }
       num_residuals += 7;
     } else {
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TranslationalCost, 3, 4, 1>(
@@ -139,6 +187,13 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
     }
     if (!scale_used[s]) problem.SetParameterBlockConstant(&scales[s]);
   }
+  const bool h_free = use_axis && !input.axis_offset_fixed;
+  if (h_free && input.axis_prior_sigma > 0.0 && std::isfinite(input.axis_prior_sigma)) {
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AxisPriorCost, 1, 1>(
+                                 new AxisPriorCost(input.axis_prior, input.axis_prior_sigma)),
+                             nullptr, &h);
+    num_residuals += 1;
+  }
 
   if (solve) {
     ceres::Solver::Options solver_options;
@@ -156,6 +211,7 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
     out.converged = true;
     out.message = "linear estimate (no refinement)";
   }
+  if (use_axis) c = t.leftCols<2>() * p + t.col(2) * h;
   out.q = Canonical(FromWxyz(q).normalized());
   out.C = c;
   out.scales = scales;
@@ -164,7 +220,8 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   if (!options.compute_covariance) return out;
   double cost = 0.0;
   problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
-  const int num_params = 3 + (input.translational ? 0 : 3) + num_scales;
+  const int num_params =
+      3 + (input.translational ? 0 : (use_axis ? (h_free ? 3 : 2) : 3)) + num_scales;
   const double dof = num_residuals - num_params;
   const double chi2 = dof > 0 ? 2.0 * cost / dof : 1.0;
 
@@ -173,7 +230,15 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   cov_options.null_space_rank = 0;
   ceres::Covariance covariance(cov_options);
   std::vector<std::pair<const double*, const double*>> blocks = {{q.data(), q.data()}};
-  if (!input.translational) blocks.emplace_back(c.data(), c.data());
+  if (use_axis) {
+    blocks.emplace_back(p.data(), p.data());
+    if (h_free) {
+      blocks.emplace_back(&h, &h);
+      blocks.emplace_back(p.data(), &h);
+    }
+  } else if (!input.translational) {
+    blocks.emplace_back(c.data(), c.data());
+  }
   for (int s = 0; s < num_scales; ++s) {
     if (scale_used[s]) blocks.emplace_back(&scales[s], &scales[s]);
   }
@@ -182,7 +247,24 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   covariance.GetCovarianceMatrixInTangentSpace({q.data()}, cov_delta.data());
   // QuaternionManifold: q ⊕ δ = Exp(δ) q with Exp(δ) = (cos|δ|, sin|δ| δ/|δ|), a rotation by 2|δ|.
   out.cov_rotation = 4.0 * chi2 * cov_delta;
-  if (!input.translational) {
+  if (use_axis) {
+    // Covariance of (p, h), mapped to C = t (p, h).
+    Eigen::Matrix3d cov_ph = Eigen::Matrix3d::Zero();
+    Eigen::Matrix<double, 2, 2, Eigen::RowMajor> cov_p;
+    covariance.GetCovarianceBlock(p.data(), p.data(), cov_p.data());
+    cov_ph.topLeftCorner<2, 2>() = cov_p;
+    if (h_free) {
+      double var_h = 0.0;
+      Eigen::Vector2d cov_p_h;
+      covariance.GetCovarianceBlock(&h, &h, &var_h);
+      covariance.GetCovarianceBlock(p.data(), &h, cov_p_h.data());
+      cov_ph(2, 2) = var_h;
+      cov_ph.topRightCorner<2, 1>() = cov_p_h;
+      cov_ph.bottomLeftCorner<1, 2>() = cov_p_h.transpose();
+      out.axis_std = std::sqrt(std::max(0.0, chi2 * var_h));
+    }
+    out.cov_position = chi2 * t * cov_ph * t.transpose();
+  } else if (!input.translational) {
     Eigen::Matrix<double, 3, 3, Eigen::RowMajor> cov_c;
     covariance.GetCovarianceBlock(c.data(), c.data(), cov_c.data());
     out.cov_position = chi2 * cov_c;

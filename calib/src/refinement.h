@@ -26,6 +26,14 @@ struct RefinementInput {
   // Noise levels used to whiten the residuals (from the linear solution's residuals).
   double sigma_rotation = 1.0;  // of the 4-vector A dq
   double sigma_position = 1.0;  // of the 3-vector position residual
+  // Axis parameterisation of C (the reduced parameter set of planar motion): when `axis` is a
+  // unit vector, C = B p + h axis with B = PlaneBasis(axis), starting from the projection of
+  // `C`. h is held constant when axis_offset_fixed; axis_prior_sigma > 0 adds the weighted
+  // term (h - axis_prior) / axis_prior_sigma. A zero axis: C is a plain 3-vector.
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+  bool axis_offset_fixed = false;
+  double axis_prior = 0.0;
+  double axis_prior_sigma = 0.0;
 };
 
 struct RefinementResult {
@@ -37,8 +45,9 @@ struct RefinementResult {
   // Covariance (0 when not computed or rank deficient).
   bool covariance_ok = false;
   Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Zero();  // rotation vector, rad^2
-  Eigen::Matrix3d cov_position = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d cov_position = Eigen::Matrix3d::Zero();  // of C; 0 along a fixed axis offset
   std::vector<double> scale_std;
+  double axis_std = 0.0;  // σ of h with the axis parameterisation (0 when h is fixed)
 };
 
 // Minimises eq. (4.26)+(4.27): rotation residuals q0·dq - dq·qi and position residuals

@@ -3,13 +3,17 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
 
 #include "linear_solvers.h"
+#include "model_selection.h"
 #include "motion_data.h"
 #include "motion_geometry.h"
+#include "motion_statistics.h"
 #include "refinement.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/pair_selection.h"
@@ -96,19 +100,54 @@ int CountSegments(const std::vector<MotionData>& motions) {
   return static_cast<int>(seen.size());
 }
 
+// Scales of `n` scale variables (scale_index of the motions) from the position equations.
+using ScaleSolver = std::function<std::vector<double>(std::vector<MotionData>*, int n)>;
+
 // Thesis 5.5: measured scales (4.18 / 4.31) that drift by more than the threshold (and by
 // more than their own noise) call for time-dependent scales. Returns the partition count
 // (1 = time-fixed).
+// Planar motion translates perpendicular to the rotation axis, so the measurements of (4.18)
+// are ratios of noise: the drift is tested with the position equations alone.
 int ChoosePartitions(const std::vector<MotionData>& motions, double epsilon, bool translational,
-                     const CalibrationOptions& options, std::string* why) {
+                     bool planar, const CalibrationOptions& options,
+                     const ScaleSolver& solve_scales, std::string* why) {
   std::vector<MotionData> sorted = motions;
   std::stable_sort(sorted.begin(), sorted.end(),
                    [](const MotionData& a, const MotionData& b) { return a.t_ns < b.t_ns; });
+  if (planar) {
+    const int parts =
+        std::min(10, static_cast<int>(sorted.size()) / options.min_motions_per_partition);
+    if (parts < 2) {
+      *why =
+          "time-fixed scale (" + std::to_string(sorted.size()) + " motions, too few to test drift)";
+      return 1;
+    }
+    AssignScaleKeys(ScaleModel::kPartitions, parts, &sorted);
+    const int n = static_cast<int>(CompactScaleIndices(&sorted).size());
+    const std::vector<double> scales = solve_scales(&sorted, n);
+    double worst = 0.0;
+    if (!scales.empty()) {
+      const double center = internal::Robust(scales).median;
+      for (double v : scales) worst = std::max(worst, std::abs(v - center) / std::abs(center));
+    }
+    if (worst > options.scale_deviation_threshold) {
+      *why =
+          "time-dependent scale: the position equations give partition scales deviating by "
+          "up to " +
+          Fmt(100 * worst, 1) + " % (threshold " + Fmt(100 * options.scale_deviation_threshold, 1) +
+          " %)";
+      return parts;
+    }
+    *why = "time-fixed scale: the position equations give partition scales within " +
+           Fmt(100 * worst, 2) + " %";
+    return 1;
+  }
   const auto measurements = internal::MeasureScales(sorted, epsilon, translational);
   const int count = static_cast<int>(measurements.size());
   const int parts = std::min(10, count / options.min_motions_per_partition);
   if (parts < 2) {
-    *why = "time-fixed scale (" + std::to_string(count) + " scale measurements, too few to test drift)";
+    *why = "time-fixed scale (" + std::to_string(count) +
+           " scale measurements, too few to test drift)";
     return 1;
   }
   std::vector<double> all;
@@ -133,22 +172,15 @@ int ChoosePartitions(const std::vector<MotionData>& motions, double epsilon, boo
     // The ratios of (4.18) are noisy and can be biased by geometry; confirm the drift with the
     // position equations (4.17), whose per-partition scales are far better determined.
     std::vector<MotionData> work = sorted;
-    const Eigen::Quaterniond dq = translational ? internal::SolveTranslationalRotation(work)
-                                                : internal::SolveLinearRotation(&work).q;
     AssignScaleKeys(ScaleModel::kPartitions, parts, &work);
     const int n = static_cast<int>(CompactScaleIndices(&work).size());
-    std::vector<double> scales;
-    if (translational) {
-      scales = internal::SolveTranslationalScales(work, n);
-    } else {
-      const auto lls = internal::SolveLinearPositionScale(work, dq, n);
-      if (lls.ok) scales = lls.scales;
-    }
+    const std::vector<double> scales = solve_scales(&work, n);
     double lls_worst = 0.0;
     if (!scales.empty()) {
       std::vector<double> sorted_scales = scales;
       const double center = internal::Robust(sorted_scales).median;
-      for (double v : scales) lls_worst = std::max(lls_worst, std::abs(v - center) / std::abs(center));
+      for (double v : scales)
+        lls_worst = std::max(lls_worst, std::abs(v - center) / std::abs(center));
     }
     if (lls_worst > options.scale_deviation_threshold) {
       *why = "time-dependent scale: scales deviate by up to " + Fmt(100 * lls_worst, 1) +
@@ -162,6 +194,49 @@ int ChoosePartitions(const std::vector<MotionData>& motions, double epsilon, boo
   }
   *why = "time-fixed scale: measured scales deviate by at most " + Fmt(100 * worst, 1) + " %";
   return 1;
+}
+
+// Sums of the linear equations of the motions, one scale variable per scale_index.
+internal::MotionStatistics StatisticsOf(const std::vector<MotionData>& motions) {
+  internal::MotionStatistics stats;
+  for (const auto& m : motions) stats.Add(m, m.scale_index, 1.0);
+  return stats;
+}
+
+// The linear solution of a rotating rig (general or planar, model_selection.h) with the
+// quaternion signs of the motions aligned to it. `scales` is indexed by scale_index.
+struct RotatingFit {
+  internal::RotatingSolution solution;
+  std::vector<double> scales;
+};
+
+RotatingFit SolveRotatingLinear(std::vector<MotionData>* motions, int num_scales,
+                                MotionModel requested,
+                                const internal::ModelSelectionOptions& select,
+                                const internal::AxisPrior& prior) {
+  internal::SolveLinearRotation(motions);  // signs, incl. motions near 180 degrees
+  RotatingFit fit;
+  fit.solution = internal::SolveRotating(StatisticsOf(*motions), requested, select, prior);
+  if (fit.solution.ok && fit.solution.rotation_from_planar) {
+    std::vector<MotionData> aligned = *motions;
+    internal::AlignSignsWith(ToWxyz(fit.solution.q), &aligned);
+    bool changed = false;
+    for (size_t k = 0; k < aligned.size(); ++k)
+      changed = changed || aligned[k].qi != (*motions)[k].qi;
+    if (changed) {
+      *motions = std::move(aligned);
+      fit.solution = internal::SolveRotating(StatisticsOf(*motions), requested, select, prior);
+    }
+  }
+  fit.scales.assign(num_scales, 0.0);
+  for (const auto& [index, scale] : fit.solution.scales) {
+    if (index >= 0 && index < num_scales) fit.scales[index] = scale;
+  }
+  return fit;
+}
+
+std::string Vec3Text(const Eigen::Vector3d& v) {
+  return "[" + Fmt(v.x(), 3) + ", " + Fmt(v.y(), 3) + ", " + Fmt(v.z(), 3) + "]";
 }
 
 SlaveCalibration Fail(SlaveCalibration r, Termination t, const std::string& message) {
@@ -178,7 +253,8 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   SlaveCalibration r;
   r.name = name;
   std::string error;
-  if (!options.Check(&error)) return Fail(r, Termination::kInvalidInput, "invalid options: " + error);
+  if (!options.Check(&error))
+    return Fail(r, Termination::kInvalidInput, "invalid options: " + error);
 
   std::vector<MotionData> data = internal::ToMotionData(motions);
   r.motions.total = static_cast<int>(data.size());
@@ -191,23 +267,20 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   for (const auto& m : data) max_rotation = std::max(max_rotation, m.angle0);
   r.observability.max_rotation_deg = max_rotation * kDegPerRad;
 
-  MotionModel model = options.motion_model;
-  if (model == MotionModel::kAuto) {
-    model = max_rotation * kDegPerRad >= options.alpha_maxrot_deg ? MotionModel::kGeneral
-                                                                  : MotionModel::kTranslational;
+  MotionModel requested = options.motion_model;
+  if (requested == MotionModel::kAuto && max_rotation * kDegPerRad < options.alpha_maxrot_deg) {
+    requested = MotionModel::kTranslational;
   }
-  r.motion_model = model;
-  const bool translational = model == MotionModel::kTranslational;
+  const bool translational = requested == MotionModel::kTranslational;
+  r.motion_model = translational ? MotionModel::kTranslational : MotionModel::kGeneral;
 
   if (!translational) {
     const double alpha = options.alpha_threshold_deg * kRadPerDeg;
-    r.motions.small_rotation = KeepIf(&data, [alpha](const MotionData& m) {
-      return m.angle0 >= alpha && m.anglei >= alpha;
-    });
+    r.motions.small_rotation = KeepIf(
+        &data, [alpha](const MotionData& m) { return m.angle0 >= alpha && m.anglei >= alpha; });
   } else {
-    r.motions.small_rotation = KeepIf(&data, [](const MotionData& m) {
-      return m.C0.norm() > 0.0 && m.Ci.norm() > 0.0;
-    });
+    r.motions.small_rotation =
+        KeepIf(&data, [](const MotionData& m) { return m.C0.norm() > 0.0 && m.Ci.norm() > 0.0; });
   }
   // Scale-free invariant: master and slave motions rotate by the same angle.
   {
@@ -223,35 +296,41 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
     if (translational) {
       msg << "need >= " << min_motions << " motions with translation, got " << data.size();
     } else {
-      msg << "need >= " << min_motions << " motions with rotation >= "
-          << Fmt(options.alpha_threshold_deg, 1) << " deg, got " << data.size()
-          << " (largest rotation " << Fmt(r.observability.max_rotation_deg, 2) << " deg)";
+      msg << "need >= " << min_motions
+          << " motions with rotation >= " << Fmt(options.alpha_threshold_deg, 1) << " deg, got "
+          << data.size() << " (largest rotation " << Fmt(r.observability.max_rotation_deg, 2)
+          << " deg)";
     }
     r.motions.used = static_cast<int>(data.size());
     return Fail(r, Termination::kInsufficientMotion, msg.str());
   }
 
-  if (!translational) {
-    const auto spread = internal::MasterAxisSpread(data);
-    r.observability.axis_spread_deg = spread.spread_deg;
-    if (spread.spread_deg < options.planar_axis_spread_deg) {
-      r.observability.planar = true;
-      r.observability.planar_axis = spread.principal_axis;
-      r.unobservable.push_back(spread.principal_axis);
-      r.motions.used = static_cast<int>(data.size());
-      return Fail(r, Termination::kDegenerate,
-                  "planar motion: every rotation is about one axis (spread " +
-                      Fmt(spread.spread_deg, 3) +
-                      " deg), so the rotation about that axis and the translation along it are "
-                      "unobservable with the general model");
-    }
+  // What the motion cannot determine is taken from the nominal mounting, when there is one:
+  // the prior on C along the mean rotation axis (its axis is known once the motions are).
+  const auto nominal_it = options.nominal.find(name);
+  const Similarity* nominal = nominal_it == options.nominal.end() ? nullptr : &nominal_it->second;
+  internal::ModelSelectionOptions select;
+  select.planar_axis_spread_deg = options.planar_axis_spread_deg;
+  select.min_tilt_snr = options.min_tilt_snr;
+  select.max_axis_std_ratio = options.max_axis_std_ratio;
+  internal::AxisPrior prior;
+  if (nominal != nullptr) {
+    prior.given = true;
+    prior.nominal_C = nominal->C;
+    prior.sigma = options.nominal_sigma;
   }
+  const ScaleSolver solve_scales = [&](std::vector<MotionData>* work, int n) {
+    if (translational) return internal::SolveTranslationalScales(*work, n);
+    const RotatingFit fit = SolveRotatingLinear(work, n, requested, select, prior);
+    return fit.solution.ok ? fit.scales : std::vector<double>{};
+  };
 
   // Scale model.
   double rms_ci = 0.0;
   for (const auto& m : data) rms_ci += m.Ci.squaredNorm();
   rms_ci = std::sqrt(rms_ci / data.size());
-  const double epsilon = options.scale_dot_epsilon > 0.0 ? options.scale_dot_epsilon : 1e-3 * rms_ci;
+  const double epsilon =
+      options.scale_dot_epsilon > 0.0 ? options.scale_dot_epsilon : 1e-3 * rms_ci;
   ScaleModel scale_model = options.scale_model;
   int partitions = options.partitions;
   std::string scale_why;
@@ -260,7 +339,14 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
       scale_model = ScaleModel::kSegments;
       scale_why = "one scale per odometry segment (" + std::to_string(CountSegments(data)) + ")";
     } else {
-      partitions = ChoosePartitions(data, epsilon, translational, options, &scale_why);
+      bool planar_motion = false;
+      if (!translational) {
+        std::vector<MotionData> work = data;  // one scale (scale_index 0)
+        planar_motion = SolveRotatingLinear(&work, 1, requested, select, prior).solution.model ==
+                        MotionModel::kPlanar;
+      }
+      partitions = ChoosePartitions(data, epsilon, translational, planar_motion, options,
+                                    solve_scales, &scale_why);
       scale_model = partitions > 1 ? ScaleModel::kPartitions : ScaleModel::kFixed;
     }
   }
@@ -271,14 +357,17 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   Eigen::Quaterniond dq = Eigen::Quaterniond::Identity();
   internal::LinearPositionScale pos;
   std::vector<int> scale_keys;
-  internal::LinearRotation rot;
+  RotatingFit fit;
   for (int round = 0;; ++round) {
     scale_keys = CompactScaleIndices(&data);
     const int num_scales = static_cast<int>(scale_keys.size());
     if (!translational) {
-      rot = internal::SolveLinearRotation(&data);
-      dq = rot.q;
-      pos = internal::SolveLinearPositionScale(data, dq, num_scales);
+      fit = SolveRotatingLinear(&data, num_scales, requested, select, prior);
+      dq = fit.solution.q;
+      pos.C = fit.solution.C;
+      pos.scales = fit.scales;
+      pos.ok = fit.solution.ok;
+      pos.min_eigenvalue = fit.solution.observability.position_min_eigenvalue;
     } else {
       dq = internal::SolveTranslationalRotation(data);
       pos.C.setZero();
@@ -295,8 +384,8 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
       if (!translational) res_rot.push_back(internal::RotationResidual(m, ToWxyz(dq)));
       typical = std::max(typical, m.C0.norm());
     }
-    int removed = RemoveOutliers(&data, res_pos, options.outlier_mad_factor, 1e-9 * (1 + typical),
-                                 false);
+    int removed =
+        RemoveOutliers(&data, res_pos, options.outlier_mad_factor, 1e-9 * (1 + typical), false);
     if (!translational && removed == 0) {
       removed = RemoveOutliers(&data, res_rot, options.outlier_mad_factor, 1e-9, false);
     }
@@ -305,18 +394,41 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
     if (static_cast<int>(data.size()) < min_motions) break;
   }
   r.motions.used = static_cast<int>(data.size());
+  if (!translational) {
+    const double max_rotation_deg = r.observability.max_rotation_deg;
+    r.observability = fit.solution.observability;
+    r.observability.max_rotation_deg = max_rotation_deg;
+    r.motion_model = fit.solution.model;
+  }
+  const bool planar = r.motion_model == MotionModel::kPlanar;
   if (static_cast<int>(data.size()) < min_motions) {
     return Fail(r, Termination::kInsufficientMotion,
                 "need >= " + std::to_string(min_motions) + " consistent motions, got " +
                     std::to_string(data.size()) + " after misfit removal");
   }
+  if (!pos.ok && options.motion_model == MotionModel::kGeneral) {
+    const internal::RotatingSolution figures =
+        internal::SolveRotating(StatisticsOf(data), MotionModel::kAuto, select, prior);
+    if (figures.model == MotionModel::kPlanar) {
+      r.observability.planar = true;
+      r.unobservable = {figures.observability.planar_axis};
+      return Fail(r, Termination::kDegenerate,
+                  "planar motion (" + figures.why +
+                      "): the rotation about the axis and C along it are not determined by the "
+                      "general model; use the planar model (motion model auto or planar)");
+    }
+  }
   if (!pos.ok) {
+    if (planar) {
+      return Fail(r, Termination::kDegenerate,
+                  "planar motion (" + fit.solution.why +
+                      "), but the in-plane translation equations are singular: the motions do "
+                      "not determine the angle about the axis, position and scale");
+    }
     return Fail(r, Termination::kDegenerate,
                 "the position/scale equations (4.16) are singular: the motions do not determine "
                 "position and scale");
   }
-  r.observability.rotation_eigenvalues = rot.eigenvalues;
-  r.observability.position_min_eigenvalue = pos.min_eigenvalue;
 
   // Noise levels from the linear residuals whiten the non-linear problem.
   const int num_scales = static_cast<int>(scale_keys.size());
@@ -336,16 +448,28 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   input.scales = pos.scales;
   input.translational = translational;
   input.sigma_rotation = std::max(std::sqrt(ss_rot / std::max(1, 4 * k - 3)), 1e-12);
-  const int pos_dof = std::max(1, 3 * k - (translational ? 0 : 3) - num_scales - 3);
+  const int pos_unknowns = translational ? 0 : (planar ? 2 : 3);
+  const int pos_dof = std::max(1, 3 * k - pos_unknowns - num_scales - 3);
   input.sigma_position = std::max(std::sqrt(ss_pos / pos_dof), 1e-12 * (1.0 + typical));
+  // The reduced parameter set: C = B p + h a about the mean rotation axis a; h fixed (planar,
+  // at the prior or 0) or pulled towards the prior by a weighted term.
+  const Eigen::Vector3d axis = r.observability.planar_axis;
+  const double axis_prior = prior.given ? axis.dot(prior.nominal_C) : 0.0;
+  if (!translational && axis.norm() > 0.5) {
+    input.axis = axis;
+    input.axis_prior = axis_prior;
+    input.axis_prior_sigma = prior.given ? prior.sigma : 0.0;
+    input.axis_offset_fixed = planar && !(prior.given && prior.sigma > 0.0);
+  }
 
   const auto measurements = internal::MeasureScales(data, epsilon, translational);
   std::vector<internal::ScaleSummary> summaries;
   for (int s = 0; s < num_scales; ++s) {
     summaries.push_back(internal::SummarizeScales(measurements, data, s));
-    // Prior of (4.27), σ² = sum (λ - λ^k)² as in the thesis.
-    input.priors.push_back({summaries[s].mean,
-                            summaries[s].count >= 2 ? summaries[s].sigma_thesis : 0.0});
+    // Prior of (4.27), σ² = sum (λ - λ^k)² as in the thesis; none for planar motion, whose
+    // measurements (4.18) are ratios of noise (translation perpendicular to the axis).
+    input.priors.push_back(
+        {summaries[s].mean, summaries[s].count >= 2 && !planar ? summaries[s].sigma_thesis : 0.0});
   }
 
   const bool solve = options.method == Method::kNonlinear;
@@ -371,25 +495,65 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   }
   if (translational) {
     r.position_observable = false;
-    r.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
-                      Eigen::Vector3d::UnitZ()};
+    r.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
+  } else if (planar) {
+    r.unobservable = {axis};
+    r.unobservable_from_prior = prior.given;
+    r.axis_offset_std = prior.given && prior.sigma > 0.0
+                            ? (refined.covariance_ok ? refined.axis_std : prior.sigma)
+                            : std::numeric_limits<double>::quiet_NaN();
+  } else {
+    r.axis_offset_std = refined.covariance_ok ? refined.axis_std : fit.solution.axis_std;
   }
 
   std::ostringstream msg;
   msg << r.motions.used << " motions used, " << r.motions.rejected() << " rejected ("
       << r.motions.small_rotation << (translational ? " without translation" : " small rotation")
       << ", " << r.motions.angle_mismatch << " angle mismatch, " << r.motions.residual_outlier
-      << " outliers); " << ToString(model) << " motion";
+      << " outliers); " << ToString(r.motion_model) << " motion";
   if (translational) {
-    msg << " (largest rotation " << Fmt(r.observability.max_rotation_deg, 2)
-        << " deg < " << Fmt(options.alpha_maxrot_deg, 1)
+    msg << " (largest rotation " << Fmt(r.observability.max_rotation_deg, 2) << " deg < "
+        << Fmt(options.alpha_maxrot_deg, 1)
         << " deg): rotation and scale only, position unobservable";
+  } else if (planar) {
+    if (!fit.solution.why.empty()) msg << " (" << fit.solution.why << ")";
+    msg << ": C along the rotation axis " << Vec3Text(axis) << " is unobservable";
+    if (prior.given) {
+      msg << ", taken from the nominal mounting (" << Fmt(axis_prior, 4) << " along the axis";
+      if (prior.sigma > 0.0) msg << ", sigma " << Fmt(prior.sigma, 4);
+      msg << ")";
+    } else {
+      msg << ", reported as 0 (unknown; a nominal mounting would fill it in)";
+    }
+  } else {
+    if (!fit.solution.why.empty()) msg << " (" << fit.solution.why << ")";
+    if (r.observability.axis_std_ratio > 3.0 && std::isfinite(r.axis_offset_std)) {
+      msg << "; nearly planar: C along the mean rotation axis " << Vec3Text(axis) << " has sigma "
+          << Fmt(r.axis_offset_std, 4);
+      if (prior.given && prior.sigma > 0.0) msg << " (with the nominal mounting as a prior)";
+    }
   }
   msg << "; " << (scale_why.empty() ? ToString(scale_model) + " scale model" : scale_why);
   if (solve) msg << "; refinement: " << refined.message;
+  r.termination =
+      (solve && !refined.converged) ? Termination::kNoConvergence : Termination::kConverged;
+  // The thesis's general model on planar motion: the rotation about the axis and C along it
+  // are not determined.
+  if (options.motion_model == MotionModel::kGeneral && !translational) {
+    internal::MotionStatistics stats = StatisticsOf(data);
+    const internal::RotatingSolution figures =
+        internal::SolveRotating(stats, MotionModel::kAuto, select, prior);
+    if (figures.model == MotionModel::kPlanar) {
+      r.observability.planar = true;
+      r.unobservable = {axis};
+      r.termination = Termination::kDegenerate;
+      msg.str("");
+      msg << "planar motion (" << figures.why
+          << "): the rotation about the axis and C along it are not determined by the general "
+             "model; use the planar model (motion model auto or planar)";
+    }
+  }
   r.message = msg.str();
-  r.termination = (solve && !refined.converged) ? Termination::kNoConvergence
-                                                : Termination::kConverged;
   log->debug("slave '{}': {}", name, r.message);
   return r;
 }

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "linear_solvers.h"
+#include "model_selection.h"
 #include "motion_data.h"
 #include "motion_statistics.h"
 #include "refinement.h"
@@ -56,9 +57,12 @@ uint64_t Fnv1a(const std::string& s) {
   return h;
 }
 
-// Linear solution of one set of statistics, in the batch result schema.
+// Linear solution of one set of statistics, in the batch result schema. `general` is the
+// hysteresis state of a rotating rig (true: the general model was chosen last time); it is
+// updated when not null.
 SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimatorOptions& opt,
-                                 const std::optional<Similarity>& nominal, int current_segment) {
+                                 const std::optional<Similarity>& nominal, int current_segment,
+                                 bool* general) {
   SlaveCalibration r;
   r.motions.used = stats.motions();
   r.observability.max_rotation_deg = stats.max_rotation() * kDegPerRad;
@@ -69,8 +73,8 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
   }
   const bool translational = r.observability.max_rotation_deg < opt.alpha_maxrot_deg;
   r.motion_model = translational ? MotionModel::kTranslational : MotionModel::kGeneral;
-  const double w = stats.weight();
   std::map<int, double> scales;
+  bool ok = true;
   if (translational) {
     r.estimate.q = stats.SolveTranslationalRotation();
     scales = stats.SolveTranslationalScales();
@@ -78,41 +82,38 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
     r.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
     if (nominal) r.estimate.C = nominal->C;
   } else {
-    Eigen::Vector4d eig;
-    r.estimate.q = stats.SolveRotation(&eig);
-    r.observability.rotation_eigenvalues = eig;
-    // Rotation covariance from the eigen-gaps: q = q0 + eps e_j rotates by 2 eps.
-    const double sigma2 = std::max(eig(0), 0.0) / std::max(1.0, 4.0 * w - 3.0);
-    double var = 0.0;
-    for (int j = 1; j < 4; ++j) {
-      var = std::max(var, 4.0 * sigma2 / std::max(eig(j) - eig(0), 1e-300));
+    internal::ModelSelectionOptions select;
+    select.planar_axis_spread_deg = opt.planar_axis_spread_deg;
+    select.min_tilt_snr = opt.min_tilt_snr;
+    select.max_axis_std_ratio = opt.max_axis_std_ratio;
+    if (general != nullptr && *general) {  // hysteresis: stay general unless clearly planar
+      select.min_tilt_snr /= opt.planar_hysteresis;
+      select.max_axis_std_ratio *= opt.planar_hysteresis;
     }
-    r.rot_std_deg = std::sqrt(var) * kDegPerRad;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(stats.axis_scatter());
-    const Eigen::Vector3d e = axes.eigenvalues().cwiseMax(0.0);
-    r.observability.axis_spread_deg =
-        e(2) > 0.0 ? std::atan(std::sqrt((e(0) + e(1)) / e(2))) * kDegPerRad : 0.0;
-    if (r.observability.axis_spread_deg < opt.planar_axis_spread_deg) {
-      r.observability.planar = true;
-      r.observability.planar_axis = axes.eigenvectors().col(2);
+    internal::AxisPrior prior;
+    if (nominal) {
+      prior.given = true;
+      prior.nominal_C = nominal->C;
+      prior.sigma = opt.nominal_sigma;
+    }
+    const internal::RotatingSolution sol =
+        internal::SolveRotating(stats, MotionModel::kAuto, select, prior);
+    if (general != nullptr) *general = sol.model == MotionModel::kGeneral;
+    r.motion_model = sol.model;
+    r.observability = sol.observability;
+    r.estimate.q = sol.q;
+    r.estimate.C = sol.C;
+    scales = sol.scales;
+    r.rot_std_deg = sol.rot_std_deg;
+    r.pos_std = sol.cov_C.diagonal().cwiseMax(0.0).cwiseSqrt();
+    r.axis_offset_std = sol.axis_std;
+    if (sol.model == MotionModel::kPlanar) {
       r.unobservable.push_back(r.observability.planar_axis);
+      r.unobservable_from_prior = sol.axis_from_prior;
     }
-    const internal::PositionSolution pos = stats.SolvePosition(r.estimate.q);
-    r.observability.position_min_eigenvalue = pos.min_eigenvalue;
-    if (pos.ok) {
-      r.estimate.C = pos.C;
-      scales = pos.scales;
-      const double dof = std::max(1.0, 3.0 * w - 3.0 - static_cast<double>(scales.size()));
-      const Eigen::Matrix3d cov = pos.residual_ss / dof * pos.information.inverse();
-      r.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
-    } else if (nominal) {
-      r.estimate.C = nominal->C;
-    }
-    if (r.observability.planar && nominal) {
-      // The offset along the axis is not determined: keep the configured nominal value.
-      const Eigen::Vector3d a = r.observability.planar_axis;
-      r.estimate.C += (nominal->C.dot(a) - r.estimate.C.dot(a)) * a;
-    }
+    r.message = sol.why;
+    ok = sol.ok;
+    if (!ok && nominal) r.estimate.C = nominal->C;
   }
   for (const auto& [id, v] : stats.closed_scales()) {
     SegmentScale s;
@@ -135,7 +136,7 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
   r.scale_model = r.scales.size() > 1 ? ScaleModel::kSegments : ScaleModel::kFixed;
   const bool finite = r.estimate.q.coeffs().allFinite() && r.estimate.C.allFinite() &&
                       std::isfinite(r.estimate.scale);
-  r.termination = finite ? Termination::kConverged : Termination::kDegenerate;
+  r.termination = ok && finite ? Termination::kConverged : Termination::kDegenerate;
   return r;
 }
 
@@ -150,35 +151,61 @@ struct RigEstimator::Slave {
   MotionCounts counts;
   SlaveOnlineState online;
   std::deque<WindowEntry> window;
-  SlaveCalibration linear;       // latest linear solution of the long statistics
+  SlaveCalibration linear;  // latest linear solution of the long statistics
   std::optional<SlaveCalibration> refined;
   int disagreements = 0;
   int stable = 0;
-  bool general = false;      // some motion rotated by alpha_maxrot: general motion model
-  int accepted_in_model = 0; // accepted motions since the motion model last changed
+  bool general = false;        // some motion rotated by alpha_maxrot: a rotating rig
+  bool general_model = false;  // rotating rig: the general (not planar) model, with hysteresis
+  int accepted_in_model = 0;   // accepted motions since the motion model last changed
   int64_t decalibrated_at_ns = -1;
   Eigen::Quaterniond last_q = Eigen::Quaterniond::Identity();
 };
 
 bool RigEstimatorOptions::Check(std::string* error) const {
   std::ostringstream e;
-  if (!(keyframe_min_angle_deg >= 0.0)) e << "keyframe_min_angle_deg must be >= 0";
-  else if (!(keyframe_min_translation >= 0.0)) e << "keyframe_min_translation must be >= 0";
-  else if (keyframe_max_interval_ns <= 0) e << "keyframe_max_interval_ns must be > 0";
-  else if (keyframe_history < 2) e << "keyframe_history must be >= 2, got " << keyframe_history;
-  else if (!(pair_target_angle_deg > 0.0)) e << "pair_target_angle_deg must be > 0";
+  if (!(keyframe_min_angle_deg >= 0.0))
+    e << "keyframe_min_angle_deg must be >= 0";
+  else if (!(keyframe_min_translation >= 0.0))
+    e << "keyframe_min_translation must be >= 0";
+  else if (keyframe_max_interval_ns <= 0)
+    e << "keyframe_max_interval_ns must be > 0";
+  else if (keyframe_history < 2)
+    e << "keyframe_history must be >= 2, got " << keyframe_history;
+  else if (!(pair_target_angle_deg > 0.0))
+    e << "pair_target_angle_deg must be > 0";
   else if (!(pair_target_translation_fraction > 0.0))
     e << "pair_target_translation_fraction must be > 0";
-  else if (pair_max_span_ns <= 0) e << "pair_max_span_ns must be > 0";
-  else if (!(angle_gate_floor_deg > 0.0)) e << "angle_gate_floor_deg must be > 0";
-  else if (!(gate_sigmas > 0.0)) e << "gate_sigmas must be > 0";
-  else if (!(huber_sigmas > 0.0)) e << "huber_sigmas must be > 0";
-  else if (!(scale_gate > 0.0)) e << "scale_gate must be > 0";
-  else if (half_life_s < 0.0) e << "half_life_s must be >= 0 (0 = never forget)";
-  else if (!(short_half_life_s > 0.0)) e << "short_half_life_s must be > 0";
-  else if (max_open_segments < 1) e << "max_open_segments must be >= 1";
-  else if (window_size < 2) e << "window_size must be >= 2";
-  else if (converged_min_motions < 2) e << "converged_min_motions must be >= 2";
+  else if (pair_max_span_ns <= 0)
+    e << "pair_max_span_ns must be > 0";
+  else if (!(angle_gate_floor_deg > 0.0))
+    e << "angle_gate_floor_deg must be > 0";
+  else if (!(gate_sigmas > 0.0))
+    e << "gate_sigmas must be > 0";
+  else if (!(huber_sigmas > 0.0))
+    e << "huber_sigmas must be > 0";
+  else if (!(scale_gate > 0.0))
+    e << "scale_gate must be > 0";
+  else if (half_life_s < 0.0)
+    e << "half_life_s must be >= 0 (0 = never forget)";
+  else if (!(short_half_life_s > 0.0))
+    e << "short_half_life_s must be > 0";
+  else if (max_open_segments < 1)
+    e << "max_open_segments must be >= 1";
+  else if (window_size < 2)
+    e << "window_size must be >= 2";
+  else if (converged_min_motions < 2)
+    e << "converged_min_motions must be >= 2";
+  else if (!(min_tilt_snr >= 0.0))
+    e << "min_tilt_snr must be >= 0";
+  else if (!(max_axis_std_ratio > 0.0))
+    e << "max_axis_std_ratio must be > 0";
+  else if (!(planar_hysteresis >= 1.0))
+    e << "planar_hysteresis must be >= 1 (1 = none)";
+  else if (!(planar_axis_spread_deg >= 0.0))
+    e << "planar_axis_spread_deg must be >= 0";
+  else if (!(nominal_sigma >= 0.0) || std::isinf(nominal_sigma))
+    e << "nominal_sigma must be finite and >= 0 (0 = no weighted prior)";
   if (error) *error = e.str();
   return e.str().empty();
 }
@@ -211,9 +238,10 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
   const CameraPose& master = *poses[0];
   if (have_master_segment_ && master.segment != master_segment_) {
     // New master unit: positions and scales restart; rotations are unit-free and stay.
-    ModuleLogger("calib")->info("master odometry re-initialised (segment {} -> {}): position "
-                                "and scales restart in the new master unit",
-                                master_segment_, master.segment);
+    ModuleLogger("calib")->info(
+        "master odometry re-initialised (segment {} -> {}): position "
+        "and scales restart in the new master unit",
+        master_segment_, master.segment);
     for (auto& s : slaves_) {
       s->long_stats.ResetPosition();
       s->short_stats.ResetPosition();
@@ -308,15 +336,15 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
     return;
   }
   const bool have_estimate =
-      s.linear.usable() && (s.linear.motion_model == MotionModel::kGeneral) == general;
+      s.linear.usable() && (s.linear.motion_model != MotionModel::kTranslational) == general;
   if (s.linear.usable()) internal::AlignSignsWith(ToWxyz(s.linear.estimate.q), &data);
 
   // Gates.
   const bool gating = s.accepted_in_model >= o.gate_after_motions && have_estimate;
   const double angle_diff = std::abs(md.angle0 - md.anglei) * kDegPerRad;
-  const double angle_gate = gating ? std::max(o.angle_gate_floor_deg,
-                                              o.gate_sigmas * std::sqrt(s.angle_var.value))
-                                   : 4.0 * o.angle_gate_floor_deg;
+  const double angle_gate =
+      gating ? std::max(o.angle_gate_floor_deg, o.gate_sigmas * std::sqrt(s.angle_var.value))
+             : 4.0 * o.angle_gate_floor_deg;
   if (angle_diff > angle_gate) {
     reject(&s.counts.angle_mismatch);
     return;
@@ -350,7 +378,8 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
     }
     if (gating) {
       double worst = general ? r_rot / std::sqrt(std::max(s.rot_var.value, 1e-300)) : 0.0;
-      if (r_pos >= 0.0) worst = std::max(worst, r_pos / std::sqrt(std::max(s.pos_var.value, 1e-300)));
+      if (r_pos >= 0.0)
+        worst = std::max(worst, r_pos / std::sqrt(std::max(s.pos_var.value, 1e-300)));
       if (worst > o.gate_sigmas) {
         reject(&s.counts.residual_outlier);
         return;
@@ -379,8 +408,9 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
     while (static_cast<int>(stats->segments().size()) > o.max_open_segments) {
       int oldest = stats->segments().begin()->first;
       if (oldest == md.segment) oldest = std::next(stats->segments().begin())->first;
-      stats->MarginaliseSegment(oldest, have_estimate ? s.linear.estimate.q
-                                                      : Eigen::Quaterniond::Identity());
+      stats->MarginaliseSegment(
+          oldest, have_estimate ? s.linear.estimate.q : Eigen::Quaterniond::Identity(),
+          stats->SolvePlanarFrame());
     }
   }
   s.window.push_back({m, weight});
@@ -404,7 +434,7 @@ void RigEstimator::Publish(int index) {
   const RigEstimatorOptions& o = options_;
   const std::optional<Similarity> nominal =
       index < static_cast<int>(o.nominal.size()) ? o.nominal[index] : std::nullopt;
-  s.linear = SolveStatistics(s.long_stats, o, nominal, s.online.segment);
+  s.linear = SolveStatistics(s.long_stats, o, nominal, s.online.segment, &s.general_model);
   for (const auto& [id, stats] : s.long_stats.segments()) {
     for (const auto& sc : s.linear.scales) {
       if (sc.segment == id) s.long_stats.SetSegmentScale(id, sc.scale);
@@ -414,9 +444,14 @@ void RigEstimator::Publish(int index) {
   online.flags = 0;
 
   // Decalibration: the short window disagrees with the long one for several keyframes.
-  const SlaveCalibration short_est = SolveStatistics(s.short_stats, o, nominal, online.segment);
   online.short_long_rot_deg = 0.0;
-  // Planar motion leaves the rotation about the axis free: the windows may differ there.
+  // Planar motion: the short window determines the rotation about the axis from a few
+  // translations only; it is not compared (no decalibration detection on planar drives).
+  bool short_general = s.general_model;
+  const SlaveCalibration short_est =
+      s.linear.observability.planar
+          ? SlaveCalibration{}
+          : SolveStatistics(s.short_stats, o, nominal, online.segment, &short_general);
   if (s.linear.usable() && short_est.usable() && !s.linear.observability.planar &&
       !short_est.observability.planar && short_est.motions.used >= o.converged_min_motions / 2) {
     const double diff = AngleBetween(s.linear.estimate.q, short_est.estimate.q) * kDegPerRad;
@@ -441,12 +476,12 @@ void RigEstimator::Publish(int index) {
       s.decalibrated_at_ns = online.last_update_ns;
       ++online.decalibration_events;
       ++generation_;
-      s.linear = SolveStatistics(s.long_stats, o, nominal, online.segment);
+      s.linear = SolveStatistics(s.long_stats, o, nominal, online.segment, &s.general_model);
     }
   }
-  const bool decalibrated = s.decalibrated_at_ns >= 0 &&
-                            online.last_update_ns - s.decalibrated_at_ns <
-                                static_cast<int64_t>(o.short_half_life_s * 1e9);
+  const bool decalibrated =
+      s.decalibrated_at_ns >= 0 && online.last_update_ns - s.decalibrated_at_ns <
+                                       static_cast<int64_t>(o.short_half_life_s * 1e9);
   if (decalibrated) online.flags |= kFlagDecalibrated;
 
   SlaveCalibration published = s.linear;
@@ -469,7 +504,8 @@ void RigEstimator::Publish(int index) {
     const double change = AngleBetween(s.linear.estimate.q, s.last_q) * kDegPerRad;
     s.stable = change <= std::max(s.linear.rot_std_deg, 0.01) ? s.stable + 1 : 0;
     s.last_q = s.linear.estimate.q;
-    if (published.motion_model == MotionModel::kTranslational) online.flags |= kFlagTranslationalOnly;
+    if (published.motion_model == MotionModel::kTranslational)
+      online.flags |= kFlagTranslationalOnly;
     if (published.observability.planar) online.flags |= kFlagPlanar;
     const double c_ref = std::max(1.0, published.estimate.C.norm());
     const bool position_ok = !published.position_observable || published.observability.planar ||
@@ -486,10 +522,16 @@ void RigEstimator::Publish(int index) {
       << " rejected; " << ToString(published.motion_model) << " motion";
   if (online.flags & kFlagTranslationalOnly) msg << " (rotation and scale only)";
   if (online.flags & kFlagPlanar) {
-    msg << "; planar motion: offset along the rotation axis unobservable"
-        << (o.nominal.size() > static_cast<size_t>(index) && o.nominal[index]
-                ? " (nominal value kept)"
-                : "");
+    const Eigen::Vector3d& a = published.observability.planar_axis;
+    msg << " (" << s.linear.message << "): C along the rotation axis [" << a.x() << ", " << a.y()
+        << ", " << a.z() << "] is unobservable, "
+        << (published.unobservable_from_prior ? "taken from the nominal mounting"
+                                              : "reported as 0 (unknown)");
+  } else if (published.motion_model == MotionModel::kGeneral &&
+             published.observability.axis_std_ratio > 3.0 &&
+             std::isfinite(published.axis_offset_std)) {
+    msg << " (nearly planar: sigma of C along the mean rotation axis " << published.axis_offset_std
+        << ")";
   }
   if (decalibrated) msg << "; DECALIBRATED (camera moved), re-converging";
   if (!published.usable()) msg.str(published.message);
@@ -509,6 +551,12 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave) const {
     job.weights.push_back(w.weight);
   }
   job.start = s.linear;
+  const std::optional<Similarity>& nominal =
+      slave < static_cast<int>(options_.nominal.size()) ? options_.nominal[slave] : std::nullopt;
+  if (nominal && options_.nominal_sigma > 0.0) {
+    job.axis_prior = s.linear.observability.planar_axis.dot(nominal->C);
+    job.axis_prior_sigma = options_.nominal_sigma;
+  }
   return job;
 }
 
@@ -530,6 +578,15 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
   input.q = job.start.estimate.q;
   input.C = job.start.estimate.C;
   input.translational = job.start.motion_model == MotionModel::kTranslational;
+  const bool planar = job.start.motion_model == MotionModel::kPlanar;
+  const Eigen::Vector3d axis = job.start.observability.planar_axis;
+  if (!input.translational && axis.norm() > 0.5) {
+    // The reduced parameter set: C = B p + h a, h fixed in the planar model (no prior σ).
+    input.axis = axis;
+    input.axis_prior = job.axis_prior_sigma > 0.0 ? job.axis_prior : axis.dot(input.C);
+    input.axis_prior_sigma = job.axis_prior_sigma;
+    input.axis_offset_fixed = planar && !(job.axis_prior_sigma > 0.0);
+  }
   for (auto& m : data) {
     auto [it, inserted] = index.emplace(m.segment, static_cast<int>(index.size()));
     if (inserted) {
@@ -551,7 +608,8 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
   }
   const double k = static_cast<double>(data.size());
   input.sigma_rotation = std::max(std::sqrt(ss_rot / std::max(1.0, 4 * k - 3)), 1e-12);
-  input.sigma_position = std::max(std::sqrt(ss_pos / std::max(1.0, 3 * k - 7)), 1e-12);
+  input.sigma_position =
+      std::max(std::sqrt(ss_pos / std::max(1.0, 3 * k - (planar ? 6 : 7))), 1e-12);
   CalibrationOptions options;
   options.robust_loss = RobustLoss::kHuber;
   const internal::RefinementResult r = internal::RefineNonlinear(data, input, options);
@@ -571,6 +629,9 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(r.cov_rotation);
     out.rot_std_deg = std::sqrt(std::max(0.0, eig.eigenvalues()(2))) * kDegPerRad;
     if (!input.translational) out.pos_std = r.cov_position.diagonal().cwiseMax(0.0).cwiseSqrt();
+    if (!input.translational && !input.axis_offset_fixed && input.axis.norm() > 0.5) {
+      out.axis_offset_std = r.axis_std;
+    }
   }
   out.termination = r.converged ? Termination::kConverged : Termination::kNoConvergence;
   return out;
@@ -586,10 +647,11 @@ std::string RigEstimator::SerializeState() const {
     const Slave& s = *slaves_[i];
     body << "slave " << i << "\ncounts " << s.counts.total << ' ' << s.counts.used << ' '
          << s.counts.small_rotation << ' ' << s.counts.angle_mismatch << ' '
-         << s.counts.residual_outlier << "\nnoise " << s.angle_var.value << ' '
-         << s.angle_var.count << ' ' << s.rot_var.value << ' ' << s.rot_var.count << ' '
-         << s.pos_var.value << ' ' << s.pos_var.count << ' ' << s.ci_sq.value << ' '
-         << s.ci_sq.count << "\nsegment " << s.online.segment << "\nlong\n"
+         << s.counts.residual_outlier << "\nnoise " << s.angle_var.value << ' ' << s.angle_var.count
+         << ' ' << s.rot_var.value << ' ' << s.rot_var.count << ' ' << s.pos_var.value << ' '
+         << s.pos_var.count << ' ' << s.ci_sq.value << ' ' << s.ci_sq.count << "\nsegment "
+         << s.online.segment << "\nmodel " << (s.general ? 1 : 0) << ' '
+         << (s.general_model ? 1 : 0) << "\nlong\n"
          << s.long_stats.Serialize() << "short\n"
          << s.short_stats.Serialize();
   }
@@ -656,6 +718,12 @@ bool RigEstimator::RestoreState(const std::string& text, std::string* error) {
       return fail("malformed noise of slave " + names_[i + 1]);
     }
     if (!(sin >> word >> s->online.segment) || word != "segment") return fail("malformed segment");
+    int rotating = 0, general_model = 0;
+    if (!(sin >> word >> rotating >> general_model) || word != "model") {
+      return fail("malformed model of slave " + names_[i + 1]);
+    }
+    s->general = rotating != 0;
+    s->general_model = general_model != 0;
     std::string remaining((std::istreambuf_iterator<char>(sin)), std::istreambuf_iterator<char>());
     const size_t long_pos = remaining.find("long\n");
     const size_t short_pos = remaining.find("short\n");

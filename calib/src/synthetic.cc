@@ -1,7 +1,9 @@
 #include "rigcal/calib/synthetic.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "rigcal/calib/quaternion.h"
 
@@ -94,8 +96,6 @@ RigRecording ThesisSample(const ThesisSampleOptions& options, std::mt19937_64& r
 
 SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
                              const std::vector<Similarity>& rigs, const DriveOptions& options) {
-  std::mt19937_64 rng(options.seed);
-  std::normal_distribution<double> gauss(0.0, 1.0);
   const int n = options.num_frames;
   const double amp_rot = options.rotation_amplitude_deg * kRadPerDeg;
   const double amp_pos = options.translation_amplitude;
@@ -119,15 +119,30 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
     truth_master[k].q = ExpMap(rv);
     truth_master[k].C = pos;
   }
+  std::vector<int64_t> t_ns;
+  for (int k = 0; k < n; ++k) {
+    t_ns.push_back(static_cast<int64_t>(std::llround(k * 1e9 / options.frame_rate_hz)));
+  }
+  return GenerateDriveAlong(names, rigs, t_ns, truth_master, options);
+}
+
+SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
+                                  const std::vector<Similarity>& rigs,
+                                  const std::vector<int64_t>& t_ns, std::vector<Pose> master_world,
+                                  const DriveOptions& options) {
+  std::vector<Pose> truth_master = std::move(master_world);
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const int n = static_cast<int>(std::min(t_ns.size(), truth_master.size()));
+  truth_master.resize(n);
+  SyntheticDrive drive;
+  drive.truth = rigs;
+  if (n == 0) return drive;
   const Pose first_inverse = truth_master.front().Inverse();
   for (auto& p : truth_master) p = first_inverse * p;  // camera-local: pose 0 is identity
 
-  SyntheticDrive drive;
-  drive.truth = rigs;
   auto& rec = drive.recording;
-  for (int k = 0; k < n; ++k) {
-    rec.t_ns.push_back(static_cast<int64_t>(std::llround(k * 1e9 / options.frame_rate_hz)));
-  }
+  rec.t_ns.assign(t_ns.begin(), t_ns.begin() + n);
   const double sigma_rot = options.rotation_noise_deg * kRadPerDeg;
   const double drift = options.drift_deg_per_frame * kRadPerDeg;
   // Pose of a slave in its own reference frame (its pose at frame 0, rig `at_start`) when the
@@ -156,7 +171,7 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
         const bool changed = options.change_frame >= 0 && k >= options.change_frame &&
                              slave < static_cast<int>(options.changed_rigs.size());
         p = slave_pose(truth_master[k], *rig, changed ? options.changed_rigs[slave] : *rig);
-        if (rec.t_ns[k] >= next_reset) {
+        if (rec.t_ns[k] - rec.t_ns[0] >= next_reset) {
           ++segment;
           unit_change = std::exp(unit_factor(rng));
           next_reset += static_cast<int64_t>(options.segment_period_s * 1e9);
@@ -166,8 +181,7 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
       if (k > 0) {
         walk = (ExpMap(drift * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) * walk)
                    .normalized();
-        p.q = (walk * ExpMap(sigma_rot * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) *
-               p.q)
+        p.q = (walk * ExpMap(sigma_rot * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) * p.q)
                   .normalized();
         p.C += options.position_noise / unit * unit_change *
                Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));

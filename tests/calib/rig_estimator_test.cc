@@ -111,8 +111,9 @@ long ResidentKiB() {
 
 // 1e6 sets: memory must stay flat after the first keyframes fill the bounded buffers.
 TEST(RigEstimator, MemoryStaysBounded) {
-  if (kSanitized) GTEST_SKIP() << "sanitizer runtimes keep freed memory in quarantine: RSS is not "
-                                  "the estimator's footprint";
+  if (kSanitized)
+    GTEST_SKIP() << "sanitizer runtimes keep freed memory in quarantine: RSS is not "
+                    "the estimator's footprint";
   const SyntheticDrive drive = NoisyDrive(2000);  // periodic: frame 2000 == frame 0
   RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
   const int64_t period = drive.recording.t_ns.back() + 50'000'000;
@@ -308,7 +309,10 @@ TEST(RigEstimator, StateRoundTripAndCorruptFiles) {
   EXPECT_NE(error.find("checksum"), std::string::npos) << error;
   EXPECT_FALSE(fresh.RestoreState(state.substr(0, state.size() / 3), &error));
   std::string other_version = state;
-  other_version.replace(other_version.find(" 1\n"), 3, " 9\n");
+  const std::string header =
+      "rigcal-estimator-state " + std::to_string(RigEstimator::kStateVersion) + "\n";
+  ASSERT_EQ(other_version.rfind(header, 0), 0u);
+  other_version.replace(0, header.size(), "rigcal-estimator-state 9\n");
   EXPECT_FALSE(fresh.RestoreState(other_version, &error));
   EXPECT_NE(error.find("version 9"), std::string::npos) << error;
   RigEstimator other_rig({"front", "left", "rear"}, RigEstimatorOptions{});

@@ -1,14 +1,19 @@
 #pragma once
 // Options of the batch rig calibrator: plain struct, documented defaults, Check().
 
+#include <map>
 #include <string>
 
 #include "rigcal/calib/pair_selection.h"
+#include "rigcal/calib/types.h"
 
 namespace rigcal {
 
 enum class Method { kLinear, kNonlinear };
-enum class MotionModel { kAuto, kGeneral, kTranslational };
+// kGeneral: the thesis's general model (4.3); kPlanar: every rotation about one axis (a car on
+// a road): rotation, scale and in-plane position, the offset along the axis unobservable;
+// kTranslational: no rotation (4.5).
+enum class MotionModel { kAuto, kGeneral, kTranslational, kPlanar };
 enum class ScaleModel {
   kAuto,        // segments if the data has several, partitions when measured scales drift
   kFixed,       // one scale per slave (thesis time-fixed model)
@@ -51,9 +56,23 @@ struct CalibrationOptions {
   int max_iterations = 100;
   bool compute_covariance = true;
 
-  // Planar motion: rotation axes whose spread (sqrt of the second eigenvalue of the
-  // axis scatter) is below this angle count as one axis.
-  double planar_axis_spread_deg = 1.0;
+  // General or planar (kAuto, rotating rig): the general model needs the master's rotation
+  // axes to tilt by at least min_tilt_snr times what rotation noise alone explains, and the σ
+  // of C along the mean rotation axis within max_axis_std_ratio times its in-plane σ;
+  // otherwise the planar model is used. Master axes whose spread (RMS angle about their
+  // principal axis) is below planar_axis_spread_deg count as one axis whatever the other
+  // figures (0 = decided by the figures alone).
+  double min_tilt_snr = 10.0;
+  double max_axis_std_ratio = 100.0;
+  double planar_axis_spread_deg = 0.0;
+
+  // Nominal mounting per slave name (CAD, a rig config's cameras[].nominal), master frame.
+  // Used for what the motions do not determine: C along the rotation axis of planar motion.
+  std::map<std::string, Similarity> nominal;
+  // σ of the nominal C along the mean rotation axis, master units. > 0: a weighted term
+  // (C·a - C_nominal·a) / σ in the refinement, in the general model too; 0: the nominal value
+  // is used only where the motion determines nothing.
+  double nominal_sigma = 0.0;
 
   // Needs at least this many usable motions per slave.
   int min_motions = 2;

@@ -3,6 +3,7 @@
 // is usable and why, never a silent garbage answer.
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,36 +34,58 @@ struct SegmentScale {
 struct MotionCounts {
   int total = 0;
   int used = 0;
-  int small_rotation = 0;   // below alpha_threshold (general model)
-  int angle_mismatch = 0;   // master/slave rotation angles differ (invariant)
+  int small_rotation = 0;  // below alpha_threshold (general model)
+  int angle_mismatch = 0;  // master/slave rotation angles differ (invariant)
   int residual_outlier = 0;
   int rejected() const { return small_rotation + angle_mismatch + residual_outlier; }
 };
 
+// The figures that decide what the motions determine (general, planar or translational).
 struct Observability {
   // Eigenvalues of the rotation system sum A^T A (4.10), ascending. The smallest is the
   // fit residual; the gap to the second tells how well the rotation is determined.
   Eigen::Vector4d rotation_eigenvalues = Eigen::Vector4d::Zero();
+  // σ of the linear rotation (4.11) about its weakest direction, from the eigen-gap λ2 - λ1
+  // (degrees; large when every rotation is about one axis).
+  double rotation_weak_std_deg = 0.0;
   // Smallest eigenvalue of the (normalised) position/scale normal equations (4.16).
   double position_min_eigenvalue = 0.0;
-  // Spread of the master rotation axes, degrees (0 = all motions about one axis).
+  // RMS angle of the rotation vectors about their principal axis, degrees (0 = all motions
+  // about one axis): master (in its frame) and slave (in its frame).
   double axis_spread_deg = 0.0;
+  double slave_axis_spread_deg = 0.0;
+  // How much more the master's rotation axes tilt away from the mean axis than rotation noise
+  // alone makes them (about 1 for planar motion with noise, 0 without noise).
+  double tilt_snr = 0.0;
+  // σ of C along the mean rotation axis divided by its in-plane σ (linear position system);
+  // infinite when the axis component is not determined at all.
+  double axis_std_ratio = 0.0;
   double max_rotation_deg = 0.0;  // largest master rotation angle among the motions
-  bool planar = false;            // all rotation axes parallel
-  Eigen::Vector3d planar_axis = Eigen::Vector3d::Zero();  // in the master frame
+  bool planar = false;            // planar model: C along planar_axis is not determined
+  // Mean rotation axis in the master frame (unit; set for every rotating rig, not only planar).
+  Eigen::Vector3d planar_axis = Eigen::Vector3d::Zero();
 };
 
 struct SlaveCalibration {
   std::string name;
-  Similarity estimate;                 // q, C and the first segment's scale
-  std::vector<SegmentScale> scales;    // one per segment / partition
-  bool position_observable = true;     // false for the purely translational model
-  // Unobservable directions of C in the master frame (unit vectors).
+  Similarity estimate;               // q, C and the first segment's scale
+  std::vector<SegmentScale> scales;  // one per segment / partition
+  bool position_observable = true;   // false for the purely translational model
+  // Unobservable directions of C in the master frame (unit vectors). C along them is the
+  // nominal mounting's when unobservable_from_prior, else 0 (unknown, not estimated).
   std::vector<Eigen::Vector3d> unobservable;
+  bool unobservable_from_prior = false;
 
   // Standard deviations from the covariance of the refined parameters.
   double rot_std_deg = 0.0;  // largest axis
+  // σ of C per master axis. Along an unobservable direction only the prior's σ is included
+  // (nothing when the prior has none).
   Eigen::Vector3d pos_std = Eigen::Vector3d::Zero();
+  // σ of C along the mean rotation axis (observability.planar_axis), master units: estimated
+  // (general model; large for nearly planar drives), the prior's σ (planar model with a
+  // weighted prior), NaN when unknown (planar model otherwise) or not applicable
+  // (translational model).
+  double axis_offset_std = std::numeric_limits<double>::quiet_NaN();
 
   MotionCounts motions;
   MotionModel motion_model = MotionModel::kGeneral;  // chosen model (never kAuto)

@@ -56,14 +56,24 @@ struct RigEstimatorOptions {
   double decalibration_sigmas = 5.0;
   double decalibration_min_deg = 0.5;
   double decalibration_min_translation = 0.0;  // 0 = only rotation triggers
-  int decalibration_confirmations = 3;  // consecutive keyframes in disagreement
+  int decalibration_confirmations = 3;         // consecutive keyframes in disagreement
 
   // Odometry segments kept open (their scale is a variable); older ones are marginalised.
   int max_open_segments = 2;
 
   // Models.
-  double alpha_maxrot_deg = 10.0;         // below: purely translational (rotation + scale)
-  double planar_axis_spread_deg = 1.0;    // below: all rotation axes parallel (planar)
+  double alpha_maxrot_deg = 10.0;  // below: purely translational (rotation + scale)
+  // General or planar, as CalibrationOptions (the same figures): the general model needs the
+  // rotation axes to tilt by min_tilt_snr times the noise and the σ of C along the mean axis
+  // within max_axis_std_ratio times its in-plane σ. Hysteresis: once general, the estimate
+  // turns planar again only when a figure is worse than its threshold by planar_hysteresis
+  // (SNR below min_tilt_snr / h or ratio above max_axis_std_ratio * h), so the model does not
+  // flip from keyframe to keyframe. Master axes whose spread is below planar_axis_spread_deg
+  // count as one axis whatever the figures (0 = off).
+  double min_tilt_snr = 10.0;
+  double max_axis_std_ratio = 100.0;
+  double planar_hysteresis = 2.0;
+  double planar_axis_spread_deg = 0.0;
 
   // Convergence: enough motions, small uncertainty, stable over the last keyframes.
   int converged_min_motions = 30;
@@ -75,8 +85,11 @@ struct RigEstimatorOptions {
   int window_size = 400;
 
   // Nominal extrinsics per slave (from the rig config), used for what the motion cannot
-  // determine (e.g. the offset along the rotation axis of planar motion). Empty = none.
+  // determine (the offset of C along the rotation axis of planar motion). Empty = none.
   std::vector<std::optional<Similarity>> nominal;
+  // σ of the nominal C along the mean rotation axis (master units): > 0 combines it with the
+  // estimate as a weighted term in the general model too; 0 = used only where unobservable.
+  double nominal_sigma = 0.0;
 
   bool Check(std::string* error) const;
 };
@@ -93,19 +106,19 @@ enum SlaveFlags : uint32_t {
 
 struct SlaveOnlineState {
   uint32_t flags = kFlagInitialising;
-  int segment = 0;            // current odometry segment of the slave
-  int64_t last_update_ns = 0; // stream time of the last accepted motion
+  int segment = 0;                  // current odometry segment of the slave
+  int64_t last_update_ns = 0;       // stream time of the last accepted motion
   double short_long_rot_deg = 0.0;  // disagreement of the short and long windows
   int keyframes = 0;
-  int gated_scale = 0;        // rejected by the screw-pitch scale gate
+  int gated_scale = 0;  // rejected by the screw-pitch scale gate
   int decalibration_events = 0;
 };
 
 struct RigEstimate {
-  int64_t t_ns = 0;             // stream time of the last set
-  uint64_t sets = 0;            // sets consumed
-  uint64_t rejected_sets = 0;   // sets ignored: time not increasing, no or non-finite master
-  RigCalibration rig;           // per slave: the result in the batch schema
+  int64_t t_ns = 0;            // stream time of the last set
+  uint64_t sets = 0;           // sets consumed
+  uint64_t rejected_sets = 0;  // sets ignored: time not increasing, no or non-finite master
+  RigCalibration rig;          // per slave: the result in the batch schema
   std::vector<SlaveOnlineState> online;  // per slave
 };
 
@@ -116,6 +129,10 @@ struct RefinementJob {
   std::vector<double> weights;
   SlaveCalibration start;
   uint64_t generation = 0;  // estimator generation when the job was made
+  // Prior on C along start.observability.planar_axis (from the nominal mounting): σ > 0 adds
+  // it as a weighted term; the planar model keeps C along the axis at start's value otherwise.
+  double axis_prior = 0.0;
+  double axis_prior_sigma = 0.0;
 };
 
 class RigEstimator {
@@ -145,7 +162,7 @@ class RigEstimator {
   // cameras) text returns false with a message and leaves the estimator unchanged.
   bool RestoreState(const std::string& text, std::string* error);
 
-  static constexpr int kStateVersion = 1;
+  static constexpr int kStateVersion = 2;
 
  private:
   struct Slave;

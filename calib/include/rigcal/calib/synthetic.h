@@ -24,10 +24,10 @@ Pose PerturbPose(const Pose& pose, double eps_rad, std::mt19937_64& rng);
 Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng);
 
 struct ThesisSampleOptions {
-  int num_poses = 4;             // K
-  int num_slaves = 1;            // N
-  double eps_deg = 0.0;          // orientation error level
-  double max_rotation_deg = 180; // master rotation angle of pose k: uniform in [0, max]
+  int num_poses = 4;              // K
+  int num_slaves = 1;             // N
+  double eps_deg = 0.0;           // orientation error level
+  double max_rotation_deg = 180;  // master rotation angle of pose k: uniform in [0, max]
   // When > 0, pose k rotates by (k/K) * fixed_rotation_deg instead (thesis 5.2).
   double fixed_rotation_deg = 0.0;
   // Slave position of pose k scaled by 1 + (k/K) * max_scale_error (thesis 5.3).
@@ -75,6 +75,15 @@ struct SyntheticDrive {
 // Builds a drive for the given rig (names[0] is the master, rigs[i] for names[i+1]).
 SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
                              const std::vector<Similarity>& rigs, const DriveOptions& options);
+
+// The same along a given master trajectory: `master_world[k]` is world_from_master at stamp
+// t_ns[k] (any world frame; the poses are made camera-local, pose 0 the identity). Uses the
+// noise, drift, seed, change_frame/changed_rigs and segment_period_s of `options`; its motion,
+// num_frames, frame_rate_hz and amplitudes are ignored.
+SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
+                                  const std::vector<Similarity>& rigs,
+                                  const std::vector<int64_t>& t_ns, std::vector<Pose> master_world,
+                                  const DriveOptions& options);
 
 // The default 3-camera rig of the demo: master looking forward, one slave looking left and
 // one looking backwards, with different odometry scales.

@@ -21,6 +21,8 @@
 // Whitespace-separated formats take an optional integer 9th column: the scale segment id (a
 // VO re-initialisation opens a new segment); all lines of one file have the same column
 // count. Lines whose first non-blank character is '#' and blank lines are ignored.
+// KITTI odometry files (3x4 matrices plus a separate time file) have their own reader,
+// ReadKittiTrajectory.
 
 #include <cstdint>
 #include <optional>
@@ -61,6 +63,16 @@ struct TrajectoryReadOptions {
 Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
                                          const TrajectoryReadOptions& options = {},
                                          TrajectoryFormat* format = nullptr);
+
+// Reads a KITTI odometry pose file and its time file: `poses_path` has one pose per line, the
+// 12 numbers of the row-major 3x4 matrix [R | t] (camera frame: x right, y down, z forward;
+// world = the first camera pose), `times_path` one time in seconds per line (the same count).
+// R is world_from_camera and t the camera centre, as in every other format. Rotations are
+// projected onto the nearest rotation when orthonormal within 1e-4 (KITTI prints 7 digits),
+// else an error. Errors start with `<path>:<line>: ` and name the column; the trajectory
+// is named after the pose file's stem.
+Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
+                                              const std::string& times_path);
 
 // Writes `trajectory` in TUM format (seconds with 9 decimals, so stamps round-trip exactly;
 // doubles in shortest round-trip form), with the segment as 9th column when any segment id is

@@ -1,0 +1,62 @@
+#pragma once
+// General or planar: the linear solution of a rotating rig from fixed-size statistics, with
+// the figures that decide which parameters the motions determine. Shared by the batch
+// calibrator (on statistics of its motions) and the recursive estimator, so both decide alike.
+//
+// Figures (Observability): the eigenvalues of the rotation system (4.10) and the σ of the
+// linear rotation (4.11) about its weakest direction; the spread of the master and slave
+// rotation axes; the tilt signal-to-noise ratio (planar_solver.h); the conditioning of the
+// position system (4.16) and the ratio of the σ of C along the mean rotation axis to its
+// in-plane σ. The general model needs the axis to tilt (SNR >= min_tilt_snr) and C along it
+// to be determined (ratio <= max_axis_std_ratio); otherwise the motion is planar: the planar
+// solver gives rotation, scales and in-plane position, and the offset along the axis is
+// unobservable (a prior's value, or 0 reported as unknown).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <map>
+#include <string>
+
+#include "motion_statistics.h"
+#include "rigcal/calib/calibration_options.h"
+#include "rigcal/calib/calibration_result.h"
+
+namespace rigcal::internal {
+
+struct ModelSelectionOptions {
+  double planar_axis_spread_deg = 0.0;  // master axes spread below: planar, whatever else
+  double min_tilt_snr = 10.0;
+  double max_axis_std_ratio = 100.0;
+};
+
+// A prior on the offset of C along the mean rotation axis a: h = a^T C_nominal.
+struct AxisPrior {
+  bool given = false;
+  Eigen::Vector3d nominal_C = Eigen::Vector3d::Zero();  // master frame
+  double sigma = 0.0;  // > 0: combined with the estimate as a weighted term; 0: value only
+};
+
+struct RotatingSolution {
+  bool ok = false;
+  MotionModel model = MotionModel::kGeneral;  // kGeneral or kPlanar
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d C = Eigen::Vector3d::Zero();
+  std::map<int, double> scales;  // open segments
+  Observability observability;
+  double rot_std_deg = 0.0;
+  // Covariance of C: in the planar model only the in-plane part, plus the prior's σ along the
+  // axis when it has one.
+  Eigen::Matrix3d cov_C = Eigen::Matrix3d::Zero();
+  double axis_std = 0.0;              // σ of C along observability.planar_axis; NaN when unknown
+  bool axis_from_prior = false;       // planar: C along the axis is the prior's value
+  double axis_prior = 0.0;            // a^T C_nominal for the axis found (when prior.given)
+  bool rotation_from_planar = false;  // the rotation comes from the planar solver
+  std::string why;                    // the figures behind the model, one phrase for the message
+};
+
+// `requested`: kAuto (decide), kGeneral (the thesis's general model, figures reported only)
+// or kPlanar. The statistics must hold a rotating rig's motions.
+RotatingSolution SolveRotating(const MotionStatistics& stats, MotionModel requested,
+                               const ModelSelectionOptions& options, const AxisPrior& prior);
+
+}  // namespace rigcal::internal
