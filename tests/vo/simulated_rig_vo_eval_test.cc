@@ -51,14 +51,18 @@ VoOptions EvalOptions() {
                                             {"ba_window", &o.ba_window},
                                             {"ba_max_iterations", &o.ba_max_iterations},
                                             {"keyframe_max_frames", &o.keyframe_max_frames},
-                                            {"min_tracking_inliers", &o.min_tracking_inliers}};
+                                            {"min_tracking_inliers", &o.min_tracking_inliers},
+                                            {"affine_half_size", &o.affine_half_size}};
   const std::map<std::string, double*> doubles = {
       {"klt_max_fb_error_px", &o.klt_max_fb_error_px},
       {"ransac_threshold_px", &o.ransac_threshold_px},
       {"keyframe_parallax_deg", &o.keyframe_parallax_deg},
       {"keyframe_track_ratio", &o.keyframe_track_ratio},
       {"min_triangulation_angle_deg", &o.min_triangulation_angle_deg},
-      {"ba_huber_px", &o.ba_huber_px}};
+      {"ba_huber_px", &o.ba_huber_px},
+      {"affine_max_shift_px", &o.affine_max_shift_px},
+      {"affine_min_area", &o.affine_min_area},
+      {"affine_max_area", &o.affine_max_area}};
   std::string all(text);
   size_t start = 0;
   while (start < all.size()) {

@@ -79,6 +79,8 @@ bool VoOptions::Check(std::string* error) const {
   require(border_px >= 0, "border_px", ">= 0");
   require(affine_half_size >= 0 && affine_half_size <= 15, "affine_half_size", "in [0, 15]");
   require(affine_max_shift_px > 0.0, "affine_max_shift_px", "> 0");
+  require(affine_min_area > 0.0 && affine_min_area < 1.0, "affine_min_area", "in (0, 1)");
+  require(affine_max_area > 1.0, "affine_max_area", "> 1");
   require(ransac_threshold_px > 0.0, "ransac_threshold_px", "> 0");
   require(ransac_max_iterations >= 1, "ransac_max_iterations", ">= 1");
   require(ransac_confidence > 0.0 && ransac_confidence < 1.0, "ransac_confidence", "in (0, 1)");
@@ -356,7 +358,9 @@ void MonocularVo::Impl::RefineTrack(const cv::Mat& grey, Track* track) const {
       // appears at a very different size or shape.
       const double area = warp.determinant();
       const double shear = (warp / std::sqrt(std::abs(area)) - Eigen::Matrix2d::Identity()).norm();
-      if (area > 0.6 && area < 1.7 && shear < 0.4) return;
+      if (area > options_.affine_min_area && area < 1.0 / options_.affine_min_area && shear < 0.4) {
+        return;
+      }
     }
   }
   track->patch = MakePatch(grey, track->px);

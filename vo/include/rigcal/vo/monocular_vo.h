@@ -53,8 +53,14 @@ struct VoOptions {
   // Frame-to-frame KLT alone drifts where patches deform (zoom, perspective, fisheye), which
   // biases triangulation and makes the scale drift. A refinement that moves the KLT position
   // by more than affine_max_shift_px is refused and the patch is sampled anew.
+  // The patch is also sampled anew once the warp scales its area by less than
+  // affine_min_area (a shrunk patch has lost detail its reference still has: the alignment
+  // becomes biased quickly) or by more than affine_max_area (a grown one shows detail the
+  // reference lacks, which biases it much less).
   int affine_half_size = 5;
   double affine_max_shift_px = 1.5;
+  double affine_min_area = 0.9;
+  double affine_max_area = 1.7;
 
   // --- Robust estimation (angles in pixels of the camera's centre resolution) ---
   // RANSAC inlier threshold of the essential matrix (epipolar angle) and of PnP (angle
