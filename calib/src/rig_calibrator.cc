@@ -406,17 +406,23 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
                 "need >= " + std::to_string(min_motions) + " consistent motions, got " +
                     std::to_string(data.size()) + " after misfit removal");
   }
-  if (!pos.ok && options.motion_model == MotionModel::kGeneral) {
-    const internal::RotatingSolution figures =
-        internal::SolveRotating(StatisticsOf(data), MotionModel::kAuto, select, prior);
-    if (figures.model == MotionModel::kPlanar) {
-      r.observability.planar = true;
-      r.unobservable = {figures.observability.planar_axis};
-      return Fail(r, Termination::kDegenerate,
-                  "planar motion (" + figures.why +
-                      "): the rotation about the axis and C along it are not determined by the "
-                      "general model; use the planar model (motion model auto or planar)");
-    }
+  // The thesis's general model on planar motion (the axes tilt no more than noise explains):
+  // the rotation about the axis and C along it are not determined, whether or not the
+  // equations happen to be singular. (A merely large σ along the axis is reported, not failed.)
+  const Observability& figures = r.observability;
+  if (options.motion_model == MotionModel::kGeneral && !translational &&
+      (figures.tilt_snr < options.min_tilt_snr ||
+       figures.axis_spread_deg < options.planar_axis_spread_deg)) {
+    r.observability.planar = true;
+    r.unobservable = {figures.planar_axis};
+    r.estimate.q = dq;
+    if (pos.ok) r.estimate.C = pos.C;
+    return Fail(r, Termination::kDegenerate,
+                "planar motion (the rotation axes tilt no more than rotation noise explains: "
+                "spread " +
+                    Fmt(figures.axis_spread_deg, 3) + " deg, tilt SNR " + Fmt(figures.tilt_snr, 1) +
+                    "): the rotation about the axis and C along it are not determined by the "
+                    "general model; use the planar model (motion model auto or planar)");
   }
   if (!pos.ok) {
     if (planar) {
@@ -459,7 +465,8 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
     input.axis = axis;
     input.axis_prior = axis_prior;
     input.axis_prior_sigma = prior.given ? prior.sigma : 0.0;
-    input.axis_offset_fixed = planar && !(prior.given && prior.sigma > 0.0);
+    // Planar: nothing but the prior determines h, so it is held at the prior's value (or 0).
+    input.axis_offset_fixed = planar;
   }
 
   const auto measurements = internal::MeasureScales(data, epsilon, translational);
@@ -499,9 +506,15 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   } else if (planar) {
     r.unobservable = {axis};
     r.unobservable_from_prior = prior.given;
-    r.axis_offset_std = prior.given && prior.sigma > 0.0
-                            ? (refined.covariance_ok ? refined.axis_std : prior.sigma)
-                            : std::numeric_limits<double>::quiet_NaN();
+    r.axis_offset_std = std::numeric_limits<double>::quiet_NaN();
+    if (prior.given && prior.sigma > 0.0) {
+      r.axis_offset_std = prior.sigma;
+      if (refined.covariance_ok) {
+        const Eigen::Matrix3d cov =
+            refined.cov_position + prior.sigma * prior.sigma * axis * axis.transpose();
+        r.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+      }
+    }
   } else {
     r.axis_offset_std = refined.covariance_ok ? refined.axis_std : fit.solution.axis_std;
   }
@@ -537,22 +550,6 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   if (solve) msg << "; refinement: " << refined.message;
   r.termination =
       (solve && !refined.converged) ? Termination::kNoConvergence : Termination::kConverged;
-  // The thesis's general model on planar motion: the rotation about the axis and C along it
-  // are not determined.
-  if (options.motion_model == MotionModel::kGeneral && !translational) {
-    internal::MotionStatistics stats = StatisticsOf(data);
-    const internal::RotatingSolution figures =
-        internal::SolveRotating(stats, MotionModel::kAuto, select, prior);
-    if (figures.model == MotionModel::kPlanar) {
-      r.observability.planar = true;
-      r.unobservable = {axis};
-      r.termination = Termination::kDegenerate;
-      msg.str("");
-      msg << "planar motion (" << figures.why
-          << "): the rotation about the axis and C along it are not determined by the general "
-             "model; use the planar model (motion model auto or planar)";
-    }
-  }
   r.message = msg.str();
   log->debug("slave '{}': {}", name, r.message);
   return r;

@@ -86,7 +86,9 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
     select.planar_axis_spread_deg = opt.planar_axis_spread_deg;
     select.min_tilt_snr = opt.min_tilt_snr;
     select.max_axis_std_ratio = opt.max_axis_std_ratio;
-    if (general != nullptr && *general) {  // hysteresis: stay general unless clearly planar
+    // Hysteresis: stay general unless clearly planar, once the figures rest on enough motions
+    // (the first few motions' tilt SNR is a ratio of a handful of noise samples).
+    if (general != nullptr && *general && stats.motions() >= opt.converged_min_motions) {
       select.min_tilt_snr /= opt.planar_hysteresis;
       select.max_axis_std_ratio *= opt.planar_hysteresis;
     }
@@ -452,7 +454,12 @@ void RigEstimator::Publish(int index) {
       s.linear.observability.planar
           ? SlaveCalibration{}
           : SolveStatistics(s.short_stats, o, nominal, online.segment, &short_general);
-  if (s.linear.usable() && short_est.usable() && !s.linear.observability.planar &&
+  // Only a settled long-window estimate can be contradicted: enough motions and a determined
+  // rotation (the first keyframes of a planar drive can look general, with the rotation about
+  // the axis undetermined in both windows).
+  const bool settled = s.linear.motions.used >= o.converged_min_motions &&
+                       s.linear.rot_std_deg <= o.converged_rot_std_deg;
+  if (settled && s.linear.usable() && short_est.usable() && !s.linear.observability.planar &&
       !short_est.observability.planar && short_est.motions.used >= o.converged_min_motions / 2) {
     const double diff = AngleBetween(s.linear.estimate.q, short_est.estimate.q) * kDegPerRad;
     online.short_long_rot_deg = diff;
@@ -583,9 +590,9 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
   if (!input.translational && axis.norm() > 0.5) {
     // The reduced parameter set: C = B p + h a, h fixed in the planar model (no prior σ).
     input.axis = axis;
-    input.axis_prior = job.axis_prior_sigma > 0.0 ? job.axis_prior : axis.dot(input.C);
+    input.axis_prior = job.axis_prior;
     input.axis_prior_sigma = job.axis_prior_sigma;
-    input.axis_offset_fixed = planar && !(job.axis_prior_sigma > 0.0);
+    input.axis_offset_fixed = planar;
   }
   for (auto& m : data) {
     auto [it, inserted] = index.emplace(m.segment, static_cast<int>(index.size()));
@@ -631,6 +638,10 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
     if (!input.translational) out.pos_std = r.cov_position.diagonal().cwiseMax(0.0).cwiseSqrt();
     if (!input.translational && !input.axis_offset_fixed && input.axis.norm() > 0.5) {
       out.axis_offset_std = r.axis_std;
+    } else if (planar && job.axis_prior_sigma > 0.0) {
+      const Eigen::Matrix3d cov =
+          r.cov_position + job.axis_prior_sigma * job.axis_prior_sigma * axis * axis.transpose();
+      out.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
     }
   }
   out.termination = r.converged ? Termination::kConverged : Termination::kNoConvergence;

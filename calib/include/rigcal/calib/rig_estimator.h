@@ -129,8 +129,9 @@ struct RefinementJob {
   std::vector<double> weights;
   SlaveCalibration start;
   uint64_t generation = 0;  // estimator generation when the job was made
-  // Prior on C along start.observability.planar_axis (from the nominal mounting): σ > 0 adds
-  // it as a weighted term; the planar model keeps C along the axis at start's value otherwise.
+  // Prior on C along start.observability.planar_axis (from the nominal mounting, when
+  // options.nominal_sigma > 0): the general model adds it as a weighted term. The planar model
+  // keeps C along the axis at start's value (the nominal's or 0) in any case.
   double axis_prior = 0.0;
   double axis_prior_sigma = 0.0;
 };
