@@ -15,7 +15,8 @@ double AngleBetweenVectors(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 }  // namespace
 
-CalibrationError CompareToTruth(const Similarity& estimate, const Similarity& truth) {
+CalibrationError CompareToTruth(const Similarity& estimate, const Similarity& truth,
+                                const Eigen::Vector3d& axis) {
   CalibrationError e;
   e.rot_deg = AngleBetween(estimate.q, truth.q) * kDegPerRad;
   e.dir_deg = AngleBetweenVectors(truth.C, estimate.C) * kDegPerRad;
@@ -23,13 +24,19 @@ CalibrationError CompareToTruth(const Similarity& estimate, const Similarity& tr
   e.dist_pct = n > 0.0 ? std::abs(n - estimate.C.norm()) / n * 100.0 : 0.0;
   e.trans_err = (truth.C - estimate.C).norm();
   e.scale_pct = std::abs(truth.scale - estimate.scale) / std::abs(truth.scale) * 100.0;
+  if (axis.norm() > 0.0) {
+    const Eigen::Vector3d a = axis.normalized();
+    const Eigen::Vector3d d = estimate.C - truth.C;
+    e.axis_err = std::abs(d.dot(a));
+    e.plane_err = (d - d.dot(a) * a).norm();
+  }
   return e;
 }
 
 ConstraintResidual ResidualOf(const RigMotion& motion, const Similarity& rig) {
   ConstraintResidual r;
-  const Eigen::Quaterniond lhs = motion.master.q * rig.q;   // R_0 dR
-  const Eigen::Quaterniond rhs = rig.q * motion.slave.q;    // dR R_i
+  const Eigen::Quaterniond lhs = motion.master.q * rig.q;  // R_0 dR
+  const Eigen::Quaterniond rhs = rig.q * motion.slave.q;   // dR R_i
   r.rotation_deg = AngleBetween(lhs, rhs) * kDegPerRad;
   const Eigen::Vector3d p_lhs = motion.master.q * rig.C + motion.master.C;  // R_0 dC + C_0
   const Eigen::Vector3d p_rhs = rig.scale * (rig.q * motion.slave.C) + rig.C;

@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <set>
 
 #include "rigcal/calib/error_model.h"
@@ -57,14 +58,30 @@ Fixture MakeFixture() {
   back.scale_model = ScaleModel::kSegments;
   back.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ()};
   back.termination = Termination::kConverged;
+  SlaveCalibration road;  // planar: C along the vertical unknown
+  road.name = "road";
+  road.estimate = MakeRig({0, 1, 0}, 90, {0.9, 0.0, -1.5}, 2.0);
+  road.scales = {SegmentScale{0, 2.0, 0.001}};
+  road.rot_std_deg = 0.003;
+  road.pos_std = {0.002, 0.0, 0.002};
+  road.motion_model = MotionModel::kPlanar;
+  road.unobservable = {Eigen::Vector3d::UnitY()};
+  road.observability.planar = true;
+  road.observability.planar_axis = Eigen::Vector3d::UnitY();
+  road.observability.rotation_eigenvalues = Eigen::Vector4d(1e-8, 2e-8, 3.0, 4.0);
+  road.observability.tilt_snr = 1.05;
+  road.observability.axis_std_ratio = std::numeric_limits<double>::infinity();
+  road.termination = Termination::kConverged;
+  road.message = "planar motion: C along the rotation axis is unobservable";
   SlaveCalibration still;
   still.name = "still";
   still.termination = Termination::kInsufficientMotion;
   still.message = "need >= 2 motions with rotation >= 2 deg, got 1";
-  r.slaves = {left, back, still};
+  r.slaves = {left, back, still, road};
   f.truth = {{"left", MakeRig({0, 1, 0}, -90, {-0.85, 0.05, -0.6}, 0.5)},
              {"back", MakeRig({0, 1, 0}, 180, {0.1, -0.1, -2.2}, 2.0)},
-             {"still", MakeRig({1, 0, 0}, 10, {1, 1, 1}, 1.0)}};
+             {"still", MakeRig({1, 0, 0}, 10, {1, 1, 1}, 1.0)},
+             {"road", MakeRig({0, 1, 0}, 90.1, {0.9, 0.3, -1.5}, 2.0)}};
   return f;
 }
 
@@ -74,9 +91,18 @@ std::set<std::string> Keys(const nlohmann::json& j) {
   return keys;
 }
 
-const std::set<std::string> kCommonKeys = {
-    "name",   "q_wxyz",      "C",       "std",         "motions_used", "motions_rejected",
-    "models", "termination", "message", "unobservable"};
+const std::set<std::string> kCommonKeys = {"name",
+                                           "q_wxyz",
+                                           "C",
+                                           "std",
+                                           "motions_used",
+                                           "motions_rejected",
+                                           "models",
+                                           "termination",
+                                           "message",
+                                           "unobservable",
+                                           "unobservable_from_prior",
+                                           "observability"};
 
 std::set<std::string> With(std::set<std::string> keys, std::initializer_list<const char*> more) {
   for (const char* k : more) keys.insert(k);
@@ -89,7 +115,7 @@ TEST(ResultJsonTest, ExactSchemaWithTruth) {
   EXPECT_EQ(Keys(j), std::set<std::string>({"master", "slaves"}));
   EXPECT_EQ(j.at("master"), "front");
   ASSERT_TRUE(j.at("slaves").is_array());
-  ASSERT_EQ(j.at("slaves").size(), 3u);
+  ASSERT_EQ(j.at("slaves").size(), 4u);
   const nlohmann::json& left = j.at("slaves")[0];
   const nlohmann::json& back = j.at("slaves")[1];
   const nlohmann::json& still = j.at("slaves")[2];
@@ -103,7 +129,9 @@ TEST(ResultJsonTest, ExactSchemaWithTruth) {
   EXPECT_EQ(left.at("q_wxyz"), nlohmann::json({q.w(), q.x(), q.y(), q.z()}));
   EXPECT_EQ(left["C"], nlohmann::json({-0.84, 0.05, -0.61}));
   EXPECT_EQ(left.at("scale"), 0.505);
-  EXPECT_EQ(left.at("std"), nlohmann::json({{"rot_deg", 0.02}, {"pos", {0.001, 0.002, 0.003}}}));
+  // σ along the mean axis: not computed here (NaN) -> null.
+  EXPECT_EQ(left.at("std"),
+            nlohmann::json({{"rot_deg", 0.02}, {"pos", {0.001, 0.002, 0.003}}, {"axis", nullptr}}));
   EXPECT_EQ(left.at("motions_used"), 190);
   EXPECT_EQ(left.at("motions_rejected"), 10);
   EXPECT_EQ(left.at("models"), nlohmann::json({{"motion", "general"}, {"scale", "fixed"}}));
@@ -113,7 +141,9 @@ TEST(ResultJsonTest, ExactSchemaWithTruth) {
 
   const CalibrationError e = CompareToTruth(f.result.slaves[0].estimate, f.truth.at("left"));
   EXPECT_EQ(Keys(left.at("errors")),
-            std::set<std::string>({"rot_deg", "dir_deg", "dist_pct", "trans_err", "scale_pct"}));
+            std::set<std::string>({"rot_deg", "dir_deg", "dist_pct", "trans_err", "scale_pct",
+                                   "plane_err", "axis_err"}));
+  EXPECT_TRUE(left.at("errors").at("axis_err").is_null());  // no mean axis
   EXPECT_DOUBLE_EQ(left.at("errors").at("rot_deg").get<double>(), e.rot_deg);
   EXPECT_DOUBLE_EQ(left.at("errors").at("dir_deg").get<double>(), e.dir_deg);
   EXPECT_DOUBLE_EQ(left.at("errors").at("dist_pct").get<double>(), e.dist_pct);
@@ -128,6 +158,27 @@ TEST(ResultJsonTest, ExactSchemaWithTruth) {
   EXPECT_EQ(back.at("models"),
             nlohmann::json({{"motion", "translational"}, {"scale", "segments"}}));
   EXPECT_EQ(back.at("unobservable"), nlohmann::json({{1.0, 0.0, 0.0}, {0.0, 0.0, 1.0}}));
+
+  EXPECT_EQ(left.at("unobservable_from_prior"), false);
+  EXPECT_EQ(Keys(left.at("observability")),
+            std::set<std::string>({"rotation_eigenvalues", "rotation_weak_std_deg",
+                                   "position_min_eigenvalue", "axis_spread_deg",
+                                   "slave_axis_spread_deg", "tilt_snr", "axis_std_ratio",
+                                   "max_rotation_deg", "planar", "mean_axis"}));
+
+  // Planar: the vertical is listed, not from a prior, its σ unknown (null), and the errors are
+  // split at the axis: 0.3 m along it (the unknown height, reported as 0), none in the plane.
+  const nlohmann::json& road = j.at("slaves")[3];
+  EXPECT_EQ(road.at("models").at("motion"), "planar");
+  EXPECT_EQ(road.at("unobservable"), nlohmann::json({{0.0, 1.0, 0.0}}));
+  EXPECT_EQ(road.at("unobservable_from_prior"), false);
+  EXPECT_TRUE(road.at("std").at("axis").is_null());
+  EXPECT_EQ(road.at("observability").at("planar"), true);
+  EXPECT_EQ(road.at("observability").at("mean_axis"), nlohmann::json({0.0, 1.0, 0.0}));
+  EXPECT_TRUE(road.at("observability").at("axis_std_ratio").is_null());  // infinite
+  EXPECT_DOUBLE_EQ(road.at("observability").at("tilt_snr").get<double>(), 1.05);
+  EXPECT_NEAR(road.at("errors").at("axis_err").get<double>(), 0.3, 1e-12);
+  EXPECT_NEAR(road.at("errors").at("plane_err").get<double>(), 0.0, 1e-12);
 
   EXPECT_EQ(still.at("termination"), "insufficient_motion");
   EXPECT_EQ(still.at("message"), "need >= 2 motions with rotation >= 2 deg, got 1");
@@ -166,13 +217,30 @@ TEST(RollPitchYawTest, KnownRotations) {
 TEST(FormatResultTableTest, ShowsEstimatesTruthAndErrors) {
   const Fixture f = MakeFixture();
   const std::string table = FormatResultTable(f.result, &f.truth);
-  for (const char* expected :
-       {"master: front", "left: converged", "back: converged", "still: insufficient_motion",
-        "NOT USABLE", "need >= 2 motions with rotation >= 2 deg, got 1", "q (w, x, y, z)",
-        "roll pitch yaw [deg]", "C [master units]", "truth", "scale segment 3", "std rotation",
-        "used 190 of 200, rejected 10", "motion general, scale fixed",
-        "motion translational, scale segments", "unobservable along", "errors vs truth",
-        "rotation 0.5 deg", "scale 1 %"}) {
+  for (const char* expected : {"master: front",
+                               "left: converged",
+                               "back: converged",
+                               "still: insufficient_motion",
+                               "NOT USABLE",
+                               "need >= 2 motions with rotation >= 2 deg, got 1",
+                               "q (w, x, y, z)",
+                               "roll pitch yaw [deg]",
+                               "C [master units]",
+                               "truth",
+                               "scale segment 3",
+                               "std rotation",
+                               "used 190 of 200, rejected 10",
+                               "motion general, scale fixed",
+                               "motion translational, scale segments",
+                               "unobservable along",
+                               "errors vs truth",
+                               "rotation 0.5 deg",
+                               "scale 1 %",
+                               "motion planar, scale fixed",
+                               "C along mean axis",
+                               "unobservable: unknown (0 shown; give a nominal)",
+                               "tilt SNR 1.05",
+                               "C error in the plane 0, along the mean axis 0.3"}) {
     EXPECT_THAT(table, HasSubstr(expected));
   }
   // left's estimate -0.84 and its truth -0.85 both appear in its C row.

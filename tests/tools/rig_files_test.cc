@@ -226,18 +226,66 @@ TEST_F(RigFilesTest, ResultYamlRoundTripsThroughReadRigYaml) {
 TEST_F(RigFilesTest, ResultYamlHasStatusAndStatistics) {
   const std::string yaml = ResultToYaml(MakeResult());
   for (const char* expected :
-       {"master: front", "pairs_selected: 321", "usable: true", "usable: false",
-        "termination: converged", "termination: no_convergence", "termination: insufficient_motion",
-        "need >= 2 motions with rotation >= 2 deg, got 0", "rot_deg: 0.02",
+       {"master: front",
+        "pairs_selected: 321",
+        "usable: true",
+        "usable: false",
+        "termination: converged",
+        "termination: no_convergence",
+        "termination: insufficient_motion",
+        "need >= 2 motions with rotation >= 2 deg, got 0",
+        "rot_deg: 0.02",
         "pos: [0.001, 0.002, 0.003]",
         "motions: {total: 300, used: 290, rejected: 10, small_rotation: 6, angle_mismatch: 3, "
         "residual_outlier: 1}",
-        "models: {motion: general, scale: segments}", "{segment: 4, scale: 1.5, std: 0.03}",
-        "unobservable: [[0, 1, 0]]", "unobservable: []"}) {
+        "models: {motion: general, scale: segments}",
+        "{segment: 4, scale: 1.5, std: 0.03}",
+        "unobservable: [[0, 1, 0]]",
+        "unobservable: []",
+        "unobservable_from_prior: false",
+        "axis: .nan",
+        "observability:",
+        "tilt_snr: 0",
+        "mean_axis: [0, 0, 0]",
+        "planar: false"}) {
     EXPECT_THAT(yaml, HasSubstr(expected));
   }
   // One scale: no `scales` list for that slave (only `back` has one).
   EXPECT_EQ(yaml.find("scales:"), yaml.rfind("scales:"));
+}
+
+// --prior: nominal mountings from a rig YAML, or from a rig config's cameras[].nominal.
+TEST_F(RigFilesTest, NominalMountingsFromRigYamlOrRigConfig) {
+  const std::map<std::string, Similarity> rig = {
+      {"left", MakeRig({0, 1, 0}, -90, {-0.9, 0.3, -1.5}, 1.0)}};
+  ASSERT_EQ(WriteRigYaml(Path("nominal.yaml"), rig), "");
+  const auto from_rig = ReadNominalMountings(Path("nominal.yaml"));
+  ASSERT_TRUE(from_rig.ok()) << from_rig.error();
+  ASSERT_EQ(from_rig->count("left"), 1u);
+  ExpectRigNear(from_rig->at("left"), rig.at("left"), 1e-15);
+
+  const std::string config = Write("rig.yaml",
+                                   "rig: {name: car, master: front}\n"
+                                   "cameras:\n"
+                                   "  - name: front\n"
+                                   "  - name: left\n"
+                                   "    nominal: {q_wxyz: [0.7071068, 0, -0.7071068, 0], "
+                                   "C: [-0.9, 0.3, -1.5]}\n"
+                                   "  - name: rear\n");
+  const auto from_config = ReadNominalMountings(config);
+  ASSERT_TRUE(from_config.ok()) << from_config.error();
+  ASSERT_EQ(from_config->size(), 1u);  // the cameras without a nominal are not listed
+  EXPECT_EQ(from_config->at("left").C, Eigen::Vector3d(-0.9, 0.3, -1.5));
+
+  const std::string none = Write("none.yaml",
+                                 "rig: {name: car, master: front}\n"
+                                 "cameras:\n  - name: front\n  - name: left\n");
+  const auto empty = ReadNominalMountings(none);
+  ASSERT_FALSE(empty.ok());
+  EXPECT_THAT(empty.error(), HasSubstr("no camera has a `nominal` mounting"));
+  const auto bad = ReadNominalMountings(Write("bad.yaml", "left: {q_wxyz: [1, 0, 0]}\n"));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_THAT(bad.error(), HasSubstr("left.q_wxyz"));
 }
 
 // Independent check of T_cn_cnm1: it must take a point from camera n-1 to camera n, where

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "rigcal/tools/atomic_file.h"
+#include "rigcal/tools/rig_config.h"
 #include "rigcal/tools/yaml_fields.h"
 
 namespace rigcal::tools {
@@ -135,6 +136,20 @@ Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path)
   return rig;
 }
 
+Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::string& path) {
+  auto root = LoadYaml(path);
+  if (!root) return Error{root.error()};
+  if (!root->IsMap() || !(*root)["cameras"]) return ReadRigYaml(path);
+  auto config = LoadRigConfig(path);
+  if (!config) return Error{config.error()};
+  std::map<std::string, Similarity> nominal;
+  for (const CameraConfig& camera : config->cameras) {
+    if (camera.nominal) nominal.emplace(camera.name, *camera.nominal);
+  }
+  if (nominal.empty()) return Error{path + ": no camera has a `nominal` mounting"};
+  return nominal;
+}
+
 std::string RigToYaml(const std::map<std::string, Similarity>& rig) {
   YAML::Emitter out;
   out << YAML::BeginMap;
@@ -178,6 +193,7 @@ std::string ResultToYaml(const RigCalibration& result) {
     out << YAML::Key << "rot_deg" << YAML::Value << Num(slave.rot_std_deg);
     out << YAML::Key << "pos" << YAML::Value;
     EmitVector(out, slave.pos_std.data(), 3);
+    out << YAML::Key << "axis" << YAML::Value << Num(slave.axis_offset_std);
     out << YAML::EndMap;
     const MotionCounts& m = slave.motions;
     out << YAML::Key << "motions" << YAML::Value << YAML::Flow << YAML::BeginMap;
@@ -196,6 +212,25 @@ std::string ResultToYaml(const RigCalibration& result) {
     out << YAML::Key << "unobservable" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (const Eigen::Vector3d& d : slave.unobservable) EmitVector(out, d.data(), 3);
     out << YAML::EndSeq;
+    out << YAML::Key << "unobservable_from_prior" << YAML::Value << slave.unobservable_from_prior;
+    const Observability& o = slave.observability;
+    out << YAML::Key << "observability" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "rotation_eigenvalues" << YAML::Value;
+    EmitVector(out, o.rotation_eigenvalues.data(), 4);
+    for (const auto& [key, value] :
+         {std::pair<const char*, double>{"rotation_weak_std_deg", o.rotation_weak_std_deg},
+          {"position_min_eigenvalue", o.position_min_eigenvalue},
+          {"axis_spread_deg", o.axis_spread_deg},
+          {"slave_axis_spread_deg", o.slave_axis_spread_deg},
+          {"tilt_snr", o.tilt_snr},
+          {"axis_std_ratio", o.axis_std_ratio},
+          {"max_rotation_deg", o.max_rotation_deg}}) {
+      out << YAML::Key << key << YAML::Value << Num(value);
+    }
+    out << YAML::Key << "planar" << YAML::Value << o.planar;
+    out << YAML::Key << "mean_axis" << YAML::Value;
+    EmitVector(out, o.planar_axis.data(), 3);
+    out << YAML::EndMap;
     out << YAML::EndMap;
   }
   out << YAML::EndMap;

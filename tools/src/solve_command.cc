@@ -4,6 +4,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,8 @@ struct SolveArgs {
   double tolerance_ms = 5.0;
   double max_quaternion_norm_error = 1e-6;
   std::string truth;
+  std::string prior;
+  double prior_sigma = 0.0;
   std::string out;
   std::string camchain;
   bool json = false;
@@ -92,8 +95,10 @@ int RunSolve(const SolveArgs& args) {
   CalibrationOptions options;
   options.method = args.method == "lls" ? Method::kLinear : Method::kNonlinear;
   options.motion_model = args.motion == "general"         ? MotionModel::kGeneral
+                         : args.motion == "planar"        ? MotionModel::kPlanar
                          : args.motion == "translational" ? MotionModel::kTranslational
                                                           : MotionModel::kAuto;
+  options.nominal_sigma = args.prior_sigma;
   if (std::string e = ApplyScale(args.scale, &options); !e.empty()) return Fail("--scale: " + e);
   if (std::string e = ApplyPairs(args.pairs, &options.pairs); !e.empty()) {
     return Fail("--pairs: " + e);
@@ -135,6 +140,20 @@ int RunSolve(const SolveArgs& args) {
     }
   }
 
+  if (!args.prior.empty()) {
+    auto nominal = tools::ReadNominalMountings(args.prior);
+    if (!nominal) return Fail(nominal.error());
+    for (const auto& slave : slaves) {
+      if (nominal->count(slave.name) == 0) {
+        log->warn(
+            "{}: no nominal mounting for slave '{}': what its motion cannot determine is "
+            "reported unknown",
+            args.prior, slave.name);
+      }
+    }
+    options.nominal = std::move(*nominal);
+  }
+
   const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
   auto recording = tools::MatchTrajectories(*master, slaves, tolerance_ns);
   if (!recording) return Fail(recording.error());
@@ -147,6 +166,12 @@ int RunSolve(const SolveArgs& args) {
     if (args.online) {
       tools::OnlineReplayOptions replay;
       replay.report_every_s = args.report_every_s;
+      replay.estimator.nominal_sigma = options.nominal_sigma;
+      for (const auto& slave : recording->slaves) {
+        const auto it = options.nominal.find(slave.name);
+        replay.estimator.nominal.push_back(
+            it == options.nominal.end() ? std::nullopt : std::optional<Similarity>(it->second));
+      }
       const tools::OnlineReplayResult online =
           tools::ReplayOnline(*recording, replay, truth_for_replay);
       // Convergence goes to stderr with --json so stdout stays one JSON object.
@@ -218,11 +243,16 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       ->check(CLI::IsMember({"lls", "nl"}))
       ->capture_default_str();
   cmd->add_option("--motion", args->motion,
-                  "Motion model. general: the rig rotates; rotation, position and\n"
-                  "scale are estimated. translational: it (almost) does not rotate;\n"
-                  "only rotation and scale are determined. auto: chosen from the\n"
-                  "largest master rotation.")
-      ->check(CLI::IsMember({"auto", "general", "translational"}))
+                  "Motion model. general: the rig rotates about varying axes; rotation,\n"
+                  "position and scale are estimated. planar: every rotation is about one\n"
+                  "axis (a car on a road); rotation, scale and the position in the plane\n"
+                  "are estimated, the offset along the axis comes from --prior or is\n"
+                  "reported unknown. translational: it (almost) does not rotate; only\n"
+                  "rotation and scale are determined. auto: translational below 10 deg\n"
+                  "of rotation, else general or planar from how much the rotation axes\n"
+                  "tilt beyond the noise and how well the offset along the mean axis is\n"
+                  "determined (the result's `observability`).")
+      ->check(CLI::IsMember({"auto", "general", "planar", "translational"}))
       ->capture_default_str();
   cmd->add_option("--scale", args->scale,
                   "Scale model. A slave's scale maps its odometry unit to the\n"
@@ -269,6 +299,23 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
                   "Rig YAML with the true parameters of every slave (see below):\n"
                   "prints the errors of thesis 5.1.1 and adds \"errors\" to the JSON.")
       ->type_name("FILE");
+  auto* prior =
+      cmd->add_option("--prior", args->prior,
+                      "Nominal mountings (e.g. from CAD): a rig YAML as for --truth, or a rig\n"
+                      "config whose cameras[].nominal are used. Fills in what the motion\n"
+                      "cannot determine (C along the rotation axis of planar motion); the\n"
+                      "result says so (`unobservable_from_prior`).");
+  prior->type_name("FILE");
+  cmd->add_option("--prior-sigma", args->prior_sigma,
+                  "Standard deviation of the nominal C along the mean rotation axis,\n"
+                  "master units.\n"
+                  "> 0: combined with what the data determine as a weighted term (also\n"
+                  "for nearly planar drives, where the offset is determined poorly);\n"
+                  "0: the nominal is used only where the motion determines nothing.")
+      ->type_name("S")
+      ->check(CLI::NonNegativeNumber)
+      ->needs(prior)
+      ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "Write the result YAML here (atomically): the rig entries plus\n"
                   "standard deviations, motion counts, models and termination.")
@@ -300,7 +347,7 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       "Each pose is the camera centre in that camera's own odometry frame and unit, and the\n"
       "rotation world_from_camera. segment: integer scale segment id (a VO re-initialisation\n"
       "starts a new one).\n"
-      "Rig YAML (--truth, and the rig part of --out), per slave name:\n"
+      "Rig YAML (--truth, --prior, and the rig part of --out), per slave name:\n"
       "  cam1: {q_wxyz: [w, x, y, z], C: [x, y, z], scale: s}\n"
       "  the slave's orientation and centre in the master frame (master units), and the\n"
       "  scale: the factor from slave odometry units to master units.\n"

@@ -1,6 +1,7 @@
 #pragma once
 // Error model of thesis 5.1.1: compares an estimate with the true rig parameters.
 
+#include <limits>
 #include <vector>
 
 #include "rigcal/calib/types.h"
@@ -13,16 +14,22 @@ struct CalibrationError {
   double dist_pct = 0.0;   // distance error: | |C| - |C_hat| | / |C| in percent
   double trans_err = 0.0;  // |C - C_hat| in master units
   double scale_pct = 0.0;  // | s - s_hat | / s in percent
+  // |C - C_hat| split at a unit axis (the mean rotation axis of planar motion): the error
+  // orthogonal to it (in the plane) and along it. NaN when no axis is given.
+  double plane_err = std::numeric_limits<double>::quiet_NaN();
+  double axis_err = std::numeric_limits<double>::quiet_NaN();
 };
 
-CalibrationError CompareToTruth(const Similarity& estimate, const Similarity& truth);
+// `axis`: the direction to split the position error at; a zero vector = none.
+CalibrationError CompareToTruth(const Similarity& estimate, const Similarity& truth,
+                                const Eigen::Vector3d& axis = Eigen::Vector3d::Zero());
 
 // Constraint residua of one motion against given rig parameters (thesis 5.1.1).
 struct ConstraintResidual {
-  double rotation_deg = 0.0;          // angle between R_0 dR and dR R_i
-  double position_dir_deg = 0.0;      // angle between R_0 dC + C_0 and s dR C_i + dC
-  double position_abs = 0.0;          // |(R_0 - I) dC + C_0 - s dR C_i|
-  double scale_pct = 0.0;             // |s - lambda_meas| / s, percent (0 if degenerate)
+  double rotation_deg = 0.0;      // angle between R_0 dR and dR R_i
+  double position_dir_deg = 0.0;  // angle between R_0 dC + C_0 and s dR C_i + dC
+  double position_abs = 0.0;      // |(R_0 - I) dC + C_0 - s dR C_i|
+  double scale_pct = 0.0;         // |s - lambda_meas| / s, percent (0 if degenerate)
 };
 
 ConstraintResidual ResidualOf(const RigMotion& motion, const Similarity& rig);

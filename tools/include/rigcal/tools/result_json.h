@@ -17,15 +17,26 @@ namespace rigcal::tools {
 //                "C": [x, y, z],              slave centre in the master frame, master units
 //                "scale": s,                  when the slave has one scale, or else
 //                "scales": [{"segment": id, "scale": s, "std": sigma}, ...],
-//                "std": {"rot_deg": sigma, "pos": [sx, sy, sz]},
+//                "std": {"rot_deg": sigma, "pos": [sx, sy, sz],
+//                        "axis": sigma},      σ of C along observability.mean_axis (null when
+//                                             unknown: planar motion without a prior σ)
 //                "motions_used": n, "motions_rejected": n,
-//                "models": {"motion": "general"|"translational",
+//                "models": {"motion": "general"|"planar"|"translational",
 //                           "scale": "fixed"|"segments"|"partitions"},
 //                "termination": ToString(Termination), "message": text,
-//                "unobservable": [[x, y, z], ...],   unit directions, master frame
-//                "errors": {"rot_deg", "dir_deg", "dist_pct", "trans_err", "scale_pct"}}]}
+//                "unobservable": [[x, y, z], ...],   unit directions, master frame; C along
+//                                                    them is 0 (unknown) or the prior's
+//                "unobservable_from_prior": bool,    C along them is the nominal mounting's
+//                "observability": {"rotation_eigenvalues": [4, ascending],
+//                                  "rotation_weak_std_deg", "position_min_eigenvalue",
+//                                  "axis_spread_deg", "slave_axis_spread_deg", "tilt_snr",
+//                                  "axis_std_ratio", "max_rotation_deg",
+//                                  "planar": bool, "mean_axis": [x, y, z]},
+//                "errors": {"rot_deg", "dir_deg", "dist_pct", "trans_err", "scale_pct",
+//                           "plane_err", "axis_err"}}]}
 // Scale: slave odometry unit -> master unit. "errors" (CompareToTruth of error_model.h) is
-// present only when `truth` (nullable) has an entry for the slave and the slave is usable.
+// present only when `truth` (nullable) has an entry for the slave and the slave is usable;
+// plane_err / axis_err split |C - C_true| at the mean rotation axis (null without one).
 // Non-finite numbers become null.
 nlohmann::json ResultToJson(const RigCalibration& result,
                             const std::map<std::string, Similarity>* truth);

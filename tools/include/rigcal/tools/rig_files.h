@@ -31,6 +31,12 @@ namespace rigcal::tools {
 // malformed `scales` entries, no slaves.
 Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path);
 
+// Nominal mountings (CAD values) for `rigcal solve --prior`: a rig YAML as above (a truth or
+// result file), or a rig config (config/README.md; recognised by its `cameras` key) whose
+// cameras[].nominal are taken, by camera name. Errors as ReadRigYaml / LoadRigConfig, or no
+// camera with a nominal mounting.
+Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::string& path);
+
 // The rig YAML text of `rig` (slave name -> similarity), numbers in shortest round-trip form.
 std::string RigToYaml(const std::map<std::string, Similarity>& rig);
 
@@ -40,10 +46,12 @@ std::string RigToYaml(const std::map<std::string, Similarity>& rig);
 
 // The result YAML text of `result`: `master`, `pairs_selected`, and per slave the rig entry
 // (the estimate; present even when unusable, so check `usable`) plus `usable`, `termination`,
-// `message`, `std: {rot_deg, pos}`, `motions: {total, used, rejected, small_rotation,
-// angle_mismatch, residual_outlier}`, `models: {motion, scale}`, `position_observable` and
-// `unobservable` (unit directions in the master frame). `scales` (with `std`) is written when
-// the slave has several segment or partition scales.
+// `message`, `std: {rot_deg, pos, axis}`, `motions: {total, used, rejected, small_rotation,
+// angle_mismatch, residual_outlier}`, `models: {motion, scale}`, `position_observable`,
+// `unobservable` (unit directions in the master frame), `unobservable_from_prior` and
+// `observability` (the figures behind the model, keys as in the JSON schema of
+// result_json.h). `scales` (with `std`) is written when the slave has several segment or
+// partition scales. Non-finite numbers are written as .nan / .inf.
 std::string ResultToYaml(const RigCalibration& result);
 
 // Writes ResultToYaml(result) atomically. Returns an empty string or an error naming the path.
