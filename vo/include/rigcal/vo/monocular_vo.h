@@ -65,7 +65,9 @@ struct VoOptions {
   // --- Robust estimation (angles in pixels of the camera's centre resolution) ---
   // RANSAC inlier threshold of the essential matrix (epipolar angle) and of PnP (angle
   // between observed and predicted bearings), in pixels (converted with PixelAngle()).
-  double ransac_threshold_px = 1.5;
+  // (1 px: affine-refined tracks agree with the projection to a few hundredths of a pixel,
+  // so a wider gate only lets slightly wrong tracks in.)
+  double ransac_threshold_px = 1.0;
   int ransac_max_iterations = 200;
   double ransac_confidence = 0.999;
 
@@ -102,7 +104,7 @@ struct VoOptions {
   int ba_window = 6;
   int ba_max_iterations = 8;
   // Huber loss scale of bearing residuals, pixels.
-  double ba_huber_px = 2.0;
+  double ba_huber_px = 1.0;
 
   // Seed of the RANSAC sampling (the VO is deterministic for a given input).
   uint32_t seed = 42;
