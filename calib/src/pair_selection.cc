@@ -42,6 +42,16 @@ std::vector<IndexPair> RelativePairs(const RigRecording& rec, int step) {
   return pairs;
 }
 
+// Whether poses a and b lie in the same segment of the master and of every slave (a pair
+// across a slave's re-initialisation would be lost for that slave).
+bool SameSegments(const RigRecording& rec, int a, int b) {
+  if (SegmentOf(rec.master, a) != SegmentOf(rec.master, b)) return false;
+  for (const auto& slave : rec.slaves) {
+    if (SegmentOf(slave, a) != SegmentOf(slave, b)) return false;
+  }
+  return true;
+}
+
 std::vector<IndexPair> WalkPairs(const RigRecording& rec, const PairOptions& opt) {
   std::vector<IndexPair> pairs;
   const int n = static_cast<int>(rec.size());
@@ -55,27 +65,32 @@ std::vector<IndexPair> WalkPairs(const RigRecording& rec, const PairOptions& opt
   const int max_span = std::max(1, static_cast<int>(opt.max_span_fraction * n));
   const int stride = std::max(1, (n + opt.max_pairs - 1) / opt.max_pairs);
 
+  // Every pose ends at most one pair: walks from neighbouring anchors often stop at the same
+  // pose (the end of a turn, the end of the recording), and that pose's noise would enter all
+  // of their motions alike. A taken end moves on to the next free pose (the motion only
+  // grows), within the span limit and the segment.
+  std::vector<bool> end_taken(n, false);
   for (int a = 0; a + 1 < n; a += stride) {
-    const int seg = SegmentOf(rec.master, a);
     int chosen = -1;
-    double chosen_angle = 0.0, chosen_trans = 0.0;
     for (int b = a + 1; b < n && b - a <= max_span; ++b) {
-      if (SegmentOf(rec.master, b) != seg) break;
-      // A pair across any slave's re-initialisation would be lost for that slave.
-      bool slave_boundary = false;
-      for (const auto& slave : rec.slaves) {
-        slave_boundary = slave_boundary || SegmentOf(slave, b) != SegmentOf(slave, a);
-      }
-      if (slave_boundary) break;
-      const double angle = AngleBetween(poses[a].q, poses[b].q);
-      const double trans = (poses[b].C - poses[a].C).norm();
+      if (!SameSegments(rec, a, b)) break;
       chosen = b;
-      chosen_angle = angle;
-      chosen_trans = trans;
-      if (angle >= target_angle || trans >= target_trans) break;
+      if (AngleBetween(poses[a].q, poses[b].q) >= target_angle ||
+          (poses[b].C - poses[a].C).norm() >= target_trans) {
+        break;
+      }
+    }
+    while (chosen > 0 && end_taken[chosen]) {
+      const int next = chosen + 1;
+      chosen = next < n && next - a <= max_span && SameSegments(rec, a, next) ? next : -1;
     }
     if (chosen < 0) continue;
-    if (chosen_angle >= min_angle || chosen_trans >= min_trans) pairs.push_back({a, chosen});
+    const double angle = AngleBetween(poses[a].q, poses[chosen].q);
+    const double trans = (poses[chosen].C - poses[a].C).norm();
+    if (angle >= min_angle || trans >= min_trans) {
+      pairs.push_back({a, chosen});
+      end_taken[chosen] = true;
+    }
   }
   return pairs;
 }
@@ -133,14 +148,20 @@ int AutoPairSpan(const RigRecording& recording, const PairOptions& options) {
 
 bool PairOptions::Check(std::string* error) const {
   std::ostringstream e;
-  if (step < 1) e << "pairs.step must be >= 1, got " << step;
-  else if (!(target_angle_deg > 0.0)) e << "pairs.target_angle_deg must be > 0";
-  else if (!(target_translation_fraction > 0.0)) e << "pairs.target_translation_fraction must be > 0";
-  else if (min_angle_deg < 0.0) e << "pairs.min_angle_deg must be >= 0";
-  else if (min_translation_fraction < 0.0) e << "pairs.min_translation_fraction must be >= 0";
+  if (step < 1)
+    e << "pairs.step must be >= 1, got " << step;
+  else if (!(target_angle_deg > 0.0))
+    e << "pairs.target_angle_deg must be > 0";
+  else if (!(target_translation_fraction > 0.0))
+    e << "pairs.target_translation_fraction must be > 0";
+  else if (min_angle_deg < 0.0)
+    e << "pairs.min_angle_deg must be >= 0";
+  else if (min_translation_fraction < 0.0)
+    e << "pairs.min_translation_fraction must be >= 0";
   else if (!(max_span_fraction > 0.0 && max_span_fraction <= 1.0))
     e << "pairs.max_span_fraction must be in (0, 1], got " << max_span_fraction;
-  else if (max_pairs < 1) e << "pairs.max_pairs must be >= 1";
+  else if (max_pairs < 1)
+    e << "pairs.max_pairs must be >= 1";
   if (error) *error = e.str();
   return e.str().empty();
 }
@@ -158,8 +179,7 @@ std::vector<IndexPair> SelectPairs(const RigRecording& recording, const PairOpti
       const int span = AutoPairSpan(recording, options);
       const int n = static_cast<int>(recording.size());
       if (span > 0 && n > 0) {
-        walk.max_span_fraction =
-            std::min(options.max_span_fraction, std::max(2.0 * span, 2.0) / n);
+        walk.max_span_fraction = std::min(options.max_span_fraction, std::max(2.0 * span, 2.0) / n);
       }
       return WalkPairs(recording, walk);
     }

@@ -454,10 +454,12 @@ void RigEstimator::Publish(int index) {
       s.linear.observability.planar
           ? SlaveCalibration{}
           : SolveStatistics(s.short_stats, o, nominal, online.segment, &short_general);
-  // Only a settled long-window estimate can be contradicted: enough motions and a determined
-  // rotation (the first keyframes of a planar drive can look general, with the rotation about
-  // the axis undetermined in both windows).
+  // Only a settled long-window estimate can be contradicted: enough motions and a rotation
+  // with a small σ (the first keyframes of a planar drive can look general with the rotation
+  // about the axis undetermined in both windows; the translational model has no σ, and a
+  // car driving straight does not determine the rotation about its direction of travel).
   const bool settled = s.linear.motions.used >= o.converged_min_motions &&
+                       s.linear.rot_std_deg > 0.0 &&
                        s.linear.rot_std_deg <= o.converged_rot_std_deg;
   if (settled && s.linear.usable() && short_est.usable() && !s.linear.observability.planar &&
       !short_est.observability.planar && short_est.motions.used >= o.converged_min_motions / 2) {

@@ -58,12 +58,12 @@ Trajectory CarPath(const CarPathOptions& o) {
     p.C = c;
     out.t_ns.push_back(static_cast<int64_t>(std::llround(t * 1e9)));
     out.poses.push_back(p);
-    // Turns: incommensurate sinusoids, about 20 deg/s at most; none on the ramp.
-    const double yaw_rate =
-        on_ramp
-            ? 0.0
-            : (12.0 * std::sin(2.0 * kPi * t / 23.0) + 8.0 * std::sin(2.0 * kPi * t / 9.1 + 1.0)) *
-                  kRadPerDeg;
+    // Turns: incommensurate sinusoids (up to ~25 deg/s) around a steady 5 deg/s, so the
+    // heading keeps changing (loops of ~90 m radius); none on the ramp.
+    const double yaw_rate = on_ramp ? 0.0
+                                    : (5.0 + 12.0 * std::sin(2.0 * kPi * t / 23.0) +
+                                       8.0 * std::sin(2.0 * kPi * t / 9.1 + 1.0)) *
+                                          kRadPerDeg;
     yaw += yaw_rate * dt;
     c += o.speed_mps * dt * (p.q * Eigen::Vector3d::UnitZ());
   }

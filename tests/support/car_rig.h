@@ -29,8 +29,8 @@ struct Trajectory {
   std::vector<Pose> poses;
 };
 
-// A car driving on a level road: speed `speed_mps`, yaw rate a sum of sinusoids (turns of up
-// to ~20 deg/s), sampled at `rate_hz` for `duration_s`. With ramp_at_s >= 0 the car stops
+// A car driving on a level road: speed `speed_mps`, yaw rate a sum of sinusoids around a
+// steady turn (up to ~25 deg/s, loops of ~90 m radius), sampled at `rate_hz` for `duration_s`. With ramp_at_s >= 0 the car stops
 // turning at that time and drives straight up a ramp: it pitches up to `ramp_slope_deg` over
 // `ramp_transition_s`, climbs for `ramp_length_s`, pitches back to level and turns again.
 struct CarPathOptions {

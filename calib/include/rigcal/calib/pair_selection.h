@@ -29,8 +29,12 @@ struct PairOptions {
   // motions have the best signal-to-noise ratio (AutoPairSpan below: white pose noise favours
   // long spans, drift short ones), and never beyond max_span_fraction of the recording.
   // Pairs whose motion stays below both min_angle_deg and min_translation_fraction are not
-  // used. Large rotations inform both rotation and position ((I - R_0) grows with the angle);
-  // beyond ~120 degrees the quaternion sign becomes ambiguous under noise.
+  // used. Every pose ends at most one pair: when a walk stops at a pose that already ends one
+  // (the end of a turn, the end of the recording), it moves on to the next free pose within
+  // the span limit, or the anchor is skipped; otherwise that pose's noise would enter the
+  // motions of every anchor before it alike. Large rotations inform both rotation and position ((I
+  // - R_0) grows with the angle); beyond ~120 degrees the quaternion sign becomes ambiguous under
+  // noise.
   double target_angle_deg = 120.0;
   double target_translation_fraction = 0.5;
   double min_angle_deg = 3.0;
