@@ -34,7 +34,8 @@ std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int came
     unit.poses = static_cast<int>(members.size());
     unit.metres_per_unit = den > 0.0 ? num / den : 0.0;
     double sum_sq = 0.0;
-    for (const auto& [truth, vo] : pairs) sum_sq += (truth - unit.metres_per_unit * vo).squaredNorm();
+    for (const auto& [truth, vo] : pairs)
+      sum_sq += (truth - unit.metres_per_unit * vo).squaredNorm();
     unit.fit_rms_m = std::sqrt(sum_sq / static_cast<double>(pairs.size()));
     units.push_back(unit);
   }
@@ -94,34 +95,74 @@ Expected<RunEvaluation> EvaluateRun(const drivers::SimulatedRig& rig,
     e.truth_master_units.scale = slave_metres_per_unit > 0.0
                                      ? slave_metres_per_unit / evaluation.master_metres_per_unit
                                      : std::nan("");
-    Similarity estimate = slave.estimate;
-    estimate.scale = estimated_scale;
-    e.error = CompareToTruth(estimate, e.truth_master_units);
+    ScoreEstimate(slave, estimated_scale, &e);
     evaluation.slaves.push_back(e);
   }
   return evaluation;
 }
 
+void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveEvaluation* e) {
+  Similarity estimate = slave.estimate;
+  estimate.scale = estimated_scale;
+  e->position_observable = slave.position_observable;
+  e->axis.setZero();
+  e->axis_unknown = false;
+  if (slave.position_observable && slave.unobservable.size() == 1) {
+    e->axis = slave.unobservable[0].normalized();
+    e->axis_unknown = !slave.unobservable_from_prior;
+  }
+  e->error = CompareToTruth(estimate, e->truth_master_units, e->axis);
+  if (e->axis_unknown) {
+    // Score what was estimated: direction and distance of C within the plane.
+    Similarity in_plane = estimate, truth_in_plane = e->truth_master_units;
+    in_plane.C -= in_plane.C.dot(e->axis) * e->axis;
+    truth_in_plane.C -= truth_in_plane.C.dot(e->axis) * e->axis;
+    const CalibrationError plane = CompareToTruth(in_plane, truth_in_plane);
+    e->error.dir_deg = plane.dir_deg;
+    e->error.dist_pct = plane.dist_pct;
+  }
+}
+
 std::string FormatEvaluation(const RunEvaluation& evaluation) {
   std::ostringstream out;
-  char line[160];
-  std::snprintf(line, sizeof(line), "%-10s %10s %10s %10s %10s  %s\n", "slave", "rot[deg]",
-                "dir[deg]", "dist[%]", "scale[%]", "");
+  char line[200];
+  const double mm = 1000.0 * evaluation.master_metres_per_unit;  // master unit -> mm
+  auto figure = [](double v, bool known) {
+    char text[32];
+    if (!known || !std::isfinite(v)) return std::string(known ? "-" : "unobs");
+    std::snprintf(text, sizeof(text), "%.4f", v);
+    return std::string(text);
+  };
+  std::snprintf(line, sizeof(line), "%-10s %10s %10s %10s %10s %10s %10s  %s\n", "slave",
+                "rot[deg]", "dir[deg]", "dist[%]", "scale[%]", "plane[mm]", "axis[mm]", "");
   out << "Errors against the simulated ground truth (thesis 5.1.1):\n" << line;
+  bool any_in_plane = false;
   for (const SlaveEvaluation& e : evaluation.slaves) {
     if (!e.usable) {
-      std::snprintf(line, sizeof(line), "%-10s %10s %10s %10s %10s  no usable estimate\n",
-                    e.name.c_str(), "-", "-", "-", "-");
+      std::snprintf(line, sizeof(line), "%-10s %10s %10s %10s %10s %10s %10s  no usable estimate\n",
+                    e.name.c_str(), "-", "-", "-", "-", "-", "-");
     } else {
-      std::snprintf(line, sizeof(line), "%-10s %10.4f %10.4f %10.4f %10.4f  (segment %d)\n",
-                    e.name.c_str(), e.error.rot_deg, e.error.dir_deg, e.error.dist_pct,
-                    e.error.scale_pct, e.segment);
+      const bool planar = e.axis.squaredNorm() > 0.0;
+      any_in_plane = any_in_plane || e.axis_unknown;
+      std::snprintf(
+          line, sizeof(line), "%-10s %10.4f %10s %10s %10.4f %10s %10s  (segment %d)\n",
+          e.name.c_str(), e.error.rot_deg, figure(e.error.dir_deg, e.position_observable).c_str(),
+          figure(e.error.dist_pct, e.position_observable).c_str(), e.error.scale_pct,
+          figure(planar ? e.error.plane_err * mm : std::nan(""), e.position_observable).c_str(),
+          figure(planar ? e.error.axis_err * mm : std::nan(""),
+                 e.position_observable && !e.axis_unknown)
+              .c_str(),
+          e.segment);
     }
     out << line;
   }
   std::snprintf(line, sizeof(line), "master unit: %.6g m (VO segment %d)\n",
                 evaluation.master_metres_per_unit, evaluation.master_segment);
   out << line;
+  if (any_in_plane) {
+    out << "planar motion: dir and dist compare C in the plane orthogonal to the rotation axis "
+           "(the offset along it is unobservable without a nominal mounting)\n";
+  }
   if (!evaluation.note.empty()) out << "note: " << evaluation.note << "\n";
   return out.str();
 }

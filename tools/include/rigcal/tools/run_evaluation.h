@@ -28,9 +28,16 @@ struct SegmentUnit {
 struct SlaveEvaluation {
   std::string name;
   bool usable = false;
-  int segment = 0;                // slave segment whose scale is scored
-  CalibrationError error;         // q, direction, distance (%), scale (%) vs truth
-  Similarity truth_master_units;  // the truth expressed in master units (for JSON errors)
+  int segment = 0;  // slave segment whose scale is scored
+  // q, direction, distance (%), scale (%) vs truth. When the estimate leaves the offset along
+  // an axis undetermined (planar motion without a prior), direction and distance compare the
+  // components in the plane orthogonal to that axis; plane_err / axis_err split |C - C_hat|
+  // at the axis (master units).
+  CalibrationError error;
+  Similarity truth_master_units;    // the truth expressed in master units (for JSON errors)
+  bool position_observable = true;  // false: translational motion, C not estimated
+  bool axis_unknown = false;        // planar, the offset along `axis` neither estimated nor given
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();  // planar: the unobservable direction
 };
 
 struct RunEvaluation {
@@ -47,8 +54,13 @@ Expected<RunEvaluation> EvaluateRun(const drivers::SimulatedRig& rig,
                                     const std::vector<std::vector<CameraPose>>& poses,
                                     const RigCalibration& result);
 
+// Fills e->error, position_observable, axis and axis_unknown from the slave's estimate (with
+// the scale of the scored segment) against e->truth_master_units.
+void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveEvaluation* e);
+
 // A table: slave, rotation error (deg), position direction error (deg), distance error (%),
-// scale error (%), and the master unit.
+// scale error (%), position error in the plane and along the axis of planar motion (mm), and
+// the master unit. Figures the estimate does not determine are shown as "unobs".
 std::string FormatEvaluation(const RunEvaluation& evaluation);
 
 }  // namespace rigcal::tools
