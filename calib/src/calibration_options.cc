@@ -36,6 +36,8 @@ bool CalibrationOptions::Check(std::string* error) const {
     e << "planar_axis_spread_deg must be >= 0, got " << planar_axis_spread_deg;
   else if (!(min_tilt_snr >= 0.0))
     e << "min_tilt_snr must be >= 0, got " << min_tilt_snr;
+  else if (!(general_axis_spread_deg > 0.0))
+    e << "general_axis_spread_deg must be > 0, got " << general_axis_spread_deg;
   else if (!(max_axis_std_ratio > 0.0))
     e << "max_axis_std_ratio must be > 0, got " << max_axis_std_ratio;
   else if (!(nominal_sigma >= 0.0) || std::isinf(nominal_sigma))

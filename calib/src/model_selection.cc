@@ -102,7 +102,8 @@ RotatingSolution SolveRotating(const MotionStatistics& stats, MotionModel reques
   bool is_general = requested == MotionModel::kGeneral;
   if (requested == MotionModel::kAuto) {
     const bool one_axis = obs.axis_spread_deg < options.planar_axis_spread_deg;
-    const bool tilts = obs.tilt_snr >= options.min_tilt_snr;
+    const bool tilts = obs.tilt_snr >= options.min_tilt_snr ||
+                       obs.axis_spread_deg >= options.general_axis_spread_deg;
     const bool determined = obs.axis_std_ratio <= options.max_axis_std_ratio;
     if (!frame.ok) {
       is_general = general.ok;

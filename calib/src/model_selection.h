@@ -7,8 +7,9 @@
 // linear rotation (4.11) about its weakest direction; the spread of the master and slave
 // rotation axes; the tilt signal-to-noise ratio (planar_solver.h); the conditioning of the
 // position system (4.16) and the ratio of the σ of C along the mean rotation axis to its
-// in-plane σ. The general model needs the axis to tilt (SNR >= min_tilt_snr) and C along it
-// to be determined (ratio <= max_axis_std_ratio); otherwise the motion is planar: the planar
+// in-plane σ. The general model needs the axes to tilt (SNR >= min_tilt_snr, or a spread of
+// general_axis_spread_deg: noisy rotations about clearly different axes) and C along the mean
+// axis to be determined (ratio <= max_axis_std_ratio); otherwise the motion is planar: the planar
 // solver gives rotation, scales and in-plane position, and the offset along the axis is
 // unobservable (a prior's value, or 0 reported as unknown).
 
@@ -25,6 +26,8 @@ namespace rigcal::internal {
 
 struct ModelSelectionOptions {
   double planar_axis_spread_deg = 0.0;  // master axes spread below: planar, whatever else
+  // Master axes spread at least this much tilt, whatever the SNR (noisy 6-DoF motion).
+  double general_axis_spread_deg = 10.0;
   double min_tilt_snr = 10.0;
   double max_axis_std_ratio = 100.0;
 };

@@ -65,11 +65,14 @@ std::vector<IndexPair> WalkPairs(const RigRecording& rec, const PairOptions& opt
   const int max_span = std::max(1, static_cast<int>(opt.max_span_fraction * n));
   const int stride = std::max(1, (n + opt.max_pairs - 1) / opt.max_pairs);
 
-  // Every pose ends at most one pair: walks from neighbouring anchors often stop at the same
-  // pose (the end of a turn, the end of the recording), and that pose's noise would enter all
-  // of their motions alike. A taken end moves on to the next free pose (the motion only
-  // grows), within the span limit and the segment.
-  std::vector<bool> end_taken(n, false);
+  // At most max_pairs_per_end pairs end at one pose (0 = no limit): walks from neighbouring
+  // anchors often stop at the same pose (the end of a turn, the end of the recording), and
+  // that pose's noise enters all of their motions alike. A taken end moves on to the next
+  // free pose (the motion only grows), within the span limit and the segment.
+  std::vector<int> end_uses(n, 0);
+  auto taken = [&](int b) {
+    return opt.max_pairs_per_end > 0 && end_uses[b] >= opt.max_pairs_per_end;
+  };
   for (int a = 0; a + 1 < n; a += stride) {
     int chosen = -1;
     for (int b = a + 1; b < n && b - a <= max_span; ++b) {
@@ -80,7 +83,7 @@ std::vector<IndexPair> WalkPairs(const RigRecording& rec, const PairOptions& opt
         break;
       }
     }
-    while (chosen > 0 && end_taken[chosen]) {
+    while (chosen > 0 && taken(chosen)) {
       const int next = chosen + 1;
       chosen = next < n && next - a <= max_span && SameSegments(rec, a, next) ? next : -1;
     }
@@ -89,7 +92,7 @@ std::vector<IndexPair> WalkPairs(const RigRecording& rec, const PairOptions& opt
     const double trans = (poses[chosen].C - poses[a].C).norm();
     if (angle >= min_angle || trans >= min_trans) {
       pairs.push_back({a, chosen});
-      end_taken[chosen] = true;
+      ++end_uses[chosen];
     }
   }
   return pairs;
@@ -162,6 +165,8 @@ bool PairOptions::Check(std::string* error) const {
     e << "pairs.max_span_fraction must be in (0, 1], got " << max_span_fraction;
   else if (max_pairs < 1)
     e << "pairs.max_pairs must be >= 1";
+  else if (max_pairs_per_end < 0)
+    e << "pairs.max_pairs_per_end must be >= 0 (0 = no limit)";
   if (error) *error = e.str();
   return e.str().empty();
 }

@@ -313,6 +313,7 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   select.planar_axis_spread_deg = options.planar_axis_spread_deg;
   select.min_tilt_snr = options.min_tilt_snr;
   select.max_axis_std_ratio = options.max_axis_std_ratio;
+  select.general_axis_spread_deg = options.general_axis_spread_deg;
   internal::AxisPrior prior;
   if (nominal != nullptr) {
     prior.given = true;
@@ -411,7 +412,8 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   // equations happen to be singular. (A merely large σ along the axis is reported, not failed.)
   const Observability& figures = r.observability;
   if (options.motion_model == MotionModel::kGeneral && !translational &&
-      (figures.tilt_snr < options.min_tilt_snr ||
+      ((figures.tilt_snr < options.min_tilt_snr &&
+        figures.axis_spread_deg < options.general_axis_spread_deg) ||
        figures.axis_spread_deg < options.planar_axis_spread_deg)) {
     r.observability.planar = true;
     r.unobservable = {figures.planar_axis};
@@ -461,7 +463,9 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   // at the prior or 0) or pulled towards the prior by a weighted term.
   const Eigen::Vector3d axis = r.observability.planar_axis;
   const double axis_prior = prior.given ? axis.dot(prior.nominal_C) : 0.0;
-  if (!translational && axis.norm() > 0.5) {
+  // (The general model without a weighted prior keeps C a plain 3-vector.)
+  const bool weighted_prior = prior.given && prior.sigma > 0.0;
+  if (!translational && axis.norm() > 0.5 && (planar || weighted_prior)) {
     input.axis = axis;
     input.axis_prior = axis_prior;
     input.axis_prior_sigma = prior.given ? prior.sigma : 0.0;
@@ -515,8 +519,12 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
         r.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
       }
     }
+  } else if (refined.covariance_ok) {
+    r.axis_offset_std = weighted_prior
+                            ? refined.axis_std
+                            : std::sqrt(std::max(0.0, axis.dot(refined.cov_position * axis)));
   } else {
-    r.axis_offset_std = refined.covariance_ok ? refined.axis_std : fit.solution.axis_std;
+    r.axis_offset_std = fit.solution.axis_std;
   }
 
   std::ostringstream msg;

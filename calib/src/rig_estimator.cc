@@ -86,6 +86,7 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
     select.planar_axis_spread_deg = opt.planar_axis_spread_deg;
     select.min_tilt_snr = opt.min_tilt_snr;
     select.max_axis_std_ratio = opt.max_axis_std_ratio;
+    select.general_axis_spread_deg = opt.general_axis_spread_deg;
     // Hysteresis: stay general unless clearly planar, once the figures rest on enough motions
     // (the first few motions' tilt SNR is a ratio of a handful of noise samples).
     if (general != nullptr && *general && stats.motions() >= opt.converged_min_motions) {
@@ -204,6 +205,8 @@ bool RigEstimatorOptions::Check(std::string* error) const {
     e << "max_axis_std_ratio must be > 0";
   else if (!(planar_hysteresis >= 1.0))
     e << "planar_hysteresis must be >= 1 (1 = none)";
+  else if (!(general_axis_spread_deg > 0.0))
+    e << "general_axis_spread_deg must be > 0";
   else if (!(planar_axis_spread_deg >= 0.0))
     e << "planar_axis_spread_deg must be >= 0";
   else if (!(nominal_sigma >= 0.0) || std::isinf(nominal_sigma))
@@ -589,8 +592,9 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
   input.translational = job.start.motion_model == MotionModel::kTranslational;
   const bool planar = job.start.motion_model == MotionModel::kPlanar;
   const Eigen::Vector3d axis = job.start.observability.planar_axis;
-  if (!input.translational && axis.norm() > 0.5) {
-    // The reduced parameter set: C = B p + h a, h fixed in the planar model (no prior σ).
+  if (!input.translational && axis.norm() > 0.5 && (planar || job.axis_prior_sigma > 0.0)) {
+    // The reduced parameter set: C = B p + h a, h fixed in the planar model, pulled towards
+    // the nominal by a weighted term in the general model.
     input.axis = axis;
     input.axis_prior = job.axis_prior;
     input.axis_prior_sigma = job.axis_prior_sigma;
@@ -640,6 +644,8 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
     if (!input.translational) out.pos_std = r.cov_position.diagonal().cwiseMax(0.0).cwiseSqrt();
     if (!input.translational && !input.axis_offset_fixed && input.axis.norm() > 0.5) {
       out.axis_offset_std = r.axis_std;
+    } else if (!input.translational && !planar && axis.norm() > 0.5) {
+      out.axis_offset_std = std::sqrt(std::max(0.0, axis.dot(r.cov_position * axis)));
     } else if (planar && job.axis_prior_sigma > 0.0) {
       const Eigen::Matrix3d cov =
           r.cov_position + job.axis_prior_sigma * job.axis_prior_sigma * axis * axis.transpose();

@@ -2,7 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include <set>
+#include <algorithm>
+#include <map>
 
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/synthetic.h"
@@ -37,25 +38,48 @@ TEST(PairSelection, AutoReachesTargetWithinSpan) {
   ASSERT_GT(span, 0);
   const int max_span = std::min(static_cast<int>(opt.max_span_fraction * rec.size()), 2 * span);
   int reached = 0;
-  std::set<int> ends;
-  for (const auto& p : pairs) ends.insert(p.b);
-  // Every pose ends at most one pair (shared ends would share their noise).
-  EXPECT_EQ(ends.size(), pairs.size());
   for (const auto& p : pairs) {
     ASSERT_LT(p.a, p.b);
     ASSERT_LE(p.b - p.a, max_span);
     const double angle = AngleBetween(rec.master.poses[p.a].q, rec.master.poses[p.b].q);
     if (angle * kDegPerRad >= opt.target_angle_deg) ++reached;
-    // The pair is the first b reaching a target, or the first free end after it: when b - 1
-    // already reached it, b - 1 ends another pair.
+    // The pair is the first b reaching a target: b - 1 must not have reached both.
     if (p.b - p.a > 1) {
       const double prev = AngleBetween(rec.master.poses[p.a].q, rec.master.poses[p.b - 1].q);
-      if (prev * kDegPerRad >= opt.target_angle_deg) {
-        EXPECT_EQ(ends.count(p.b - 1), 1u) << p.a << "-" << p.b;
-      }
+      EXPECT_LT(prev * kDegPerRad, opt.target_angle_deg);
     }
   }
   EXPECT_GT(reached, 0);
+}
+
+// With a limit on the pairs per end pose, walks stopping at a taken end move on to the next
+// free pose (or the anchor is dropped): no pose ends more pairs than the limit.
+TEST(PairSelection, LimitOfPairsPerEndPose) {
+  const RigRecording rec = Drive(1000);
+  PairOptions opt;
+  opt.target_angle_deg = 30.0;
+  std::map<int, int> unlimited_ends;
+  for (const auto& p : SelectPairs(rec, opt)) ++unlimited_ends[p.b];
+  int most = 0;
+  for (const auto& [b, uses] : unlimited_ends) most = std::max(most, uses);
+  ASSERT_GT(most, 1);  // the default shares ends on this drive
+  for (int limit : {1, 2}) {
+    opt.max_pairs_per_end = limit;
+    std::map<int, int> ends;
+    const auto pairs = SelectPairs(rec, opt);
+    ASSERT_GT(pairs.size(), 300u);
+    for (const auto& p : pairs) {
+      ++ends[p.b];
+      const double angle = AngleBetween(rec.master.poses[p.a].q, rec.master.poses[p.b].q);
+      const double trans = (rec.master.poses[p.b].C - rec.master.poses[p.a].C).norm();
+      EXPECT_TRUE(angle * kDegPerRad >= opt.min_angle_deg || trans > 0.0);
+    }
+    for (const auto& [b, uses] : ends) EXPECT_LE(uses, limit) << "pose " << b;
+  }
+  opt.max_pairs_per_end = -1;
+  std::string error;
+  EXPECT_FALSE(opt.Check(&error));
+  EXPECT_NE(error.find("max_pairs_per_end"), std::string::npos);
 }
 
 // White pose noise: longer spans only add signal, so the best span is long. Random-walk drift

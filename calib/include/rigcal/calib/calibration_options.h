@@ -57,13 +57,16 @@ struct CalibrationOptions {
   bool compute_covariance = true;
 
   // General or planar (kAuto, rotating rig): the general model needs the master's rotation
-  // axes to tilt by at least min_tilt_snr times what rotation noise alone explains, and the σ
-  // of C along the mean rotation axis within max_axis_std_ratio times its in-plane σ;
-  // otherwise the planar model is used. Master axes whose spread (RMS angle about their
-  // principal axis) is below planar_axis_spread_deg count as one axis whatever the other
-  // figures (0 = decided by the figures alone).
+  // axes to tilt by at least min_tilt_snr times what rotation noise alone explains (or to
+  // spread by general_axis_spread_deg: noisy rotations about clearly different axes), and
+  // the σ of C along the mean rotation axis within max_axis_std_ratio times its in-plane σ;
+  // otherwise the planar model is used. Spread: RMS angle of the rotation vectors about their
+  // principal axis. Master axes whose spread is below planar_axis_spread_deg count as one
+  // axis whatever the other figures (0 = decided by the figures alone). The general model,
+  // forced, reports planar motion (axes that do not tilt) as degenerate.
   double min_tilt_snr = 10.0;
   double max_axis_std_ratio = 100.0;
+  double general_axis_spread_deg = 10.0;
   double planar_axis_spread_deg = 0.0;
 
   // Nominal mounting per slave name (CAD, a rig config's cameras[].nominal), master frame.

@@ -64,14 +64,16 @@ struct RigEstimatorOptions {
   // Models.
   double alpha_maxrot_deg = 10.0;  // below: purely translational (rotation + scale)
   // General or planar, as CalibrationOptions (the same figures): the general model needs the
-  // rotation axes to tilt by min_tilt_snr times the noise and the σ of C along the mean axis
-  // within max_axis_std_ratio times its in-plane σ. Hysteresis: once general, the estimate
-  // turns planar again only when a figure is worse than its threshold by planar_hysteresis
-  // (SNR below min_tilt_snr / h or ratio above max_axis_std_ratio * h), so the model does not
-  // flip from keyframe to keyframe. Master axes whose spread is below planar_axis_spread_deg
-  // count as one axis whatever the figures (0 = off).
+  // rotation axes to tilt by min_tilt_snr times the noise (or to spread by
+  // general_axis_spread_deg) and the σ of C along the mean axis within max_axis_std_ratio
+  // times its in-plane σ. Hysteresis: once general (and after converged_min_motions
+  // motions), the estimate turns planar again only when a figure is worse than its threshold
+  // by planar_hysteresis (SNR below min_tilt_snr / h or ratio above max_axis_std_ratio * h),
+  // so the model does not flip from keyframe to keyframe. Master axes whose spread is below
+  // planar_axis_spread_deg count as one axis whatever the figures (0 = off).
   double min_tilt_snr = 10.0;
   double max_axis_std_ratio = 100.0;
+  double general_axis_spread_deg = 10.0;  // axes spread this much: general, whatever the SNR
   double planar_hysteresis = 2.0;
   double planar_axis_spread_deg = 0.0;
 
