@@ -170,7 +170,7 @@ TEST_F(KittiEval, FlattenedToPureYaw) {
   }
 }
 
-// Online: planar for 150 s, then a 6 % ramp (pitch up over 3 s, 15 s climbing, level again)
+// Online: planar for 150 s, then a 6 deg ramp (pitch up over 3 s, 15 s climbing, level again)
 // and turning on the upper level. Prints when the vertical offset is flagged and resolved.
 TEST(PlanarEval, OnlinePlanarThenRamp) {
   support::CarPathOptions po;

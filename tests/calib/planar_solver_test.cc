@@ -362,7 +362,7 @@ TEST(PlanarOnline, EqualsBatchPlanarLinearSolution) {
   }
 }
 
-// Planar for two and a half minutes, then up a 6 % ramp: first the vertical offset is flagged
+// Planar for two and a half minutes, then up a 6 deg ramp: first the vertical offset is flagged
 // (planar, unobservable, C along the axis 0), then resolved (general, finite σ, error within
 // it), with one switch of the model per slave.
 TEST(PlanarOnline, FlagsThenResolvesTheVerticalOffsetOnARamp) {
