@@ -1,5 +1,7 @@
 #include "rigcal/calib/rig_estimator.h"
 
+#include <spdlog/fmt/fmt.h>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -535,15 +537,16 @@ void RigEstimator::Publish(int index) {
   if (online.flags & kFlagTranslationalOnly) msg << " (rotation and scale only)";
   if (online.flags & kFlagPlanar) {
     const Eigen::Vector3d& a = published.observability.planar_axis;
-    msg << " (" << s.linear.message << "): C along the rotation axis [" << a.x() << ", " << a.y()
-        << ", " << a.z() << "] is unobservable, "
-        << (published.unobservable_from_prior ? "taken from the nominal mounting"
-                                              : "reported as 0 (unknown)");
+    msg << fmt::format(
+        " ({}): C along the rotation axis [{:.3f}, {:.3f}, {:.3f}] is unobservable, {}",
+        s.linear.message, a.x(), a.y(), a.z(),
+        published.unobservable_from_prior ? "taken from the nominal mounting"
+                                          : "reported as 0 (unknown)");
   } else if (published.motion_model == MotionModel::kGeneral &&
              published.observability.axis_std_ratio > 3.0 &&
              std::isfinite(published.axis_offset_std)) {
-    msg << " (nearly planar: sigma of C along the mean rotation axis " << published.axis_offset_std
-        << ")";
+    msg << fmt::format(" (nearly planar: sigma of C along the mean rotation axis {:.4f})",
+                       published.axis_offset_std);
   }
   if (decalibrated) msg << "; DECALIBRATED (camera moved), re-converging";
   if (!published.usable()) msg.str(published.message);

@@ -30,9 +30,10 @@ struct Trajectory {
 };
 
 // A car driving on a level road: speed `speed_mps`, yaw rate a sum of sinusoids around a
-// steady turn (up to ~25 deg/s, loops of ~90 m radius), sampled at `rate_hz` for `duration_s`. With ramp_at_s >= 0 the car stops
-// turning at that time and drives straight up a ramp: it pitches up to `ramp_slope_deg` over
-// `ramp_transition_s`, climbs for `ramp_length_s`, pitches back to level and turns again.
+// steady turn (up to ~25 deg/s, loops of ~90 m radius), sampled at `rate_hz` for `duration_s`. With
+// ramp_at_s >= 0 the car stops turning at that time and drives straight up a ramp: it pitches up to
+// `ramp_slope_deg` over `ramp_transition_s`, climbs for `ramp_length_s`, pitches back to level and
+// turns again.
 struct CarPathOptions {
   double duration_s = 240.0;
   double rate_hz = 20.0;
