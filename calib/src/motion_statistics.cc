@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <sstream>
+#include <unsupported/Eigen/KroneckerProduct>
 
 #include "linear_solvers.h"
 #include "rigcal/calib/quaternion.h"
@@ -181,6 +182,31 @@ PlanarSystemSolution MotionStatistics::SolvePlanarSystem(const PlanarFrame& fram
   std::vector<PlanarSegmentView> views;
   for (const auto& [id, s] : segments_) views.push_back({id, &s.P, &s.Q, &s.N});
   return internal::SolvePlanarSystem(planar_, H_cc_, g_c_, views, frame);
+}
+
+RefinementPrior MotionStatistics::Quadratic() const {
+  RefinementPrior prior;
+  prior.weight = weight_;
+  prior.motions = motions_;
+  prior.rotation = M_;
+  const int n = static_cast<int>(segments_.size());
+  const int dim = 4 + 9 * n;
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(dim, dim);
+  // Each motion's residual is A_k u with A_k = [(I - R0), (C_i^T ⊗ I3) in its segment's block,
+  // -C0]; the Gram matrix sum w A_k^T A_k from the sums:
+  g.topLeftCorner<3, 3>() = H_cc_ + H_marg_;
+  g.block<3, 1>(0, dim - 1) = -(g_c_ + g_marg_);
+  g(dim - 1, dim - 1) = c0_sq_ + c0_sq_marg_;
+  int j = 3;
+  for (const auto& [id, seg] : segments_) {
+    prior.segments.push_back(id);
+    g.block<3, 9>(0, j) = seg.P;  // (I-R0)^T (C_i^T ⊗ I3)
+    g.block<9, 9>(j, j) = Eigen::kroneckerProduct(seg.N, Eigen::Matrix3d::Identity());
+    g.block<9, 1>(j, dim - 1) = -Eigen::Map<const Eigen::Matrix<double, 9, 1>>(seg.Q.data());
+    j += 9;
+  }
+  prior.position = g.selfadjointView<Eigen::Upper>();
+  return prior;
 }
 
 std::map<int, double> MotionStatistics::SolveTranslationalScales() const {

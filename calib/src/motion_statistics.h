@@ -22,6 +22,7 @@
 
 #include "motion_data.h"
 #include "planar_solver.h"
+#include "rigcal/calib/rig_estimator.h"
 
 namespace rigcal::internal {
 
@@ -94,6 +95,10 @@ class MotionStatistics {
   const std::map<int, double>& closed_scales() const { return closed_scales_; }
   int motions() const { return motions_; }
   void SetSegmentScale(int segment, double scale);
+
+  // The sums as the quadratic forms of a refinement prior (RefinementPrior in
+  // rig_estimator.h); the segments are the open ones, ascending.
+  RefinementPrior Quadratic() const;
 
   // Plain-text serialisation of every sum (for state files); Parse returns false on a
   // malformed text.

@@ -121,7 +121,9 @@ void OnlineCalibrator::RefineNow() {
       std::lock_guard<std::mutex> lock(estimator_mutex_);
       job = estimator_.MakeRefinementJob(static_cast<int>(i));
     }
-    if (!job.start.usable() || job.motions.size() < 10) continue;
+    if (!job.start.usable() || static_cast<int>(job.motions.size()) + job.prior.motions < 10) {
+      continue;
+    }
     const SlaveCalibration refined = RefineWindow(job);
     std::lock_guard<std::mutex> lock(estimator_mutex_);
     if (estimator_.ApplyRefinement(job, refined)) ++refinements_applied_;

@@ -9,6 +9,7 @@
 #include "linear_solvers.h"
 #include "planar_solver.h"
 #include "rigcal/calib/quaternion.h"
+#include "statistics_prior.h"
 
 namespace rigcal::internal {
 namespace {
@@ -152,11 +153,16 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   }
   for (auto& s : scales) problem.AddParameterBlock(&s, 1);
 
-  const double w_rot = 1.0 / input.sigma_rotation;
-  const double w_pos = 1.0 / input.sigma_position;
+  const double inv_sigma_rot = 1.0 / input.sigma_rotation;
+  const double inv_sigma_pos = 1.0 / input.sigma_position;
   std::vector<bool> scale_used(num_scales, false);
   int num_residuals = 0;
-  for (const auto& m : motions) {
+  for (size_t j = 0; j < motions.size(); ++j) {
+    const MotionData& m = motions[j];
+    const double sqrt_w =
+        input.weights.size() == motions.size() ? std::sqrt(input.weights[j]) : 1.0;
+    const double w_rot = sqrt_w * inv_sigma_rot;
+    const double w_pos = sqrt_w * inv_sigma_pos;
     if (!input.translational) {
       problem.AddResidualBlock(new RotationCost(m, w_rot), MakeLoss(options), q.data());
       if (use_axis) {
@@ -176,6 +182,40 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
       num_residuals += 3;
     }
     scale_used[m.scale_index] = true;
+  }
+  if (input.prior != nullptr && input.prior->weight > 0.0) {
+    // The motions outside the window: the exact sums of their squared residuals.
+    const RefinementPrior& prior = *input.prior;
+    if (!input.translational) {
+      ceres::CostFunction* rotation = MakeRotationPriorCost(prior, inv_sigma_rot);
+      if (rotation->num_residuals() > 0) {
+        problem.AddResidualBlock(rotation, nullptr, q.data());
+      } else {
+        delete rotation;
+      }
+    }
+    std::vector<double*> blocks = {q.data()};
+    PriorPosition layout = PriorPosition::kTranslational;
+    if (use_axis) {
+      layout = PriorPosition::kAxis;
+      blocks.push_back(p.data());
+      blocks.push_back(&h);
+    } else if (!input.translational) {
+      layout = PriorPosition::kPlain;
+      blocks.push_back(c.data());
+    }
+    for (int index : input.prior_scale_index) {
+      blocks.push_back(&scales[index]);
+      scale_used[index] = true;
+    }
+    ceres::CostFunction* position = MakePositionPriorCost(prior, inv_sigma_pos, layout, t);
+    if (position->num_residuals() > 0) {
+      problem.AddResidualBlock(position, nullptr, blocks);
+    } else {
+      delete position;
+    }
+    num_residuals +=
+        static_cast<int>(std::lround((input.translational ? 3.0 : 7.0) * prior.weight));
   }
   for (int s = 0; s < num_scales; ++s) {
     const auto& prior = s < static_cast<int>(input.priors.size()) ? input.priors[s] : ScalePrior{};

@@ -9,6 +9,7 @@
 
 #include "motion_data.h"
 #include "rigcal/calib/calibration_options.h"
+#include "rigcal/calib/rig_estimator.h"
 
 namespace rigcal::internal {
 
@@ -34,6 +35,13 @@ struct RefinementInput {
   bool axis_offset_fixed = false;
   double axis_prior = 0.0;
   double axis_prior_sigma = 0.0;
+  // Motions outside the given ones as quadratic forms (RefinementPrior, rig_estimator.h),
+  // added as residual blocks whitened by the same sigmas, without robust loss;
+  // prior_scale_index[k] is the scale variable of prior->segments[k]. Null: no prior.
+  const RefinementPrior* prior = nullptr;
+  std::vector<int> prior_scale_index;
+  // Per motion, a weight of its squared residuals (empty: all 1).
+  std::vector<double> weights;
 };
 
 struct RefinementResult {

@@ -15,6 +15,7 @@
 #include "refinement.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/quaternion.h"
+#include "statistics_prior.h"
 
 namespace rigcal {
 namespace {
@@ -31,7 +32,9 @@ struct Keyframe {
 
 struct WindowEntry {
   RigMotion motion;
-  double weight = 1.0;
+  double weight = 1.0;        // its weight in the statistics when it was added
+  internal::MotionData data;  // as added (signs aligned)
+  double log_decay = 0.0;     // the slave's cumulative log forgetting factor when it was added
 };
 
 // Running mean of a squared quantity over roughly the last 50 samples.
@@ -156,6 +159,10 @@ struct RigEstimator::Slave {
   MotionCounts counts;
   SlaveOnlineState online;
   std::deque<WindowEntry> window;
+  // The long statistics minus the window's motions: what the window refinement's prior is
+  // made of (long_stats == outside + window, decayed alike).
+  MotionStatistics outside;
+  double log_decay = 0.0;   // sum of the log forgetting factors applied to long_stats
   SlaveCalibration linear;  // latest linear solution of the long statistics
   std::optional<SlaveCalibration> refined;
   int disagreements = 0;
@@ -165,6 +172,26 @@ struct RigEstimator::Slave {
   int accepted_in_model = 0;   // accepted motions since the motion model last changed
   int64_t decalibrated_at_ns = -1;
   Eigen::Quaterniond last_q = Eigen::Quaterniond::Identity();
+
+  // Moves window entries into `outside`, with the weight they have in long_stats now (their
+  // weight when added, forgotten since): the oldest one, or every one of a segment.
+  void EvictOldest() {
+    MoveOutside(window.front());
+    window.pop_front();
+  }
+  void EvictSegment(int segment) {
+    for (auto it = window.begin(); it != window.end();) {
+      if (it->data.segment != segment) {
+        ++it;
+        continue;
+      }
+      MoveOutside(*it);
+      it = window.erase(it);
+    }
+  }
+  void MoveOutside(const WindowEntry& e) {
+    outside.Add(e.data, e.data.segment, e.weight * std::exp(log_decay - e.log_decay));
+  }
 };
 
 bool RigEstimatorOptions::Check(std::string* error) const {
@@ -254,6 +281,7 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
       s->short_stats.ResetPosition();
       s->keyframes.clear();
       s->window.clear();
+      s->outside = s->long_stats;
       s->refined.reset();
     }
     ++generation_;
@@ -405,7 +433,10 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
   // Forgetting, then accumulate.
   if (s.last_decay_ns >= 0) {
     const int64_t dt = m.t_b_ns - s.last_decay_ns;
-    s.long_stats.Decay(Forget(dt, o.half_life_s));
+    const double f = Forget(dt, o.half_life_s);
+    s.long_stats.Decay(f);
+    s.outside.Decay(f);
+    s.log_decay += std::log(f);
     s.short_stats.Decay(Forget(dt, o.short_half_life_s));
   }
   s.last_decay_ns = m.t_b_ns;
@@ -415,13 +446,19 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
     while (static_cast<int>(stats->segments().size()) > o.max_open_segments) {
       int oldest = stats->segments().begin()->first;
       if (oldest == md.segment) oldest = std::next(stats->segments().begin())->first;
-      stats->MarginaliseSegment(
-          oldest, have_estimate ? s.linear.estimate.q : Eigen::Quaterniond::Identity(),
-          stats->SolvePlanarFrame());
+      const Eigen::Quaterniond at =
+          have_estimate ? s.linear.estimate.q : Eigen::Quaterniond::Identity();
+      const internal::PlanarFrame frame = stats->SolvePlanarFrame();
+      if (stats == &s.long_stats) {
+        // The window keeps open segments only: the closed one's motions join the prior.
+        s.EvictSegment(oldest);
+        s.outside.MarginaliseSegment(oldest, at, frame);
+      }
+      stats->MarginaliseSegment(oldest, at, frame);
     }
   }
-  s.window.push_back({m, weight});
-  if (static_cast<int>(s.window.size()) > o.window_size) s.window.pop_front();
+  s.window.push_back({m, weight, md, s.log_decay});
+  if (static_cast<int>(s.window.size()) > o.window_size) s.EvictOldest();
   ++s.counts.used;
   s.online.last_update_ns = m.t_b_ns;
   Publish(index);
@@ -484,6 +521,7 @@ void RigEstimator::Publish(int index) {
           names_[index + 1], diff);
       s.long_stats = s.short_stats;  // re-converge on the recent motions
       s.window.clear();
+      s.outside = s.long_stats;
       s.refined.reset();
       s.disagreements = 0;
       s.stable = 0;
@@ -563,9 +601,10 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave) const {
   const Slave& s = *slaves_.at(slave);
   for (const auto& w : s.window) {
     job.motions.push_back(w.motion);
-    job.weights.push_back(w.weight);
+    job.weights.push_back(std::exp(s.log_decay - w.log_decay));
   }
   job.start = s.linear;
+  job.prior = s.outside.Quadratic();
   const std::optional<Similarity>& nominal =
       slave < static_cast<int>(options_.nominal.size()) ? options_.nominal[slave] : std::nullopt;
   if (nominal && options_.nominal_sigma > 0.0) {
@@ -585,7 +624,9 @@ bool RigEstimator::ApplyRefinement(const RefinementJob& job, const SlaveCalibrat
 
 SlaveCalibration RefineWindow(const RefinementJob& job) {
   SlaveCalibration out = job.start;
-  if (!job.start.usable() || job.motions.size() < 3) return out;
+  if (!job.start.usable() || static_cast<int>(job.motions.size()) + job.prior.motions < 3) {
+    return out;
+  }
   std::vector<MotionData> data = internal::ToMotionData(job.motions);
   internal::AlignSignsWith(ToWxyz(job.start.estimate.q), &data);
   std::map<int, int> index;
@@ -603,31 +644,50 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
     input.axis_prior_sigma = job.axis_prior_sigma;
     input.axis_offset_fixed = planar;
   }
-  for (auto& m : data) {
-    auto [it, inserted] = index.emplace(m.segment, static_cast<int>(index.size()));
+  auto scale_index = [&](int segment) {
+    auto [it, inserted] = index.emplace(segment, static_cast<int>(index.size()));
     if (inserted) {
       double scale = job.start.estimate.scale;
       for (const auto& sc : job.start.scales) {
-        if (sc.segment == m.segment) scale = sc.scale;
+        if (sc.segment == segment) scale = sc.scale;
       }
       input.scales.push_back(scale);
     }
-    m.scale_index = it->second;
+    return it->second;
+  };
+  for (auto& m : data) m.scale_index = scale_index(m.segment);
+  if (job.weights.size() == data.size()) input.weights = job.weights;
+  std::vector<double> prior_scales;
+  if (job.prior.weight > 0.0) {
+    input.prior = &job.prior;
+    for (int segment : job.prior.segments) {
+      input.prior_scale_index.push_back(scale_index(segment));
+      prior_scales.push_back(input.scales[input.prior_scale_index.back()]);
+    }
   }
-  double ss_rot = 0.0, ss_pos = 0.0;
-  for (const auto& m : data) {
+  // Noise levels from the residuals at the start, of the window's motions and the prior's.
+  double ss_rot = 0.0, ss_pos = 0.0, k = 0.0;
+  for (size_t j = 0; j < data.size(); ++j) {
+    const internal::MotionData& m = data[j];
+    const double w = input.weights.empty() ? 1.0 : input.weights[j];
     const double s = input.scales[m.scale_index];
-    ss_rot += std::pow(internal::RotationResidual(m, ToWxyz(input.q)), 2);
-    ss_pos += std::pow(input.translational ? internal::TranslationalResidual(m, input.q, s)
-                                           : internal::PositionResidual(m, input.q, input.C, s),
-                       2);
+    ss_rot += w * std::pow(internal::RotationResidual(m, ToWxyz(input.q)), 2);
+    ss_pos += w * std::pow(input.translational ? internal::TranslationalResidual(m, input.q, s)
+                                               : internal::PositionResidual(m, input.q, input.C, s),
+                           2);
+    k += w;
   }
-  const double k = static_cast<double>(data.size());
+  if (input.prior != nullptr) {
+    ss_rot += internal::RotationPriorValue(job.prior, input.q);
+    ss_pos += internal::PositionPriorValue(
+        job.prior, input.q, input.translational ? Eigen::Vector3d::Zero() : input.C, prior_scales);
+    k += job.prior.weight;
+  }
   input.sigma_rotation = std::max(std::sqrt(ss_rot / std::max(1.0, 4 * k - 3)), 1e-12);
   input.sigma_position =
       std::max(std::sqrt(ss_pos / std::max(1.0, 3 * k - (planar ? 6 : 7))), 1e-12);
   CalibrationOptions options;
-  options.robust_loss = RobustLoss::kHuber;
+  options.robust_loss = job.robust_loss ? RobustLoss::kHuber : RobustLoss::kNone;
   const internal::RefinementResult r = internal::RefineNonlinear(data, input, options);
   if (!r.q.coeffs().allFinite() || !r.C.allFinite()) return out;
   out.estimate.q = r.q;
@@ -639,7 +699,10 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
       sc.std = r.scale_std[it->second];
     }
   }
-  const auto current = index.find(job.motions.back().segment);
+  const int newest = !job.motions.empty()          ? job.motions.back().segment
+                     : !job.prior.segments.empty() ? job.prior.segments.back()
+                                                   : -1;
+  const auto current = index.find(newest);
   if (current != index.end()) out.estimate.scale = r.scales[current->second];
   if (r.covariance_ok) {
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(r.cov_rotation);
@@ -759,6 +822,7 @@ bool RigEstimator::RestoreState(const std::string& text, std::string* error) {
     if (!s->long_stats.Parse(long_text) || !s->short_stats.Parse(short_text)) {
       return fail("malformed statistics of slave " + names_[i + 1]);
     }
+    s->outside = s->long_stats;  // the window is not saved: all of it is prior now
     rest = next == std::string::npos ? "" : remaining.substr(next + 1);
     restored.push_back(std::move(s));
   }

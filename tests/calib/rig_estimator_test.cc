@@ -284,6 +284,141 @@ TEST(RigEstimator, WindowRefinementIsPublishedWhenConsistent) {
   EXPECT_FALSE(est.ApplyRefinement(stale, refined));
 }
 
+// The window refinement's prior holds exactly what the statistics know of the motions outside
+// the window: a short window with its prior minimises the same sum of squares as a window of
+// every motion, and after a restart from a state file (no window at all) the prior alone does.
+TEST(RigEstimator, WindowPriorMakesAShortWindowRefineLikeAllMotions) {
+  const SyntheticDrive drive = NoisyDrive(1600, 11, 1);
+  const auto names = Names(drive.recording);
+  RigEstimatorOptions all;
+  all.window_size = 1 << 20;
+  all.gate_after_motions = 1 << 30;  // no Huber weights in the statistics
+  RigEstimatorOptions short_window = all;
+  short_window.window_size = 20;
+  RigEstimator a(names, all), b(names, short_window);
+  Feed(&a, drive.recording);
+  Feed(&b, drive.recording);
+  RefinementJob job_all = a.MakeRefinementJob(0);
+  RefinementJob job_short = b.MakeRefinementJob(0);
+  EXPECT_EQ(job_all.prior.motions, 0);
+  ASSERT_EQ(job_short.motions.size(), 20u);
+  ASSERT_GT(job_all.motions.size(), 200u);
+  EXPECT_EQ(job_short.prior.motions + 20, static_cast<int>(job_all.motions.size()));
+  RefinementJob job_window_only = job_short;
+  job_window_only.prior = RefinementPrior{};
+  for (RefinementJob* job : {&job_all, &job_short, &job_window_only}) job->robust_loss = false;
+  const SlaveCalibration r_all = RefineWindow(job_all);
+  const SlaveCalibration r_short = RefineWindow(job_short);
+  const SlaveCalibration r_window_only = RefineWindow(job_window_only);
+  ASSERT_TRUE(r_all.usable() && r_short.usable() && r_window_only.usable());
+  ASSERT_GT(r_all.rot_std_deg, 0.0);
+  // The same minimum up to rounding (the sums are accumulated in another order).
+  EXPECT_LT(AngleBetween(r_short.estimate.q, r_all.estimate.q), 1e-9);
+  EXPECT_LT((r_short.estimate.C - r_all.estimate.C).norm(), 1e-9 * r_all.estimate.C.norm());
+  EXPECT_NEAR(r_short.estimate.scale, r_all.estimate.scale, 1e-9 * r_all.estimate.scale);
+  // ... and the uncertainty of every motion, not of the 20.
+  EXPECT_NEAR(r_short.rot_std_deg, r_all.rot_std_deg, 1e-6 * r_all.rot_std_deg);
+  // 20 motions alone are far noisier.
+  EXPECT_GT(AngleBetween(r_window_only.estimate.q, r_all.estimate.q) * kDegPerRad,
+            3.0 * r_all.rot_std_deg);
+
+  // With the Huber loss on the window's residuals (the default) the minimum moves by a small
+  // part of the uncertainty.
+  job_short.robust_loss = true;
+  const SlaveCalibration r_robust = RefineWindow(job_short);
+  EXPECT_LT(AngleBetween(r_robust.estimate.q, r_all.estimate.q) * kDegPerRad,
+            0.5 * r_all.rot_std_deg);
+
+  // Restarted from its state: the window is empty, the prior holds everything.
+  RigEstimator c(names, short_window);
+  std::string error;
+  ASSERT_TRUE(c.RestoreState(b.SerializeState(), &error)) << error;
+  RefinementJob job_restored = c.MakeRefinementJob(0);
+  EXPECT_TRUE(job_restored.motions.empty());
+  EXPECT_EQ(job_restored.prior.motions, static_cast<int>(job_all.motions.size()));
+  const SlaveCalibration r_restored = RefineWindow(job_restored);
+  ASSERT_TRUE(r_restored.usable());
+  EXPECT_LT(AngleBetween(r_restored.estimate.q, r_all.estimate.q), 1e-9);
+  EXPECT_LT((r_restored.estimate.C - r_all.estimate.C).norm(), 1e-9 * r_all.estimate.C.norm());
+}
+
+// With forgetting and scale segments that close (marginalised), the window and its prior
+// still add up to the long statistics: the prior-only refinement after a restart equals the
+// refinement with the window.
+TEST(RigEstimator, WindowPriorFollowsForgettingAndClosedSegments) {
+  DriveOptions d;
+  d.num_frames = 3000;
+  d.seed = 12;
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.002;
+  d.segment_period_s = 30.0;
+  std::vector<Similarity> rigs = DemoRig();
+  rigs.resize(1);
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, rigs, d);
+  RigEstimatorOptions o;
+  o.window_size = 50;
+  o.half_life_s = 60.0;
+  o.gate_after_motions = 1 << 30;
+  RigEstimator est(Names(drive.recording), o);
+  Feed(&est, drive.recording);
+  RefinementJob job = est.MakeRefinementJob(0);
+  job.robust_loss = false;
+  ASSERT_EQ(job.motions.size(), 50u);
+  ASSERT_GT(job.prior.motions, 50);
+  EXPECT_LE(job.prior.segments.size(), static_cast<size_t>(o.max_open_segments));
+  const SlaveCalibration with_window = RefineWindow(job);
+  RigEstimator restored(Names(drive.recording), o);
+  std::string error;
+  ASSERT_TRUE(restored.RestoreState(est.SerializeState(), &error)) << error;
+  RefinementJob prior_only = restored.MakeRefinementJob(0);
+  prior_only.robust_loss = false;
+  ASSERT_TRUE(prior_only.motions.empty());
+  const SlaveCalibration from_prior = RefineWindow(prior_only);
+  ASSERT_TRUE(with_window.usable() && from_prior.usable());
+  EXPECT_LT(AngleBetween(with_window.estimate.q, from_prior.estimate.q), 1e-8);
+  EXPECT_LT((with_window.estimate.C - from_prior.estimate.C).norm(),
+            1e-8 * with_window.estimate.C.norm());
+  EXPECT_NEAR(with_window.estimate.scale, from_prior.estimate.scale, 1e-8);
+  const auto error_nl = CompareToTruth(with_window.estimate, drive.truth[0]);
+  EXPECT_LT(error_nl.rot_deg, 6.0 * with_window.rot_std_deg);
+}
+
+// The prior also enters the reduced parameters of the planar model (C in the plane, the
+// offset along the axis held) and the translational model (no C).
+TEST(RigEstimator, WindowPriorWithPlanarAndTranslationalModels) {
+  for (const auto motion :
+       {DriveOptions::Motion::kPlanarYaw, DriveOptions::Motion::kTranslationOnly}) {
+    DriveOptions d;
+    d.motion = motion;
+    d.num_frames = 2400;
+    d.seed = 13;
+    d.rotation_noise_deg = 0.02;
+    d.position_noise = 0.002;
+    std::vector<Similarity> rigs = DemoRig();
+    rigs.resize(1);
+    const SyntheticDrive drive = GenerateDrive({"front", "left"}, rigs, d);
+    RigEstimatorOptions all;
+    all.window_size = 1 << 20;
+    all.gate_after_motions = 1 << 30;
+    RigEstimatorOptions short_window = all;
+    short_window.window_size = 20;
+    RigEstimator a(Names(drive.recording), all), b(Names(drive.recording), short_window);
+    Feed(&a, drive.recording);
+    Feed(&b, drive.recording);
+    RefinementJob job_all = a.MakeRefinementJob(0), job_short = b.MakeRefinementJob(0);
+    job_all.robust_loss = job_short.robust_loss = false;
+    ASSERT_GT(job_short.prior.motions, 0);
+    const SlaveCalibration r_all = RefineWindow(job_all), r_short = RefineWindow(job_short);
+    ASSERT_TRUE(r_all.usable() && r_short.usable()) << r_all.message;
+    EXPECT_EQ(r_all.motion_model, motion == DriveOptions::Motion::kPlanarYaw
+                                      ? MotionModel::kPlanar
+                                      : MotionModel::kTranslational);
+    EXPECT_LT(AngleBetween(r_short.estimate.q, r_all.estimate.q), 1e-8) << r_all.message;
+    EXPECT_LT((r_short.estimate.C - r_all.estimate.C).norm(), 1e-8) << r_all.message;
+    EXPECT_NEAR(r_short.estimate.scale, r_all.estimate.scale, 1e-8 * r_all.estimate.scale);
+  }
+}
+
 TEST(RigEstimator, StateRoundTripAndCorruptFiles) {
   const SyntheticDrive drive = NoisyDrive(1200, 4, 2);
   const auto names = Names(drive.recording);

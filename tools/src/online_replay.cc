@@ -91,7 +91,7 @@ OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineRepla
   if (options.refine_at_end) {
     for (size_t i = 0; i < recording.slaves.size(); ++i) {
       const RefinementJob job = estimator.MakeRefinementJob(static_cast<int>(i));
-      if (job.start.usable() && job.motions.size() >= 10) {
+      if (job.start.usable() && static_cast<int>(job.motions.size()) + job.prior.motions >= 10) {
         estimator.ApplyRefinement(job, RefineWindow(job));
       }
     }

@@ -10,6 +10,7 @@
 //
 // Not thread-safe: one estimator thread owns it (see OnlineCalibrator for the threads).
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -124,10 +125,30 @@ struct RigEstimate {
   std::vector<SlaveOnlineState> online;  // per slave
 };
 
+// Everything the statistics know about the motions that are NOT in the refinement window,
+// as the exact sums of squared linear residuals of those motions (the residuals the
+// refinement minimises, thesis 4.26):
+//   sum w |A q|^2 = q^T rotation q                                                  (4.10)
+//   sum w |(I - R0) C + λ_s dR C_i - C0|^2 = u^T position u,  u = [C; λ_1 vec(dR); ...; 1]
+// with one 9-block per entry of `segments` (the open scale segments, vec column-major).
+// Closed segments enter through their Schur complement on C (marginalised at the rotation of
+// the time). A window refinement with this prior minimises over every motion since the start
+// (or the last reset), not only the window's: the window adds nothing but robust re-weighting.
+struct RefinementPrior {
+  double weight = 0.0;  // sum of the motions' weights (0: no prior)
+  int motions = 0;      // how many motions
+  Eigen::Matrix4d rotation = Eigen::Matrix4d::Zero();
+  std::vector<int> segments;
+  Eigen::MatrixXd position;  // (4 + 9 * segments.size()) square, positive semi-definite
+};
+
 // One slave's refinement job: a copy of the window and the linear estimate to start from.
 struct RefinementJob {
   int slave = 0;
   std::vector<RigMotion> motions;
+  // Per motion: how much of it the statistics still hold (exponential forgetting since it was
+  // added, in (0, 1]). Its residuals are weighted by it; the robust loss replaces the Huber
+  // weights of the statistics.
   std::vector<double> weights;
   SlaveCalibration start;
   uint64_t generation = 0;  // estimator generation when the job was made
@@ -136,6 +157,10 @@ struct RefinementJob {
   // keeps C along the axis at start's value (the nominal's or 0) in any case.
   double axis_prior = 0.0;
   double axis_prior_sigma = 0.0;
+  // The motions accumulated before the window (see RefinementPrior).
+  RefinementPrior prior;
+  // Huber loss (at 3 sigma) on the window's residuals; the prior has none.
+  bool robust_loss = true;
 };
 
 class RigEstimator {
