@@ -13,9 +13,9 @@ namespace fs = std::filesystem;
 
 std::string Write(const std::string& text) {
   static int counter = 0;
-  const fs::path path = fs::temp_directory_path() / ("rigcal_rig_config_" +
-                                                     std::to_string(::getpid()) + "_" +
-                                                     std::to_string(counter++) + ".yaml");
+  const fs::path path =
+      fs::temp_directory_path() / ("rigcal_rig_config_" + std::to_string(::getpid()) + "_" +
+                                   std::to_string(counter++) + ".yaml");
   std::ofstream(path) << text;
   return path.string();
 }
@@ -44,18 +44,27 @@ TEST(RigConfig, MasterFirstNominalAndDefaults) {
 }
 
 TEST(RigConfig, OptionSections) {
-  auto config = LoadRigConfig(Write(std::string(kMinimal) +
-                                    "  - name: back\n"
-                                    "estimator: {half_life_s: 120, window_size: 50,\n"
-                                    "            keyframe_max_interval_s: 0.5, refine_period_s: 0}\n"
-                                    "sync: {frame_rate_hz: 10, tolerance_ms: 7.5, required: [left]}\n"
-                                    "publish: {extrinsics_rate_hz: 5, status_rate_hz: 0.5}\n"
-                                    "state: {path: /tmp/x.state, save_interval_s: 12}\n"));
+  auto config =
+      LoadRigConfig(Write(std::string(kMinimal) +
+                          "  - name: back\n"
+                          "estimator: {half_life_s: 120, window_size: 50,\n"
+                          "            keyframe_max_interval_s: 0.5, refine_period_s: 0,\n"
+                          "            nominal_sigma: 0.03, min_tilt_snr: 8,\n"
+                          "            max_axis_std_ratio: 50, planar_hysteresis: 1.5,\n"
+                          "            general_axis_spread_deg: 12}\n"
+                          "sync: {frame_rate_hz: 10, tolerance_ms: 7.5, required: [left]}\n"
+                          "publish: {extrinsics_rate_hz: 5, status_rate_hz: 0.5}\n"
+                          "state: {path: /tmp/x.state, save_interval_s: 12}\n"));
   ASSERT_TRUE(config) << config.error();
   EXPECT_DOUBLE_EQ(config->online.estimator.half_life_s, 120.0);
   EXPECT_EQ(config->online.estimator.window_size, 50);
   EXPECT_EQ(config->online.estimator.keyframe_max_interval_ns, 500'000'000);
   EXPECT_DOUBLE_EQ(config->online.refine_period_s, 0.0);
+  EXPECT_DOUBLE_EQ(config->online.estimator.nominal_sigma, 0.03);
+  EXPECT_DOUBLE_EQ(config->online.estimator.min_tilt_snr, 8.0);
+  EXPECT_DOUBLE_EQ(config->online.estimator.max_axis_std_ratio, 50.0);
+  EXPECT_DOUBLE_EQ(config->online.estimator.planar_hysteresis, 1.5);
+  EXPECT_DOUBLE_EQ(config->online.estimator.general_axis_spread_deg, 12.0);
   EXPECT_EQ(config->online.sync.frame_period_ns, 100'000'000);
   EXPECT_EQ(config->online.sync.tolerance_ns, 7'500'000);
   EXPECT_EQ(config->online.sync.required, (std::vector<bool>{true, true, false}));
@@ -102,7 +111,8 @@ TEST(RigConfig, ErrorsNameFileLineAndKey) {
       {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nsource: {type: "
        "v4l3}\n",
        ":5: source.type: 'v4l3' is not supported"},
-      {"rig: {master: front}\ncameras:\n  - name: front\n", "cameras: expected a list of at least two"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n",
+       "cameras: expected a list of at least two"},
       {"rig: [\n", "YAML syntax error"},
   };
   for (const BadCase& c : cases) {

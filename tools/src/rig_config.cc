@@ -139,6 +139,11 @@ const std::map<std::string, FieldSetter>& EstimatorFields() {
       {"max_open_segments", Int(&O::max_open_segments)},
       {"alpha_maxrot_deg", Double(&O::alpha_maxrot_deg)},
       {"planar_axis_spread_deg", Double(&O::planar_axis_spread_deg)},
+      {"min_tilt_snr", Double(&O::min_tilt_snr)},
+      {"max_axis_std_ratio", Double(&O::max_axis_std_ratio)},
+      {"general_axis_spread_deg", Double(&O::general_axis_spread_deg)},
+      {"planar_hysteresis", Double(&O::planar_hysteresis)},
+      {"nominal_sigma", Double(&O::nominal_sigma)},
       {"converged_min_motions", Int(&O::converged_min_motions)},
       {"converged_rot_std_deg", Double(&O::converged_rot_std_deg)},
       {"converged_pos_std_fraction", Double(&O::converged_pos_std_fraction)},
@@ -186,7 +191,8 @@ std::optional<Error> ParseSync(const FieldReader& r, const YAML::Node& node,
   if (const YAML::Node n = node["frame_rate_hz"]) {
     auto v = r.Number(n, "sync.frame_rate_hz");
     if (!v) return Error{v.error()};
-    if (!(*v > 0.0 && *v <= 10000.0)) return r.Fail(n, "sync.frame_rate_hz", "must be in (0, 10000]");
+    if (!(*v > 0.0 && *v <= 10000.0))
+      return r.Fail(n, "sync.frame_rate_hz", "must be in (0, 10000]");
     sync->frame_period_ns = static_cast<int64_t>(std::llround(1e9 / *v));
   }
   if (const YAML::Node n = node["tolerance_ms"]) {
@@ -256,8 +262,8 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
   if (!root) return Error{root.error()};
   const FieldReader r(path);
   if (!root->IsMap()) return r.Fail(*root, "(top level)", "expected a map with rig and cameras");
-  if (auto e = r.CheckKeys(*root, "", {"rig", "cameras", "estimator", "sync", "publish", "state",
-                                        "source"})) {
+  if (auto e = r.CheckKeys(*root, "",
+                           {"rig", "cameras", "estimator", "sync", "publish", "state", "source"})) {
     return *e;
   }
   RigConfig config;
@@ -326,8 +332,8 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
       return *e;
     }
     if (const YAML::Node n = publish["extrinsics_rate_hz"]) {
-      if (auto e = ParseRate(r, n, "publish.extrinsics_rate_hz",
-                             &config.publish.extrinsics_rate_hz)) {
+      if (auto e =
+              ParseRate(r, n, "publish.extrinsics_rate_hz", &config.publish.extrinsics_rate_hz)) {
         return *e;
       }
     }
@@ -367,7 +373,8 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
                         "missing: image_folders needs the camera's folder (e.g. mav0/cam0)");
         }
         if (!camera.spec) {
-          return r.Fail(entry, camera.name, "a camera of image_folders needs a model and intrinsics");
+          return r.Fail(entry, camera.name,
+                        "a camera of image_folders needs a model and intrinsics");
         }
         const std::filesystem::path folder(camera.device);
         config.image_folders.push_back(folder.is_absolute() ? folder.string()
