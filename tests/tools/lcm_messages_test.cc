@@ -483,6 +483,54 @@ TEST(LcmMessages, RigCalibrationToLcmSetsFlagsAndFields) {
   EXPECT_EQ(RawEncode(*decoded), *buffer);
 }
 
+// The offset along the axis of planar motion: unknown (-1), from the nominal mounting (flag,
+// with its σ or 0 when held exactly), or estimated with its σ in nearly planar general motion.
+TEST(LcmMessages, AxisOffsetOfPlanarAndNearlyPlanarEstimates) {
+  SlaveCalibration unknown = MakeSlave("left");
+  unknown.motion_model = MotionModel::kPlanar;
+  unknown.observability.planar = true;
+  unknown.observability.planar_axis = Eigen::Vector3d(0, 1, 0);
+  unknown.unobservable = {Eigen::Vector3d(0, 1, 0)};
+  SlaveCalibration from_prior = unknown;
+  from_prior.name = "back";
+  from_prior.unobservable_from_prior = true;
+  from_prior.axis_offset_std = 0.03;
+  SlaveCalibration held = from_prior;
+  held.name = "right";
+  held.axis_offset_std = kNaN;
+  SlaveCalibration nearly = MakeSlave("up");
+  nearly.observability.planar_axis = Eigen::Vector3d(0, 1, 0);
+  nearly.axis_offset_std = 0.06;
+  RigCalibration result;
+  result.master = "front";
+  result.slaves = {unknown, from_prior, held, nearly};
+  Expected<rig_extrinsics_t> msg = RigCalibrationToLcm(result, 1, 2);
+  ASSERT_TRUE(msg.ok()) << msg.error();
+  EXPECT_EQ(msg->slaves[0].flags, kFlagConverged | kFlagPlanar);
+  EXPECT_EQ(msg->slaves[0].axis_offset_std, -1.0);
+  EXPECT_EQ(msg->slaves[1].flags, kFlagConverged | kFlagPlanar | kFlagAxisFromPrior);
+  EXPECT_EQ(msg->slaves[1].axis_offset_std, 0.03);
+  EXPECT_EQ(msg->slaves[2].axis_offset_std, 0.0);
+  EXPECT_EQ(msg->slaves[3].flags, kFlagConverged);
+  EXPECT_EQ(msg->slaves[3].axis_offset_std, 0.06);
+  EXPECT_EQ(msg->slaves[3].planar_axis[1], 1.0);  // the mean axis, known
+  const CameraNames names = {"front", "left", "back", "right", "up"};
+  Expected<std::vector<uint8_t>> buffer = EncodeMessage(kExtrinsicsChannel, names, *msg);
+  ASSERT_TRUE(buffer.ok()) << buffer.error();
+  MessageValidator validator(names);
+  EXPECT_TRUE(
+      validator.Decode<rig_extrinsics_t>(kExtrinsicsChannel, buffer->data(), buffer->size()).ok());
+
+  // A σ below -1 or between -1 and 0, or the prior flag without the planar one, is refused.
+  rig_extrinsics_t bad = *msg;
+  bad.slaves[3].axis_offset_std = -0.5;
+  Expected<std::vector<uint8_t>> bad_bytes = EncodeMessage(kExtrinsicsChannel, names, bad);
+  EXPECT_FALSE(bad_bytes.ok());
+  bad = *msg;
+  bad.slaves[3].flags |= kFlagAxisFromPrior;
+  EXPECT_FALSE(EncodeMessage(kExtrinsicsChannel, names, bad).ok());
+}
+
 TEST(LcmMessages, RigCalibrationToLcmRejectsBrokenResults) {
   RigCalibration result;
   result.master = "front";

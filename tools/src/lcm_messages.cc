@@ -147,6 +147,7 @@ void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check)
   check->Finite("position_min_eigenvalue", s->position_min_eigenvalue);
   check->Finite("axis_spread_deg", s->axis_spread_deg);
   check->Finite("planar_axis", s->planar_axis, 3);
+  check->Finite("axis_offset_std", s->axis_offset_std);
 
   const bool converged = (s->flags & kFlagConverged) != 0;
   const bool initialising = (s->flags & kFlagInitialising) != 0;
@@ -174,6 +175,11 @@ void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check)
   if (s->flags & kFlagPlanar) {
     check->Unit("planar_axis", s->planar_axis, 3, RejectCause::kOutOfRange, "planar_axis");
   }
+  if ((s->flags & kFlagAxisFromPrior) && !(s->flags & kFlagPlanar)) {
+    check->Fail(RejectCause::kOutOfRange, "flags",
+                "FLAG_AXIS_FROM_PRIOR without FLAG_PLANAR_UNOBSERVABLE_AXIS");
+  }
+  if (s->axis_offset_std != -1.0) check->AtLeast("axis_offset_std", s->axis_offset_std, 0.0);
 }
 
 void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* check) {
@@ -587,7 +593,10 @@ int32_t SlaveFlags(const SlaveCalibration& slave) {
   if (slave.motion_model == MotionModel::kTranslational || !slave.position_observable) {
     flags |= kFlagTranslationalOnly;
   }
-  if (slave.observability.planar) flags |= kFlagPlanar;
+  if (slave.observability.planar) {
+    flags |= kFlagPlanar;
+    if (slave.unobservable_from_prior) flags |= kFlagAxisFromPrior;
+  }
   return flags;
 }
 
@@ -639,13 +648,23 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
   msg.axis_spread_deg = or_zero(obs.axis_spread_deg);
   msg.flags = SlaveFlags(slave);
   Eigen::Vector3d axis = Eigen::Vector3d::Zero();
-  if (obs.planar) {
-    if (!obs.planar_axis.allFinite() || obs.planar_axis.norm() == 0.0) {
-      return Error{who + ": observability is planar but planar_axis is not a direction"};
-    }
-    axis = obs.planar_axis.normalized();
+  const bool axis_known = obs.planar_axis.allFinite() && obs.planar_axis.norm() > 0.5;
+  if (obs.planar && !axis_known) {
+    return Error{who + ": observability is planar but planar_axis is not a direction"};
   }
+  if (axis_known) axis = obs.planar_axis.normalized();
   for (int i = 0; i < 3; ++i) msg.planar_axis[i] = axis[i];
+  msg.axis_offset_std = 0.0;
+  if (axis_known && usable && slave.position_observable) {
+    if (obs.planar && !slave.unobservable_from_prior) {
+      msg.axis_offset_std = -1.0;  // unknown
+    } else if (std::isfinite(slave.axis_offset_std) && slave.axis_offset_std >= 0.0) {
+      msg.axis_offset_std = slave.axis_offset_std;
+    } else if (!obs.planar) {
+      msg.axis_offset_std =
+          std::sqrt(std::max(0.0, axis.dot(slave.pos_std.cwiseAbs2().asDiagonal() * axis)));
+    }
+  }
   msg.message = ToString(slave.termination);
   if (!slave.message.empty()) msg.message += ": " + slave.message;
 

@@ -59,8 +59,9 @@ inline constexpr int32_t kFlagConverged = slave_extrinsics_t::FLAG_CONVERGED;
 inline constexpr int32_t kFlagTranslationalOnly = slave_extrinsics_t::FLAG_TRANSLATIONAL_ONLY;
 inline constexpr int32_t kFlagPlanar = slave_extrinsics_t::FLAG_PLANAR_UNOBSERVABLE_AXIS;
 inline constexpr int32_t kFlagDecalibrated = slave_extrinsics_t::FLAG_DECALIBRATED;
-inline constexpr int32_t kKnownFlags =
-    kFlagInitialising | kFlagConverged | kFlagTranslationalOnly | kFlagPlanar | kFlagDecalibrated;
+inline constexpr int32_t kFlagAxisFromPrior = slave_extrinsics_t::FLAG_AXIS_FROM_PRIOR;
+inline constexpr int32_t kKnownFlags = kFlagInitialising | kFlagConverged | kFlagTranslationalOnly |
+                                       kFlagPlanar | kFlagDecalibrated | kFlagAxisFromPrior;
 
 // Largest accepted | |q| - 1 | of a quaternion (and |a| - 1 of slave_extrinsics_t.planar_axis).
 inline constexpr double kUnitTolerance = 1e-6;
