@@ -21,6 +21,16 @@ std::unique_ptr<CameraModel> BuildPinholeCamera(const CameraSpec& spec, CameraSp
 std::unique_ptr<CameraModel> BuildFisheyeCamera(const CameraSpec& spec, CameraSpecIssue* issue);
 std::unique_ptr<CameraModel> BuildScaramuzzaCamera(const CameraSpec& spec, CameraSpecIssue* issue);
 
+// The angle one pixel subtends at `pixel` (radians): the square root of the area the
+// unprojection Jacobian maps a pixel to on the unit sphere. False when `pixel` does not
+// unproject.
+inline bool PixelAngleAt(const CameraModel& camera, const Eigen::Vector2d& pixel, double* angle) {
+  Eigen::Matrix<double, 3, 2> jacobian;
+  if (!camera.Unproject(pixel, &jacobian)) return false;
+  *angle = std::sqrt(std::sqrt((jacobian.transpose() * jacobian).determinant()));
+  return true;
+}
+
 // sum_i c[i] x^i (Horner). Empty c: 0.
 inline double Polynomial(const std::vector<double>& c, double x) {
   double value = 0.0;

@@ -186,12 +186,10 @@ bool FisheyeCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issu
       theta_d_max_ = corner;
     }
   }
-  Eigen::Matrix<double, 3, 2> jacobian;
-  if (!Unproject(Eigen::Vector2d(cx_, cy_), &jacobian)) {
+  if (!PixelAngleAt(*this, Eigen::Vector2d(cx_, cy_), &pixel_angle_)) {
     *issue = {"intrinsics", "cannot unproject the principal point"};
     return false;
   }
-  pixel_angle_ = std::sqrt(std::sqrt((jacobian.transpose() * jacobian).determinant()));
   return true;
 }
 

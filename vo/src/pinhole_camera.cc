@@ -251,12 +251,10 @@ bool PinholeCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issu
   }
   max_field_angle_deg_ = std::atan(std::sqrt(r_max2_)) * kRadToDeg;
 
-  Eigen::Matrix<double, 3, 2> jacobian;
-  if (!Unproject(Eigen::Vector2d(cx_, cy_), &jacobian)) {
+  if (!PixelAngleAt(*this, Eigen::Vector2d(cx_, cy_), &pixel_angle_)) {
     *issue = {"distortion", "cannot unproject the principal point"};
     return false;
   }
-  pixel_angle_ = std::sqrt(std::sqrt((jacobian.transpose() * jacobian).determinant()));
   return true;
 }
 

@@ -280,12 +280,10 @@ bool ScaramuzzaCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* i
     }
   }
 
-  Eigen::Matrix<double, 3, 2> jacobian;
-  if (!Unproject(Eigen::Vector2d(cx_, cy_), &jacobian)) {
+  if (!PixelAngleAt(*this, Eigen::Vector2d(cx_, cy_), &pixel_angle_)) {
     *issue = {"center", "cannot unproject the centre"};
     return false;
   }
-  pixel_angle_ = std::sqrt(std::sqrt((jacobian.transpose() * jacobian).determinant()));
   return true;
 }
 
