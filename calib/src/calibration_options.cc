@@ -16,6 +16,9 @@ bool CalibrationOptions::Check(std::string* error) const {
     e << "alpha_threshold_deg must be in [0, 180), got " << alpha_threshold_deg;
   else if (alpha_maxrot_deg < 0.0 || alpha_maxrot_deg >= 180.0)
     e << "alpha_maxrot_deg must be in [0, 180), got " << alpha_maxrot_deg;
+  else if (!(alpha_maxrot_noise_deg >= 0.0) || std::isinf(alpha_maxrot_noise_deg))
+    e << "alpha_maxrot_noise_deg must be finite and >= 0 (0 = fixed alpha_maxrot_deg), got "
+      << alpha_maxrot_noise_deg;
   else if (!(scale_deviation_threshold > 0.0))
     e << "scale_deviation_threshold must be > 0, got " << scale_deviation_threshold;
   else if (min_motions_per_partition < 2)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "motion_geometry.h"
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal::internal {
@@ -31,6 +32,22 @@ void AxisAndPlaneStd(const Eigen::Matrix3d& cov, const Eigen::Vector3d& axis, do
 }
 
 }  // namespace
+
+double TranslationalBelowDeg(double alpha_maxrot_deg, double noise_ref_deg, double noise_deg,
+                             double floor_deg) {
+  const double boundary =
+      noise_ref_deg > 0.0 ? alpha_maxrot_deg * std::sqrt(std::max(noise_deg, 0.0) / noise_ref_deg)
+                          : alpha_maxrot_deg;
+  return std::max(boundary, floor_deg);
+}
+
+double RotationNoiseDeg(const std::vector<MotionData>& motions) {
+  if (motions.size() < 2) return 0.0;
+  std::vector<double> diff;
+  diff.reserve(motions.size());
+  for (const auto& m : motions) diff.push_back((m.angle0 - m.anglei) * kDegPerRad);
+  return Robust(diff).sigma;
+}
 
 RotatingSolution SolveRotating(const MotionStatistics& stats, MotionModel requested,
                                const ModelSelectionOptions& options, const AxisPrior& prior) {

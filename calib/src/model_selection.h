@@ -17,6 +17,7 @@
 #include <Eigen/Geometry>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "motion_statistics.h"
 #include "rigcal/calib/calibration_options.h"
@@ -56,6 +57,21 @@ struct RotatingSolution {
   bool rotation_from_planar = false;  // the rotation comes from the planar solver
   std::string why;                    // the figures behind the model, one phrase for the message
 };
+
+// Thesis 5.2 (fig. 5.5): while the largest master rotation stays below the equal-error
+// boundary the purely translational model (4.5) gives the more accurate rotation. The boundary
+// grows with the orientation error ε of the input poses: the general model's error falls as
+// ε / α_max, the translational model's bias grows as α_max |dC| / |C_0| ((I - R_0) dC is
+// ignored), so the two meet at α_max ∝ √ε (`rigcal experiment motion-model` measures 14°, 20°,
+// 24° for ε = 1°, 2°, 3°). The thesis fixes α_maxrot = 10° for the ε ≈ 1° it expects; this
+// scales that to the measured ε: α_maxrot √(ε / ε_ref), never below `floor_deg` (the general
+// model drops motions below its smallest usable rotation). ε_ref <= 0: the fixed α_maxrot.
+double TranslationalBelowDeg(double alpha_maxrot_deg, double noise_ref_deg, double noise_deg,
+                             double floor_deg);
+
+// ε of a set of motions: the robust σ (1.4826 MAD) of the master-minus-slave rotation angle
+// differences, degrees (0 for fewer than 2 motions).
+double RotationNoiseDeg(const std::vector<MotionData>& motions);
 
 // `requested`: kAuto (decide), kGeneral (the thesis's general model, figures reported only)
 // or kPlanar. The statistics must hold a rotating rig's motions.

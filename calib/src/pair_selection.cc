@@ -73,15 +73,26 @@ std::vector<IndexPair> WalkPairs(const RigRecording& rec, const PairOptions& opt
   auto taken = [&](int b) {
     return opt.max_pairs_per_end > 0 && end_uses[b] >= opt.max_pairs_per_end;
   };
+  // A walk that runs into the end of the recording (or of a segment) before it reaches a
+  // target or the span limit stops at that last pose, and so do the walks of every later
+  // anchor: one pose's noise would enter a large share of the motions (half of them when the
+  // span limit is half the recording). Only one such truncated pair ends at a pose.
+  std::vector<bool> truncated_end(n, false);
   for (int a = 0; a + 1 < n; a += stride) {
     int chosen = -1;
+    bool complete = false;
     for (int b = a + 1; b < n && b - a <= max_span; ++b) {
       if (!SameSegments(rec, a, b)) break;
       chosen = b;
       if (AngleBetween(poses[a].q, poses[b].q) >= target_angle ||
-          (poses[b].C - poses[a].C).norm() >= target_trans) {
+          (poses[b].C - poses[a].C).norm() >= target_trans || b - a == max_span) {
+        complete = true;
         break;
       }
+    }
+    if (chosen > 0 && !complete) {
+      if (truncated_end[chosen]) continue;
+      truncated_end[chosen] = true;
     }
     while (chosen > 0 && taken(chosen)) {
       const int next = chosen + 1;

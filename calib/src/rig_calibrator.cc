@@ -267,8 +267,15 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   for (const auto& m : data) max_rotation = std::max(max_rotation, m.angle0);
   r.observability.max_rotation_deg = max_rotation * kDegPerRad;
 
+  // Thesis 5.2: the purely translational model below the equal-error boundary, which scales
+  // with the measured rotation noise (model_selection.h).
+  r.observability.rotation_noise_deg = internal::RotationNoiseDeg(data);
+  r.observability.translational_below_deg = internal::TranslationalBelowDeg(
+      options.alpha_maxrot_deg, options.alpha_maxrot_noise_deg, r.observability.rotation_noise_deg,
+      options.alpha_threshold_deg);
   MotionModel requested = options.motion_model;
-  if (requested == MotionModel::kAuto && max_rotation * kDegPerRad < options.alpha_maxrot_deg) {
+  if (requested == MotionModel::kAuto &&
+      max_rotation * kDegPerRad < r.observability.translational_below_deg) {
     requested = MotionModel::kTranslational;
   }
   const bool translational = requested == MotionModel::kTranslational;
@@ -396,9 +403,11 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   }
   r.motions.used = static_cast<int>(data.size());
   if (!translational) {
-    const double max_rotation_deg = r.observability.max_rotation_deg;
-    r.observability = fit.solution.observability;
-    r.observability.max_rotation_deg = max_rotation_deg;
+    Observability figures = fit.solution.observability;
+    figures.max_rotation_deg = r.observability.max_rotation_deg;
+    figures.rotation_noise_deg = r.observability.rotation_noise_deg;
+    figures.translational_below_deg = r.observability.translational_below_deg;
+    r.observability = figures;
     r.motion_model = fit.solution.model;
   }
   const bool planar = r.motion_model == MotionModel::kPlanar;
@@ -532,12 +541,30 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
       << r.motions.small_rotation << (translational ? " without translation" : " small rotation")
       << ", " << r.motions.angle_mismatch << " angle mismatch, " << r.motions.residual_outlier
       << " outliers); " << ToString(r.motion_model) << " motion";
+  // Why the motion model: the largest rotation against the equal-error boundary at the
+  // measured rotation noise (thesis 5.2), then the figures of general vs planar.
+  const std::string boundary_text =
+      options.alpha_maxrot_noise_deg > 0.0
+          ? Fmt(r.observability.translational_below_deg, 2) +
+                " deg, the equal-error boundary at the measured rotation noise " +
+                Fmt(r.observability.rotation_noise_deg, 3) + " deg"
+          : Fmt(r.observability.translational_below_deg, 1) + " deg";
+  std::vector<std::string> why;
+  if (options.motion_model == MotionModel::kAuto) {
+    why.push_back("largest rotation " + Fmt(r.observability.max_rotation_deg, 2) +
+                  (translational ? " deg < " : " deg >= ") + boundary_text);
+  } else if (translational) {
+    why.push_back("largest rotation " + Fmt(r.observability.max_rotation_deg, 2) + " deg");
+  }
+  if (!translational && !fit.solution.why.empty()) why.push_back(fit.solution.why);
+  if (!why.empty()) {
+    msg << " (" << why[0];
+    for (size_t j = 1; j < why.size(); ++j) msg << "; " << why[j];
+    msg << ")";
+  }
   if (translational) {
-    msg << " (largest rotation " << Fmt(r.observability.max_rotation_deg, 2) << " deg < "
-        << Fmt(options.alpha_maxrot_deg, 1)
-        << " deg): rotation and scale only, position unobservable";
+    msg << ": rotation and scale only, position unobservable";
   } else if (planar) {
-    if (!fit.solution.why.empty()) msg << " (" << fit.solution.why << ")";
     msg << ": C along the rotation axis " << Vec3Text(axis) << " is unobservable";
     if (prior.given) {
       msg << ", taken from the nominal mounting (" << Fmt(axis_prior, 4) << " along the axis";
@@ -546,13 +573,10 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
     } else {
       msg << ", reported as 0 (unknown; a nominal mounting would fill it in)";
     }
-  } else {
-    if (!fit.solution.why.empty()) msg << " (" << fit.solution.why << ")";
-    if (r.observability.axis_std_ratio > 3.0 && std::isfinite(r.axis_offset_std)) {
-      msg << "; nearly planar: C along the mean rotation axis " << Vec3Text(axis) << " has sigma "
-          << Fmt(r.axis_offset_std, 4);
-      if (prior.given && prior.sigma > 0.0) msg << " (with the nominal mounting as a prior)";
-    }
+  } else if (r.observability.axis_std_ratio > 3.0 && std::isfinite(r.axis_offset_std)) {
+    msg << "; nearly planar: C along the mean rotation axis " << Vec3Text(axis) << " has sigma "
+        << Fmt(r.axis_offset_std, 4);
+    if (prior.given && prior.sigma > 0.0) msg << " (with the nominal mounting as a prior)";
   }
   msg << "; " << (scale_why.empty() ? ToString(scale_model) + " scale model" : scale_why);
   if (solve) msg << "; refinement: " << refined.message;

@@ -48,6 +48,19 @@ struct RunningVariance {
   }
 };
 
+// How many pairs share each error, on average: overlapping pairs (every keyframe pairs with
+// one several keyframes back) share the odometry drift between their ends, so the linear
+// solution's σ, which takes the motions as independent, is optimistic by the square root of
+// this. Drift makes the angle-invariant variance grow with the span: its ratio between the
+// pairs and the consecutive-keyframe motions measures the sharing, between 1 (errors of the
+// poses alone, shared by the two pairs at a pose) and the mean span of the pairs in keyframes
+// (pure drift).
+double OverlapFactor(const RunningVariance& pairs, const RunningVariance& consecutive,
+                     const RunningVariance& span) {
+  if (pairs.count == 0 || consecutive.count == 0 || !(consecutive.value > 0.0)) return 1.0;
+  return std::clamp(pairs.value / consecutive.value, 1.0, std::max(1.0, span.value));
+}
+
 double Forget(int64_t dt_ns, double half_life_s) {
   if (half_life_s <= 0.0 || dt_ns <= 0) return 1.0;
   return std::pow(0.5, static_cast<double>(dt_ns) * 1e-9 / half_life_s);
@@ -62,12 +75,31 @@ uint64_t Fnv1a(const std::string& s) {
   return h;
 }
 
-// Linear solution of one set of statistics, in the batch result schema. `general` is the
-// hysteresis state of a rotating rig (true: the general model was chosen last time); it is
-// updated when not null.
+// The motion model of a slave (thesis 5.2): rotating once a formed motion rotated by the
+// equal-error boundary at the rotation noise measured so far (model_selection.h).
+struct MotionModelChoice {
+  bool rotating = false;
+  double noise_deg = 0.0;     // running RMS of the master-minus-slave rotation angle difference
+  double boundary_deg = 0.0;  // translational below this largest rotation
+};
+
+// The equal-error boundary at the running angle-invariant variance `angle_var_deg2` (deg^2,
+// from `samples` motions): the fixed alpha_maxrot until gate_after_motions motions measured it.
+double TranslationalBelowDeg(const RigEstimatorOptions& o, double angle_var_deg2, int samples) {
+  if (o.alpha_maxrot_noise_deg <= 0.0 || samples < o.gate_after_motions) {
+    return std::max(o.alpha_maxrot_deg, o.pair_min_angle_deg);
+  }
+  return internal::TranslationalBelowDeg(o.alpha_maxrot_deg, o.alpha_maxrot_noise_deg,
+                                         std::sqrt(std::max(angle_var_deg2, 0.0)),
+                                         o.pair_min_angle_deg);
+}
+
+// Linear solution of one set of statistics, in the batch result schema, in the motion model
+// `choice`. `general` is the hysteresis state of a rotating rig (true: the general model was
+// chosen last time); it is updated when not null.
 SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimatorOptions& opt,
                                  const std::optional<Similarity>& nominal, int current_segment,
-                                 bool* general) {
+                                 const MotionModelChoice& choice, bool* general) {
   SlaveCalibration r;
   r.motions.used = stats.motions();
   r.observability.max_rotation_deg = stats.max_rotation() * kDegPerRad;
@@ -76,7 +108,7 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
     r.message = "initialising: " + std::to_string(stats.motions()) + " motions so far";
     return r;
   }
-  const bool translational = r.observability.max_rotation_deg < opt.alpha_maxrot_deg;
+  const bool translational = !choice.rotating;
   r.motion_model = translational ? MotionModel::kTranslational : MotionModel::kGeneral;
   std::map<int, double> scales;
   bool ok = true;
@@ -123,6 +155,8 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
     ok = sol.ok;
     if (!ok && nominal) r.estimate.C = nominal->C;
   }
+  r.observability.rotation_noise_deg = choice.noise_deg;
+  r.observability.translational_below_deg = choice.boundary_deg;
   for (const auto& [id, v] : stats.closed_scales()) {
     SegmentScale s;
     s.segment = id;
@@ -167,9 +201,15 @@ struct RigEstimator::Slave {
   std::optional<SlaveCalibration> refined;
   int disagreements = 0;
   int stable = 0;
-  bool general = false;        // some motion rotated by alpha_maxrot: a rotating rig
-  bool general_model = false;  // rotating rig: the general (not planar) model, with hysteresis
-  int accepted_in_model = 0;   // accepted motions since the motion model last changed
+  bool general = false;            // some motion rotated by the boundary: a rotating rig
+  bool general_model = false;      // rotating rig: the general (not planar) model, with hysteresis
+  int accepted_in_model = 0;       // accepted motions since the motion model last changed
+  int64_t model_changed_ns = -1;   // stream time of the last change of the motion model
+  int gate_rejections_in_row = 0;  // consecutive motions rejected by the residual gates
+  // Drift: the angle-invariant variance of the consecutive-keyframe motion ending at each new
+  // keyframe (compared with angle_var, that of the pairs) and the span of the pairs in
+  // keyframes; overlapping pairs share their drift (see OverlapFactor).
+  RunningVariance consecutive_angle_var, pair_span;
   int64_t decalibrated_at_ns = -1;
   Eigen::Quaterniond last_q = Eigen::Quaterniond::Identity();
 
@@ -224,6 +264,10 @@ bool RigEstimatorOptions::Check(std::string* error) const {
     e << "short_half_life_s must be > 0";
   else if (max_open_segments < 1)
     e << "max_open_segments must be >= 1";
+  else if (!(alpha_maxrot_deg >= 0.0 && alpha_maxrot_deg < 180.0))
+    e << "alpha_maxrot_deg must be in [0, 180)";
+  else if (!(alpha_maxrot_noise_deg >= 0.0) || std::isinf(alpha_maxrot_noise_deg))
+    e << "alpha_maxrot_noise_deg must be finite and >= 0 (0 = fixed alpha_maxrot_deg)";
   else if (window_size < 2)
     e << "window_size must be >= 2";
   else if (converged_min_motions < 2)
@@ -358,12 +402,15 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
     PublishCounts(index);
   };
   // The motion model follows every formed motion (not only accepted ones): once the rig has
-  // rotated by alpha_maxrot the general model applies, and the residual statistics restart.
-  if (!s.general && md.angle0 * kDegPerRad >= o.alpha_maxrot_deg) {
+  // rotated by the equal-error boundary at the measured rotation noise (thesis 5.2) the
+  // general model applies, and the residual statistics restart.
+  if (!s.general &&
+      md.angle0 * kDegPerRad >= TranslationalBelowDeg(o, s.angle_var.value, s.angle_var.count)) {
     s.general = true;
     s.accepted_in_model = 0;
     s.rot_var = {};
     s.pos_var = {};
+    s.model_changed_ns = m.t_b_ns;
   }
   const bool general = s.general;
   if (general && md.angle0 * kDegPerRad < o.pair_min_angle_deg) {
@@ -374,7 +421,20 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
       s.linear.usable() && (s.linear.motion_model != MotionModel::kTranslational) == general;
   if (s.linear.usable()) internal::AlignSignsWith(ToWxyz(s.linear.estimate.q), &data);
 
-  // Gates.
+  // Gates. A residual gate that rejects gate_after_motions motions in a row has an estimate
+  // that the motions contradict (formed early, from motions about one axis, say): it is the
+  // estimate that is off, not the majority of the motions. Gating then restarts as after a
+  // model change, so the next motions are accepted and the estimate can follow them.
+  auto restart_locked_gates = [&] {
+    if (++s.gate_rejections_in_row < o.gate_after_motions) return;
+    ModuleLogger("calib")->info(
+        "slave '{}': {} motions in a row contradict the estimate; residual gating restarts",
+        names_[index + 1], s.gate_rejections_in_row);
+    s.gate_rejections_in_row = 0;
+    s.accepted_in_model = 0;
+    s.rot_var = {};
+    s.pos_var = {};
+  };
   const bool gating = s.accepted_in_model >= o.gate_after_motions && have_estimate;
   const double angle_diff = std::abs(md.angle0 - md.anglei) * kDegPerRad;
   const double angle_gate =
@@ -406,6 +466,7 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
           if (std::abs(measured / scale - 1.0) > o.scale_gate) {
             ++s.online.gated_scale;
             reject(&s.counts.residual_outlier);
+            restart_locked_gates();
             return;
           }
         }
@@ -417,12 +478,24 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
         worst = std::max(worst, r_pos / std::sqrt(std::max(s.pos_var.value, 1e-300)));
       if (worst > o.gate_sigmas) {
         reject(&s.counts.residual_outlier);
+        restart_locked_gates();
         return;
       }
       if (worst > o.huber_sigmas) weight = o.huber_sigmas / worst;  // Huber
     }
   }
+  s.gate_rejections_in_row = 0;
   s.angle_var.Add(angle_diff * angle_diff);
+  {
+    // The consecutive-keyframe motion ending at b: its angle invariant holds the drift of one
+    // keyframe interval only.
+    const Keyframe& p = s.keyframes[s.keyframes.size() - 2];
+    const double consecutive =
+        std::abs(AngleBetween(p.master.q, b.master.q) - AngleBetween(p.slave.q, b.slave.q)) *
+        kDegPerRad;
+    s.consecutive_angle_var.Add(consecutive * consecutive);
+    s.pair_span.Add(static_cast<double>(s.keyframes.size() - 1 - chosen));
+  }
   s.ci_sq.Add(md.Ci.squaredNorm());
   if (have_estimate) {
     s.rot_var.Add(r_rot * r_rot);
@@ -478,7 +551,15 @@ void RigEstimator::Publish(int index) {
   const RigEstimatorOptions& o = options_;
   const std::optional<Similarity> nominal =
       index < static_cast<int>(o.nominal.size()) ? o.nominal[index] : std::nullopt;
-  s.linear = SolveStatistics(s.long_stats, o, nominal, s.online.segment, &s.general_model);
+  MotionModelChoice choice;
+  choice.rotating = s.general;
+  choice.noise_deg = std::sqrt(s.angle_var.value);
+  choice.boundary_deg = TranslationalBelowDeg(o, s.angle_var.value, s.angle_var.count);
+  const bool was_general_model = s.general_model;
+  s.linear = SolveStatistics(s.long_stats, o, nominal, s.online.segment, choice, &s.general_model);
+  if (s.general && s.general_model != was_general_model) {
+    s.model_changed_ns = s.online.last_update_ns;  // general <-> planar
+  }
   for (const auto& [id, stats] : s.long_stats.segments()) {
     for (const auto& sc : s.linear.scales) {
       if (sc.segment == id) s.long_stats.SetSegmentScale(id, sc.scale);
@@ -495,19 +576,28 @@ void RigEstimator::Publish(int index) {
   const SlaveCalibration short_est =
       s.linear.observability.planar
           ? SlaveCalibration{}
-          : SolveStatistics(s.short_stats, o, nominal, online.segment, &short_general);
+          : SolveStatistics(s.short_stats, o, nominal, online.segment, choice, &short_general);
   // Only a settled long-window estimate can be contradicted: enough motions and a rotation
   // with a small σ (the first keyframes of a planar drive can look general with the rotation
   // about the axis undetermined in both windows; the translational model has no σ, and a
   // car driving straight does not determine the rotation about its direction of travel).
-  const bool settled = s.linear.motions.used >= o.converged_min_motions &&
-                       s.linear.rot_std_deg > 0.0 &&
-                       s.linear.rot_std_deg <= o.converged_rot_std_deg;
-  if (settled && s.linear.usable() && short_est.usable() && !s.linear.observability.planar &&
-      !short_est.observability.planar && short_est.motions.used >= o.converged_min_motions / 2) {
+  // The σ of both windows count the shared drift of overlapping pairs (OverlapFactor). Across
+  // a change of the motion model (translational -> rotating, general <-> planar) the short
+  // window still holds the other model's motions: no comparison until it has forgotten them.
+  const double overlap =
+      std::sqrt(OverlapFactor(s.angle_var, s.consecutive_angle_var, s.pair_span));
+  const double long_sigma = overlap * s.linear.rot_std_deg;
+  const bool settled = s.linear.motions.used >= o.converged_min_motions && long_sigma > 0.0 &&
+                       long_sigma <= o.converged_rot_std_deg;
+  const bool model_settled =
+      s.model_changed_ns < 0 ||
+      online.last_update_ns - s.model_changed_ns >= static_cast<int64_t>(o.short_half_life_s * 1e9);
+  if (settled && model_settled && s.linear.usable() && short_est.usable() &&
+      !s.linear.observability.planar && !short_est.observability.planar &&
+      short_est.motions.used >= o.converged_min_motions / 2) {
     const double diff = AngleBetween(s.linear.estimate.q, short_est.estimate.q) * kDegPerRad;
     online.short_long_rot_deg = diff;
-    const double sigma = std::hypot(s.linear.rot_std_deg, short_est.rot_std_deg);
+    const double sigma = overlap * std::hypot(s.linear.rot_std_deg, short_est.rot_std_deg);
     bool disagree = diff > std::max(o.decalibration_min_deg, o.decalibration_sigmas * sigma);
     if (o.decalibration_min_translation > 0.0 && s.linear.position_observable) {
       disagree = disagree || (s.linear.estimate.C - short_est.estimate.C).norm() >
@@ -528,7 +618,8 @@ void RigEstimator::Publish(int index) {
       s.decalibrated_at_ns = online.last_update_ns;
       ++online.decalibration_events;
       ++generation_;
-      s.linear = SolveStatistics(s.long_stats, o, nominal, online.segment, &s.general_model);
+      s.linear =
+          SolveStatistics(s.long_stats, o, nominal, online.segment, choice, &s.general_model);
     }
   }
   const bool decalibrated =
@@ -538,7 +629,7 @@ void RigEstimator::Publish(int index) {
 
   SlaveCalibration published = s.linear;
   if (s.refined && s.linear.usable()) {
-    const double sigma = std::max(s.linear.rot_std_deg, 1e-3);
+    const double sigma = std::max(overlap * s.linear.rot_std_deg, 1e-3);  // shared drift counted
     if (AngleBetween(s.refined->estimate.q, s.linear.estimate.q) * kDegPerRad <=
         o.gate_sigmas * sigma) {
       published = *s.refined;
@@ -572,7 +663,14 @@ void RigEstimator::Publish(int index) {
   msg << (online.flags & kFlagConverged ? "converged" : "converging") << ": "
       << published.motions.used << " motions used, " << published.motions.rejected()
       << " rejected; " << ToString(published.motion_model) << " motion";
-  if (online.flags & kFlagTranslationalOnly) msg << " (rotation and scale only)";
+  if (online.flags & kFlagTranslationalOnly) {
+    // Thesis 5.2: why the translational model.
+    msg << fmt::format(
+        " (rotation and scale only: largest rotation {:.2f} deg < {:.2f} deg, the equal-error "
+        "boundary at the rotation noise {:.3f} deg)",
+        published.observability.max_rotation_deg, published.observability.translational_below_deg,
+        published.observability.rotation_noise_deg);
+  }
   if (online.flags & kFlagPlanar) {
     const Eigen::Vector3d& a = published.observability.planar_axis;
     msg << fmt::format(

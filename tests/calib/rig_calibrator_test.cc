@@ -246,10 +246,20 @@ TEST(CalibrateSlave, ReportsInsufficientRotation) {
       << r.message;
 }
 
-TEST(CalibrateSlave, AutoModelPicksTranslationalForSmallRotations) {
+// Thesis 5.2: below the equal-error boundary the purely translational model. The boundary
+// scales with the measured rotation noise: noise-free rotations of up to 6 degrees determine the
+// general model exactly (the boundary falls to alpha_threshold), while the thesis's fixed
+// 10 degrees (alpha_maxrot_noise_deg = 0) takes them as purely translational.
+TEST(CalibrateSlave, AutoModelBoundaryScalesWithTheRotationNoise) {
   std::vector<Similarity> truth;
   RigRecording rec = ExactSample(1, 8, 4, &truth, 0.0, 6.0);  // every rotation below 10 deg
-  const auto r = CalibrateRig(rec, SinceStart()).slaves[0];
+  const auto general = CalibrateRig(rec, SinceStart()).slaves[0];
+  EXPECT_EQ(general.motion_model, MotionModel::kGeneral) << general.message;
+  ExpectExact(general, truth[0]);
+  EXPECT_NE(general.message.find("equal-error boundary"), std::string::npos) << general.message;
+  CalibrationOptions fixed = SinceStart();
+  fixed.alpha_maxrot_noise_deg = 0.0;
+  const auto r = CalibrateRig(rec, fixed).slaves[0];
   EXPECT_EQ(r.motion_model, MotionModel::kTranslational);
   EXPECT_NE(r.message.find("position unobservable"), std::string::npos);
 }

@@ -33,8 +33,14 @@ struct CalibrationOptions {
   // Motions whose master rotation is below this angle are not used by the general model
   // (thesis alpha_threshold, 4.3.1).
   double alpha_threshold_deg = 2.0;
-  // Purely translational model when every motion rotates less than this (thesis 5.2).
+  // Purely translational model (thesis 4.5) when every motion rotates less than the
+  // equal-error boundary of thesis 5.2 (fig. 5.5): alpha_maxrot_deg at an orientation error of
+  // alpha_maxrot_noise_deg of the input poses (the thesis's 10 deg at the 1 deg it expects),
+  // scaled by sqrt(eps / alpha_maxrot_noise_deg) for the rotation noise eps measured from the
+  // motions (robust σ of the master-minus-slave rotation angle differences); never below
+  // alpha_threshold_deg. alpha_maxrot_noise_deg = 0: the fixed alpha_maxrot_deg.
   double alpha_maxrot_deg = 10.0;
+  double alpha_maxrot_noise_deg = 1.0;
   // Time-dependent scales when measured scales deviate by more than this fraction (5.5).
   double scale_deviation_threshold = 0.03;
   // Auto partition count: each partition keeps at least this many motions.

@@ -61,7 +61,13 @@ struct Observability {
   // infinite when the axis component is not determined at all.
   double axis_std_ratio = 0.0;
   double max_rotation_deg = 0.0;  // largest master rotation angle among the motions
-  bool planar = false;            // planar model: C along planar_axis is not determined
+  // The motion-model decision (thesis 5.2): the rotation noise ε of the motions (robust σ of
+  // the master-minus-slave rotation angle differences, which are zero whatever the
+  // extrinsics), and the largest rotation below which the purely translational model is used
+  // (the equal-error boundary at ε, see CalibrationOptions::alpha_maxrot_noise_deg). Degrees.
+  double rotation_noise_deg = 0.0;
+  double translational_below_deg = 0.0;
+  bool planar = false;  // planar model: C along planar_axis is not determined
   // Mean rotation axis in the master frame (unit; set for every rotating rig, not only planar).
   Eigen::Vector3d planar_axis = Eigen::Vector3d::Zero();
 };

@@ -63,7 +63,14 @@ struct RigEstimatorOptions {
   int max_open_segments = 2;
 
   // Models.
-  double alpha_maxrot_deg = 10.0;  // below: purely translational (rotation + scale)
+  // Purely translational (rotation + scale) while no motion rotates by the equal-error
+  // boundary of thesis 5.2, as CalibrationOptions: alpha_maxrot_deg at an orientation noise of
+  // alpha_maxrot_noise_deg, scaled by sqrt(eps / alpha_maxrot_noise_deg) for the running
+  // rotation noise eps of the motions (RMS of the master-minus-slave rotation angle
+  // differences), never below pair_min_angle_deg; the fixed alpha_maxrot_deg until
+  // gate_after_motions motions have measured eps, or when alpha_maxrot_noise_deg = 0.
+  double alpha_maxrot_deg = 10.0;
+  double alpha_maxrot_noise_deg = 1.0;
   // General or planar, as CalibrationOptions (the same figures): the general model needs the
   // rotation axes to tilt by min_tilt_snr times the noise (or to spread by
   // general_axis_spread_deg) and the σ of C along the mean axis within max_axis_std_ratio
