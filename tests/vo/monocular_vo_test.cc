@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <cstdio>
 #include <map>
 
@@ -243,6 +244,29 @@ TEST(MonocularVo, BadImagesAreRejectedWithoutCrashing) {
   EXPECT_EQ(vo.frames_processed(), 4);
   MonocularVo no_camera(nullptr, 0);
   EXPECT_FALSE(no_camera.Process(0, cv::Mat(240, 320, CV_8UC1)).pose.has_value());
+}
+
+// The feature budget follows the field of view: a normal lens keeps max_features, a 186-degree
+// fisheye (2 pi (1 - cos 93 deg) = 6.61 sr) tracks max_features * 6.61 / normal_fov_sr.
+TEST(MonocularVo, FeatureBudgetFollowsTheFieldOfView) {
+  const auto pinhole = TestPinhole::WithFov(752, 480, 60.0);
+  const auto fisheye = TestEquidistant::WithFov(640, 640, 186.0);
+  VoOptions options;
+  const MonocularVo normal(pinhole, 0, options);
+  const MonocularVo wide(fisheye, 1, options);
+  // 60 x 40.5 degrees: 4 asin(sin 30 sin 20.2) = 0.69 sr.
+  EXPECT_NEAR(normal.field_of_view_sr(), 0.69, 0.03);
+  EXPECT_EQ(normal.feature_budget(), options.max_features);
+  const double fisheye_sr = 2.0 * M_PI * (1.0 - std::cos(93.0 * M_PI / 180.0));
+  EXPECT_NEAR(wide.field_of_view_sr(), fisheye_sr, 0.03 * fisheye_sr);
+  EXPECT_NEAR(wide.feature_budget(), options.max_features * fisheye_sr / options.normal_fov_sr,
+              0.03 * options.max_features * fisheye_sr / options.normal_fov_sr);
+  options.normal_fov_sr = 0.0;  // off: max_features for every lens
+  EXPECT_EQ(MonocularVo(fisheye, 1, options).feature_budget(), options.max_features);
+  options.normal_fov_sr = -1.0;
+  std::string error;
+  EXPECT_FALSE(options.Check(&error));
+  EXPECT_NE(error.find("normal_fov_sr"), std::string::npos);
 }
 
 TEST(VoOptions, CheckNamesTheField) {

@@ -62,7 +62,8 @@ VoOptions EvalOptions() {
       {"ba_huber_px", &o.ba_huber_px},
       {"affine_max_shift_px", &o.affine_max_shift_px},
       {"affine_min_area", &o.affine_min_area},
-      {"affine_max_area", &o.affine_max_area}};
+      {"affine_max_area", &o.affine_max_area},
+      {"normal_fov_sr", &o.normal_fov_sr}};
   std::string all(text);
   size_t start = 0;
   while (start < all.size()) {

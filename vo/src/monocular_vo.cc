@@ -72,6 +72,8 @@ bool VoOptions::Check(std::string* error) const {
   };
   require(grid_cell_px >= 4, "grid_cell_px", ">= 4");
   require(max_features >= 20, "max_features", ">= 20");
+  require(normal_fov_sr >= 0.0 && normal_fov_sr <= 4.0 * M_PI, "normal_fov_sr",
+          "in [0, 4 pi] (0: max_features for every lens)");
   require(fast_threshold >= 1 && fast_threshold <= 255, "fast_threshold", "in [1, 255]");
   require(klt_window_px >= 5 && klt_window_px % 2 == 1, "klt_window_px", "odd and >= 5");
   require(klt_pyramid_levels >= 0 && klt_pyramid_levels <= 8, "klt_pyramid_levels", "in [0, 8]");
@@ -126,6 +128,8 @@ class MonocularVo::Impl {
   int segment_ = 0;
   int64_t frames_ = 0;
   VoOptions options_;
+  double fov_sr_ = 0.0;  // solid angle of the valid image area
+  int max_tracks_ = 0;   // feature budget for this lens
 
  private:
   void StartReference(int64_t t_ns, const cv::Mat& grey);
@@ -179,6 +183,7 @@ MonocularVo::Impl::Impl(std::shared_ptr<const CameraModel> camera, int camera_in
     log_->error("camera {}: invalid VO options ({}); using the defaults", camera_index_, error);
     options_ = VoOptions{};
   }
+  max_tracks_ = options_.max_features;
   rng_.seed(options_.seed);
   KltOptions klt;
   klt.window_px = options_.klt_window_px;
@@ -219,8 +224,34 @@ MonocularVo::Impl::Impl(std::shared_ptr<const CameraModel> camera, int camera_in
   const int border = std::max(1, options_.border_px);
   cv::erode(valid_mask_, detect_mask,
             cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * border + 1, 2 * border + 1)));
-  grid_ = std::make_unique<FeatureGrid>(cv::Size(w, h), options_.grid_cell_px,
-                                        options_.fast_threshold, options_.border_px, detect_mask);
+
+  // Field of view: the share of directions (a Fibonacci sphere) that land in the valid area.
+  constexpr int kDirections = 4000;
+  int seen = 0;
+  for (int i = 0; i < kDirections; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / kDirections;
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = i * M_PI * (3.0 - std::sqrt(5.0));  // golden angle
+    const Eigen::Vector3d d(r * std::cos(phi), r * std::sin(phi), z);
+    if (std::acos(std::clamp(z, -1.0, 1.0)) > max_angle + 1e-9) continue;
+    const auto px = camera_->Project(d);
+    if (px && InMask(cv::Point2f(static_cast<float>(px->x()), static_cast<float>(px->y())))) {
+      ++seen;
+    }
+  }
+  fov_sr_ = 4.0 * M_PI * seen / kDirections;
+  // Wide lenses track more features, on cells small enough to hold them.
+  int cell_px = options_.grid_cell_px;
+  if (options_.normal_fov_sr > 0.0 && fov_sr_ > options_.normal_fov_sr) {
+    max_tracks_ =
+        static_cast<int>(std::lround(options_.max_features * fov_sr_ / options_.normal_fov_sr));
+    const double area = cv::countNonZero(detect_mask);
+    cell_px = std::clamp(static_cast<int>(std::sqrt(area / max_tracks_)), 4, cell_px);
+  }
+  log_->debug("camera {}: field of view {:.2f} sr, up to {} features on {} px cells", camera_index_,
+              fov_sr_, max_tracks_, cell_px);
+  grid_ = std::make_unique<FeatureGrid>(cv::Size(w, h), cell_px, options_.fast_threshold,
+                                        options_.border_px, detect_mask);
 }
 
 bool MonocularVo::Impl::InMask(const cv::Point2f& px) const {
@@ -304,7 +335,7 @@ VoResult MonocularVo::Impl::Process(int64_t t_ns, const cv::Mat& image) {
 }
 
 void MonocularVo::Impl::AddNewTracks(const cv::Mat& grey, int anchor_keyframe) {
-  const int room = options_.max_features - static_cast<int>(tracks_.size());
+  const int room = max_tracks_ - static_cast<int>(tracks_.size());
   if (room <= 0) return;
   std::vector<cv::Point2f> existing;
   existing.reserve(tracks_.size());
@@ -731,5 +762,7 @@ VoState MonocularVo::state() const { return impl_->state_; }
 int MonocularVo::segment() const { return impl_->segment_; }
 int64_t MonocularVo::frames_processed() const { return impl_->frames_; }
 const VoOptions& MonocularVo::options() const { return impl_->options_; }
+double MonocularVo::field_of_view_sr() const { return impl_->fov_sr_; }
+int MonocularVo::feature_budget() const { return impl_->max_tracks_; }
 
 }  // namespace rigcal::vo
