@@ -138,6 +138,7 @@ const std::map<std::string, FieldSetter>& EstimatorFields() {
       {"decalibration_confirmations", Int(&O::decalibration_confirmations)},
       {"max_open_segments", Int(&O::max_open_segments)},
       {"alpha_maxrot_deg", Double(&O::alpha_maxrot_deg)},
+      {"alpha_maxrot_noise_deg", Double(&O::alpha_maxrot_noise_deg)},
       {"planar_axis_spread_deg", Double(&O::planar_axis_spread_deg)},
       {"min_tilt_snr", Double(&O::min_tilt_snr)},
       {"max_axis_std_ratio", Double(&O::max_axis_std_ratio)},

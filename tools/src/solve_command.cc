@@ -248,10 +248,13 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
                   "axis (a car on a road); rotation, scale and the position in the plane\n"
                   "are estimated, the offset along the axis comes from --prior or is\n"
                   "reported unknown. translational: it (almost) does not rotate; only\n"
-                  "rotation and scale are determined. auto: translational below 10 deg\n"
-                  "of rotation, else general or planar from how much the rotation axes\n"
-                  "tilt beyond the noise and how well the offset along the mean axis is\n"
-                  "determined (the result's `observability`).")
+                  "rotation and scale are determined. auto: translational when no\n"
+                  "motion rotates beyond the thesis's equal-error boundary (10 deg at\n"
+                  "1 deg of rotation noise, scaled by sqrt(noise / 1 deg) for the noise\n"
+                  "measured from the master/slave rotation-angle differences), else\n"
+                  "general or planar from how much the rotation axes tilt beyond the\n"
+                  "noise and how well the offset along the mean axis is determined (the\n"
+                  "result's `observability`).")
       ->check(CLI::IsMember({"auto", "general", "planar", "translational"}))
       ->capture_default_str();
   cmd->add_option("--scale", args->scale,
