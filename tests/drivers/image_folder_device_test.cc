@@ -52,7 +52,9 @@ TEST(ImageFolderDevice, EurocCam1ReportsExactlyTheFourMissingImages) {
     EXPECT_EQ(frames[i].image.cols, 752);
     EXPECT_EQ(frames[i].image.rows, 480);
     EXPECT_EQ(frames[i].seq, static_cast<int64_t>(i));
-    if (i > 0) EXPECT_GT(frames[i].t_ns, frames[i - 1].t_ns);
+    if (i > 0) {
+      EXPECT_GT(frames[i].t_ns, frames[i - 1].t_ns);
+    }
   }
   EXPECT_EQ(frames.front().t_ns, 1403715273262142976);
   EXPECT_EQ(device.skipped_count(), 4u);  // nothing new at Grab
