@@ -46,8 +46,8 @@ struct PositionPriorFunctor {
       for (int i = 0; i < 3; ++i) c[i] = T(t(i, 0)) * p[0] + T(t(i, 1)) * p[1] + T(t(i, 2)) * h[0];
       next = 3;
     }
-    std::vector<const T*> scales;
-    for (int k = 0; k < segments; ++k) scales.push_back(parameters[next + k]);
+    std::vector<const T*> scales(static_cast<size_t>(segments));
+    for (int k = 0; k < segments; ++k) scales[static_cast<size_t>(k)] = parameters[next + k];
     std::vector<T> u(static_cast<size_t>(l.cols()));
     FillU(q, c, scales, u.data());
     for (Eigen::Index row = 0; row < l.rows(); ++row) {
@@ -103,6 +103,7 @@ double PositionPriorValue(const RefinementPrior& prior, const Eigen::Quaterniond
   if (prior.position.size() == 0) return 0.0;
   const Eigen::Vector4d w = ToWxyz(q.normalized());
   std::vector<const double*> scales;
+  scales.reserve(segment_scales.size());
   for (const double& s : segment_scales) scales.push_back(&s);
   Eigen::VectorXd u(prior.position.cols());
   FillU(w.data(), c.data(), scales, u.data());

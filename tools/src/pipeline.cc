@@ -58,7 +58,7 @@ Pipeline::Pipeline(std::vector<std::string> names,
                    std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
                    std::vector<std::shared_ptr<const vo::CameraModel>> cameras,
                    OnlineOptions online, PipelineOptions options, lcm::LCM* lcm)
-    : names_(std::move(names)), options_(std::move(options)), lcm_(lcm) {
+    : names_(std::move(names)), options_(options), lcm_(lcm) {
   if (names_.size() < 2 || devices.size() != names_.size() || cameras.size() != names_.size()) {
     throw std::invalid_argument("Pipeline: need one device and one camera model per camera (>= 2)");
   }

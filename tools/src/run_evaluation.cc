@@ -34,8 +34,9 @@ std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int came
     unit.poses = static_cast<int>(members.size());
     unit.metres_per_unit = den > 0.0 ? num / den : 0.0;
     double sum_sq = 0.0;
-    for (const auto& [truth, vo] : pairs)
+    for (const auto& [truth, vo] : pairs) {
       sum_sq += (truth - unit.metres_per_unit * vo).squaredNorm();
+    }
     unit.fit_rms_m = std::sqrt(sum_sq / static_cast<double>(pairs.size()));
     units.push_back(unit);
   }
