@@ -46,12 +46,14 @@ test-asan: deps
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --test-dir $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval
 
-# The multi-threaded calib tests (SyncBuffer producers, OnlineCalibrator threads) under TSan.
+# The multi-threaded calib tests (SyncBuffer producers, PoseMerge, OnlineCalibrator threads)
+# under TSan.
 test-tsan: deps
 	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,-DRIGCAL_TSAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
-	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test
+	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test \
+	  calib_pose_merge_test
 	TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
-	  ctest --test-dir $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator)'
+	  ctest --test-dir $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)'
 
 # Long evaluations (not part of make test).
 eval: build

@@ -5,8 +5,8 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
-#include "rigcal/tools/pose_merge.h"
 #include "rigcal/calib/logging.h"
+#include "rigcal/calib/pose_merge.h"
 #include "rigcal/tools/lcm_messages.h"
 
 namespace rigcal::tools {

@@ -28,6 +28,10 @@ namespace lcm {
 class LCM;
 }
 
+namespace rigcal {
+class PoseMerge;
+}
+
 namespace rigcal::tools {
 
 struct PipelineOptions {
@@ -67,8 +71,6 @@ struct PipelineSnapshot {
   RigEstimate estimate;
   bool finished = false;  // every camera ended or died and its frames were processed
 };
-
-class PoseMerge;
 
 class Pipeline {
  public:

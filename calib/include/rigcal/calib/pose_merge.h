@@ -21,7 +21,7 @@
 
 #include "rigcal/calib/types.h"
 
-namespace rigcal::tools {
+namespace rigcal {
 
 class PoseMerge {
  public:
@@ -57,4 +57,4 @@ class PoseMerge {
   bool stopped_ = false;                // guarded by mutex_
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal

@@ -1,7 +1,7 @@
 // PoseMerge forwards the poses of several VO threads in one canonical order, (frame stamp,
 // camera), whatever the thread timing, holds nothing back once every camera has ended, and
 // keeps the threads within the lead.
-#include "rigcal/tools/pose_merge.h"
+#include "rigcal/calib/pose_merge.h"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <random>
 #include <thread>
 
-namespace rigcal::tools {
+namespace rigcal {
 namespace {
 
 constexpr int64_t kPeriodNs = 50'000'000;
@@ -132,4 +132,4 @@ TEST(PoseMerge, StopReleasesAWaitingCamera) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal

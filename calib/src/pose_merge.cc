@@ -1,8 +1,8 @@
-#include "rigcal/tools/pose_merge.h"
+#include "rigcal/calib/pose_merge.h"
 
 #include <limits>
 
-namespace rigcal::tools {
+namespace rigcal {
 namespace {
 constexpr int64_t kNotStarted = std::numeric_limits<int64_t>::min();
 }  // namespace
@@ -68,4 +68,4 @@ void PoseMerge::ReleaseSafe() {
   }
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal
