@@ -639,13 +639,21 @@ void RigEstimator::Publish(int index) {
   }
   published.name = names_[index + 1];
   published.motions.used = s.counts.used;
+  // The covariance takes the motions as independent; overlapping pairs share their drift, so
+  // the published σ count it (OverlapFactor), and convergence is judged on them.
+  if (overlap > 1.0) {
+    published.rot_std_deg *= overlap;
+    published.pos_std *= overlap;
+    if (std::isfinite(published.axis_offset_std)) published.axis_offset_std *= overlap;
+    for (SegmentScale& sc : published.scales) sc.std *= overlap;
+  }
 
   if (!published.usable()) {
     online.flags |= kFlagInitialising;
   } else {
     // Stability of the linear estimate (a refinement being published is no change).
     const double change = AngleBetween(s.linear.estimate.q, s.last_q) * kDegPerRad;
-    s.stable = change <= std::max(s.linear.rot_std_deg, 0.01) ? s.stable + 1 : 0;
+    s.stable = change <= std::max(overlap * s.linear.rot_std_deg, 0.01) ? s.stable + 1 : 0;
     s.last_q = s.linear.estimate.q;
     if (published.motion_model == MotionModel::kTranslational)
       online.flags |= kFlagTranslationalOnly;
