@@ -67,9 +67,9 @@ LinearRotation SolveLinearRotation(std::vector<MotionData>* motions) {
         const Eigen::Matrix4d a = RotationConstraintMatrix(m);
         sum.noalias() += a.transpose() * a;
       }
-      const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(
-                                  sum, Eigen::EigenvaluesOnly)
-                                  .eigenvalues()(0);
+      const double smallest =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(sum, Eigen::EigenvaluesOnly)
+              .eigenvalues()(0);
       if (smallest < best) {
         best = smallest;
         best_mask = mask;
@@ -163,6 +163,41 @@ Eigen::Quaterniond SolveTranslationalRotation(const std::vector<MotionData>& mot
     target.push_back(m.C0 / n0);  // c_0^k
   }
   return SolveAbsoluteOrientation(source, target);
+}
+
+double TranslationalRotationStd(const Eigen::Matrix3d& s, const Eigen::Matrix3d& d,
+                                const Eigen::Quaterniond& dq) {
+  const Eigen::Matrix3d dr = dq.toRotationMatrix();
+  const double w = d.trace();  // sum of the weights (unit directions)
+  if (w <= 0.0) return std::numeric_limits<double>::infinity();
+  // sum w |c_0 - dR c_i|^2 = 2 w - 2 tr(dR S).
+  const double residual_ss = std::max(0.0, 2.0 * w - 2.0 * (dr * s).trace());
+  const double variance = residual_ss / std::max(1.0, 2.0 * w - 3.0);
+  // d(Exp(δ) dR c_i)/dδ = -[dR c_i]x: information sum w (I - v v^T) with v = dR c_i.
+  const Eigen::Matrix3d information = w * Eigen::Matrix3d::Identity() - dr * d * dr.transpose();
+  // The noisy directions add information of their own about the rotation about a line all
+  // translations share: 2 σ_i² per motion, σ_i² the slave's per-component direction noise,
+  // about variance / 2 (the residual has the master's and the slave's). What is left is the
+  // spread of the true directions; below twice the noise's share the rotation is undetermined.
+  const double smallest =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(information).eigenvalues()(0);
+  const double signal = smallest - w * variance;
+  if (!(signal > 2.0 * w * variance) || !(signal > 1e-12 * w)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return std::sqrt(variance / signal);
+}
+
+double TranslationalRotationStd(const std::vector<MotionData>& motions,
+                                const Eigen::Quaterniond& dq) {
+  Eigen::Matrix3d s = Eigen::Matrix3d::Zero(), d = Eigen::Matrix3d::Zero();
+  for (const auto& m : motions) {
+    const double ni = m.Ci.norm(), n0 = m.C0.norm();
+    if (ni <= 0.0 || n0 <= 0.0) continue;
+    s += (m.Ci / ni) * (m.C0 / n0).transpose();
+    d += (m.Ci / ni) * (m.Ci / ni).transpose();
+  }
+  return TranslationalRotationStd(s, d, dq);
 }
 
 std::vector<double> SolveTranslationalScales(const std::vector<MotionData>& motions,

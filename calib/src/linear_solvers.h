@@ -28,6 +28,18 @@ Eigen::Quaterniond SolveAbsoluteOrientation(const std::vector<Eigen::Vector3d>& 
 // The same from the correlation S = sum source_k target_k^T.
 Eigen::Quaterniond SolveAbsoluteOrientation(const Eigen::Matrix3d& s);
 
+// σ (radians, largest axis) of the translational model's rotation dR (Horn on the translation
+// directions c, 4.29-4.30), a left perturbation Exp(δ) dR, from S = sum w c_i c_0^T and
+// D = sum w c_i c_i^T: the direction residuals c_0 - dR c_i with their variance estimated from
+// them (2 equations per motion, 3 unknowns). Infinite when the translations do not constrain
+// the rotation about some direction beyond what their noise does (all translations parallel:
+// driving straight).
+double TranslationalRotationStd(const Eigen::Matrix3d& s, const Eigen::Matrix3d& d,
+                                const Eigen::Quaterniond& dq);
+// The same from the motions (unit weights).
+double TranslationalRotationStd(const std::vector<MotionData>& motions,
+                                const Eigen::Quaterniond& dq);
+
 struct LinearPositionScale {
   Eigen::Vector3d C = Eigen::Vector3d::Zero();
   std::vector<double> scales;

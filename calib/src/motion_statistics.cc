@@ -1,7 +1,9 @@
 #include "motion_statistics.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <unsupported/Eigen/KroneckerProduct>
 
@@ -63,7 +65,11 @@ void MotionStatistics::Add(const MotionData& m, int segment, double w) {
   s.len_cross += w * ni * n0;
   s.len_sq += w * ni * ni;
   s.weight += w;
-  if (ni > 0.0 && n0 > 0.0) S_dir_.noalias() += w * (m.Ci / ni) * (m.C0 / n0).transpose();
+  if (ni > 0.0 && n0 > 0.0) {
+    const Eigen::Vector3d ci = m.Ci / ni;
+    S_dir_.noalias() += w * ci * (m.C0 / n0).transpose();
+    D_dir_.noalias() += w * ci * ci.transpose();
+  }
   weight_ += w;
   max_rotation_ = std::max(max_rotation_, m.angle0);
   ++motions_;
@@ -76,6 +82,7 @@ void MotionStatistics::Decay(double f) {
   g_c_ *= f;
   c0_sq_ *= f;
   S_dir_ *= f;
+  D_dir_ *= f;
   H_marg_ *= f;
   g_marg_ *= f;
   c0_sq_marg_ *= f;
@@ -99,6 +106,10 @@ Eigen::Quaterniond MotionStatistics::SolveRotation(Eigen::Vector4d* eigenvalues)
 
 Eigen::Quaterniond MotionStatistics::SolveTranslationalRotation() const {
   return SolveAbsoluteOrientation(S_dir_);  // (4.30)
+}
+
+double MotionStatistics::TranslationalRotationStd(const Eigen::Quaterniond& dq) const {
+  return internal::TranslationalRotationStd(S_dir_, D_dir_, dq);
 }
 
 PositionSolution MotionStatistics::SolvePosition(const Eigen::Quaterniond& dq,
@@ -243,6 +254,7 @@ void MotionStatistics::ResetPosition() {
   g_marg_.setZero();
   c0_sq_marg_ = 0.0;
   S_dir_.setZero();
+  D_dir_.setZero();
   planar_.ResetPosition();
   segments_.clear();
 }
@@ -268,6 +280,7 @@ std::string MotionStatistics::Serialize() const {
   Write(out, "gc", g_c_);
   out << "c0sq " << c0_sq_ << '\n';
   Write(out, "Sdir", S_dir_);
+  Write(out, "Ddir", D_dir_);
   Write(out, "Hmarg", H_marg_);
   Write(out, "gmarg", g_marg_);
   out << "c0sqmarg " << c0_sq_marg_ << '\n';
@@ -289,17 +302,27 @@ std::string MotionStatistics::Serialize() const {
 bool MotionStatistics::Parse(const std::string& text) {
   std::istringstream in(text);
   MotionStatistics s;
+  // "Ddir" follows "Sdir" since state version 3; a version-2 text goes on with "Hmarg".
+  const bool has_d = text.find("\nDdir ") != std::string::npos;
   double motions = 0.0, count = 0.0;
   if (!Read(in, "M", s.M_) || !Read(in, "v00", s.planar_.v00) || !Read(in, "vii", s.planar_.vii) ||
       !Read(in, "v0i", s.planar_.v0i) || !Read(in, "K", s.planar_.k) ||
       !Read(in, "c0c0", s.planar_.c0c0) || !Read(in, "Hplmarg", s.planar_.h_marg) ||
       !Read(in, "gplmarg", s.planar_.g_marg) || !ReadScalar(in, "cplmarg", &s.planar_.c_marg) ||
       !Read(in, "Hcc", s.H_cc_) || !Read(in, "gc", s.g_c_) || !ReadScalar(in, "c0sq", &s.c0_sq_) ||
-      !Read(in, "Sdir", s.S_dir_) || !Read(in, "Hmarg", s.H_marg_) ||
-      !Read(in, "gmarg", s.g_marg_) || !ReadScalar(in, "c0sqmarg", &s.c0_sq_marg_) ||
-      !ReadScalar(in, "weight", &s.weight_) || !ReadScalar(in, "maxrot", &s.max_rotation_) ||
-      !ReadScalar(in, "motions", &motions) || !ReadScalar(in, "segments", &count)) {
+      !Read(in, "Sdir", s.S_dir_) || (has_d && !Read(in, "Ddir", s.D_dir_)) ||
+      !Read(in, "Hmarg", s.H_marg_) || !Read(in, "gmarg", s.g_marg_) ||
+      !ReadScalar(in, "c0sqmarg", &s.c0_sq_marg_) || !ReadScalar(in, "weight", &s.weight_) ||
+      !ReadScalar(in, "maxrot", &s.max_rotation_) || !ReadScalar(in, "motions", &motions) ||
+      !ReadScalar(in, "segments", &count)) {
     return false;
+  }
+  if (!has_d) {
+    // Version 2: c_0 ≈ dR c_i gives D ≈ S dR, and tr D is the sum of the weights (unit
+    // directions; every motion but a standing one has them).
+    const Eigen::Matrix3d sd = s.S_dir_ * SolveAbsoluteOrientation(s.S_dir_).toRotationMatrix();
+    const double trace = sd.trace();
+    if (trace > 0.0) s.D_dir_ = (sd + sd.transpose()) / 2.0 * (s.weight_ / trace);
   }
   s.motions_ = static_cast<int>(motions);
   if (count < 0 || count > 1e6) return false;

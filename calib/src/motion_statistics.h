@@ -11,7 +11,8 @@
 //   vec(dR),
 //                  n_s = sum w |C_i|^2,   Q_s = sum w C_0 C_i^T   so that  sum w C_0^T dR C_i =
 //                  <dR, Q_s>.
-// Purely translational model (4.29-4.32): S = sum w c_i c_0^T and per segment sum w |C_i||C_0|.
+// Purely translational model (4.29-4.32): S = sum w c_i c_0^T and per segment sum w |C_i||C_0|;
+// for its covariance D = sum w c_i c_i^T (c = C/|C| the translation directions).
 // Planar model (planar_solver.h): PlanarSums and per segment N_s = sum w C_i C_i^T.
 
 #include <Eigen/Core>
@@ -70,6 +71,11 @@ class MotionStatistics {
   Eigen::Quaterniond SolveRotation(Eigen::Vector4d* eigenvalues) const;
   // Horn on translation directions (4.29-4.30).
   Eigen::Quaterniond SolveTranslationalRotation() const;
+  // σ (radians, largest axis) of that rotation, a left perturbation Exp(δ) dR, from the
+  // direction residuals c_0 - dR c_i with their variance estimated from them (2 equations
+  // per motion, 3 unknowns). Infinite when no translation constrains the rotation about
+  // some direction (all translations parallel: driving straight).
+  double TranslationalRotationStd(const Eigen::Quaterniond& dq) const;
   // Normal equations of (4.16)/(4.17) for the given rotation, with the closed segments'
   // marginalised information added; C restricted by `constraint` when not null.
   PositionSolution SolvePosition(const Eigen::Quaterniond& dq,
@@ -112,6 +118,7 @@ class MotionStatistics {
   Eigen::Vector3d g_c_ = Eigen::Vector3d::Zero();
   double c0_sq_ = 0.0;                                // sum w |C_0|^2
   Eigen::Matrix3d S_dir_ = Eigen::Matrix3d::Zero();   // sum w c_i c_0^T
+  Eigen::Matrix3d D_dir_ = Eigen::Matrix3d::Zero();   // sum w c_i c_i^T
   Eigen::Matrix3d H_marg_ = Eigen::Matrix3d::Zero();  // marginalised segments
   Eigen::Vector3d g_marg_ = Eigen::Vector3d::Zero();
   double c0_sq_marg_ = 0.0;

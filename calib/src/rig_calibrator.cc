@@ -513,6 +513,11 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
     r.rot_std_deg = std::sqrt(std::max(0.0, eig.eigenvalues()(2))) * kDegPerRad;
     r.pos_std = refined.cov_position.diagonal().cwiseMax(0.0).cwiseSqrt();
   }
+  // Translations all along one line leave the rotation about it to their noise (Ceres's
+  // covariance would take that noise for information).
+  const bool parallel =
+      translational && !std::isfinite(internal::TranslationalRotationStd(data, r.estimate.q));
+  if (parallel) r.rot_std_deg = std::numeric_limits<double>::infinity();
   if (translational) {
     r.position_observable = false;
     r.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
@@ -562,7 +567,10 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
     for (size_t j = 1; j < why.size(); ++j) msg << "; " << why[j];
     msg << ")";
   }
-  if (translational) {
+  if (parallel) {
+    msg << ": the translations are all parallel, so the rotation about their direction is "
+           "undetermined (drive a curve)";
+  } else if (translational) {
     msg << ": rotation and scale only, position unobservable";
   } else if (planar) {
     msg << ": C along the rotation axis " << Vec3Text(axis) << " is unobservable";
@@ -580,8 +588,9 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   }
   msg << "; " << (scale_why.empty() ? ToString(scale_model) + " scale model" : scale_why);
   if (solve) msg << "; refinement: " << refined.message;
-  r.termination =
-      (solve && !refined.converged) ? Termination::kNoConvergence : Termination::kConverged;
+  r.termination = parallel                        ? Termination::kDegenerate
+                  : (solve && !refined.converged) ? Termination::kNoConvergence
+                                                  : Termination::kConverged;
   r.message = msg.str();
   log->debug("slave '{}': {}", name, r.message);
   return r;

@@ -115,6 +115,8 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
   if (translational) {
     r.estimate.q = stats.SolveTranslationalRotation();
     scales = stats.SolveTranslationalScales();
+    // Infinite when the translations leave a rotation undetermined (driving straight).
+    r.rot_std_deg = stats.TranslationalRotationStd(r.estimate.q) * kDegPerRad;
     r.position_observable = false;
     r.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
     if (nominal) r.estimate.C = nominal->C;
@@ -678,6 +680,10 @@ void RigEstimator::Publish(int index) {
         "boundary at the rotation noise {:.3f} deg)",
         published.observability.max_rotation_deg, published.observability.translational_below_deg,
         published.observability.rotation_noise_deg);
+    if (!std::isfinite(published.rot_std_deg)) {
+      msg << "; the translations are all parallel: the rotation about their direction is "
+             "undetermined";
+    }
   }
   if (online.flags & kFlagPlanar) {
     const Eigen::Vector3d& a = published.observability.planar_axis;
@@ -864,9 +870,9 @@ bool RigEstimator::RestoreState(const std::string& text, std::string* error) {
   if (!(in >> magic >> version) || magic != "rigcal-estimator-state") {
     return fail("not a rigcal estimator state (bad header)");
   }
-  if (version != kStateVersion) {
-    return fail("state version " + std::to_string(version) + ", this build reads version " +
-                std::to_string(kStateVersion));
+  if (version < kOldestStateVersion || version > kStateVersion) {
+    return fail("state version " + std::to_string(version) + ", this build reads versions " +
+                std::to_string(kOldestStateVersion) + " to " + std::to_string(kStateVersion));
   }
   const size_t body_start = text.find('\n') + 1;
   const size_t sum_pos = text.rfind("checksum ");

@@ -246,6 +246,41 @@ TEST(CalibrateSlave, ReportsInsufficientRotation) {
       << r.message;
 }
 
+// Translations all along one line (driving straight without turning) leave the rotation about
+// that line undetermined, with or without noise: reported degenerate, not as a small σ.
+TEST(CalibrateSlave, StraightTranslationIsDegenerate) {
+  for (const double noise : {0.0, 0.002}) {
+    std::vector<int64_t> t_ns;
+    std::vector<Pose> master;
+    for (int k = 0; k < 600; ++k) {
+      t_ns.push_back(static_cast<int64_t>(k) * 50'000'000);
+      Pose p;
+      p.C = Eigen::Vector3d(0.0, 0.0, 0.05 * k + 0.5 * std::sin(0.05 * k));
+      master.push_back(p);
+    }
+    DriveOptions d;
+    d.rotation_noise_deg = noise > 0.0 ? 0.02 : 0.0;
+    d.position_noise = noise;
+    const SyntheticDrive drive =
+        GenerateDriveAlong({"front", "back"}, {DemoRig()[1]}, t_ns, master, d);
+    const auto r = CalibrateRig(drive.recording, CalibrationOptions{}).slaves[0];
+    EXPECT_EQ(r.motion_model, MotionModel::kTranslational) << r.message;
+    EXPECT_EQ(r.termination, Termination::kDegenerate) << "noise " << noise << ": " << r.message;
+    EXPECT_FALSE(std::isfinite(r.rot_std_deg));
+    EXPECT_NE(r.message.find("undetermined"), std::string::npos) << r.message;
+  }
+  // A translating drive that turns its direction is not.
+  DriveOptions d;
+  d.motion = DriveOptions::Motion::kTranslationOnly;
+  d.rotation_noise_deg = 0.02;
+  d.position_noise = 0.002;
+  const SyntheticDrive drive = GenerateDrive({"front", "back"}, {DemoRig()[1]}, d);
+  const auto r = CalibrateRig(drive.recording, CalibrationOptions{}).slaves[0];
+  EXPECT_EQ(r.motion_model, MotionModel::kTranslational) << r.message;
+  EXPECT_TRUE(r.usable()) << r.message;
+  EXPECT_TRUE(std::isfinite(r.rot_std_deg) && r.rot_std_deg > 0.0) << r.rot_std_deg;
+}
+
 // Thesis 5.2: below the equal-error boundary the purely translational model. The boundary
 // scales with the measured rotation noise: noise-free rotations of up to 6 degrees determine the
 // general model exactly (the boundary falls to alpha_threshold), while the thesis's fixed

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <sstream>
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
@@ -188,6 +190,63 @@ TEST(RigEstimator, PureTranslationGivesRotationAndScaleOnly) {
   const auto e = CompareToTruth(r.estimate, drive.truth[0]);
   EXPECT_LT(e.rot_deg, 0.5);
   EXPECT_LT(e.scale_pct, 2.0);
+}
+
+// The translational model's σ (Horn on translation directions) is of the size of its error:
+// the RMS over seeds of the error per σ (σ of the largest axis, the error the whole angle:
+// √3 per axis for an isotropic error) lies within a factor ~2 of 1.
+TEST(RigEstimator, PureTranslationSigmaMatchesError) {
+  double sum_sq = 0.0;
+  constexpr int kSeeds = 12;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    DriveOptions d;
+    d.motion = DriveOptions::Motion::kTranslationOnly;
+    d.num_frames = 1200;
+    d.seed = seed;
+    d.rotation_noise_deg = 0.02;
+    d.position_noise = 0.004;
+    const SyntheticDrive drive = GenerateDrive({"front", "back"}, {DemoRig()[1]}, d);
+    RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+    Feed(&est, drive.recording);
+    const auto& r = est.Estimate().rig.slaves[0];
+    ASSERT_TRUE(r.usable()) << r.message;
+    ASSERT_EQ(r.motion_model, MotionModel::kTranslational);
+    ASSERT_GT(r.rot_std_deg, 0.0);
+    ASSERT_TRUE(std::isfinite(r.rot_std_deg));
+    const double e = CompareToTruth(r.estimate, drive.truth[0]).rot_deg;
+    sum_sq += std::pow(e / (std::sqrt(3.0) * r.rot_std_deg), 2);
+  }
+  const double rms = std::sqrt(sum_sq / kSeeds);
+  std::printf("translational model: RMS of error / sigma over %d seeds: %.2f\n", kSeeds, rms);
+  EXPECT_GT(rms, 0.4);
+  EXPECT_LT(rms, 2.0);
+}
+
+// Translations all along one line do not determine the rotation about it: the σ says so
+// (no small number) and the estimate is never called converged.
+TEST(RigEstimator, StraightDriveDoesNotConverge) {
+  std::vector<int64_t> t_ns;
+  std::vector<Pose> master;
+  for (int k = 0; k < 1200; ++k) {
+    t_ns.push_back(static_cast<int64_t>(k) * 50'000'000);
+    Pose p;
+    p.C = Eigen::Vector3d(0.0, 0.0, 0.05 * k + 0.5 * std::sin(0.05 * k));  // speeding up, slowing
+    master.push_back(p);
+  }
+  DriveOptions d;
+  d.rotation_noise_deg = 0.02;
+  d.position_noise = 0.002;
+  const SyntheticDrive drive =
+      GenerateDriveAlong({"front", "back"}, {DemoRig()[1]}, t_ns, master, d);
+  RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
+  Feed(&est, drive.recording);
+  const auto& r = est.Estimate().rig.slaves[0];
+  ASSERT_TRUE(r.usable()) << r.message;
+  EXPECT_EQ(r.motion_model, MotionModel::kTranslational);
+  EXPECT_GT(r.rot_std_deg, 5.0) << r.message << "; error "
+                                << CompareToTruth(r.estimate, drive.truth[0]).rot_deg;
+  EXPECT_FALSE(est.Estimate().online[0].flags & kFlagConverged) << r.message;
+  EXPECT_NE(r.message.find("undetermined"), std::string::npos) << r.message;
 }
 
 TEST(RigEstimator, ScaleSegmentsFromOdometryResets) {
@@ -455,6 +514,58 @@ TEST(RigEstimator, StateRoundTripAndCorruptFiles) {
   EXPECT_NE(error.find("different rig"), std::string::npos) << error;
   EXPECT_FALSE(fresh.RestoreState("garbage", &error));
   EXPECT_EQ(fresh.Estimate().rig.slaves[0].motions.used, 0);  // unchanged
+}
+
+uint64_t Fnv1a(const std::string& s) {  // the state files' checksum (FNV-1a, 64 bit)
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// A version-2 state (no translation-direction moments) is read: the moments are derived from
+// the others, so the translational model's estimate is the same and its σ close.
+TEST(RigEstimator, ReadsVersionTwoStates) {
+  DriveOptions d;
+  d.motion = DriveOptions::Motion::kTranslationOnly;
+  d.rotation_noise_deg = 0.02;
+  d.position_noise = 0.002;
+  const SyntheticDrive drive = GenerateDrive({"front", "back"}, {DemoRig()[1]}, d);
+  const auto names = Names(drive.recording);
+  RigEstimator est(names, RigEstimatorOptions{});
+  Feed(&est, drive.recording);
+  const std::string state = est.SerializeState();
+
+  // The same state as version 2 wrote it: no "Ddir" lines, header 2, its checksum.
+  std::istringstream in(state);
+  std::string line, body;
+  std::getline(in, line);
+  ASSERT_EQ(line, "rigcal-estimator-state " + std::to_string(RigEstimator::kStateVersion));
+  int removed = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("checksum ", 0) == 0) break;
+    if (line.rfind("Ddir ", 0) == 0) {
+      ++removed;
+      continue;
+    }
+    body += line + '\n';
+  }
+  ASSERT_EQ(removed, 2);  // long and short statistics
+  std::ostringstream v2;
+  v2 << "rigcal-estimator-state 2\n" << body << "checksum " << std::hex << Fnv1a(body) << '\n';
+
+  RigEstimator restored(names, RigEstimatorOptions{});
+  std::string error;
+  ASSERT_TRUE(restored.RestoreState(v2.str(), &error)) << error;
+  const auto& a = est.Estimate().rig.slaves[0];
+  const auto& b = restored.Estimate().rig.slaves[0];
+  ASSERT_EQ(b.motion_model, MotionModel::kTranslational);
+  EXPECT_LT(AngleBetween(a.estimate.q, b.estimate.q), 1e-12);
+  EXPECT_NEAR(b.rot_std_deg, a.rot_std_deg, 0.05 * a.rot_std_deg);
+  EXPECT_FALSE(restored.RestoreState("rigcal-estimator-state 1\n" + body, &error));
+  EXPECT_NE(error.find("version 1"), std::string::npos) << error;
 }
 
 TEST(RigEstimator, BadSetsAreCountedAndIgnored) {

@@ -197,7 +197,10 @@ class RigEstimator {
   // cameras) text returns false with a message and leaves the estimator unchanged.
   bool RestoreState(const std::string& text, std::string* error);
 
-  static constexpr int kStateVersion = 2;
+  // Version 3 adds the translation-direction moments (the translational model's σ);
+  // version-2 states are read too, with those moments derived from the others.
+  static constexpr int kStateVersion = 3;
+  static constexpr int kOldestStateVersion = 2;
 
  private:
   struct Slave;
