@@ -33,6 +33,9 @@ bool CalibrationOptions::Check(std::string* error) const {
     e << "max_outlier_rounds must be >= 0, got " << max_outlier_rounds;
   else if (!(robust_scale > 0.0))
     e << "robust_scale must be > 0, got " << robust_scale;
+  else if (covariance_time_blocks != 0 &&
+           (covariance_time_blocks < 2 || covariance_time_blocks > 10000))
+    e << "covariance_time_blocks must be 0 (off) or in [2, 10000], got " << covariance_time_blocks;
   else if (max_iterations < 1)
     e << "max_iterations must be >= 1, got " << max_iterations;
   else if (!(planar_axis_spread_deg >= 0.0))

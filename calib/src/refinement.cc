@@ -3,8 +3,11 @@
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <unordered_set>
 
 #include "linear_solvers.h"
 #include "planar_solver.h"
@@ -107,6 +110,78 @@ struct ScalePriorCost {
   double v, inv_sigma;
 };
 
+// The smallest covariance (Loewner order) above both a and b: a + (b - a)₊, the positive part
+// of the difference. Sets *larger when b exceeds a in some direction.
+Eigen::Matrix3d LoewnerMax(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b, bool* larger) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(b - a);
+  const Eigen::Vector3d positive = eig.eigenvalues().cwiseMax(0.0);
+  if (positive.maxCoeff() > 1e-6 * std::max(a.trace(), 1e-300)) *larger = true;
+  return a + eig.eigenvectors() * positive.asDiagonal() * eig.eigenvectors().transpose();
+}
+
+// Cluster-robust (sandwich) covariance of the free parameters at the current point, tangent
+// coordinates: H⁻¹ M H⁻¹ with H = JᵀJ over every residual, M = sum over clusters of g gᵀ,
+// g = Jᵀr of the cluster's residuals, times B / (B - 1) for B time blocks. The motions'
+// residual blocks are clustered by the time block of their motion, every other residual block
+// (priors) is a cluster of its own. Empty when H is singular.
+Eigen::MatrixXd ClusteredCovariance(ceres::Problem& problem, const std::vector<double*>& free,
+                                    const std::vector<ceres::ResidualBlockId>& motion_blocks,
+                                    const std::vector<int>& motion_of_block,
+                                    const std::vector<int>& time_block) {
+  std::vector<ceres::ResidualBlockId> all;
+  problem.GetResidualBlocks(&all);
+  const std::unordered_set<ceres::ResidualBlockId> of_motions(motion_blocks.begin(),
+                                                              motion_blocks.end());
+  std::vector<ceres::ResidualBlockId> ordered = motion_blocks;
+  std::vector<int> cluster;
+  int num_blocks = 0;
+  for (size_t k = 0; k < motion_blocks.size(); ++k) {
+    cluster.push_back(time_block[motion_of_block[k]]);
+    num_blocks = std::max(num_blocks, cluster.back() + 1);
+  }
+  int next = num_blocks;
+  for (ceres::ResidualBlockId id : all) {
+    if (of_motions.count(id) > 0) continue;
+    ordered.push_back(id);
+    cluster.push_back(next++);
+  }
+  if (num_blocks < 2) return {};
+  ceres::Problem::EvaluateOptions options;
+  options.parameter_blocks = free;
+  options.residual_blocks = ordered;
+  options.apply_loss_function = true;
+  std::vector<double> residuals;
+  ceres::CRSMatrix jacobian;
+  if (!problem.Evaluate(options, nullptr, &residuals, nullptr, &jacobian)) return {};
+  const int n = jacobian.num_cols;
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  std::vector<Eigen::VectorXd> gradient(next, Eigen::VectorXd::Zero(n));
+  Eigen::VectorXd j_row(n);
+  int row = 0;
+  for (size_t b = 0; b < ordered.size(); ++b) {
+    const int size = problem.GetCostFunctionForResidualBlock(ordered[b])->num_residuals();
+    for (int i = 0; i < size; ++i, ++row) {
+      j_row.setZero();
+      for (int e = jacobian.rows[row]; e < jacobian.rows[row + 1]; ++e) {
+        j_row(jacobian.cols[e]) = jacobian.values[e];
+      }
+      h.noalias() += j_row * j_row.transpose();
+      gradient[cluster[b]] += j_row * residuals[row];
+    }
+  }
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
+  for (int c = 0; c < next; ++c) {
+    const double factor = c < num_blocks ? num_blocks / (num_blocks - 1.0) : 1.0;
+    meat.noalias() += factor * gradient[c] * gradient[c].transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(h);
+  const Eigen::VectorXd lambda = eig.eigenvalues();
+  if (!(lambda(0) > 1e-12 * lambda(n - 1))) return {};
+  const Eigen::MatrixXd h_inv =
+      eig.eigenvectors() * lambda.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+  return h_inv * meat * h_inv;
+}
+
 ceres::LossFunction* MakeLoss(const CalibrationOptions& options) {
   switch (options.robust_loss) {
     case RobustLoss::kHuber:
@@ -157,6 +232,13 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   const double inv_sigma_pos = 1.0 / input.sigma_position;
   std::vector<bool> scale_used(num_scales, false);
   int num_residuals = 0;
+  // Residual blocks in the order of the motions (rotation then position), for the clusters.
+  std::vector<ceres::ResidualBlockId> motion_blocks;
+  std::vector<int> motion_of_block;
+  auto record = [&](ceres::ResidualBlockId id, size_t j) {
+    motion_blocks.push_back(id);
+    motion_of_block.push_back(static_cast<int>(j));
+  };
   for (size_t j = 0; j < motions.size(); ++j) {
     const MotionData& m = motions[j];
     const double sqrt_w =
@@ -164,21 +246,26 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
     const double w_rot = sqrt_w * inv_sigma_rot;
     const double w_pos = sqrt_w * inv_sigma_pos;
     if (!input.translational) {
-      problem.AddResidualBlock(new RotationCost(m, w_rot), MakeLoss(options), q.data());
+      record(problem.AddResidualBlock(new RotationCost(m, w_rot), MakeLoss(options), q.data()), j);
       if (use_axis) {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AxisPositionCost, 3, 4, 2, 1, 1>(
-                                     new AxisPositionCost(m, w_pos, t)),
-                                 MakeLoss(options), q.data(), p.data(), &h, &scales[m.scale_index]);
+        record(problem.AddResidualBlock(
+                   new ceres::AutoDiffCostFunction<AxisPositionCost, 3, 4, 2, 1, 1>(
+                       new AxisPositionCost(m, w_pos, t)),
+                   MakeLoss(options), q.data(), p.data(), &h, &scales[m.scale_index]),
+               j);
       } else {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<PositionCost, 3, 4, 3, 1>(new PositionCost(m, w_pos)),
-            MakeLoss(options), q.data(), c.data(), &scales[m.scale_index]);
+        record(
+            problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PositionCost, 3, 4, 3, 1>(
+                                         new PositionCost(m, w_pos)),
+                                     MakeLoss(options), q.data(), c.data(), &scales[m.scale_index]),
+            j);
       }
       num_residuals += 7;
     } else {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TranslationalCost, 3, 4, 1>(
-                                   new TranslationalCost(m, w_pos)),
-                               MakeLoss(options), q.data(), &scales[m.scale_index]);
+      record(problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TranslationalCost, 3, 4, 1>(
+                                          new TranslationalCost(m, w_pos)),
+                                      MakeLoss(options), q.data(), &scales[m.scale_index]),
+             j);
       num_residuals += 3;
     }
     scale_used[m.scale_index] = true;
@@ -316,6 +403,51 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
     out.scale_std[s] = std::sqrt(std::max(0.0, chi2 * var));
   }
   out.covariance_ok = out.cov_rotation.allFinite() && out.cov_position.allFinite();
+  if (out.covariance_ok && input.blocks.size() == motions.size()) {
+    // The free parameters in tangent coordinates: q (3), C (3) or p (2) and h (1, when free),
+    // the used scales (1 each).
+    std::vector<double*> free = {q.data()};
+    if (use_axis) {
+      free.push_back(p.data());
+      if (h_free) free.push_back(&h);
+    } else if (!input.translational) {
+      free.push_back(c.data());
+    }
+    std::vector<int> scale_column(num_scales, -1);
+    int column = 3 + (use_axis ? (h_free ? 3 : 2) : (input.translational ? 0 : 3));
+    for (int s = 0; s < num_scales; ++s) {
+      if (!scale_used[s]) continue;
+      scale_column[s] = column++;
+      free.push_back(&scales[s]);
+    }
+    const Eigen::MatrixXd cov =
+        ClusteredCovariance(problem, free, motion_blocks, motion_of_block, input.blocks);
+    if (cov.size() > 0 && cov.allFinite()) {
+      Eigen::Matrix3d rot = 4.0 * cov.topLeftCorner<3, 3>();  // tangent δ rotates by 2|δ|
+      Eigen::Matrix3d position = Eigen::Matrix3d::Zero();
+      if (use_axis) {
+        Eigen::Matrix3d ph = Eigen::Matrix3d::Zero();
+        ph.block(0, 0, h_free ? 3 : 2, h_free ? 3 : 2) =
+            cov.block(3, 3, h_free ? 3 : 2, h_free ? 3 : 2);
+        position = t * ph * t.transpose();
+        if (h_free) out.axis_std = std::max(out.axis_std, std::sqrt(std::max(0.0, ph(2, 2))));
+      } else if (!input.translational) {
+        position = cov.block<3, 3>(3, 3);
+      }
+      bool larger = false;
+      out.cov_rotation = LoewnerMax(out.cov_rotation, rot, &larger);
+      out.cov_position = LoewnerMax(out.cov_position, position, &larger);
+      for (int s = 0; s < num_scales; ++s) {
+        if (scale_column[s] < 0) continue;
+        const double sd = std::sqrt(std::max(0.0, cov(scale_column[s], scale_column[s])));
+        if (sd > out.scale_std[s]) {
+          out.scale_std[s] = sd;
+          larger = true;
+        }
+      }
+      out.clustered_larger = larger;
+    }
+  }
   return out;
 }
 

@@ -42,6 +42,10 @@ struct RefinementInput {
   std::vector<int> prior_scale_index;
   // Per motion, a weight of its squared residuals (empty: all 1).
   std::vector<double> weights;
+  // Per motion, its time block (time_blocks.h), or empty. Given, the covariance is at least
+  // the cluster-robust (sandwich) one, H⁻¹ (sum_b g_b g_bᵀ) H⁻¹ · B / (B - 1) with g_b the
+  // gradient of block b's residuals: errors are independent between blocks only.
+  std::vector<int> blocks;
 };
 
 struct RefinementResult {
@@ -56,12 +60,16 @@ struct RefinementResult {
   Eigen::Matrix3d cov_position = Eigen::Matrix3d::Zero();  // of C; 0 along a fixed axis offset
   std::vector<double> scale_std;
   double axis_std = 0.0;  // σ of h with the axis parameterisation (0 when h is fixed)
+  // With input.blocks: the cluster-robust covariance was larger than the one of independent
+  // motions in some direction, and the covariance above is the smallest one above both.
+  bool clustered_larger = false;
 };
 
 // Minimises eq. (4.26)+(4.27): rotation residuals q0·dq - dq·qi and position residuals
 // (I - R0) dC + dλ dR C_i - C_0, each whitened by its sigma, plus the scale priors. The unit
 // norm of dq is kept by Ceres's quaternion manifold instead of the thesis's penalty term.
-// With compute_covariance, the covariance is scaled by the reduced chi-square of the fit.
+// With compute_covariance, the covariance is scaled by the reduced chi-square of the fit (and
+// raised to the cluster-robust one with input.blocks).
 RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
                                  const RefinementInput& input, const CalibrationOptions& options,
                                  bool solve = true);

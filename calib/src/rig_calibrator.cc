@@ -19,6 +19,7 @@
 #include "rigcal/calib/pair_selection.h"
 #include "rigcal/calib/quaternion.h"
 #include "scale_measurement.h"
+#include "time_blocks.h"
 
 namespace rigcal {
 namespace {
@@ -492,6 +493,8 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
         {summaries[s].mean, summaries[s].count >= 2 && !planar ? summaries[s].sigma_thesis : 0.0});
   }
 
+  const int blocks = options.covariance_time_blocks;
+  if (blocks > 0 && k >= 4 * blocks) input.blocks = internal::TimeBlocks(data, blocks);
   const bool solve = options.method == Method::kNonlinear;
   const internal::RefinementResult refined = internal::RefineNonlinear(data, input, options, solve);
 
@@ -587,6 +590,10 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
     if (prior.given && prior.sigma > 0.0) msg << " (with the nominal mounting as a prior)";
   }
   msg << "; " << (scale_why.empty() ? ToString(scale_model) + " scale model" : scale_why);
+  if (refined.clustered_larger) {
+    msg << "; sigma with errors shared within " << blocks
+        << " time blocks (motions close in time share their errors)";
+  }
   if (solve) msg << "; refinement: " << refined.message;
   r.termination = parallel                        ? Termination::kDegenerate
                   : (solve && !refined.converged) ? Termination::kNoConvergence

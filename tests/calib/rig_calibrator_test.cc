@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
@@ -420,8 +422,47 @@ TEST(CalibrateSlave, UncertaintyMatchesObservedError) {
     sum_sq += std::pow(e / (std::sqrt(3.0) * r.rot_std_deg), 2);
   }
   const double rms = std::sqrt(sum_sq / trials);
+  std::printf("white noise: RMS error / sigma %.2f\n", rms);
   EXPECT_GT(rms, 0.3);
   EXPECT_LT(rms, 2.0);
+}
+
+// RMS over drives of the rotation error per σ (σ of the largest axis, the error the whole
+// angle: √3 per axis for an isotropic error).
+double NormalisedRotationErrorRms(const DriveOptions& base, const CalibrationOptions& o,
+                                  int trials) {
+  double sum_sq = 0.0;
+  for (int t = 0; t < trials; ++t) {
+    DriveOptions d = base;
+    d.seed = 500 + t;
+    const SyntheticDrive drive = GenerateDrive({"m", "s"}, {DemoRig()[0]}, d);
+    const auto r = CalibrateRig(drive.recording, o).slaves[0];
+    EXPECT_TRUE(r.usable()) << r.message;
+    if (!r.usable() || !(r.rot_std_deg > 0.0)) return std::numeric_limits<double>::infinity();
+    const double e = CompareToTruth(r.estimate, drive.truth[0]).rot_deg;
+    sum_sq += std::pow(e / (std::sqrt(3.0) * r.rot_std_deg), 2);
+  }
+  return std::sqrt(sum_sq / trials);
+}
+
+// Odometry that drifts (a random walk of the orientation) makes the errors of motions close in
+// time alike, and the auto pairs overlap: the covariance of independent motions is then far
+// too small. With the errors taken as shared within time blocks the σ describes the error.
+TEST(CalibrateSlave, UncertaintyWithCorrelatedErrors) {
+  DriveOptions d;
+  d.num_frames = 1200;
+  d.rotation_noise_deg = 0.02;
+  d.position_noise = 0.002;
+  d.drift_deg_per_frame = 0.01;
+  CalibrationOptions independent;
+  independent.covariance_time_blocks = 0;
+  const double rms_independent = NormalisedRotationErrorRms(d, independent, 30);
+  const double rms_blocks = NormalisedRotationErrorRms(d, CalibrationOptions{}, 30);
+  std::printf("drifting odometry: RMS error / sigma %.2f independent motions, %.2f time blocks\n",
+              rms_independent, rms_blocks);
+  EXPECT_GT(rms_independent, 2.5);  // what the time blocks are for
+  EXPECT_GT(rms_blocks, 0.4);
+  EXPECT_LT(rms_blocks, 2.0);
 }
 
 TEST(CalibrationOptions, CheckNamesTheField) {

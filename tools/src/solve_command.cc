@@ -37,6 +37,7 @@ struct SolveArgs {
   std::string truth;
   std::string prior;
   double prior_sigma = 0.0;
+  int time_blocks = CalibrationOptions{}.covariance_time_blocks;
   std::string out;
   std::string camchain;
   bool json = false;
@@ -99,6 +100,7 @@ int RunSolve(const SolveArgs& args) {
                          : args.motion == "translational" ? MotionModel::kTranslational
                                                           : MotionModel::kAuto;
   options.nominal_sigma = args.prior_sigma;
+  options.covariance_time_blocks = args.time_blocks;
   if (std::string e = ApplyScale(args.scale, &options); !e.empty()) return Fail("--scale: " + e);
   if (std::string e = ApplyPairs(args.pairs, &options.pairs); !e.empty()) {
     return Fail("--pairs: " + e);
@@ -318,6 +320,15 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       ->type_name("S")
       ->check(CLI::NonNegativeNumber)
       ->needs(prior)
+      ->capture_default_str();
+  cmd->add_option("--time-blocks", args->time_blocks,
+                  "Standard deviations: the motions' errors are taken as shared within this\n"
+                  "many contiguous time blocks and independent between them (cluster-robust\n"
+                  "covariance): odometry drift, overlapping pairs and correlated pose errors\n"
+                  "make motions close in time err alike. 0: every motion independent\n"
+                  "(optimistic on real odometry). Needs 4 motions per block.")
+      ->type_name("N")
+      ->check(CLI::Range(0, 10000))
       ->capture_default_str();
   cmd->add_option("--out", args->out,
                   "Write the result YAML here (atomically): the rig entries plus\n"

@@ -61,6 +61,11 @@ struct CalibrationOptions {
   double robust_scale = 3.0;  // in units of the whitened residual (standard deviations)
   int max_iterations = 100;
   bool compute_covariance = true;
+  // The covariance of independent motions is optimistic when motions close in time share
+  // their errors (overlapping pairs, correlated pose errors, drift): the reported σ are at
+  // least the cluster-robust (sandwich) ones with the motions cut into this many contiguous
+  // time blocks, errors independent between blocks only (needs 4 motions per block; 0 = off).
+  int covariance_time_blocks = 20;
 
   // General or planar (kAuto, rotating rig): the general model needs the master's rotation
   // axes to tilt by at least min_tilt_snr times what rotation noise alone explains (or to

@@ -1,0 +1,17 @@
+#pragma once
+// Contiguous time blocks of motions, for covariances that let motions close in time share
+// their errors (overlapping pairs share poses, odometry drifts, pose errors of neighbouring
+// frames are correlated): errors are taken as independent between blocks only.
+
+#include <vector>
+
+#include "motion_data.h"
+
+namespace rigcal::internal {
+
+// Block (0 .. blocks-1) of each motion: within every scale variable (scale_index) its motions
+// in time order (t_ns) are cut into `blocks` runs of equal count, so that every block holds a
+// share of every scale variable.
+std::vector<int> TimeBlocks(const std::vector<MotionData>& motions, int blocks);
+
+}  // namespace rigcal::internal
