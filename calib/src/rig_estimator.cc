@@ -15,6 +15,7 @@
 #include "refinement.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/quaternion.h"
+#include "rotation_blocks.h"
 #include "statistics_prior.h"
 
 namespace rigcal {
@@ -55,6 +56,11 @@ struct RunningVariance {
 // pairs and the consecutive-keyframe motions measures the sharing, between 1 (errors of the
 // poses alone, shared by the two pairs at a pose) and the mean span of the pairs in keyframes
 // (pure drift).
+internal::RotationBlocks MakeRotationBlocks(const RigEstimatorOptions& o) {
+  return internal::RotationBlocks(std::max<int64_t>(1, std::llround(o.sigma_block_s * 1e9)),
+                                  o.sigma_blocks);
+}
+
 double OverlapFactor(const RunningVariance& pairs, const RunningVariance& consecutive,
                      const RunningVariance& span) {
   if (pairs.count == 0 || consecutive.count == 0 || !(consecutive.value > 0.0)) return 1.0;
@@ -212,6 +218,8 @@ struct RigEstimator::Slave {
   // keyframe (compared with angle_var, that of the pairs) and the span of the pairs in
   // keyframes; overlapping pairs share their drift (see OverlapFactor).
   RunningVariance consecutive_angle_var, pair_span;
+  // The long statistics' rotation information in time blocks (cluster-robust rotation σ).
+  internal::RotationBlocks rotation_blocks;
   int64_t decalibrated_at_ns = -1;
   Eigen::Quaterniond last_q = Eigen::Quaterniond::Identity();
 
@@ -286,6 +294,12 @@ bool RigEstimatorOptions::Check(std::string* error) const {
     e << "planar_axis_spread_deg must be >= 0";
   else if (!(nominal_sigma >= 0.0) || std::isinf(nominal_sigma))
     e << "nominal_sigma must be finite and >= 0 (0 = no weighted prior)";
+  else if (!(sigma_block_s >= 0.0) || std::isinf(sigma_block_s))
+    e << "sigma_block_s must be finite and >= 0 (0 = off), got " << sigma_block_s;
+  else if (sigma_blocks < 4 || sigma_blocks > 1000)
+    e << "sigma_blocks must be in [4, 1000], got " << sigma_blocks;
+  else if (sigma_min_blocks < 2 || sigma_min_blocks > sigma_blocks)
+    e << "sigma_min_blocks must be in [2, sigma_blocks], got " << sigma_min_blocks;
   if (error) *error = e.str();
   return e.str().empty();
 }
@@ -295,6 +309,7 @@ RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOp
   estimate_.rig.master = names_.empty() ? "" : names_[0];
   for (size_t i = 1; i < names_.size(); ++i) {
     slaves_.push_back(std::make_unique<Slave>());
+    slaves_.back()->rotation_blocks = MakeRotationBlocks(options_);
     SlaveCalibration c;
     c.name = names_[i];
     c.message = "initialising: no motion yet";
@@ -510,12 +525,17 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
     const int64_t dt = m.t_b_ns - s.last_decay_ns;
     const double f = Forget(dt, o.half_life_s);
     s.long_stats.Decay(f);
+    s.rotation_blocks.Decay(f);
     s.outside.Decay(f);
     s.log_decay += std::log(f);
     s.short_stats.Decay(Forget(dt, o.short_half_life_s));
   }
   s.last_decay_ns = m.t_b_ns;
   s.long_stats.Add(md, md.segment, weight);
+  if (o.sigma_block_s > 0.0) {
+    const Eigen::Matrix4d a = internal::RotationConstraintMatrix(md);
+    s.rotation_blocks.Add(m.t_b_ns, weight * a.transpose() * a, weight);  // (4.10) per block
+  }
   s.short_stats.Add(md, md.segment, weight);
   for (MotionStatistics* stats : {&s.long_stats, &s.short_stats}) {
     while (static_cast<int>(stats->segments().size()) > o.max_open_segments) {
@@ -588,6 +608,13 @@ void RigEstimator::Publish(int index) {
   // window still holds the other model's motions: no comparison until it has forgotten them.
   const double overlap =
       std::sqrt(OverlapFactor(s.angle_var, s.consecutive_angle_var, s.pair_span));
+  // The published rotation σ: at least the cluster-robust one of the time blocks (rotating
+  // rig). Not for the decalibration test: after a bump the blocks disagree, which inflates
+  // that σ exactly when the windows should be found to differ.
+  const double rot_factor =
+      o.sigma_block_s > 0.0 && s.general
+          ? std::max(overlap, std::sqrt(s.rotation_blocks.VarianceFactor(o.sigma_min_blocks)))
+          : overlap;
   const double long_sigma = overlap * s.linear.rot_std_deg;
   const bool settled = s.linear.motions.used >= o.converged_min_motions && long_sigma > 0.0 &&
                        long_sigma <= o.converged_rot_std_deg;
@@ -612,6 +639,7 @@ void RigEstimator::Publish(int index) {
           "new calibration",
           names_[index + 1], diff);
       s.long_stats = s.short_stats;  // re-converge on the recent motions
+      s.rotation_blocks.Clear();
       s.window.clear();
       s.outside = s.long_stats;
       s.refined.reset();
@@ -631,7 +659,7 @@ void RigEstimator::Publish(int index) {
 
   SlaveCalibration published = s.linear;
   if (s.refined && s.linear.usable()) {
-    const double sigma = std::max(overlap * s.linear.rot_std_deg, 1e-3);  // shared drift counted
+    const double sigma = std::max(rot_factor * s.linear.rot_std_deg, 1e-3);  // shared drift counted
     if (AngleBetween(s.refined->estimate.q, s.linear.estimate.q) * kDegPerRad <=
         o.gate_sigmas * sigma) {
       published = *s.refined;
@@ -641,10 +669,11 @@ void RigEstimator::Publish(int index) {
   }
   published.name = names_[index + 1];
   published.motions.used = s.counts.used;
-  // The covariance takes the motions as independent; overlapping pairs share their drift, so
-  // the published σ count it (OverlapFactor), and convergence is judged on them.
+  // The covariance takes the motions as independent; overlapping pairs and drift make motions
+  // close in time err alike, so the published σ count it (OverlapFactor; the time blocks for
+  // the rotation), and convergence is judged on them.
+  published.rot_std_deg *= rot_factor;
   if (overlap > 1.0) {
-    published.rot_std_deg *= overlap;
     published.pos_std *= overlap;
     if (std::isfinite(published.axis_offset_std)) published.axis_offset_std *= overlap;
     for (SegmentScale& sc : published.scales) sc.std *= overlap;
@@ -655,7 +684,7 @@ void RigEstimator::Publish(int index) {
   } else {
     // Stability of the linear estimate (a refinement being published is no change).
     const double change = AngleBetween(s.linear.estimate.q, s.last_q) * kDegPerRad;
-    s.stable = change <= std::max(overlap * s.linear.rot_std_deg, 0.01) ? s.stable + 1 : 0;
+    s.stable = change <= std::max(rot_factor * s.linear.rot_std_deg, 0.01) ? s.stable + 1 : 0;
     s.last_q = s.linear.estimate.q;
     if (published.motion_model == MotionModel::kTranslational)
       online.flags |= kFlagTranslationalOnly;
@@ -900,6 +929,7 @@ bool RigEstimator::RestoreState(const std::string& text, std::string* error) {
   std::string rest((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
   for (size_t i = 0; i < slaves_.size(); ++i) {
     auto s = std::make_unique<Slave>();
+    s->rotation_blocks = MakeRotationBlocks(options_);  // not saved: rebuilt from new motions
     std::istringstream sin(rest);
     size_t idx = 0;
     if (!(sin >> word >> idx) || word != "slave" || idx != i) return fail("malformed slave block");

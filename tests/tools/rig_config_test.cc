@@ -52,7 +52,8 @@ TEST(RigConfig, OptionSections) {
                           "            nominal_sigma: 0.03, min_tilt_snr: 8,\n"
                           "            max_axis_std_ratio: 50, planar_hysteresis: 1.5,\n"
                           "            general_axis_spread_deg: 12,\n"
-                          "            alpha_maxrot_noise_deg: 0}\n"
+                          "            alpha_maxrot_noise_deg: 0, sigma_block_s: 5,\n"
+                          "            sigma_blocks: 30}\n"
                           "sync: {frame_rate_hz: 10, tolerance_ms: 7.5, required: [left]}\n"
                           "publish: {extrinsics_rate_hz: 5, status_rate_hz: 0.5}\n"
                           "state: {path: /tmp/x.state, save_interval_s: 12}\n"));
@@ -67,6 +68,8 @@ TEST(RigConfig, OptionSections) {
   EXPECT_DOUBLE_EQ(config->online.estimator.planar_hysteresis, 1.5);
   EXPECT_DOUBLE_EQ(config->online.estimator.general_axis_spread_deg, 12.0);
   EXPECT_DOUBLE_EQ(config->online.estimator.alpha_maxrot_noise_deg, 0.0);
+  EXPECT_DOUBLE_EQ(config->online.estimator.sigma_block_s, 5.0);
+  EXPECT_EQ(config->online.estimator.sigma_blocks, 30);
   EXPECT_EQ(config->online.sync.frame_period_ns, 100'000'000);
   EXPECT_EQ(config->online.sync.tolerance_ns, 7'500'000);
   EXPECT_EQ(config->online.sync.required, (std::vector<bool>{true, true, false}));

@@ -150,6 +150,9 @@ const std::map<std::string, FieldSetter>& EstimatorFields() {
       {"converged_pos_std_fraction", Double(&O::converged_pos_std_fraction)},
       {"converged_stable_keyframes", Int(&O::converged_stable_keyframes)},
       {"window_size", Int(&O::window_size)},
+      {"sigma_block_s", Double(&O::sigma_block_s)},
+      {"sigma_blocks", Int(&O::sigma_blocks)},
+      {"sigma_min_blocks", Int(&O::sigma_min_blocks)},
       {"refine_period_s",
        [](const FieldReader& r, const YAML::Node& node, const std::string& field,
           OnlineOptions* options) -> std::optional<Error> {

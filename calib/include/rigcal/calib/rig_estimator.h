@@ -91,6 +91,15 @@ struct RigEstimatorOptions {
   double converged_pos_std_fraction = 0.05;  // of |C|, or absolute when |C| < 1
   int converged_stable_keyframes = 5;
 
+  // Rotation σ, cluster-robust: the motions' rotation information is kept in contiguous time
+  // blocks of sigma_block_s (at most sigma_blocks; when full, neighbours merge and blocks
+  // last twice as long), errors shared within a block and independent between blocks. The
+  // published rotation σ is at least that once sigma_min_blocks blocks exist (0 s = off:
+  // independent motions with the overlap of the pairs counted).
+  double sigma_block_s = 10.0;
+  int sigma_blocks = 20;
+  int sigma_min_blocks = 8;
+
   // Motions kept per slave for the background non-linear refinement window.
   int window_size = 400;
 
