@@ -175,7 +175,7 @@ Eigen::MatrixXd ClusteredCovariance(ceres::Problem& problem, const std::vector<d
     meat.noalias() += factor * gradient[c] * gradient[c].transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(h);
-  const Eigen::VectorXd lambda = eig.eigenvalues();
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
   if (!(lambda(0) > 1e-12 * lambda(n - 1))) return {};
   const Eigen::MatrixXd h_inv =
       eig.eigenvectors() * lambda.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();

@@ -46,7 +46,7 @@ double RotationBlocks::VarianceFactor(int min_blocks) const {
     weight += b.weight;
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(m);
-  const Eigen::Vector4d lambda = eig.eigenvalues();
+  const Eigen::Vector4d& lambda = eig.eigenvalues();
   const Eigen::Vector4d q = eig.eigenvectors().col(0);
   // Residual variance of (4.10) per equation, as the σ of independent motions uses it.
   const double sigma2 = std::max(lambda(0), 0.0) / std::max(1.0, 4.0 * weight - 3.0);

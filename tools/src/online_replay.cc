@@ -20,7 +20,9 @@ int64_t MedianStep(const std::vector<int64_t>& t) {
 std::string FlagsToString(uint32_t flags) {
   std::string s;
   auto add = [&](uint32_t bit, const char* word) {
-    if (flags & bit) s += (s.empty() ? "" : " ") + std::string(word);
+    if (!(flags & bit)) return;
+    if (!s.empty()) s += ' ';
+    s += word;
   };
   add(kFlagInitialising, "initialising");
   add(kFlagConverged, "converged");
