@@ -237,7 +237,9 @@ RotatingFit SolveRotatingLinear(std::vector<MotionData>* motions, int num_scales
 }
 
 std::string Vec3Text(const Eigen::Vector3d& v) {
-  return "[" + Fmt(v.x(), 3) + ", " + Fmt(v.y(), 3) + ", " + Fmt(v.z(), 3) + "]";
+  std::string text = "[";  // appended, not "[" + ...: GCC 12 warns (-Wrestrict) on that
+  text += Fmt(v.x(), 3) + ", " + Fmt(v.y(), 3) + ", " + Fmt(v.z(), 3) + "]";
+  return text;
 }
 
 SlaveCalibration Fail(SlaveCalibration r, Termination t, const std::string& message) {

@@ -115,6 +115,10 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
       pos.y() = 0.0;
     } else if (options.motion == DriveOptions::Motion::kTranslationOnly) {
       rv.setZero();
+    } else if (options.motion == DriveOptions::Motion::kStraight) {
+      const double seconds = k / options.frame_rate_hz;
+      rv.setZero();
+      pos = Eigen::Vector3d(0.0, 0.0, 0.5 * amp_pos * (seconds + 0.5 * std::sin(seconds)));
     }
     truth_master[k].q = ExpMap(rv);
     truth_master[k].C = pos;

@@ -20,6 +20,24 @@ Pose Pose::operator*(const Pose& other) const {
 
 Pose Pose::Between(const Pose& other) const { return Inverse() * other; }
 
+CameraPose RigRecording::PoseAt(int camera, size_t k) const {
+  const CameraTrack& track = camera == 0 ? master : slaves.at(camera - 1);
+  CameraPose p;
+  p.camera = camera;
+  p.t_ns = t_ns.at(k);
+  p.segment = track.segment.empty() ? 0 : track.segment.at(k);
+  p.pose = track.poses.at(k);
+  return p;
+}
+
+std::vector<std::optional<CameraPose>> RigRecording::SetAt(size_t k) const {
+  std::vector<std::optional<CameraPose>> set;
+  for (int camera = 0; camera <= static_cast<int>(slaves.size()); ++camera) {
+    set.emplace_back(PoseAt(camera, k));
+  }
+  return set;
+}
+
 std::string RigRecording::Validate() const {
   std::ostringstream err;
   auto check = [&](const CameraTrack& track) {
@@ -29,8 +47,8 @@ std::string RigRecording::Validate() const {
       return false;
     }
     if (!track.segment.empty() && track.segment.size() != t_ns.size()) {
-      err << "camera '" << track.name << "' has " << track.segment.size()
-          << " segment ids for " << t_ns.size() << " stamps";
+      err << "camera '" << track.name << "' has " << track.segment.size() << " segment ids for "
+          << t_ns.size() << " stamps";
       return false;
     }
     return true;

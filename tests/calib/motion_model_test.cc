@@ -63,21 +63,6 @@ SyntheticDrive SewerDrive(double rotation_deg, double drift_deg_per_frame, uint6
   return GenerateDriveAlong({"front", "rear"}, {BackToBack()}, t_ns, world, noise);
 }
 
-std::vector<std::optional<CameraPose>> SetAt(const RigRecording& rec, size_t k) {
-  std::vector<std::optional<CameraPose>> set;
-  auto make = [&](const CameraTrack& t, int cam) {
-    CameraPose p;
-    p.camera = cam;
-    p.t_ns = rec.t_ns[k];
-    p.segment = t.segment[k];
-    p.pose = t.poses[k];
-    return p;
-  };
-  set.push_back(make(rec.master, 0));
-  set.push_back(make(rec.slaves[0], 1));
-  return set;
-}
-
 TEST(MotionModel, SmallRotationsAboveTheNoiseChooseTheGeneralModel) {
   for (uint64_t seed : {1u, 2u, 3u}) {
     const SyntheticDrive drive = SewerDrive(4.0, 0.0, seed);
@@ -145,7 +130,7 @@ TEST(MotionModel, OnlineEstimatorChoosesTheGeneralModelWithoutFalseAlarms) {
     RigEstimator est({"front", "rear"}, RigEstimatorOptions{});
     bool alarm = false, translational_at_end = true;
     for (size_t k = 0; k < drive.recording.size(); ++k) {
-      est.AddSet(drive.recording.t_ns[k], SetAt(drive.recording, k));
+      est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
       alarm = alarm || (est.Estimate().online[0].flags & kFlagDecalibrated);
       translational_at_end = (est.Estimate().online[0].flags & kFlagTranslationalOnly) != 0;
     }
@@ -175,7 +160,7 @@ TEST(MotionModel, OnlineEstimatorKeepsTheTranslationalModelWithoutRotation) {
   const SyntheticDrive drive = SewerDrive(0.01, 0.0, 6);
   RigEstimator est({"front", "rear"}, RigEstimatorOptions{});
   for (size_t k = 0; k < drive.recording.size(); ++k) {
-    est.AddSet(drive.recording.t_ns[k], SetAt(drive.recording, k));
+    est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
   }
   const SlaveCalibration& r = est.Estimate().rig.slaves[0];
   ASSERT_TRUE(r.usable()) << r.message;

@@ -30,13 +30,8 @@ TEST(OnlineCalibrator, ThreadedProducersConverge) {
   std::vector<std::thread> producers;
   for (int cam = 0; cam < 3; ++cam) {
     producers.emplace_back([&, cam] {
-      const CameraTrack& track = cam == 0 ? rec.master : rec.slaves[cam - 1];
       for (size_t k = 0; k < rec.size(); ++k) {
-        CameraPose p;
-        p.camera = cam;
-        p.t_ns = rec.t_ns[k];
-        p.pose = track.poses[k];
-        EXPECT_EQ(calibrator.Push(p), PushResult::kAccepted);
+        EXPECT_EQ(calibrator.Push(rec.PoseAt(cam, k)), PushResult::kAccepted);
       }
     });
   }

@@ -186,20 +186,7 @@ TEST(PlanarEval, OnlinePlanarThenRamp) {
     std::vector<int> changes(3, 0);
     std::vector<bool> was_planar(3, false);
     for (size_t k = 0; k < rec.size(); ++k) {
-      std::vector<std::optional<CameraPose>> set;
-      auto make = [&](const CameraTrack& t, int cam) {
-        CameraPose p;
-        p.camera = cam;
-        p.t_ns = rec.t_ns[k];
-        p.segment = t.segment[k];
-        p.pose = t.poses[k];
-        return p;
-      };
-      set.push_back(make(rec.master, 0));
-      for (size_t i = 0; i < rec.slaves.size(); ++i) {
-        set.push_back(make(rec.slaves[i], static_cast<int>(i) + 1));
-      }
-      est.AddSet(rec.t_ns[k], set);
+      est.AddSet(rec.t_ns[k], rec.SetAt(k));
       const double t = rec.t_ns[k] * 1e-9;
       for (int i = 0; i < 3; ++i) {
         const uint32_t flags = est.Estimate().online[i].flags;

@@ -67,23 +67,6 @@ void ExpectWithinSigma(const SlaveCalibration& r, const Similarity& truth) {
   EXPECT_LT(e.scale_pct / 100.0 * truth.scale, kSigmas * ScaleStd(r) + 1e-12) << r.name;
 }
 
-std::vector<std::optional<CameraPose>> SetAt(const RigRecording& rec, size_t k) {
-  std::vector<std::optional<CameraPose>> set;
-  auto make = [&](const CameraTrack& t, int cam) {
-    CameraPose p;
-    p.camera = cam;
-    p.t_ns = rec.t_ns[k];
-    p.segment = t.segment[k];
-    p.pose = t.poses[k];
-    return p;
-  };
-  set.push_back(make(rec.master, 0));
-  for (size_t i = 0; i < rec.slaves.size(); ++i) {
-    set.push_back(make(rec.slaves[i], static_cast<int>(i) + 1));
-  }
-  return set;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Batch, noise-free: the planar model is exact in rotation, scale and in-plane position, and
 // reports C along the axis as unknown (0), whatever the cameras' tilt in their own frames.
@@ -335,7 +318,7 @@ TEST(PlanarOnline, EqualsBatchPlanarLinearSolution) {
   o.max_open_segments = 100;
   RigEstimator est(support::CarRigNames(), o);
   for (size_t k = 0; k < drive.recording.size(); ++k) {
-    est.AddSet(drive.recording.t_ns[k], SetAt(drive.recording, k));
+    est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
   }
   for (int i = 0; i < 3; ++i) {
     const RefinementJob job = est.MakeRefinementJob(i);
@@ -376,7 +359,7 @@ TEST(PlanarOnline, FlagsThenResolvesTheVerticalOffsetOnARamp) {
   std::vector<uint32_t> last(3, 0);
   bool checked_before_ramp = false;
   for (size_t k = 0; k < rec.size(); ++k) {
-    est.AddSet(rec.t_ns[k], SetAt(rec, k));
+    est.AddSet(rec.t_ns[k], rec.SetAt(k));
     for (int i = 0; i < 3; ++i) {
       const uint32_t flags = est.Estimate().online[i].flags;
       if ((flags & kFlagConverged) && (last[i] & kFlagConverged) &&
@@ -435,7 +418,7 @@ TEST(PlanarOnline, HysteresisKeepsTheModelFromFlipping) {
     Run out;
     bool was_planar = false;
     for (size_t k = 0; k < drive.recording.size(); ++k) {
-      est.AddSet(drive.recording.t_ns[k], SetAt(drive.recording, k));
+      est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
       const SlaveCalibration& r = est.Estimate().rig.slaves[0];
       const double t = drive.recording.t_ns[k] * 1e-9;
       if (!r.usable() || t < 10.0) continue;  // the first keyframes decide nothing
@@ -471,7 +454,7 @@ TEST(PlanarOnline, NominalKeptThroughRefinementAndStateFiles) {
   }
   RigEstimator est(support::CarRigNames(), o);
   for (size_t k = 0; k < drive.recording.size(); ++k) {
-    est.AddSet(drive.recording.t_ns[k], SetAt(drive.recording, k));
+    est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
   }
   for (int i = 0; i < 3; ++i) {
     const SlaveCalibration& r = est.Estimate().rig.slaves[i];

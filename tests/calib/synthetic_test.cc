@@ -49,7 +49,8 @@ TEST(Synthetic, DriveIsDeterministicAndConsistent) {
   const auto b = GenerateDrive({"front", "left", "back"}, DemoRig(), opt);
   ASSERT_EQ(a.recording.Validate(), "");
   EXPECT_EQ(a.recording.slaves[1].poses[50].C, b.recording.slaves[1].poses[50].C);
-  const auto pairs = SelectPairs(a.recording, {.policy = PairOptions::Policy::kRelative, .step = 7});
+  const auto pairs =
+      SelectPairs(a.recording, {.policy = PairOptions::Policy::kRelative, .step = 7});
   for (int i = 0; i < 2; ++i) {
     for (const auto& m : MotionsForSlave(a.recording, i, pairs)) {
       EXPECT_LT(ResidualOf(m, a.truth[i]).position_abs, 1e-9);

@@ -69,18 +69,9 @@ OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineRepla
   auto drain = [&] {
     while (sync.TryPop(&set)) estimator.AddSet(set.t_ns, set.poses);
   };
-  auto push = [&](const CameraTrack& track, int camera, size_t k) {
-    CameraPose p;
-    p.camera = camera;
-    p.t_ns = recording.t_ns[k];
-    p.segment = track.segment.empty() ? 0 : track.segment[k];
-    p.pose = track.poses[k];
-    sync.Push(p);
-  };
   for (size_t k = 0; k < recording.size(); ++k) {
-    push(recording.master, 0, k);
-    for (size_t i = 0; i < recording.slaves.size(); ++i) {
-      push(recording.slaves[i], static_cast<int>(i) + 1, k);
+    for (int camera = 0; camera <= static_cast<int>(recording.slaves.size()); ++camera) {
+      sync.Push(recording.PoseAt(camera, k));
     }
     drain();
     if (every > 0 && recording.t_ns[k] >= next_report) {

@@ -48,6 +48,8 @@ struct DriveOptions {
     kGeneral,          // 6-DoF: every axis rotates and moves
     kPlanarYaw,        // a car: yaw about the master camera's y axis, moves in its x-z plane
     kTranslationOnly,  // no rotation at all
+    kStraight,         // no rotation, forward along z at translation_amplitude / 2 units per
+                       // second, speeding up and slowing down: every translation parallel
   };
   Motion motion = Motion::kGeneral;
   int num_frames = 1200;

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,17 @@ struct Similarity {
   double scale = 1.0;
 };
 
+// One camera's pose from its odometry, as it travels from a VO thread (or an LCM channel) to
+// the estimator. `pose` is camera-local (the camera's own reference frame and unit).
+struct CameraPose {
+  int camera = 0;            // index in the rig: 0 = master, 1..N = slaves
+  int64_t t_ns = 0;          // capture time, CLOCK_MONOTONIC of the capturing host
+  int64_t trigger_seq = -1;  // hardware trigger pulse number, -1 when unknown
+  int segment = 0;           // odometry scale segment (a VO re-initialisation opens a new one)
+  Pose pose;
+  double quality = 1.0;  // tracking quality in [0, 1]
+};
+
 // Time-corresponding poses of the master and every slave camera: entry k of every vector
 // belongs to stamp t_ns[k]. `segment` is the camera's scale segment id at that pose (a VO
 // re-initialisation opens a new one); poses of one segment share one odometry scale.
@@ -48,6 +60,10 @@ struct RigRecording {
   std::vector<CameraTrack> slaves;
 
   size_t size() const { return t_ns.size(); }
+  // Pose k of camera `camera` (0 = master, i + 1 = slave i) as odometry delivers it.
+  CameraPose PoseAt(int camera, size_t k) const;
+  // Every camera's pose k, the set the online estimator takes (RigEstimator::AddSet).
+  std::vector<std::optional<CameraPose>> SetAt(size_t k) const;
   // Empty when consistent, else a message naming the camera whose sizes disagree.
   std::string Validate() const;
 };
@@ -60,17 +76,6 @@ struct RigMotion {
   int segment = 0;  // slave scale segment of both ends
   int64_t t_a_ns = 0;
   int64_t t_b_ns = 0;
-};
-
-// One camera's pose from its odometry, as it travels from a VO thread (or an LCM channel) to
-// the estimator. `pose` is camera-local (the camera's own reference frame and unit).
-struct CameraPose {
-  int camera = 0;             // index in the rig: 0 = master, 1..N = slaves
-  int64_t t_ns = 0;           // capture time, CLOCK_MONOTONIC of the capturing host
-  int64_t trigger_seq = -1;   // hardware trigger pulse number, -1 when unknown
-  int segment = 0;            // odometry scale segment (a VO re-initialisation opens a new one)
-  Pose pose;
-  double quality = 1.0;       // tracking quality in [0, 1]
 };
 
 }  // namespace rigcal
