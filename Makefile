@@ -66,7 +66,7 @@ format:
 	find calib vo drivers tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
 
 tidy: build
-	find calib/src vo/src drivers/src tools/src -name '*.cc' | xargs clang-tidy -p $(BUILD_DIR) --quiet
+	find calib/src calib/camera/src vo/src drivers/src tools/*/src tools/cli -name '*.cc' | xargs clang-tidy -p $(BUILD_DIR) --quiet
 
 clean:
 	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(TSAN_DIR)

@@ -652,7 +652,7 @@ void Scene::FillBlock(const Hit& h00, const Hit& h10, const Hit& h01, const Hit&
   }
 }
 
-CameraTables MakeCameraTables(std::shared_ptr<const vo::CameraModel> model) {
+CameraTables MakeCameraTables(std::shared_ptr<const camera::CameraModel> model) {
   CameraTables tables;
   tables.width = model->width();
   tables.height = model->height();

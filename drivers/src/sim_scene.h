@@ -12,7 +12,7 @@
 
 #include "rigcal/calib/types.h"
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/vo/camera_model.h"
+#include "rigcal/camera/camera_model.h"
 
 namespace rigcal::drivers::internal {
 
@@ -136,12 +136,12 @@ class Scene {
 // Per camera: the unit bearing of every pixel (camera frame, NaN x when the pixel has none)
 // and the local pixel angle, computed once.
 struct CameraTables {
-  std::shared_ptr<const vo::CameraModel> model;
+  std::shared_ptr<const camera::CameraModel> model;
   int width = 0;
   int height = 0;
   std::vector<float> bearings;  // 3 per pixel, row-major
 };
-CameraTables MakeCameraTables(std::shared_ptr<const vo::CameraModel> model);
+CameraTables MakeCameraTables(std::shared_ptr<const camera::CameraModel> model);
 
 // Ray-casting nodes every `block` pixels (block >= 2): node (i, j) sits at pixel
 // (i * block, j * block); nodes just beyond the right/bottom edge close the last blocks.

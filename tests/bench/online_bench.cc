@@ -25,7 +25,7 @@
 
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/tools/process_stats.h"
+#include "rigcal/lcm/process_stats.h"
 #include "support/opencv_handeye.h"
 
 namespace rigcal {

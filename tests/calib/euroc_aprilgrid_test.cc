@@ -28,7 +28,7 @@
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/types.h"
-#include "rigcal/tools/trajectory_io.h"
+#include "rigcal/io/trajectory_io.h"
 #include "support/opencv_handeye.h"
 
 #if defined(RIGCAL_BINARY) && __has_include(<nlohmann/json.hpp>)

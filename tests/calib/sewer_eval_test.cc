@@ -17,9 +17,9 @@
 
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/tools/pipeline.h"
-#include "rigcal/tools/rig_config.h"
-#include "rigcal/tools/run_evaluation.h"
+#include "rigcal/pipeline/pipeline.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/pipeline/run_evaluation.h"
 
 namespace rigcal {
 namespace {

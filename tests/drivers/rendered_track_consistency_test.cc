@@ -15,7 +15,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/tools/rig_config.h"
+#include "rigcal/io/rig_config.h"
 
 namespace rigcal::drivers {
 namespace {
@@ -31,7 +31,7 @@ struct TrackStats {
 // renders noise-free views (RenderView) instead of the device's frames.
 TrackStats TrackAgainstProjection(const SimulatedRig& rig, int camera, int64_t first, int frames,
                                   bool noise) {
-  const vo::CameraModel& model = *rig.spec().cameras[camera];
+  const camera::CameraModel& model = *rig.spec().cameras[camera];
   auto pose = [&](int64_t k) { return rig.CameraPoseAt(camera, rig.FrameStreamTime(k)); };
   auto image = [&](int64_t k) {
     return noise ? rig.RenderFrame(camera, k) : rig.RenderView(camera, pose(k));

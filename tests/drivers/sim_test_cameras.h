@@ -9,11 +9,11 @@
 #include <optional>
 #include <string>
 
-#include "rigcal/vo/camera_model.h"
+#include "rigcal/camera/camera_model.h"
 
 namespace rigcal::drivers::testing {
 
-class TestPinhole final : public vo::CameraModel {
+class TestPinhole final : public camera::CameraModel {
  public:
   TestPinhole(int width, int height, double fx, double fy, double cx, double cy)
       : CameraModel(width, height), fx_(fx), fy_(fy), cx_(cx), cy_(cy) {}
@@ -54,7 +54,7 @@ class TestPinhole final : public vo::CameraModel {
 };
 
 // r = f * theta; valid up to max_angle_deg from the optical axis (may exceed 90).
-class TestEquidistant final : public vo::CameraModel {
+class TestEquidistant final : public camera::CameraModel {
  public:
   TestEquidistant(int width, int height, double f, double max_angle_deg)
       : CameraModel(width, height),

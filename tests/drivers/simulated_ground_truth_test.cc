@@ -7,8 +7,8 @@
 
 #include "drivers/sim_test_cameras.h"
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/tools/rig_files.h"
-#include "rigcal/tools/trajectory_io.h"
+#include "rigcal/io/rig_files.h"
+#include "rigcal/io/trajectory_io.h"
 
 namespace rigcal::drivers {
 namespace {

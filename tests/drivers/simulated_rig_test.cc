@@ -230,8 +230,8 @@ TEST(SimulatedRig, WallEdgeAppearsWhereTheModelProjectsIt) {
 // Renders two views of the room; a pixel of view A and the projection into view B of the 3D
 // point that A's pixel sees must show the same texture.
 double RegistrationError(const SimulatedRig& rig, int cam_a, const Pose& a, int cam_b,
-                         const Pose& b, const vo::CameraModel& model_a,
-                         const vo::CameraModel& model_b, const Eigen::Vector2d& shift, int* count) {
+                         const Pose& b, const camera::CameraModel& model_a,
+                         const camera::CameraModel& model_b, const Eigen::Vector2d& shift, int* count) {
   const cv::Mat image_a = rig.RenderView(cam_a, a, 1);
   const cv::Mat image_b = rig.RenderView(cam_b, b, 1);
   double sum = 0;

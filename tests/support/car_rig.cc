@@ -5,7 +5,7 @@
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
-#include "rigcal/tools/trajectory_io.h"
+#include "rigcal/io/trajectory_io.h"
 
 namespace rigcal::support {
 namespace {

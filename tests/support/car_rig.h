@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/expected.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/calib/types.h"
 

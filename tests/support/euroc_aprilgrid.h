@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/expected.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 
 namespace rigcal::support {

@@ -13,7 +13,7 @@
 #include <random>
 
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/tools/rig_config.h"
+#include "rigcal/io/rig_config.h"
 
 namespace rigcal::vo {
 namespace {
@@ -76,7 +76,7 @@ void CompareWithKltChain(const std::string& file, int camera, int frames, double
   spec.realtime = false;
   auto rig = drivers::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig.ok()) << rig.error();
-  const CameraModel& model = *spec.cameras[camera];
+  const camera::CameraModel& model = *spec.cameras[camera];
   auto pose = [&](int64_t k) { return rig->CameraPoseAt(camera, rig->FrameStreamTime(k)); };
   const int64_t first = 40;
   cv::Mat previous = rig->RenderFrame(camera, first);

@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "rigcal/drivers/image_folder_device.h"
-#include "rigcal/vo/camera_spec.h"
+#include "rigcal/camera/camera_spec.h"
 #include "rigcal/vo/monocular_vo.h"
 
 namespace rigcal::vo {
@@ -16,11 +16,11 @@ namespace {
 
 const std::string kEuroc = std::string(RIGCAL_SHARED_DATA_DIR) + "/euroc_v101_static/mav0";
 
-std::shared_ptr<const CameraModel> EurocCamera(int index) {
+std::shared_ptr<const camera::CameraModel> EurocCamera(int index) {
   // mav0/cam<index>/sensor.yaml
-  CameraSpec spec;
+  camera::CameraSpec spec;
   spec.name = "cam" + std::to_string(index);
-  spec.model = CameraSpec::Model::kPinhole;
+  spec.model = camera::CameraSpec::Model::kPinhole;
   spec.width = 752;
   spec.height = 480;
   if (index == 0) {
@@ -30,10 +30,10 @@ std::shared_ptr<const CameraModel> EurocCamera(int index) {
     spec.intrinsics = {457.587, 456.134, 379.999, 255.238};
     spec.distortion = {-0.28368365, 0.07451284, -0.00010473, -3.55590700e-05};
   }
-  auto model = MakeCameraModel(spec);
+  auto model = camera::MakeCameraModel(spec);
   EXPECT_TRUE(model.ok()) << model.error();
   if (!model.ok()) return nullptr;
-  return std::shared_ptr<const CameraModel>(std::move(*model));
+  return std::shared_ptr<const camera::CameraModel>(std::move(*model));
 }
 
 struct StaticRun {

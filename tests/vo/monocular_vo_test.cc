@@ -33,7 +33,7 @@ struct Sequence {
 // Runs the VO over `frames` rendered frames; `pose_of(k)` gives the true pose of frame k and
 // `blank(k)` says which frames are replaced by a uniform grey image.
 template <typename PoseOf, typename Blank>
-Sequence RunSequence(const std::shared_ptr<const CameraModel>& camera, int frames, PoseOf pose_of,
+Sequence RunSequence(const std::shared_ptr<const camera::CameraModel>& camera, int frames, PoseOf pose_of,
                      Blank blank, VoOptions options = {}) {
   static const SyntheticRoom room;
   const auto rays = SyntheticRoom::Rays(*camera);

@@ -22,9 +22,9 @@
 #include <map>
 
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/tools/rig_config.h"
-#include "rigcal/tools/trajectory_io.h"
-#include "rigcal/vo/camera_spec.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/trajectory_io.h"
+#include "rigcal/camera/camera_spec.h"
 #include "rigcal/vo/monocular_vo.h"
 
 namespace rigcal::vo {

@@ -16,15 +16,15 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/vo/camera_model.h"
+#include "rigcal/camera/camera_model.h"
 
 namespace rigcal::vo::testing {
 
 // Ideal pinhole: u = fx x/z + cx.
-class TestPinhole : public CameraModel {
+class TestPinhole : public camera::CameraModel {
  public:
   TestPinhole(int width, int height, double fx, double fy, double cx, double cy)
-      : CameraModel(width, height), fx_(fx), fy_(fy), cx_(cx), cy_(cy) {}
+      : camera::CameraModel(width, height), fx_(fx), fy_(fy), cx_(cx), cy_(cy) {}
   // A pinhole with the given horizontal field of view, principal point at the centre.
   static std::shared_ptr<TestPinhole> WithFov(int width, int height, double hfov_deg) {
     const double f = 0.5 * width / std::tan(0.5 * hfov_deg * M_PI / 180.0);
@@ -59,7 +59,7 @@ class TestPinhole : public CameraModel {
     return std::atan(std::hypot(x, y)) * 180.0 / M_PI;
   }
   double PixelAngle() const override { return 1.0 / fx_; }
-  std::unique_ptr<CameraModel> Clone() const override {
+  std::unique_ptr<camera::CameraModel> Clone() const override {
     return std::make_unique<TestPinhole>(*this);
   }
 
@@ -69,10 +69,10 @@ class TestPinhole : public CameraModel {
 
 // Ideal equidistant fisheye: r = f theta, up to `max_angle_deg` from the axis (93 degrees =
 // a 186-degree lens, where bearings have z < 0).
-class TestEquidistant : public CameraModel {
+class TestEquidistant : public camera::CameraModel {
  public:
   TestEquidistant(int width, int height, double f, double cx, double cy, double max_angle_deg)
-      : CameraModel(width, height),
+      : camera::CameraModel(width, height),
         f_(f),
         cx_(cx),
         cy_(cy),
@@ -122,7 +122,7 @@ class TestEquidistant : public CameraModel {
   }
   double MaxFieldAngleDeg() const override { return max_angle_ * 180.0 / M_PI; }
   double PixelAngle() const override { return 1.0 / f_; }
-  std::unique_ptr<CameraModel> Clone() const override {
+  std::unique_ptr<camera::CameraModel> Clone() const override {
     return std::make_unique<TestEquidistant>(*this);
   }
 
@@ -142,7 +142,7 @@ class SyntheticRoom {
   }
 
   // Unit bearings of every pixel of `camera` (row-major; invalid pixels have a zero vector).
-  static std::vector<Eigen::Vector3f> Rays(const CameraModel& camera) {
+  static std::vector<Eigen::Vector3f> Rays(const camera::CameraModel& camera) {
     std::vector<Eigen::Vector3f> rays(static_cast<size_t>(camera.width()) * camera.height(),
                                       Eigen::Vector3f::Zero());
     for (int y = 0; y < camera.height(); ++y) {
@@ -156,7 +156,7 @@ class SyntheticRoom {
 
   // Grey image seen by a camera at (R world_from_cam, C) inside the room, with Gaussian noise
   // of `noise_sigma` grey levels (seeded by `noise_seed`). Pixels outside the lens are black.
-  cv::Mat Render(const CameraModel& camera, const std::vector<Eigen::Vector3f>& rays,
+  cv::Mat Render(const camera::CameraModel& camera, const std::vector<Eigen::Vector3f>& rays,
                  const Eigen::Matrix3d& R_world_from_cam, const Eigen::Vector3d& C,
                  double noise_sigma = 1.0, uint32_t noise_seed = 1) const {
     cv::Mat image(camera.height(), camera.width(), CV_32FC1);

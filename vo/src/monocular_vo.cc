@@ -121,7 +121,7 @@ std::string ToString(VoState state) {
 
 class MonocularVo::Impl {
  public:
-  Impl(std::shared_ptr<const CameraModel> camera, int camera_index, VoOptions options);
+  Impl(std::shared_ptr<const camera::CameraModel> camera, int camera_index, VoOptions options);
   VoResult Process(int64_t t_ns, const cv::Mat& image);
 
   VoState state_ = VoState::kInitialising;
@@ -148,7 +148,7 @@ class MonocularVo::Impl {
   bool Unproject(const cv::Point2f& px, Eigen::Vector3d* bearing) const;
   bool InMask(const cv::Point2f& px) const;
 
-  std::shared_ptr<const CameraModel> camera_;
+  std::shared_ptr<const camera::CameraModel> camera_;
   int camera_index_ = 0;
   std::shared_ptr<spdlog::logger> log_;
   double pixel_angle_ = 1e-3;
@@ -174,7 +174,7 @@ class MonocularVo::Impl {
   int keyframe_landmarks_ = 0;
 };
 
-MonocularVo::Impl::Impl(std::shared_ptr<const CameraModel> camera, int camera_index,
+MonocularVo::Impl::Impl(std::shared_ptr<const camera::CameraModel> camera, int camera_index,
                         VoOptions options)
     : options_(options), camera_(std::move(camera)), camera_index_(camera_index) {
   log_ = ModuleLogger("vo");
@@ -748,7 +748,7 @@ void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
   for (const Track& t : tracks_) keyframe_landmarks_ += t.landmark >= 0;
 }
 
-MonocularVo::MonocularVo(std::shared_ptr<const CameraModel> camera, int camera_index,
+MonocularVo::MonocularVo(std::shared_ptr<const camera::CameraModel> camera, int camera_index,
                          VoOptions options)
     : impl_(std::make_unique<Impl>(std::move(camera), camera_index, options)) {}
 MonocularVo::~MonocularVo() = default;

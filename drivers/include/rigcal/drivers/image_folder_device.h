@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/expected.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/drivers/capture_device.h"
 
 namespace rigcal::drivers {

@@ -86,17 +86,17 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/expected.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 #include "rigcal/drivers/capture_device.h"
-#include "rigcal/vo/camera_model.h"
+#include "rigcal/camera/camera_model.h"
 
 namespace rigcal::drivers {
 
 struct SimulatedRigSpec {
   // --- Cameras (from `cameras:`); index 0 is the master. ---------------------------------
   std::vector<std::string> names;
-  std::vector<std::shared_ptr<const vo::CameraModel>> cameras;
+  std::vector<std::shared_ptr<const camera::CameraModel>> cameras;
   // True mounting of camera i in the master frame; [0] must be the identity.
   std::vector<Pose> master_from_camera;
 

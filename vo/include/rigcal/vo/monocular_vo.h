@@ -27,7 +27,7 @@
 #include <string>
 
 #include "rigcal/calib/types.h"
-#include "rigcal/vo/camera_model.h"
+#include "rigcal/camera/camera_model.h"
 
 namespace rigcal::vo {
 
@@ -150,7 +150,7 @@ class MonocularVo {
  public:
   // `camera` must not be null; `camera_index` is written into every CameraPose. Invalid
   // options are logged and replaced by the defaults (see Check()).
-  MonocularVo(std::shared_ptr<const CameraModel> camera, int camera_index, VoOptions options = {});
+  MonocularVo(std::shared_ptr<const camera::CameraModel> camera, int camera_index, VoOptions options = {});
   ~MonocularVo();
   MonocularVo(const MonocularVo&) = delete;
   MonocularVo& operator=(const MonocularVo&) = delete;

@@ -1,0 +1,70 @@
+#pragma once
+// One meaning per state. Every surface that says how far a slave's calibration has got — the
+// batch result, the online estimate, RIGCAL_EXTRINSICS / RIGCAL_STATUS, result files, status
+// lines and exit codes — reports exactly one SlaveState, mapped from here:
+//
+//   state          meaning                                             LCM  file / line    exit
+//   initialising   no usable estimate yet: too few motions, or the     0    initialising   3
+//                  motions do not determine the parameters
+//   usable         an estimate the data support; its σ has not settled 1    usable         0
+//                  (online) or could not be computed (batch)
+//   converged      usable, and σ has settled: below the thresholds and 2    converged      0
+//                  stable over the last keyframes (online), computed
+//                  from the covariance (batch)
+//   decalibrated   the rig moved: the estimate no longer fits the      3    decalibrated   3
+//                  recent motions (online only); it re-converges
+//
+// The LCM constants slave_extrinsics_t::STATE_* carry the same numbers (checked at compile time
+// in rigcal_lcm). What the motion determines is a separate set of facts, never a state: the
+// purely translational model (C unobservable), planar motion (C along the axis unobservable,
+// or taken from the nominal mounting), and whether a value comes from the non-linear
+// refinement.
+
+#include <cstdint>
+#include <string_view>
+#include <vector>
+
+namespace rigcal {
+
+enum class SlaveState : uint8_t {
+  kInitialising = 0,
+  kUsable = 1,
+  kConverged = 2,
+  kDecalibrated = 3,
+};
+
+// "initialising", "usable", "converged", "decalibrated".
+std::string_view ToString(SlaveState state);
+
+// Whether the estimate may be used: usable or converged.
+constexpr bool IsUsable(SlaveState state) {
+  return state == SlaveState::kUsable || state == SlaveState::kConverged;
+}
+
+// The state of a whole rig, for RIGCAL_STATUS and status lines (the LCM constants
+// rig_status_t::ESTIMATOR_* carry the same numbers):
+//   idle          no slave has seen a motion yet
+//   initialising  no slave is usable yet
+//   degraded      some slaves usable, some not (the message says which)
+//   usable        every slave usable, not every one converged
+//   converged     every slave converged
+//   decalibrated  some slave decalibrated
+enum class RigState : uint8_t {
+  kIdle = 0,
+  kInitialising = 1,
+  kDegraded = 2,
+  kUsable = 3,
+  kConverged = 4,
+  kDecalibrated = 5,
+};
+
+std::string_view ToString(RigState state);
+
+// The rig's state from its slaves' (`any_motion`: some slave has seen a motion).
+RigState CombineStates(const std::vector<SlaveState>& slaves, bool any_motion);
+
+// Exit code of a command that produced these slaves: 0 when every one is usable, 3 otherwise
+// (README "Exit codes": 1 bad input and 2 usage are decided before any estimate exists).
+int ExitCodeFor(const std::vector<SlaveState>& slaves);
+
+}  // namespace rigcal

@@ -1,0 +1,258 @@
+// The JSON schema shared by the commands, the text table and the Euler angle helper.
+#include "rigcal/io/result_json.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <set>
+
+#include "rigcal/calib/error_model.h"
+#include "rigcal/calib/quaternion.h"
+
+namespace rigcal::tools {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+Similarity MakeRig(const Eigen::Vector3d& axis, double angle_deg, const Eigen::Vector3d& c,
+                   double scale) {
+  Similarity s;
+  s.q = AxisAngle(axis, angle_deg * kRadPerDeg);
+  s.C = c;
+  s.scale = scale;
+  return s;
+}
+
+struct Fixture {
+  RigCalibration result;
+  std::map<std::string, Similarity> truth;
+};
+
+// left: converged, one scale; back: three segment scales; still: insufficient motion.
+Fixture MakeFixture() {
+  Fixture f;
+  RigCalibration& r = f.result;
+  r.master = "front";
+  r.pairs_selected = 200;
+  SlaveCalibration left;
+  left.name = "left";
+  left.estimate = MakeRig({0, 1, 0}, -89.5, {-0.84, 0.05, -0.61}, 0.505);
+  left.scales = {SegmentScale{0, 0.505, 0.002}};
+  left.rot_std_deg = 0.02;
+  left.pos_std = {0.001, 0.002, 0.003};
+  left.motions.total = 200;
+  left.motions.used = 190;
+  left.motions.small_rotation = 7;
+  left.motions.residual_outlier = 3;
+  left.motion_model = MotionModel::kGeneral;
+  left.scale_model = ScaleModel::kFixed;
+  left.termination = Termination::kConverged;
+  left.message = "converged after 7 iterations";
+  SlaveCalibration back;
+  back.name = "back";
+  back.estimate = MakeRig({0, 1, 0}, 180, {0.1, -0.1, -2.2}, 2.0);
+  back.scales = {SegmentScale{0, 2.0, 0.01}, SegmentScale{3, 2.5, 0.02}};
+  back.motion_model = MotionModel::kTranslational;
+  back.scale_model = ScaleModel::kSegments;
+  back.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ()};
+  back.termination = Termination::kConverged;
+  SlaveCalibration road;  // planar: C along the vertical unknown
+  road.name = "road";
+  road.estimate = MakeRig({0, 1, 0}, 90, {0.9, 0.0, -1.5}, 2.0);
+  road.scales = {SegmentScale{0, 2.0, 0.001}};
+  road.rot_std_deg = 0.003;
+  road.pos_std = {0.002, 0.0, 0.002};
+  road.motion_model = MotionModel::kPlanar;
+  road.unobservable = {Eigen::Vector3d::UnitY()};
+  road.observability.planar = true;
+  road.observability.planar_axis = Eigen::Vector3d::UnitY();
+  road.observability.rotation_eigenvalues = Eigen::Vector4d(1e-8, 2e-8, 3.0, 4.0);
+  road.observability.tilt_snr = 1.05;
+  road.observability.axis_std_ratio = std::numeric_limits<double>::infinity();
+  road.termination = Termination::kConverged;
+  road.message = "planar motion: C along the rotation axis is unobservable";
+  SlaveCalibration still;
+  still.name = "still";
+  still.termination = Termination::kInsufficientMotion;
+  still.message = "need >= 2 motions with rotation >= 2 deg, got 1";
+  r.slaves = {left, back, still, road};
+  f.truth = {{"left", MakeRig({0, 1, 0}, -90, {-0.85, 0.05, -0.6}, 0.5)},
+             {"back", MakeRig({0, 1, 0}, 180, {0.1, -0.1, -2.2}, 2.0)},
+             {"still", MakeRig({1, 0, 0}, 10, {1, 1, 1}, 1.0)},
+             {"road", MakeRig({0, 1, 0}, 90.1, {0.9, 0.3, -1.5}, 2.0)}};
+  return f;
+}
+
+std::set<std::string> Keys(const nlohmann::json& j) {
+  std::set<std::string> keys;
+  for (const auto& [key, value] : j.items()) keys.insert(key);
+  return keys;
+}
+
+const std::set<std::string> kCommonKeys = {"name",
+                                           "q_wxyz",
+                                           "C",
+                                           "std",
+                                           "motions_used",
+                                           "motions_rejected",
+                                           "models",
+                                           "termination",
+                                           "message",
+                                           "unobservable",
+                                           "unobservable_from_prior",
+                                           "observability"};
+
+std::set<std::string> With(std::set<std::string> keys, std::initializer_list<const char*> more) {
+  for (const char* k : more) keys.insert(k);
+  return keys;
+}
+
+TEST(ResultJsonTest, ExactSchemaWithTruth) {
+  const Fixture f = MakeFixture();
+  const nlohmann::json j = ResultToJson(f.result, &f.truth);
+  EXPECT_EQ(Keys(j), std::set<std::string>({"master", "slaves"}));
+  EXPECT_EQ(j.at("master"), "front");
+  ASSERT_TRUE(j.at("slaves").is_array());
+  ASSERT_EQ(j.at("slaves").size(), 4u);
+  const nlohmann::json& left = j.at("slaves")[0];
+  const nlohmann::json& back = j.at("slaves")[1];
+  const nlohmann::json& still = j.at("slaves")[2];
+  // One scale -> "scale"; several -> "scales"; "errors" only for usable slaves with truth.
+  EXPECT_EQ(Keys(left), With(kCommonKeys, {"scale", "errors"}));
+  EXPECT_EQ(Keys(back), With(kCommonKeys, {"scales", "errors"}));
+  EXPECT_EQ(Keys(still), With(kCommonKeys, {"scale"}));
+
+  EXPECT_EQ(left.at("name"), "left");
+  const Eigen::Quaterniond& q = f.result.slaves[0].estimate.q;
+  EXPECT_EQ(left.at("q_wxyz"), nlohmann::json({q.w(), q.x(), q.y(), q.z()}));
+  EXPECT_EQ(left["C"], nlohmann::json({-0.84, 0.05, -0.61}));
+  EXPECT_EQ(left.at("scale"), 0.505);
+  // σ along the mean axis: not computed here (NaN) -> null.
+  EXPECT_EQ(left.at("std"),
+            nlohmann::json({{"rot_deg", 0.02}, {"pos", {0.001, 0.002, 0.003}}, {"axis", nullptr}}));
+  EXPECT_EQ(left.at("motions_used"), 190);
+  EXPECT_EQ(left.at("motions_rejected"), 10);
+  EXPECT_EQ(left.at("models"), nlohmann::json({{"motion", "general"}, {"scale", "fixed"}}));
+  EXPECT_EQ(left.at("termination"), "converged");
+  EXPECT_EQ(left.at("message"), "converged after 7 iterations");
+  EXPECT_EQ(left.at("unobservable"), nlohmann::json::array());
+
+  const CalibrationError e = CompareToTruth(f.result.slaves[0].estimate, f.truth.at("left"));
+  EXPECT_EQ(Keys(left.at("errors")),
+            std::set<std::string>({"rot_deg", "dir_deg", "dist_pct", "trans_err", "scale_pct",
+                                   "plane_err", "axis_err"}));
+  EXPECT_TRUE(left.at("errors").at("axis_err").is_null());  // no mean axis
+  EXPECT_DOUBLE_EQ(left.at("errors").at("rot_deg").get<double>(), e.rot_deg);
+  EXPECT_DOUBLE_EQ(left.at("errors").at("dir_deg").get<double>(), e.dir_deg);
+  EXPECT_DOUBLE_EQ(left.at("errors").at("dist_pct").get<double>(), e.dist_pct);
+  EXPECT_DOUBLE_EQ(left.at("errors").at("trans_err").get<double>(), e.trans_err);
+  EXPECT_DOUBLE_EQ(left.at("errors").at("scale_pct").get<double>(), e.scale_pct);
+  // Sanity of the error model on this fixture: 0.5 deg rotation error, 1 % scale error.
+  EXPECT_NEAR(left.at("errors").at("rot_deg").get<double>(), 0.5, 1e-9);
+  EXPECT_NEAR(left.at("errors").at("scale_pct").get<double>(), 1.0, 1e-9);
+
+  ASSERT_EQ(back.at("scales").size(), 2u);
+  EXPECT_EQ(back.at("scales")[1], nlohmann::json({{"segment", 3}, {"scale", 2.5}, {"std", 0.02}}));
+  EXPECT_EQ(back.at("models"),
+            nlohmann::json({{"motion", "translational"}, {"scale", "segments"}}));
+  EXPECT_EQ(back.at("unobservable"), nlohmann::json({{1.0, 0.0, 0.0}, {0.0, 0.0, 1.0}}));
+
+  EXPECT_EQ(left.at("unobservable_from_prior"), false);
+  EXPECT_EQ(Keys(left.at("observability")),
+            std::set<std::string>({"rotation_eigenvalues", "rotation_weak_std_deg",
+                                   "position_min_eigenvalue", "axis_spread_deg",
+                                   "slave_axis_spread_deg", "tilt_snr", "axis_std_ratio",
+                                   "max_rotation_deg", "planar", "mean_axis"}));
+
+  // Planar: the vertical is listed, not from a prior, its σ unknown (null), and the errors are
+  // split at the axis: 0.3 m along it (the unknown height, reported as 0), none in the plane.
+  const nlohmann::json& road = j.at("slaves")[3];
+  EXPECT_EQ(road.at("models").at("motion"), "planar");
+  EXPECT_EQ(road.at("unobservable"), nlohmann::json({{0.0, 1.0, 0.0}}));
+  EXPECT_EQ(road.at("unobservable_from_prior"), false);
+  EXPECT_TRUE(road.at("std").at("axis").is_null());
+  EXPECT_EQ(road.at("observability").at("planar"), true);
+  EXPECT_EQ(road.at("observability").at("mean_axis"), nlohmann::json({0.0, 1.0, 0.0}));
+  EXPECT_TRUE(road.at("observability").at("axis_std_ratio").is_null());  // infinite
+  EXPECT_DOUBLE_EQ(road.at("observability").at("tilt_snr").get<double>(), 1.05);
+  EXPECT_NEAR(road.at("errors").at("axis_err").get<double>(), 0.3, 1e-12);
+  EXPECT_NEAR(road.at("errors").at("plane_err").get<double>(), 0.0, 1e-12);
+
+  EXPECT_EQ(still.at("termination"), "insufficient_motion");
+  EXPECT_EQ(still.at("message"), "need >= 2 motions with rotation >= 2 deg, got 1");
+}
+
+TEST(ResultJsonTest, NoTruthNoErrors) {
+  const Fixture f = MakeFixture();
+  const nlohmann::json j = ResultToJson(f.result, nullptr);
+  for (const auto& slave : j.at("slaves")) EXPECT_FALSE(slave.contains("errors")) << slave.dump();
+  // A truth map without the slave: no errors for that slave only.
+  std::map<std::string, Similarity> partial = {{"back", f.truth.at("back")}};
+  const nlohmann::json p = ResultToJson(f.result, &partial);
+  EXPECT_FALSE(p.at("slaves")[0].contains("errors"));
+  EXPECT_TRUE(p.at("slaves")[1].contains("errors"));
+}
+
+TEST(ResultJsonTest, SerialisesAndParsesBack) {
+  const Fixture f = MakeFixture();
+  const nlohmann::json j = ResultToJson(f.result, &f.truth);
+  EXPECT_EQ(nlohmann::json::parse(j.dump()), j);
+}
+
+TEST(RollPitchYawTest, KnownRotations) {
+  auto rpy = [](const Eigen::Quaterniond& q) { return RollPitchYawDeg(q); };
+  // 1e-9 deg: a handful of double roundings in acos/atan2.
+  EXPECT_LT((rpy(AxisAngle({0, 0, 1}, 90 * kRadPerDeg)) - Eigen::Vector3d(0, 0, 90)).norm(), 1e-9);
+  EXPECT_LT((rpy(AxisAngle({1, 0, 0}, 30 * kRadPerDeg)) - Eigen::Vector3d(30, 0, 0)).norm(), 1e-9);
+  EXPECT_LT((rpy(AxisAngle({0, 1, 0}, -20 * kRadPerDeg)) - Eigen::Vector3d(0, -20, 0)).norm(),
+            1e-9);
+  const Eigen::Quaterniond zyx = AxisAngle({0, 0, 1}, 40 * kRadPerDeg) *
+                                 AxisAngle({0, 1, 0}, -20 * kRadPerDeg) *
+                                 AxisAngle({1, 0, 0}, 10 * kRadPerDeg);
+  EXPECT_LT((rpy(zyx) - Eigen::Vector3d(10, -20, 40)).norm(), 1e-9);
+}
+
+TEST(FormatResultTableTest, ShowsEstimatesTruthAndErrors) {
+  const Fixture f = MakeFixture();
+  const std::string table = FormatResultTable(f.result, &f.truth);
+  for (const char* expected : {"master: front",
+                               "left: converged",
+                               "back: converged",
+                               "still: insufficient_motion",
+                               "NOT USABLE",
+                               "need >= 2 motions with rotation >= 2 deg, got 1",
+                               "q (w, x, y, z)",
+                               "roll pitch yaw [deg]",
+                               "C [master units]",
+                               "truth",
+                               "scale segment 3",
+                               "std rotation",
+                               "used 190 of 200, rejected 10",
+                               "motion general, scale fixed",
+                               "motion translational, scale segments",
+                               "unobservable along",
+                               "errors vs truth",
+                               "rotation 0.5 deg",
+                               "scale 1 %",
+                               "motion planar, scale fixed",
+                               "C along mean axis",
+                               "unobservable: unknown (0 shown; give a nominal)",
+                               "tilt SNR 1.05",
+                               "C error in the plane 0, along the mean axis 0.3"}) {
+    EXPECT_THAT(table, HasSubstr(expected));
+  }
+  // left's estimate -0.84 and its truth -0.85 both appear in its C row.
+  EXPECT_THAT(table, ::testing::ContainsRegex("C \\[master units\\] +-0\\.8400 .* -0\\.8500"));
+}
+
+TEST(FormatResultTableTest, NoTruthNoTruthColumn) {
+  const Fixture f = MakeFixture();
+  const std::string table = FormatResultTable(f.result, nullptr);
+  EXPECT_THAT(table, Not(HasSubstr("truth")));
+  EXPECT_THAT(table, HasSubstr("left: converged"));
+}
+
+}  // namespace
+}  // namespace rigcal::tools

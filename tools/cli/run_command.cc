@@ -1,0 +1,403 @@
+// `rigcal run`: the whole live pipeline on a configured source: capture -> VO per camera ->
+// SyncBuffer -> RigEstimator -> LCM, with a status line per second.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "commands.h"
+#include "rigcal/calib/logging.h"
+#include "rigcal/drivers/image_folder_device.h"
+#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/pipeline/calib_node.h"
+#include "rigcal/lcm/lcm_messages.h"
+#include "rigcal/pipeline/online_replay.h"
+#include "rigcal/pipeline/pipeline.h"
+#include "rigcal/lcm/process_stats.h"
+#include "rigcal/io/result_json.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/rig_files.h"
+#include "rigcal/lcm/rig_status.h"
+#include "rigcal/pipeline/run_evaluation.h"
+#include "rigcal/io/trajectory_io.h"
+#include "rigcal/camera/camera_spec.h"
+#include "stop_signal.h"
+
+namespace rigcal::cli {
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitError = 1;
+constexpr int kExitNoCalibration = 3;
+
+struct RunArgs {
+  std::string config;
+  std::string lcm_url;
+  double duration_s = 0.0;
+  bool eval = false;
+  bool json = false;
+  bool fast = false;
+  std::string out = "rigcal_result.yaml";
+  std::string truth_dir;
+  std::string poses_dir;
+  double status_every_s = 1.0;
+};
+
+const char* VoStateShort(vo::VoState state) {
+  switch (state) {
+    case vo::VoState::kInitialising:
+      return "init";
+    case vo::VoState::kTracking:
+      return "trk";
+    case vo::VoState::kLost:
+      return "lost";
+  }
+  return "?";
+}
+
+int8_t VoStateToLcm(const tools::CameraHealth& h) {
+  if (h.dead) return camera_status_t::VO_DEAD;
+  switch (h.vo_state) {
+    case vo::VoState::kTracking:
+      return camera_status_t::VO_TRACKING;
+    case vo::VoState::kLost:
+      return camera_status_t::VO_LOST;
+    default:
+      return camera_status_t::VO_INITIALISING;
+  }
+}
+
+// One line: time, per camera fps / VO state / segment / VO ms, sets, per slave estimate.
+std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
+                       const std::vector<int64_t>& frames_before, double period_s) {
+  std::ostringstream line;
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "%6.1fs", t_s);
+  line << buf;
+  for (size_t i = 0; i < s.cameras.size(); ++i) {
+    const tools::CameraHealth& h = s.cameras[i];
+    const double fps = period_s > 0 ? (h.frames_processed - frames_before[i]) / period_s : 0.0;
+    if (h.dead) {
+      line << " | " << h.name << " DEAD";
+      continue;
+    }
+    std::snprintf(buf, sizeof(buf), " | %s %4.1ffps %s s%d %.1fms", h.name.c_str(), fps,
+                  VoStateShort(h.vo_state), h.segment, h.vo_ms_median);
+    line << buf;
+    if (h.dropped_backlog > 0) line << " drop" << h.dropped_backlog;
+  }
+  line << " | sets " << s.estimate.sets;
+  for (size_t i = 0; i < s.estimate.rig.slaves.size(); ++i) {
+    const SlaveCalibration& slave = s.estimate.rig.slaves[i];
+    if (slave.usable()) {
+      std::snprintf(buf, sizeof(buf), " | %s C=(%.2f %.2f %.2f) ±%.2f° %d mot", slave.name.c_str(),
+                    slave.estimate.C.x(), slave.estimate.C.y(), slave.estimate.C.z(),
+                    slave.rot_std_deg, slave.motions.used);
+      line << buf;
+    } else {
+      line << " | " << slave.name << " " << slave.motions.used << " mot";
+    }
+    if (i < s.estimate.online.size()) {
+      line << " [" << tools::FlagsToString(s.estimate.online[i].flags) << "]";
+    }
+  }
+  return line.str();
+}
+
+void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
+                   const std::vector<int64_t>& frames_before, double period_s, int32_t capacity,
+                   tools::CpuMeter* cpu, const std::vector<std::string>& names) {
+  std::vector<tools::CameraStatusInput> cameras;
+  for (size_t i = 0; i < s.cameras.size(); ++i) {
+    const tools::CameraHealth& h = s.cameras[i];
+    tools::CameraStatusInput c;
+    c.name = h.name;
+    c.fps = period_s > 0 ? (h.frames_processed - frames_before[i]) / period_s : 0.0;
+    c.frames_received = h.frames_captured;
+    c.dropped_backlog = h.dropped_backlog;
+    c.vo_state = VoStateToLcm(h);
+    c.last_pose_age_ms =
+        h.last_pose_t_ns >= 0 && h.last_frame_t_ns >= 0
+            ? std::max<int64_t>(0, (h.last_frame_t_ns - h.last_pose_t_ns) / 1'000'000)
+            : -1;
+    cameras.push_back(c);
+  }
+  const int64_t utime = std::chrono::duration_cast<std::chrono::microseconds>(
+                            std::chrono::steady_clock::now().time_since_epoch())
+                            .count();
+  const rig_status_t msg =
+      tools::MakeRigStatus(cameras, s.sync, capacity, s.estimate, cpu->Sample(), utime);
+  if (auto bytes = tools::EncodeMessage(tools::kStatusChannel, names, msg)) {
+    bus->publish(tools::kStatusChannel, bytes->data(), static_cast<unsigned int>(bytes->size()));
+  }
+  if (auto extrinsics = tools::EstimateToLcm(s.estimate, utime)) {
+    if (auto bytes = tools::EncodeMessage(tools::kExtrinsicsChannel, names, *extrinsics)) {
+      bus->publish(tools::kExtrinsicsChannel, bytes->data(),
+                   static_cast<unsigned int>(bytes->size()));
+    }
+  }
+}
+
+// Writes every recorded VO pose of camera i to <dir>/<name>.txt in the rigcal native format
+// (`t_ns qw qx qy qz Cx Cy Cz segment`), which `rigcal solve` reads. Returns an error or "".
+std::string WritePoses(const std::string& dir, const std::vector<std::string>& names,
+                       const tools::Pipeline& pipeline) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return "cannot create '" + dir + "': " + ec.message();
+  for (size_t i = 0; i < names.size(); ++i) {
+    tools::TimedTrajectory trajectory;
+    trajectory.name = names[i];
+    for (const CameraPose& p : pipeline.RecordedPoses(static_cast<int>(i))) {
+      // A segment's reference pose and its first pose are distinct stamps; keep stamps
+      // strictly increasing (a reader rejects anything else).
+      if (!trajectory.t_ns.empty() && p.t_ns <= trajectory.t_ns.back()) continue;
+      trajectory.t_ns.push_back(p.t_ns);
+      trajectory.poses.push_back(p.pose);
+      trajectory.segment.push_back(p.segment);
+    }
+    const std::string path = (std::filesystem::path(dir) / (names[i] + ".txt")).string();
+    if (std::string error = tools::WriteTrajectoryNative(path, trajectory); !error.empty()) {
+      return error;
+    }
+  }
+  return {};
+}
+
+int RunRun(const RunArgs& args) {
+  auto log = ModuleLogger("tools");
+  auto config = tools::LoadRigConfig(args.config);
+  if (!config) {
+    std::cerr << "rigcal run: " << config.error() << "\n";
+    return kExitError;
+  }
+  const std::vector<std::string> names = config->CameraNames();
+  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::shared_ptr<const camera::CameraModel>> models;
+  std::vector<drivers::ImageFolderDevice*> folders;  // not owned: for the end report
+  std::optional<drivers::SimulatedRig> rig;
+  bool realtime = false;
+  if (config->simulated_source) {
+    drivers::SimulatedRigSpec spec = *config->simulated_source;
+    if (args.fast) spec.realtime = false;
+    realtime = spec.realtime;
+    std::cerr << "rigcal run: building the simulated rig (" << spec.names.size() << " cameras, "
+              << drivers::ToString(spec.scene.type) << " scene)...\n";
+    auto made = drivers::MakeSimulatedRig(spec);
+    if (!made) {
+      std::cerr << "rigcal run: " << args.config << ": " << made.error() << "\n";
+      return kExitError;
+    }
+    rig = std::move(*made);
+    if (!args.truth_dir.empty()) {
+      if (const std::string error = rig->WriteGroundTruth(args.truth_dir); !error.empty()) {
+        std::cerr << "rigcal run: " << error << "\n";
+        return kExitError;
+      }
+    }
+    devices = rig->MakeDevices();
+    models = spec.cameras;
+    std::cerr << "rigcal run: " << rig->num_frames() << " frames per camera at "
+              << rig->frame_rate_hz() << " Hz"
+              << (realtime ? " (real time)" : " (as fast as possible)") << "\n";
+  } else if (!config->image_folders.empty()) {
+    if (args.eval) {
+      std::cerr << "rigcal run: --eval needs a simulated source (ground truth)\n";
+      return kExitError;
+    }
+    for (size_t i = 0; i < names.size(); ++i) {
+      auto device =
+          drivers::ImageFolderDevice::Open(config->image_folders[i], names[i], static_cast<int>(i));
+      if (!device) {
+        std::cerr << "rigcal run: " << args.config << ": camera '" << names[i]
+                  << "': " << device.error() << "\n";
+        return kExitError;
+      }
+      auto model = camera::MakeCameraModel(*config->cameras[i].spec);
+      if (!model) {
+        std::cerr << "rigcal run: " << args.config << ": camera '" << names[i]
+                  << "': " << model.error() << "\n";
+        return kExitError;
+      }
+      std::cerr << "rigcal run: camera '" << names[i] << "': " << (*device)->size()
+                << " images listed in " << config->image_folders[i] << "\n";
+      folders.push_back(device->get());
+      devices.push_back(std::move(*device));
+      models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
+    }
+  } else {
+    std::cerr << "rigcal run: " << args.config
+              << ": no `source:` section (supported: simulated, image_folders)\n";
+    return kExitError;
+  }
+  std::unique_ptr<lcm::LCM> bus;
+  if (!args.lcm_url.empty()) {
+    bus = std::make_unique<lcm::LCM>(args.lcm_url);
+    if (!bus->good()) {
+      std::cerr << "rigcal run: " << args.lcm_url << ": cannot open LCM\n";
+      return kExitError;
+    }
+  }
+  tools::PipelineOptions options;
+  options.lossless = !realtime;
+  options.record_poses = (rig.has_value() && (args.eval || args.json)) || !args.poses_dir.empty();
+  tools::Pipeline pipeline(names, std::move(devices), models, config->online, options, bus.get());
+
+  StopSignal stop_signal;
+  const auto start = std::chrono::steady_clock::now();
+  pipeline.Start();
+  std::cerr << "rigcal run: running; Ctrl-C stops cleanly\n";
+  std::vector<int64_t> frames_before(names.size(), 0);
+  auto last_status = start;
+  tools::CpuMeter cpu;
+  const int32_t capacity = config->online.sync.capacity * static_cast<int32_t>(names.size());
+  while (!pipeline.Finished() && !stop_signal.flag().load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    const auto now = std::chrono::steady_clock::now();
+    const double elapsed = std::chrono::duration<double>(now - start).count();
+    if (args.duration_s > 0 && elapsed >= args.duration_s) break;
+    const double period = std::chrono::duration<double>(now - last_status).count();
+    if (period >= (args.status_every_s > 0 ? args.status_every_s : 1.0)) {
+      const tools::PipelineSnapshot snapshot = pipeline.Snapshot();
+      if (args.status_every_s > 0)
+        std::cerr << StatusLine(elapsed, snapshot, frames_before, period) << "\n";
+      if (bus) PublishStatus(bus.get(), snapshot, frames_before, period, capacity, &cpu, names);
+      for (size_t i = 0; i < names.size(); ++i) {
+        frames_before[i] = snapshot.cameras[i].frames_processed;
+      }
+      last_status = now;
+    }
+  }
+  pipeline.Stop();
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const tools::PipelineSnapshot final_state = pipeline.Snapshot();
+  if (bus) PublishStatus(bus.get(), final_state, frames_before, 0.0, capacity, &cpu, names);
+  const RigCalibration& result = final_state.estimate.rig;
+
+  // What happened to the cameras.
+  for (const tools::CameraHealth& h : final_state.cameras) {
+    if (h.dead)
+      std::cerr << "rigcal run: camera '" << h.name << "' died: " << h.dead_reason << "\n";
+    if (h.dropped_backlog > 0) {
+      std::cerr << "rigcal run: camera '" << h.name << "': " << h.dropped_backlog
+                << " frames dropped because its VO fell behind\n";
+    }
+  }
+  for (const drivers::ImageFolderDevice* folder : folders) {
+    const std::vector<std::string> skipped = folder->skipped_files();
+    if (!skipped.empty()) {
+      std::cerr << "rigcal run: camera '" << folder->name() << "': " << skipped.size()
+                << " listed images missing or unreadable, skipped:\n";
+      for (const std::string& file : skipped) std::cerr << "  " << file << "\n";
+    }
+    for (const std::string& problem : folder->csv_problems()) {
+      std::cerr << "rigcal run: " << problem << "\n";
+    }
+  }
+  std::fprintf(stderr, "rigcal run: %.1f s, %llu sets; RSS %.0f MB\n", elapsed,
+               static_cast<unsigned long long>(final_state.estimate.sets),
+               static_cast<double>(tools::ResidentSetBytes()) / (1 << 20));
+  if (!args.out.empty()) {
+    if (const std::string error = tools::WriteResultYaml(args.out, result); !error.empty()) {
+      std::cerr << "rigcal run: " << error << "\n";
+      return kExitError;
+    }
+    log->info("result written to {}", args.out);
+  }
+
+  if (!args.poses_dir.empty()) {
+    if (const std::string error = WritePoses(args.poses_dir, names, pipeline); !error.empty()) {
+      std::cerr << "rigcal run: " << error << "\n";
+      return kExitError;
+    }
+  }
+  if (rig && !args.truth_dir.empty() && !args.poses_dir.empty()) {
+    // In real time the devices' stamps start with the rig clock: rewrite the truth now that
+    // it runs, so its stamps match the written poses (before the run they count from 0).
+    if (const std::string error = rig->WriteGroundTruth(args.truth_dir); !error.empty()) {
+      std::cerr << "rigcal run: " << error << "\n";
+      return kExitError;
+    }
+  }
+
+  bool any_usable = false;
+  for (const SlaveCalibration& slave : result.slaves) any_usable = any_usable || slave.usable();
+  std::optional<tools::RunEvaluation> evaluation;
+  if (rig && (args.eval || args.json)) {
+    std::vector<std::vector<CameraPose>> poses;
+    for (size_t i = 0; i < names.size(); ++i) {
+      poses.push_back(pipeline.RecordedPoses(static_cast<int>(i)));
+    }
+    auto e = tools::EvaluateRun(*rig, poses, result);
+    if (e) {
+      evaluation = *e;
+    } else {
+      std::cerr << "rigcal run: " << e.error() << "\n";
+    }
+  }
+  if (args.json) {
+    std::map<std::string, Similarity> truth;
+    if (evaluation) {
+      for (const tools::SlaveEvaluation& e : evaluation->slaves)
+        truth[e.name] = e.truth_master_units;
+    }
+    std::cout << tools::ResultToJson(result, evaluation ? &truth : nullptr).dump(2) << "\n";
+  } else {
+    std::cout << tools::FormatResultTable(result, nullptr);
+    if (!any_usable) {
+      std::cout << "insufficient motion: no slave could be calibrated (see the messages above; "
+                   "the rig must rotate about at least two axes, or move, while the cameras "
+                   "track)\n";
+    }
+    if (args.eval && evaluation) std::cout << tools::FormatEvaluation(*evaluation);
+  }
+  return any_usable ? kExitOk : kExitNoCalibration;
+}
+
+}  // namespace
+
+void RegisterRun(CLI::App& app, int* exit_code) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "run",
+      "The live pipeline: capture from the configured source, monocular VO per camera, pose\n"
+      "matching and the recursive rig estimator; a status line per second, LCM publishing with\n"
+      "--lcm, the result YAML on exit. Exit 3 when no slave could be calibrated.");
+  cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--lcm", args->lcm_url,
+                  "Publish RIGCAL_POSE_<camera>, RIGCAL_EXTRINSICS and RIGCAL_STATUS on this LCM "
+                  "URL (default: no LCM)");
+  cmd->add_option("--duration", args->duration_s, "Stop after this many seconds (0 = source end)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--eval", args->eval,
+                "Simulated source: print the errors against the ground truth at the end");
+  cmd->add_flag("--json", args->json,
+                "Print the final result as JSON (rigcal solve --json schema, with \"errors\" for a "
+                "simulated source)");
+  cmd->add_flag("--fast", args->fast,
+                "Do not pace a simulated source in real time: run as fast as the VO allows, "
+                "without dropping frames");
+  cmd->add_option("--out", args->out, "Result YAML written on exit (atomically)")
+      ->default_val("rigcal_result.yaml");
+  cmd->add_option("--truth-out", args->truth_dir,
+                  "Simulated source: write the ground truth (TUM per camera, truth.yaml) here");
+  cmd->add_option("--poses-out", args->poses_dir,
+                  "Write every VO pose of every camera to DIR/<camera>.txt (rigcal native format "
+                  "with the scale segment column, read by `rigcal solve`)");
+  cmd->add_option("--status-every", args->status_every_s, "Seconds between status lines (0 = none)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_val(1.0);
+  cmd->callback([args, exit_code]() { *exit_code = RunRun(*args); });
+}
+
+}  // namespace rigcal::cli

@@ -1,0 +1,382 @@
+// `rigcal solve`: batch calibration of a rig from per-camera trajectory files.
+#include <cmath>
+#include <exception>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "rigcal/calib/calibration_options.h"
+#include "rigcal/calib/logging.h"
+#include "rigcal/calib/rig_calibrator.h"
+#include "rigcal/pipeline/online_replay.h"
+#include "rigcal/io/result_json.h"
+#include "rigcal/io/rig_files.h"
+#include "rigcal/io/trajectory_io.h"
+
+namespace rigcal::cli {
+namespace {
+
+// Exit codes of `rigcal solve` (0 and 1 as for every subcommand).
+constexpr int kExitOk = 0;
+constexpr int kExitError = 1;
+constexpr int kExitUnusableSlave = 3;
+
+struct SolveArgs {
+  std::string master;
+  std::vector<std::string> slaves;
+  std::string method = "nl";
+  std::string motion = "auto";
+  std::string scale = "auto";
+  std::string pairs = "auto";
+  double tolerance_ms = 5.0;
+  double max_quaternion_norm_error = 1e-6;
+  std::string truth;
+  std::string prior;
+  double prior_sigma = 0.0;
+  int time_blocks = CalibrationOptions{}.covariance_time_blocks;
+  std::string out;
+  std::string camchain;
+  bool json = false;
+  bool online = false;
+  double report_every_s = 10.0;
+};
+
+// Parses the positive integer after `prefix` in `text` ("partitions:4" -> 4), else 0.
+int CountAfter(const std::string& text, const std::string& prefix) {
+  if (text.rfind(prefix, 0) != 0 || text.size() == prefix.size()) return 0;
+  const std::string digits = text.substr(prefix.size());
+  if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 6) return 0;
+  return std::stoi(digits);
+}
+
+// --scale value -> options; returns an error text or "".
+std::string ApplyScale(const std::string& text, CalibrationOptions* options) {
+  if (text == "auto") {
+    options->scale_model = ScaleModel::kAuto;
+  } else if (text == "fixed") {
+    options->scale_model = ScaleModel::kFixed;
+  } else if (text == "segments") {
+    options->scale_model = ScaleModel::kSegments;
+  } else if (const int n = CountAfter(text, "partitions:"); n > 0) {
+    options->scale_model = ScaleModel::kPartitions;
+    options->partitions = n;
+  } else {
+    return "expected auto, fixed, segments or partitions:N with N >= 1, got '" + text + "'";
+  }
+  return "";
+}
+
+// --pairs value -> options; returns an error text or "".
+std::string ApplyPairs(const std::string& text, PairOptions* pairs) {
+  if (text == "auto") {
+    pairs->policy = PairOptions::Policy::kAuto;
+  } else if (text == "start") {
+    pairs->policy = PairOptions::Policy::kSinceStart;
+  } else if (const int step = CountAfter(text, "relative:"); step > 0) {
+    pairs->policy = PairOptions::Policy::kRelative;
+    pairs->step = step;
+  } else {
+    return "expected auto, start or relative:STEP with STEP >= 1, got '" + text + "'";
+  }
+  return "";
+}
+
+int Fail(const std::string& message) {
+  std::cerr << "rigcal solve: " << message << "\n";
+  return kExitError;
+}
+
+int RunSolve(const SolveArgs& args) {
+  const auto log = ModuleLogger("tools");
+
+  CalibrationOptions options;
+  options.method = args.method == "lls" ? Method::kLinear : Method::kNonlinear;
+  options.motion_model = args.motion == "general"         ? MotionModel::kGeneral
+                         : args.motion == "planar"        ? MotionModel::kPlanar
+                         : args.motion == "translational" ? MotionModel::kTranslational
+                                                          : MotionModel::kAuto;
+  options.nominal_sigma = args.prior_sigma;
+  options.covariance_time_blocks = args.time_blocks;
+  if (std::string e = ApplyScale(args.scale, &options); !e.empty()) return Fail("--scale: " + e);
+  if (std::string e = ApplyPairs(args.pairs, &options.pairs); !e.empty()) {
+    return Fail("--pairs: " + e);
+  }
+  if (std::string e; !options.Check(&e)) return Fail("invalid options: " + e);
+
+  tools::TrajectoryReadOptions read_options;
+  read_options.max_quaternion_norm_error = args.max_quaternion_norm_error;
+  auto read = [&](const std::string& path) {
+    tools::TrajectoryFormat format = tools::TrajectoryFormat::kTum;
+    auto trajectory = tools::ReadTrajectory(path, read_options, &format);
+    if (trajectory) {
+      log->info("{}: {} poses ({} format), camera '{}'", path, trajectory->size(),
+                tools::ToString(format), trajectory->name);
+    }
+    return trajectory;
+  };
+  auto master = read(args.master);
+  if (!master) return Fail(master.error());
+  std::vector<tools::TimedTrajectory> slaves;
+  for (const std::string& path : args.slaves) {
+    auto slave = read(path);
+    if (!slave) return Fail(slave.error());
+    slaves.push_back(std::move(*slave));
+  }
+
+  std::map<std::string, Similarity> truth;
+  if (!args.truth.empty()) {
+    auto loaded = tools::ReadRigYaml(args.truth);
+    if (!loaded) return Fail(loaded.error());
+    truth = std::move(*loaded);
+    for (const auto& slave : slaves) {
+      if (truth.count(slave.name) == 0) {
+        std::string known;
+        for (const auto& [name, rig] : truth) known += (known.empty() ? "" : ", ") + name;
+        return Fail(args.truth + ": no entry for slave '" + slave.name +
+                    "' (the file has: " + known + ")");
+      }
+    }
+  }
+
+  if (!args.prior.empty()) {
+    auto nominal = tools::ReadNominalMountings(args.prior);
+    if (!nominal) return Fail(nominal.error());
+    for (const auto& slave : slaves) {
+      if (nominal->count(slave.name) == 0) {
+        log->warn(
+            "{}: no nominal mounting for slave '{}': what its motion cannot determine is "
+            "reported unknown",
+            args.prior, slave.name);
+      }
+    }
+    options.nominal = std::move(*nominal);
+  }
+
+  const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
+  auto recording = tools::MatchTrajectories(*master, slaves, tolerance_ns);
+  if (!recording) return Fail(recording.error());
+  log->info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
+            slaves.size() + 1, args.tolerance_ms);
+
+  RigCalibration result;
+  const std::map<std::string, Similarity>* truth_for_replay = args.truth.empty() ? nullptr : &truth;
+  try {
+    if (args.online) {
+      tools::OnlineReplayOptions replay;
+      replay.report_every_s = args.report_every_s;
+      replay.estimator.nominal_sigma = options.nominal_sigma;
+      for (const auto& slave : recording->slaves) {
+        const auto it = options.nominal.find(slave.name);
+        replay.estimator.nominal.push_back(
+            it == options.nominal.end() ? std::nullopt : std::optional<Similarity>(it->second));
+      }
+      const tools::OnlineReplayResult online =
+          tools::ReplayOnline(*recording, replay, truth_for_replay);
+      // Convergence goes to stderr with --json so stdout stays one JSON object.
+      (args.json ? std::cerr : std::cout) << tools::FormatConvergence(online.history) << "\n";
+      log->info("sync buffer: {}", online.sync.BriefReport());
+      result = online.estimate.rig;
+    } else {
+      result = CalibrateRig(*recording, options);
+    }
+  } catch (const std::exception& e) {
+    return Fail(std::string("calibration failed: ") + e.what());
+  }
+  if (result.master.empty()) result.master = master->name;
+
+  const std::map<std::string, Similarity>* truth_ptr = args.truth.empty() ? nullptr : &truth;
+  if (args.json) {
+    std::cout << tools::ResultToJson(result, truth_ptr).dump(2) << "\n";
+  } else {
+    std::cout << tools::FormatResultTable(result, truth_ptr);
+  }
+  std::cout.flush();
+
+  if (!args.out.empty()) {
+    if (std::string e = tools::WriteResultYaml(args.out, result); !e.empty()) return Fail(e);
+    log->info("wrote result to {}", args.out);
+  }
+  if (!args.camchain.empty()) {
+    if (std::string e = tools::WriteCamchain(args.camchain, result); !e.empty()) return Fail(e);
+    log->info("wrote camera chain to {}", args.camchain);
+  }
+
+  int exit_code = kExitOk;
+  for (const SlaveCalibration& slave : result.slaves) {
+    if (slave.usable()) continue;
+    std::cerr << "rigcal solve: " << slave.name << ": " << ToString(slave.termination) << ": "
+              << slave.message << "\n";
+    exit_code = kExitUnusableSlave;
+  }
+  return exit_code;
+}
+
+CLI::Validator ValueCheck(std::string (*apply)(const std::string&), const std::string& desc) {
+  return CLI::Validator([apply](std::string& value) { return apply(value); }, desc);
+}
+
+}  // namespace
+
+void RegisterSolve(CLI::App& app, int* exit_code) {
+  auto args = std::make_shared<SolveArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "solve",
+      "Calibrate a rig from per-camera trajectory files: estimate every slave camera's\n"
+      "orientation, position and odometry scale relative to the master camera.");
+
+  cmd->add_option("--master", args->master,
+                  "Trajectory file of the master camera. It defines the rig frame\n"
+                  "and the unit of every position in the result.")
+      ->type_name("FILE")
+      ->required();
+  cmd->add_option("--slave", args->slaves,
+                  "Trajectory file of a slave camera; repeat for every slave. A\n"
+                  "camera's name is its file name without directory and extension.")
+      ->type_name("FILE")
+      ->required();
+  cmd->add_option("--method", args->method,
+                  "lls: linear least squares only (thesis 4.3); nl: the linear\n"
+                  "estimate refined by non-linear least squares, with standard\n"
+                  "deviations (4.26-4.27).")
+      ->check(CLI::IsMember({"lls", "nl"}))
+      ->capture_default_str();
+  cmd->add_option("--motion", args->motion,
+                  "Motion model. general: the rig rotates about varying axes; rotation,\n"
+                  "position and scale are estimated. planar: every rotation is about one\n"
+                  "axis (a car on a road); rotation, scale and the position in the plane\n"
+                  "are estimated, the offset along the axis comes from --prior or is\n"
+                  "reported unknown. translational: it (almost) does not rotate; only\n"
+                  "rotation and scale are determined. auto: translational when no\n"
+                  "motion rotates beyond the thesis's equal-error boundary (10 deg at\n"
+                  "1 deg of rotation noise, scaled by sqrt(noise / 1 deg) for the noise\n"
+                  "measured from the master/slave rotation-angle differences), else\n"
+                  "general or planar from how much the rotation axes tilt beyond the\n"
+                  "noise and how well the offset along the mean axis is determined (the\n"
+                  "result's `observability`).")
+      ->check(CLI::IsMember({"auto", "general", "planar", "translational"}))
+      ->capture_default_str();
+  cmd->add_option("--scale", args->scale,
+                  "Scale model. A slave's scale maps its odometry unit to the\n"
+                  "master's (p_master = scale * R * p_slave + C): monocular odometry\n"
+                  "has its own unit per camera and per re-initialisation.\n"
+                  "fixed: one scale per slave; segments: one per segment id of the\n"
+                  "slave file (9th column); partitions:N: one per N equal parts of\n"
+                  "the drive (drifting scale); auto: segments when the file has\n"
+                  "several, partitions when the measured scale drifts, else fixed.")
+      ->check(ValueCheck(
+          [](const std::string& v) {
+            CalibrationOptions o;
+            return ApplyScale(v, &o);
+          },
+          "auto|fixed|segments|partitions:N"))
+      ->capture_default_str();
+  cmd->add_option("--pairs", args->pairs,
+                  "Which pairs of times (a, b) become motions. auto: pairs with\n"
+                  "large enough motion and bounded drift, spread over the drive;\n"
+                  "start: (first pose, k) for every k; relative:STEP: (k, k + STEP)\n"
+                  "for every k.")
+      ->check(ValueCheck(
+          [](const std::string& v) {
+            PairOptions p;
+            return ApplyPairs(v, &p);
+          },
+          "auto|start|relative:STEP"))
+      ->capture_default_str();
+  cmd->add_option("--tolerance-ms", args->tolerance_ms,
+                  "Largest time difference in milliseconds between a master pose\n"
+                  "and the slave pose matched to it (mutually nearest stamps).\n"
+                  "Master poses without a match in every slave are dropped.")
+      ->type_name("MS")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--max-quaternion-norm-error", args->max_quaternion_norm_error,
+                  "Quaternions whose norm differs from 1 by at most this are\n"
+                  "normalised (with a warning); larger deviations are an error.\n"
+                  "Printed ground truth such as EuRoC's needs about 1e-3.")
+      ->type_name("X")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--truth", args->truth,
+                  "Rig YAML with the true parameters of every slave (see below):\n"
+                  "prints the errors of thesis 5.1.1 and adds \"errors\" to the JSON.")
+      ->type_name("FILE");
+  auto* prior =
+      cmd->add_option("--prior", args->prior,
+                      "Nominal mountings (e.g. from CAD): a rig YAML as for --truth, or a rig\n"
+                      "config whose cameras[].nominal are used. Fills in what the motion\n"
+                      "cannot determine (C along the rotation axis of planar motion); the\n"
+                      "result says so (`unobservable_from_prior`).");
+  prior->type_name("FILE");
+  cmd->add_option("--prior-sigma", args->prior_sigma,
+                  "Standard deviation of the nominal C along the mean rotation axis,\n"
+                  "master units.\n"
+                  "> 0: combined with what the data determine as a weighted term (also\n"
+                  "for nearly planar drives, where the offset is determined poorly);\n"
+                  "0: the nominal is used only where the motion determines nothing.")
+      ->type_name("S")
+      ->check(CLI::NonNegativeNumber)
+      ->needs(prior)
+      ->capture_default_str();
+  cmd->add_option("--time-blocks", args->time_blocks,
+                  "Standard deviations: the motions' errors are taken as shared within this\n"
+                  "many contiguous time blocks and independent between them (cluster-robust\n"
+                  "covariance): odometry drift, overlapping pairs and correlated pose errors\n"
+                  "make motions close in time err alike. 0: every motion independent\n"
+                  "(optimistic on real odometry). Needs 4 motions per block.")
+      ->type_name("N")
+      ->check(CLI::Range(0, 10000))
+      ->capture_default_str();
+  cmd->add_option("--out", args->out,
+                  "Write the result YAML here (atomically): the rig entries plus\n"
+                  "standard deviations, motion counts, models and termination.")
+      ->type_name("FILE");
+  cmd->add_option("--camchain", args->camchain,
+                  "Write a Kalibr-style camchain YAML here: cam0 = master, cam1.. =\n"
+                  "the usable slaves in --slave order, each with T_cn_cnm1\n"
+                  "(extrinsics only, no intrinsics).")
+      ->type_name("FILE");
+  cmd->add_flag("--online", args->online,
+                "Feed the trajectories through the online path instead (sync buffer and "
+                "recursive estimator, as `rigcal calib` does live) and print how the estimate "
+                "converges over time (errors too with --truth). --method/--pairs/--scale do "
+                "not apply: the online estimator picks keyframe pairs and segment scales.");
+  cmd->add_option("--report-every", args->report_every_s,
+                  "With --online: seconds of stream time between convergence lines")
+      ->default_val(10.0)
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--json", args->json,
+                "Print only the result, as one JSON object, on stdout (logs stay\n"
+                "on stderr).");
+
+  cmd->footer(
+      "Trajectory files: one pose per line, '#' comments; the format is detected:\n"
+      "  TUM:         t tx ty tz qx qy qz qw [segment]   t in seconds\n"
+      "  EuRoC CSV:   t_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z[,...]   further columns ignored\n"
+      "  rigcal:      t_ns qw qx qy qz Cx Cy Cz [segment]   with a '# rigcal poses' header,\n"
+      "               or integer stamps >= 1e12 ns\n"
+      "Each pose is the camera centre in that camera's own odometry frame and unit, and the\n"
+      "rotation world_from_camera. segment: integer scale segment id (a VO re-initialisation\n"
+      "starts a new one).\n"
+      "Rig YAML (--truth, --prior, and the rig part of --out), per slave name:\n"
+      "  cam1: {q_wxyz: [w, x, y, z], C: [x, y, z], scale: s}\n"
+      "  the slave's orientation and centre in the master frame (master units), and the\n"
+      "  scale: the factor from slave odometry units to master units.\n"
+      "Exit status: 0 every slave calibrated; 1 bad input or output error (message\n"
+      "'rigcal solve: <file>:<line>: <what>' on stderr); 3 the solve ran but at least one\n"
+      "slave has no usable estimate (too little motion, degenerate motion); the result is\n"
+      "still printed and written.");
+
+  cmd->callback([args, exit_code]() {
+    try {
+      *exit_code = RunSolve(*args);
+    } catch (const std::exception& e) {
+      *exit_code = Fail(e.what());
+    }
+  });
+}
+
+}  // namespace rigcal::cli

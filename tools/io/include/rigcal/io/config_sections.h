@@ -1,0 +1,32 @@
+#pragma once
+// Parsers of the sections of a rig config file (config/README.md). yaml-cpp stays inside
+// tools/: each parser fills a plain options struct of its module. Errors read
+// "<path>:<line>: <key>: <what is wrong>" (line is 1-based, from the node's mark).
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/status.h"
+#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/camera/camera_spec.h"
+
+namespace rigcal::tools {
+
+// One entry of `cameras:` (name, model, resolution, intrinsics, distortion, scaramuzza fields).
+// Keys owned by other parsers (nominal, truth, device) are skipped here; any other unknown key
+// is an error.
+Expected<camera::CameraSpec> ParseCameraSection(const YAML::Node& camera, const std::string& path);
+
+// The intrinsics of a Kalibr camchain file (cam0, cam1, ...: camera_model, intrinsics,
+// distortion_model, distortion_coeffs, resolution, rostopic). Camera names are
+// `rigcal_name` when present, else "cam0", "cam1", ...
+Expected<std::vector<camera::CameraSpec>> ReadKalibrIntrinsics(const std::string& path);
+
+// The `source:` section of type `simulated`. Fills every field of SimulatedRigSpec that the
+// section owns; cameras and their true mounting are filled by the caller from `cameras:`.
+Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
+                                                         const std::string& path);
+
+}  // namespace rigcal::tools

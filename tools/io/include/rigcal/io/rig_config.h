@@ -1,0 +1,61 @@
+#pragma once
+// The rig configuration file (schema: config/README.md): cameras, nominal mounting, estimator,
+// sync, publishing and state options, and the capture source of `rigcal run`. This is the one
+// place where a rig config YAML is read; every module gets plain option structs.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/status.h"
+#include "rigcal/calib/online_calibrator.h"
+#include "rigcal/calib/types.h"
+#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/camera/camera_spec.h"
+
+namespace rigcal::tools {
+
+struct PublishOptions {
+  double extrinsics_rate_hz = 2.0;  // RIGCAL_EXTRINSICS messages per second, in (0, 1000]
+  double status_rate_hz = 1.0;      // RIGCAL_STATUS messages per second, in (0, 1000]
+};
+
+struct StateOptions {
+  std::string path;             // empty: no state file
+  double save_interval_s = 30;  // > 0; the state is also saved on a clean stop
+};
+
+struct CameraConfig {
+  std::string name;
+  // Intrinsics; absent for a camera entry that has only a name (and nominal/truth/device),
+  // which is enough for `rigcal calib` where VO runs elsewhere.
+  std::optional<camera::CameraSpec> spec;
+  std::optional<Similarity> nominal;  // mounting from CAD, master frame (slaves only)
+  std::optional<Similarity> truth;    // simulated sources: true mounting, master frame
+  std::string device;                 // capture device path (real sources), may be empty
+};
+
+struct RigConfig {
+  std::string path;  // the file it was read from
+  std::string name;
+  // Camera index order: the master first, then the other cameras in file order. This is the
+  // camera id of CameraPose and the order of OnlineOptions and SimulatedRigSpec.
+  std::vector<CameraConfig> cameras;
+  OnlineOptions online;  // estimator options incl. nominal per slave; sync.num_cameras set
+  PublishOptions publish;
+  StateOptions state;
+  std::optional<drivers::SimulatedRigSpec> simulated_source;  // `source: {type: simulated}`
+  // `source: {type: image_folders}`: one EuRoC-format camera folder per camera (its `device`,
+  // resolved against the config file's directory), camera index order.
+  std::vector<std::string> image_folders;
+
+  std::vector<std::string> CameraNames() const;
+  const std::string& master() const { return cameras.front().name; }
+};
+
+// Reads and checks a rig config. Errors read "<path>:<line>: <key>: <what>" (unknown keys,
+// wrong types, out-of-range values, unknown master, duplicate camera names, a nominal on the
+// master, a simulated source with cameras lacking intrinsics or truth, ...).
+Expected<RigConfig> LoadRigConfig(const std::string& path);
+
+}  // namespace rigcal::tools

@@ -1,0 +1,59 @@
+#pragma once
+// Reading YAML files with errors that point at the user's text: every message reads
+// "<path>:<line>: <field>: <what is wrong>". Used by every YAML reader of tools/ (rig files,
+// rig configs, camera and source sections).
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/status.h"
+
+namespace rigcal::tools {
+
+// The whole file as text; the error names the path and errno text.
+Expected<std::string> ReadWholeFile(const std::string& path);
+
+// Parses a YAML file; syntax errors name the path and line.
+Expected<YAML::Node> LoadYaml(const std::string& path);
+
+// Field access with errors of the form `<path>:<line>: <field>: <what>`.
+class FieldReader {
+ public:
+  // `path` must outlive the reader.
+  explicit FieldReader(const std::string& path) : path_(path) {}
+
+  // "<path>:<line>: " of a node ("<path>: " when the node has no position).
+  std::string At(const YAML::Node& node) const;
+  Error Fail(const YAML::Node& node, const std::string& field, const std::string& what) const;
+
+  // A finite number.
+  Expected<double> Number(const YAML::Node& node, const std::string& field) const;
+  Expected<int> Integer(const YAML::Node& node, const std::string& field) const;
+  Expected<int64_t> Integer64(const YAML::Node& node, const std::string& field) const;
+  Expected<bool> Bool(const YAML::Node& node, const std::string& field) const;
+  Expected<std::string> String(const YAML::Node& node, const std::string& field) const;
+
+  // A sequence of exactly `n` numbers at parent[key]; missing key is an error at the parent.
+  Expected<std::vector<double>> Numbers(const YAML::Node& parent, const std::string& key,
+                                        const std::string& field, size_t n) const;
+  Expected<std::vector<double>> NumbersOf(const YAML::Node& node, const std::string& field,
+                                          size_t n) const;
+  // A sequence of any length >= min_n.
+  Expected<std::vector<double>> NumberList(const YAML::Node& node, const std::string& field,
+                                           size_t min_n = 0) const;
+
+  // Error naming the first key of map `node` not in `known` ("<prefix><key>: unknown key;
+  // expected one of ..."), or nullopt. A non-map node is an error too.
+  std::optional<Error> CheckKeys(const YAML::Node& node, const std::string& prefix,
+                                 const std::set<std::string>& known) const;
+
+ private:
+  const std::string& path_;
+};
+
+}  // namespace rigcal::tools

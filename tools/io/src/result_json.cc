@@ -1,0 +1,194 @@
+#include "rigcal/io/result_json.h"
+
+#include <spdlog/fmt/fmt.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "rigcal/calib/error_model.h"
+#include "rigcal/calib/quaternion.h"
+
+namespace rigcal::tools {
+namespace {
+
+// A number, or null when it is not finite (JSON has no NaN or infinity).
+nlohmann::json Num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::json Vec(const Eigen::Vector3d& v) {
+  return nlohmann::json::array({Num(v.x()), Num(v.y()), Num(v.z())});
+}
+
+const Similarity* TruthOf(const std::map<std::string, Similarity>* truth, const std::string& name) {
+  if (truth == nullptr) return nullptr;
+  const auto it = truth->find(name);
+  return it == truth->end() ? nullptr : &it->second;
+}
+
+// One table row: label, estimate and (when given) the truth in a column of its own.
+std::string Row(const std::string& label, const std::string& estimate,
+                const std::string& truth = "") {
+  std::string row = truth.empty() ? fmt::format("  {:<22}{}", label, estimate)
+                                  : fmt::format("  {:<22}{:<48}{}", label, estimate, truth);
+  row.erase(row.find_last_not_of(' ') + 1);
+  return row + "\n";
+}
+
+std::string Quat(const Eigen::Quaterniond& q) {
+  return fmt::format("{:9.6f} {:9.6f} {:9.6f} {:9.6f}", q.w(), q.x(), q.y(), q.z());
+}
+
+std::string Vec3(const Eigen::Vector3d& v, int decimals = 4) {
+  return fmt::format("{:10.{}f} {:10.{}f} {:10.{}f}", v.x(), decimals, v.y(), decimals, v.z(),
+                     decimals);
+}
+
+std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth) {
+  std::string out =
+      fmt::format("{}: {}{}\n", s.name, ToString(s.termination), s.usable() ? "" : " (NOT USABLE)");
+  if (!s.message.empty()) out += fmt::format("  {}\n", s.message);
+  out += Row("", "estimate", truth ? "truth" : "");
+  out += Row("q (w, x, y, z)", Quat(s.estimate.q), truth ? Quat(truth->q) : "");
+  out += Row("roll pitch yaw [deg]", Vec3(RollPitchYawDeg(s.estimate.q), 3),
+             truth ? Vec3(RollPitchYawDeg(truth->q), 3) : "");
+  out += Row("C [master units]",
+             s.position_observable ? Vec3(s.estimate.C) : "not observable with this motion",
+             truth ? Vec3(truth->C) : "");
+  if (s.scales.size() > 1) {
+    for (const SegmentScale& seg : s.scales) {
+      out += Row(fmt::format("scale segment {}", seg.segment),
+                 fmt::format("{:.6g} (std {:.2g})", seg.scale, seg.std));
+    }
+  } else {
+    const double std = s.scales.empty() ? 0.0 : s.scales.front().std;
+    out += Row("scale", fmt::format("{:.6g} (std {:.2g})", s.estimate.scale, std),
+               truth ? fmt::format("{:.6g}", truth->scale) : "");
+  }
+  const bool rotating = s.observability.planar_axis.norm() > 0.0;
+  if (rotating && s.position_observable) {
+    std::string along;
+    if (!s.unobservable.empty()) {
+      along = s.unobservable_from_prior ? "unobservable: the nominal mounting's value"
+                                        : "unobservable: unknown (0 shown; give a nominal)";
+    } else {
+      along = fmt::format("estimated, std {:.3g}", s.axis_offset_std);
+    }
+    out += Row("C along mean axis", Vec3(s.observability.planar_axis, 3) + "  " + along);
+  }
+  out += Row("std rotation [deg]", fmt::format("{:.3g}", s.rot_std_deg));
+  out += Row("std C", Vec3(s.pos_std));
+  if (rotating && std::isfinite(s.axis_offset_std)) {
+    out += Row("std C along axis", fmt::format("{:.3g}", s.axis_offset_std));
+  }
+  if (rotating) {
+    const Observability& o = s.observability;
+    out +=
+        Row("observability",
+            fmt::format("axis spread {:.3g} deg (slave {:.3g}), tilt SNR {:.3g}, axis/plane "
+                        "std {:.3g}",
+                        o.axis_spread_deg, o.slave_axis_spread_deg, o.tilt_snr, o.axis_std_ratio));
+  }
+  const MotionCounts& m = s.motions;
+  out += Row("motions",
+             fmt::format("used {} of {}, rejected {} (small rotation {}, angle mismatch {}, "
+                         "residual outlier {})",
+                         m.used, m.total, m.rejected(), m.small_rotation, m.angle_mismatch,
+                         m.residual_outlier));
+  out += Row("models",
+             fmt::format("motion {}, scale {}", ToString(s.motion_model), ToString(s.scale_model)));
+  for (const Eigen::Vector3d& d : s.unobservable) {
+    out += Row("unobservable along", Vec3(d));
+  }
+  if (truth != nullptr && s.usable()) {
+    const CalibrationError e = CompareToTruth(s.estimate, *truth, s.observability.planar_axis);
+    out += Row("errors vs truth",
+               fmt::format("rotation {:.3g} deg, C direction {:.3g} deg, C distance {:.3g} %,",
+                           e.rot_deg, e.dir_deg, e.dist_pct));
+    out += Row(
+        "", fmt::format("C error {:.3g} master units, scale {:.3g} %", e.trans_err, e.scale_pct));
+    if (std::isfinite(e.plane_err)) {
+      out += Row("", fmt::format("C error in the plane {:.3g}, along the mean axis {:.3g}",
+                                 e.plane_err, e.axis_err));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Eigen::Vector3d RollPitchYawDeg(const Eigen::Quaterniond& q) {
+  const Eigen::Matrix3d r = q.normalized().toRotationMatrix();
+  const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  const double roll = std::atan2(r(2, 1), r(2, 2));
+  const double yaw = std::atan2(r(1, 0), r(0, 0));
+  return Eigen::Vector3d(roll, pitch, yaw) * kDegPerRad;
+}
+
+nlohmann::json ResultToJson(const RigCalibration& result,
+                            const std::map<std::string, Similarity>* truth) {
+  nlohmann::json slaves = nlohmann::json::array();
+  for (const SlaveCalibration& s : result.slaves) {
+    nlohmann::json j;
+    j["name"] = s.name;
+    const Eigen::Quaterniond& q = s.estimate.q;
+    j["q_wxyz"] = {Num(q.w()), Num(q.x()), Num(q.y()), Num(q.z())};
+    j["C"] = Vec(s.estimate.C);
+    if (s.scales.size() > 1) {
+      nlohmann::json scales = nlohmann::json::array();
+      for (const SegmentScale& seg : s.scales) {
+        scales.push_back(
+            {{"segment", seg.segment}, {"scale", Num(seg.scale)}, {"std", Num(seg.std)}});
+      }
+      j["scales"] = scales;
+    } else {
+      j["scale"] = Num(s.estimate.scale);
+    }
+    j["std"] = {
+        {"rot_deg", Num(s.rot_std_deg)}, {"pos", Vec(s.pos_std)}, {"axis", Num(s.axis_offset_std)}};
+    j["motions_used"] = s.motions.used;
+    j["motions_rejected"] = s.motions.rejected();
+    j["models"] = {{"motion", ToString(s.motion_model)}, {"scale", ToString(s.scale_model)}};
+    j["termination"] = ToString(s.termination);
+    j["message"] = s.message;
+    nlohmann::json unobservable = nlohmann::json::array();
+    for (const Eigen::Vector3d& d : s.unobservable) unobservable.push_back(Vec(d));
+    j["unobservable"] = unobservable;
+    j["unobservable_from_prior"] = s.unobservable_from_prior;
+    const Observability& o = s.observability;
+    const Eigen::Vector4d& ev = o.rotation_eigenvalues;
+    j["observability"] = {
+        {"rotation_eigenvalues", {Num(ev[0]), Num(ev[1]), Num(ev[2]), Num(ev[3])}},
+        {"rotation_weak_std_deg", Num(o.rotation_weak_std_deg)},
+        {"position_min_eigenvalue", Num(o.position_min_eigenvalue)},
+        {"axis_spread_deg", Num(o.axis_spread_deg)},
+        {"slave_axis_spread_deg", Num(o.slave_axis_spread_deg)},
+        {"tilt_snr", Num(o.tilt_snr)},
+        {"axis_std_ratio", Num(o.axis_std_ratio)},
+        {"max_rotation_deg", Num(o.max_rotation_deg)},
+        {"planar", o.planar},
+        {"mean_axis", Vec(o.planar_axis)}};
+    if (const Similarity* t = TruthOf(truth, s.name); t != nullptr && s.usable()) {
+      const CalibrationError e = CompareToTruth(s.estimate, *t, o.planar_axis);
+      j["errors"] = {{"rot_deg", Num(e.rot_deg)},     {"dir_deg", Num(e.dir_deg)},
+                     {"dist_pct", Num(e.dist_pct)},   {"trans_err", Num(e.trans_err)},
+                     {"scale_pct", Num(e.scale_pct)}, {"plane_err", Num(e.plane_err)},
+                     {"axis_err", Num(e.axis_err)}};
+    }
+    slaves.push_back(std::move(j));
+  }
+  return {{"master", result.master}, {"slaves", slaves}};
+}
+
+std::string FormatResultTable(const RigCalibration& result,
+                              const std::map<std::string, Similarity>* truth) {
+  std::string out = fmt::format(
+      "master: {}  (pairs of times used: {}; C in master units, scale = slave unit -> master "
+      "unit)\n",
+      result.master, result.pairs_selected);
+  for (const SlaveCalibration& s : result.slaves) {
+    out += '\n';
+    out += FormatSlave(s, TruthOf(truth, s.name));
+  }
+  return out;
+}
+
+}  // namespace rigcal::tools

@@ -1,0 +1,345 @@
+#include "rigcal/io/rig_files.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "rigcal/io/atomic_file.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/yaml_fields.h"
+
+namespace rigcal::tools {
+namespace {
+
+// Quaternions typed by hand with 4 decimals are off by up to ~1e-4.
+constexpr double kRigQuaternionNormTolerance = 1e-3;
+constexpr double kRotationOrthonormalTolerance = 1e-6;
+const std::set<std::string> kMetadataKeys = {"master", "pairs_selected"};
+
+// Shortest round-trip text of a double; YAML spellings for non-finite values.
+std::string Num(double v) {
+  if (std::isnan(v)) return ".nan";
+  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
+  std::array<char, 32> buf{};
+  const auto [ptr, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v);
+  return std::string(buf.data(), ptr);
+}
+
+std::string FormatG(double v) {
+  std::array<char, 32> buf{};
+  std::snprintf(buf.data(), buf.size(), "%.6g", v);
+  return buf.data();
+}
+
+void EmitVector(YAML::Emitter& out, const double* v, int n) {
+  out << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < n; ++i) out << Num(v[i]);
+  out << YAML::EndSeq;
+}
+
+void EmitRigEntry(YAML::Emitter& out, const Similarity& rig) {
+  const std::array<double, 4> q = {rig.q.w(), rig.q.x(), rig.q.y(), rig.q.z()};
+  out << YAML::Key << "q_wxyz" << YAML::Value;
+  EmitVector(out, q.data(), 4);
+  out << YAML::Key << "C" << YAML::Value;
+  EmitVector(out, rig.C.data(), 3);
+  out << YAML::Key << "scale" << YAML::Value << Num(rig.scale);
+}
+
+Expected<Similarity> ReadSlave(const FieldReader& r, const std::string& name,
+                               const YAML::Node& node) {
+  if (!node.IsMap()) return r.Fail(node, name, "expected a map with q_wxyz, C and scale");
+  Similarity rig;
+  auto q = r.Numbers(node, "q_wxyz", name + ".q_wxyz", 4);
+  if (!q) return Error{q.error()};
+  const Eigen::Vector4d q_wxyz((*q)[0], (*q)[1], (*q)[2], (*q)[3]);
+  const double norm = q_wxyz.norm();
+  if (!(std::abs(norm - 1.0) <= kRigQuaternionNormTolerance)) {
+    return r.Fail(
+        node["q_wxyz"], name + ".q_wxyz",
+        "norm " + FormatG(norm) + " is not 1 within " + FormatG(kRigQuaternionNormTolerance));
+  }
+  rig.q =
+      Eigen::Quaterniond(q_wxyz[0] / norm, q_wxyz[1] / norm, q_wxyz[2] / norm, q_wxyz[3] / norm);
+  auto c = r.Numbers(node, "C", name + ".C", 3);
+  if (!c) return Error{c.error()};
+  rig.C = Eigen::Vector3d((*c)[0], (*c)[1], (*c)[2]);
+  const YAML::Node scale = node["scale"];
+  if (!scale) return r.Fail(node, name + ".scale", "missing");
+  auto s = r.Number(scale, name + ".scale");
+  if (!s) return Error{s.error()};
+  if (!(*s > 0.0)) return r.Fail(scale, name + ".scale", "must be > 0, got " + scale.Scalar());
+  rig.scale = *s;
+
+  if (const YAML::Node scales = node["scales"]) {
+    if (!scales.IsSequence()) {
+      return r.Fail(scales, name + ".scales", "expected a list of {segment, scale}");
+    }
+    for (size_t i = 0; i < scales.size(); ++i) {
+      const std::string field = name + ".scales[" + std::to_string(i) + "]";
+      const YAML::Node entry = scales[i];
+      if (!entry.IsMap()) return r.Fail(entry, field, "expected {segment: id, scale: s}");
+      if (!entry["segment"]) return r.Fail(entry, field + ".segment", "missing");
+      if (!entry["scale"]) return r.Fail(entry, field + ".scale", "missing");
+      auto id = r.Integer(entry["segment"], field + ".segment");
+      if (!id) return Error{id.error()};
+      auto value = r.Number(entry["scale"], field + ".scale");
+      if (!value) return Error{value.error()};
+      if (!(*value > 0.0)) return r.Fail(entry["scale"], field + ".scale", "must be > 0");
+    }
+  }
+  return rig;
+}
+
+Eigen::Matrix4d MasterFromCam(const Similarity& rig) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = rig.q.normalized().toRotationMatrix();
+  m.topRightCorner<3, 1>() = rig.C;
+  return m;
+}
+
+Eigen::Matrix4d InverseRigid(const Eigen::Matrix4d& m) {
+  Eigen::Matrix4d inv = Eigen::Matrix4d::Identity();
+  const Eigen::Matrix3d rt = m.topLeftCorner<3, 3>().transpose();
+  inv.topLeftCorner<3, 3>() = rt;
+  inv.topRightCorner<3, 1>() = -rt * m.topRightCorner<3, 1>();
+  return inv;
+}
+
+}  // namespace
+
+Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path) {
+  auto root = LoadYaml(path);
+  if (!root) return Error{root.error()};
+  const FieldReader r(path);
+  if (!root->IsMap()) {
+    return Error{r.At(*root) + "expected a map from slave name to {q_wxyz, C, scale}"};
+  }
+  std::map<std::string, Similarity> rig;
+  for (auto it = root->begin(); it != root->end(); ++it) {
+    if (!it->first.IsScalar()) return Error{r.At(it->first) + "slave names must be scalars"};
+    const std::string name = it->first.Scalar();
+    if (kMetadataKeys.count(name) && it->second.IsScalar()) continue;
+    if (rig.count(name)) return r.Fail(it->first, name, "appears twice");
+    auto slave = ReadSlave(r, name, it->second);
+    if (!slave) return Error{slave.error()};
+    rig.emplace(name, *slave);
+  }
+  if (rig.empty()) return Error{path + ": no slave entries"};
+  return rig;
+}
+
+Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::string& path) {
+  auto root = LoadYaml(path);
+  if (!root) return Error{root.error()};
+  if (!root->IsMap() || !(*root)["cameras"]) return ReadRigYaml(path);
+  auto config = LoadRigConfig(path);
+  if (!config) return Error{config.error()};
+  std::map<std::string, Similarity> nominal;
+  for (const CameraConfig& camera : config->cameras) {
+    if (camera.nominal) nominal.emplace(camera.name, *camera.nominal);
+  }
+  if (nominal.empty()) return Error{path + ": no camera has a `nominal` mounting"};
+  return nominal;
+}
+
+std::string RigToYaml(const std::map<std::string, Similarity>& rig) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  for (const auto& [name, similarity] : rig) {
+    out << YAML::Key << name << YAML::Value << YAML::BeginMap;
+    EmitRigEntry(out, similarity);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  return std::string(
+             "# rigcal rig: per slave its orientation q_wxyz and centre C in the master frame\n"
+             "# (master units) and the scale mapping its odometry units to master units.\n") +
+         out.c_str() + "\n";
+}
+
+std::string WriteRigYaml(const std::string& path, const std::map<std::string, Similarity>& rig) {
+  return WriteFileAtomically(path, RigToYaml(rig));
+}
+
+std::string ResultToYaml(const RigCalibration& result) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "master" << YAML::Value << result.master;
+  out << YAML::Key << "pairs_selected" << YAML::Value << result.pairs_selected;
+  for (const SlaveCalibration& slave : result.slaves) {
+    out << YAML::Key << slave.name << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "usable" << YAML::Value << slave.usable();
+    out << YAML::Key << "termination" << YAML::Value << ToString(slave.termination);
+    out << YAML::Key << "message" << YAML::Value << slave.message;
+    EmitRigEntry(out, slave.estimate);
+    if (slave.scales.size() > 1) {
+      out << YAML::Key << "scales" << YAML::Value << YAML::BeginSeq;
+      for (const SegmentScale& s : slave.scales) {
+        out << YAML::Flow << YAML::BeginMap << YAML::Key << "segment" << YAML::Value << s.segment
+            << YAML::Key << "scale" << YAML::Value << Num(s.scale) << YAML::Key << "std"
+            << YAML::Value << Num(s.std) << YAML::EndMap;
+      }
+      out << YAML::EndSeq;
+    }
+    out << YAML::Key << "std" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "rot_deg" << YAML::Value << Num(slave.rot_std_deg);
+    out << YAML::Key << "pos" << YAML::Value;
+    EmitVector(out, slave.pos_std.data(), 3);
+    out << YAML::Key << "axis" << YAML::Value << Num(slave.axis_offset_std);
+    out << YAML::EndMap;
+    const MotionCounts& m = slave.motions;
+    out << YAML::Key << "motions" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "total" << YAML::Value << m.total;
+    out << YAML::Key << "used" << YAML::Value << m.used;
+    out << YAML::Key << "rejected" << YAML::Value << m.rejected();
+    out << YAML::Key << "small_rotation" << YAML::Value << m.small_rotation;
+    out << YAML::Key << "angle_mismatch" << YAML::Value << m.angle_mismatch;
+    out << YAML::Key << "residual_outlier" << YAML::Value << m.residual_outlier;
+    out << YAML::EndMap;
+    out << YAML::Key << "models" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "motion" << YAML::Value << ToString(slave.motion_model);
+    out << YAML::Key << "scale" << YAML::Value << ToString(slave.scale_model);
+    out << YAML::EndMap;
+    out << YAML::Key << "position_observable" << YAML::Value << slave.position_observable;
+    out << YAML::Key << "unobservable" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const Eigen::Vector3d& d : slave.unobservable) EmitVector(out, d.data(), 3);
+    out << YAML::EndSeq;
+    out << YAML::Key << "unobservable_from_prior" << YAML::Value << slave.unobservable_from_prior;
+    const Observability& o = slave.observability;
+    out << YAML::Key << "observability" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "rotation_eigenvalues" << YAML::Value;
+    EmitVector(out, o.rotation_eigenvalues.data(), 4);
+    for (const auto& [key, value] :
+         {std::pair<const char*, double>{"rotation_weak_std_deg", o.rotation_weak_std_deg},
+          {"position_min_eigenvalue", o.position_min_eigenvalue},
+          {"axis_spread_deg", o.axis_spread_deg},
+          {"slave_axis_spread_deg", o.slave_axis_spread_deg},
+          {"tilt_snr", o.tilt_snr},
+          {"axis_std_ratio", o.axis_std_ratio},
+          {"max_rotation_deg", o.max_rotation_deg}}) {
+      out << YAML::Key << key << YAML::Value << Num(value);
+    }
+    out << YAML::Key << "planar" << YAML::Value << o.planar;
+    out << YAML::Key << "mean_axis" << YAML::Value;
+    EmitVector(out, o.planar_axis.data(), 3);
+    out << YAML::EndMap;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  return std::string(
+             "# rigcal solve result. Per slave: orientation q_wxyz and centre C in the master\n"
+             "# frame (master odometry units), scale = slave odometry unit -> master unit.\n"
+             "# Use an entry only when usable is true; termination and message say why not.\n") +
+         out.c_str() + "\n";
+}
+
+std::string WriteResultYaml(const std::string& path, const RigCalibration& result) {
+  return WriteFileAtomically(path, ResultToYaml(result));
+}
+
+std::string WriteCamchain(const std::string& path, const RigCalibration& result,
+                          const std::vector<std::string>& camera_order) {
+  const std::string where = "cannot write camchain '" + path + "': ";
+  std::vector<std::string> order = camera_order;
+  if (order.empty()) {
+    order.push_back(result.master);
+    for (const SlaveCalibration& s : result.slaves) {
+      if (s.usable()) order.push_back(s.name);
+    }
+  }
+  if (order.front() != result.master) {
+    return where + "the first camera must be the master '" + result.master + "', got '" +
+           order.front() + "'";
+  }
+  std::vector<Similarity> master_from_cam = {Similarity{}};
+  for (size_t n = 1; n < order.size(); ++n) {
+    const auto it = std::find_if(result.slaves.begin(), result.slaves.end(),
+                                 [&](const SlaveCalibration& s) { return s.name == order[n]; });
+    if (it == result.slaves.end()) return where + "unknown camera '" + order[n] + "'";
+    if (!it->usable()) {
+      return where + "camera '" + order[n] + "' has no usable estimate (" +
+             ToString(it->termination) + ")";
+    }
+    master_from_cam.push_back(it->estimate);
+  }
+
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  for (size_t n = 0; n < order.size(); ++n) {
+    out << YAML::Key << "cam" + std::to_string(n) << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "rigcal_name" << YAML::Value << order[n];
+    if (n > 0) {
+      const Eigen::Matrix4d cn_from_cnm1 =
+          InverseRigid(MasterFromCam(master_from_cam[n])) * MasterFromCam(master_from_cam[n - 1]);
+      out << YAML::Key << "T_cn_cnm1" << YAML::Value << YAML::BeginSeq;
+      for (int row = 0; row < 4; ++row) {
+        const std::array<double, 4> values = {cn_from_cnm1(row, 0), cn_from_cnm1(row, 1),
+                                              cn_from_cnm1(row, 2), cn_from_cnm1(row, 3)};
+        EmitVector(out, values.data(), 4);
+      }
+      out << YAML::EndSeq;
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  const std::string text =
+      "# Kalibr-style camera chain written by rigcal solve. rigcal estimates extrinsics only:\n"
+      "# camera_model, intrinsics, distortion, resolution and rostopic are unknown here and\n"
+      "# not written. T_cn_cnm1 takes points from camera n-1 to camera n; translations are in\n"
+      "# the master camera's odometry units (metric only if the master odometry is metric).\n" +
+      std::string(out.c_str()) + "\n";
+  return WriteFileAtomically(path, text);
+}
+
+Expected<std::vector<CamchainCamera>> ReadCamchain(const std::string& path) {
+  auto root = LoadYaml(path);
+  if (!root) return Error{root.error()};
+  const FieldReader r(path);
+  if (!root->IsMap() || !(*root)["cam0"]) {
+    return Error{r.At(*root) + "expected a map with cam0, cam1, ..."};
+  }
+  std::vector<CamchainCamera> cameras;
+  for (int n = 0;; ++n) {
+    const std::string key = "cam" + std::to_string(n);
+    const YAML::Node cam = (*root)[key];
+    if (!cam) break;
+    if (!cam.IsMap()) return r.Fail(cam, key, "expected a map");
+    CamchainCamera camera;
+    if (const YAML::Node name = cam["rigcal_name"]; name && name.IsScalar()) {
+      camera.name = name.Scalar();
+    }
+    if (n > 0) {
+      const std::string field = key + ".T_cn_cnm1";
+      const YAML::Node t = cam["T_cn_cnm1"];
+      if (!t) return r.Fail(cam, field, "missing");
+      if (!t.IsSequence() || t.size() != 4) return r.Fail(t, field, "expected 4 rows");
+      for (int row = 0; row < 4; ++row) {
+        auto values = r.NumbersOf(t[row], field + "[" + std::to_string(row) + "]", 4);
+        if (!values) return Error{values.error()};
+        for (int col = 0; col < 4; ++col) camera.cn_from_cnm1(row, col) = (*values)[col];
+      }
+      const Eigen::RowVector4d last = camera.cn_from_cnm1.row(3);
+      if ((last - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-12) {
+        return r.Fail(t, field, "last row must be [0, 0, 0, 1]");
+      }
+      const Eigen::Matrix3d rot = camera.cn_from_cnm1.topLeftCorner<3, 3>();
+      if ((rot * rot.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() >
+              kRotationOrthonormalTolerance ||
+          rot.determinant() < 0.0) {
+        return r.Fail(t, field, "rotation block is not a rotation matrix");
+      }
+    }
+    cameras.push_back(camera);
+  }
+  return cameras;
+}
+
+}  // namespace rigcal::tools

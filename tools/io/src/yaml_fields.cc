@@ -1,0 +1,147 @@
+#include "rigcal/io/yaml_fields.h"
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace rigcal::tools {
+
+Expected<std::string> ReadWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{path + ": cannot open: " + std::strerror(errno)};
+  std::ostringstream contents;
+  contents << in.rdbuf();
+  if (in.bad()) return Error{path + ": read error"};
+  return contents.str();
+}
+
+Expected<YAML::Node> LoadYaml(const std::string& path) {
+  auto text = ReadWholeFile(path);
+  if (!text) return Error{text.error()};
+  try {
+    return YAML::Load(*text);
+  } catch (const YAML::ParserException& e) {
+    return Error{path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg};
+  } catch (const YAML::Exception& e) {
+    return Error{path + ": YAML error: " + e.what()};
+  }
+}
+
+std::string FieldReader::At(const YAML::Node& node) const {
+  const YAML::Mark mark = node.Mark();
+  if (mark.is_null()) return path_ + ": ";
+  return path_ + ":" + std::to_string(mark.line + 1) + ": ";
+}
+
+Error FieldReader::Fail(const YAML::Node& node, const std::string& field,
+                        const std::string& what) const {
+  return Error{At(node) + field + ": " + what};
+}
+
+Expected<double> FieldReader::Number(const YAML::Node& node, const std::string& field) const {
+  if (!node.IsScalar()) return Fail(node, field, "expected a number");
+  const std::string& text = node.Scalar();
+  std::string_view view(text);
+  if (view.size() > 1 && view[0] == '+') view.remove_prefix(1);
+  double value = 0.0;
+  const auto [ptr, ec] = std::from_chars(view.data(), view.data() + view.size(), value);
+  if (view.empty() || ec != std::errc() || ptr != view.data() + view.size()) {
+    return Fail(node, field, "'" + text + "' is not a number");
+  }
+  if (!std::isfinite(value)) return Fail(node, field, "'" + text + "' is not finite");
+  return value;
+}
+
+Expected<int> FieldReader::Integer(const YAML::Node& node, const std::string& field) const {
+  if (!node.IsScalar()) return Fail(node, field, "expected an integer");
+  const std::string& text = node.Scalar();
+  int value = 0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.empty() || ec != std::errc() || ptr != text.data() + text.size()) {
+    return Fail(node, field, "'" + text + "' is not an integer");
+  }
+  return value;
+}
+
+Expected<int64_t> FieldReader::Integer64(const YAML::Node& node, const std::string& field) const {
+  if (!node.IsScalar()) return Fail(node, field, "expected an integer");
+  const std::string& text = node.Scalar();
+  int64_t value = 0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.empty() || ec != std::errc() || ptr != text.data() + text.size()) {
+    return Fail(node, field, "'" + text + "' is not an integer");
+  }
+  return value;
+}
+
+Expected<bool> FieldReader::Bool(const YAML::Node& node, const std::string& field) const {
+  if (node.IsScalar()) {
+    const std::string& text = node.Scalar();
+    if (text == "true" || text == "yes" || text == "on") return true;
+    if (text == "false" || text == "no" || text == "off") return false;
+  }
+  return Fail(node, field, "expected true or false");
+}
+
+Expected<std::string> FieldReader::String(const YAML::Node& node, const std::string& field) const {
+  if (!node.IsScalar() || node.Scalar().empty()) return Fail(node, field, "expected a string");
+  return node.Scalar();
+}
+
+Expected<std::vector<double>> FieldReader::Numbers(const YAML::Node& parent,
+                                                   const std::string& key,
+                                                   const std::string& field, size_t n) const {
+  const YAML::Node node = parent[key];
+  if (!node) return Fail(parent, field, "missing (expected " + std::to_string(n) + " numbers)");
+  return NumbersOf(node, field, n);
+}
+
+Expected<std::vector<double>> FieldReader::NumbersOf(const YAML::Node& node,
+                                                     const std::string& field, size_t n) const {
+  if (!node.IsSequence()) {
+    return Fail(node, field, "expected a list of " + std::to_string(n) + " numbers");
+  }
+  if (node.size() != n) {
+    return Fail(node, field,
+                "expected " + std::to_string(n) + " numbers, got " + std::to_string(node.size()));
+  }
+  return NumberList(node, field, n);
+}
+
+Expected<std::vector<double>> FieldReader::NumberList(const YAML::Node& node,
+                                                      const std::string& field,
+                                                      size_t min_n) const {
+  if (!node.IsSequence()) return Fail(node, field, "expected a list of numbers");
+  if (node.size() < min_n) {
+    return Fail(node, field,
+                "expected at least " + std::to_string(min_n) + " numbers, got " +
+                    std::to_string(node.size()));
+  }
+  std::vector<double> values;
+  values.reserve(node.size());
+  for (size_t i = 0; i < node.size(); ++i) {
+    auto v = Number(node[i], field + "[" + std::to_string(i) + "]");
+    if (!v) return Error{v.error()};
+    values.push_back(*v);
+  }
+  return values;
+}
+
+std::optional<Error> FieldReader::CheckKeys(const YAML::Node& node, const std::string& prefix,
+                                            const std::set<std::string>& known) const {
+  if (!node.IsMap()) return Fail(node, prefix.empty() ? "(top level)" : prefix, "expected a map");
+  for (auto it = node.begin(); it != node.end(); ++it) {
+    const std::string key = it->first.Scalar();
+    if (known.count(key) == 0) {
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      return Fail(it->first, prefix + key, "unknown key; expected one of " + list);
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace rigcal::tools

@@ -1,0 +1,87 @@
+#include "rigcal/lcm/rig_status.h"
+
+#include <algorithm>
+#include <sstream>
+
+#include "rigcal/lcm/process_stats.h"
+
+namespace rigcal::tools {
+
+rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const SyncStats& sync,
+                           int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
+                           int64_t utime) {
+  rig_status_t msg{};
+  msg.version = rig_status_t::VERSION;
+  msg.utime = utime;
+  msg.num_cameras = static_cast<int32_t>(cameras.size());
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const CameraStatusInput& input = cameras[i];
+    camera_status_t cam{};
+    cam.name = input.name;
+    cam.fps = input.fps;
+    cam.frames_received = input.frames_received;
+    cam.dropped_invalid = input.dropped_invalid;
+    cam.dropped_overflow = input.dropped_backlog;
+    if (i < sync.cameras.size()) {
+      const SyncCameraStats& s = sync.cameras[i];
+      cam.dropped_late = static_cast<int64_t>(s.late);
+      cam.dropped_duplicate = static_cast<int64_t>(s.duplicate);
+      cam.dropped_out_of_order = static_cast<int64_t>(s.out_of_order);
+      cam.dropped_overflow += static_cast<int64_t>(s.overflow);
+      cam.dropped_never_matched = static_cast<int64_t>(s.never_matched);
+      cam.dropped_invalid += static_cast<int64_t>(s.invalid);
+    }
+    cam.vo_state = input.vo_state;
+    cam.last_pose_age_ms = input.last_pose_age_ms;
+    msg.cameras.push_back(cam);
+  }
+  msg.sync_sets_emitted = static_cast<int64_t>(sync.sets_emitted);
+  const SyncCameraStats& total = sync.total;
+  const int64_t dropped =
+      static_cast<int64_t>(total.invalid + total.late + total.duplicate + total.out_of_order +
+                           total.overflow + total.never_matched + total.stopped);
+  const int64_t fill = static_cast<int64_t>(total.pushed) - static_cast<int64_t>(total.used) - dropped;
+  msg.sync_capacity = std::max<int32_t>(0, sync_capacity);
+  msg.sync_fill = static_cast<int32_t>(std::clamp<int64_t>(fill, 0, msg.sync_capacity));
+  msg.estimator_state = EstimatorState(estimate, &msg.estimator_message);
+  msg.cpu_percent = std::max(0.0, cpu_percent);
+  msg.rss_bytes = ResidentSetBytes();
+  return msg;
+}
+
+int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
+  int converged = 0;
+  int decalibrated = 0;
+  const int slaves = static_cast<int>(estimate.online.size());
+  std::string decalibrated_names;
+  for (int i = 0; i < slaves; ++i) {
+    if (estimate.online[i].flags & rigcal::kFlagConverged) ++converged;
+    if (estimate.online[i].flags & rigcal::kFlagDecalibrated) {
+      ++decalibrated;
+      if (i < static_cast<int>(estimate.rig.slaves.size())) {
+        decalibrated_names += (decalibrated_names.empty() ? "" : ", ") + estimate.rig.slaves[i].name;
+      }
+    }
+  }
+  std::ostringstream text;
+  int8_t state = rig_status_t::ESTIMATOR_INITIALISING;
+  if (estimate.sets == 0) {
+    state = rig_status_t::ESTIMATOR_IDLE;
+    text << "no synchronised pose sets yet";
+  } else if (decalibrated > 0) {
+    state = rig_status_t::ESTIMATOR_DECALIBRATED;
+    text << "decalibrated: " << decalibrated_names << " moved; re-estimating";
+  } else if (converged == slaves) {
+    state = rig_status_t::ESTIMATOR_CONVERGED;
+    text << "all " << slaves << " slaves converged";
+  } else if (converged > 0) {
+    state = rig_status_t::ESTIMATOR_DEGRADED;
+    text << converged << " of " << slaves << " slaves converged";
+  } else {
+    text << "collecting motion (" << estimate.sets << " sets)";
+  }
+  if (message != nullptr) *message = text.str();
+  return state;
+}
+
+}  // namespace rigcal::tools

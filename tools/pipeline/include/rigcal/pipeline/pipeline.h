@@ -1,0 +1,122 @@
+#pragma once
+// Pipeline: the live data flow of `rigcal run` (DESIGN.md "Data flow"):
+//
+//   capture thread per device --(bounded frame queue, drop-oldest)--> VO thread per camera
+//   --(CameraPose)--> OnlineCalibrator (SyncBuffer -> RigEstimator, refinement thread)
+//
+// One object owns and joins every thread. Capture never waits for VO in live mode: a full
+// frame queue drops its oldest frame and counts it (VO backlog). In lossless mode (recorded or
+// simulated sources that are not paced in real time) capture waits for room instead, and the
+// poses reach the calibrator in one canonical order whatever the thread timing (PoseMerge), so
+// a run is deterministic. Slaves are optional members of a sync set, so a dead slave camera leaves
+// the others calibrating; a dead master stops the calibration (the status says so).
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "rigcal/calib/bounded_queue.h"
+#include "rigcal/calib/online_calibrator.h"
+#include "rigcal/drivers/capture_device.h"
+#include "rigcal/vo/monocular_vo.h"
+
+namespace lcm {
+class LCM;
+}
+
+namespace rigcal {
+class PoseMerge;
+}
+
+namespace rigcal::tools {
+
+struct PipelineOptions {
+  vo::VoOptions vo;
+  // Frames buffered between a camera's capture and its VO thread, >= 1.
+  int frame_queue_capacity = 4;
+  // Capture waits for the VO instead of dropping frames (for sources not paced in real time).
+  bool lossless = false;
+  // Keep every pose of every camera (for evaluation against ground truth; memory grows with
+  // the run length, ~100 bytes per pose).
+  bool record_poses = false;
+  bool Check(std::string* error) const;
+};
+
+// Health of one camera of a running pipeline.
+struct CameraHealth {
+  std::string name;
+  int64_t frames_captured = 0;   // frames handed over by the device
+  int64_t dropped_backlog = 0;   // frames dropped because the VO fell behind
+  int64_t frames_processed = 0;  // frames through the VO
+  int64_t poses = 0;             // poses pushed to the calibrator
+  int64_t sync_rejected = 0;     // poses the sync buffer refused (late, out of order, ...)
+  vo::VoState vo_state = vo::VoState::kInitialising;
+  int segment = 0;
+  double vo_ms_median = 0.0;  // over the last 64 frames
+  int64_t last_frame_t_ns = -1;
+  int64_t last_pose_t_ns = -1;
+  bool ended = false;  // end of stream
+  bool dead = false;   // the device failed
+  std::string dead_reason;
+  std::string vo_message;  // why the VO is initialising or lost
+};
+
+struct PipelineSnapshot {
+  std::vector<CameraHealth> cameras;
+  SyncStats sync;
+  RigEstimate estimate;
+  bool finished = false;  // every camera ended or died and its frames were processed
+};
+
+class Pipeline {
+ public:
+  // names[0] is the master; devices[i] and cameras[i] belong to names[i]. `online` are the
+  // calibrator's options (sync.required is set to master-only: slaves are optional). `lcm`
+  // (optional, not owned, must outlive the pipeline): every pose is also published on
+  // RIGCAL_POSE_<camera>. Throws std::invalid_argument on inconsistent arguments.
+  Pipeline(std::vector<std::string> names,
+           std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
+           std::vector<std::shared_ptr<const camera::CameraModel>> cameras, OnlineOptions online,
+           PipelineOptions options, lcm::LCM* lcm = nullptr);
+  ~Pipeline();
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+
+  // Starts every thread. Call once.
+  void Start();
+  // Any thread.
+  PipelineSnapshot Snapshot() const;
+  bool Finished() const;
+  // Interrupts the devices, lets the VO threads finish the queued frames, flushes the
+  // calibrator and joins every thread. Idempotent.
+  void Stop();
+
+  // Every pose of camera i so far (record_poses only). Any thread.
+  std::vector<CameraPose> RecordedPoses(int camera) const;
+  const std::vector<std::string>& names() const { return names_; }
+  OnlineCalibrator& calibrator() { return *calibrator_; }
+
+ private:
+  struct Camera;
+  void CaptureLoop(int camera);
+  void VoLoop(int camera);
+  // Hands one pose to the calibrator (and LCM); counts a rejection.
+  void Forward(const CameraPose& pose);
+
+  std::vector<std::string> names_;
+  PipelineOptions options_;
+  lcm::LCM* lcm_ = nullptr;
+  std::unique_ptr<OnlineCalibrator> calibrator_;
+  std::vector<std::unique_ptr<Camera>> cameras_;
+  std::unique_ptr<PoseMerge> merge_;  // lossless runs only
+  std::atomic<int> vo_threads_running_{0};
+  bool started_ = false;
+  bool stopped_ = false;
+  std::mutex stop_mutex_;
+};
+
+}  // namespace rigcal::tools

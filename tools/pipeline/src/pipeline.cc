@@ -1,0 +1,239 @@
+#include "rigcal/pipeline/pipeline.h"
+
+#include <algorithm>
+#include <array>
+#include <lcm/lcm-cpp.hpp>
+#include <stdexcept>
+
+#include "rigcal/calib/logging.h"
+#include "rigcal/calib/pose_merge.h"
+#include "rigcal/lcm/lcm_messages.h"
+
+namespace rigcal::tools {
+namespace {
+
+constexpr size_t kTimingWindow = 64;
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
+  return values[mid];
+}
+
+}  // namespace
+
+bool PipelineOptions::Check(std::string* error) const {
+  std::string e;
+  if (frame_queue_capacity < 1) e = "frame_queue_capacity must be >= 1";
+  std::string vo_error;
+  if (e.empty() && !vo.Check(&vo_error)) e = "vo: " + vo_error;
+  if (error != nullptr) *error = e;
+  return e.empty();
+}
+
+struct Pipeline::Camera {
+  int index = 0;
+  std::unique_ptr<drivers::CameraDevice> device;
+  vo::MonocularVo vo;
+  BoundedQueue<drivers::Frame> frames;
+  std::thread capture_thread;
+  std::thread vo_thread;
+
+  mutable std::mutex mutex;  // guards health, timings, recorded
+  CameraHealth health;
+  std::array<double, kTimingWindow> timings{};
+  size_t timing_count = 0;
+  std::vector<CameraPose> recorded;
+
+  Camera(int i, std::unique_ptr<drivers::CameraDevice> d,
+         std::shared_ptr<const camera::CameraModel> model, const PipelineOptions& options)
+      : index(i),
+        device(std::move(d)),
+        vo(std::move(model), i, options.vo),
+        frames(static_cast<size_t>(options.frame_queue_capacity)) {}
+};
+
+Pipeline::Pipeline(std::vector<std::string> names,
+                   std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
+                   std::vector<std::shared_ptr<const camera::CameraModel>> cameras,
+                   OnlineOptions online, PipelineOptions options, lcm::LCM* lcm)
+    : names_(std::move(names)), options_(options), lcm_(lcm) {
+  if (names_.size() < 2 || devices.size() != names_.size() || cameras.size() != names_.size()) {
+    throw std::invalid_argument("Pipeline: need one device and one camera model per camera (>= 2)");
+  }
+  std::string error;
+  if (!options_.Check(&error)) throw std::invalid_argument("Pipeline options: " + error);
+  for (size_t i = 0; i < names_.size(); ++i) {
+    if (!devices[i] || !cameras[i]) {
+      throw std::invalid_argument("Pipeline: camera '" + names_[i] + "' has no device or model");
+    }
+  }
+  // A dead or lagging slave must not stop the others: only the master is required.
+  online.sync.required.assign(names_.size(), false);
+  online.sync.required[0] = true;
+  const int64_t lead_ns = online.sync.EffectiveMaxWaitNs() / 3;
+  calibrator_ = std::make_unique<OnlineCalibrator>(names_, online);
+  if (options_.lossless) {
+    merge_ = std::make_unique<PoseMerge>(static_cast<int>(names_.size()), lead_ns,
+                                         [this](const CameraPose& pose) { Forward(pose); });
+  }
+  for (size_t i = 0; i < names_.size(); ++i) {
+    auto camera = std::make_unique<Camera>(static_cast<int>(i), std::move(devices[i]),
+                                           std::move(cameras[i]), options_);
+    camera->health.name = names_[i];
+    cameras_.push_back(std::move(camera));
+  }
+}
+
+Pipeline::~Pipeline() { Stop(); }
+
+void Pipeline::Start() {
+  std::lock_guard<std::mutex> lock(stop_mutex_);
+  if (started_) return;
+  started_ = true;
+  calibrator_->Start();
+  vo_threads_running_ = static_cast<int>(cameras_.size());
+  for (auto& camera : cameras_) {
+    const int i = camera->index;
+    camera->vo_thread = std::thread([this, i] { VoLoop(i); });
+    camera->capture_thread = std::thread([this, i] { CaptureLoop(i); });
+  }
+}
+
+void Pipeline::CaptureLoop(int index) {
+  Camera& camera = *cameras_[static_cast<size_t>(index)];
+  auto log = ModuleLogger("drivers");
+  while (true) {
+    Expected<std::optional<drivers::Frame>> grabbed = camera.device->Grab();
+    if (!grabbed) {
+      {
+        std::lock_guard<std::mutex> lock(camera.mutex);
+        camera.health.dead = true;
+        camera.health.dead_reason = grabbed.error();
+      }
+      log->error("camera '{}' died: {}", names_[static_cast<size_t>(index)], grabbed.error());
+      break;
+    }
+    if (!grabbed->has_value()) {
+      std::lock_guard<std::mutex> lock(camera.mutex);
+      camera.health.ended = true;
+      break;
+    }
+    drivers::Frame frame = std::move(**grabbed);
+    frame.camera = index;
+    {
+      std::lock_guard<std::mutex> lock(camera.mutex);
+      ++camera.health.frames_captured;
+      camera.health.last_frame_t_ns = frame.t_ns;
+    }
+    const uint64_t dropped_before = camera.frames.dropped();
+    const bool pushed = options_.lossless ? camera.frames.PushWait(std::move(frame))
+                                          : camera.frames.Push(std::move(frame));
+    if (!pushed) break;  // stopped
+    const uint64_t dropped = camera.frames.dropped() - dropped_before;
+    if (dropped > 0) {
+      std::lock_guard<std::mutex> lock(camera.mutex);
+      camera.health.dropped_backlog += static_cast<int64_t>(dropped);
+    }
+  }
+  camera.frames.Stop();  // the VO thread drains what is queued, then ends
+}
+
+void Pipeline::Forward(const CameraPose& pose) {
+  const auto index = static_cast<size_t>(pose.camera);
+  const PushResult pushed = calibrator_->Push(pose);
+  if (pushed != PushResult::kAccepted) {
+    Camera& camera = *cameras_[index];
+    std::lock_guard<std::mutex> lock(camera.mutex);
+    ++camera.health.sync_rejected;
+  }
+  if (lcm_ != nullptr) {
+    auto msg = CameraPoseToLcm(pose, names_, pose.t_ns / 1000);
+    if (msg) {
+      const std::string channel = PoseChannel(names_[index]);
+      auto bytes = EncodeMessage(channel, names_, *msg);
+      if (bytes) lcm_->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
+    }
+  }
+}
+
+void Pipeline::VoLoop(int index) {
+  Camera& camera = *cameras_[static_cast<size_t>(index)];
+  while (std::optional<drivers::Frame> frame = camera.frames.Pop()) {
+    const vo::VoResult result = camera.vo.Process(frame->t_ns, frame->image);
+    std::vector<CameraPose> poses;
+    if (result.segment_start) poses.push_back(*result.segment_start);
+    if (result.pose) {
+      poses.push_back(*result.pose);
+      poses.back().trigger_seq = frame->seq;
+    }
+    for (CameraPose& pose : poses) pose.camera = index;
+    {
+      std::lock_guard<std::mutex> lock(camera.mutex);
+      CameraHealth& h = camera.health;
+      ++h.frames_processed;
+      h.poses += static_cast<int64_t>(poses.size());
+      h.vo_state = result.state;
+      h.segment = camera.vo.segment();
+      h.vo_message = result.message;
+      if (result.pose) h.last_pose_t_ns = result.pose->t_ns;
+      camera.timings[camera.timing_count++ % kTimingWindow] = result.processing_ms;
+      if (options_.record_poses) {
+        for (const CameraPose& pose : poses) camera.recorded.push_back(pose);
+      }
+    }
+    if (merge_) {
+      merge_->Deliver(index, frame->t_ns, std::move(poses));
+    } else {
+      for (const CameraPose& pose : poses) Forward(pose);
+    }
+  }
+  if (merge_) merge_->End(index);
+  --vo_threads_running_;
+}
+
+PipelineSnapshot Pipeline::Snapshot() const {
+  PipelineSnapshot snapshot;
+  for (const auto& camera : cameras_) {
+    std::lock_guard<std::mutex> lock(camera->mutex);
+    CameraHealth h = camera->health;
+    const size_t n = std::min(camera->timing_count, kTimingWindow);
+    h.vo_ms_median = Median(std::vector<double>(
+        camera->timings.begin(), camera->timings.begin() + static_cast<std::ptrdiff_t>(n)));
+    snapshot.cameras.push_back(std::move(h));
+  }
+  snapshot.sync = calibrator_->sync_stats();
+  snapshot.estimate = calibrator_->Estimate();
+  snapshot.finished = Finished();
+  return snapshot;
+}
+
+bool Pipeline::Finished() const { return started_ && vo_threads_running_.load() == 0; }
+
+void Pipeline::Stop() {
+  std::lock_guard<std::mutex> lock(stop_mutex_);
+  if (!started_ || stopped_) return;
+  stopped_ = true;
+  // Devices stop delivering; queued frames are still processed (Pop drains a stopped queue).
+  for (auto& camera : cameras_) {
+    camera->device->Interrupt();
+    camera->frames.Stop();
+  }
+  if (merge_) merge_->Stop();
+  for (auto& camera : cameras_) {
+    if (camera->capture_thread.joinable()) camera->capture_thread.join();
+    if (camera->vo_thread.joinable()) camera->vo_thread.join();
+  }
+  calibrator_->Flush();
+  calibrator_->RefineNow();
+  calibrator_->Stop();
+}
+
+std::vector<CameraPose> Pipeline::RecordedPoses(int camera) const {
+  const Camera& c = *cameras_.at(static_cast<size_t>(camera));
+  std::lock_guard<std::mutex> lock(c.mutex);
+  return c.recorded;
+}
+
+}  // namespace rigcal::tools

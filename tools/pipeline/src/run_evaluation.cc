@@ -1,0 +1,171 @@
+#include "rigcal/pipeline/run_evaluation.h"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+namespace rigcal::tools {
+namespace {
+
+// Unit of every VO segment of camera `camera`.
+std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int camera,
+                                      const std::vector<CameraPose>& poses) {
+  std::map<int, std::vector<const CameraPose*>> by_segment;
+  for (const CameraPose& pose : poses) by_segment[pose.segment].push_back(&pose);
+  std::vector<SegmentUnit> units;
+  const double epoch_ns = static_cast<double>(rig.epoch_ns());
+  auto stream_time = [&](int64_t t_ns) { return 1e-9 * (static_cast<double>(t_ns) - epoch_ns); };
+  for (const auto& [segment, members] : by_segment) {
+    // The reference frame of the segment: its first pose (the identity at the segment start).
+    const Pose reference = rig.CameraPoseAt(camera, stream_time(members.front()->t_ns));
+    const Pose reference_inverse = reference.Inverse();
+    double num = 0.0;
+    double den = 0.0;
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;
+    for (const CameraPose* pose : members) {
+      const Pose truth = reference_inverse * rig.CameraPoseAt(camera, stream_time(pose->t_ns));
+      pairs.emplace_back(truth.C, pose->pose.C);
+      num += truth.C.dot(pose->pose.C);
+      den += pose->pose.C.squaredNorm();
+    }
+    SegmentUnit unit;
+    unit.segment = segment;
+    unit.poses = static_cast<int>(members.size());
+    unit.metres_per_unit = den > 0.0 ? num / den : 0.0;
+    double sum_sq = 0.0;
+    for (const auto& [truth, vo] : pairs) {
+      sum_sq += (truth - unit.metres_per_unit * vo).squaredNorm();
+    }
+    unit.fit_rms_m = std::sqrt(sum_sq / static_cast<double>(pairs.size()));
+    units.push_back(unit);
+  }
+  return units;
+}
+
+}  // namespace
+
+Expected<RunEvaluation> EvaluateRun(const drivers::SimulatedRig& rig,
+                                    const std::vector<std::vector<CameraPose>>& poses,
+                                    const RigCalibration& result) {
+  if (poses.size() != static_cast<size_t>(rig.num_cameras())) {
+    return Error{"evaluation: expected poses of " + std::to_string(rig.num_cameras()) +
+                 " cameras, got " + std::to_string(poses.size())};
+  }
+  RunEvaluation evaluation;
+  for (int camera = 0; camera < rig.num_cameras(); ++camera) {
+    evaluation.units.push_back(SegmentUnits(rig, camera, poses[static_cast<size_t>(camera)]));
+  }
+  // The master's unit: its segment with the most poses.
+  const SegmentUnit* master = nullptr;
+  for (const SegmentUnit& unit : evaluation.units[0]) {
+    if (unit.poses >= 3 && unit.metres_per_unit > 0.0 &&
+        (master == nullptr || unit.poses > master->poses)) {
+      master = &unit;
+    }
+  }
+  if (master == nullptr) {
+    return Error{"evaluation: the master's VO produced no segment with 3 poses or more"};
+  }
+  evaluation.master_segment = master->segment;
+  evaluation.master_metres_per_unit = master->metres_per_unit;
+  if (evaluation.units[0].size() > 1) {
+    evaluation.note = "the master VO re-initialised (" +
+                      std::to_string(evaluation.units[0].size()) +
+                      " segments); distances are scored in the unit of its longest segment";
+  }
+  const std::vector<Similarity> truth = rig.TrueRig();
+  for (size_t i = 0; i < result.slaves.size() && i < truth.size(); ++i) {
+    const SlaveCalibration& slave = result.slaves[i];
+    SlaveEvaluation e;
+    e.name = slave.name;
+    e.usable = slave.usable();
+    // The scored slave segment: the estimate's newest segment scale, if any.
+    double estimated_scale = slave.estimate.scale;
+    e.segment = 0;
+    if (!slave.scales.empty()) {
+      e.segment = slave.scales.back().segment;
+      estimated_scale = slave.scales.back().scale;
+    }
+    double slave_metres_per_unit = 0.0;
+    for (const SegmentUnit& unit : evaluation.units[i + 1]) {
+      if (unit.segment == e.segment) slave_metres_per_unit = unit.metres_per_unit;
+    }
+    e.truth_master_units.q = truth[i].q;
+    e.truth_master_units.C = truth[i].C / evaluation.master_metres_per_unit;
+    e.truth_master_units.scale = slave_metres_per_unit > 0.0
+                                     ? slave_metres_per_unit / evaluation.master_metres_per_unit
+                                     : std::nan("");
+    ScoreEstimate(slave, estimated_scale, &e);
+    evaluation.slaves.push_back(e);
+  }
+  return evaluation;
+}
+
+void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveEvaluation* e) {
+  Similarity estimate = slave.estimate;
+  estimate.scale = estimated_scale;
+  e->position_observable = slave.position_observable;
+  e->axis.setZero();
+  e->axis_unknown = false;
+  if (slave.position_observable && slave.unobservable.size() == 1) {
+    e->axis = slave.unobservable[0].normalized();
+    e->axis_unknown = !slave.unobservable_from_prior;
+  }
+  e->error = CompareToTruth(estimate, e->truth_master_units, e->axis);
+  if (e->axis_unknown) {
+    // Score what was estimated: direction and distance of C within the plane.
+    Similarity in_plane = estimate, truth_in_plane = e->truth_master_units;
+    in_plane.C -= in_plane.C.dot(e->axis) * e->axis;
+    truth_in_plane.C -= truth_in_plane.C.dot(e->axis) * e->axis;
+    const CalibrationError plane = CompareToTruth(in_plane, truth_in_plane);
+    e->error.dir_deg = plane.dir_deg;
+    e->error.dist_pct = plane.dist_pct;
+  }
+}
+
+std::string FormatEvaluation(const RunEvaluation& evaluation) {
+  std::ostringstream out;
+  char line[200];
+  const double mm = 1000.0 * evaluation.master_metres_per_unit;  // master unit -> mm
+  auto figure = [](double v, bool known) {
+    char text[32];
+    if (!known || !std::isfinite(v)) return std::string(known ? "-" : "unobs");
+    std::snprintf(text, sizeof(text), "%.4f", v);
+    return std::string(text);
+  };
+  std::snprintf(line, sizeof(line), "%-10s %10s %10s %10s %10s %10s %10s  %s\n", "slave",
+                "rot[deg]", "dir[deg]", "dist[%]", "scale[%]", "plane[mm]", "axis[mm]", "");
+  out << "Errors against the simulated ground truth (thesis 5.1.1):\n" << line;
+  bool any_in_plane = false;
+  for (const SlaveEvaluation& e : evaluation.slaves) {
+    if (!e.usable) {
+      std::snprintf(line, sizeof(line), "%-10s %10s %10s %10s %10s %10s %10s  no usable estimate\n",
+                    e.name.c_str(), "-", "-", "-", "-", "-", "-");
+    } else {
+      const bool planar = e.axis.squaredNorm() > 0.0;
+      any_in_plane = any_in_plane || e.axis_unknown;
+      std::snprintf(
+          line, sizeof(line), "%-10s %10.4f %10s %10s %10.4f %10s %10s  (segment %d)\n",
+          e.name.c_str(), e.error.rot_deg, figure(e.error.dir_deg, e.position_observable).c_str(),
+          figure(e.error.dist_pct, e.position_observable).c_str(), e.error.scale_pct,
+          figure(planar ? e.error.plane_err * mm : std::nan(""), e.position_observable).c_str(),
+          figure(planar ? e.error.axis_err * mm : std::nan(""),
+                 e.position_observable && !e.axis_unknown)
+              .c_str(),
+          e.segment);
+    }
+    out << line;
+  }
+  std::snprintf(line, sizeof(line), "master unit: %.6g m (VO segment %d)\n",
+                evaluation.master_metres_per_unit, evaluation.master_segment);
+  out << line;
+  if (any_in_plane) {
+    out << "planar motion: dir and dist compare C in the plane orthogonal to the rotation axis "
+           "(the offset along it is unobservable without a nominal mounting)\n";
+  }
+  if (!evaluation.note.empty()) out << "note: " << evaluation.note << "\n";
+  return out.str();
+}
+
+}  // namespace rigcal::tools

@@ -1,0 +1,296 @@
+#include "rigcal/research/svg_plot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+#include "rigcal/io/atomic_file.h"
+
+namespace rigcal {
+namespace {
+
+// Colour-blind friendly palette (Okabe & Ito) plus black.
+constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
+constexpr int kPaletteSize = sizeof(kPalette) / sizeof(kPalette[0]);
+
+// Panel margins around the plot area, pixels.
+constexpr double kMarginLeft = 62;
+constexpr double kMarginRight = 14;
+constexpr double kMarginTop = 30;
+constexpr double kMarginBottom = 46;
+constexpr double kFigureTitleHeight = 28;
+constexpr double kCharWidth = 6.2;  // approximate width of one 11px sans-serif character
+
+std::string Num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.2f", v);
+  return buf;
+}
+
+// Tick label with as many decimals as the tick step needs.
+std::string TickLabel(double v, double step) {
+  int decimals = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
+  if (std::abs(v) < step * 1e-6) v = 0.0;  // no "-0.0"
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
+  return buf;
+}
+
+struct Range {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void Add(double v) {
+    if (!std::isfinite(v)) return;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  bool valid() const { return lo <= hi; }
+};
+
+// Makes a degenerate or empty range plottable.
+void Widen(Range* r) {
+  if (!r->valid()) {
+    r->lo = 0.0;
+    r->hi = 1.0;
+  } else if (r->hi - r->lo <= 1e-12 * std::max(1.0, std::abs(r->hi))) {
+    double pad = std::abs(r->hi) > 0 ? 0.1 * std::abs(r->hi) : 1.0;
+    r->lo -= pad;
+    r->hi += pad;
+  }
+}
+
+struct Axis {
+  std::vector<double> ticks;
+  double lo = 0;
+  double hi = 1;
+  double step = 1;
+};
+
+Axis MakeAxis(Range r) {
+  Widen(&r);
+  Axis axis;
+  axis.ticks = NiceTicks(r.lo, r.hi, 6);
+  axis.lo = axis.ticks.front();
+  axis.hi = axis.ticks.back();
+  axis.step = axis.ticks.size() > 1 ? axis.ticks[1] - axis.ticks[0] : 1.0;
+  return axis;
+}
+
+std::string SeriesColor(const PlotSeries& s, size_t index) {
+  return s.color.empty() ? kPalette[index % kPaletteSize] : s.color;
+}
+
+void RenderPanel(const PlotPanel& panel, int index, double x0, double y0, double width,
+                 double height, std::ostringstream& out) {
+  Range xr;
+  Range yr;
+  for (const PlotSeries& s : panel.series) {
+    size_t n = std::min(s.x.size(), s.y.size());
+    for (size_t i = 0; i < n; ++i) {
+      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
+        xr.Add(s.x[i]);
+        yr.Add(s.y[i]);
+      }
+    }
+  }
+  if (panel.y_from_zero) yr.Add(0.0);
+  Axis xa = MakeAxis(xr);
+  Axis ya = MakeAxis(yr);
+
+  // Legend size (entries with a label only).
+  size_t longest = 0;
+  int entries = 0;
+  for (const PlotSeries& s : panel.series) {
+    if (s.label.empty()) continue;
+    longest = std::max(longest, s.label.size());
+    ++entries;
+  }
+  const double legend_w = 34 + kCharWidth * static_cast<double>(longest);
+  const double legend_h = 6 + 14.0 * entries;
+  const bool outside = panel.legend == LegendPosition::kOutsideRight && entries > 0;
+
+  const double left = x0 + kMarginLeft;
+  const double top = y0 + kMarginTop;
+  const double pw =
+      std::max(40.0, width - kMarginLeft - kMarginRight - (outside ? legend_w + 8 : 0.0));
+  const double ph = height - kMarginTop - kMarginBottom;
+  auto px = [&](double x) { return left + (x - xa.lo) / (xa.hi - xa.lo) * pw; };
+  auto py = [&](double y) { return top + ph - (y - ya.lo) / (ya.hi - ya.lo) * ph; };
+
+  out << "<g class=\"panel\">\n";
+  out << "<rect x=\"" << Num(left) << "\" y=\"" << Num(top) << "\" width=\"" << Num(pw)
+      << "\" height=\"" << Num(ph) << "\" fill=\"#ffffff\" stroke=\"#333333\"/>\n";
+  // Grid and ticks.
+  for (double t : xa.ticks) {
+    double x = px(t);
+    out << "<line x1=\"" << Num(x) << "\" y1=\"" << Num(top) << "\" x2=\"" << Num(x) << "\" y2=\""
+        << Num(top + ph) << "\" stroke=\"#e5e5e5\"/>\n";
+    out << "<text x=\"" << Num(x) << "\" y=\"" << Num(top + ph + 15) << "\" text-anchor=\"middle\">"
+        << XmlEscape(TickLabel(t, xa.step)) << "</text>\n";
+  }
+  for (double t : ya.ticks) {
+    double y = py(t);
+    out << "<line x1=\"" << Num(left) << "\" y1=\"" << Num(y) << "\" x2=\"" << Num(left + pw)
+        << "\" y2=\"" << Num(y) << "\" stroke=\"#e5e5e5\"/>\n";
+    out << "<text x=\"" << Num(left - 5) << "\" y=\"" << Num(y + 4) << "\" text-anchor=\"end\">"
+        << XmlEscape(TickLabel(t, ya.step)) << "</text>\n";
+  }
+  // Labels and title.
+  out << "<text x=\"" << Num(left + pw / 2) << "\" y=\"" << Num(top + ph + 36)
+      << "\" text-anchor=\"middle\">" << XmlEscape(panel.x_label) << "</text>\n";
+  double ly = top + ph / 2;
+  double lx = x0 + 14;
+  out << "<text x=\"" << Num(lx) << "\" y=\"" << Num(ly) << "\" text-anchor=\"middle\" "
+      << "transform=\"rotate(-90 " << Num(lx) << " " << Num(ly) << ")\">"
+      << XmlEscape(panel.y_label) << "</text>\n";
+  out << "<text x=\"" << Num(left + pw / 2) << "\" y=\"" << Num(y0 + 19)
+      << "\" text-anchor=\"middle\" font-weight=\"bold\">" << XmlEscape(panel.title) << "</text>\n";
+
+  // Series, clipped to the plot area.
+  std::string clip_id = "clip" + std::to_string(index);
+  out << "<clipPath id=\"" << clip_id << "\"><rect x=\"" << Num(left) << "\" y=\"" << Num(top)
+      << "\" width=\"" << Num(pw) << "\" height=\"" << Num(ph) << "\"/></clipPath>\n";
+  for (size_t si = 0; si < panel.series.size(); ++si) {
+    const PlotSeries& s = panel.series[si];
+    std::string color = SeriesColor(s, si);
+    out << "<g class=\"series\" data-label=\"" << XmlEscape(s.label) << "\" clip-path=\"url(#"
+        << clip_id << ")\">\n";
+    size_t n = std::min(s.x.size(), s.y.size());
+    std::string points;
+    auto flush = [&]() {
+      if (!points.empty()) {
+        out << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"1.6\""
+            << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << " points=\"" << points << "\"/>\n";
+      }
+      points.clear();
+    };
+    for (size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+        flush();
+        continue;
+      }
+      if (!points.empty()) points += ' ';
+      points += Num(px(s.x[i])) + "," + Num(py(s.y[i]));
+    }
+    flush();
+    if (s.markers) {
+      for (size_t i = 0; i < n; ++i) {
+        if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+        out << "<circle cx=\"" << Num(px(s.x[i])) << "\" cy=\"" << Num(py(s.y[i]))
+            << "\" r=\"2.2\" fill=\"" << color << "\"/>\n";
+      }
+    }
+    out << "</g>\n";
+  }
+
+  if (entries > 0) {
+    const double lw = legend_w;
+    const double lh = legend_h;
+    double bx = left + 6;
+    if (panel.legend == LegendPosition::kTopRight) bx = left + pw - 6 - lw;
+    if (outside) bx = left + pw + 8;
+    const double by = outside ? top : top + 6;
+    out << "<g class=\"legend\">\n<rect x=\"" << Num(bx) << "\" y=\"" << Num(by) << "\" width=\""
+        << Num(lw) << "\" height=\"" << Num(lh)
+        << "\" fill=\"#ffffff\" fill-opacity=\"0.85\" stroke=\"#999999\"/>\n";
+    int row = 0;
+    for (size_t si = 0; si < panel.series.size(); ++si) {
+      const PlotSeries& s = panel.series[si];
+      if (s.label.empty()) continue;
+      double ey = by + 11 + 14.0 * row++;
+      out << "<line x1=\"" << Num(bx + 5) << "\" y1=\"" << Num(ey - 3) << "\" x2=\"" << Num(bx + 27)
+          << "\" y2=\"" << Num(ey - 3) << "\" stroke=\"" << SeriesColor(s, si)
+          << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
+      out << "<text x=\"" << Num(bx + 31) << "\" y=\"" << Num(ey) << "\">" << XmlEscape(s.label)
+          << "</text>\n";
+    }
+    out << "</g>\n";
+  }
+  out << "</g>\n";
+}
+
+}  // namespace
+
+std::string XmlEscape(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::vector<double> NiceTicks(double lo, double hi, int target_count) {
+  target_count = std::max(2, target_count);
+  double raw = (hi - lo) / (target_count - 1);
+  double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = magnitude;
+  for (double m : {1.0, 2.0, 5.0, 10.0}) {
+    step = m * magnitude;
+    if (step >= raw * (1 - 1e-9)) break;
+  }
+  double first = std::floor(lo / step + 1e-9) * step;
+  double last = std::ceil(hi / step - 1e-9) * step;
+  std::vector<double> ticks;
+  int count = static_cast<int>(std::llround((last - first) / step)) + 1;
+  for (int i = 0; i < count; ++i) ticks.push_back(first + i * step);
+  if (ticks.size() < 2) ticks.push_back(first + step);
+  return ticks;
+}
+
+std::string RenderSvg(const PlotFigure& figure) {
+  const int n = static_cast<int>(figure.panels.size());
+  const int columns =
+      figure.columns > 0 ? std::min(figure.columns, std::max(n, 1)) : std::max(n, 1);
+  const int rows = std::max(1, (n + columns - 1) / columns);
+  const double title_h = figure.title.empty() ? 0.0 : kFigureTitleHeight;
+  const double width = static_cast<double>(columns) * figure.panel_width;
+  const double height = title_h + static_cast<double>(rows) * figure.panel_height;
+
+  std::ostringstream out;
+  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  out << "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"" << Num(width)
+      << "\" height=\"" << Num(height) << "\" viewBox=\"0 0 " << Num(width) << " " << Num(height)
+      << "\" font-family=\"DejaVu Sans, Arial, Helvetica, sans-serif\" font-size=\"11\">\n";
+  out << "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
+  if (!figure.title.empty()) {
+    out << "<text x=\"" << Num(width / 2) << "\" y=\"19\" text-anchor=\"middle\" "
+        << "font-size=\"14\" font-weight=\"bold\">" << XmlEscape(figure.title) << "</text>\n";
+  }
+  for (int i = 0; i < n; ++i) {
+    double x0 = static_cast<double>(i % columns) * figure.panel_width;
+    double y0 = title_h + static_cast<double>(i / columns) * figure.panel_height;
+    RenderPanel(figure.panels[i], i, x0, y0, figure.panel_width, figure.panel_height, out);
+  }
+  out << "</svg>\n";
+  return out.str();
+}
+
+bool WriteSvg(const PlotFigure& figure, const std::string& path, std::string* error) {
+  const std::string message = tools::WriteFileAtomically(path, RenderSvg(figure));
+  if (!message.empty() && error) *error = message;
+  return message.empty();
+}
+
+}  // namespace rigcal
