@@ -50,8 +50,8 @@ RigState CombineStates(const std::vector<SlaveState>& slaves, bool any_motion) {
 }
 
 int ExitCodeFor(const std::vector<SlaveState>& slaves) {
-  const bool all_usable =
-      !slaves.empty() && std::all_of(slaves.begin(), slaves.end(), [](SlaveState s) { return IsUsable(s); });
+  const bool all_usable = !slaves.empty() && std::all_of(slaves.begin(), slaves.end(),
+                                                         [](SlaveState s) { return IsUsable(s); });
   return all_usable ? 0 : 3;
 }
 

@@ -28,24 +28,25 @@ struct Error {
 class [[nodiscard]] Status {
  public:
   Status() = default;  // success
-  Status(Error error) : error_(std::move(error.message)) {}  // NOLINT(google-explicit-constructor)
+  Status(Error error)  // NOLINT(google-explicit-constructor)
+      : ok_(false), message_(std::move(error.message)) {}
   static Status Ok() { return Status(); }
 
-  bool ok() const { return !error_.has_value(); }
+  bool ok() const { return ok_; }
   explicit operator bool() const { return ok(); }
   // The error message; empty for success.
-  const std::string& message() const {
-    static const std::string kNone;
-    return error_ ? *error_ : kNone;
-  }
+  const std::string& message() const { return message_; }
   // The same error with `context` in front ("<context>: <message>"); success stays success.
   Status Prefixed(std::string_view context) const {
     if (ok()) return *this;
-    return Error{std::string(context) + ": " + *error_};
+    return Error{std::string(context) + ": " + message_};
   }
 
  private:
-  std::optional<std::string> error_;
+  // A flag beside a plain string rather than std::optional<std::string>: GCC 12 warns
+  // (-Wmaybe-uninitialized) about moving optional strings.
+  bool ok_ = true;
+  std::string message_;
 };
 
 // Thrown by Expected<T>::value() when it holds an error: a programming error at the caller,
@@ -71,7 +72,7 @@ inline void RequireValid(const Status& status, std::string_view what) {
 template <typename T>
 class [[nodiscard]] Expected {
  public:
-  Expected(T value) : value_(std::move(value)) {}  // NOLINT(google-explicit-constructor)
+  Expected(T value) : value_(std::move(value)) {}       // NOLINT(google-explicit-constructor)
   Expected(Error error) : status_(std::move(error)) {}  // NOLINT(google-explicit-constructor)
   // An Expected from a failed Status (a successful one is a programming error).
   Expected(Status status) : status_(std::move(status)) {  // NOLINT(google-explicit-constructor)
