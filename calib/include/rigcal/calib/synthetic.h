@@ -1,6 +1,10 @@
 #pragma once
-// Synthetic rigs and motions shared by tests, experiments, benchmarks and the demo.
+// The pose-level synthetic data generator shared by tests, experiments, benchmarks and the demo:
+// rigs, master trajectories, drives with odometry-like errors (thesis samples of chapter 5 and
+// smooth drives). The car rig and car-like trajectories are in synthetic_car.h; images of a
+// simulated rig are rendered by drivers' SimulatedRig.
 
+#include <cstdint>
 #include <random>
 #include <string>
 #include <vector>
@@ -69,6 +73,12 @@ struct DriveOptions {
   double segment_period_s = 0.0;
 };
 
+// A master trajectory: world_from_master at stamp t_ns[k] (any world frame).
+struct SampledTrajectory {
+  std::vector<int64_t> t_ns;
+  std::vector<Pose> poses;
+};
+
 struct SyntheticDrive {
   RigRecording recording;
   std::vector<Similarity> truth;  // per slave
@@ -86,6 +96,10 @@ SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
                                   const std::vector<Similarity>& rigs,
                                   const std::vector<int64_t>& t_ns, std::vector<Pose> master_world,
                                   const DriveOptions& options);
+// The same along `master` (master.t_ns, master.poses).
+SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
+                                  const std::vector<Similarity>& rigs,
+                                  const SampledTrajectory& master, const DriveOptions& options);
 
 // The default 3-camera rig of the demo: master looking forward, one slave looking left and
 // one looking backwards, with different odometry scales.
