@@ -64,13 +64,8 @@ TEST(Synthetic, DriveIsDeterministicAndConsistent) {
 
 // The car rig seen through its drive: noise-free poses satisfy the rig constraint.
 TEST(SyntheticCar, DriveCarRigIsConsistent) {
-  CarPathOptions o;
-  o.duration_s = 30.0;
-  o.rate_hz = 10.0;
-  DriveOptions exact;
-  exact.rotation_noise_deg = 0.0;
-  exact.position_noise = 0.0;
-  const SyntheticDrive drive = DriveCarRig(CarPath(o), exact);
+  const SyntheticDrive drive = DriveCarRig(CarPath({.duration_s = 30.0, .rate_hz = 10.0}),
+                                           {.rotation_noise_deg = 0.0, .position_noise = 0.0});
   ASSERT_EQ(drive.recording.Validate(), "");
   ASSERT_EQ(drive.recording.size(), 300u);
   ASSERT_EQ(drive.truth.size(), 3u);

@@ -316,13 +316,8 @@ TEST_F(SolveCommandTest, UnusableSlaveExitsWith3AndStillWritesTheResult) {
 // offset of every slave along the vertical (the cameras' y axis) is reported unknown, or taken
 // from --prior (with --prior-sigma as its σ).
 TEST_F(SolveCommandTest, PlanarCarDriveReportsTheVerticalAsUnobservable) {
-  CarPathOptions path;
-  path.duration_s = 60.0;
-  path.rate_hz = 10.0;
-  DriveOptions noise;
-  noise.rotation_noise_deg = 0.02;
-  noise.position_noise = 0.01;
-  const SyntheticDrive drive = DriveCarRig(CarPath(path), noise);
+  const SyntheticDrive drive = DriveCarRig(CarPath({.duration_s = 60.0, .rate_hz = 10.0}),
+                                           {.rotation_noise_deg = 0.02, .position_noise = 0.01});
   const RigRecording& rec = drive.recording;
   WriteTrack(rec, rec.master, 0);
   std::string args = "solve --master " + Quote(Path("front.txt"));

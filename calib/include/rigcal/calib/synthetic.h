@@ -67,7 +67,7 @@ struct DriveOptions {
   // From frame change_frame on, the slaves sit at changed_rigs (a bumped camera); the odometry
   // of every camera continues undisturbed. -1 = never.
   int change_frame = -1;
-  std::vector<Similarity> changed_rigs;
+  std::vector<Similarity> changed_rigs = {};
   // Every slave's odometry re-initialises every segment_period_s seconds (0 = never): a new
   // segment id and an odometry unit multiplied by a random factor in [0.5, 2].
   double segment_period_s = 0.0;
