@@ -202,6 +202,12 @@ SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
   return drive;
 }
 
+SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
+                                  const std::vector<Similarity>& rigs,
+                                  const SampledTrajectory& master, const DriveOptions& options) {
+  return GenerateDriveAlong(names, rigs, master.t_ns, master.poses, options);
+}
+
 std::vector<Similarity> DemoRig() {
   Similarity left;  // looking left (rotated about the camera's vertical axis), metre-ish units
   left.q = AxisAngle(Eigen::Vector3d::UnitY(), -90.0 * kRadPerDeg) *

@@ -1,6 +1,7 @@
 // Speed of the monocular VO per 752x480 frame on one core (issue 4: <= 4 ms median).
-// A 60-degree pinhole camera moves through the rendered textured room of the VO tests; every
-// benchmark iteration processes one frame (frames are rendered once, before timing). Times are
+// A 60-degree pinhole camera moves through the textured room of the VO tests, rendered by the
+// simulated rig (support/room_sequence.h); every benchmark iteration processes one frame (frames
+// are rendered once, before timing). Times are
 // the CPU time of the VO's thread (OpenCV limited to one thread), so the figure holds on a busy
 // machine too; `median_ms` is the median over the frames processed while tracking, `p90_ms`
 // the 90th percentile, `median_wall_ms` the median wall-clock time, `keyframes` the fraction
@@ -16,24 +17,25 @@
 #include <opencv2/core/utility.hpp>
 
 #include "rigcal/vo/monocular_vo.h"
-#include "vo/synthetic_room.h"
+#include "support/ideal_cameras.h"
+#include "support/room_sequence.h"
 
 namespace {
 
 using rigcal::vo::MonocularVo;
 using rigcal::vo::VoState;
-namespace vt = rigcal::vo::testing;
 
 struct Frames {
-  std::shared_ptr<vt::TestPinhole> camera = vt::TestPinhole::WithFov(752, 480, 60.0);
+  std::shared_ptr<const rigcal::camera::CameraModel> camera =
+      rigcal::support::PinholeWithFov(752, 480, 60.0);
   std::vector<cv::Mat> images;
   Frames() {
-    const vt::SyntheticRoom room;
-    const auto rays = vt::SyntheticRoom::Rays(*camera);
-    for (int k = 0; k < 200; ++k) {
-      const auto [R, C] = vt::RoomTrajectory(k);
-      images.push_back(room.Render(*camera, rays, R, C, 1.0, 1000 + k));
-    }
+    constexpr int kFrames = 200;
+    std::vector<rigcal::Pose> poses;
+    for (int k = 0; k < kFrames; ++k) poses.push_back(rigcal::support::RoomPose(k));
+    const rigcal::drivers::SimulatedRig rig =
+        rigcal::support::MakeRoomSequence(camera, poses).value();
+    for (int k = 0; k < kFrames; ++k) images.push_back(rig.RenderFrame(0, k));
   }
 };
 

@@ -15,11 +15,13 @@
 #include <optional>
 #include <string>
 
+#include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"
-#include "support/car_rig.h"
+#include "rigcal/calib/synthetic_car.h"
+#include "support/kitti.h"
 
 namespace rigcal {
 namespace {
@@ -27,6 +29,15 @@ namespace {
 constexpr double kRotationNoiseDeg = 0.02;
 constexpr double kPositionNoise = 0.01;  // metres
 constexpr int kSeeds = 5;
+
+// The car rig along `path` with the pose noise above.
+SyntheticDrive NoisyDrive(const SampledTrajectory& path, uint64_t seed) {
+  DriveOptions d;
+  d.rotation_noise_deg = kRotationNoiseDeg;
+  d.position_noise = kPositionNoise;
+  d.seed = seed;
+  return DriveCarRig(path, d);
+}
 
 // Worst case over slaves and seeds.
 struct Worst {
@@ -36,22 +47,21 @@ struct Worst {
   double rot_over_std = 0.0, plane_over_std = 0.0;
   int planar = 0, general = 0, other = 0;
   void Add(const SlaveCalibration& r, const Similarity& truth) {
-    const support::PlanarErrors e =
-        support::ErrorsAlongAxis(r.estimate, truth, r.observability.planar_axis);
+    const CalibrationError e = CompareToTruth(r.estimate, truth, r.observability.planar_axis);
     rot_deg = std::max(rot_deg, e.rot_deg);
-    plane = std::max(plane, e.plane);
-    axis = std::max(axis, e.axis);
+    plane = std::max(plane, e.plane_err);
+    axis = std::max(axis, e.axis_err);
     scale_pct = std::max(scale_pct, e.scale_pct);
     if (r.rot_std_deg > 0.0) rot_over_std = std::max(rot_over_std, e.rot_deg / r.rot_std_deg);
     const double plane_std = std::max(r.pos_std.x(), r.pos_std.z());
-    if (plane_std > 0.0) plane_over_std = std::max(plane_over_std, e.plane / plane_std);
+    if (plane_std > 0.0) plane_over_std = std::max(plane_over_std, e.plane_err / plane_std);
     if (r.motion_model == MotionModel::kPlanar) {
       ++planar;
     } else if (r.motion_model == MotionModel::kGeneral) {
       ++general;
       axis_std_min = std::min(axis_std_min, r.axis_offset_std);
       axis_std_max = std::max(axis_std_max, r.axis_offset_std);
-      axis_over_std = std::max(axis_over_std, e.axis / r.axis_offset_std);
+      axis_over_std = std::max(axis_over_std, e.axis_err / r.axis_offset_std);
     } else {
       ++other;
     }
@@ -69,12 +79,11 @@ struct Worst {
   }
 };
 
-Worst Evaluate(const support::Trajectory& path, const CalibrationOptions& options,
+Worst Evaluate(const SampledTrajectory& path, const CalibrationOptions& options,
                const std::string& what) {
   Worst w;
   for (int seed = 1; seed <= kSeeds; ++seed) {
-    const SyntheticDrive drive =
-        support::DriveCarRig(path, kRotationNoiseDeg, kPositionNoise, static_cast<uint64_t>(seed));
+    const SyntheticDrive drive = NoisyDrive(path, static_cast<uint64_t>(seed));
     const RigCalibration cal = CalibrateRig(drive.recording, options);
     for (size_t i = 0; i < cal.slaves.size(); ++i) {
       EXPECT_TRUE(cal.slaves[i].usable()) << what << ": " << cal.slaves[i].message;
@@ -94,10 +103,10 @@ void ExpectAccurate(const Worst& w) {
 }
 
 TEST(PlanarEval, SyntheticFlatYawDrive) {
-  support::CarPathOptions o;
+  CarPathOptions o;
   o.duration_s = 240.0;
   o.rate_hz = 10.0;
-  const Worst w = Evaluate(support::CarPath(o), CalibrationOptions{}, "flat yaw drive, 4 min");
+  const Worst w = Evaluate(CarPath(o), CalibrationOptions{}, "flat yaw drive, 4 min");
   EXPECT_EQ(w.planar, 3 * kSeeds);
   ExpectAccurate(w);
 }
@@ -109,7 +118,7 @@ class KittiEval : public ::testing::Test {
     if (!kitti) GTEST_SKIP() << kitti.error();
     path_ = std::move(*kitti);
   }
-  support::Trajectory path_;
+  SampledTrajectory path_;
 };
 
 TEST_F(KittiEval, RealTrajectory) {
@@ -134,11 +143,11 @@ TEST_F(KittiEval, RealTrajectoryWithNominalPrior) {
   // Nominal heights 2 cm off, σ 3 cm: combined with the data's (large) σ along the vertical.
   CalibrationOptions o;
   o.nominal_sigma = 0.03;
-  const std::vector<Similarity> rig = support::CarRig();
+  const std::vector<Similarity> rig = CarRig();
   for (size_t i = 0; i < rig.size(); ++i) {
     Similarity nominal = rig[i];
     nominal.C.y() += 0.02;
-    o.nominal[support::CarRigNames()[i + 1]] = nominal;
+    o.nominal[CarRigNames()[i + 1]] = nominal;
   }
   const Worst w = Evaluate(path_, o, "KITTI 00 (real) + prior 3 cm");
   EXPECT_EQ(w.general, 3 * kSeeds);
@@ -146,7 +155,7 @@ TEST_F(KittiEval, RealTrajectoryWithNominalPrior) {
 }
 
 TEST_F(KittiEval, FlattenedToPureYaw) {
-  const support::Trajectory flat = support::FlattenToYaw(path_);
+  const SampledTrajectory flat = FlattenToYaw(path_);
   const Worst w = Evaluate(flat, CalibrationOptions{}, "KITTI 00 flattened to pure yaw");
   EXPECT_EQ(w.planar, 3 * kSeeds);
   ExpectAccurate(w);
@@ -155,7 +164,7 @@ TEST_F(KittiEval, FlattenedToPureYaw) {
   CalibrationOptions thesis;
   thesis.method = Method::kLinear;
   thesis.motion_model = MotionModel::kGeneral;
-  const SyntheticDrive drive = support::DriveCarRig(flat, kRotationNoiseDeg, kPositionNoise, 1);
+  const SyntheticDrive drive = NoisyDrive(flat, 1);
   const RigCalibration cal = CalibrateRig(drive.recording, thesis);
   for (size_t i = 0; i < cal.slaves.size(); ++i) {
     const SlaveCalibration& r = cal.slaves[i];
@@ -173,15 +182,14 @@ TEST_F(KittiEval, FlattenedToPureYaw) {
 // Online: planar for 150 s, then a 6 deg ramp (pitch up over 3 s, 15 s climbing, level again)
 // and turning on the upper level. Prints when the vertical offset is flagged and resolved.
 TEST(PlanarEval, OnlinePlanarThenRamp) {
-  support::CarPathOptions po;
+  CarPathOptions po;
   po.duration_s = 210.0;
   po.ramp_at_s = 150.0;
-  const support::Trajectory path = support::CarPath(po);
+  const SampledTrajectory path = CarPath(po);
   for (int seed = 1; seed <= kSeeds; ++seed) {
-    const SyntheticDrive drive =
-        support::DriveCarRig(path, kRotationNoiseDeg, kPositionNoise, static_cast<uint64_t>(seed));
+    const SyntheticDrive drive = NoisyDrive(path, static_cast<uint64_t>(seed));
     const RigRecording& rec = drive.recording;
-    RigEstimator est(support::CarRigNames(), RigEstimatorOptions{});
+    RigEstimator est(CarRigNames(), RigEstimatorOptions{});
     std::vector<double> flagged(3, -1.0), resolved(3, -1.0);
     std::vector<int> changes(3, 0);
     std::vector<bool> was_planar(3, false);
@@ -200,22 +208,22 @@ TEST(PlanarEval, OnlinePlanarThenRamp) {
     }
     for (int i = 0; i < 3; ++i) {
       const SlaveCalibration& r = est.Estimate().rig.slaves[i];
-      const support::PlanarErrors e =
-          support::ErrorsAlongAxis(r.estimate, drive.truth[i], Eigen::Vector3d::UnitY());
+      const CalibrationError e =
+          CompareToTruth(r.estimate, drive.truth[i], Eigen::Vector3d::UnitY());
       std::printf(
           "online seed %d %-5s: planar (vertical flagged) at %5.1f s, general (resolved) at "
           "%5.1f s, %d model change(s) after the flag | end: rotation %.4f deg, in-plane %.1f mm, "
           "vertical %.1f mm "
           "(sigma %.1f mm), scale %.4f %%\n",
-          seed, r.name.c_str(), flagged[i], resolved[i], changes[i], e.rot_deg, e.plane * 1e3,
-          e.axis * 1e3, r.axis_offset_std * 1e3, e.scale_pct);
+          seed, r.name.c_str(), flagged[i], resolved[i], changes[i], e.rot_deg, e.plane_err * 1e3,
+          e.axis_err * 1e3, r.axis_offset_std * 1e3, e.scale_pct);
       EXPECT_GE(flagged[i], 0.0);
       EXPECT_LT(flagged[i], po.ramp_at_s);
       EXPECT_GT(resolved[i], po.ramp_at_s);
       EXPECT_EQ(changes[i], 1);  // resolved once, no flipping
-      EXPECT_LT(e.axis, 5.0 * r.axis_offset_std);
+      EXPECT_LT(e.axis_err, 5.0 * r.axis_offset_std);
       EXPECT_LT(e.rot_deg, 0.05);
-      EXPECT_LT(e.plane, 0.02);
+      EXPECT_LT(e.plane_err, 0.02);
     }
   }
 }

@@ -11,13 +11,11 @@
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"
-#include "support/car_rig.h"
+#include "rigcal/calib/synthetic_car.h"
+#include "support/kitti.h"
 
 namespace rigcal {
 namespace {
-
-using support::ErrorsAlongAxis;
-using support::PlanarErrors;
 
 constexpr double kExact = 1e-9;
 // Bound on |error| / σ for noisy tests. The motions share poses (pairs overlap and the
@@ -26,21 +24,21 @@ constexpr double kExact = 1e-9;
 constexpr double kSigmas = 6.0;
 
 // A noise-free or noisy car drive along `path`, optionally with odometry re-initialisations.
-SyntheticDrive Drive(const support::Trajectory& path, double rot_noise_deg, double pos_noise,
+SyntheticDrive Drive(const SampledTrajectory& path, double rot_noise_deg, double pos_noise,
                      double segment_period_s = 0.0, uint64_t seed = 1) {
   DriveOptions d;
   d.rotation_noise_deg = rot_noise_deg;
   d.position_noise = pos_noise;
   d.segment_period_s = segment_period_s;
   d.seed = seed;
-  return GenerateDriveAlong(support::CarRigNames(), support::CarRig(), path.t_ns, path.poses, d);
+  return DriveCarRig(path, d);
 }
 
-support::Trajectory FlatPath(double duration_s, double rate_hz = 10.0) {
-  support::CarPathOptions o;
+SampledTrajectory FlatPath(double duration_s, double rate_hz = 10.0) {
+  CarPathOptions o;
   o.duration_s = duration_s;
   o.rate_hz = rate_hz;
-  return support::CarPath(o);
+  return CarPath(o);
 }
 
 // The scale of the slave's segment scales that belongs to `segment` (its estimate.scale for 0).
@@ -58,12 +56,12 @@ double ScaleStd(const SlaveCalibration& r) { return r.scales.empty() ? 0.0 : r.s
 double PlaneStd(const SlaveCalibration& r) { return std::max(r.pos_std.x(), r.pos_std.z()); }
 
 void ExpectWithinSigma(const SlaveCalibration& r, const Similarity& truth) {
-  const PlanarErrors e = ErrorsAlongAxis(r.estimate, truth, r.observability.planar_axis);
+  const CalibrationError e = CompareToTruth(r.estimate, truth, r.observability.planar_axis);
   ASSERT_GT(r.rot_std_deg, 0.0) << r.message;
   ASSERT_GT(PlaneStd(r), 0.0) << r.message;
   // Rotation: rot_std_deg is the largest axis' σ; the error has 3 components (2 in the plane).
   EXPECT_LT(e.rot_deg, kSigmas * std::sqrt(3.0) * r.rot_std_deg) << r.name << ": " << r.message;
-  EXPECT_LT(e.plane, kSigmas * std::sqrt(2.0) * PlaneStd(r)) << r.name << ": " << r.message;
+  EXPECT_LT(e.plane_err, kSigmas * std::sqrt(2.0) * PlaneStd(r)) << r.name << ": " << r.message;
   EXPECT_LT(e.scale_pct / 100.0 * truth.scale, kSigmas * ScaleStd(r) + 1e-12) << r.name;
 }
 
@@ -148,7 +146,7 @@ TEST(PlanarSolver, NominalMountingFillsTheAxisOffset) {
   for (size_t i = 0; i < 3; ++i) {
     Similarity nominal = drive.truth[i];
     nominal.C.y() += 0.05 * (i + 1);  // CAD heights off by 5, 10, 15 cm
-    o.nominal[support::CarRigNames()[i + 1]] = nominal;
+    o.nominal[CarRigNames()[i + 1]] = nominal;
   }
   for (double sigma : {0.0, 0.1}) {
     o.nominal_sigma = sigma;
@@ -235,7 +233,7 @@ class Kitti : public ::testing::Test {
     if (!kitti) GTEST_SKIP() << kitti.error();
     path_ = std::move(*kitti);
   }
-  support::Trajectory path_;
+  SampledTrajectory path_;
 };
 
 // KITTI's turns end many auto pairs at the same pose, which makes the reported σ optimistic
@@ -260,8 +258,9 @@ TEST_F(Kitti, RealTrajectoryIsNearlyPlanarGeneral) {
     // The vertical is determined, but far worse than the plane, and the error fits its σ.
     ASSERT_TRUE(std::isfinite(r.axis_offset_std));
     EXPECT_GT(r.axis_offset_std, 10.0 * PlaneStd(r));
-    const PlanarErrors e = ErrorsAlongAxis(r.estimate, drive.truth[i], r.observability.planar_axis);
-    EXPECT_LT(e.axis, kSigmas * r.axis_offset_std) << r.message;
+    const CalibrationError e =
+        CompareToTruth(r.estimate, drive.truth[i], r.observability.planar_axis);
+    EXPECT_LT(e.axis_err, kSigmas * r.axis_offset_std) << r.message;
     EXPECT_NE(r.message.find("nearly planar"), std::string::npos) << r.message;
   }
   // A nominal mounting with a σ is combined with the data as a weighted term: the combined σ
@@ -270,7 +269,7 @@ TEST_F(Kitti, RealTrajectoryIsNearlyPlanarGeneral) {
   for (size_t i = 0; i < 3; ++i) {
     Similarity nominal = drive.truth[i];
     nominal.C.y() += 0.02;
-    o.nominal[support::CarRigNames()[i + 1]] = nominal;
+    o.nominal[CarRigNames()[i + 1]] = nominal;
   }
   const RigCalibration with_prior = CalibrateRig(drive.recording, o);
   for (size_t i = 0; i < 3; ++i) {
@@ -291,7 +290,7 @@ TEST_F(Kitti, RealTrajectoryIsNearlyPlanarGeneral) {
 }
 
 TEST_F(Kitti, FlattenedTrajectoryIsPlanar) {
-  const SyntheticDrive drive = Drive(support::FlattenToYaw(path_), 0.02, 0.01);
+  const SyntheticDrive drive = Drive(FlattenToYaw(path_), 0.02, 0.01);
   const RigCalibration cal = CalibrateRig(drive.recording, KittiOptions());
   for (size_t i = 0; i < 3; ++i) {
     const SlaveCalibration& r = cal.slaves[i];
@@ -316,7 +315,7 @@ TEST(PlanarOnline, EqualsBatchPlanarLinearSolution) {
   o.half_life_s = 0.0;
   o.window_size = 1 << 20;
   o.max_open_segments = 100;
-  RigEstimator est(support::CarRigNames(), o);
+  RigEstimator est(CarRigNames(), o);
   for (size_t k = 0; k < drive.recording.size(); ++k) {
     est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
   }
@@ -349,12 +348,12 @@ TEST(PlanarOnline, EqualsBatchPlanarLinearSolution) {
 // (planar, unobservable, C along the axis 0), then resolved (general, finite σ, error within
 // it), with one switch of the model per slave.
 TEST(PlanarOnline, FlagsThenResolvesTheVerticalOffsetOnARamp) {
-  support::CarPathOptions po;
+  CarPathOptions po;
   po.duration_s = 200.0;
   po.ramp_at_s = 150.0;
-  const SyntheticDrive drive = Drive(support::CarPath(po), 0.02, 0.01);
+  const SyntheticDrive drive = Drive(CarPath(po), 0.02, 0.01);
   const RigRecording& rec = drive.recording;
-  RigEstimator est(support::CarRigNames(), RigEstimatorOptions{});
+  RigEstimator est(CarRigNames(), RigEstimatorOptions{});
   std::vector<int> switches(3, 0);
   std::vector<uint32_t> last(3, 0);
   bool checked_before_ramp = false;
@@ -389,9 +388,9 @@ TEST(PlanarOnline, FlagsThenResolvesTheVerticalOffsetOnARamp) {
     EXPECT_EQ(r.motion_model, MotionModel::kGeneral) << r.message;
     EXPECT_TRUE(r.unobservable.empty());
     ASSERT_TRUE(std::isfinite(r.axis_offset_std)) << r.message;
-    const PlanarErrors e = ErrorsAlongAxis(r.estimate, drive.truth[i], Eigen::Vector3d::UnitY());
-    EXPECT_LT(e.axis, kSigmas * r.axis_offset_std) << r.message;
-    EXPECT_LT(e.axis, 0.1) << r.message;  // resolved: the heights differ by 0.3-0.4 m
+    const CalibrationError e = CompareToTruth(r.estimate, drive.truth[i], Eigen::Vector3d::UnitY());
+    EXPECT_LT(e.axis_err, kSigmas * r.axis_offset_std) << r.message;
+    EXPECT_LT(e.axis_err, 0.1) << r.message;  // resolved: the heights differ by 0.3-0.4 m
     EXPECT_LE(switches[i], 1) << r.name;
   }
 }
@@ -402,10 +401,10 @@ TEST(PlanarOnline, FlagsThenResolvesTheVerticalOffsetOnARamp) {
 // planar (a factor 2 beyond the thresholds), much later than without; and it changes only at
 // those two events (the ramp, the return), never back and forth.
 TEST(PlanarOnline, HysteresisKeepsTheModelFromFlipping) {
-  support::CarPathOptions po;
+  CarPathOptions po;
   po.duration_s = 400.0;
   po.ramp_at_s = 100.0;
-  const SyntheticDrive drive = Drive(support::CarPath(po), 0.02, 0.01);
+  const SyntheticDrive drive = Drive(CarPath(po), 0.02, 0.01);
   struct Run {
     int switches = 0;
     double general_at_s = -1.0, planar_again_at_s = -1.0;
@@ -414,7 +413,7 @@ TEST(PlanarOnline, HysteresisKeepsTheModelFromFlipping) {
     RigEstimatorOptions o;
     o.half_life_s = 60.0;
     o.planar_hysteresis = hysteresis;
-    RigEstimator est(support::CarRigNames(), o);
+    RigEstimator est(CarRigNames(), o);
     Run out;
     bool was_planar = false;
     for (size_t k = 0; k < drive.recording.size(); ++k) {
@@ -452,7 +451,7 @@ TEST(PlanarOnline, NominalKeptThroughRefinementAndStateFiles) {
     nominal.C.y() += 0.05;
     o.nominal.push_back(nominal);
   }
-  RigEstimator est(support::CarRigNames(), o);
+  RigEstimator est(CarRigNames(), o);
   for (size_t k = 0; k < drive.recording.size(); ++k) {
     est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
   }
@@ -472,7 +471,7 @@ TEST(PlanarOnline, NominalKeptThroughRefinementAndStateFiles) {
     EXPECT_TRUE(est.Estimate().online[i].flags & kFlagPlanar);
     ExpectWithinSigma(est.Estimate().rig.slaves[i], drive.truth[i]);
   }
-  RigEstimator restored(support::CarRigNames(), o);
+  RigEstimator restored(CarRigNames(), o);
   std::string error;
   ASSERT_TRUE(restored.RestoreState(est.SerializeState(), &error)) << error;
   for (int i = 0; i < 3; ++i) {

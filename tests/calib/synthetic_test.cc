@@ -2,9 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/synthetic_car.h"
 
 namespace rigcal {
 namespace {
@@ -56,6 +60,67 @@ TEST(Synthetic, DriveIsDeterministicAndConsistent) {
       EXPECT_LT(ResidualOf(m, a.truth[i]).position_abs, 1e-9);
     }
   }
+}
+
+// The car rig seen through its drive: noise-free poses satisfy the rig constraint.
+TEST(SyntheticCar, DriveCarRigIsConsistent) {
+  const SyntheticDrive drive = DriveCarRig(CarPath({.duration_s = 30.0, .rate_hz = 10.0}),
+                                           {.rotation_noise_deg = 0.0, .position_noise = 0.0});
+  ASSERT_EQ(drive.recording.Validate(), "");
+  ASSERT_EQ(drive.recording.size(), 300u);
+  ASSERT_EQ(drive.truth.size(), 3u);
+  EXPECT_EQ(drive.recording.master.name, "front");
+  EXPECT_EQ(drive.recording.slaves[2].name, "rear");
+  const auto pairs =
+      SelectPairs(drive.recording, {.policy = PairOptions::Policy::kRelative, .step = 13});
+  for (int i = 0; i < 3; ++i) {
+    for (const auto& m : MotionsForSlave(drive.recording, i, pairs)) {
+      const ConstraintResidual r = ResidualOf(m, drive.truth[i]);
+      EXPECT_LT(r.rotation_deg, 1e-9);
+      EXPECT_LT(r.position_abs, 1e-9);
+    }
+  }
+}
+
+// A level road: yaw about the vertical (the cameras' y axis) only, constant speed, no height;
+// a ramp pitches the car up by its slope and lifts it; flattening takes both back out.
+TEST(SyntheticCar, CarPathIsLevelExceptOnTheRamp) {
+  CarPathOptions o;
+  o.duration_s = 60.0;
+  o.rate_hz = 10.0;
+  const SampledTrajectory flat = CarPath(o);
+  ASSERT_EQ(flat.poses.size(), 600u);
+  ASSERT_EQ(flat.t_ns.size(), 600u);
+  EXPECT_EQ(flat.t_ns[10], 1'000'000'000);
+  double max_yaw_rate = 0.0;
+  for (size_t k = 0; k < flat.poses.size(); ++k) {
+    const Pose& p = flat.poses[k];
+    EXPECT_EQ(p.C.y(), 0.0);
+    EXPECT_LT((p.q * Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitY()).norm(), 1e-12);
+    if (k == 0) continue;
+    EXPECT_NEAR((p.C - flat.poses[k - 1].C).norm(), o.speed_mps / o.rate_hz, 1e-9);
+    max_yaw_rate =
+        std::max(max_yaw_rate, AngleBetween(p.q, flat.poses[k - 1].q) * kDegPerRad * o.rate_hz);
+  }
+  EXPECT_GT(max_yaw_rate, 15.0);  // turns of up to ~25 deg/s
+  EXPECT_LT(max_yaw_rate, 26.0);
+
+  o.ramp_at_s = 20.0;
+  const SampledTrajectory ramp = CarPath(o);
+  // Level before the ramp, then pitched up by the slope on it (nose up: forward towards -y).
+  const Pose& before = ramp.poses[190];
+  const Pose& climbing = ramp.poses[300];  // 10 s into the ramp: past the 3 s transition
+  EXPECT_EQ(before.C.y(), 0.0);
+  const Eigen::Vector3d forward = climbing.q * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(std::asin(-forward.y()) * kDegPerRad, o.ramp_slope_deg, 1e-9);
+  EXPECT_LT(ramp.poses.back().C.y(), -1.0);  // climbed: y points down
+  const SampledTrajectory flattened = FlattenToYaw(ramp);
+  for (const Pose& p : flattened.poses) {
+    EXPECT_EQ(p.C.y(), 0.0);
+    EXPECT_LT((p.q * Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitY()).norm(), 1e-12);
+  }
+  // Level poses are kept (2 acos of a dot product: ~1e-8 of rounding).
+  EXPECT_LT(AngleBetween(flattened.poses[150].q, ramp.poses[150].q), 1e-6);
 }
 
 }  // namespace

@@ -14,9 +14,9 @@
 
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/synthetic.h"
+#include "rigcal/calib/synthetic_car.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
-#include "support/car_rig.h"
 
 namespace rigcal::tools {
 namespace {
@@ -316,12 +316,8 @@ TEST_F(SolveCommandTest, UnusableSlaveExitsWith3AndStillWritesTheResult) {
 // offset of every slave along the vertical (the cameras' y axis) is reported unknown, or taken
 // from --prior (with --prior-sigma as its σ).
 TEST_F(SolveCommandTest, PlanarCarDriveReportsTheVerticalAsUnobservable) {
-  support::CarPathOptions path;
-  path.duration_s = 60.0;
-  path.rate_hz = 10.0;
-  const SyntheticDrive drive =
-      support::DriveCarRig(support::CarPath(path), /*rotation_noise_deg=*/0.02,
-                           /*position_noise=*/0.01);
+  const SyntheticDrive drive = DriveCarRig(CarPath({.duration_s = 60.0, .rate_hz = 10.0}),
+                                           {.rotation_noise_deg = 0.02, .position_noise = 0.01});
   const RigRecording& rec = drive.recording;
   WriteTrack(rec, rec.master, 0);
   std::string args = "solve --master " + Quote(Path("front.txt"));

@@ -5,10 +5,10 @@
 
 #include <filesystem>
 
-#include "drivers/sim_test_cameras.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
+#include "support/ideal_cameras.h"
 
 namespace rigcal::drivers {
 namespace {
@@ -26,7 +26,7 @@ SimulatedRigSpec::Waypoint Waypoint(const Eigen::Vector3d& p, double yaw, double
 SimulatedRigSpec Spec() {
   SimulatedRigSpec spec;
   spec.names = {"front", "side", "back"};
-  for (int i = 0; i < 3; ++i) spec.cameras.push_back(testing::TestPinhole::WithFov(32, 24, 60));
+  for (int i = 0; i < 3; ++i) spec.cameras.push_back(support::PinholeWithFov(32, 24, 60));
   Pose side, back;
   side.q = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()));
   side.C = Eigen::Vector3d(-1, 1, 3);

@@ -1,5 +1,8 @@
 // The simulated rig: rendering geometry against the camera model, determinism, noise, blur,
 // device behaviour (frame times, drops, jitter, failures, interrupt), spec checks, speed report.
+// The cameras are rigcal_camera's ideal pinhole and equidistant models (support/ideal_cameras.h),
+// whose projections tests/camera/ checks against their equations: here they are the reference
+// the renderer must agree with.
 #include "rigcal/drivers/simulated_rig.h"
 
 #include <gtest/gtest.h>
@@ -11,13 +14,14 @@
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
-#include "drivers/sim_test_cameras.h"
+#include "support/ideal_cameras.h"
 
 namespace rigcal::drivers {
 namespace {
 
-using testing::TestEquidistant;
-using testing::TestPinhole;
+using support::IdealEquidistant;
+using support::IdealPinhole;
+using support::PinholeWithFov;
 
 Pose Mounting(const Eigen::Quaterniond& q, const Eigen::Vector3d& c) {
   Pose p;
@@ -39,7 +43,7 @@ SimulatedRigSpec::Waypoint Waypoint(const Eigen::Vector3d& p, double yaw, double
 SimulatedRigSpec TwoCameraSpec(int width = 160, int height = 120) {
   SimulatedRigSpec spec;
   spec.names = {"cam0", "cam1"};
-  spec.cameras = {TestPinhole::WithFov(width, height, 60), TestPinhole::WithFov(width, height, 60)};
+  spec.cameras = {PinholeWithFov(width, height, 60), PinholeWithFov(width, height, 60)};
   spec.master_from_camera = {
       Pose(), Mounting(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY())),
                        Eigen::Vector3d(-0.5, 0, 0))};
@@ -188,7 +192,7 @@ void ExpectWallTopAtProjection(int block) {
   spec.scene.boxes = 0;
   spec.waypoints = {Waypoint({10, 0, 6}, 0), Waypoint({11, 0, 6}, 0)};
   const SimulatedRig rig = Make(spec);
-  const auto camera = std::static_pointer_cast<const TestPinhole>(spec.cameras[0]);
+  const auto& camera = spec.cameras[0];
   const Pose view = LookingAlongX({14, 0.3, 6.0}, 4.0, 1.0);  // slight yaw and pitch
   const cv::Mat image = rig.RenderView(0, view, block);
   int checked = 0, exact = 0;
@@ -231,7 +235,8 @@ TEST(SimulatedRig, WallEdgeAppearsWhereTheModelProjectsIt) {
 // point that A's pixel sees must show the same texture.
 double RegistrationError(const SimulatedRig& rig, int cam_a, const Pose& a, int cam_b,
                          const Pose& b, const camera::CameraModel& model_a,
-                         const camera::CameraModel& model_b, const Eigen::Vector2d& shift, int* count) {
+                         const camera::CameraModel& model_b, const Eigen::Vector2d& shift,
+                         int* count) {
   const cv::Mat image_a = rig.RenderView(cam_a, a, 1);
   const cv::Mat image_b = rig.RenderView(cam_b, b, 1);
   double sum = 0;
@@ -284,8 +289,7 @@ TEST(SimulatedRig, FisheyeBeyond180DegreesAgreesWithPinhole) {
   // z < 0.
   SimulatedRigSpec spec = TwoCameraSpec();
   const double f = 100.0;  // px / rad: 0.01 rad per pixel on both cameras
-  spec.cameras = {std::make_shared<TestEquidistant>(360, 360, f, 100.0),
-                  std::make_shared<TestPinhole>(160, 120, f, f, 79.5, 59.5)};
+  spec.cameras = {IdealEquidistant(360, 360, f, 100.0), IdealPinhole(160, 120, f, f, 79.5, 59.5)};
   const SimulatedRig rig = Make(spec);
   const Pose a = LookingAlongX({0, 0, 3}, 0);
   const Pose b = LookingAlongX({0, 0, 3}, 95);
@@ -552,8 +556,8 @@ TEST(SimulatedRig, RenderSpeedReport) {
   };
   SimulatedRigSpec pinhole = TwoCameraSpec(752, 480);
   SimulatedRigSpec fisheye = TwoCameraSpec();
-  fisheye.cameras = {std::make_shared<TestEquidistant>(640, 640, 191.0, 93.0),
-                     std::make_shared<TestEquidistant>(640, 640, 191.0, 93.0)};
+  fisheye.cameras = {IdealEquidistant(640, 640, 191.0, 93.0),
+                     IdealEquidistant(640, 640, 191.0, 93.0)};
   SimulatedRigSpec pipe = fisheye;
   pipe.scene.type = SimulatedRigSpec::SceneType::kPipe;
   pipe.master_from_camera[1] =

@@ -1,4 +1,5 @@
-// MonocularVo on rendered image sequences of a textured room (pinhole 60 degrees and an
+// MonocularVo on image sequences of a camera moving through the textured room of the simulated
+// rig (support/room_sequence.h: drivers' renderer, rigcal_camera's ideal pinhole 60 degrees and
 // equidistant 186-degree fisheye), pure rotation, a static camera, blank frames (tracking loss
 // -> new segment) and bad input.
 
@@ -11,15 +12,16 @@
 #include <cstdio>
 #include <map>
 
-#include "synthetic_room.h"
+#include "rigcal/calib/quaternion.h"
+#include "support/ideal_cameras.h"
+#include "support/room_sequence.h"
 
 namespace rigcal::vo {
 namespace {
 
-using testing::RoomTrajectory;
-using testing::SyntheticRoom;
-using testing::TestEquidistant;
-using testing::TestPinhole;
+using support::EquidistantWithFov;
+using support::PinholeWithFov;
+using support::RoomPose;
 
 constexpr int64_t kFrameNs = 50'000'000;  // 20 Hz
 
@@ -30,22 +32,24 @@ struct Sequence {
   std::vector<VoResult> results;
 };
 
-// Runs the VO over `frames` rendered frames; `pose_of(k)` gives the true pose of frame k and
-// `blank(k)` says which frames are replaced by a uniform grey image.
+// Runs the VO over `frames` frames rendered in the room; `pose_of(k)` gives the pose
+// (world_from_camera) of frame k and `blank(k)` says which frames are replaced by a uniform
+// grey image.
 template <typename PoseOf, typename Blank>
-Sequence RunSequence(const std::shared_ptr<const camera::CameraModel>& camera, int frames, PoseOf pose_of,
-                     Blank blank, VoOptions options = {}) {
-  static const SyntheticRoom room;
-  const auto rays = SyntheticRoom::Rays(*camera);
+Sequence RunSequence(const std::shared_ptr<const camera::CameraModel>& camera, int frames,
+                     PoseOf pose_of, Blank blank, VoOptions options = {}) {
+  std::vector<Pose> poses;
+  for (int k = 0; k < frames; ++k) poses.push_back(pose_of(k));
+  const drivers::SimulatedRig rig = support::MakeRoomSequence(camera, poses).value();
   MonocularVo vo(camera, 0, options);
   Sequence s;
   for (int k = 0; k < frames; ++k) {
-    const auto [R, C] = pose_of(k);
+    const Pose truth = rig.CameraPoseAt(0, rig.FrameStreamTime(k));
     cv::Mat image = blank(k) ? cv::Mat(camera->height(), camera->width(), CV_8UC1, cv::Scalar(128))
-                             : room.Render(*camera, rays, R, C, 1.0, 1000 + k);
+                             : rig.RenderFrame(0, k);
     s.t_ns.push_back(k * kFrameNs);
-    s.R.push_back(R);
-    s.C.push_back(C);
+    s.R.push_back(truth.R());
+    s.C.push_back(truth.C);
     s.results.push_back(vo.Process(k * kFrameNs, image));
   }
   return s;
@@ -127,9 +131,8 @@ int FirstTracking(const Sequence& s) {
 auto NoBlank = [](int) { return false; };
 
 TEST(MonocularVo, PinholeRoomSequenceMeetsAccuracyTargets) {
-  const auto camera = TestPinhole::WithFov(752, 480, 60.0);
-  const Sequence s = RunSequence(
-      camera, 160, [](int k) { return RoomTrajectory(k); }, NoBlank);
+  const auto camera = PinholeWithFov(752, 480, 60.0);
+  const Sequence s = RunSequence(camera, 160, RoomPose, NoBlank);
   const int first = FirstTracking(s);
   ASSERT_GE(first, 1);
   EXPECT_LT(first, 40);
@@ -152,9 +155,8 @@ TEST(MonocularVo, PinholeRoomSequenceMeetsAccuracyTargets) {
 }
 
 TEST(MonocularVo, Fisheye186RoomSequenceMeetsAccuracyTargets) {
-  const auto camera = TestEquidistant::WithFov(640, 640, 186.0);
-  const Sequence s = RunSequence(
-      camera, 140, [](int k) { return RoomTrajectory(k); }, NoBlank);
+  const auto camera = EquidistantWithFov(640, 640, 186.0);
+  const Sequence s = RunSequence(camera, 140, RoomPose, NoBlank);
   const int first = FirstTracking(s);
   ASSERT_GE(first, 1);
   EXPECT_LT(first, 40);
@@ -168,14 +170,14 @@ TEST(MonocularVo, Fisheye186RoomSequenceMeetsAccuracyTargets) {
 }
 
 TEST(MonocularVo, PureRotationNeverInventsTranslation) {
-  const auto camera = TestPinhole::WithFov(752, 480, 60.0);
+  const auto camera = PinholeWithFov(752, 480, 60.0);
   const Sequence s = RunSequence(
       camera, 60,
       [](int k) {
-        const double a = 0.006 * k;  // ~0.35 deg per frame about a tilted axis
-        return std::make_pair(
-            Eigen::AngleAxisd(a, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix(),
-            Eigen::Vector3d(0.3, -0.2, 0.1));
+        Pose rotated;  // ~0.35 deg per frame about a tilted axis, relative to the room's centre
+        rotated.q = AxisAngle(Eigen::Vector3d(0.2, 1.0, 0.1), 0.006 * k);
+        rotated.C = Eigen::Vector3d(0.3, -0.2, 0.1);
+        return support::RoomCentre() * rotated;
       },
       NoBlank);
   for (const VoResult& r : s.results) {
@@ -185,9 +187,9 @@ TEST(MonocularVo, PureRotationNeverInventsTranslation) {
 }
 
 TEST(MonocularVo, StaticCameraStaysInitialising) {
-  const auto camera = TestPinhole::WithFov(752, 480, 60.0);
+  const auto camera = PinholeWithFov(752, 480, 60.0);
   const Sequence s = RunSequence(
-      camera, 30, [](int) { return RoomTrajectory(10); }, NoBlank);
+      camera, 30, [](int) { return RoomPose(10); }, NoBlank);
   for (const VoResult& r : s.results) {
     EXPECT_EQ(r.state, VoState::kInitialising) << r.message;
     EXPECT_FALSE(r.pose.has_value());
@@ -195,12 +197,11 @@ TEST(MonocularVo, StaticCameraStaysInitialising) {
 }
 
 TEST(MonocularVo, BlankFramesLoseTrackingAndReinitialiseInANewSegment) {
-  const auto camera = TestPinhole::WithFov(752, 480, 60.0);
+  const auto camera = PinholeWithFov(752, 480, 60.0);
   const int blank_from = 60;
   const int blank_to = 63;  // frames 60, 61, 62 are blank
-  const Sequence s = RunSequence(
-      camera, 140, [](int k) { return RoomTrajectory(k); },
-      [&](int k) { return k >= blank_from && k < blank_to; });
+  const Sequence s =
+      RunSequence(camera, 140, RoomPose, [&](int k) { return k >= blank_from && k < blank_to; });
   ASSERT_EQ(s.results[blank_from - 1].state, VoState::kTracking);
   EXPECT_EQ(s.results[blank_from].state, VoState::kLost);
   for (int k = blank_from; k < blank_to; ++k) {
@@ -230,7 +231,7 @@ TEST(MonocularVo, BlankFramesLoseTrackingAndReinitialiseInANewSegment) {
 }
 
 TEST(MonocularVo, BadImagesAreRejectedWithoutCrashing) {
-  const auto camera = TestPinhole::WithFov(320, 240, 60.0);
+  const auto camera = PinholeWithFov(320, 240, 60.0);
   MonocularVo vo(camera, 3);
   VoResult r = vo.Process(0, cv::Mat());
   EXPECT_FALSE(r.pose.has_value());
@@ -249,8 +250,8 @@ TEST(MonocularVo, BadImagesAreRejectedWithoutCrashing) {
 // The feature budget follows the field of view: a normal lens keeps max_features, a 186-degree
 // fisheye (2 pi (1 - cos 93 deg) = 6.61 sr) tracks max_features * 6.61 / normal_fov_sr.
 TEST(MonocularVo, FeatureBudgetFollowsTheFieldOfView) {
-  const auto pinhole = TestPinhole::WithFov(752, 480, 60.0);
-  const auto fisheye = TestEquidistant::WithFov(640, 640, 186.0);
+  const auto pinhole = PinholeWithFov(752, 480, 60.0);
+  const auto fisheye = EquidistantWithFov(640, 640, 186.0);
   VoOptions options;
   const MonocularVo normal(pinhole, 0, options);
   const MonocularVo wide(fisheye, 1, options);

@@ -1,6 +1,10 @@
 #pragma once
-// Synthetic rigs and motions shared by tests, experiments, benchmarks and the demo.
+// The pose-level synthetic data generator shared by tests, experiments, benchmarks and the demo:
+// rigs, master trajectories, drives with odometry-like errors (thesis samples of chapter 5 and
+// smooth drives). The car rig and car-like trajectories are in synthetic_car.h; images of a
+// simulated rig are rendered by drivers' SimulatedRig.
 
+#include <cstdint>
 #include <random>
 #include <string>
 #include <vector>
@@ -63,10 +67,16 @@ struct DriveOptions {
   // From frame change_frame on, the slaves sit at changed_rigs (a bumped camera); the odometry
   // of every camera continues undisturbed. -1 = never.
   int change_frame = -1;
-  std::vector<Similarity> changed_rigs;
+  std::vector<Similarity> changed_rigs = {};
   // Every slave's odometry re-initialises every segment_period_s seconds (0 = never): a new
   // segment id and an odometry unit multiplied by a random factor in [0.5, 2].
   double segment_period_s = 0.0;
+};
+
+// A master trajectory: world_from_master at stamp t_ns[k] (any world frame).
+struct SampledTrajectory {
+  std::vector<int64_t> t_ns;
+  std::vector<Pose> poses;
 };
 
 struct SyntheticDrive {
@@ -86,6 +96,10 @@ SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
                                   const std::vector<Similarity>& rigs,
                                   const std::vector<int64_t>& t_ns, std::vector<Pose> master_world,
                                   const DriveOptions& options);
+// The same along `master` (master.t_ns, master.poses).
+SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
+                                  const std::vector<Similarity>& rigs,
+                                  const SampledTrajectory& master, const DriveOptions& options);
 
 // The default 3-camera rig of the demo: master looking forward, one slave looking left and
 // one looking backwards, with different odometry scales.

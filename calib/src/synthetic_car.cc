@@ -1,16 +1,16 @@
-#include "support/car_rig.h"
+// The synthetic car rig and its car-like trajectories (synthetic_car.h).
+#include "rigcal/calib/synthetic_car.h"
 
+#include <algorithm>
 #include <cmath>
-#include <filesystem>
+#include <numbers>
 
-#include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
-#include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::support {
+namespace rigcal {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = std::numbers::pi;
 
 Similarity Mount(double yaw_deg, double pitch_deg, double roll_deg, const Eigen::Vector3d& c,
                  double scale) {
@@ -35,8 +35,8 @@ std::vector<Similarity> CarRig() {
 
 std::vector<std::string> CarRigNames() { return {"front", "left", "right", "rear"}; }
 
-Trajectory CarPath(const CarPathOptions& o) {
-  Trajectory out;
+SampledTrajectory CarPath(const CarPathOptions& o) {
+  SampledTrajectory out;
   const int n = static_cast<int>(std::llround(o.duration_s * o.rate_hz));
   const double dt = 1.0 / o.rate_hz;
   const double ramp_end = o.ramp_at_s + 2.0 * o.ramp_transition_s + o.ramp_length_s;
@@ -70,23 +70,8 @@ Trajectory CarPath(const CarPathOptions& o) {
   return out;
 }
 
-Expected<Trajectory> LoadKitti00() {
-  const std::filesystem::path dir = std::filesystem::path(RIGCAL_SHARED_DATA_DIR) / "trajectories";
-  const std::filesystem::path poses = dir / "KITTI_00_gt.txt";
-  const std::filesystem::path times = dir / "KITTI_00_gt_times.txt";
-  if (!std::filesystem::exists(poses) || !std::filesystem::exists(times)) {
-    return Error{"KITTI 00 ground truth not found in " + dir.string()};
-  }
-  auto read = tools::ReadKittiTrajectory(poses.string(), times.string());
-  if (!read) return Error{read.error()};
-  Trajectory out;
-  out.t_ns = read->t_ns;
-  out.poses = read->poses;
-  return out;
-}
-
-Trajectory FlattenToYaw(const Trajectory& trajectory) {
-  Trajectory out = trajectory;
+SampledTrajectory FlattenToYaw(const SampledTrajectory& trajectory) {
+  SampledTrajectory out = trajectory;
   for (Pose& p : out.poses) {
     const Eigen::Vector3d forward = p.q * Eigen::Vector3d::UnitZ();
     p.q = AxisAngle(Eigen::Vector3d::UnitY(), std::atan2(forward.x(), forward.z()));
@@ -95,26 +80,8 @@ Trajectory FlattenToYaw(const Trajectory& trajectory) {
   return out;
 }
 
-SyntheticDrive DriveCarRig(const Trajectory& trajectory, double rotation_noise_deg,
-                           double position_noise, uint64_t seed) {
-  DriveOptions d;
-  d.rotation_noise_deg = rotation_noise_deg;
-  d.position_noise = position_noise;
-  d.seed = seed;
-  return GenerateDriveAlong(CarRigNames(), CarRig(), trajectory.t_ns, trajectory.poses, d);
+SyntheticDrive DriveCarRig(const SampledTrajectory& path, const DriveOptions& options) {
+  return GenerateDriveAlong(CarRigNames(), CarRig(), path, options);
 }
 
-PlanarErrors ErrorsAlongAxis(const Similarity& estimate, const Similarity& truth,
-                             const Eigen::Vector3d& axis) {
-  PlanarErrors e;
-  const CalibrationError c = CompareToTruth(estimate, truth);
-  e.rot_deg = c.rot_deg;
-  e.scale_pct = c.scale_pct;
-  const Eigen::Vector3d a = axis.normalized();
-  const Eigen::Vector3d d = estimate.C - truth.C;
-  e.axis = std::abs(d.dot(a));
-  e.plane = (d - d.dot(a) * a).norm();
-  return e;
-}
-
-}  // namespace rigcal::support
+}  // namespace rigcal
