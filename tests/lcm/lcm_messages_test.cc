@@ -1,7 +1,11 @@
 // The rigcal LCM messages: encode/decode round trips of every type, conversion from and to the
 // calib types, every rejection cause of the validator, in-process publish/subscribe (memq://)
 // and LCM log files. Never UDP multicast (DESIGN.md "LCM").
-#include "rigcal/lcm/lcm_messages.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/extrinsics_message.h"
+#include "rigcal/lcm/image_message.h"
+#include "rigcal/lcm/pose_message.h"
+#include "rigcal/lcm/status_message.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,0 +1,163 @@
+#include "rigcal/lcm/status_message.h"
+
+#include <algorithm>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include "message_checker.h"
+#include "message_codec.h"
+#include "rigcal/lcm/process_stats.h"
+
+namespace rigcal::tools {
+namespace {
+
+using lcm_internal::Checker;
+
+void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* check) {
+  check->CameraName("name", c->name, names, 0, "the rig's cameras");
+  check->Finite("fps", c->fps);
+  check->AtLeast("fps", c->fps, 0.0);
+  const std::pair<const char*, int64_t> counters[] = {
+      {"frames_received", c->frames_received},
+      {"dropped_late", c->dropped_late},
+      {"dropped_duplicate", c->dropped_duplicate},
+      {"dropped_out_of_order", c->dropped_out_of_order},
+      {"dropped_overflow", c->dropped_overflow},
+      {"dropped_never_matched", c->dropped_never_matched},
+      {"dropped_invalid", c->dropped_invalid}};
+  for (const auto& [field, value] : counters) check->AtLeast<int64_t>(field, value, 0);
+  check->InRange<int8_t>("vo_state", c->vo_state, camera_status_t::VO_INITIALISING,
+                         camera_status_t::VO_DEAD);
+  check->AtLeast<int64_t>("last_pose_age_ms", c->last_pose_age_ms, -1);
+}
+
+}  // namespace
+
+template <>
+struct lcm_internal::WireFormat<rig_status_t> {
+  static constexpr char kTypeName[] = "rig_status_t";
+  static void WalkLayout(LayoutWalk* walk) {
+    walk->Fixed("version", 2);
+    walk->Fixed("utime", 8);
+    walk->Count("num_cameras", camera_status_t()._getEncodedSizeNoHash());
+  }
+  static std::optional<Rejection> Check(std::string_view channel, const CameraNames& names,
+                                        rig_status_t* msg) {
+    return CheckMessage(channel, names, msg);
+  }
+};
+
+std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
+                                      rig_status_t* msg) {
+  Checker check(channel, "rig_status_t");
+  check.Version(msg->version, rig_status_t::VERSION);
+  check.Count("num_cameras", msg->num_cameras, msg->cameras.size(), "cameras");
+  if (!check.ok()) return check.TakeRejection();
+  check.Finite("cpu_percent", msg->cpu_percent);
+  check.AtLeast<int64_t>("utime", msg->utime, 0);
+  check.AtLeast<int64_t>("sync_sets_emitted", msg->sync_sets_emitted, 0);
+  check.AtLeast<int32_t>("sync_capacity", msg->sync_capacity, 0);
+  check.InRange<int32_t>("sync_fill", msg->sync_fill, 0, msg->sync_capacity);
+  check.InRange<int8_t>("estimator_state", msg->estimator_state, rig_status_t::ESTIMATOR_IDLE,
+                        rig_status_t::ESTIMATOR_FAILED);
+  check.AtLeast("cpu_percent", msg->cpu_percent, 0.0);
+  check.AtLeast<int64_t>("rss_bytes", msg->rss_bytes, 0);
+  std::set<std::string> seen;
+  for (size_t i = 0; i < msg->cameras.size() && check.ok(); ++i) {
+    const std::string field = "cameras[" + std::to_string(i) + "]";
+    Checker nested = check.Nested(field);
+    CheckCameraStatus(names, &msg->cameras[i], &nested);
+    check.Merge(std::move(nested));
+    if (check.ok() && !seen.insert(msg->cameras[i].name).second) {
+      check.Fail(RejectCause::kOutOfRange, field + ".name",
+                 "camera '" + msg->cameras[i].name + "' appears twice");
+    }
+  }
+  return check.TakeRejection();
+}
+
+rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const SyncStats& sync,
+                           int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
+                           int64_t utime) {
+  rig_status_t msg{};
+  msg.version = rig_status_t::VERSION;
+  msg.utime = utime;
+  msg.num_cameras = static_cast<int32_t>(cameras.size());
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const CameraStatusInput& input = cameras[i];
+    camera_status_t cam{};
+    cam.name = input.name;
+    cam.fps = input.fps;
+    cam.frames_received = input.frames_received;
+    cam.dropped_invalid = input.dropped_invalid;
+    cam.dropped_overflow = input.dropped_backlog;
+    if (i < sync.cameras.size()) {
+      const SyncCameraStats& s = sync.cameras[i];
+      cam.dropped_late = static_cast<int64_t>(s.late);
+      cam.dropped_duplicate = static_cast<int64_t>(s.duplicate);
+      cam.dropped_out_of_order = static_cast<int64_t>(s.out_of_order);
+      cam.dropped_overflow += static_cast<int64_t>(s.overflow);
+      cam.dropped_never_matched = static_cast<int64_t>(s.never_matched);
+      cam.dropped_invalid += static_cast<int64_t>(s.invalid);
+    }
+    cam.vo_state = input.vo_state;
+    cam.last_pose_age_ms = input.last_pose_age_ms;
+    msg.cameras.push_back(cam);
+  }
+  msg.sync_sets_emitted = static_cast<int64_t>(sync.sets_emitted);
+  const SyncCameraStats& total = sync.total;
+  const int64_t dropped =
+      static_cast<int64_t>(total.invalid + total.late + total.duplicate + total.out_of_order +
+                           total.overflow + total.never_matched + total.stopped);
+  const int64_t fill =
+      static_cast<int64_t>(total.pushed) - static_cast<int64_t>(total.used) - dropped;
+  msg.sync_capacity = std::max<int32_t>(0, sync_capacity);
+  msg.sync_fill = static_cast<int32_t>(std::clamp<int64_t>(fill, 0, msg.sync_capacity));
+  msg.estimator_state = EstimatorState(estimate, &msg.estimator_message);
+  msg.cpu_percent = std::max(0.0, cpu_percent);
+  msg.rss_bytes = ResidentSetBytes();
+  return msg;
+}
+
+int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
+  int converged = 0;
+  int decalibrated = 0;
+  const int slaves = static_cast<int>(estimate.online.size());
+  std::string decalibrated_names;
+  for (int i = 0; i < slaves; ++i) {
+    if (estimate.online[i].flags & rigcal::kFlagConverged) ++converged;
+    if (estimate.online[i].flags & rigcal::kFlagDecalibrated) {
+      ++decalibrated;
+      if (i < static_cast<int>(estimate.rig.slaves.size())) {
+        decalibrated_names +=
+            (decalibrated_names.empty() ? "" : ", ") + estimate.rig.slaves[i].name;
+      }
+    }
+  }
+  std::ostringstream text;
+  int8_t state = rig_status_t::ESTIMATOR_INITIALISING;
+  if (estimate.sets == 0) {
+    state = rig_status_t::ESTIMATOR_IDLE;
+    text << "no synchronised pose sets yet";
+  } else if (decalibrated > 0) {
+    state = rig_status_t::ESTIMATOR_DECALIBRATED;
+    text << "decalibrated: " << decalibrated_names << " moved; re-estimating";
+  } else if (converged == slaves) {
+    state = rig_status_t::ESTIMATOR_CONVERGED;
+    text << "all " << slaves << " slaves converged";
+  } else if (converged > 0) {
+    state = rig_status_t::ESTIMATOR_DEGRADED;
+    text << converged << " of " << slaves << " slaves converged";
+  } else {
+    text << "collecting motion (" << estimate.sets << " sets)";
+  }
+  if (message != nullptr) *message = text.str();
+  return state;
+}
+
+template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
+                                                      rig_status_t);
+template Expected<rig_status_t> MessageValidator::Decode(std::string_view, const void*, int64_t);
+
+}  // namespace rigcal::tools
