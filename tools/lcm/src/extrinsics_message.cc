@@ -15,7 +15,9 @@ namespace {
 
 using lcm_internal::Checker;
 using lcm_internal::FormatNumber;
+using lcm_internal::LayoutWalk;
 
+// The rules of one slave_extrinsics_t (extrinsics_message.h).
 void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check) {
   check->CameraName("name", s->name, names, 1, "the rig's slaves");
   check->Quaternion("q", s->q);
@@ -63,53 +65,42 @@ void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check)
   if (s->axis_offset_std != -1.0) check->AtLeast("axis_offset_std", s->axis_offset_std, 0.0);
 }
 
+// The fields of rig_extrinsics_t.lcm up to num_slaves.
+void WalkExtrinsicsLayout(LayoutWalk* walk) {
+  walk->Fixed("version", 2);
+  walk->Fixed("utime", 8);
+  walk->Fixed("t_ns", 8);
+  walk->String("master");
+  walk->Fixed("distance_unit", 1);
+  walk->Count("num_slaves", slave_extrinsics_t()._getEncodedSizeNoHash());
+}
+
+// The rules of rig_extrinsics_t (extrinsics_message.h) but the version.
+void CheckExtrinsics(const CameraNames& names, rig_extrinsics_t* msg, Checker* check) {
+  check->Count("num_slaves", msg->num_slaves, msg->slaves.size(), "slaves");
+  if (!check->ok()) return;
+  check->CameraName("master", msg->master, names, 0, "the rig's cameras");
+  if (check->ok() && !names.empty() && msg->master != names[0]) {
+    check->Fail(RejectCause::kUnknownCamera, "master",
+                "camera '" + msg->master + "' is not the rig's master '" + names[0] + "'");
+  }
+  check->AtLeast<int64_t>("utime", msg->utime, 0);
+  check->AtLeast<int64_t>("t_ns", msg->t_ns, 0);
+  check->InRange<int8_t>("distance_unit", msg->distance_unit,
+                         rig_extrinsics_t::UNIT_MASTER_ODOMETRY, rig_extrinsics_t::UNIT_METRE);
+  check->NamedElements(
+      "slaves", &msg->slaves, {msg->master},
+      [&](slave_extrinsics_t* s, Checker* nested) { CheckSlave(names, s, nested); });
+}
+
 }  // namespace
 
 template <>
-struct lcm_internal::WireFormat<rig_extrinsics_t> {
+struct lcm_internal::MessageTraits<rig_extrinsics_t> {
   static constexpr char kTypeName[] = "rig_extrinsics_t";
-  static void WalkLayout(LayoutWalk* walk) {
-    walk->Fixed("version", 2);
-    walk->Fixed("utime", 8);
-    walk->Fixed("t_ns", 8);
-    walk->String("master");
-    walk->Fixed("distance_unit", 1);
-    walk->Count("num_slaves", slave_extrinsics_t()._getEncodedSizeNoHash());
-  }
-  static std::optional<Rejection> Check(std::string_view channel, const CameraNames& names,
-                                        rig_extrinsics_t* msg) {
-    return CheckMessage(channel, names, msg);
-  }
+  static constexpr auto WalkLayout = &WalkExtrinsicsLayout;
+  static constexpr auto CheckContent = &CheckExtrinsics;
 };
-
-std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
-                                      rig_extrinsics_t* msg) {
-  Checker check(channel, "rig_extrinsics_t");
-  check.Version(msg->version, rig_extrinsics_t::VERSION);
-  check.Count("num_slaves", msg->num_slaves, msg->slaves.size(), "slaves");
-  if (!check.ok()) return check.TakeRejection();
-  check.CameraName("master", msg->master, names, 0, "the rig's cameras");
-  if (check.ok() && !names.empty() && msg->master != names[0]) {
-    check.Fail(RejectCause::kUnknownCamera, "master",
-               "camera '" + msg->master + "' is not the rig's master '" + names[0] + "'");
-  }
-  check.AtLeast<int64_t>("utime", msg->utime, 0);
-  check.AtLeast<int64_t>("t_ns", msg->t_ns, 0);
-  check.InRange<int8_t>("distance_unit", msg->distance_unit, rig_extrinsics_t::UNIT_MASTER_ODOMETRY,
-                        rig_extrinsics_t::UNIT_METRE);
-  std::set<std::string> seen = {msg->master};
-  for (size_t i = 0; i < msg->slaves.size() && check.ok(); ++i) {
-    const std::string field = "slaves[" + std::to_string(i) + "]";
-    Checker nested = check.Nested(field);
-    CheckSlave(names, &msg->slaves[i], &nested);
-    check.Merge(std::move(nested));
-    if (check.ok() && !seen.insert(msg->slaves[i].name).second) {
-      check.Fail(RejectCause::kOutOfRange, field + ".name",
-                 "camera '" + msg->slaves[i].name + "' appears twice");
-    }
-  }
-  return check.TakeRejection();
-}
 
 int32_t SlaveFlags(const SlaveCalibration& slave) {
   int32_t flags = slave.usable() ? kFlagConverged : kFlagInitialising;
@@ -219,6 +210,8 @@ Expected<rig_extrinsics_t> RigCalibrationToLcm(const RigCalibration& result, int
   return msg;
 }
 
+template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
+                                               rig_extrinsics_t*);
 template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
                                                       rig_extrinsics_t);
 template Expected<rig_extrinsics_t> MessageValidator::Decode(std::string_view, const void*,

@@ -5,8 +5,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "rigcal/lcm/message_validation.h"
 
@@ -69,6 +72,25 @@ class Checker {
   // Array length field `count_field` against the vector's size.
   void Count(std::string_view count_field, int64_t count, size_t vector_size,
              std::string_view vector_field);
+
+  // Checks element i of `elements` as the nested message "<array>[i]" with
+  // check_element(&element, &nested checker), in order while no rule has failed, and that its
+  // name is neither in `seen` nor the name of an earlier element.
+  template <typename Element, typename CheckElement>
+  void NamedElements(std::string_view array, std::vector<Element>* elements,
+                     std::set<std::string> seen, CheckElement check_element) {
+    for (size_t i = 0; i < elements->size() && ok(); ++i) {
+      Element& element = (*elements)[i];
+      const std::string field = std::string(array) + "[" + std::to_string(i) + "]";
+      Checker nested = Nested(field);
+      check_element(&element, &nested);
+      Merge(std::move(nested));
+      if (ok() && !seen.insert(element.name).second) {
+        Fail(RejectCause::kOutOfRange, field + ".name",
+             "camera '" + element.name + "' appears twice");
+      }
+    }
+  }
 
   // A camera name: non-empty, no NUL, and one of names[first..] unless `names` is empty (no
   // table: any name). `allowed_what` says which names ("the rig's cameras", "the rig's slaves").

@@ -1,9 +1,9 @@
 #pragma once
 // The decoder and encoder skeleton shared by every rigcal LCM message type (private to
 // rigcal_lcm): the checks of a received buffer before LCM decodes it (fingerprint, version, every
-// array length against the bytes left), LCM's decode, then the type's CheckMessage. A message
-// type's .cc specialises WireFormat and instantiates MessageValidator::Decode and EncodeMessage
-// for its type.
+// array length against the bytes left), LCM's decode, then the checks of the content: the schema
+// version and the type's own rules. A message type's .cc specialises MessageTraits and
+// instantiates MessageValidator::Decode and EncodeMessage for its type.
 
 #include <climits>
 #include <cstdint>
@@ -96,23 +96,33 @@ class LayoutWalk {
 };
 
 // What the skeleton needs of one message type; each type's .cc specialises it:
-//   static constexpr char kTypeName[];      the LCM type name, "camera_pose_t"
-//   static void WalkLayout(LayoutWalk* w);  the fields of the .lcm file in order up to (and
-//       including) the last top-level array length; nested types have fixed-size arrays only.
-//       Strings after the last length are left to LCM's decode (a bad length there fails or
+//   static constexpr char kTypeName[];  the LCM type name, "camera_pose_t"
+//   WalkLayout(LayoutWalk* walk)        steps through the fields of the .lcm file in order up to
+//       (and including) the last top-level array length; nested types have fixed-size arrays
+//       only. Strings after the last length are left to LCM's decode (a bad length there fails or
 //       throws, both caught).
-//   static std::optional<Rejection> Check(std::string_view channel, const CameraNames& names,
-//                                         Message* msg);  the type's CheckMessage
+//   CheckContent(const CameraNames& names, Message* msg, Checker* check)
+//                                       the type's own rules (all but the schema version),
+//       normalising quaternions and axes in place.
 template <typename Message>
-struct WireFormat;
+struct MessageTraits;
 
 }  // namespace lcm_internal
+
+// The schema version, then the type's own rules.
+template <typename Message>
+std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
+                                      Message* msg) {
+  lcm_internal::Checker check(channel, lcm_internal::MessageTraits<Message>::kTypeName);
+  check.Version(msg->version, Message::VERSION);
+  lcm_internal::MessageTraits<Message>::CheckContent(names, msg, &check);
+  return check.TakeRejection();
+}
 
 template <typename Message>
 Expected<std::vector<uint8_t>> EncodeMessage(std::string_view channel, const CameraNames& names,
                                              Message msg) {
-  if (std::optional<Rejection> rejection =
-          lcm_internal::WireFormat<Message>::Check(channel, names, &msg)) {
+  if (std::optional<Rejection> rejection = CheckMessage(channel, names, &msg)) {
     return Error{rejection->message};
   }
   std::vector<uint8_t> buffer(msg.getEncodedSize());
@@ -129,8 +139,8 @@ std::optional<Rejection> MessageValidator::DecodeUncounted(std::string_view chan
                                                            Message* msg) const {
   using lcm_internal::kHashBytes;
   using lcm_internal::ReadBigEndian;
-  using Format = lcm_internal::WireFormat<Message>;
-  const char* type = Format::kTypeName;
+  using Traits = lcm_internal::MessageTraits<Message>;
+  const char* type = Traits::kTypeName;
   lcm_internal::Checker check(channel, type);
   const auto* bytes = static_cast<const uint8_t*>(data);
   if (size < 0 || (size > 0 && data == nullptr)) {
@@ -159,7 +169,7 @@ std::optional<Rejection> MessageValidator::DecodeUncounted(std::string_view chan
   }
   check.Version(static_cast<int16_t>(ReadBigEndian(bytes + kHashBytes, 2)), Message::VERSION);
   lcm_internal::LayoutWalk walk(bytes, size, &check);
-  Format::WalkLayout(&walk);
+  Traits::WalkLayout(&walk);
   if (!check.ok()) return check.TakeRejection();
 
   int decoded = -1;
@@ -178,7 +188,7 @@ std::optional<Rejection> MessageValidator::DecodeUncounted(std::string_view chan
                    std::to_string(decoded) + "-byte message");
   }
   if (!check.ok()) return check.TakeRejection();
-  return Format::Check(channel, names_, msg);
+  return CheckMessage(channel, names_, msg);
 }
 
 template <typename Message>

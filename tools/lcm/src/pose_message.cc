@@ -10,57 +10,60 @@
 #include "rigcal/lcm/channels.h"
 
 namespace rigcal::tools {
+namespace {
 
-template <>
-struct lcm_internal::WireFormat<camera_pose_t> {
-  static constexpr char kTypeName[] = "camera_pose_t";
-  static void WalkLayout(LayoutWalk* walk) {
-    walk->Fixed("version", 2);
-    walk->Fixed("utime", 8);
-    walk->Fixed("t_ns", 8);
-    walk->String("camera");
-  }
-  static std::optional<Rejection> Check(std::string_view channel, const CameraNames& names,
-                                        camera_pose_t* msg) {
-    return CheckMessage(channel, names, msg);
-  }
-};
+using lcm_internal::Checker;
+using lcm_internal::LayoutWalk;
 
-std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
-                                      camera_pose_t* msg) {
-  lcm_internal::Checker check(channel, "camera_pose_t");
-  check.Version(msg->version, camera_pose_t::VERSION);
-  check.Finite("q", msg->q, 4);
-  check.Finite("C", msg->C, 3);
-  check.Finite("quality", msg->quality);
-  if (msg->has_covariance) check.Finite("covariance", msg->covariance, 36);
-  check.Quaternion("q", msg->q);
-  check.CameraName("camera", msg->camera, names, 0, "the rig's cameras");
-  check.AtLeast<int64_t>("utime", msg->utime, 0);
-  check.AtLeast<int64_t>("t_ns", msg->t_ns, 0);
-  check.AtLeast<int64_t>("trigger_seq", msg->trigger_seq, -1);
-  check.AtLeast<int32_t>("segment", msg->segment, 0);
-  check.InRange("quality", msg->quality, 0.0, 1.0);
+// The fields of camera_pose_t.lcm up to the camera name (it has no arrays of variable length).
+void WalkPoseLayout(LayoutWalk* walk) {
+  walk->Fixed("version", 2);
+  walk->Fixed("utime", 8);
+  walk->Fixed("t_ns", 8);
+  walk->String("camera");
+}
+
+// The rules of camera_pose_t (pose_message.h) but the version.
+void CheckPose(const CameraNames& names, camera_pose_t* msg, Checker* check) {
+  check->Finite("q", msg->q, 4);
+  check->Finite("C", msg->C, 3);
+  check->Finite("quality", msg->quality);
+  if (msg->has_covariance) check->Finite("covariance", msg->covariance, 36);
+  check->Quaternion("q", msg->q);
+  check->CameraName("camera", msg->camera, names, 0, "the rig's cameras");
+  check->AtLeast<int64_t>("utime", msg->utime, 0);
+  check->AtLeast<int64_t>("t_ns", msg->t_ns, 0);
+  check->AtLeast<int64_t>("trigger_seq", msg->trigger_seq, -1);
+  check->AtLeast<int32_t>("segment", msg->segment, 0);
+  check->InRange("quality", msg->quality, 0.0, 1.0);
   if (msg->has_covariance) {
     const double* cov = msg->covariance;
     double max_abs = 0.0;
     for (int i = 0; i < 36; ++i) max_abs = std::max(max_abs, std::abs(cov[i]));
-    for (int r = 0; r < 6 && check.ok(); ++r) {
-      check.AtLeast("covariance[" + std::to_string(r * 7) + "]", cov[r * 7], 0.0);
+    for (int r = 0; r < 6 && check->ok(); ++r) {
+      check->AtLeast("covariance[" + std::to_string(r * 7) + "]", cov[r * 7], 0.0);
       for (int c = r + 1; c < 6; ++c) {
         if (std::abs(cov[r * 6 + c] - cov[c * 6 + r]) > 1e-9 * std::max(1.0, max_abs)) {
-          check.Fail(RejectCause::kOutOfRange, "covariance",
-                     "not symmetric: element (" + std::to_string(r) + ", " + std::to_string(c) +
-                         ") = " + lcm_internal::FormatNumber(cov[r * 6 + c]) + ", (" +
-                         std::to_string(c) + ", " + std::to_string(r) +
-                         ") = " + lcm_internal::FormatNumber(cov[c * 6 + r]));
+          check->Fail(RejectCause::kOutOfRange, "covariance",
+                      "not symmetric: element (" + std::to_string(r) + ", " + std::to_string(c) +
+                          ") = " + lcm_internal::FormatNumber(cov[r * 6 + c]) + ", (" +
+                          std::to_string(c) + ", " + std::to_string(r) +
+                          ") = " + lcm_internal::FormatNumber(cov[c * 6 + r]));
           break;
         }
       }
     }
   }
-  return check.TakeRejection();
 }
+
+}  // namespace
+
+template <>
+struct lcm_internal::MessageTraits<camera_pose_t> {
+  static constexpr char kTypeName[] = "camera_pose_t";
+  static constexpr auto WalkLayout = &WalkPoseLayout;
+  static constexpr auto CheckContent = &CheckPose;
+};
 
 Expected<camera_pose_t> CameraPoseToLcm(const CameraPose& pose, const CameraNames& names,
                                         int64_t utime, const Matrix6d* covariance) {
@@ -142,6 +145,8 @@ Expected<PoseMessage> MessageValidator::DecodeCameraPose(std::string_view channe
   return pose;
 }
 
+template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
+                                               camera_pose_t*);
 template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
                                                       camera_pose_t);
 template Expected<camera_pose_t> MessageValidator::Decode(std::string_view, const void*, int64_t);

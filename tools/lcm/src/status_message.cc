@@ -13,7 +13,9 @@ namespace rigcal::tools {
 namespace {
 
 using lcm_internal::Checker;
+using lcm_internal::LayoutWalk;
 
+// The rules of one camera_status_t (status_message.h).
 void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* check) {
   check->CameraName("name", c->name, names, 0, "the rig's cameras");
   check->Finite("fps", c->fps);
@@ -32,50 +34,39 @@ void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* ch
   check->AtLeast<int64_t>("last_pose_age_ms", c->last_pose_age_ms, -1);
 }
 
+// The fields of rig_status_t.lcm up to num_cameras.
+void WalkStatusLayout(LayoutWalk* walk) {
+  walk->Fixed("version", 2);
+  walk->Fixed("utime", 8);
+  walk->Count("num_cameras", camera_status_t()._getEncodedSizeNoHash());
+}
+
+// The rules of rig_status_t (status_message.h) but the version.
+void CheckStatus(const CameraNames& names, rig_status_t* msg, Checker* check) {
+  check->Count("num_cameras", msg->num_cameras, msg->cameras.size(), "cameras");
+  if (!check->ok()) return;
+  check->Finite("cpu_percent", msg->cpu_percent);
+  check->AtLeast<int64_t>("utime", msg->utime, 0);
+  check->AtLeast<int64_t>("sync_sets_emitted", msg->sync_sets_emitted, 0);
+  check->AtLeast<int32_t>("sync_capacity", msg->sync_capacity, 0);
+  check->InRange<int32_t>("sync_fill", msg->sync_fill, 0, msg->sync_capacity);
+  check->InRange<int8_t>("estimator_state", msg->estimator_state, rig_status_t::ESTIMATOR_IDLE,
+                         rig_status_t::ESTIMATOR_FAILED);
+  check->AtLeast("cpu_percent", msg->cpu_percent, 0.0);
+  check->AtLeast<int64_t>("rss_bytes", msg->rss_bytes, 0);
+  check->NamedElements("cameras", &msg->cameras, {}, [&](camera_status_t* c, Checker* nested) {
+    CheckCameraStatus(names, c, nested);
+  });
+}
+
 }  // namespace
 
 template <>
-struct lcm_internal::WireFormat<rig_status_t> {
+struct lcm_internal::MessageTraits<rig_status_t> {
   static constexpr char kTypeName[] = "rig_status_t";
-  static void WalkLayout(LayoutWalk* walk) {
-    walk->Fixed("version", 2);
-    walk->Fixed("utime", 8);
-    walk->Count("num_cameras", camera_status_t()._getEncodedSizeNoHash());
-  }
-  static std::optional<Rejection> Check(std::string_view channel, const CameraNames& names,
-                                        rig_status_t* msg) {
-    return CheckMessage(channel, names, msg);
-  }
+  static constexpr auto WalkLayout = &WalkStatusLayout;
+  static constexpr auto CheckContent = &CheckStatus;
 };
-
-std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
-                                      rig_status_t* msg) {
-  Checker check(channel, "rig_status_t");
-  check.Version(msg->version, rig_status_t::VERSION);
-  check.Count("num_cameras", msg->num_cameras, msg->cameras.size(), "cameras");
-  if (!check.ok()) return check.TakeRejection();
-  check.Finite("cpu_percent", msg->cpu_percent);
-  check.AtLeast<int64_t>("utime", msg->utime, 0);
-  check.AtLeast<int64_t>("sync_sets_emitted", msg->sync_sets_emitted, 0);
-  check.AtLeast<int32_t>("sync_capacity", msg->sync_capacity, 0);
-  check.InRange<int32_t>("sync_fill", msg->sync_fill, 0, msg->sync_capacity);
-  check.InRange<int8_t>("estimator_state", msg->estimator_state, rig_status_t::ESTIMATOR_IDLE,
-                        rig_status_t::ESTIMATOR_FAILED);
-  check.AtLeast("cpu_percent", msg->cpu_percent, 0.0);
-  check.AtLeast<int64_t>("rss_bytes", msg->rss_bytes, 0);
-  std::set<std::string> seen;
-  for (size_t i = 0; i < msg->cameras.size() && check.ok(); ++i) {
-    const std::string field = "cameras[" + std::to_string(i) + "]";
-    Checker nested = check.Nested(field);
-    CheckCameraStatus(names, &msg->cameras[i], &nested);
-    check.Merge(std::move(nested));
-    if (check.ok() && !seen.insert(msg->cameras[i].name).second) {
-      check.Fail(RejectCause::kOutOfRange, field + ".name",
-                 "camera '" + msg->cameras[i].name + "' appears twice");
-    }
-  }
-  return check.TakeRejection();
-}
 
 rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const SyncStats& sync,
                            int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
@@ -156,6 +147,7 @@ int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
   return state;
 }
 
+template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&, rig_status_t*);
 template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
                                                       rig_status_t);
 template Expected<rig_status_t> MessageValidator::Decode(std::string_view, const void*, int64_t);

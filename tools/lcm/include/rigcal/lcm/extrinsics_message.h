@@ -25,14 +25,19 @@ inline constexpr int32_t kFlagAxisFromPrior = slave_extrinsics_t::FLAG_AXIS_FROM
 inline constexpr int32_t kKnownFlags = kFlagInitialising | kFlagConverged | kFlagTranslationalOnly |
                                        kFlagPlanar | kFlagDecalibrated | kFlagAxisFromPrior;
 
-// CheckMessage (message_validation.h) of rig_extrinsics_t: num_slaves agrees with slaves, the
-// master is names[0], utime and t_ns >= 0, a defined distance_unit, and per slave: a slave of the
-// rig named once, finite fields, unit q, only defined flags with exactly one of INITIALISING and
-// CONVERGED, a positive scale when converged, non-negative counters and standard deviations
-// (axis_offset_std may be -1, unknown), axis_spread_deg in [0, 180], a unit planar_axis with
+// The rules of rig_extrinsics_t (beyond message_validation.h), checked by CheckMessage,
+// EncodeMessage and MessageValidator::Decode: num_slaves agrees with slaves, the master is
+// names[0], utime and t_ns >= 0, a defined distance_unit, and per slave: a slave of the rig named
+// once, finite fields, unit q, only defined flags with exactly one of INITIALISING and CONVERGED, a
+// positive scale when converged, non-negative counters and standard deviations (axis_offset_std may
+// be -1, unknown), axis_spread_deg in [0, 180], a unit planar_axis with
 // FLAG_PLANAR_UNOBSERVABLE_AXIS, FLAG_AXIS_FROM_PRIOR only with it.
-std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
-                                      rig_extrinsics_t* msg);
+extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
+                                                      rig_extrinsics_t*);
+extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
+                                                             rig_extrinsics_t);
+extern template Expected<rig_extrinsics_t> MessageValidator::Decode(std::string_view, const void*,
+                                                                    int64_t);
 
 // Flags of slave_extrinsics_t for a calibration result:
 //   CONVERGED                when slave.usable(), else INITIALISING (no usable estimate yet);
@@ -59,10 +64,5 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
 Expected<rig_extrinsics_t> RigCalibrationToLcm(
     const RigCalibration& result, int64_t utime, int64_t t_ns = 0,
     int8_t distance_unit = rig_extrinsics_t::UNIT_MASTER_ODOMETRY);
-
-extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
-                                                             rig_extrinsics_t);
-extern template Expected<rig_extrinsics_t> MessageValidator::Decode(std::string_view, const void*,
-                                                                    int64_t);
 
 }  // namespace rigcal::tools

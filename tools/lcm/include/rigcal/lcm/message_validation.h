@@ -28,15 +28,8 @@
 //     flag fields hold only defined bits, ranges as documented in the .lcm files.
 // Rejection messages name the channel, the field and the rule:
 //   "RIGCAL_POSE_left: camera_pose_t.q: |q| = 1.1 is not 1 within 1e-06 (non_unit_quaternion)".
-//
-// Every message header declares, for its type `Message`,
-//   std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
-//                                         Message* msg);
-// which checks `msg` against these rules as if it had been received on `channel`, and
-// normalises its quaternions (and planar axes) that are within kUnitTolerance of unit length.
-// `names` may be empty: then any non-empty camera name is accepted. It returns the first rule
-// that fails, or nullopt when the message is valid. `msg` must not be null. Stateless; any
-// thread.
+// CheckMessage, EncodeMessage and MessageValidator::Decode are defined for camera_pose_t,
+// rig_extrinsics_t, rig_status_t and image_t; include the type's header, which states its rules.
 
 #include <array>
 #include <cstdint>
@@ -91,10 +84,17 @@ struct DecodeStats {
   std::string Summary() const;
 };
 
+// Checks `msg` against the rules above as if it had been received on `channel`, and normalises
+// its quaternions (and planar axes) that are within kUnitTolerance of unit length. `names` may be
+// empty: then any non-empty camera name is accepted. Returns the first rule that fails, or
+// nullopt when the message is valid. `msg` must not be null. Stateless; any thread.
+template <typename Message>
+std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
+                                      Message* msg);
+
 // Checks `msg` (CheckMessage) and encodes it into LCM's wire format, ready for
 // lcm::LCM::publish(channel, data, size) or lcm::LogFile. Never calls LCM's encode on an
-// inconsistent message (LCM indexes the vectors with the num_* fields unchecked). Defined for
-// camera_pose_t, rig_extrinsics_t, rig_status_t and image_t (include the type's header).
+// inconsistent message (LCM indexes the vectors with the num_* fields unchecked).
 template <typename Message>
 Expected<std::vector<uint8_t>> EncodeMessage(std::string_view channel, const CameraNames& names,
                                              Message msg);
@@ -111,8 +111,7 @@ class MessageValidator {
   // DecodeCameraPose, which needs the camera's index.
   explicit MessageValidator(CameraNames camera_names = {});
 
-  // Decodes one message of type Message (camera_pose_t, rig_extrinsics_t, rig_status_t or
-  // image_t; include the type's header) that arrived on `channel`. `data` may be null only when
+  // Decodes one message of type Message that arrived on `channel`. `data` may be null only when
   // `size` is 0. The buffer must hold exactly one message: fingerprint, version, array lengths
   // and size are checked before LCM decodes anything, then the content (CheckMessage). Counts
   // the outcome.

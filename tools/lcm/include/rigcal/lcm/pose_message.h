@@ -26,11 +26,16 @@ struct PoseMessage {
   int64_t utime = 0;  // publish time, µs
 };
 
-// CheckMessage (message_validation.h) of camera_pose_t: finite q, C, quality (and covariance when
-// has_covariance), unit q, a known camera, utime and t_ns >= 0, trigger_seq >= -1, segment >= 0,
-// quality in [0, 1], a symmetric covariance with a non-negative diagonal.
-std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
-                                      camera_pose_t* msg);
+// The rules of camera_pose_t (beyond message_validation.h), checked by CheckMessage, EncodeMessage
+// and MessageValidator::Decode: finite q, C, quality (and covariance when has_covariance), unit q,
+// a known camera, utime and t_ns >= 0, trigger_seq >= -1, segment >= 0, quality in [0, 1], a
+// symmetric covariance with a non-negative diagonal.
+extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
+                                                      camera_pose_t*);
+extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
+                                                             camera_pose_t);
+extern template Expected<camera_pose_t> MessageValidator::Decode(std::string_view, const void*,
+                                                                 int64_t);
 
 // camera_pose_t of `pose` published at `utime` (µs); the camera name is names[pose.camera].
 // `covariance` (nullable): 6x6 covariance of (rotation vector, centre), see PoseMessage.
@@ -44,10 +49,5 @@ Expected<camera_pose_t> CameraPoseToLcm(const CameraPose& pose, const CameraName
 // rejected with kUnknownCamera. Rejections are not counted (MessageValidator counts).
 Expected<PoseMessage> CameraPoseFromLcm(std::string_view channel, const camera_pose_t& msg,
                                         const CameraNames& names);
-
-extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
-                                                             camera_pose_t);
-extern template Expected<camera_pose_t> MessageValidator::Decode(std::string_view, const void*,
-                                                                 int64_t);
 
 }  // namespace rigcal::tools

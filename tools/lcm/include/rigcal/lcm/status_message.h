@@ -17,12 +17,17 @@
 
 namespace rigcal::tools {
 
-// CheckMessage (message_validation.h) of rig_status_t: num_cameras agrees with cameras, finite
-// cpu_percent >= 0, utime, sync_sets_emitted, sync_capacity and rss_bytes >= 0, sync_fill in
-// [0, sync_capacity], a defined estimator_state, and per camera: a camera of the rig named once,
-// finite fps >= 0, counters >= 0, a defined vo_state, last_pose_age_ms >= -1.
-std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
-                                      rig_status_t* msg);
+// The rules of rig_status_t (beyond message_validation.h), checked by CheckMessage, EncodeMessage
+// and MessageValidator::Decode: num_cameras agrees with cameras, finite cpu_percent >= 0, utime,
+// sync_sets_emitted, sync_capacity and rss_bytes >= 0, sync_fill in [0, sync_capacity], a defined
+// estimator_state, and per camera: a camera of the rig named once, finite fps >= 0, counters >= 0,
+// a defined vo_state, last_pose_age_ms >= -1.
+extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
+                                                      rig_status_t*);
+extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
+                                                             rig_status_t);
+extern template Expected<rig_status_t> MessageValidator::Decode(std::string_view, const void*,
+                                                                int64_t);
 
 // What the caller knows of one camera beyond the sync buffer's counters.
 struct CameraStatusInput {
@@ -44,10 +49,5 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
 // rig_status_t estimator_state of an estimate (IDLE, INITIALISING, CONVERGED, DEGRADED,
 // DECALIBRATED) and a one-line message.
 int8_t EstimatorState(const RigEstimate& estimate, std::string* message);
-
-extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
-                                                             rig_status_t);
-extern template Expected<rig_status_t> MessageValidator::Decode(std::string_view, const void*,
-                                                                int64_t);
 
 }  // namespace rigcal::tools
