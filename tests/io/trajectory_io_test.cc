@@ -1,105 +1,21 @@
-// Trajectory files: format detection, exact stamps, every rejected input, and matching.
+// Trajectory files in TUM, EuRoC CSV and native format: format detection, reading and writing
+// (exact stamps, round trips), and every rejected input.
 #include "rigcal/io/trajectory_io.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <spdlog/sinks/ostream_sink.h>
-#include <stdlib.h>
 
-#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "io/trajectory_fixtures.h"
 #include "rigcal/calib/logging.h"
 
-namespace rigcal::tools {
+namespace rigcal::tools::trajectory_test {
 namespace {
-
-namespace fs = std::filesystem;
-using ::testing::HasSubstr;
-
-class TrajectoryIoTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    std::string pattern = (fs::path(::testing::TempDir()) / "trajectory_io_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
-  std::string Write(const std::string& name, const std::string& contents) {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path) << contents;
-    return path;
-  }
-
-  // Reads a file expected to be rejected and returns the error message.
-  std::string ErrorOf(const std::string& name, const std::string& contents,
-                      const TrajectoryReadOptions& options = {}) {
-    const auto result = ReadTrajectory(Write(name, contents), options);
-    EXPECT_FALSE(result.ok()) << name << " was accepted";
-    return result.ok() ? "" : result.error();
-  }
-
-  fs::path dir_;
-};
-
-TimedTrajectory MakeTrajectory(const std::string& name, const std::vector<int64_t>& stamps) {
-  TimedTrajectory t;
-  t.name = name;
-  t.t_ns = stamps;
-  for (size_t k = 0; k < stamps.size(); ++k) {
-    Pose p;
-    p.q = Eigen::Quaterniond(
-        Eigen::AngleAxisd(0.01 * static_cast<double>(k), Eigen::Vector3d(1, 2, 3).normalized()));
-    p.C = Eigen::Vector3d(0.1 * static_cast<double>(k), -0.2, 0.3);
-    t.poses.push_back(p);
-    t.segment.push_back(static_cast<int>(k / 4));
-  }
-  return t;
-}
-
-TEST(ParseSecondsToNsTest, ExactDecimalConversion) {
-  EXPECT_EQ(ParseSecondsToNs("1305031102.175304"), 1305031102175304000LL);
-  // 1403715524.907143168 is not representable as a double; the string path keeps every digit.
-  EXPECT_EQ(ParseSecondsToNs("1403715524.907143168"), 1403715524907143168LL);
-  EXPECT_EQ(ParseSecondsToNs("0"), 0);
-  EXPECT_EQ(ParseSecondsToNs("-0.5"), -500000000LL);
-  EXPECT_EQ(ParseSecondsToNs("+2"), 2000000000LL);
-  EXPECT_EQ(ParseSecondsToNs(".25"), 250000000LL);
-  EXPECT_EQ(ParseSecondsToNs("7."), 7000000000LL);
-  EXPECT_EQ(ParseSecondsToNs("1.037359e-01"), 103735900LL);
-  EXPECT_EQ(ParseSecondsToNs("1.5E3"), 1500000000000LL);
-  EXPECT_EQ(ParseSecondsToNs("0.000000001"), 1);
-  EXPECT_EQ(ParseSecondsToNs("1.00000000000000000000"), 1000000000LL);
-  // Below the nanosecond: round half away from zero.
-  EXPECT_EQ(ParseSecondsToNs("1.0000000005"), 1000000001LL);
-  EXPECT_EQ(ParseSecondsToNs("1.0000000004999"), 1000000000LL);
-  EXPECT_EQ(ParseSecondsToNs("-1.0000000005"), -1000000001LL);
-  EXPECT_EQ(ParseSecondsToNs("4e-10"), 0);
-  EXPECT_EQ(ParseSecondsToNs("9223372036.854775807"), INT64_MAX);
-}
-
-TEST(ParseSecondsToNsTest, RejectsNonNumbersAndOverflow) {
-  for (const char* bad : {"", "-", ".", "abc", "1.2.3", "1e", "1e+", "12s", "nan", "inf", "0x10",
-                          "1 2", "9223372036.854775808", "1e30", "99999999999999999999"}) {
-    EXPECT_FALSE(ParseSecondsToNs(bad).has_value()) << "'" << bad << "'";
-  }
-}
-
-TEST(FormatNsAsSecondsTest, ExactAndRoundTrips) {
-  EXPECT_EQ(FormatNsAsSeconds(0), "0.000000000");
-  EXPECT_EQ(FormatNsAsSeconds(-1), "-0.000000001");
-  EXPECT_EQ(FormatNsAsSeconds(1403715524907143168LL), "1403715524.907143168");
-  for (const int64_t t : std::vector<int64_t>{INT64_MIN + 1, -1234567890123LL, 42, INT64_MAX}) {
-    EXPECT_EQ(ParseSecondsToNs(FormatNsAsSeconds(t)), t);
-  }
-}
 
 TEST_F(TrajectoryIoTest, ReadsTum) {
   TrajectoryFormat format = TrajectoryFormat::kNative;
@@ -355,163 +271,5 @@ TEST(TrajectoryIoDataTest, EurocGroundTruth) {
   EXPECT_EQ(t->size(), 16702u);
   EXPECT_EQ(t->t_ns.front(), 1403715524907143168LL);
 }
-
-// --- KITTI odometry poses ----------------------------------------------------------------
-
-TEST_F(TrajectoryIoTest, ReadsKittiPosesAndTimes) {
-  // Pose 1: a rotation of 90 deg about y (x -> -z) at (1, 2, 3); printed with 7 digits.
-  const std::string poses = Write("00.txt",
-                                  "1 0 0 0 0 1 0 0 0 0 1 0\n"
-                                  "0 0 1.000000e+00 1 0 1 0 2 -1.000000e+00 0 0 3\n");
-  const std::string times = Write("00_times.txt", "0.000000e+00\n1.037359e-01\n");
-  const auto t = ReadKittiTrajectory(poses, times);
-  ASSERT_TRUE(t.ok()) << t.error();
-  EXPECT_EQ(t->name, "00");
-  ASSERT_EQ(t->size(), 2u);
-  EXPECT_EQ(t->t_ns, (std::vector<int64_t>{0, 103735900}));
-  EXPECT_EQ(t->poses[0].C, Eigen::Vector3d::Zero());
-  EXPECT_EQ(t->poses[1].C, Eigen::Vector3d(1, 2, 3));
-  // R = world_from_camera: the camera's x axis points along world -z.
-  EXPECT_LT((t->poses[1].q * Eigen::Vector3d::UnitX() - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
-  EXPECT_EQ(t->segment, (std::vector<int>{0, 0}));
-}
-
-TEST_F(TrajectoryIoTest, KittiErrorsNameFileLineAndColumn) {
-  const std::string times = Write("t.txt", "0\n0.1\n");
-  auto error = [&](const std::string& poses, const std::string& time_file) {
-    const auto t = ReadKittiTrajectory(Write("p.txt", poses), time_file);
-    EXPECT_FALSE(t.ok());
-    return t.ok() ? "" : t.error();
-  };
-  const std::string identity = "1 0 0 0 0 1 0 0 0 0 1 0\n";
-  EXPECT_THAT(error(identity + "1 0 0 0 0 1 0 0 0 0 1\n", times),
-              HasSubstr("p.txt:2: expected 12 numbers"));
-  EXPECT_THAT(error(identity + "1 0 0 0 0 1 0 x 0 0 1 0\n", times),
-              HasSubstr("p.txt:2: column 8 (ty): 'x' is not a number"));
-  EXPECT_THAT(error(identity + "1 0 0 0 0 1 0 0 0 0 1.1 0\n", times),
-              HasSubstr("p.txt:2: the rotation block is not a rotation"));
-  EXPECT_THAT(error(identity + "-1 0 0 0 0 1 0 0 0 0 1 0\n", times), HasSubstr("det -1"));
-  EXPECT_THAT(error(identity + identity + identity, times), HasSubstr("2 times for 3 poses"));
-  EXPECT_THAT(error(identity + identity, Write("t2.txt", "0.1\n0.1\n")),
-              HasSubstr("t2.txt:2: time does not increase"));
-  EXPECT_THAT(error("", times), HasSubstr("p.txt: no poses"));
-  EXPECT_THAT(error(identity, (dir_ / "missing.txt").string()), HasSubstr("cannot open"));
-}
-
-TEST(TrajectoryIoDataTest, KittiGroundTruth) {
-  const fs::path dir = fs::path(RIGCAL_SHARED_DATA_DIR) / "trajectories";
-  if (!fs::exists(dir / "KITTI_00_gt.txt")) GTEST_SKIP() << dir << " has no KITTI_00_gt.txt";
-  const auto t = ReadKittiTrajectory((dir / "KITTI_00_gt.txt").string(),
-                                     (dir / "KITTI_00_gt_times.txt").string());
-  ASSERT_TRUE(t.ok()) << t.error();
-  EXPECT_EQ(t->size(), 4541u);
-  // The drive is ~3.7 km long, on a road: mostly in the camera's x-z plane.
-  double length = 0.0;
-  for (size_t k = 1; k < t->size(); ++k) length += (t->poses[k].C - t->poses[k - 1].C).norm();
-  EXPECT_GT(length, 3000.0);
-  EXPECT_LT(length, 4500.0);
-}
-
-// --- Matching ---------------------------------------------------------------------------
-
-std::vector<int64_t> Stamps(int64_t start, int64_t step, int count) {
-  std::vector<int64_t> t;
-  for (int k = 0; k < count; ++k) t.push_back(start + step * k);
-  return t;
-}
-
-TEST(MatchTrajectoriesTest, SameStampsMatchEverything) {
-  const auto master = MakeTrajectory("m", Stamps(0, 50'000'000, 10));
-  const auto slave = MakeTrajectory("s", Stamps(0, 50'000'000, 10));
-  const auto rec = MatchTrajectories(master, {slave}, 5'000'000);
-  ASSERT_TRUE(rec.ok()) << rec.error();
-  EXPECT_EQ(rec->Validate(), "");
-  EXPECT_EQ(rec->t_ns, master.t_ns);
-  EXPECT_EQ(rec->master.name, "m");
-  ASSERT_EQ(rec->slaves.size(), 1u);
-  EXPECT_EQ(rec->slaves[0].name, "s");
-  EXPECT_EQ(rec->slaves[0].segment, slave.segment);
-}
-
-TEST(MatchTrajectoriesTest, OffsetWithinToleranceAndKeepsOnlyStampsInAllSlaves) {
-  const auto master = MakeTrajectory("m", Stamps(0, 50'000'000, 10));
-  const auto early = MakeTrajectory("early", Stamps(-3'000'000, 50'000'000, 10));
-  auto gappy = MakeTrajectory("gappy", Stamps(1'000'000, 50'000'000, 10));
-  // Remove master stamp 4's partner from the second slave.
-  gappy.t_ns.erase(gappy.t_ns.begin() + 4);
-  gappy.poses.erase(gappy.poses.begin() + 4);
-  gappy.segment.erase(gappy.segment.begin() + 4);
-  const auto rec = MatchTrajectories(master, {early, gappy}, 5'000'000);
-  ASSERT_TRUE(rec.ok()) << rec.error();
-  ASSERT_EQ(rec->size(), 9u);
-  EXPECT_EQ(rec->t_ns[4], master.t_ns[5]);
-  // Poses travel with their stamps (after the erase, gappy's index 4 is stamped 251 ms).
-  EXPECT_EQ(rec->slaves[1].poses[4].C, gappy.poses[4].C);
-  EXPECT_EQ(rec->slaves[0].poses[4].C, early.poses[5].C);
-  EXPECT_EQ(rec->master.poses[4].C, master.poses[5].C);
-}
-
-TEST(MatchTrajectoriesTest, OffsetBeyondToleranceMatchesNothing) {
-  const auto master = MakeTrajectory("m", Stamps(0, 50'000'000, 10));
-  const auto late = MakeTrajectory("late", Stamps(7'000'000, 50'000'000, 10));
-  const auto rec = MatchTrajectories(master, {late}, 5'000'000);
-  ASSERT_FALSE(rec.ok());
-  EXPECT_THAT(rec.error(), HasSubstr("late matched 0 of 10"));
-}
-
-TEST(MatchTrajectoriesTest, FastMasterUsesEverySlavePoseOnce) {
-  // Master at 200 Hz, slave at 20 Hz: within 5 ms up to two master stamps are near one slave
-  // stamp; only the mutually nearest pair is kept.
-  const auto master = MakeTrajectory("m", Stamps(0, 5'000'000, 200));
-  const auto slave = MakeTrajectory("s", Stamps(2'000'000, 50'000'000, 20));
-  const auto rec = MatchTrajectories(master, {slave}, 5'000'000);
-  ASSERT_TRUE(rec.ok()) << rec.error();
-  ASSERT_EQ(rec->size(), 20u);
-  for (size_t k = 0; k < rec->size(); ++k) {
-    EXPECT_EQ(rec->t_ns[k], static_cast<int64_t>(k) * 50'000'000) << k;
-    EXPECT_EQ(rec->slaves[0].poses[k].C, slave.poses[k].C) << k;
-  }
-}
-
-TEST(MatchTrajectoriesTest, SlowMasterTakesNearestSlavePose) {
-  const auto master = MakeTrajectory("m", Stamps(0, 50'000'000, 20));
-  const auto slave = MakeTrajectory("s", Stamps(-1'000'000, 5'000'000, 200));
-  const auto rec = MatchTrajectories(master, {slave}, 5'000'000);
-  ASSERT_TRUE(rec.ok()) << rec.error();
-  ASSERT_EQ(rec->size(), 20u);
-  // Around master stamp k, slave index 10 k is 1 ms early and 10 k + 1 is 4 ms late.
-  for (size_t k = 0; k < rec->size(); ++k) {
-    EXPECT_EQ(rec->slaves[0].poses[k].C, slave.poses[10 * k].C) << k;
-  }
-}
-
-TEST(MatchTrajectoriesTest, NoOverlapNamesRanges) {
-  const auto master = MakeTrajectory("master_cam", Stamps(0, 1'000'000'000, 10));
-  const auto slave = MakeTrajectory("cam1", Stamps(100'000'000'000, 1'000'000'000, 10));
-  const auto rec = MatchTrajectories(master, {slave}, 5'000'000);
-  ASSERT_FALSE(rec.ok());
-  EXPECT_THAT(rec.error(), HasSubstr("no overlapping time range: master master_cam 0.000..9.000 s, "
-                                     "cam1 100.000..109.000 s"));
-}
-
-TEST(MatchTrajectoriesTest, FewerThanTwoMatchesNamesTheSlave) {
-  const auto master = MakeTrajectory("m", Stamps(0, 50'000'000, 10));
-  const auto good = MakeTrajectory("good", Stamps(0, 50'000'000, 10));
-  const auto one = MakeTrajectory("one", {450'000'000, 460'000'000});
-  const auto rec = MatchTrajectories(master, {good, one}, 5'000'000);
-  ASSERT_FALSE(rec.ok());
-  EXPECT_THAT(rec.error(), HasSubstr("only 1 master stamps"));
-  EXPECT_THAT(rec.error(), HasSubstr("good matched 10 of 10"));
-  EXPECT_THAT(rec.error(), HasSubstr("one matched 1 of 10"));
-}
-
-TEST(MatchTrajectoriesTest, DuplicateNamesAreRejected) {
-  const auto master = MakeTrajectory("cam", Stamps(0, 50'000'000, 10));
-  const auto slave = MakeTrajectory("cam", Stamps(0, 50'000'000, 10));
-  const auto rec = MatchTrajectories(master, {slave}, 5'000'000);
-  ASSERT_FALSE(rec.ok());
-  EXPECT_THAT(rec.error(), HasSubstr("two cameras are named 'cam'"));
-}
-
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::tools::trajectory_test

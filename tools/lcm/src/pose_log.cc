@@ -1,13 +1,14 @@
 #include "rigcal/lcm/pose_log.h"
 
-#include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
 #include <cstdio>
+#include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <vector>
 
-#include "rigcal/lcm/lcm_messages.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/pose_message.h"
 
 namespace rigcal::tools {
 

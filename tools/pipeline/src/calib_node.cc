@@ -13,7 +13,9 @@
 #include "rigcal/pipeline/online_replay.h"
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/io/rig_files.h"
-#include "rigcal/lcm/rig_status.h"
+#include "rigcal/lcm/status_message.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/pose_message.h"
 #include "rigcal/io/yaml_fields.h"
 
 namespace rigcal::tools {

@@ -7,7 +7,8 @@
 
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/pose_merge.h"
-#include "rigcal/lcm/lcm_messages.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/pose_message.h"
 
 namespace rigcal::tools {
 namespace {

@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/lcm/lcm_messages.h"
+#include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/io/rig_config.h"
-#include "rigcal/lcm/rig_status.h"
+#include "rigcal/lcm/status_message.h"
 
 namespace lcm {
 class LCM;

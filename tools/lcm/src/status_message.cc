@@ -1,11 +1,72 @@
-#include "rigcal/lcm/rig_status.h"
+#include "rigcal/lcm/status_message.h"
 
 #include <algorithm>
+#include <set>
 #include <sstream>
+#include <utility>
 
+#include "message_checker.h"
+#include "message_codec.h"
 #include "rigcal/lcm/process_stats.h"
 
 namespace rigcal::tools {
+namespace {
+
+using lcm_internal::Checker;
+using lcm_internal::LayoutWalk;
+
+// The rules of one camera_status_t (status_message.h).
+void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* check) {
+  check->CameraName("name", c->name, names, 0, "the rig's cameras");
+  check->Finite("fps", c->fps);
+  check->AtLeast("fps", c->fps, 0.0);
+  const std::pair<const char*, int64_t> counters[] = {
+      {"frames_received", c->frames_received},
+      {"dropped_late", c->dropped_late},
+      {"dropped_duplicate", c->dropped_duplicate},
+      {"dropped_out_of_order", c->dropped_out_of_order},
+      {"dropped_overflow", c->dropped_overflow},
+      {"dropped_never_matched", c->dropped_never_matched},
+      {"dropped_invalid", c->dropped_invalid}};
+  for (const auto& [field, value] : counters) check->AtLeast<int64_t>(field, value, 0);
+  check->InRange<int8_t>("vo_state", c->vo_state, camera_status_t::VO_INITIALISING,
+                         camera_status_t::VO_DEAD);
+  check->AtLeast<int64_t>("last_pose_age_ms", c->last_pose_age_ms, -1);
+}
+
+// The fields of rig_status_t.lcm up to num_cameras.
+void WalkStatusLayout(LayoutWalk* walk) {
+  walk->Fixed("version", 2);
+  walk->Fixed("utime", 8);
+  walk->Count("num_cameras", camera_status_t()._getEncodedSizeNoHash());
+}
+
+// The rules of rig_status_t (status_message.h) but the version.
+void CheckStatus(const CameraNames& names, rig_status_t* msg, Checker* check) {
+  check->Count("num_cameras", msg->num_cameras, msg->cameras.size(), "cameras");
+  if (!check->ok()) return;
+  check->Finite("cpu_percent", msg->cpu_percent);
+  check->AtLeast<int64_t>("utime", msg->utime, 0);
+  check->AtLeast<int64_t>("sync_sets_emitted", msg->sync_sets_emitted, 0);
+  check->AtLeast<int32_t>("sync_capacity", msg->sync_capacity, 0);
+  check->InRange<int32_t>("sync_fill", msg->sync_fill, 0, msg->sync_capacity);
+  check->InRange<int8_t>("estimator_state", msg->estimator_state, rig_status_t::ESTIMATOR_IDLE,
+                         rig_status_t::ESTIMATOR_FAILED);
+  check->AtLeast("cpu_percent", msg->cpu_percent, 0.0);
+  check->AtLeast<int64_t>("rss_bytes", msg->rss_bytes, 0);
+  check->NamedElements("cameras", &msg->cameras, {}, [&](camera_status_t* c, Checker* nested) {
+    CheckCameraStatus(names, c, nested);
+  });
+}
+
+}  // namespace
+
+template <>
+struct lcm_internal::MessageTraits<rig_status_t> {
+  static constexpr char kTypeName[] = "rig_status_t";
+  static constexpr auto WalkLayout = &WalkStatusLayout;
+  static constexpr auto CheckContent = &CheckStatus;
+};
 
 rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const SyncStats& sync,
                            int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
@@ -40,7 +101,8 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
   const int64_t dropped =
       static_cast<int64_t>(total.invalid + total.late + total.duplicate + total.out_of_order +
                            total.overflow + total.never_matched + total.stopped);
-  const int64_t fill = static_cast<int64_t>(total.pushed) - static_cast<int64_t>(total.used) - dropped;
+  const int64_t fill =
+      static_cast<int64_t>(total.pushed) - static_cast<int64_t>(total.used) - dropped;
   msg.sync_capacity = std::max<int32_t>(0, sync_capacity);
   msg.sync_fill = static_cast<int32_t>(std::clamp<int64_t>(fill, 0, msg.sync_capacity));
   msg.estimator_state = EstimatorState(estimate, &msg.estimator_message);
@@ -59,7 +121,8 @@ int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
     if (estimate.online[i].flags & rigcal::kFlagDecalibrated) {
       ++decalibrated;
       if (i < static_cast<int>(estimate.rig.slaves.size())) {
-        decalibrated_names += (decalibrated_names.empty() ? "" : ", ") + estimate.rig.slaves[i].name;
+        decalibrated_names +=
+            (decalibrated_names.empty() ? "" : ", ") + estimate.rig.slaves[i].name;
       }
     }
   }
@@ -83,5 +146,10 @@ int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
   if (message != nullptr) *message = text.str();
   return state;
 }
+
+template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&, rig_status_t*);
+template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
+                                                      rig_status_t);
+template Expected<rig_status_t> MessageValidator::Decode(std::string_view, const void*, int64_t);
 
 }  // namespace rigcal::tools

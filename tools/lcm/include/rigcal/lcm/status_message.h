@@ -1,0 +1,53 @@
+#pragma once
+// rig_status_t, the health of a running calibration on RIGCAL_STATUS: its checks, and the
+// message built from the estimator, shared by `rigcal calib` (poses from the bus) and `rigcal run`
+// (the live pipeline).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/status.h"
+#include "rigcal/calib/sync_buffer.h"
+#include "rigcal/lcm/message_validation.h"
+#include "rigcal/rig_status_t.hpp"
+
+namespace rigcal::tools {
+
+// The rules of rig_status_t (beyond message_validation.h), checked by CheckMessage, EncodeMessage
+// and MessageValidator::Decode: num_cameras agrees with cameras, finite cpu_percent >= 0, utime,
+// sync_sets_emitted, sync_capacity and rss_bytes >= 0, sync_fill in [0, sync_capacity], a defined
+// estimator_state, and per camera: a camera of the rig named once, finite fps >= 0, counters >= 0,
+// a defined vo_state, last_pose_age_ms >= -1.
+extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
+                                                      rig_status_t*);
+extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
+                                                             rig_status_t);
+extern template Expected<rig_status_t> MessageValidator::Decode(std::string_view, const void*,
+                                                                int64_t);
+
+// What the caller knows of one camera beyond the sync buffer's counters.
+struct CameraStatusInput {
+  std::string name;
+  double fps = 0.0;             // over the last status period
+  int64_t frames_received = 0;  // cumulative
+  int64_t dropped_invalid = 0;  // rejected before the sync buffer (decoder, ...)
+  int64_t dropped_backlog = 0;  // dropped before the sync buffer because a stage fell behind
+  int8_t vo_state = camera_status_t::VO_INITIALISING;
+  int64_t last_pose_age_ms = -1;  // -1 when no pose yet
+};
+
+// rig_status_t from the caller's per-camera view, the sync buffer's counters (drops by cause,
+// fill), the estimate (estimator state and message) and the process's CPU and RSS.
+rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const SyncStats& sync,
+                           int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
+                           int64_t utime);
+
+// rig_status_t estimator_state of an estimate (IDLE, INITIALISING, CONVERGED, DEGRADED,
+// DECALIBRATED) and a one-line message.
+int8_t EstimatorState(const RigEstimate& estimate, std::string* message);
+
+}  // namespace rigcal::tools

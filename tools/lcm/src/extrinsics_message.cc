@@ -1,0 +1,220 @@
+#include "rigcal/lcm/extrinsics_message.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+#include <utility>
+
+#include "message_checker.h"
+#include "message_codec.h"
+#include "rigcal/lcm/channels.h"
+
+namespace rigcal::tools {
+namespace {
+
+using lcm_internal::Checker;
+using lcm_internal::FormatNumber;
+using lcm_internal::LayoutWalk;
+
+// The rules of one slave_extrinsics_t (extrinsics_message.h).
+void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check) {
+  check->CameraName("name", s->name, names, 1, "the rig's slaves");
+  check->Quaternion("q", s->q);
+  check->Finite("C", s->C, 3);
+  check->Finite("scale", s->scale);
+  check->Finite("rot_std_deg", s->rot_std_deg);
+  check->Finite("pos_std", s->pos_std, 3);
+  check->Finite("scale_std", s->scale_std);
+  check->Finite("rotation_eigen_gap", s->rotation_eigen_gap);
+  check->Finite("position_min_eigenvalue", s->position_min_eigenvalue);
+  check->Finite("axis_spread_deg", s->axis_spread_deg);
+  check->Finite("planar_axis", s->planar_axis, 3);
+  check->Finite("axis_offset_std", s->axis_offset_std);
+
+  const bool converged = (s->flags & kFlagConverged) != 0;
+  const bool initialising = (s->flags & kFlagInitialising) != 0;
+  if ((s->flags & ~kKnownFlags) != 0) {
+    check->Fail(RejectCause::kOutOfRange, "flags",
+                "undefined bits " + std::to_string(s->flags & ~kKnownFlags));
+  } else if (converged == initialising) {
+    check->Fail(RejectCause::kOutOfRange, "flags",
+                "exactly one of FLAG_INITIALISING and FLAG_CONVERGED must be set");
+  }
+  if (converged && !(s->scale > 0.0)) {
+    check->Fail(RejectCause::kOutOfRange, "scale",
+                FormatNumber(s->scale) + " is not positive in a converged estimate");
+  }
+  check->AtLeast<int32_t>("segment", s->segment, 0);
+  check->AtLeast("rot_std_deg", s->rot_std_deg, 0.0);
+  for (int i = 0; i < 3; ++i) {
+    check->AtLeast("pos_std[" + std::to_string(i) + "]", s->pos_std[i], 0.0);
+  }
+  check->AtLeast("scale_std", s->scale_std, 0.0);
+  check->AtLeast<int32_t>("motions_used", s->motions_used, 0);
+  check->AtLeast<int32_t>("motions_rejected", s->motions_rejected, 0);
+  check->AtLeast("rotation_eigen_gap", s->rotation_eigen_gap, 0.0);
+  check->InRange("axis_spread_deg", s->axis_spread_deg, 0.0, 180.0);
+  if (s->flags & kFlagPlanar) {
+    check->Unit("planar_axis", s->planar_axis, 3, RejectCause::kOutOfRange, "planar_axis");
+  }
+  if ((s->flags & kFlagAxisFromPrior) && !(s->flags & kFlagPlanar)) {
+    check->Fail(RejectCause::kOutOfRange, "flags",
+                "FLAG_AXIS_FROM_PRIOR without FLAG_PLANAR_UNOBSERVABLE_AXIS");
+  }
+  if (s->axis_offset_std != -1.0) check->AtLeast("axis_offset_std", s->axis_offset_std, 0.0);
+}
+
+// The fields of rig_extrinsics_t.lcm up to num_slaves.
+void WalkExtrinsicsLayout(LayoutWalk* walk) {
+  walk->Fixed("version", 2);
+  walk->Fixed("utime", 8);
+  walk->Fixed("t_ns", 8);
+  walk->String("master");
+  walk->Fixed("distance_unit", 1);
+  walk->Count("num_slaves", slave_extrinsics_t()._getEncodedSizeNoHash());
+}
+
+// The rules of rig_extrinsics_t (extrinsics_message.h) but the version.
+void CheckExtrinsics(const CameraNames& names, rig_extrinsics_t* msg, Checker* check) {
+  check->Count("num_slaves", msg->num_slaves, msg->slaves.size(), "slaves");
+  if (!check->ok()) return;
+  check->CameraName("master", msg->master, names, 0, "the rig's cameras");
+  if (check->ok() && !names.empty() && msg->master != names[0]) {
+    check->Fail(RejectCause::kUnknownCamera, "master",
+                "camera '" + msg->master + "' is not the rig's master '" + names[0] + "'");
+  }
+  check->AtLeast<int64_t>("utime", msg->utime, 0);
+  check->AtLeast<int64_t>("t_ns", msg->t_ns, 0);
+  check->InRange<int8_t>("distance_unit", msg->distance_unit,
+                         rig_extrinsics_t::UNIT_MASTER_ODOMETRY, rig_extrinsics_t::UNIT_METRE);
+  check->NamedElements(
+      "slaves", &msg->slaves, {msg->master},
+      [&](slave_extrinsics_t* s, Checker* nested) { CheckSlave(names, s, nested); });
+}
+
+}  // namespace
+
+template <>
+struct lcm_internal::MessageTraits<rig_extrinsics_t> {
+  static constexpr char kTypeName[] = "rig_extrinsics_t";
+  static constexpr auto WalkLayout = &WalkExtrinsicsLayout;
+  static constexpr auto CheckContent = &CheckExtrinsics;
+};
+
+int32_t SlaveFlags(const SlaveCalibration& slave) {
+  int32_t flags = slave.usable() ? kFlagConverged : kFlagInitialising;
+  if (slave.motion_model == MotionModel::kTranslational || !slave.position_observable) {
+    flags |= kFlagTranslationalOnly;
+  }
+  if (slave.observability.planar) {
+    flags |= kFlagPlanar;
+    if (slave.unobservable_from_prior) flags |= kFlagAxisFromPrior;
+  }
+  return flags;
+}
+
+Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave) {
+  const bool usable = slave.usable();
+  const std::string who = "slave '" + slave.name + "'";
+  const auto or_zero = [](double v) { return std::isfinite(v) ? v : 0.0; };
+
+  slave_extrinsics_t msg;
+  msg.name = slave.name;
+  Eigen::Quaterniond q = slave.estimate.q;
+  Eigen::Vector3d C = slave.estimate.C;
+  double scale = slave.estimate.scale;
+  int32_t segment = 0;
+  double scale_std = 0.0;
+  if (!slave.scales.empty()) {
+    const SegmentScale& current = *std::max_element(
+        slave.scales.begin(), slave.scales.end(),
+        [](const SegmentScale& a, const SegmentScale& b) { return a.segment < b.segment; });
+    scale = current.scale;
+    segment = current.segment;
+    scale_std = current.std;
+  }
+  if (!usable) {  // placeholders for what a failed estimate left undefined
+    if (!q.coeffs().allFinite() || q.norm() == 0.0) q = Eigen::Quaterniond::Identity();
+    if (!C.allFinite()) C.setZero();
+    if (!std::isfinite(scale)) scale = 1.0;
+  } else if (!q.coeffs().allFinite() || !C.allFinite() || !std::isfinite(scale)) {
+    return Error{who + " is usable (" + ToString(slave.termination) +
+                 ") but its estimate is not finite"};
+  }
+  if (q.norm() > 0.0) q.normalize();
+  msg.q[0] = q.w();
+  msg.q[1] = q.x();
+  msg.q[2] = q.y();
+  msg.q[3] = q.z();
+  for (int i = 0; i < 3; ++i) msg.C[i] = C[i];
+  msg.scale = scale;
+  msg.segment = segment;
+  msg.rot_std_deg = or_zero(slave.rot_std_deg);
+  for (int i = 0; i < 3; ++i) msg.pos_std[i] = or_zero(slave.pos_std[i]);
+  msg.scale_std = or_zero(scale_std);
+  msg.motions_used = slave.motions.used;
+  msg.motions_rejected = slave.motions.rejected();
+
+  const Observability& obs = slave.observability;
+  msg.rotation_eigen_gap = or_zero(obs.rotation_eigenvalues[1] - obs.rotation_eigenvalues[0]);
+  msg.position_min_eigenvalue = or_zero(obs.position_min_eigenvalue);
+  msg.axis_spread_deg = or_zero(obs.axis_spread_deg);
+  msg.flags = SlaveFlags(slave);
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+  const bool axis_known = obs.planar_axis.allFinite() && obs.planar_axis.norm() > 0.5;
+  if (obs.planar && !axis_known) {
+    return Error{who + ": observability is planar but planar_axis is not a direction"};
+  }
+  if (axis_known) axis = obs.planar_axis.normalized();
+  for (int i = 0; i < 3; ++i) msg.planar_axis[i] = axis[i];
+  msg.axis_offset_std = 0.0;
+  if (axis_known && usable && slave.position_observable) {
+    if (obs.planar && !slave.unobservable_from_prior) {
+      msg.axis_offset_std = -1.0;  // unknown
+    } else if (std::isfinite(slave.axis_offset_std) && slave.axis_offset_std >= 0.0) {
+      msg.axis_offset_std = slave.axis_offset_std;
+    } else if (!obs.planar) {
+      msg.axis_offset_std =
+          std::sqrt(std::max(0.0, axis.dot(slave.pos_std.cwiseAbs2().asDiagonal() * axis)));
+    }
+  }
+  msg.message = ToString(slave.termination);
+  if (!slave.message.empty()) msg.message += ": " + slave.message;
+
+  Checker check(kExtrinsicsChannel, "slave_extrinsics_t");
+  CheckSlave({}, &msg, &check);
+  if (std::optional<Rejection> rejection = check.TakeRejection()) {
+    return Error{who + ": " + rejection->message};
+  }
+  return msg;
+}
+
+Expected<rig_extrinsics_t> RigCalibrationToLcm(const RigCalibration& result, int64_t utime,
+                                               int64_t t_ns, int8_t distance_unit) {
+  rig_extrinsics_t msg;
+  msg.version = rig_extrinsics_t::VERSION;
+  msg.utime = utime;
+  msg.t_ns = t_ns;
+  msg.master = result.master;
+  msg.distance_unit = distance_unit;
+  for (const SlaveCalibration& slave : result.slaves) {
+    Expected<slave_extrinsics_t> converted = SlaveCalibrationToLcm(slave);
+    if (!converted) return Error{converted.error()};
+    msg.slaves.push_back(std::move(converted).value());
+  }
+  msg.num_slaves = static_cast<int32_t>(msg.slaves.size());
+  if (std::optional<Rejection> rejection = CheckMessage(kExtrinsicsChannel, {}, &msg)) {
+    return Error{rejection->message};
+  }
+  return msg;
+}
+
+template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
+                                               rig_extrinsics_t*);
+template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
+                                                      rig_extrinsics_t);
+template Expected<rig_extrinsics_t> MessageValidator::Decode(std::string_view, const void*,
+                                                             int64_t);
+
+}  // namespace rigcal::tools
