@@ -19,6 +19,7 @@
 
 #include "rigcal/calib/logging.h"
 #include "sim_random.h"
+#include "sim_render.h"
 #include "sim_scene.h"
 #include "sim_trajectory.h"
 
