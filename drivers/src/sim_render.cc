@@ -29,7 +29,8 @@ struct Transform {
 // pixels apart) all hit the same surface or all see the sky: texture coordinates and mip
 // level (or the sky's intensity) are interpolated bilinearly between the corners.
 void FillBlock(const Scene& scene, const Hit& h00, const Hit& h10, const Hit& h01, const Hit& h11,
-               int block, int nx, int ny, float weight, float* out, int stride) {
+               int block, int nx, int ny, float weight, float* out, int stride,
+               RenderKernel kernel) {
   if (h00.surface == kSky) {  // u holds the sky's intensity
     const Bilinear2d u(h00.u, h10.u, h01.u, h11.u, 1.f / static_cast<float>(block));
     for (int y = 0; y < ny; ++y, out += stride) {
@@ -42,7 +43,8 @@ void FillBlock(const Scene& scene, const Hit& h00, const Hit& h10, const Hit& h0
   const BlockCorners corners = {{h00.u, h10.u, h01.u, h11.u},
                                 {h00.v, h10.v, h01.v, h11.v},
                                 {h00.lod, h10.lod, h01.lod, h11.lod}};
-  FillTexturedBlock(scene.Texture(h00.surface), corners, block, nx, ny, weight, out, stride);
+  FillTexturedBlock(scene.Texture(h00.surface), corners, block, nx, ny, weight, out, stride,
+                    kernel);
 }
 
 }  // namespace
@@ -108,7 +110,7 @@ NodeGrid MakeNodeGrid(const CameraTables& camera, int block) {
 
 void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
                       const Pose& world_from_camera, float weight, float* acc,
-                      std::vector<Hit>* hits) {
+                      std::vector<Hit>* hits, RenderKernel kernel) {
   Transform xf;
   const Eigen::Matrix3d r = world_from_camera.R();
   for (int i = 0; i < 9; ++i) xf.r[i] = static_cast<float>(r(i / 3, i % 3));
@@ -209,7 +211,7 @@ void RenderAccumulate(const Scene& scene, const CameraTables& camera, const Node
       }
       if (s == kInvalid) continue;
       FillBlock(scene, h00, h10, h01, h11, block, x1 - x0, y1 - y0, weight,
-                acc + static_cast<size_t>(y0) * w + x0, w);
+                acc + static_cast<size_t>(y0) * w + x0, w, kernel);
     }
   }
 }

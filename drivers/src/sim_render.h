@@ -35,8 +35,9 @@ NodeGrid MakeNodeGrid(const CameraTables& camera, int block);
 
 // Renders the view of `camera` at world_from_camera and adds weight * intensity to acc
 // (width * height floats). `grid` null or block < 2: every pixel is cast. `hits`: scratch.
+// `kernel`: the texture-block kernels to use.
 void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
                       const Pose& world_from_camera, float weight, float* acc,
-                      std::vector<Hit>* hits);
+                      std::vector<Hit>* hits, RenderKernel kernel);
 
 }  // namespace rigcal::drivers::internal

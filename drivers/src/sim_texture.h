@@ -27,6 +27,13 @@ struct TextureTile {
   }
 };
 
+// Byte offset of entry (x0, y0) of a level of size 2^log2n in the row-pair layout. One unaligned
+// 32-bit load there yields the four texels of a bilinear sample in the byte order p00, p01,
+// p10, p11 (p_xy, x0 and y0 in [0, 2^log2n)), without any wrapping arithmetic.
+inline uint32_t PairOffset(int log2n, uint32_t x0, uint32_t y0) {
+  return (y0 << (log2n + 1)) + y0 * (2 * kTexturePairPad) + (x0 << 1);
+}
+
 // Scale-invariant "dead leaves" texture: opaque axis-aligned rectangles, rotated rectangles and
 // discs of random grey with sizes from 1.5 to size/8 texels (density ~ r^-3), lightly blurred.
 // Periodic (tiles seamlessly), deterministic for `seed`.

@@ -1,33 +1,25 @@
-// Texture sampling of the simulated rig: the fixed-point row-pair sampler, one sample at a time
-// and SSE2 block kernels.
+// Texture sampling of the simulated rig: the fixed-point row-pair sampler, one sample at a time,
+// and the block kernels, written once for the four-lane backends of sim_simd.h.
 #include "sim_texture_sampling.h"
-
-#include <emmintrin.h>
 
 #include <algorithm>
 #include <cstring>
+
+#include "sim_simd.h"
 
 namespace rigcal::drivers::internal {
 namespace {
 
 constexpr int kTileLog2 = kTextureTileLog2;
-constexpr int kPairPad = kTexturePairPad;
 
 inline int FloorToInt(float x) {
   const int i = static_cast<int>(x);
   return i - (x < static_cast<float>(i));
 }
 
-// Texture levels are stored as "row pairs" (TextureTile::pairs): entry (x, y) holds the
-// texels (x, y) and (x, y + 1 mod n) as two bytes, rows of n + kPairPad entries whose entry n
-// repeats entry 0. One unaligned 32-bit load at entry (x0, y0) then yields the four texels of a
-// bilinear sample in the byte order p00, p01, p10, p11 (p_xy), without any wrapping arithmetic.
 // Sample coordinates are 16.16 fixed point in the level's texels, shifted by half a texel; their
-// integer part wraps (2^16 is a multiple of every level's size).
-
-inline uint32_t PairOffset(int log2n, uint32_t x0, uint32_t y0) {  // in bytes
-  return (y0 << (log2n + 1)) + y0 * (2 * kPairPad) + (x0 << 1);
-}
+// integer part wraps (2^16 is a multiple of every level's size). Texels are read in the
+// row-pair layout (sim_texture.h, PairOffset).
 
 // Scalar bilinear sample; returns the intensity * 2^16.
 inline int BilinearPair(const uint8_t* pairs, int log2n, uint32_t x, uint32_t y) {
@@ -35,45 +27,8 @@ inline int BilinearPair(const uint8_t* pairs, int log2n, uint32_t x, uint32_t y)
   uint32_t q;
   std::memcpy(&q, pairs + PairOffset(log2n, (x >> 16) & mask, (y >> 16) & mask), sizeof(q));
   const uint32_t ax = (x >> 8) & 0xFFu;
-  const uint32_t ay = (y >> 8) & 0xFFu;
-  // Two 16-bit lanes (left and right column) interpolated vertically at once: every lane stays
-  // below 255 * 256, so no carry crosses lanes.
-  const uint32_t columns = (q & 0x00FF00FFu) * (256u - ay) + ((q >> 8) & 0x00FF00FFu) * ay;
+  const uint32_t columns = BilinearColumns(q, (y >> 8) & 0xFFu);
   return static_cast<int>((columns & 0xFFFFu) * (256u - ax) + (columns >> 16) * ax);
-}
-
-// Four bilinear samples at once (SSE2): lanes of x and y as above. Returns intensity * 256.
-template <int log2n>
-inline __m128 BilinearPair4(const uint8_t* pairs, __m128i x, __m128i y) {
-  const __m128i mask = _mm_set1_epi32((1 << log2n) - 1);
-  const __m128i x0 = _mm_and_si128(_mm_srli_epi32(x, 16), mask);
-  const __m128i y0 = _mm_and_si128(_mm_srli_epi32(y, 16), mask);
-  const __m128i offset = _mm_add_epi32(
-      _mm_add_epi32(_mm_slli_epi32(y0, log2n + 1), _mm_slli_epi32(y0, 5)), _mm_slli_epi32(x0, 1));
-  static_assert(2 * kPairPad == 32, "offset uses y0 << 5");
-  alignas(16) uint32_t offsets[4];
-  _mm_store_si128(reinterpret_cast<__m128i*>(offsets), offset);
-  uint32_t q[4];
-  for (int i = 0; i < 4; ++i) std::memcpy(&q[i], pairs + offsets[i], sizeof(uint32_t));
-  const __m128i quads = _mm_setr_epi32(static_cast<int>(q[0]), static_cast<int>(q[1]),
-                                       static_cast<int>(q[2]), static_cast<int>(q[3]));
-  const __m128i byte_mask = _mm_set1_epi32(0xFF);
-  const __m128i ay = _mm_and_si128(_mm_srli_epi32(y, 8), byte_mask);
-  // 16-bit weight pairs (256 - ay, ay) per pixel.
-  const __m128i wy = _mm_or_si128(_mm_sub_epi32(_mm_set1_epi32(256), ay), _mm_slli_epi32(ay, 16));
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i q01 = _mm_unpacklo_epi8(quads, zero);  // pixels 0, 1: p00 p01 p10 p11 (16 bit)
-  const __m128i q23 = _mm_unpackhi_epi8(quads, zero);
-  const __m128i w01 = _mm_shuffle_epi32(wy, _MM_SHUFFLE(1, 1, 0, 0));
-  const __m128i w23 = _mm_shuffle_epi32(wy, _MM_SHUFFLE(3, 3, 2, 2));
-  // Left and right columns interpolated vertically, * 256: [L0 R0 L1 R1], [L2 R2 L3 R3].
-  const __m128 c01 = _mm_cvtepi32_ps(_mm_madd_epi16(q01, w01));
-  const __m128 c23 = _mm_cvtepi32_ps(_mm_madd_epi16(q23, w23));
-  const __m128 left = _mm_shuffle_ps(c01, c23, _MM_SHUFFLE(2, 0, 2, 0));
-  const __m128 right = _mm_shuffle_ps(c01, c23, _MM_SHUFFLE(3, 1, 3, 1));
-  const __m128 ax = _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(x, 8), byte_mask)),
-                               _mm_set1_ps(1.f / 256.f));
-  return _mm_add_ps(left, _mm_mul_ps(ax, _mm_sub_ps(right, left)));
 }
 
 // 16.16 fixed-point start of a texel coordinate at a level of size 2^log2n (the coordinate is
@@ -118,7 +73,7 @@ float SampleTrilinear(const TileView& tile, float u, float v, float lod) {
 
 namespace {
 
-// The same in 16.16 fixed point for texel coordinates of a level of size 2^log2n, scaled by
+// Bilinear2d in 16.16 fixed point for texel coordinates of a level of size 2^log2n, scaled by
 // `scale` (2^-level), with the half-texel shift and the wrap applied to the start.
 struct FixedBilinear2d {
   uint32_t a, b, c, d;
@@ -131,9 +86,10 @@ struct FixedBilinear2d {
 
 // The 16.16 coordinates of pixels x0 .. x0 + 3 of a block's row y, walked down the rows:
 // lane i at row y is a + (x0 + i) b + y (c + (x0 + i) d), so each row adds a constant vector.
+template <typename L>
 struct FixedLanes {
-  __m128i value;
-  __m128i row_step;
+  typename L::U value;
+  typename L::U row_step;
   FixedLanes(const FixedBilinear2d& f, int x0) {
     uint32_t v[4], s[4];
     for (int i = 0; i < 4; ++i) {
@@ -141,49 +97,36 @@ struct FixedLanes {
       v[i] = f.a + x * f.b;
       s[i] = f.c + x * f.d;
     }
-    value = _mm_setr_epi32(static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]),
-                           static_cast<int>(v[3]));
-    row_step = _mm_setr_epi32(static_cast<int>(s[0]), static_cast<int>(s[1]),
-                              static_cast<int>(s[2]), static_cast<int>(s[3]));
+    value = L::Load(v);
+    row_step = L::Load(s);
   }
-  void NextRow() { value = _mm_add_epi32(value, row_step); }
+  void NextRow() { value = L::AddU(value, row_step); }
 };
 
 // The same for a float interpolant.
+template <typename L>
 struct FloatLanes {
-  __m128 value;
-  __m128 row_step;
+  typename L::F value;
+  typename L::F row_step;
   FloatLanes(const Bilinear2d& f, int x0) {
-    const __m128 x = _mm_setr_ps(static_cast<float>(x0), static_cast<float>(x0 + 1),
-                                 static_cast<float>(x0 + 2), static_cast<float>(x0 + 3));
-    value = _mm_add_ps(_mm_set1_ps(f.a), _mm_mul_ps(x, _mm_set1_ps(f.b)));
-    row_step = _mm_add_ps(_mm_set1_ps(f.c), _mm_mul_ps(x, _mm_set1_ps(f.d)));
+    const typename L::F x = L::Iota(x0);
+    value = L::Add(L::Splat(f.a), L::Mul(x, L::Splat(f.b)));
+    row_step = L::Add(L::Splat(f.c), L::Mul(x, L::Splat(f.d)));
   }
-  void NextRow() { value = _mm_add_ps(value, row_step); }
+  void NextRow() { value = L::Add(value, row_step); }
 };
 
-// out[i] += lanes i < n of v.
-inline void AddLanes(__m128 v, int n, float* out) {
-  if (n == 4) {
-    _mm_storeu_ps(out, _mm_add_ps(_mm_loadu_ps(out), v));
-    return;
-  }
-  alignas(16) float values[4];
-  _mm_store_ps(values, v);
-  for (int i = 0; i < n; ++i) out[i] += values[i];
-}
-
 // Level 0 only (magnified texture).
-template <int log2n>
+template <typename L, int log2n>
 void FillMagnified(const uint8_t* level, const FixedBilinear2d& fu, const FixedBilinear2d& fv,
                    int nx, int ny, float weight, float* out, int stride) {
-  const __m128 scale = _mm_set1_ps(weight * (1.f / 256.f));
+  const typename L::F scale = L::Splat(weight * (1.f / 256.f));
   for (int x0 = 0; x0 < nx; x0 += 4) {
     const int n = std::min(4, nx - x0);
-    FixedLanes u(fu, x0), v(fv, x0);
+    FixedLanes<L> u(fu, x0), v(fv, x0);
     float* row = out + x0;
     for (int y = 0; y < ny; ++y, row += stride, u.NextRow(), v.NextRow()) {
-      AddLanes(_mm_mul_ps(BilinearPair4<log2n>(level, u.value, v.value), scale), n, row);
+      L::AddTo(L::Mul(L::template Bilinear<log2n>(level, u.value, v.value), scale), n, row);
     }
   }
 }
@@ -192,52 +135,53 @@ void FillMagnified(const uint8_t* level, const FixedBilinear2d& fu, const FixedB
 // trilinear between l and l + 1 (fraction f in [0, 1)) or l + 1 and l + 2 (f in [1, 2)).
 // Coordinates are kept for level l; level l + 1's are (X >> 1) - 1/4 texel (16.16, half-texel
 // shifted, wrapping).
-template <int log2l>
+template <typename L, int log2l>
 void FillTrilinear(const uint8_t* const levels[3], const FixedBilinear2d& fu,
                    const FixedBilinear2d& fv, const Bilinear2d& frac, int nx, int ny, float weight,
                    float* out, int stride) {
-  const __m128 scale = _mm_set1_ps(weight * (1.f / 256.f));
-  const __m128 one = _mm_set1_ps(1.f);
-  const __m128 two = _mm_set1_ps(2.f);
-  const __m128 zero = _mm_setzero_ps();
-  const __m128i quarter = _mm_set1_epi32(16384);
-  auto half = [&quarter](__m128i c) { return _mm_sub_epi32(_mm_srli_epi32(c, 1), quarter); };
+  using F = typename L::F;
+  using U = typename L::U;
+  const F scale = L::Splat(weight * (1.f / 256.f));
+  const F one = L::Splat(1.f);
+  const F two = L::Splat(2.f);
+  const F zero = L::Splat(0.f);
+  const U quarter = L::SplatU(16384);
+  auto half = [&quarter](U c) { return L::SubU(L::template ShiftRight<1>(c), quarter); };
+  auto lerp = [](F a, F b, F t) { return L::Add(a, L::Mul(t, L::Sub(b, a))); };  // a + t (b - a)
   for (int x0 = 0; x0 < nx; x0 += 4) {
     const int n = std::min(4, nx - x0);
-    FixedLanes u(fu, x0), v(fv, x0);
-    FloatLanes fl(frac, x0);
+    FixedLanes<L> u(fu, x0), v(fv, x0);
+    FloatLanes<L> fl(frac, x0);
     float* row = out + x0;
     for (int y = 0; y < ny; ++y, row += stride, u.NextRow(), v.NextRow(), fl.NextRow()) {
-      const __m128 f = _mm_min_ps(_mm_max_ps(fl.value, zero), two);
-      const __m128i u1 = half(u.value), v1 = half(v.value);
-      const int coarse = _mm_movemask_ps(_mm_cmpge_ps(f, one));  // lanes in [l + 1, l + 2]
-      __m128 value;
+      const F f = L::Min(L::Max(fl.value, zero), two);
+      const U u1 = half(u.value), v1 = half(v.value);
+      const auto use_rough = L::CompareGe(f, one);  // lanes in [l + 1, l + 2]
+      const int coarse = L::MoveMask(use_rough);
+      F value;
       if (coarse == 0) {
-        const __m128 a = BilinearPair4<log2l>(levels[0], u.value, v.value);
-        const __m128 b = BilinearPair4<log2l - 1>(levels[1], u1, v1);
-        value = _mm_add_ps(a, _mm_mul_ps(f, _mm_sub_ps(b, a)));
+        const F a = L::template Bilinear<log2l>(levels[0], u.value, v.value);
+        const F b = L::template Bilinear<log2l - 1>(levels[1], u1, v1);
+        value = lerp(a, b, f);
       } else if (coarse == 0xF) {
-        const __m128 a = BilinearPair4<log2l - 1>(levels[1], u1, v1);
-        const __m128 b = BilinearPair4<log2l - 2>(levels[2], half(u1), half(v1));
-        value = _mm_add_ps(a, _mm_mul_ps(_mm_sub_ps(f, one), _mm_sub_ps(b, a)));
+        const F a = L::template Bilinear<log2l - 1>(levels[1], u1, v1);
+        const F b = L::template Bilinear<log2l - 2>(levels[2], half(u1), half(v1));
+        value = lerp(a, b, L::Sub(f, one));
       } else {  // the level boundary runs through these four pixels
-        const __m128 a = BilinearPair4<log2l>(levels[0], u.value, v.value);
-        const __m128 b = BilinearPair4<log2l - 1>(levels[1], u1, v1);
-        const __m128 c = BilinearPair4<log2l - 2>(levels[2], half(u1), half(v1));
-        const __m128 fine = _mm_add_ps(a, _mm_mul_ps(f, _mm_sub_ps(b, a)));
-        const __m128 rough = _mm_add_ps(b, _mm_mul_ps(_mm_sub_ps(f, one), _mm_sub_ps(c, b)));
-        const __m128 use_rough = _mm_cmpge_ps(f, one);
-        value = _mm_or_ps(_mm_and_ps(use_rough, rough), _mm_andnot_ps(use_rough, fine));
+        const F a = L::template Bilinear<log2l>(levels[0], u.value, v.value);
+        const F b = L::template Bilinear<log2l - 1>(levels[1], u1, v1);
+        const F c = L::template Bilinear<log2l - 2>(levels[2], half(u1), half(v1));
+        value = L::Select(use_rough, lerp(b, c, L::Sub(f, one)), lerp(a, b, f));
       }
-      AddLanes(_mm_mul_ps(value, scale), n, row);
+      L::AddTo(L::Mul(value, scale), n, row);
     }
   }
 }
 
-}  // namespace
-
-void FillTexturedBlock(const TileView& tile, const BlockCorners& corners, int block, int nx, int ny,
-                       float weight, float* out, int stride) {
+// FillTexturedBlock with the kernels of backend L.
+template <typename L>
+void FillTexturedBlockWith(const TileView& tile, const BlockCorners& corners, int block, int nx,
+                           int ny, float weight, float* out, int stride) {
   const float inv_block = 1.f / static_cast<float>(block);
   const float* cu = corners.u;
   const float* cv = corners.v;
@@ -249,7 +193,7 @@ void FillTexturedBlock(const TileView& tile, const BlockCorners& corners, int bl
   const float lod_max = std::max(std::max(cl[0], cl[1]), std::max(cl[2], cl[3]));
   if (lod_max <= 0.f) {  // magnified: the finest level only, fixed point
     const FixedBilinear2d fu(u, 1.f, kTileLog2), fv(v, 1.f, kTileLog2);
-    FillMagnified<kTileLog2>(tile.level[0], fu, fv, nx, ny, weight, out, stride);
+    FillMagnified<L, kTileLog2>(tile.level[0], fu, fv, nx, ny, weight, out, stride);
     return;
   }
   const int l = std::max(0, static_cast<int>(lod_min));
@@ -261,9 +205,9 @@ void FillTexturedBlock(const TileView& tile, const BlockCorners& corners, int bl
     frac.a -= static_cast<float>(l);
     const uint8_t* levels[3] = {tile.level[l], tile.level[l + 1], tile.level[l + 2]};
     switch (log2_l) {
-#define RIGCAL_FILL_CASE(n)                                              \
-  case n:                                                                \
-    FillTrilinear<n>(levels, fu, fv, frac, nx, ny, weight, out, stride); \
+#define RIGCAL_FILL_CASE(n)                                                 \
+  case n:                                                                   \
+    FillTrilinear<L, n>(levels, fu, fv, frac, nx, ny, weight, out, stride); \
     return;
       RIGCAL_FILL_CASE(10)
       RIGCAL_FILL_CASE(9)
@@ -290,4 +234,21 @@ void FillTexturedBlock(const TileView& tile, const BlockCorners& corners, int bl
   }
 }
 
+}  // namespace
+
+void FillTexturedBlock(const TileView& tile, const BlockCorners& corners, int block, int nx, int ny,
+                       float weight, float* out, int stride, RenderKernel kernel) {
+  if (kernel == RenderKernel::kSimd) {
+    FillTexturedBlockWith<SimdLanes>(tile, corners, block, nx, ny, weight, out, stride);
+  } else {
+    FillTexturedBlockWith<ScalarLanes>(tile, corners, block, nx, ny, weight, out, stride);
+  }
+}
+
 }  // namespace rigcal::drivers::internal
+
+namespace rigcal::drivers {
+
+const char* SimdRenderKernelName() { return internal::SimdLanes::kName; }
+
+}  // namespace rigcal::drivers

@@ -1,10 +1,12 @@
 #pragma once
 // Texture sampling of the simulated rig's renderer: trilinear samples of a mip-mapped texture
 // tile (sim_texture.h), one at a time or for a whole block of pixels whose texture coordinates
-// and mip level are interpolated bilinearly between the block's corners. Private to drivers/.
+// and mip level are interpolated bilinearly between the block's corners (four-lane kernels,
+// SIMD where the build has it). Private to drivers/.
 
 #include <cstdint>
 
+#include "rigcal/drivers/simulated_rig.h"
 #include "sim_texture.h"
 
 namespace rigcal::drivers::internal {
@@ -42,8 +44,9 @@ struct BlockCorners {
 
 // Adds weight * texture to the nx x ny pixels of one block (rows `stride` floats apart) whose
 // corner nodes lie `block` pixels apart: texture coordinates and mip level are interpolated
-// bilinearly between the corners.
+// bilinearly between the corners. `kernel`: SIMD (where the build has it) or scalar; both add
+// the same values (sim_simd.h).
 void FillTexturedBlock(const TileView& tile, const BlockCorners& corners, int block, int nx, int ny,
-                       float weight, float* out, int stride);
+                       float weight, float* out, int stride, RenderKernel kernel);
 
 }  // namespace rigcal::drivers::internal

@@ -60,7 +60,8 @@ struct SimulatedRigData {
   }
 
   // Frame k of `camera`: renders (with motion blur), adds noise, quantises.
-  cv::Mat Render(int camera, int64_t k, std::vector<float>* acc, std::vector<Hit>* hits) const {
+  cv::Mat Render(int camera, int64_t k, std::vector<float>* acc, std::vector<Hit>* hits,
+                 RenderKernel kernel) const {
     const CameraTables& tables = cameras[camera];
     const NodeGrid* grid = spec.render_block >= 2 ? &grids[camera] : nullptr;
     acc->assign(static_cast<size_t>(tables.width) * tables.height, 0.f);
@@ -70,10 +71,11 @@ struct SimulatedRigData {
       const float weight = 1.f / static_cast<float>(samples);
       for (int s = 0; s < samples; ++s) {
         const double ts = t + spec.blur_exposure_s * ((s + 0.5) / samples - 0.5);
-        RenderAccumulate(scene, tables, grid, CameraPose(camera, ts), weight, acc->data(), hits);
+        RenderAccumulate(scene, tables, grid, CameraPose(camera, ts), weight, acc->data(), hits,
+                         kernel);
       }
     } else {
-      RenderAccumulate(scene, tables, grid, CameraPose(camera, t), 1.f, acc->data(), hits);
+      RenderAccumulate(scene, tables, grid, CameraPose(camera, t), 1.f, acc->data(), hits, kernel);
     }
     return Quantise(camera, k, *acc, tables.width, tables.height);
   }
@@ -540,7 +542,7 @@ Expected<std::optional<Frame>> SimulatedCamera::Grab() {
     frame.camera = camera_;
     frame.seq = k;
     frame.t_ns = epoch + d.OffsetNs(k) + d.JitterNs(camera_, k);
-    frame.image = d.Render(camera_, k, &state_->acc, &state_->hits);
+    frame.image = d.Render(camera_, k, &state_->acc, &state_->hits, RenderKernel::kSimd);
     if (spec.realtime && !wait_until(epoch + d.OffsetNs(k))) return std::optional<Frame>();
     return std::optional<Frame>(std::move(frame));
   }
@@ -596,13 +598,14 @@ std::vector<Similarity> SimulatedRig::TrueRig() const {
   return rig;
 }
 
-cv::Mat SimulatedRig::RenderFrame(int camera, int64_t k) const {
+cv::Mat SimulatedRig::RenderFrame(int camera, int64_t k, RenderKernel kernel) const {
   std::vector<float> acc;
   std::vector<internal::Hit> hits;
-  return data_->Render(camera, k, &acc, &hits);
+  return data_->Render(camera, k, &acc, &hits, kernel);
 }
 
-cv::Mat SimulatedRig::RenderView(int camera, const Pose& world_from_camera, int block) const {
+cv::Mat SimulatedRig::RenderView(int camera, const Pose& world_from_camera, int block,
+                                 RenderKernel kernel) const {
   const internal::CameraTables& tables = data_->cameras[camera];
   if (block <= 0) block = data_->spec.render_block;
   std::optional<internal::NodeGrid> own_grid;
@@ -617,7 +620,8 @@ cv::Mat SimulatedRig::RenderView(int camera, const Pose& world_from_camera, int 
   }
   std::vector<float> acc(static_cast<size_t>(tables.width) * tables.height, 0.f);
   std::vector<internal::Hit> hits;
-  internal::RenderAccumulate(data_->scene, tables, grid, world_from_camera, 1.f, acc.data(), &hits);
+  internal::RenderAccumulate(data_->scene, tables, grid, world_from_camera, 1.f, acc.data(), &hits,
+                             kernel);
   cv::Mat image(tables.height, tables.width, CV_8UC1);
   for (int y = 0; y < tables.height; ++y) {
     for (int x = 0; x < tables.width; ++x) {

@@ -88,8 +88,8 @@
 
 #include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
-#include "rigcal/drivers/capture_device.h"
 #include "rigcal/camera/camera_model.h"
+#include "rigcal/drivers/capture_device.h"
 
 namespace rigcal::drivers {
 
@@ -162,6 +162,15 @@ std::optional<SimulatedRigSpec::SceneType> SceneTypeFromString(const std::string
 // World-from-master orientation of a waypoint from yaw, pitch, roll in degrees (see the
 // `ypr_deg` key above): a level master camera looking along world +x is ypr = (0, 0, 0).
 Eigen::Quaterniond WaypointOrientationFromYpr(double yaw_deg, double pitch_deg, double roll_deg);
+
+// The implementation of the renderer's texture kernels. kSimd: four-lane SIMD where the build
+// has it (SSE2 on x86-64, NEON on ARM; see SimdRenderKernelName), else the scalar code.
+// kScalar: portable C++ only. Both compute every pixel with the same operations in the same
+// order, so they render the same images (bit for bit on x86-64; within one grey level where a
+// compiler fuses multiply-adds in one of them). Devices render with kSimd.
+enum class RenderKernel { kSimd, kScalar };
+// What kSimd runs in this build: "SSE2", "NEON" or "scalar".
+const char* SimdRenderKernelName();
 
 namespace internal {
 struct SimulatedRigData;
@@ -239,11 +248,12 @@ class SimulatedRig {
   std::vector<Similarity> TrueRig() const;
 
   // Frame k of camera `camera` exactly as its device returns it (noise, blur; ignores drops,
-  // jitter and failures). Thread-safe.
-  cv::Mat RenderFrame(int camera, int64_t k) const;
+  // jitter and failures). `kernel`: the texture kernels to render with. Thread-safe.
+  cv::Mat RenderFrame(int camera, int64_t k, RenderKernel kernel = RenderKernel::kSimd) const;
   // A noise-free, blur-free image of camera `camera` at pose world_from_camera. `block`:
   // render_block to use (0 = the spec's). Thread-safe.
-  cv::Mat RenderView(int camera, const Pose& world_from_camera, int block = 0) const;
+  cv::Mat RenderView(int camera, const Pose& world_from_camera, int block = 0,
+                     RenderKernel kernel = RenderKernel::kSimd) const;
   // Distance along the ray origin + t * direction (world, direction need not be unit: t is in
   // units of |direction|) to the first surface, or nullopt (sky). Double precision.
   std::optional<double> CastRay(const Eigen::Vector3d& origin,
