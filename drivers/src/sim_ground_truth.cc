@@ -36,12 +36,12 @@ std::string FormatNs(int64_t t_ns) {
 }
 
 // Writes `contents` to `path` through a temporary file in the same directory and a rename.
-std::string WriteAtomically(const std::string& path, const std::string& contents) {
+Status WriteAtomically(const std::string& path, const std::string& contents) {
   static std::atomic<int> counter{0};
   const std::string tmp =
       path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter.fetch_add(1));
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return path + ": cannot create temporary file: " + std::strerror(errno);
+  if (fd < 0) return Error{path + ": cannot create temporary file: " + std::strerror(errno)};
   size_t written = 0;
   while (written < contents.size()) {
     const ssize_t n = ::write(fd, contents.data() + written, contents.size() - written);
@@ -50,30 +50,30 @@ std::string WriteAtomically(const std::string& path, const std::string& contents
       const std::string error = path + ": write failed: " + std::strerror(errno);
       ::close(fd);
       ::unlink(tmp.c_str());
-      return error;
+      return Error{error};
     }
     written += static_cast<size_t>(n);
   }
   if (::fsync(fd) != 0 || ::close(fd) != 0) {
     const std::string error = path + ": fsync/close failed: " + std::strerror(errno);
     ::unlink(tmp.c_str());
-    return error;
+    return Error{error};
   }
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string error = path + ": rename failed: " + std::strerror(errno);
     ::unlink(tmp.c_str());
-    return error;
+    return Error{error};
   }
-  return {};
+  return Status::Ok();
 }
 
 }  // namespace
 
-std::string SimulatedRig::WriteGroundTruth(const std::string& dir) const {
+Status SimulatedRig::WriteGroundTruth(const std::string& dir) const {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (ec) return dir + ": cannot create directory: " + ec.message();
+  if (ec) return Error{dir + ": cannot create directory: " + ec.message()};
   const SimulatedRigSpec& spec = data_->spec;
   for (int c = 0; c < num_cameras(); ++c) {
     std::ostringstream local, world;
@@ -94,9 +94,9 @@ std::string SimulatedRig::WriteGroundTruth(const std::string& dir) const {
       }
     }
     const std::string base = (fs::path(dir) / spec.names[c]).string();
-    if (std::string e = WriteAtomically(base + ".txt", local.str()); !e.empty()) return e;
+    if (Status status = WriteAtomically(base + ".txt", local.str()); !status.ok()) return status;
     const std::string world_path = (fs::path(dir) / ("world_" + spec.names[c] + ".txt")).string();
-    if (std::string e = WriteAtomically(world_path, world.str()); !e.empty()) return e;
+    if (Status status = WriteAtomically(world_path, world.str()); !status.ok()) return status;
   }
   std::ostringstream yaml;
   yaml << "# True rig of a simulated source: every slave's orientation and centre in the master\n"

@@ -114,7 +114,7 @@ size_t Scene::TextureBytes() const {
   return bytes;
 }
 
-std::string Scene::CheckFree(const Eigen::Vector3d& p, double clearance) const {
+Status Scene::CheckFree(const Eigen::Vector3d& p, double clearance) const {
   std::ostringstream out;
   if (has_enclosure_) {
     for (int a = 0; a < 3; ++a) {
@@ -122,7 +122,7 @@ std::string Scene::CheckFree(const Eigen::Vector3d& p, double clearance) const {
         out << "leaves the " << (open_top_ ? "yard" : "room") << " [" << lo_[0] << ", " << hi_[0]
             << "] x [" << lo_[1] << ", " << hi_[1] << "] x [" << lo_[2] << ", " << hi_[2]
             << "] (clearance " << clearance << " m)";
-        return out.str();
+        return Error{out.str()};
       }
     }
     for (size_t b = 0; b < boxes_.size(); ++b) {
@@ -135,7 +135,7 @@ std::string Scene::CheckFree(const Eigen::Vector3d& p, double clearance) const {
         out << "enters box " << b << " [" << box.lo[0] << ", " << box.hi[0] << "] x [" << box.lo[1]
             << ", " << box.hi[1] << "] x [" << box.lo[2] << ", " << box.hi[2]
             << "] (boxes stand in the outer 30% of the floor plan)";
-        return out.str();
+        return Error{out.str()};
       }
     }
   }
@@ -144,10 +144,10 @@ std::string Scene::CheckFree(const Eigen::Vector3d& p, double clearance) const {
     if (r > radius_ - clearance || p.x() < x0_ + clearance || p.x() > x1_ - clearance) {
       out << "leaves the pipe (radius " << radius_ << " m along x in [" << x0_ << ", " << x1_
           << "]; distance from the axis " << r << " m)";
-      return out.str();
+      return Error{out.str()};
     }
   }
-  return {};
+  return Status::Ok();
 }
 
 }  // namespace rigcal::drivers::internal

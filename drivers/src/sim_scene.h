@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/status.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "sim_texture.h"
 #include "sim_texture_sampling.h"
@@ -46,9 +47,9 @@ class Scene {
   }
   // First hit distance in units of |d|, double precision; nullopt when the ray hits nothing.
   std::optional<double> Distance(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
-  // Empty when p is in free space at least `clearance` away from every surface; else what p
-  // is too close to or inside of.
-  std::string CheckFree(const Eigen::Vector3d& p, double clearance) const;
+  // Ok when p is in free space at least `clearance` away from every surface; else an error
+  // saying what p is too close to or inside of ("leaves the room [...]", "enters box 3 [...]").
+  Status CheckFree(const Eigen::Vector3d& p, double clearance) const;
 
   // The texture of surface `surface` (>= 0), sampled at the Hit's texture coordinates.
   const TileView& Texture(int32_t surface) const { return tile_views_[surfaces_[surface].tile]; }

@@ -100,8 +100,7 @@ std::optional<double> SimulatedRig::CastRay(const Eigen::Vector3d& origin,
 }
 
 Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec) {
-  std::string error;
-  if (!spec.Check(&error)) return Error{error};
+  if (Status status = spec.Check(); !status.ok()) return status;
   const auto start = std::chrono::steady_clock::now();
   for (Pose& m : spec.master_from_camera) m.q.normalize();
   for (auto& w : spec.waypoints) w.world_from_master.normalize();
@@ -135,12 +134,11 @@ Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec) {
   for (int64_t k = 0; k < data->num_frames; ++k) {
     for (size_t c = 0; c < s.names.size(); ++c) {
       const Eigen::Vector3d p = data->CameraPose(static_cast<int>(c), data->StreamTime(k)).C;
-      const std::string where = data->scene.CheckFree(p, kMinClearance);
-      if (!where.empty()) {
+      if (const Status free = data->scene.CheckFree(p, kMinClearance); !free.ok()) {
         std::ostringstream msg;
         msg << "trajectory: camera " << s.names[c] << " at stream time " << data->StreamTime(k)
             << " s (frame " << k << ") is at (" << p.x() << ", " << p.y() << ", " << p.z()
-            << ") and " << where;
+            << ") and " << free.message();
         return Error{msg.str()};
       }
     }

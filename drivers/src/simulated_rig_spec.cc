@@ -78,12 +78,9 @@ double SimulatedRigSpec::TexelSize() const {
   return 0.01;
 }
 
-bool SimulatedRigSpec::Check(std::string* error) const {
+Status SimulatedRigSpec::Check() const {
   std::ostringstream e;
-  auto fail = [&]() {
-    if (error) *error = e.str();
-    return false;
-  };
+  auto fail = [&]() -> Status { return Error{e.str()}; };
   // Cameras.
   if (names.empty()) {
     e << "names: no cameras";
@@ -247,8 +244,7 @@ bool SimulatedRigSpec::Check(std::string* error) const {
     e << "render_block: " << render_block << " outside [1, 32]";
     return fail();
   }
-  if (error) error->clear();
-  return true;
+  return Status::Ok();
 }
 
 double SimulatedRigSpec::TrajectoryDuration() const {

@@ -102,9 +102,10 @@ TEST(SimulatedRigSpec, CheckNamesTheField) {
   for (const Case& c : cases) {
     SimulatedRigSpec spec = TwoCameraSpec();
     c.change(&spec);
-    std::string error;
-    EXPECT_FALSE(spec.Check(&error)) << c.field;
-    EXPECT_NE(error.find(c.field), std::string::npos) << "'" << c.field << "' not in: " << error;
+    const Status status = spec.Check();
+    EXPECT_FALSE(status.ok()) << c.field;
+    EXPECT_NE(status.message().find(c.field), std::string::npos)
+        << "'" << c.field << "' not in: " << status.message();
     EXPECT_FALSE(MakeSimulatedRig(spec)) << c.field;
   }
 }
@@ -231,7 +232,8 @@ TEST(SimulatedRig, WallEdgeAppearsWhereTheModelProjectsIt) {
 // point that A's pixel sees must show the same texture.
 double RegistrationError(const SimulatedRig& rig, int cam_a, const Pose& a, int cam_b,
                          const Pose& b, const camera::CameraModel& model_a,
-                         const camera::CameraModel& model_b, const Eigen::Vector2d& shift, int* count) {
+                         const camera::CameraModel& model_b, const Eigen::Vector2d& shift,
+                         int* count) {
   const cv::Mat image_a = rig.RenderView(cam_a, a, 1);
   const cv::Mat image_b = rig.RenderView(cam_b, b, 1);
   double sum = 0;

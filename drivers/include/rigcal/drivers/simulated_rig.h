@@ -132,9 +132,9 @@ class SimulatedRig {
   //                 entry per slave: q_wxyz, C, scale 1).
   // Stamps are FrameTimeNs(k): in realtime mode they match the devices' stamps only once the
   // rig clock has started (write the truth after the run; before, stamps count from 0).
-  // Every file is written atomically (temporary file + rename). Returns an empty string or an
-  // error naming the file.
-  [[nodiscard]] std::string WriteGroundTruth(const std::string& dir) const;
+  // Every file is written atomically (temporary file + rename). Ok, or an error naming the
+  // file or directory.
+  Status WriteGroundTruth(const std::string& dir) const;
 
  private:
   friend Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec);

@@ -79,6 +79,7 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_model.h"
 
@@ -135,9 +136,9 @@ struct SimulatedRigSpec {
   std::map<std::string, double> fail_after_s;  // camera name -> stream time of failure, >= 0
   int render_block = 4;                        // [1, 32]
 
-  // Empty error when consistent; else `*error` names the field and the violated constraint.
+  // Ok when consistent; else the first violated constraint as "<field>: <constraint>".
   // Checks the cameras too (names, models, mountings), so it is meant for a complete spec.
-  bool Check(std::string* error) const;
+  Status Check() const;
 
   // The scene size / texel size in use (the type's defaults when zero).
   Eigen::Vector3d SceneSize() const;
