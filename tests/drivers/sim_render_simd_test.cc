@@ -7,21 +7,11 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "drivers/shipped_sim_rig.h"
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/io/rig_config.h"
 
 namespace rigcal::drivers {
 namespace {
-
-SimulatedRig LoadRig(const std::string& file) {
-  auto config = tools::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
-  EXPECT_TRUE(config.ok()) << config.error();
-  SimulatedRigSpec spec = *config->simulated_source;
-  spec.realtime = false;
-  auto rig = MakeSimulatedRig(spec);
-  EXPECT_TRUE(rig.ok()) << rig.error();
-  return std::move(rig).value();
-}
 
 struct Difference {
   double max = 0.0;    // grey levels
@@ -46,7 +36,7 @@ void Compare(const cv::Mat& simd, const cv::Mat& scalar, Difference* difference)
 // Frames spread over the run of every camera of the rig of `file`, as the devices render them
 // (noise, blur) and noise-free at two render blocks, with both kernels.
 void ExpectKernelsAgree(const std::string& file) {
-  const SimulatedRig rig = LoadRig(file);
+  const SimulatedRig rig = testing::LoadShippedSimulatedRig(file);
   Difference frames, views;
   const int64_t n = rig.num_frames();
   for (const int64_t k : {int64_t{0}, n / 3, (2 * n) / 3, n - 1}) {
