@@ -1,7 +1,7 @@
 #pragma once
-// Scene and renderer of the simulated rig: axis-aligned textured planes and boxes and a pipe
-// (cylinder along x), procedural mip-mapped textures, and a ray-casting renderer through
-// precomputed per-pixel bearings. Private to drivers/.
+// Scene of the simulated rig: axis-aligned textured planes and boxes and a pipe (cylinder along
+// x), built from the spec; ray casting against it (sim_ray_cast.cc) and the free-space check of
+// the trajectory. Private to drivers/.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -10,31 +10,12 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/camera/camera_model.h"
+#include "sim_texture.h"
+#include "sim_texture_sampling.h"
 
 namespace rigcal::drivers::internal {
-
-// A square, power-of-two, periodic grey texture with its mip pyramid (2x2 box filtered), in the
-// "row pair" layout of the sampler: level l (size n = size >> l) holds n rows of
-// n + kTexturePairPad two-byte entries; entry (x, y) is texel (x, y) followed by texel
-// (x, y + 1 mod n); entry n of a row repeats entry 0 (the rest of the padding is zero).
-inline constexpr int kTexturePairPad = 16;
-struct TextureTile {
-  int log2_size = 0;
-  std::vector<std::vector<uint8_t>> pairs;
-  // Texel (x, y) of level l.
-  uint8_t At(int l, int x, int y) const {
-    const size_t n = size_t{1} << (log2_size - l);
-    return pairs[l][2 * (static_cast<size_t>(y) * (n + kTexturePairPad) + static_cast<size_t>(x))];
-  }
-};
-
-// Scale-invariant "dead leaves" texture: opaque axis-aligned rectangles, rotated rectangles and
-// discs of random grey with sizes from 1.5 to size/8 texels (density ~ r^-3), lightly blurred.
-// Periodic (tiles seamlessly), deterministic for `seed`.
-TextureTile MakeDeadLeavesTile(int log2_size, uint64_t seed);
 
 inline constexpr int32_t kSky = -1;      // the ray leaves the scene (sky)
 inline constexpr int32_t kInvalid = -2;  // no valid bearing at this pixel (outside the lens)
@@ -66,18 +47,12 @@ class Scene {
   }
   // First hit distance in units of |d|, double precision; nullopt when the ray hits nothing.
   std::optional<double> Distance(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
-  // Empty when p is in free space at least `clearance` away from every surface; else what p
-  // is too close to or inside of.
-  std::string CheckFree(const Eigen::Vector3d& p, double clearance) const;
+  // Ok when p is in free space at least `clearance` away from every surface; else an error
+  // saying what p is too close to or inside of ("leaves the room [...]", "enters box 3 [...]").
+  Status CheckFree(const Eigen::Vector3d& p, double clearance) const;
 
-  // Trilinear texture sample of surface `surface` at level-0 texel coordinates (u, v).
-  float Sample(int32_t surface, float u, float v, float lod) const;
-  // Adds weight * intensity to the nx x ny pixels of one block (rows `stride` floats apart)
-  // whose corner nodes (h00 top-left, h10 top-right, h01 bottom-left, h11 bottom-right, `block`
-  // pixels apart) all hit the same surface or all see the sky: texture coordinates and mip
-  // level are interpolated bilinearly between the corners.
-  void FillBlock(const Hit& h00, const Hit& h10, const Hit& h01, const Hit& h11, int block, int nx,
-                 int ny, float weight, float* out, int stride) const;
+  // The texture of surface `surface` (>= 0), sampled at the Hit's texture coordinates.
+  const TileView& Texture(int32_t surface) const { return tile_views_[surfaces_[surface].tile]; }
   // Texture coordinate period along u of a surface (0: none). A block whose corners span more
   // than half of it straddles a seam and must not be interpolated.
   float UPeriod(int32_t surface) const { return surfaces_[surface].u_period; }
@@ -99,12 +74,6 @@ class Scene {
     double hi[3];
     int32_t first_surface;  // + 2 * axis + (0: lo face, 1: hi face)
   };
-
-  struct TileView {
-    const uint8_t* level[16];
-    int num_levels;
-  };
-  static float SampleTile(const TileView& tile, float u, float v, float lod);
 
   // First surface along o + t d; `boxes`: null = every box that can be hit (band culling),
   // else only these `num_boxes` boxes.
@@ -132,32 +101,5 @@ class Scene {
   std::vector<std::shared_ptr<const TextureTile>> tiles_;
   std::vector<TileView> tile_views_;  // per tile: level pointers, for the sampler
 };
-
-// Per camera: the unit bearing of every pixel (camera frame, NaN x when the pixel has none)
-// and the local pixel angle, computed once.
-struct CameraTables {
-  std::shared_ptr<const camera::CameraModel> model;
-  int width = 0;
-  int height = 0;
-  std::vector<float> bearings;  // 3 per pixel, row-major
-};
-CameraTables MakeCameraTables(std::shared_ptr<const camera::CameraModel> model);
-
-// Ray-casting nodes every `block` pixels (block >= 2): node (i, j) sits at pixel
-// (i * block, j * block); nodes just beyond the right/bottom edge close the last blocks.
-struct NodeGrid {
-  int block = 0;
-  int nodes_x = 0;
-  int nodes_y = 0;
-  std::vector<float> bearings;     // 3 per node, NaN x when invalid
-  std::vector<float> pixel_angle;  // per node, radians per pixel
-};
-NodeGrid MakeNodeGrid(const CameraTables& camera, int block);
-
-// Renders the view of `camera` at world_from_camera and adds weight * intensity to acc
-// (width * height floats). `grid` null or block < 2: every pixel is cast. `hits`: scratch.
-void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
-                      const Pose& world_from_camera, float weight, float* acc,
-                      std::vector<Hit>* hits);
 
 }  // namespace rigcal::drivers::internal

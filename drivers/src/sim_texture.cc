@@ -1,11 +1,15 @@
 // Procedural textures of the simulated rig.
+#include "sim_texture.h"
+
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "sim_random.h"
-#include "sim_scene.h"
 
 namespace rigcal::drivers::internal {
 namespace {
@@ -139,6 +143,17 @@ TextureTile MakeDeadLeavesTile(int log2_size, uint64_t seed) {
     }
     tile.pairs.push_back(std::move(pairs));
   }
+  return tile;
+}
+
+std::shared_ptr<const TextureTile> SharedDeadLeavesTile(int log2_size, uint64_t seed) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, uint64_t>, std::weak_ptr<const TextureTile>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  std::weak_ptr<const TextureTile>& entry = cache[{log2_size, seed}];
+  if (auto tile = entry.lock()) return tile;
+  auto tile = std::make_shared<const TextureTile>(MakeDeadLeavesTile(log2_size, seed));
+  entry = tile;
   return tile;
 }
 

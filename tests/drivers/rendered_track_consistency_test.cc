@@ -14,8 +14,8 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "drivers/shipped_sim_rig.h"
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/io/rig_config.h"
 
 namespace rigcal::drivers {
 namespace {
@@ -102,18 +102,8 @@ TrackStats TrackAgainstProjection(const SimulatedRig& rig, int camera, int64_t f
   return stats;
 }
 
-SimulatedRig LoadRig(const std::string& file) {
-  auto config = tools::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
-  EXPECT_TRUE(config.ok()) << config.error();
-  SimulatedRigSpec spec = *config->simulated_source;
-  spec.realtime = false;
-  auto rig = MakeSimulatedRig(spec);
-  EXPECT_TRUE(rig.ok()) << rig.error();
-  return std::move(rig).value();
-}
-
 void ExpectConsistent(const std::string& file) {
-  const SimulatedRig rig = LoadRig(file);
+  const SimulatedRig rig = testing::LoadShippedSimulatedRig(file);
   for (int camera = 0; camera < rig.num_cameras(); ++camera) {
     for (bool noise : {false, true}) {
       // One frame: the images must agree with the model to KLT's sub-pixel accuracy. Over

@@ -47,7 +47,8 @@ TEST(SimulatedGroundTruth, FilesRoundTrip) {
   const fs::path dir =
       fs::temp_directory_path() / ("rigcal_sim_truth_" + std::to_string(::getpid())) / "sub";
   fs::remove_all(dir.parent_path());
-  ASSERT_EQ(rig->WriteGroundTruth(dir.string()), "");
+  const Status written = rig->WriteGroundTruth(dir.string());
+  ASSERT_TRUE(written.ok()) << written.message();
 
   // truth.yaml: one entry per slave, readable by `rigcal solve --truth`.
   auto truth = tools::ReadRigYaml((dir / "truth.yaml").string());
@@ -103,8 +104,10 @@ TEST(SimulatedGroundTruth, FilesRoundTrip) {
     EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
   }
   // An unwritable directory is an error that names it.
-  const std::string error = rig->WriteGroundTruth("/proc/rigcal_no_such_dir");
-  EXPECT_NE(error.find("/proc/rigcal_no_such_dir"), std::string::npos) << error;
+  const Status unwritable = rig->WriteGroundTruth("/proc/rigcal_no_such_dir");
+  EXPECT_FALSE(unwritable.ok());
+  EXPECT_NE(unwritable.message().find("/proc/rigcal_no_such_dir"), std::string::npos)
+      << unwritable.message();
   fs::remove_all(dir.parent_path());
 }
 

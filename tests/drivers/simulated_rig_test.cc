@@ -106,9 +106,10 @@ TEST(SimulatedRigSpec, CheckNamesTheField) {
   for (const Case& c : cases) {
     SimulatedRigSpec spec = TwoCameraSpec();
     c.change(&spec);
-    std::string error;
-    EXPECT_FALSE(spec.Check(&error)) << c.field;
-    EXPECT_NE(error.find(c.field), std::string::npos) << "'" << c.field << "' not in: " << error;
+    const Status status = spec.Check();
+    EXPECT_FALSE(status.ok()) << c.field;
+    EXPECT_NE(status.message().find(c.field), std::string::npos)
+        << "'" << c.field << "' not in: " << status.message();
     EXPECT_FALSE(MakeSimulatedRig(spec)) << c.field;
   }
 }

@@ -250,8 +250,8 @@ TEST(SimulatedSourceYaml, RigConfigFillsCamerasAndChecksTheSpec) {
   ASSERT_EQ(spec.cameras.size(), 2u);
   EXPECT_EQ(spec.cameras[1]->width(), 64);
   EXPECT_DOUBLE_EQ(spec.master_from_camera[1].C.x(), -0.5);
-  std::string error;
-  EXPECT_TRUE(spec.Check(&error)) << error;
+  const Status status = spec.Check();
+  EXPECT_TRUE(status.ok()) << status.message();
   EXPECT_TRUE(drivers::MakeSimulatedRig(spec));
 
   auto unknown = LoadRigConfig(Write("rig_bad.yaml", std::string(kRig) +

@@ -198,8 +198,8 @@ int RunRun(const RunArgs& args) {
     }
     rig = std::move(*made);
     if (!args.truth_dir.empty()) {
-      if (const std::string error = rig->WriteGroundTruth(args.truth_dir); !error.empty()) {
-        std::cerr << "rigcal run: " << error << "\n";
+      if (const Status status = rig->WriteGroundTruth(args.truth_dir); !status.ok()) {
+        std::cerr << "rigcal run: " << status.message() << "\n";
         return kExitError;
       }
     }
@@ -323,8 +323,8 @@ int RunRun(const RunArgs& args) {
   if (rig && !args.truth_dir.empty() && !args.poses_dir.empty()) {
     // In real time the devices' stamps start with the rig clock: rewrite the truth now that
     // it runs, so its stamps match the written poses (before the run they count from 0).
-    if (const std::string error = rig->WriteGroundTruth(args.truth_dir); !error.empty()) {
-      std::cerr << "rigcal run: " << error << "\n";
+    if (const Status status = rig->WriteGroundTruth(args.truth_dir); !status.ok()) {
+      std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
   }

@@ -415,8 +415,9 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
       master_from_camera.C = truth.C;
       spec->master_from_camera.push_back(master_from_camera);
     }
-    std::string source_error;
-    if (!spec->Check(&source_error)) return Error{path + ": source: " + source_error};
+    if (const Status status = spec->Check(); !status.ok()) {
+      return status.Prefixed(path + ": source");
+    }
     config.simulated_source = std::move(*spec);
   }
   return config;
