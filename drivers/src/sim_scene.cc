@@ -8,9 +8,9 @@
 #include <cstring>
 #include <limits>
 #include <map>
-#include <mutex>
 #include <sstream>
 
+#include "rigcal/calib/thread_annotations.h"
 #include "sim_random.h"
 
 namespace rigcal::drivers::internal {
@@ -112,13 +112,19 @@ inline uint32_t ToFixedStep(float step) {
 
 inline float SkyIntensity(float dz) { return 160.f + 60.f * dz; }
 
+// The process-wide tile cache of CachedTile; scenes may be built on any thread.
+struct TileCache {
+  Mutex mutex;
+  std::map<std::pair<int, uint64_t>, std::weak_ptr<const TextureTile>> tiles
+      RIGCAL_GUARDED_BY(mutex);
+};
+
 // Tiles are immutable and deterministic for their seed: rigs built with the same seed (tests,
 // a rig rebuilt with other options) share them instead of generating them again.
 std::shared_ptr<const TextureTile> CachedTile(int log2_size, uint64_t seed) {
-  static std::mutex mutex;
-  static std::map<std::pair<int, uint64_t>, std::weak_ptr<const TextureTile>> cache;
-  std::lock_guard<std::mutex> lock(mutex);
-  std::weak_ptr<const TextureTile>& entry = cache[{log2_size, seed}];
+  static TileCache cache;
+  MutexLock lock(cache.mutex);
+  std::weak_ptr<const TextureTile>& entry = cache.tiles[{log2_size, seed}];
   if (auto tile = entry.lock()) return tile;
   auto tile = std::make_shared<const TextureTile>(MakeDeadLeavesTile(log2_size, seed));
   entry = tile;

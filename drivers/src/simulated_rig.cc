@@ -13,11 +13,11 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <mutex>
 #include <set>
 #include <sstream>
 
 #include "rigcal/calib/logging.h"
+#include "rigcal/calib/thread_annotations.h"
 #include "sim_random.h"
 #include "sim_scene.h"
 #include "sim_trajectory.h"
@@ -111,22 +111,22 @@ int64_t MonotonicNs() {
 }
 
 // The shared time base of a realtime rig: CLOCK_MONOTONIC (std::chrono::steady_clock on
-// Linux) at the first Grab of any of its devices.
+// Linux) at the first Grab of any of its devices, whose capture threads share it.
 struct RigClock {
-  std::mutex mutex;
-  bool started = false;  // guarded by mutex
-  int64_t epoch_ns = 0;  // guarded by mutex
+  Mutex mutex;
+  bool started RIGCAL_GUARDED_BY(mutex) = false;
+  int64_t epoch_ns RIGCAL_GUARDED_BY(mutex) = 0;
 
-  int64_t StartOnce() {
-    std::lock_guard<std::mutex> lock(mutex);
+  int64_t StartOnce() RIGCAL_EXCLUDES(mutex) {
+    MutexLock lock(mutex);
     if (!started) {
       started = true;
       epoch_ns = MonotonicNs();
     }
     return epoch_ns;
   }
-  int64_t Epoch() {
-    std::lock_guard<std::mutex> lock(mutex);
+  int64_t Epoch() RIGCAL_EXCLUDES(mutex) {
+    MutexLock lock(mutex);
     return epoch_ns;
   }
 };
@@ -449,12 +449,14 @@ bool SimulatedRigSpec::Check(std::string* error) const {
 // ---------------------------------------------------------------------------------------------
 // SimulatedCamera
 
+// The interrupt flag (Interrupt on any thread, Grab on the capture thread) and the capture
+// thread's render buffers.
 struct SimulatedCamera::State {
-  std::mutex mutex;
-  std::condition_variable cv;
-  bool interrupted = false;  // guarded by mutex
-  std::vector<float> acc;
-  std::vector<internal::Hit> hits;
+  Mutex mutex;
+  std::condition_variable cv;  // signalled by Interrupt
+  bool interrupted RIGCAL_GUARDED_BY(mutex) = false;
+  std::vector<float> acc;           // the capture thread's
+  std::vector<internal::Hit> hits;  // the capture thread's
 };
 
 SimulatedCamera::SimulatedCamera(std::shared_ptr<const internal::SimulatedRigData> data,
@@ -472,7 +474,7 @@ double SimulatedCamera::frame_rate_hz() const { return data_->spec.frame_rate_hz
 
 void SimulatedCamera::Interrupt() {
   {
-    std::lock_guard<std::mutex> lock(state_->mutex);
+    MutexLock lock(state_->mutex);
     state_->interrupted = true;
   }
   state_->cv.notify_all();
@@ -483,13 +485,15 @@ Expected<std::optional<Frame>> SimulatedCamera::Grab() {
   const SimulatedRigSpec& spec = d.spec;
   // Waits until CLOCK_MONOTONIC reaches t_ns; false when interrupted.
   auto wait_until = [this](int64_t t_ns) {
-    std::unique_lock<std::mutex> lock(state_->mutex);
+    MutexLock lock(state_->mutex);
     const auto deadline = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(t_ns));
-    state_->cv.wait_until(lock, deadline, [this] { return state_->interrupted; });
+    while (!state_->interrupted) {
+      if (lock.WaitUntil(state_->cv, deadline) == std::cv_status::timeout) break;
+    }
     return !state_->interrupted;
   };
   {
-    std::lock_guard<std::mutex> lock(state_->mutex);
+    MutexLock lock(state_->mutex);
     if (state_->interrupted) return std::optional<Frame>();
   }
   const std::optional<double> fail_after = d.fail_after_s[camera_];
