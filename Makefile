@@ -33,7 +33,9 @@ demo: build
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
 # Whole suite, then the calib tests once more under ASan+UBSan and the threaded ones under TSan
-# (sanitizer builds compile only the calib library and its own tests: label calib_core).
+# (sanitizer builds compile only the calib library and its own tests: label calib_core). The
+# suite includes the static thread-contract check (label threads: clang -Wthread-safety over
+# the threaded sources with $(BUILD_DIR)/compile_commands.json, no extra build tree).
 test: build test-asan test-tsan
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
 

@@ -23,6 +23,7 @@ PACKAGES=(
   liblcm-dev           # LCM messaging: RIGCAL_EXTRINSICS/STATUS/POSE/IMAGE (lcmtypes/, tools/)
   liblcm-bin           # lcm-gen (build-time message generation), lcm-logger, lcm-logplayer
   libglib2.0-dev       # lcm.pc requires glib-2.0 and gthread-2.0
+  clang                # ctest architecture/threads: clang's -Wthread-safety on the annotated locks
 )
 
 missing=()

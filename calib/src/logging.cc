@@ -3,16 +3,18 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 
 #include <cstdlib>
-#include <mutex>
+
+#include "rigcal/calib/thread_annotations.h"
 
 namespace rigcal {
 namespace {
 
-std::mutex g_mutex;
-spdlog::level::level_enum g_level = spdlog::level::info;
-bool g_level_from_env_done = false;
+// ModuleLogger and SetLogLevel may be called from any thread.
+Mutex g_mutex;
+spdlog::level::level_enum g_level RIGCAL_GUARDED_BY(g_mutex) = spdlog::level::info;
+bool g_level_from_env_done RIGCAL_GUARDED_BY(g_mutex) = false;
 
-void LevelFromEnvironmentLocked() {
+void LevelFromEnvironmentLocked() RIGCAL_REQUIRES(g_mutex) {
   if (g_level_from_env_done) return;
   g_level_from_env_done = true;
   if (const char* env = std::getenv("RIGCAL_LOG_LEVEL")) {
@@ -24,7 +26,7 @@ void LevelFromEnvironmentLocked() {
 }  // namespace
 
 std::shared_ptr<spdlog::logger> ModuleLogger(const std::string& module) {
-  std::lock_guard<std::mutex> lock(g_mutex);
+  MutexLock lock(g_mutex);
   LevelFromEnvironmentLocked();
   if (auto existing = spdlog::get(module)) return existing;
   auto logger = spdlog::stderr_color_mt(module);
@@ -36,7 +38,7 @@ std::shared_ptr<spdlog::logger> ModuleLogger(const std::string& module) {
 bool SetLogLevel(const std::string& level) {
   const auto parsed = spdlog::level::from_str(level);
   if (parsed == spdlog::level::off && level != "off") return false;
-  std::lock_guard<std::mutex> lock(g_mutex);
+  MutexLock lock(g_mutex);
   g_level_from_env_done = true;
   g_level = parsed;
   spdlog::apply_all([parsed](const std::shared_ptr<spdlog::logger>& l) { l->set_level(parsed); });

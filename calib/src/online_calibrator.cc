@@ -55,15 +55,17 @@ PushResult OnlineCalibrator::Push(const CameraPose& pose) { return sync_.Push(po
 void OnlineCalibrator::Flush() {
   sync_.Flush();
   const uint64_t target = sync_.stats().sets_emitted;
-  std::unique_lock<std::mutex> lock(estimator_mutex_);
+  MutexLock lock(estimator_mutex_);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   // Sets dropped by a full ready queue never arrive: wait for the queue to drain instead.
-  consumed_.wait_for(lock, std::chrono::seconds(30),
-                     [&] { return sets_consumed_ >= target || sync_.stats().ready_fill == 0; });
+  while (sets_consumed_ < target && sync_.stats().ready_fill != 0) {
+    if (lock.WaitUntil(consumed_, deadline) == std::cv_status::timeout) break;
+  }
 }
 
 void OnlineCalibrator::Stop() {
   {
-    std::lock_guard<std::mutex> lock(stop_mutex_);
+    MutexLock lock(stop_mutex_);
     stopping_ = true;
   }
   stop_cv_.notify_all();
@@ -73,17 +75,17 @@ void OnlineCalibrator::Stop() {
 }
 
 RigEstimate OnlineCalibrator::Estimate() const {
-  std::lock_guard<std::mutex> lock(estimator_mutex_);
+  MutexLock lock(estimator_mutex_);
   return estimator_.Estimate();
 }
 
 std::string OnlineCalibrator::SerializeState() const {
-  std::lock_guard<std::mutex> lock(estimator_mutex_);
+  MutexLock lock(estimator_mutex_);
   return estimator_.SerializeState();
 }
 
 bool OnlineCalibrator::RestoreState(const std::string& text, std::string* error) {
-  std::lock_guard<std::mutex> lock(estimator_mutex_);
+  MutexLock lock(estimator_mutex_);
   return estimator_.RestoreState(text, error);
 }
 
@@ -92,7 +94,7 @@ void OnlineCalibrator::EstimatorLoop() {
   while (sync_.Pop(&set, std::chrono::milliseconds(200)) || !sync_.stopped()) {
     if (set.poses.empty()) continue;
     {
-      std::lock_guard<std::mutex> lock(estimator_mutex_);
+      MutexLock lock(estimator_mutex_);
       estimator_.AddSet(set.t_ns, set.poses);
       ++sets_consumed_;
     }
@@ -104,28 +106,36 @@ void OnlineCalibrator::EstimatorLoop() {
 
 void OnlineCalibrator::RefinementLoop() {
   auto log = ModuleLogger("calib");
-  const auto period = std::chrono::duration<double>(options_.refine_period_s);
-  std::unique_lock<std::mutex> stop_lock(stop_mutex_);
-  while (!stop_cv_.wait_for(stop_lock, period, [this] { return stopping_; })) {
-    stop_lock.unlock();
+  const auto period = std::chrono::ceil<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.refine_period_s));
+  MutexLock stop_lock(stop_mutex_);
+  while (true) {
+    // Sleeps one period unless Stop comes first (std::condition_variable::wait_for with a
+    // predicate).
+    const auto deadline = std::chrono::steady_clock::now() + period;
+    while (!stopping_) {
+      if (stop_lock.WaitUntil(stop_cv_, deadline) == std::cv_status::timeout) break;
+    }
+    if (stopping_) break;
+    stop_lock.Unlock();
     RefineNow();
-    stop_lock.lock();
+    stop_lock.Lock();
   }
 }
 
 void OnlineCalibrator::RefineNow() {
-  std::lock_guard<std::mutex> serial(refine_mutex_);
+  MutexLock serial(refine_mutex_);
   for (size_t i = 0; i + 1 < names_.size(); ++i) {
     RefinementJob job;
     {
-      std::lock_guard<std::mutex> lock(estimator_mutex_);
+      MutexLock lock(estimator_mutex_);
       job = estimator_.MakeRefinementJob(static_cast<int>(i));
     }
     if (!job.start.usable() || static_cast<int>(job.motions.size()) + job.prior.motions < 10) {
       continue;
     }
     const SlaveCalibration refined = RefineWindow(job);
-    std::lock_guard<std::mutex> lock(estimator_mutex_);
+    MutexLock lock(estimator_mutex_);
     if (estimator_.ApplyRefinement(job, refined)) ++refinements_applied_;
   }
 }

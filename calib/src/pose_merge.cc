@@ -15,24 +15,24 @@ PoseMerge::PoseMerge(int num_cameras, int64_t lead_ns, Sink sink)
       held_(static_cast<size_t>(num_cameras)) {}
 
 void PoseMerge::Deliver(int camera, int64_t frame_t_ns, std::vector<CameraPose> poses) {
-  std::unique_lock<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   const auto c = static_cast<size_t>(camera);
   for (CameraPose& pose : poses) held_[c].push_back({frame_t_ns, std::move(pose)});
   progress_[c] = frame_t_ns;
   ReleaseSafe();
   changed_.notify_all();
-  changed_.wait(lock, [&] { return stopped_ || !Lagging(camera, frame_t_ns); });
+  while (!stopped_ && Lagging(camera, frame_t_ns)) lock.Wait(changed_);
 }
 
 void PoseMerge::End(int camera) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   ended_[static_cast<size_t>(camera)] = true;
   ReleaseSafe();
   changed_.notify_all();
 }
 
 void PoseMerge::Stop() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   stopped_ = true;
   changed_.notify_all();
 }

@@ -38,6 +38,7 @@ Expected<std::unique_ptr<ImageFolderDevice>> ImageFolderDevice::Open(const std::
   device->name_ = std::move(name);
   device->camera_index_ = camera_index;
 
+  std::vector<std::string> missing;  // skipped_ from the start (the device is not shared yet)
   std::string line;
   int line_number = 0;
   while (std::getline(in, line)) {
@@ -75,16 +76,19 @@ Expected<std::unique_ptr<ImageFolderDevice>> ImageFolderDevice::Open(const std::
     entry.path = (dir / "data" / file).string();
     std::error_code exists_error;
     entry.exists = std::filesystem::is_regular_file(entry.path, exists_error);
-    if (!entry.exists) device->skipped_.push_back(entry.path);
+    if (!entry.exists) missing.push_back(entry.path);
     device->entries_.push_back(std::move(entry));
   }
   if (device->entries_.empty()) {
     return Error{"camera " + device->name_ + ": " + csv.string() + " lists no valid image"};
   }
-  if (!device->skipped_.empty()) {
+  if (!missing.empty()) {
     log->warn("camera {}: {} of {} images listed in {} are missing (first: {})", device->name_,
-              device->skipped_.size(), device->entries_.size(), csv.string(),
-              device->skipped_.front());
+              missing.size(), device->entries_.size(), csv.string(), missing.front());
+  }
+  {
+    MutexLock lock(device->mutex_);
+    device->skipped_ = std::move(missing);
   }
 
   if (frame_rate_hz > 0.0) {
@@ -116,7 +120,7 @@ Expected<std::optional<Frame>> ImageFolderDevice::Grab() {
     if (!image.empty() && image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);
     if (image.empty() || image.type() != CV_8UC1) {
       ModuleLogger("drivers")->warn("camera {}: cannot read image {}; skipped", name_, entry.path);
-      std::lock_guard<std::mutex> lock(mutex_);
+      MutexLock lock(mutex_);
       skipped_.push_back(entry.path);
       continue;
     }
@@ -131,12 +135,12 @@ Expected<std::optional<Frame>> ImageFolderDevice::Grab() {
 }
 
 std::vector<std::string> ImageFolderDevice::skipped_files() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   return skipped_;
 }
 
 size_t ImageFolderDevice::skipped_count() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(mutex_);
   return skipped_.size();
 }
 

@@ -3,7 +3,8 @@
 
 #include <chrono>
 #include <cstdint>
-#include <mutex>
+
+#include "rigcal/calib/thread_annotations.h"
 
 namespace rigcal::drivers::internal {
 
@@ -17,20 +18,20 @@ inline int64_t MonotonicNs() {
 // The shared time base of a realtime rig: CLOCK_MONOTONIC (std::chrono::steady_clock on
 // Linux) at the first Grab of any of its devices.
 struct RigClock {
-  std::mutex mutex;
-  bool started = false;  // guarded by mutex
-  int64_t epoch_ns = 0;  // guarded by mutex
+  Mutex mutex;
+  bool started RIGCAL_GUARDED_BY(mutex) = false;
+  int64_t epoch_ns RIGCAL_GUARDED_BY(mutex) = 0;
 
-  int64_t StartOnce() {
-    std::lock_guard<std::mutex> lock(mutex);
+  int64_t StartOnce() RIGCAL_EXCLUDES(mutex) {
+    MutexLock lock(mutex);
     if (!started) {
       started = true;
       epoch_ns = MonotonicNs();
     }
     return epoch_ns;
   }
-  int64_t Epoch() {
-    std::lock_guard<std::mutex> lock(mutex);
+  int64_t Epoch() RIGCAL_EXCLUDES(mutex) {
+    MutexLock lock(mutex);
     return epoch_ns;
   }
 };

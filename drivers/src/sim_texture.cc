@@ -4,11 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <mutex>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <utility>
 
+#include "rigcal/calib/thread_annotations.h"
 #include "sim_random.h"
 
 namespace rigcal::drivers::internal {
@@ -146,11 +146,17 @@ TextureTile MakeDeadLeavesTile(int log2_size, uint64_t seed) {
   return tile;
 }
 
+// The process-wide tile cache of SharedDeadLeavesTile; scenes may be built on any thread.
+struct TileCache {
+  Mutex mutex;
+  std::map<std::pair<int, uint64_t>, std::weak_ptr<const TextureTile>> tiles
+      RIGCAL_GUARDED_BY(mutex);
+};
+
 std::shared_ptr<const TextureTile> SharedDeadLeavesTile(int log2_size, uint64_t seed) {
-  static std::mutex mutex;
-  static std::map<std::pair<int, uint64_t>, std::weak_ptr<const TextureTile>> cache;
-  std::lock_guard<std::mutex> lock(mutex);
-  std::weak_ptr<const TextureTile>& entry = cache[{log2_size, seed}];
+  static TileCache cache;
+  MutexLock lock(cache.mutex);
+  std::weak_ptr<const TextureTile>& entry = cache.tiles[{log2_size, seed}];
   if (auto tile = entry.lock()) return tile;
   auto tile = std::make_shared<const TextureTile>(MakeDeadLeavesTile(log2_size, seed));
   entry = tile;

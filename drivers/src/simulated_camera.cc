@@ -4,10 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
-#include <mutex>
 #include <sstream>
 
 #include "rigcal/calib/logging.h"
+#include "rigcal/calib/thread_annotations.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "sim_rig_clock.h"
 #include "sim_rig_data.h"
@@ -17,9 +17,9 @@ namespace rigcal::drivers {
 using internal::MonotonicNs;
 
 struct SimulatedCamera::State {
-  std::mutex mutex;
-  std::condition_variable cv;
-  bool interrupted = false;  // guarded by mutex
+  Mutex mutex;
+  std::condition_variable cv;  // signalled by Interrupt
+  bool interrupted RIGCAL_GUARDED_BY(mutex) = false;
   std::vector<float> acc;
   std::vector<internal::Hit> hits;
 };
@@ -39,7 +39,7 @@ double SimulatedCamera::frame_rate_hz() const { return data_->spec.frame_rate_hz
 
 void SimulatedCamera::Interrupt() {
   {
-    std::lock_guard<std::mutex> lock(state_->mutex);
+    MutexLock lock(state_->mutex);
     state_->interrupted = true;
   }
   state_->cv.notify_all();
@@ -50,13 +50,15 @@ Expected<std::optional<Frame>> SimulatedCamera::Grab() {
   const SimulatedRigSpec& spec = d.spec;
   // Waits until CLOCK_MONOTONIC reaches t_ns; false when interrupted.
   auto wait_until = [this](int64_t t_ns) {
-    std::unique_lock<std::mutex> lock(state_->mutex);
+    MutexLock lock(state_->mutex);
     const auto deadline = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(t_ns));
-    state_->cv.wait_until(lock, deadline, [this] { return state_->interrupted; });
+    while (!state_->interrupted) {
+      if (lock.WaitUntil(state_->cv, deadline) == std::cv_status::timeout) break;
+    }
     return !state_->interrupted;
   };
   {
-    std::lock_guard<std::mutex> lock(state_->mutex);
+    MutexLock lock(state_->mutex);
     if (state_->interrupted) return std::optional<Frame>();
   }
   const std::optional<double> fail_after = d.fail_after_s[camera_];

@@ -10,13 +10,13 @@
 
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/atomic_file.h"
-#include "rigcal/pipeline/online_replay.h"
-#include "rigcal/lcm/process_stats.h"
 #include "rigcal/io/rig_files.h"
-#include "rigcal/lcm/status_message.h"
+#include "rigcal/io/yaml_fields.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
-#include "rigcal/io/yaml_fields.h"
+#include "rigcal/lcm/process_stats.h"
+#include "rigcal/lcm/status_message.h"
+#include "rigcal/pipeline/online_replay.h"
 
 namespace rigcal::tools {
 namespace {
@@ -69,7 +69,7 @@ struct CalibNode::Impl {
   Clock::time_point last_status_wall = Clock::now();
   CpuMeter cpu;
   bool opened = false;
-  std::atomic<int64_t> received_total{0};
+  std::atomic<int64_t> received_total{0};  // written by the LCM thread, read by ReceivedPoses
   long log_good_end = 0;  // file offset after the last complete event of the replayed log
 
   Impl(RigConfig c, CalibNodeOptions o)

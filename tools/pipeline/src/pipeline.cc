@@ -33,6 +33,9 @@ bool PipelineOptions::Check(std::string* error) const {
   return e.empty();
 }
 
+// One camera's device, VO and threads. The capture thread owns `device` and pushes into
+// `frames`; the VO thread pops `frames` and owns `vo`; they, Snapshot and RecordedPoses share
+// the rest under `mutex`.
 struct Pipeline::Camera {
   int index = 0;
   std::unique_ptr<drivers::CameraDevice> device;
@@ -41,25 +44,30 @@ struct Pipeline::Camera {
   std::thread capture_thread;
   std::thread vo_thread;
 
-  mutable std::mutex mutex;  // guards health, timings, recorded
-  CameraHealth health;
-  std::array<double, kTimingWindow> timings{};
-  size_t timing_count = 0;
-  std::vector<CameraPose> recorded;
+  mutable Mutex mutex;
+  CameraHealth health RIGCAL_GUARDED_BY(mutex);
+  std::array<double, kTimingWindow> timings RIGCAL_GUARDED_BY(mutex) = {};
+  size_t timing_count RIGCAL_GUARDED_BY(mutex) = 0;
+  std::vector<CameraPose> recorded RIGCAL_GUARDED_BY(mutex);
 
-  Camera(int i, std::unique_ptr<drivers::CameraDevice> d,
+  Camera(int i, std::string name, std::unique_ptr<drivers::CameraDevice> d,
          std::shared_ptr<const camera::CameraModel> model, const PipelineOptions& options)
       : index(i),
         device(std::move(d)),
         vo(std::move(model), i, options.vo),
-        frames(static_cast<size_t>(options.frame_queue_capacity)) {}
+        frames(static_cast<size_t>(options.frame_queue_capacity)) {
+    health.name = std::move(name);
+  }
 };
 
 Pipeline::Pipeline(std::vector<std::string> names,
                    std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
                    std::vector<std::shared_ptr<const camera::CameraModel>> cameras,
                    OnlineOptions online, PipelineOptions options, lcm::LCM* lcm)
-    : names_(std::move(names)), options_(options), lcm_(lcm) {
+    : names_(std::move(names)),
+      options_(options),
+      lcm_(lcm),
+      vo_threads_running_(static_cast<int>(names_.size())) {
   if (names_.size() < 2 || devices.size() != names_.size() || cameras.size() != names_.size()) {
     throw std::invalid_argument("Pipeline: need one device and one camera model per camera (>= 2)");
   }
@@ -80,21 +88,18 @@ Pipeline::Pipeline(std::vector<std::string> names,
                                          [this](const CameraPose& pose) { Forward(pose); });
   }
   for (size_t i = 0; i < names_.size(); ++i) {
-    auto camera = std::make_unique<Camera>(static_cast<int>(i), std::move(devices[i]),
-                                           std::move(cameras[i]), options_);
-    camera->health.name = names_[i];
-    cameras_.push_back(std::move(camera));
+    cameras_.push_back(std::make_unique<Camera>(
+        static_cast<int>(i), names_[i], std::move(devices[i]), std::move(cameras[i]), options_));
   }
 }
 
 Pipeline::~Pipeline() { Stop(); }
 
 void Pipeline::Start() {
-  std::lock_guard<std::mutex> lock(stop_mutex_);
+  MutexLock lock(stop_mutex_);
   if (started_) return;
   started_ = true;
   calibrator_->Start();
-  vo_threads_running_ = static_cast<int>(cameras_.size());
   for (auto& camera : cameras_) {
     const int i = camera->index;
     camera->vo_thread = std::thread([this, i] { VoLoop(i); });
@@ -109,7 +114,7 @@ void Pipeline::CaptureLoop(int index) {
     Expected<std::optional<drivers::Frame>> grabbed = camera.device->Grab();
     if (!grabbed) {
       {
-        std::lock_guard<std::mutex> lock(camera.mutex);
+        MutexLock lock(camera.mutex);
         camera.health.dead = true;
         camera.health.dead_reason = grabbed.error();
       }
@@ -117,14 +122,14 @@ void Pipeline::CaptureLoop(int index) {
       break;
     }
     if (!grabbed->has_value()) {
-      std::lock_guard<std::mutex> lock(camera.mutex);
+      MutexLock lock(camera.mutex);
       camera.health.ended = true;
       break;
     }
     drivers::Frame frame = std::move(**grabbed);
     frame.camera = index;
     {
-      std::lock_guard<std::mutex> lock(camera.mutex);
+      MutexLock lock(camera.mutex);
       ++camera.health.frames_captured;
       camera.health.last_frame_t_ns = frame.t_ns;
     }
@@ -134,7 +139,7 @@ void Pipeline::CaptureLoop(int index) {
     if (!pushed) break;  // stopped
     const uint64_t dropped = camera.frames.dropped() - dropped_before;
     if (dropped > 0) {
-      std::lock_guard<std::mutex> lock(camera.mutex);
+      MutexLock lock(camera.mutex);
       camera.health.dropped_backlog += static_cast<int64_t>(dropped);
     }
   }
@@ -146,7 +151,7 @@ void Pipeline::Forward(const CameraPose& pose) {
   const PushResult pushed = calibrator_->Push(pose);
   if (pushed != PushResult::kAccepted) {
     Camera& camera = *cameras_[index];
-    std::lock_guard<std::mutex> lock(camera.mutex);
+    MutexLock lock(camera.mutex);
     ++camera.health.sync_rejected;
   }
   if (lcm_ != nullptr) {
@@ -171,7 +176,7 @@ void Pipeline::VoLoop(int index) {
     }
     for (CameraPose& pose : poses) pose.camera = index;
     {
-      std::lock_guard<std::mutex> lock(camera.mutex);
+      MutexLock lock(camera.mutex);
       CameraHealth& h = camera.health;
       ++h.frames_processed;
       h.poses += static_cast<int64_t>(poses.size());
@@ -197,7 +202,7 @@ void Pipeline::VoLoop(int index) {
 PipelineSnapshot Pipeline::Snapshot() const {
   PipelineSnapshot snapshot;
   for (const auto& camera : cameras_) {
-    std::lock_guard<std::mutex> lock(camera->mutex);
+    MutexLock lock(camera->mutex);
     CameraHealth h = camera->health;
     const size_t n = std::min(camera->timing_count, kTimingWindow);
     h.vo_ms_median = Median(std::vector<double>(
@@ -210,10 +215,10 @@ PipelineSnapshot Pipeline::Snapshot() const {
   return snapshot;
 }
 
-bool Pipeline::Finished() const { return started_ && vo_threads_running_.load() == 0; }
+bool Pipeline::Finished() const { return vo_threads_running_.load() == 0; }
 
 void Pipeline::Stop() {
-  std::lock_guard<std::mutex> lock(stop_mutex_);
+  MutexLock lock(stop_mutex_);
   if (!started_ || stopped_) return;
   stopped_ = true;
   // Devices stop delivering; queued frames are still processed (Pop drains a stopped queue).
@@ -233,7 +238,7 @@ void Pipeline::Stop() {
 
 std::vector<CameraPose> Pipeline::RecordedPoses(int camera) const {
   const Camera& c = *cameras_.at(static_cast<size_t>(camera));
-  std::lock_guard<std::mutex> lock(c.mutex);
+  MutexLock lock(c.mutex);
   return c.recorded;
 }
 

@@ -4,13 +4,14 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
-#include <mutex>
 #include <thread>
+#include <utility>
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
+#include "rigcal/calib/thread_annotations.h"
 #include "rigcal/research/cramer_rao.h"
 #include "rigcal/research/experiments.h"
 
@@ -30,12 +31,13 @@ class ProgressMeter {
   ProgressMeter(const ExperimentProgress& progress, int64_t total)
       : progress_(progress), total_(std::max<int64_t>(total, 1)) {}
 
-  void Add(int64_t units) {
+  // Any worker thread.
+  void Add(int64_t units) RIGCAL_EXCLUDES(mutex_) {
     int64_t done = done_.fetch_add(units) + units;
     if (!progress_) return;
     const int decile = static_cast<int>(std::min<int64_t>(10, done * 10 / total_));
     if (decile <= reported_decile_.load()) return;
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(mutex_);
     if (decile > reported_decile_.load()) {
       reported_decile_ = decile;
       progress_(std::min(done, total_), total_);
@@ -46,8 +48,10 @@ class ProgressMeter {
   const ExperimentProgress& progress_;
   const int64_t total_;
   std::atomic<int64_t> done_{0};
-  std::mutex mutex_;                     // serialises the progress calls
-  std::atomic<int> reported_decile_{0};  // written only under mutex_
+  Mutex mutex_;  // serialises the progress calls
+  // Written only with mutex_ held; an atomic so that Add can skip the lock when the decile was
+  // reported already.
+  std::atomic<int> reported_decile_{0};
 };
 
 int ThreadCount(int requested) {
@@ -55,20 +59,36 @@ int ThreadCount(int requested) {
   return std::max(1u, std::thread::hardware_concurrency());
 }
 
+// The first exception of ParallelFor's workers (any worker thread keeps one).
+class FirstFailure {
+ public:
+  void Keep(std::exception_ptr failure) RIGCAL_EXCLUDES(mutex_) {
+    MutexLock lock(mutex_);
+    if (!first_) first_ = std::move(failure);
+  }
+  // Rethrows the kept exception, if any.
+  void Rethrow() RIGCAL_EXCLUDES(mutex_) {
+    MutexLock lock(mutex_);
+    if (first_) std::rethrow_exception(first_);
+  }
+
+ private:
+  Mutex mutex_;
+  std::exception_ptr first_ RIGCAL_GUARDED_BY(mutex_);
+};
+
 // body(i) for i in [0, count) on `threads` threads (dynamic assignment). The first exception of
 // a worker is rethrown after all workers joined.
 template <typename Body>
 void ParallelFor(int64_t count, int threads, const Body& body) {
   threads = static_cast<int>(std::min<int64_t>(threads, std::max<int64_t>(count, 1)));
   std::atomic<int64_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
+  FirstFailure failure;
   auto worker = [&]() {
     try {
       for (int64_t i = next.fetch_add(1); i < count; i = next.fetch_add(1)) body(i);
     } catch (...) {
-      std::lock_guard<std::mutex> lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
+      failure.Keep(std::current_exception());
       next = count;
     }
   };
@@ -84,7 +104,7 @@ void ParallelFor(int64_t count, int threads, const Body& body) {
     }
     for (std::thread& t : pool) t.join();
   }
-  if (failure) std::rethrow_exception(failure);
+  failure.Rethrow();
 }
 
 // Mean, RMS and median of one error measure, ignoring non-finite values.

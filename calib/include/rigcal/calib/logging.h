@@ -2,6 +2,7 @@
 // One named spdlog logger per module ("calib", "tools", ...), all writing to stderr.
 // The level comes from SetLogLevel (the command line's --log-level) or, before that, from the
 // environment variable RIGCAL_LOG_LEVEL (trace, debug, info, warn, error, off).
+// Both functions may be called from any thread.
 
 #include <spdlog/spdlog.h>
 

@@ -2,16 +2,23 @@
 // OnlineCalibrator: owns the estimator thread (SyncBuffer -> RigEstimator) and the background
 // refinement thread. Producers (VO threads, LCM handlers) call Push from any thread; readers
 // take consistent snapshots of the estimate.
+//
+// Threads: the owner calls Start, Flush, Stop and RefineNow (Start/Stop from one thread);
+// producers call Push; any thread calls Estimate, SerializeState, RestoreState and the
+// counters. The estimator thread (EstimatorLoop) pops matched sets and adds them to the
+// estimator; the refinement thread (RefinementLoop) calls RefineNow every refine_period_s.
+// estimator_mutex_ guards the estimator and is never held during a refinement;
+// refine_mutex_ (serialises RefineNow) is taken before estimator_mutex_.
 
 #include <atomic>
 #include <condition_variable>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/sync_buffer.h"
+#include "rigcal/calib/thread_annotations.h"
 
 namespace rigcal {
 
@@ -58,20 +65,22 @@ class OnlineCalibrator {
   int refinements_applied() const { return refinements_applied_.load(); }
 
  private:
-  void EstimatorLoop();
-  void RefinementLoop();
+  void EstimatorLoop() RIGCAL_EXCLUDES(estimator_mutex_);
+  void RefinementLoop() RIGCAL_EXCLUDES(stop_mutex_);
 
   std::vector<std::string> names_;
   OnlineOptions options_;
   SyncBuffer sync_;
-  mutable std::mutex estimator_mutex_;
-  RigEstimator estimator_;  // guarded by estimator_mutex_
-  std::condition_variable consumed_;
-  uint64_t sets_consumed_ = 0;  // guarded by estimator_mutex_
-  std::mutex stop_mutex_;
-  std::condition_variable stop_cv_;
-  bool stopping_ = false;    // guarded by stop_mutex_
-  std::mutex refine_mutex_;  // serialises RefineNow
+  mutable Mutex estimator_mutex_;
+  RigEstimator estimator_ RIGCAL_GUARDED_BY(estimator_mutex_);
+  std::condition_variable consumed_;  // signalled when the estimator thread consumed a set
+  uint64_t sets_consumed_ RIGCAL_GUARDED_BY(estimator_mutex_) = 0;
+  Mutex stop_mutex_;
+  std::condition_variable stop_cv_;  // signalled by Stop
+  bool stopping_ RIGCAL_GUARDED_BY(stop_mutex_) = false;
+  Mutex refine_mutex_ RIGCAL_ACQUIRED_BEFORE(estimator_mutex_);  // serialises RefineNow
+  // Incremented with estimator_mutex_ held; an atomic so that refinements_applied() reads it
+  // without the lock.
   std::atomic<int> refinements_applied_{0};
   std::thread estimator_thread_;
   std::thread refinement_thread_;

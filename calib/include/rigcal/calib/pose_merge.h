@@ -8,17 +8,20 @@
 // least as late (then nothing earlier can come any more); End() removes a camera (end of
 // stream, or a dead device). Deliver() also keeps the threads within `lead_ns` of each other in
 // stream time (it waits while another streaming camera lags further behind), so what is held
-// stays bounded. The camera with the smallest stamp never waits: no deadlock. The sink runs
-// under the merge's lock, on whichever thread releases the poses; it must not block. Live
-// pipelines do not use it: a slow camera must never hold the others back there.
+// stays bounded. The camera with the smallest stamp never waits: no deadlock. Live pipelines do
+// not use it: a slow camera must never hold the others back there.
+//
+// Threads: each camera's VO thread calls Deliver and End for its own camera; any thread calls
+// Stop. All state is guarded by mutex_. The sink runs with mutex_ held, on whichever thread
+// releases the poses: it must not block and must not call back into the merge.
 
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
-#include <mutex>
 #include <vector>
 
+#include "rigcal/calib/thread_annotations.h"
 #include "rigcal/calib/types.h"
 
 namespace rigcal {
@@ -33,28 +36,31 @@ class PoseMerge {
   // stamps may be earlier than the frame, e.g. a segment's first pose). Frame stamps of one
   // camera must increase. Releases what has become safe, then waits while a streaming camera
   // lags more than lead_ns behind frame_t_ns (or until Stop()).
-  void Deliver(int camera, int64_t frame_t_ns, std::vector<CameraPose> poses);
+  void Deliver(int camera, int64_t frame_t_ns, std::vector<CameraPose> poses)
+      RIGCAL_EXCLUDES(mutex_);
   // Camera `camera` delivers no more frames; releases what no longer waits for it.
-  void End(int camera);
+  void End(int camera) RIGCAL_EXCLUDES(mutex_);
   // Releases every waiting Deliver. Poses are still forwarded as cameras end.
-  void Stop();
+  void Stop() RIGCAL_EXCLUDES(mutex_);
 
  private:
   struct Held {
     int64_t frame_t_ns;
     CameraPose pose;
   };
-  void ReleaseSafe();  // with mutex_ held
-  bool Lagging(int camera, int64_t t_ns) const;
+  // Forwards every held pose that no streaming camera can precede any more, in order.
+  void ReleaseSafe() RIGCAL_REQUIRES(mutex_);
+  // Whether a streaming camera other than `camera` lags more than lead_ns behind t_ns.
+  bool Lagging(int camera, int64_t t_ns) const RIGCAL_REQUIRES(mutex_);
 
   const int64_t lead_ns_;
   const Sink sink_;
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::vector<int64_t> progress_;       // guarded by mutex_: last frame stamp per camera
-  std::vector<bool> ended_;             // guarded by mutex_
-  std::vector<std::deque<Held>> held_;  // guarded by mutex_: per camera, in frame order
-  bool stopped_ = false;                // guarded by mutex_
+  Mutex mutex_;
+  std::condition_variable changed_;                          // progress, an end or Stop
+  std::vector<int64_t> progress_ RIGCAL_GUARDED_BY(mutex_);  // last frame stamp per camera
+  std::vector<bool> ended_ RIGCAL_GUARDED_BY(mutex_);
+  std::vector<std::deque<Held>> held_ RIGCAL_GUARDED_BY(mutex_);  // per camera, in frame order
+  bool stopped_ RIGCAL_GUARDED_BY(mutex_) = false;
 };
 
 }  // namespace rigcal

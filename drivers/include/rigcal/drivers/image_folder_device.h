@@ -10,15 +10,18 @@
 //  - an image that is listed but missing (checked when the folder is opened) or unreadable
 //    (found by Grab) is skipped, logged, counted and listed by skipped_files(). The frame's
 //    `seq` is its line index among the valid CSV entries, so skipped frames leave gaps.
+//
+// Threads: one capture thread calls Grab; any thread calls Interrupt (an atomic flag) and
+// skipped_files/skipped_count (the list is guarded by mutex_). The rest is immutable after Open.
 
 #include <atomic>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
 #include "rigcal/calib/status.h"
+#include "rigcal/calib/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 
 namespace rigcal::drivers {
@@ -45,8 +48,8 @@ class ImageFolderDevice final : public CameraDevice {
   // Image paths listed in data.csv that are missing or could not be read as images, in CSV
   // order of discovery (missing ones at Open, unreadable ones when Grab reaches them).
   // Any thread.
-  std::vector<std::string> skipped_files() const;
-  size_t skipped_count() const;
+  std::vector<std::string> skipped_files() const RIGCAL_EXCLUDES(mutex_);
+  size_t skipped_count() const RIGCAL_EXCLUDES(mutex_);
   // "file:line: reason" for every CSV line that was skipped.
   const std::vector<std::string>& csv_problems() const { return csv_problems_; }
 
@@ -63,10 +66,10 @@ class ImageFolderDevice final : public CameraDevice {
   double frame_rate_hz_ = 20.0;
   std::vector<Entry> entries_;
   std::vector<std::string> csv_problems_;
-  size_t next_ = 0;
+  size_t next_ = 0;  // the capture thread's
   std::atomic<bool> interrupted_{false};
-  mutable std::mutex mutex_;
-  std::vector<std::string> skipped_;  // guarded by mutex_
+  mutable Mutex mutex_;
+  std::vector<std::string> skipped_ RIGCAL_GUARDED_BY(mutex_);
 };
 
 }  // namespace rigcal::drivers

@@ -41,7 +41,9 @@ struct SimulatedRigData;
 struct RigClock;
 }  // namespace internal
 
-// One camera of a simulated rig. Created by SimulatedRig::MakeDevice.
+// One camera of a simulated rig. Created by SimulatedRig::MakeDevice. Threads: one capture
+// thread calls Grab; Interrupt may come from any thread (it wakes a Grab that waits for its
+// capture time). The devices of a rig share its clock, which locks itself.
 class SimulatedCamera final : public CameraDevice {
  public:
   ~SimulatedCamera() override;

@@ -10,17 +10,24 @@
 // poses reach the calibrator in one canonical order whatever the thread timing (PoseMerge), so
 // a run is deterministic. Slaves are optional members of a sync set, so a dead slave camera leaves
 // the others calibrating; a dead master stops the calibration (the status says so).
+//
+// Threads: the owner calls Start and Stop (stop_mutex_ serialises them); any thread calls
+// Snapshot, Finished and RecordedPoses. Per camera, a capture thread (CaptureLoop) grabs frames
+// into the camera's frame queue and a VO thread (VoLoop) turns them into poses and hands them to
+// the calibrator (Forward, directly or through the PoseMerge, whose sink runs Forward on the VO
+// thread that releases the pose). A camera's health, timings and recorded poses are guarded by
+// its own mutex (Camera::mutex in pipeline.cc).
 
 #include <atomic>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "rigcal/calib/bounded_queue.h"
 #include "rigcal/calib/online_calibrator.h"
+#include "rigcal/calib/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/vo/monocular_vo.h"
 
@@ -87,13 +94,14 @@ class Pipeline {
   Pipeline& operator=(const Pipeline&) = delete;
 
   // Starts every thread. Call once.
-  void Start();
+  void Start() RIGCAL_EXCLUDES(stop_mutex_);
   // Any thread.
   PipelineSnapshot Snapshot() const;
+  // Every VO thread has ended (false before Start). Any thread.
   bool Finished() const;
   // Interrupts the devices, lets the VO threads finish the queued frames, flushes the
   // calibrator and joins every thread. Idempotent.
-  void Stop();
+  void Stop() RIGCAL_EXCLUDES(stop_mutex_);
 
   // Every pose of camera i so far (record_poses only). Any thread.
   std::vector<CameraPose> RecordedPoses(int camera) const;
@@ -113,10 +121,12 @@ class Pipeline {
   std::unique_ptr<OnlineCalibrator> calibrator_;
   std::vector<std::unique_ptr<Camera>> cameras_;
   std::unique_ptr<PoseMerge> merge_;  // lossless runs only
-  std::atomic<int> vo_threads_running_{0};
-  bool started_ = false;
-  bool stopped_ = false;
-  std::mutex stop_mutex_;
+  // VO threads not ended yet: every camera's until Start, then each VO thread counts itself
+  // down. Lock-free, for Finished().
+  std::atomic<int> vo_threads_running_;
+  Mutex stop_mutex_;
+  bool started_ RIGCAL_GUARDED_BY(stop_mutex_) = false;
+  bool stopped_ RIGCAL_GUARDED_BY(stop_mutex_) = false;
 };
 
 }  // namespace rigcal::tools

@@ -1,0 +1,87 @@
+// SyncBuffer::Impl's construction, consumer side (Pop, TryPop), Stop and counter snapshot; the
+// producer side is in sync_matching.cc.
+#include "sync_buffer_impl.h"
+
+namespace rigcal {
+
+SyncBuffer::Impl::Impl(const SyncOptions& options)
+    : options_(options),
+      n_(options.num_cameras),
+      tolerance_ns_(options.EffectiveToleranceNs()),
+      max_wait_ns_(options.EffectiveMaxWaitNs()),
+      by_seq_(options.match_by_trigger_seq),
+      ready_(static_cast<size_t>(options.ready_capacity),
+             MatchedSet{0, std::vector<std::optional<CameraPose>>(options.num_cameras)}),
+      candidates_(options.num_cameras) {
+  for (int c = 0; c < n_; ++c) required_.push_back(options.IsRequired(c));
+  cameras_.reserve(n_);
+  for (int c = 0; c < n_; ++c) cameras_.emplace_back(static_cast<size_t>(options.capacity));
+}
+
+bool SyncBuffer::Impl::Pop(MatchedSet* out, std::chrono::milliseconds timeout) {
+  if (out == nullptr) return false;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  MutexLock lock(mutex_);
+  while (ready_.empty() && !stopped_) {
+    if (lock.WaitUntil(ready_cv_, deadline) == std::cv_status::timeout) break;
+  }
+  return TakeReady(out);
+}
+
+bool SyncBuffer::Impl::TryPop(MatchedSet* out) {
+  if (out == nullptr) return false;
+  MutexLock lock(mutex_);
+  return TakeReady(out);
+}
+
+void SyncBuffer::Impl::Stop() {
+  MutexLock lock(mutex_);
+  stopped_ = true;
+  ready_cv_.notify_all();
+}
+
+bool SyncBuffer::Impl::stopped() const {
+  MutexLock lock(mutex_);
+  return stopped_;
+}
+
+SyncStats SyncBuffer::Impl::stats() const {
+  SyncStats s;
+  s.cameras.resize(n_);
+  MutexLock lock(mutex_);
+  for (int c = 0; c < n_; ++c) {
+    SyncCameraStats k = cameras_[c].stats;
+    k.fill = cameras_[c].ring.size();
+    s.cameras[c] = k;
+    SyncCameraStats& t = s.total;
+    t.pushed += k.pushed;
+    t.used += k.used;
+    t.stopped += k.stopped;
+    t.invalid += k.invalid;
+    t.late += k.late;
+    t.duplicate += k.duplicate;
+    t.out_of_order += k.out_of_order;
+    t.overflow += k.overflow;
+    t.never_matched += k.never_matched;
+    t.optional_missing += k.optional_missing;
+    t.fill += k.fill;
+  }
+  s.unknown_camera = unknown_camera_;
+  s.sets_emitted = sets_emitted_;
+  s.sets_popped = sets_popped_;
+  s.consumer_overflow = consumer_overflow_;
+  s.ready_fill = ready_.size();
+  return s;
+}
+
+bool SyncBuffer::Impl::TakeReady(MatchedSet* out) {
+  if (ready_.empty()) return false;
+  const MatchedSet& set = ready_.front();
+  out->t_ns = set.t_ns;
+  out->poses = set.poses;  // reuses out's storage once it has num_cameras slots
+  ready_.PopFront();
+  ++sets_popped_;
+  return true;
+}
+
+}  // namespace rigcal

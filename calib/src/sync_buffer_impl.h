@@ -1,0 +1,130 @@
+#pragma once
+// SyncBuffer::Impl: the state of a SyncBuffer behind its one mutex. Private to rigcal_calib.
+//   sync_matching.cc    producer side: Push and Flush, the classification of a pushed pose and
+//                       the matching rule of sync_buffer.h
+//   sync_buffer_impl.cc construction, consumer side (Pop, TryPop), Stop, the counter snapshot
+//
+// Threads: producers call Push (and Flush), the consumer calls Pop/TryPop, any thread calls
+// Stop, stopped and stats; every public function takes mutex_ itself (RIGCAL_EXCLUDES), the
+// private ones run with it held (RIGCAL_REQUIRES). A push does O(num_cameras * capacity) work
+// under the lock, so finer locking would not pay.
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <vector>
+
+#include "fixed_ring.h"
+#include "rigcal/calib/sync_buffer.h"
+#include "rigcal/calib/thread_annotations.h"
+
+namespace rigcal {
+
+// What identifies an entry in time: its stamp and trigger sequence number.
+struct SyncKey {
+  int64_t t_ns = 0;
+  int64_t seq = -1;
+};
+
+class SyncBuffer::Impl {
+ public:
+  // Allocates all storage; `options` must be valid (SyncBuffer checks them).
+  explicit Impl(const SyncOptions& options);
+
+  const SyncOptions& options() const { return options_; }
+
+  // SyncBuffer's functions of the same name (sync_buffer.h).
+  PushResult Push(const CameraPose& pose) RIGCAL_EXCLUDES(mutex_);
+  void Flush() RIGCAL_EXCLUDES(mutex_);
+  bool Pop(MatchedSet* out, std::chrono::milliseconds timeout) RIGCAL_EXCLUDES(mutex_);
+  bool TryPop(MatchedSet* out) RIGCAL_EXCLUDES(mutex_);
+  void Stop() RIGCAL_EXCLUDES(mutex_);
+  bool stopped() const RIGCAL_EXCLUDES(mutex_);
+  SyncStats stats() const RIGCAL_EXCLUDES(mutex_);
+
+ private:
+  struct CameraState {
+    explicit CameraState(size_t capacity) : ring(capacity, CameraPose{}) {}
+
+    FixedRing<CameraPose> ring;   // strictly increasing t_ns
+    bool any = false;             // an entry was ever accepted
+    int64_t newest_t = 0;         // stamp of the newest accepted entry
+    int64_t newest_seq = -1;      // highest trigger_seq accepted (-1: none)
+    bool newest_has_seq = false;  // whether the newest accepted entry carries a trigger_seq
+    bool any_used = false;        // an entry was a member of an emitted set
+    SyncKey last_used;            // the member of the last emitted set that had this camera
+    SyncCameraStats stats;        // fill is filled in by stats()
+  };
+
+  // The partner of the current master entry in one slave ring.
+  struct Candidate {
+    int index = -1;  // in the ring; -1: none
+    int64_t distance = 0;
+    bool final = false;
+  };
+
+  // sync_matching.cc: see the matching rule in sync_buffer.h.
+
+  // Both entries carry a trigger sequence number and trigger mode is on.
+  bool SeqPair(int64_t seq_a, int64_t seq_b) const { return by_seq_ && seq_a >= 0 && seq_b >= 0; }
+  // True when slave entry `s` cannot match any master entry newer than `m` (masters arrive with
+  // increasing stamps and sequence numbers).
+  bool Unmatchable(const SyncKey& s, const SyncKey& m) const {
+    if (SeqPair(s.seq, m.seq)) return s.seq <= m.seq;
+    return s.t_ns <= m.t_ns - tolerance_ns_;
+  }
+  // kAccepted, or why `pose` (of a camera in range) is rejected.
+  PushResult Classify(const CameraPose& pose) const RIGCAL_REQUIRES(mutex_);
+  // Buffers an accepted pose (dropping its ring's oldest entry when full).
+  void Accept(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
+  // Stream time against which master entries time out.
+  int64_t WaitClockNs() const RIGCAL_REQUIRES(mutex_);
+  // The entry of slave `j` closest to master `m` among those that match it.
+  Candidate FindCandidate(int j, const CameraPose& m) const RIGCAL_REQUIRES(mutex_);
+  // Whether an entry still to come from slave `j` could match master `m` strictly closer than
+  // `c` (any match at all when c has none).
+  bool CloserCanArrive(int j, const CameraPose& m, const Candidate& c) const
+      RIGCAL_REQUIRES(mutex_);
+  // An optional slave that fell more than max_wait behind the stream holds no set back.
+  bool Stale(int j) const RIGCAL_REQUIRES(mutex_);
+  // Resolves master entries from the oldest on (see the rule in the header); returns the
+  // number of sets emitted. `flush`: treat every master entry as timed out.
+  int Process(bool flush) RIGCAL_REQUIRES(mutex_);
+  // Emits the oldest master entry with candidates_ as partners.
+  void Emit() RIGCAL_REQUIRES(mutex_);
+  // Drops the oldest master entry as never matched.
+  void DropMaster() RIGCAL_REQUIRES(mutex_);
+  // Master entry `m` left the buffer: slave entries that cannot match a later master go.
+  void Resolved(const SyncKey& m) RIGCAL_REQUIRES(mutex_);
+
+  // sync_buffer_impl.cc.
+
+  // Moves the oldest ready set into *out; false when none is ready.
+  bool TakeReady(MatchedSet* out) RIGCAL_REQUIRES(mutex_);
+
+  // Immutable after construction.
+  const SyncOptions options_;
+  const int n_;
+  const int64_t tolerance_ns_;
+  const int64_t max_wait_ns_;
+  const bool by_seq_;
+  std::vector<bool> required_;  // per camera; [0] is true
+
+  mutable Mutex mutex_;
+  std::condition_variable ready_cv_;  // signalled when a set is emitted and on Stop
+  std::vector<CameraState> cameras_ RIGCAL_GUARDED_BY(mutex_);
+  FixedRing<MatchedSet> ready_ RIGCAL_GUARDED_BY(mutex_);
+  std::vector<Candidate> candidates_ RIGCAL_GUARDED_BY(mutex_);  // scratch of Process, per camera
+  bool has_stream_ RIGCAL_GUARDED_BY(mutex_) = false;
+  int64_t stream_start_ns_ RIGCAL_GUARDED_BY(mutex_) = 0;  // first accepted stamp
+  int64_t now_ns_ RIGCAL_GUARDED_BY(mutex_) = 0;           // newest accepted stamp, any camera
+  bool has_resolved_master_ RIGCAL_GUARDED_BY(mutex_) = false;
+  SyncKey last_resolved_master_ RIGCAL_GUARDED_BY(mutex_);  // last master emitted or dropped
+  bool stopped_ RIGCAL_GUARDED_BY(mutex_) = false;
+  uint64_t unknown_camera_ RIGCAL_GUARDED_BY(mutex_) = 0;
+  uint64_t sets_emitted_ RIGCAL_GUARDED_BY(mutex_) = 0;
+  uint64_t sets_popped_ RIGCAL_GUARDED_BY(mutex_) = 0;
+  uint64_t consumer_overflow_ RIGCAL_GUARDED_BY(mutex_) = 0;
+};
+
+}  // namespace rigcal

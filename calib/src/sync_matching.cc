@@ -1,0 +1,230 @@
+// The producer side of SyncBuffer: Push and Flush, the classification of a pushed pose, and the
+// matching rule stated in rigcal/calib/sync_buffer.h. Runs with the buffer's mutex held.
+#include <cmath>
+
+#include "sync_buffer_impl.h"
+
+namespace rigcal {
+namespace {
+
+bool IsValid(const CameraPose& p) {
+  return p.t_ns >= 0 && p.pose.q.coeffs().allFinite() && p.pose.q.coeffs().squaredNorm() > 0.0 &&
+         p.pose.C.allFinite() && std::isfinite(p.quality);
+}
+
+SyncKey KeyOf(const CameraPose& p) { return {p.t_ns, p.trigger_seq}; }
+
+}  // namespace
+
+PushResult SyncBuffer::Impl::Push(const CameraPose& pose) {
+  MutexLock lock(mutex_);
+  if (pose.camera < 0 || pose.camera >= n_) {
+    ++unknown_camera_;
+    return PushResult::kUnknownCamera;
+  }
+  CameraState& cam = cameras_[pose.camera];
+  ++cam.stats.pushed;
+  const PushResult result = Classify(pose);
+  switch (result) {
+    case PushResult::kAccepted:
+      break;
+    case PushResult::kStopped:
+      ++cam.stats.stopped;
+      return result;
+    case PushResult::kInvalid:
+      ++cam.stats.invalid;
+      return result;
+    case PushResult::kLate:
+      ++cam.stats.late;
+      return result;
+    case PushResult::kDuplicate:
+      ++cam.stats.duplicate;
+      return result;
+    case PushResult::kOutOfOrder:
+      ++cam.stats.out_of_order;
+      return result;
+    case PushResult::kUnknownCamera:
+      return result;
+  }
+  Accept(pose);
+  if (Process(/*flush=*/false) > 0) ready_cv_.notify_all();
+  return PushResult::kAccepted;
+}
+
+void SyncBuffer::Impl::Flush() {
+  MutexLock lock(mutex_);
+  if (Process(/*flush=*/true) > 0) ready_cv_.notify_all();
+}
+
+PushResult SyncBuffer::Impl::Classify(const CameraPose& pose) const {
+  if (stopped_) return PushResult::kStopped;
+  if (!IsValid(pose)) return PushResult::kInvalid;
+  const CameraState& cam = cameras_[pose.camera];
+  const SyncKey key = KeyOf(pose);
+  if (cam.any_used && (key.t_ns <= cam.last_used.t_ns ||
+                       (SeqPair(key.seq, cam.last_used.seq) && key.seq <= cam.last_used.seq)))
+    return PushResult::kLate;
+  if (pose.camera != 0 && has_resolved_master_ && Unmatchable(key, last_resolved_master_))
+    return PushResult::kLate;
+  if (cam.any && (key.t_ns == cam.newest_t || (key.seq >= 0 && key.seq == cam.newest_seq)))
+    return PushResult::kDuplicate;
+  for (size_t i = 0; i < cam.ring.size(); ++i) {
+    const CameraPose& e = cam.ring[i];
+    if (e.t_ns == key.t_ns || (key.seq >= 0 && e.trigger_seq == key.seq))
+      return PushResult::kDuplicate;
+  }
+  if (cam.any && key.t_ns < cam.newest_t) return PushResult::kOutOfOrder;
+  if (SeqPair(key.seq, cam.newest_seq) && key.seq < cam.newest_seq) return PushResult::kOutOfOrder;
+  return PushResult::kAccepted;
+}
+
+void SyncBuffer::Impl::Accept(const CameraPose& pose) {
+  CameraState& cam = cameras_[pose.camera];
+  if (cam.ring.full()) {
+    cam.ring.PopFront();
+    ++cam.stats.overflow;
+  }
+  cam.ring.PushBack() = pose;
+  cam.any = true;
+  cam.newest_t = pose.t_ns;
+  cam.newest_has_seq = pose.trigger_seq >= 0;
+  if (pose.trigger_seq >= 0) cam.newest_seq = pose.trigger_seq;
+  if (!has_stream_) {
+    has_stream_ = true;
+    stream_start_ns_ = pose.t_ns;
+    now_ns_ = pose.t_ns;
+  }
+  if (pose.t_ns > now_ns_) now_ns_ = pose.t_ns;
+}
+
+int64_t SyncBuffer::Impl::WaitClockNs() const { return by_seq_ ? cameras_[0].newest_t : now_ns_; }
+
+SyncBuffer::Impl::Candidate SyncBuffer::Impl::FindCandidate(int j, const CameraPose& m) const {
+  Candidate best;
+  const FixedRing<CameraPose>& ring = cameras_[j].ring;
+  for (size_t i = 0; i < ring.size(); ++i) {
+    const CameraPose& s = ring[i];
+    if (SeqPair(s.trigger_seq, m.trigger_seq)) {
+      if (s.trigger_seq == m.trigger_seq) return {static_cast<int>(i), 0, false};
+      continue;
+    }
+    const int64_t d = s.t_ns >= m.t_ns ? s.t_ns - m.t_ns : m.t_ns - s.t_ns;
+    if (d <= tolerance_ns_ && (best.index < 0 || d < best.distance))
+      best = {static_cast<int>(i), d, false};
+    if (!by_seq_ && s.t_ns > m.t_ns) break;  // later entries are farther away
+  }
+  return best;
+}
+
+bool SyncBuffer::Impl::CloserCanArrive(int j, const CameraPose& m, const Candidate& c) const {
+  const CameraState& cam = cameras_[j];
+  if (c.index >= 0 && c.distance == 0) return false;
+  if (!cam.any) return true;
+  if (by_seq_ && m.trigger_seq >= 0 && cam.newest_has_seq) return cam.newest_seq < m.trigger_seq;
+  // Future stamps are > newest_t; closer means at most m.t_ns + reach.
+  const int64_t reach = c.index >= 0 ? c.distance - 1 : tolerance_ns_;
+  return cam.newest_t - m.t_ns < reach;
+}
+
+bool SyncBuffer::Impl::Stale(int j) const {
+  if (by_seq_) return false;
+  const CameraState& cam = cameras_[j];
+  const int64_t newest = cam.any ? cam.newest_t : stream_start_ns_;
+  return now_ns_ - newest > max_wait_ns_;
+}
+
+int SyncBuffer::Impl::Process(bool flush) {
+  int emitted = 0;
+  FixedRing<CameraPose>& masters = cameras_[0].ring;
+  while (!masters.empty()) {
+    const CameraPose& m = masters.front();
+    bool impossible = false;
+    bool all_final = true;
+    bool required_present = true;
+    for (int j = 1; j < n_ && !impossible; ++j) {
+      Candidate& c = candidates_[j];
+      c = FindCandidate(j, m);
+      c.final = !CloserCanArrive(j, m, c) || (!required_[j] && Stale(j));
+      all_final = all_final && c.final;
+      if (required_[j] && c.index < 0) {
+        required_present = false;
+        impossible = c.final;
+      }
+    }
+    if (impossible) {
+      DropMaster();
+      continue;
+    }
+    if (all_final) {
+      Emit();
+      ++emitted;
+      continue;
+    }
+    if (!flush && WaitClockNs() - m.t_ns <= max_wait_ns_) break;
+    if (required_present) {
+      Emit();
+      ++emitted;
+    } else {
+      DropMaster();
+    }
+  }
+  return emitted;
+}
+
+void SyncBuffer::Impl::Emit() {
+  if (ready_.full()) {
+    ready_.PopFront();
+    ++consumer_overflow_;
+  }
+  MatchedSet& set = ready_.PushBack();
+  CameraState& master = cameras_[0];
+  const SyncKey m = KeyOf(master.ring.front());
+  set.t_ns = m.t_ns;
+  set.poses[0] = master.ring.front();
+  master.ring.PopFront();
+  ++master.stats.used;
+  master.any_used = true;
+  master.last_used = m;
+  for (int j = 1; j < n_; ++j) {
+    CameraState& cam = cameras_[j];
+    const Candidate& c = candidates_[j];
+    if (c.index < 0) {
+      set.poses[j].reset();
+      ++cam.stats.optional_missing;
+      continue;
+    }
+    set.poses[j] = cam.ring[c.index];
+    for (int i = 0; i < c.index; ++i) {
+      cam.ring.PopFront();
+      ++cam.stats.never_matched;
+    }
+    cam.last_used = KeyOf(cam.ring.front());
+    cam.any_used = true;
+    cam.ring.PopFront();
+    ++cam.stats.used;
+  }
+  ++sets_emitted_;
+  Resolved(m);
+}
+
+void SyncBuffer::Impl::DropMaster() {
+  CameraState& master = cameras_[0];
+  const SyncKey m = KeyOf(master.ring.front());
+  master.ring.PopFront();
+  ++master.stats.never_matched;
+  Resolved(m);
+}
+
+void SyncBuffer::Impl::Resolved(const SyncKey& m) {
+  has_resolved_master_ = true;
+  last_resolved_master_ = m;
+  for (int j = 1; j < n_; ++j) {
+    CameraState& cam = cameras_[j];
+    while (!cam.ring.empty() && Unmatchable(KeyOf(cam.ring.front()), m)) {
+      cam.ring.PopFront();
+      ++cam.stats.never_matched;
+    }
+  }
+}
+
+}  // namespace rigcal
