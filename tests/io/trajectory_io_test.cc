@@ -195,7 +195,8 @@ TEST_F(TrajectoryIoTest, TumAndNativeWritersRoundTripExactly) {
   for (const bool native : {false, true}) {
     const std::string path = (dir_ / (native ? "cam7.poses" : "cam7.txt")).string();
     const std::string error =
-        native ? WriteTrajectoryNative(path, original) : WriteTrajectoryTum(path, original);
+        (native ? WriteTrajectoryNative(path, original) : WriteTrajectoryTum(path, original))
+            .message();
     ASSERT_EQ(error, "");
     TrajectoryFormat format = TrajectoryFormat::kEurocCsv;
     const auto read = ReadTrajectory(path, {}, &format);
@@ -217,7 +218,7 @@ TEST_F(TrajectoryIoTest, TumWriterOmitsSegmentColumnWhenAllZero) {
   TimedTrajectory t = MakeTrajectory("x", {0, 1, 2});
   t.segment.assign(3, 0);
   const std::string path = (dir_ / "x.txt").string();
-  ASSERT_EQ(WriteTrajectoryTum(path, t), "");
+  ASSERT_TRUE(WriteTrajectoryTum(path, t).ok());
   std::ifstream in(path);
   std::string line;
   std::getline(in, line);  // header comment
@@ -335,7 +336,7 @@ TEST_F(TrajectoryIoTest, BadSegment) {
 
 TEST_F(TrajectoryIoTest, WriterReportsUnwritablePath) {
   const std::string path = (dir_ / "missing_dir" / "x.txt").string();
-  const std::string error = WriteTrajectoryTum(path, MakeTrajectory("x", {0, 1}));
+  const std::string error = WriteTrajectoryTum(path, MakeTrajectory("x", {0, 1})).message();
   EXPECT_THAT(error, HasSubstr(path));
   EXPECT_THAT(error, HasSubstr("No such file or directory"));
 }
@@ -425,7 +426,7 @@ TEST(MatchTrajectoriesTest, SameStampsMatchEverything) {
   const auto slave = MakeTrajectory("s", Stamps(0, 50'000'000, 10));
   const auto rec = MatchTrajectories(master, {slave}, 5'000'000);
   ASSERT_TRUE(rec.ok()) << rec.error();
-  EXPECT_EQ(rec->Validate(), "");
+  EXPECT_TRUE(rec->Check().ok()) << rec->Check().message();
   EXPECT_EQ(rec->t_ns, master.t_ns);
   EXPECT_EQ(rec->master.name, "m");
   ASSERT_EQ(rec->slaves.size(), 1u);

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <limits>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/atomic_file.h"
 
@@ -83,18 +84,6 @@ std::optional<double> ParseDouble(std::string_view s) {
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
   if (ec != std::errc() || ptr != s.data() + s.size() || s.empty()) return std::nullopt;
   return value;
-}
-
-std::string Shortest(double v) {
-  std::array<char, 32> buf{};
-  const auto [ptr, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v);
-  return ec == std::errc() ? std::string(buf.data(), ptr) : std::string("nan");
-}
-
-std::string FormatG(double v) {
-  std::array<char, 32> buf{};
-  std::snprintf(buf.data(), buf.size(), "%.9g", v);
-  return buf.data();
 }
 
 // Parser of one data line; every error names path, line and column.
@@ -277,11 +266,11 @@ CameraTrack TrackOf(const TimedTrajectory& t, const std::vector<size_t>& indices
   return track;
 }
 
-std::string WriteTrajectory(const std::string& path, const TimedTrajectory& trajectory,
-                            TrajectoryFormat format) {
+Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajectory,
+                       TrajectoryFormat format) {
   if (trajectory.poses.size() != trajectory.t_ns.size() ||
       (!trajectory.segment.empty() && trajectory.segment.size() != trajectory.t_ns.size())) {
-    return "cannot write '" + path + "': t_ns, poses and segment differ in size";
+    return Error{"cannot write '" + path + "': t_ns, poses and segment differ in size"};
   }
   const bool with_segment =
       format == TrajectoryFormat::kNative ||
@@ -299,12 +288,12 @@ std::string WriteTrajectory(const std::string& path, const TimedTrajectory& traj
     if (format == TrajectoryFormat::kNative) {
       out += std::to_string(trajectory.t_ns[k]);
       for (const double v : {q.w(), q.x(), q.y(), q.z(), c.x(), c.y(), c.z()}) {
-        out += ' ' + Shortest(v);
+        out += ' ' + ShortestText(v);
       }
     } else {
       out += FormatNsAsSeconds(trajectory.t_ns[k]);
       for (const double v : {c.x(), c.y(), c.z(), q.x(), q.y(), q.z(), q.w()}) {
-        out += ' ' + Shortest(v);
+        out += ' ' + ShortestText(v);
       }
     }
     if (with_segment) {
@@ -390,17 +379,6 @@ std::optional<int64_t> ParseSecondsToNs(std::string_view text) {
   return negative ? -value : value;
 }
 
-std::string FormatNsAsSeconds(int64_t t_ns) {
-  const bool negative = t_ns < 0;
-  const uint64_t magnitude =
-      negative ? ~static_cast<uint64_t>(t_ns) + 1 : static_cast<uint64_t>(t_ns);
-  std::array<char, 40> buf{};
-  std::snprintf(buf.data(), buf.size(), "%s%llu.%09llu", negative ? "-" : "",
-                static_cast<unsigned long long>(magnitude / 1'000'000'000ULL),
-                static_cast<unsigned long long>(magnitude % 1'000'000'000ULL));
-  return buf.data();
-}
-
 Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
                                               const std::string& times_path) {
   constexpr double kOrthonormalTolerance = 1e-4;
@@ -440,7 +418,8 @@ Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
     const double error = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
     if (!(error <= kOrthonormalTolerance) || !(r.determinant() > 0.0)) {
       return Error{p.Where() + "the rotation block is not a rotation (|R^T R - I| = " +
-                   FormatG(error) + ", det " + FormatG(r.determinant()) + ")"};
+                   SignificantText(error, 9) + ", det " + SignificantText(r.determinant(), 9) +
+                   ")"};
     }
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Pose pose;
@@ -553,9 +532,10 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
     const double norm = q.norm();
     const double norm_error = std::abs(norm - 1.0);
     if (!(norm_error <= options.max_quaternion_norm_error)) {
-      return Error{parser.Where() + "quaternion (w, x, y, z) = (" + FormatG(q[0]) + ", " +
-                   FormatG(q[1]) + ", " + FormatG(q[2]) + ", " + FormatG(q[3]) + ") has norm " +
-                   FormatG(norm) + ", not 1 within " + FormatG(options.max_quaternion_norm_error)};
+      return Error{parser.Where() + "quaternion (w, x, y, z) = (" + SignificantText(q[0], 9) +
+                   ", " + SignificantText(q[1], 9) + ", " + SignificantText(q[2], 9) + ", " +
+                   SignificantText(q[3], 9) + ") has norm " + SignificantText(norm, 9) +
+                   ", not 1 within " + SignificantText(options.max_quaternion_norm_error, 9)};
     }
     if (norm_error > kSilentNormError) {
       ++normalised;
@@ -581,11 +561,11 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
   return trajectory;
 }
 
-std::string WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory) {
+Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory) {
   return WriteTrajectory(path, trajectory, TrajectoryFormat::kTum);
 }
 
-std::string WriteTrajectoryNative(const std::string& path, const TimedTrajectory& trajectory) {
+Status WriteTrajectoryNative(const std::string& path, const TimedTrajectory& trajectory) {
   return WriteTrajectory(path, trajectory, TrajectoryFormat::kNative);
 }
 
@@ -649,7 +629,7 @@ Expected<RigRecording> MatchTrajectories(const TimedTrajectory& master,
   if (master_indices.size() < 2) {
     std::string message = "only " + std::to_string(master_indices.size()) +
                           " master stamps have a pose in every slave within " +
-                          FormatG(static_cast<double>(tolerance_ns) * 1e-6) +
+                          SignificantText(static_cast<double>(tolerance_ns) * 1e-6, 9) +
                           " ms (need at least 2); per slave:";
     for (size_t s = 0; s < slaves.size(); ++s) {
       message += (s ? ", " : " ") + slaves[s].name + " matched " + std::to_string(count[s]) +
