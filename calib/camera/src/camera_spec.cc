@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "camera_models.h"
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
 
 namespace rigcal::camera {
@@ -19,12 +20,8 @@ constexpr int kMaxImageSide = 100000;
 constexpr size_t kMaxPolySize = 21;         // a0..a20
 constexpr size_t kMaxInversePolySize = 31;  // b0..b30
 
-std::string Str(double value) {
-  std::ostringstream out;
-  out.precision(10);
-  out << value;
-  return out.str();
-}
+// Numbers in messages: 10 significant digits.
+std::string Str(double value) { return SignificantText(value, 10); }
 
 bool AllFinite(const std::vector<double>& values) {
   for (const double v : values) {
