@@ -92,10 +92,8 @@ TEST(ParseSecondsToNsTest, RejectsNonNumbersAndOverflow) {
   }
 }
 
-TEST(FormatNsAsSecondsTest, ExactAndRoundTrips) {
-  EXPECT_EQ(FormatNsAsSeconds(0), "0.000000000");
-  EXPECT_EQ(FormatNsAsSeconds(-1), "-0.000000001");
-  EXPECT_EQ(FormatNsAsSeconds(1403715524907143168LL), "1403715524.907143168");
+// The exact text of FormatNsAsSeconds is tested in tests/calib/time_format_test.cc.
+TEST(FormatNsAsSecondsTest, RoundTrips) {
   for (const int64_t t : std::vector<int64_t>{INT64_MIN + 1, -1234567890123LL, 42, INT64_MAX}) {
     EXPECT_EQ(ParseSecondsToNs(FormatNsAsSeconds(t)), t);
   }
@@ -218,7 +216,8 @@ TEST_F(TrajectoryIoTest, TumWriterOmitsSegmentColumnWhenAllZero) {
   TimedTrajectory t = MakeTrajectory("x", {0, 1, 2});
   t.segment.assign(3, 0);
   const std::string path = (dir_ / "x.txt").string();
-  ASSERT_TRUE(WriteTrajectoryTum(path, t).ok());
+  const Status written = WriteTrajectoryTum(path, t);
+  ASSERT_TRUE(written.ok()) << written.message();
   std::ifstream in(path);
   std::string line;
   std::getline(in, line);  // header comment
