@@ -7,9 +7,8 @@ namespace rigcal {
 
 bool CalibrationOptions::Check(std::string* error) const {
   std::ostringstream e;
-  std::string pair_error;
-  if (!pairs.Check(&pair_error))
-    e << pair_error;
+  if (const Status pair_status = pairs.Check(); !pair_status.ok())
+    e << "pairs." << pair_status.message();
   else if (scale_model == ScaleModel::kPartitions && partitions < 1)
     e << "partitions must be >= 1 for the partition scale model, got " << partitions;
   else if (alpha_threshold_deg < 0.0 || alpha_threshold_deg >= 180.0)

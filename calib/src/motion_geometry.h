@@ -1,17 +1,14 @@
 #pragma once
-// Robust statistics of motion sets, for misfit removal.
+// The robust statistics of motion sets under their old names, for the estimator files that still
+// use them: they live in rigcal/calib/robust_statistics.h (MedianAndSigma). Remove this header
+// once no file includes it.
 
-#include <Eigen/Core>
-#include <vector>
-
-#include "motion_data.h"
+#include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::internal {
 
-struct RobustStats {
-  double median = 0.0;
-  double sigma = 0.0;  // 1.4826 * median absolute deviation
-};
-RobustStats Robust(std::vector<double> values);
+using rigcal::RobustStats;
+// Median and 1.4826 MAD of `values` (rigcal::MedianAndSigma).
+inline constexpr auto& Robust = rigcal::MedianAndSigma;
 
 }  // namespace rigcal::internal

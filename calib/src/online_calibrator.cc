@@ -16,8 +16,8 @@ SyncOptions WithCameraCount(SyncOptions sync, size_t cameras) {
 
 bool OnlineOptions::Check(std::string* error) const {
   std::string e;
-  if (!sync.Check(&e)) {
-    if (error) *error = "sync." + e;
+  if (const Status sync_status = sync.Check(); !sync_status.ok()) {
+    if (error) *error = "sync." + sync_status.message();
     return false;
   }
   if (!estimator.Check(&e)) {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "motion_geometry.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal {
 namespace {
@@ -132,8 +132,8 @@ SpanFigures MeasureSpan(const RigRecording& rec, int span, int samples) {
   }
   SpanFigures f;
   if (angles.empty()) return f;
-  f.median_angle = internal::Robust(angles).median;
-  if (!diffs.empty()) f.noise = internal::Robust(diffs).sigma;
+  f.median_angle = MedianAndSigma(angles).median;
+  if (!diffs.empty()) f.noise = MedianAndSigma(diffs).sigma;
   return f;
 }
 
@@ -160,26 +160,22 @@ int AutoPairSpan(const RigRecording& recording, const PairOptions& options) {
   return best_span;
 }
 
-bool PairOptions::Check(std::string* error) const {
-  std::ostringstream e;
-  if (step < 1)
-    e << "pairs.step must be >= 1, got " << step;
-  else if (!(target_angle_deg > 0.0))
-    e << "pairs.target_angle_deg must be > 0";
-  else if (!(target_translation_fraction > 0.0))
-    e << "pairs.target_translation_fraction must be > 0";
-  else if (min_angle_deg < 0.0)
-    e << "pairs.min_angle_deg must be >= 0";
-  else if (min_translation_fraction < 0.0)
-    e << "pairs.min_translation_fraction must be >= 0";
-  else if (!(max_span_fraction > 0.0 && max_span_fraction <= 1.0))
-    e << "pairs.max_span_fraction must be in (0, 1], got " << max_span_fraction;
-  else if (max_pairs < 1)
-    e << "pairs.max_pairs must be >= 1";
-  else if (max_pairs_per_end < 0)
-    e << "pairs.max_pairs_per_end must be >= 0 (0 = no limit)";
-  if (error) *error = e.str();
-  return e.str().empty();
+Status PairOptions::Check() const {
+  if (step < 1) return Error{"step: must be >= 1, got " + std::to_string(step)};
+  if (!(target_angle_deg > 0.0)) return Error{"target_angle_deg: must be > 0"};
+  if (!(target_translation_fraction > 0.0)) {
+    return Error{"target_translation_fraction: must be > 0"};
+  }
+  if (min_angle_deg < 0.0) return Error{"min_angle_deg: must be >= 0"};
+  if (min_translation_fraction < 0.0) return Error{"min_translation_fraction: must be >= 0"};
+  if (!(max_span_fraction > 0.0 && max_span_fraction <= 1.0)) {
+    std::ostringstream e;
+    e << "max_span_fraction: must be in (0, 1], got " << max_span_fraction;
+    return Error{e.str()};
+  }
+  if (max_pairs < 1) return Error{"max_pairs: must be >= 1"};
+  if (max_pairs_per_end < 0) return Error{"max_pairs_per_end: must be >= 0 (0 = no limit)"};
+  return Status::Ok();
 }
 
 std::vector<IndexPair> SelectPairs(const RigRecording& recording, const PairOptions& options) {

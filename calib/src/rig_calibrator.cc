@@ -608,7 +608,7 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
 RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOptions& options) {
   RigCalibration out;
   out.master = recording.master.name;
-  const std::string invalid = recording.Validate();
+  const std::string invalid = recording.Check().message();
   std::string option_error;
   const bool options_ok = options.Check(&option_error);
   std::vector<IndexPair> pairs;

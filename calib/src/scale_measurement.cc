@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rigcal/calib/robust_statistics.h"
+
 namespace rigcal::internal {
 
 std::vector<ScaleMeasurement> MeasureScales(const std::vector<MotionData>& motions,
@@ -42,8 +44,7 @@ ScaleSummary SummarizeScales(const std::vector<ScaleMeasurement>& measurements,
   for (double x : v) ss += (x - s.mean) * (x - s.mean);
   s.sigma_thesis = std::sqrt(ss);
   s.std = v.size() > 1 ? std::sqrt(ss / (v.size() - 1)) : 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  s.median = v[v.size() / 2];
+  s.median = UpperMedian(std::move(v));
   return s;
 }
 

@@ -29,29 +29,29 @@ bool SyncOptions::IsRequired(int camera) const {
   return camera > 0 && camera < static_cast<int>(required.size()) && required[camera];
 }
 
-bool SyncOptions::Check(std::string* error) const {
+Status SyncOptions::Check() const {
   std::ostringstream e;
   if (num_cameras < 1 || num_cameras > kMaxCameras)
-    e << "num_cameras must be in [1, " << kMaxCameras << "], got " << num_cameras;
+    e << "num_cameras: must be in [1, " << kMaxCameras << "], got " << num_cameras;
   else if (capacity < 1 || capacity > kMaxCapacity)
-    e << "capacity must be in [1, " << kMaxCapacity << "], got " << capacity;
+    e << "capacity: must be in [1, " << kMaxCapacity << "], got " << capacity;
   else if (frame_period_ns <= 0 || frame_period_ns > kMaxDurationNs)
-    e << "frame_period_ns must be in (0, " << kMaxDurationNs << "], got " << frame_period_ns;
+    e << "frame_period_ns: must be in (0, " << kMaxDurationNs << "], got " << frame_period_ns;
   else if (tolerance_ns < 0 || tolerance_ns > kMaxDurationNs)
-    e << "tolerance_ns must be in [0, " << kMaxDurationNs << "] (0 = frame_period_ns / 2), got "
+    e << "tolerance_ns: must be in [0, " << kMaxDurationNs << "] (0 = frame_period_ns / 2), got "
       << tolerance_ns;
   else if (max_wait_ns < 0 || max_wait_ns > kMaxDurationNs)
-    e << "max_wait_ns must be in [0, " << kMaxDurationNs << "] (0 = 3 * frame_period_ns), got "
+    e << "max_wait_ns: must be in [0, " << kMaxDurationNs << "] (0 = 3 * frame_period_ns), got "
       << max_wait_ns;
   else if (!required.empty() && static_cast<int>(required.size()) != num_cameras)
-    e << "required must be empty or have num_cameras (" << num_cameras << ") flags, got "
+    e << "required: must be empty or have num_cameras (" << num_cameras << ") flags, got "
       << required.size();
   else if (!required.empty() && !required[0])
-    e << "required[0] must be true: the master is in every set";
+    e << "required[0]: must be true: the master is in every set";
   else if (ready_capacity < 1 || ready_capacity > kMaxCapacity)
-    e << "ready_capacity must be in [1, " << kMaxCapacity << "], got " << ready_capacity;
-  if (error) *error = e.str();
-  return e.str().empty();
+    e << "ready_capacity: must be in [1, " << kMaxCapacity << "], got " << ready_capacity;
+  if (e.str().empty()) return Status::Ok();
+  return Error{e.str()};
 }
 
 const char* ToString(PushResult result) {
@@ -101,8 +101,7 @@ std::string SyncStats::BriefReport() const {
 namespace {
 
 const SyncOptions& Checked(const SyncOptions& options) {
-  std::string error;
-  if (!options.Check(&error)) throw std::invalid_argument("SyncOptions: " + error);
+  RequireValid(options.Check(), "SyncOptions");
   return options;
 }
 

@@ -38,7 +38,7 @@ std::vector<std::optional<CameraPose>> RigRecording::SetAt(size_t k) const {
   return set;
 }
 
-std::string RigRecording::Validate() const {
+Status RigRecording::Check() const {
   std::ostringstream err;
   auto check = [&](const CameraTrack& track) {
     if (track.poses.size() != t_ns.size()) {
@@ -53,17 +53,17 @@ std::string RigRecording::Validate() const {
     }
     return true;
   };
-  if (!check(master)) return err.str();
+  if (!check(master)) return Error{err.str()};
   for (const auto& s : slaves) {
-    if (!check(s)) return err.str();
+    if (!check(s)) return Error{err.str()};
   }
   for (size_t k = 1; k < t_ns.size(); ++k) {
     if (t_ns[k] <= t_ns[k - 1]) {
       err << "stamps not increasing at index " << k;
-      return err.str();
+      return Error{err.str()};
     }
   }
-  return "";
+  return Status::Ok();
 }
 
 }  // namespace rigcal

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "rigcal/calib/logging.h"
+#include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::drivers {
 namespace {
@@ -98,8 +99,7 @@ Expected<std::unique_ptr<ImageFolderDevice>> ImageFolderDevice::Open(const std::
     for (size_t i = 1; i < device->entries_.size(); ++i) {
       dt.push_back(device->entries_[i].t_ns - device->entries_[i - 1].t_ns);
     }
-    std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-    device->frame_rate_hz_ = 1e9 / static_cast<double>(dt[dt.size() / 2]);
+    device->frame_rate_hz_ = 1e9 / static_cast<double>(UpperMedian(std::move(dt)));
   }
   log->info("camera {}: {} images from {} at {:.2f} Hz", device->name_, device->entries_.size(),
             folder, device->frame_rate_hz_);

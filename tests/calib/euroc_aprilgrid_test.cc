@@ -181,7 +181,7 @@ TEST_F(EurocAprilGridTest, PnpPosesMatchProvenance) {
   EXPECT_GT(rig_->recording.size(), 1400u);
   EXPECT_LT(rig_->cam0_stats.median_reproj_px, 0.6);
   EXPECT_LT(rig_->cam1_stats.median_reproj_px, 0.6);
-  EXPECT_TRUE(rig_->recording.Validate().empty()) << rig_->recording.Validate();
+  EXPECT_TRUE(rig_->recording.Check().ok()) << rig_->recording.Check().message();
   // Overlapping stereo: the per-frame relative pose cam0 -> cam1 is the extrinsic up to PnP
   // errors (provenance: naive per-frame stereo PnP is within ~0.16 deg / ~3 mm; measured here
   // ~0.19 deg / ~3.3 mm mean, ~0.7 deg rms). A wrong PnP frame convention (cam_from_target

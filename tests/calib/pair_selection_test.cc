@@ -77,9 +77,9 @@ TEST(PairSelection, LimitOfPairsPerEndPose) {
     for (const auto& [b, uses] : ends) EXPECT_LE(uses, limit) << "pose " << b;
   }
   opt.max_pairs_per_end = -1;
-  std::string error;
-  EXPECT_FALSE(opt.Check(&error));
-  EXPECT_NE(error.find("max_pairs_per_end"), std::string::npos);
+  const Status status = opt.Check();
+  EXPECT_FALSE(status.ok());
+  EXPECT_EQ(status.message().rfind("max_pairs_per_end: ", 0), 0u) << status.message();
 }
 
 // White pose noise: longer spans only add signal, so the best span is long. Random-walk drift
@@ -125,10 +125,11 @@ TEST(PairSelection, NeverCrossesSegments) {
 
 TEST(PairSelection, OptionsCheckNamesField) {
   PairOptions opt;
+  EXPECT_TRUE(opt.Check().ok()) << opt.Check().message();
   opt.max_span_fraction = 0.0;
-  std::string error;
-  EXPECT_FALSE(opt.Check(&error));
-  EXPECT_NE(error.find("max_span_fraction"), std::string::npos);
+  const Status status = opt.Check();
+  EXPECT_FALSE(status.ok());
+  EXPECT_EQ(status.message().rfind("max_span_fraction: ", 0), 0u) << status.message();
 }
 
 }  // namespace

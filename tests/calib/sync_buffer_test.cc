@@ -166,8 +166,7 @@ SyncOptions Cameras(int n) {
 
 TEST(SyncOptions, DefaultsAreDerivedFromTheFramePeriod) {
   SyncOptions o;
-  std::string error;
-  EXPECT_TRUE(o.Check(&error)) << error;
+  EXPECT_TRUE(o.Check().ok()) << o.Check().message();
   EXPECT_EQ(o.EffectiveToleranceNs(), o.frame_period_ns / 2);
   EXPECT_EQ(o.EffectiveMaxWaitNs(), 3 * o.frame_period_ns);
   o.frame_period_ns = 100'000'000;
@@ -200,10 +199,15 @@ TEST(SyncOptions, CheckNamesTheOffendingField) {
   for (const auto& [field, spoil] : cases) {
     SyncOptions o;
     spoil(o);
-    std::string error;
-    EXPECT_FALSE(o.Check(&error)) << field;
-    EXPECT_NE(error.find(field), std::string::npos) << error;
-    EXPECT_THROW(SyncBuffer{o}, std::invalid_argument) << field;
+    const Status status = o.Check();
+    EXPECT_FALSE(status.ok()) << field;
+    EXPECT_EQ(status.message().rfind(field + ": ", 0), 0u) << status.message();
+    EXPECT_THROW(SyncBuffer{o}, InvalidOptions) << field;
+    try {
+      SyncBuffer buffer(o);
+    } catch (const InvalidOptions& e) {
+      EXPECT_EQ(std::string(e.what()), "SyncOptions: " + status.message());
+    }
   }
 }
 

@@ -21,7 +21,7 @@ TEST(Synthetic, ThesisSampleSatisfiesRigConstraint) {
   opt.num_slaves = 3;
   std::vector<Similarity> truth;
   const RigRecording rec = ThesisSample(opt, rng, &truth);
-  ASSERT_EQ(rec.Validate(), "");
+  ASSERT_TRUE(rec.Check().ok()) << rec.Check().message();
   ASSERT_EQ(truth.size(), 3u);
   const auto pairs = SelectPairs(rec, {.policy = PairOptions::Policy::kSinceStart});
   for (int i = 0; i < 3; ++i) {
@@ -51,7 +51,7 @@ TEST(Synthetic, DriveIsDeterministicAndConsistent) {
   opt.position_noise = 0.0;
   const auto a = GenerateDrive({"front", "left", "back"}, DemoRig(), opt);
   const auto b = GenerateDrive({"front", "left", "back"}, DemoRig(), opt);
-  ASSERT_EQ(a.recording.Validate(), "");
+  ASSERT_TRUE(a.recording.Check().ok()) << a.recording.Check().message();
   EXPECT_EQ(a.recording.slaves[1].poses[50].C, b.recording.slaves[1].poses[50].C);
   const auto pairs =
       SelectPairs(a.recording, {.policy = PairOptions::Policy::kRelative, .step = 7});

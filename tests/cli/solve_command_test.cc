@@ -72,7 +72,7 @@ class SolveCommandTest : public ::testing::Test {
     for (const CameraTrack& slave : rec.slaves) WriteTrack(rec, slave, slave_time_offset_ns);
     std::map<std::string, Similarity> truth;
     for (size_t i = 0; i < drive.truth.size(); ++i) truth[names[i + 1]] = drive.truth[i];
-    ASSERT_EQ(WriteRigYaml(Path("truth.yaml"), truth), "");
+    ASSERT_TRUE(WriteRigYaml(Path("truth.yaml"), truth).ok());
     truth_ = truth;
   }
 
@@ -82,7 +82,7 @@ class SolveCommandTest : public ::testing::Test {
     for (const int64_t stamp : rec.t_ns) t.t_ns.push_back(stamp + offset_ns);
     t.poses = track.poses;
     t.segment = track.segment;
-    ASSERT_EQ(WriteTrajectoryTum(Path(track.name + ".txt"), t), "");
+    ASSERT_TRUE(WriteTrajectoryTum(Path(track.name + ".txt"), t).ok());
   }
 
   RunResult Run(const std::string& args) const {
@@ -256,7 +256,7 @@ TEST_F(SolveCommandTest, MissingFile) {
 
 TEST_F(SolveCommandTest, TruthWithoutSlaveNamesTheSlave) {
   WriteDemoDrive();
-  ASSERT_EQ(WriteRigYaml(Path("partial.yaml"), {{"cam1", truth_.at("cam1")}}), "");
+  ASSERT_TRUE(WriteRigYaml(Path("partial.yaml"), {{"cam1", truth_.at("cam1")}}).ok());
   const RunResult r = Run(DemoArgs() + " --truth " + Quote(Path("partial.yaml")));
   EXPECT_EQ(r.exit_code, 1) << Explain(r);
   EXPECT_THAT(r.err, HasSubstr(Path("partial.yaml") + ": no entry for slave 'cam2'"));
@@ -297,8 +297,8 @@ TEST_F(SolveCommandTest, UnusableSlaveExitsWith3AndStillWritesTheResult) {
     slave.poses.push_back(SlavePoseFromMaster(p, rig));
     slave.segment.push_back(0);
   }
-  ASSERT_EQ(WriteTrajectoryTum(Path("m.txt"), master), "");
-  ASSERT_EQ(WriteTrajectoryTum(Path("s.txt"), slave), "");
+  ASSERT_TRUE(WriteTrajectoryTum(Path("m.txt"), master).ok());
+  ASSERT_TRUE(WriteTrajectoryTum(Path("s.txt"), slave).ok());
   const RunResult r =
       Run("solve --master " + Quote(Path("m.txt")) + " --slave " + Quote(Path("s.txt")) +
           " --motion general --json --out " + Quote(Path("result.yaml")));
@@ -329,8 +329,8 @@ TEST_F(SolveCommandTest, PlanarCarDriveReportsTheVerticalAsUnobservable) {
     nominal[rec.slaves[i].name] = drive.truth[i];
     nominal[rec.slaves[i].name].C.y() += 0.05;  // CAD heights 5 cm off
   }
-  ASSERT_EQ(WriteRigYaml(Path("truth.yaml"), truth), "");
-  ASSERT_EQ(WriteRigYaml(Path("nominal.yaml"), nominal), "");
+  ASSERT_TRUE(WriteRigYaml(Path("truth.yaml"), truth).ok());
+  ASSERT_TRUE(WriteRigYaml(Path("nominal.yaml"), nominal).ok());
   args += " --truth " + Quote(Path("truth.yaml")) + " --json";
 
   const RunResult plain = Run(args);

@@ -15,6 +15,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "drivers/shipped_sim_rig.h"
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/drivers/simulated_rig.h"
 
 namespace rigcal::drivers {
@@ -97,8 +98,7 @@ TrackStats TrackAgainstProjection(const SimulatedRig& rig, int camera, int64_t f
   if (stats.tracks == 0) return stats;
   stats.mean_error /= stats.tracks;
   stats.rms_error = std::sqrt(sum2 / stats.tracks);
-  std::nth_element(norms.begin(), norms.begin() + norms.size() / 2, norms.end());
-  stats.median_error = norms[norms.size() / 2];
+  stats.median_error = UpperMedian(std::move(norms));
   return stats;
 }
 

@@ -107,7 +107,7 @@ TEST_F(RigFilesTest, RigYamlRoundTrips) {
   const std::map<std::string, Similarity> rig = {
       {"cam1", MakeRig({1, 2, 3}, 33.3, {0.1, -1.0 / 3.0, 1e-9}, 0.123456789)},
       {"cam2", MakeRig({0, 0, 1}, 180, {-2, 0, 5}, 2.0)}};
-  ASSERT_EQ(WriteRigYaml(Path("truth.yaml"), rig), "");
+  ASSERT_TRUE(WriteRigYaml(Path("truth.yaml"), rig).ok());
   const auto read = ReadRigYaml(Path("truth.yaml"));
   ASSERT_TRUE(read.ok()) << read.error();
   ASSERT_EQ(read->size(), 2u);
@@ -213,7 +213,7 @@ TEST_F(RigFilesTest, RigYamlStructure) {
 
 TEST_F(RigFilesTest, ResultYamlRoundTripsThroughReadRigYaml) {
   const RigCalibration result = MakeResult();
-  ASSERT_EQ(WriteResultYaml(Path("result.yaml"), result), "");
+  ASSERT_TRUE(WriteResultYaml(Path("result.yaml"), result).ok());
   const auto read = ReadRigYaml(Path("result.yaml"));
   ASSERT_TRUE(read.ok()) << read.error();
   ASSERT_EQ(read->size(), 3u);
@@ -258,7 +258,7 @@ TEST_F(RigFilesTest, ResultYamlHasStatusAndStatistics) {
 TEST_F(RigFilesTest, NominalMountingsFromRigYamlOrRigConfig) {
   const std::map<std::string, Similarity> rig = {
       {"left", MakeRig({0, 1, 0}, -90, {-0.9, 0.3, -1.5}, 1.0)}};
-  ASSERT_EQ(WriteRigYaml(Path("nominal.yaml"), rig), "");
+  ASSERT_TRUE(WriteRigYaml(Path("nominal.yaml"), rig).ok());
   const auto from_rig = ReadNominalMountings(Path("nominal.yaml"));
   ASSERT_TRUE(from_rig.ok()) << from_rig.error();
   ASSERT_EQ(from_rig->count("left"), 1u);
@@ -292,7 +292,7 @@ TEST_F(RigFilesTest, NominalMountingsFromRigYamlOrRigConfig) {
 // p_master = R_n p_cam_n + C_n.
 TEST_F(RigFilesTest, CamchainTransformsPointsBetweenNeighbours) {
   const RigCalibration result = MakeResult();
-  ASSERT_EQ(WriteCamchain(Path("camchain.yaml"), result, {"front", "back", "left"}), "");
+  ASSERT_TRUE(WriteCamchain(Path("camchain.yaml"), result, {"front", "back", "left"}).ok());
   const auto chain = ReadCamchain(Path("camchain.yaml"));
   ASSERT_TRUE(chain.ok()) << chain.error();
   ASSERT_EQ(chain->size(), 3u);
@@ -319,7 +319,7 @@ TEST_F(RigFilesTest, CamchainTransformsPointsBetweenNeighbours) {
 }
 
 TEST_F(RigFilesTest, CamchainDefaultOrderSkipsUnusableSlaves) {
-  ASSERT_EQ(WriteCamchain(Path("c.yaml"), MakeResult()), "");
+  ASSERT_TRUE(WriteCamchain(Path("c.yaml"), MakeResult()).ok());
   const auto chain = ReadCamchain(Path("c.yaml"));
   ASSERT_TRUE(chain.ok()) << chain.error();
   ASSERT_EQ(chain->size(), 3u);
@@ -335,11 +335,11 @@ TEST_F(RigFilesTest, CamchainDefaultOrderSkipsUnusableSlaves) {
 
 TEST_F(RigFilesTest, CamchainOrderErrors) {
   const RigCalibration result = MakeResult();
-  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"left", "front"}),
+  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"left", "front"}).message(),
               HasSubstr("the first camera must be the master 'front'"));
-  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"front", "right"}),
+  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"front", "right"}).message(),
               HasSubstr("unknown camera 'right'"));
-  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"front", "still"}),
+  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"front", "still"}).message(),
               HasSubstr("camera 'still' has no usable estimate (insufficient_motion)"));
   EXPECT_FALSE(fs::exists(Path("c.yaml")));
 }
@@ -369,8 +369,8 @@ TEST_F(RigFilesTest, CamchainReaderErrors) {
 
 TEST_F(RigFilesTest, AtomicWriteReplacesAndLeavesNoTemporaryFile) {
   const std::string path = Path("out.txt");
-  ASSERT_EQ(WriteFileAtomically(path, "first\n"), "");
-  ASSERT_EQ(WriteFileAtomically(path, "second\n"), "");
+  ASSERT_TRUE(WriteFileAtomically(path, "first\n").ok());
+  ASSERT_TRUE(WriteFileAtomically(path, "second\n").ok());
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
@@ -383,12 +383,12 @@ TEST_F(RigFilesTest, AtomicWriteReplacesAndLeavesNoTemporaryFile) {
 
 TEST_F(RigFilesTest, AtomicWriteErrorNamesPathAndErrno) {
   const std::string path = Path("no_such_dir/out.txt");
-  const std::string error = WriteFileAtomically(path, "x");
+  const std::string error = WriteFileAtomically(path, "x").message();
   EXPECT_THAT(error, HasSubstr(path));
   EXPECT_THAT(error, HasSubstr("No such file or directory"));
   // Renaming over a directory fails after the temporary file was written: it is removed.
   fs::create_directory(Path("a_dir"));
-  const std::string over_dir = WriteFileAtomically(Path("a_dir"), "x");
+  const std::string over_dir = WriteFileAtomically(Path("a_dir"), "x").message();
   EXPECT_THAT(over_dir, HasSubstr(Path("a_dir")));
   EXPECT_THAT(over_dir, HasSubstr("rename"));
   EXPECT_EQ(Listing(), std::vector<std::string>({"a_dir"}));

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/io/config_sections.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/yaml_fields.h"
@@ -269,13 +270,6 @@ double ThreadCpuSeconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-double Percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size())));
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
-  return v[k];
-}
-
 struct ShippedConfig {
   std::string file;
   enum class Motion { kGeneral, kPlanar, kAxial } motion;
@@ -364,12 +358,12 @@ TEST(SimulatedConfigs, ShippedConfigsAreTrackable) {
           }
         }
       }
-      const double median = Percentile(flow, 0.5), p95 = Percentile(flow, 0.95);
+      const double median = Quantile(flow, 0.5), p95 = Quantile(flow, 0.95);
       const double hit_fraction = static_cast<double>(hit) / std::max(valid, 1);
       std::printf(
           "  %-6s texture in %.0f%% of the view, flow per frame: median %.1f px, 95%% "
           "%.1f px, max %.1f px\n",
-          spec.names[c].c_str(), 100 * hit_fraction, median, p95, Percentile(flow, 1.0));
+          spec.names[c].c_str(), 100 * hit_fraction, median, p95, Quantile(flow, 1.0));
       EXPECT_GT(hit_fraction, 0.5) << spec.names[c];
       EXPECT_GT(median, 0.3) << spec.names[c];
       EXPECT_LT(p95, 35.0) << spec.names[c];

@@ -111,7 +111,8 @@ TEST_F(TrajectoryIoTest, TumAndNativeWritersRoundTripExactly) {
   for (const bool native : {false, true}) {
     const std::string path = (dir_ / (native ? "cam7.poses" : "cam7.txt")).string();
     const std::string error =
-        native ? WriteTrajectoryNative(path, original) : WriteTrajectoryTum(path, original);
+        (native ? WriteTrajectoryNative(path, original) : WriteTrajectoryTum(path, original))
+            .message();
     ASSERT_EQ(error, "");
     TrajectoryFormat format = TrajectoryFormat::kEurocCsv;
     const auto read = ReadTrajectory(path, {}, &format);
@@ -133,7 +134,8 @@ TEST_F(TrajectoryIoTest, TumWriterOmitsSegmentColumnWhenAllZero) {
   TimedTrajectory t = MakeTrajectory("x", {0, 1, 2});
   t.segment.assign(3, 0);
   const std::string path = (dir_ / "x.txt").string();
-  ASSERT_EQ(WriteTrajectoryTum(path, t), "");
+  const Status written = WriteTrajectoryTum(path, t);
+  ASSERT_TRUE(written.ok()) << written.message();
   std::ifstream in(path);
   std::string line;
   std::getline(in, line);  // header comment
@@ -251,7 +253,7 @@ TEST_F(TrajectoryIoTest, BadSegment) {
 
 TEST_F(TrajectoryIoTest, WriterReportsUnwritablePath) {
   const std::string path = (dir_ / "missing_dir" / "x.txt").string();
-  const std::string error = WriteTrajectoryTum(path, MakeTrajectory("x", {0, 1}));
+  const std::string error = WriteTrajectoryTum(path, MakeTrajectory("x", {0, 1})).message();
   EXPECT_THAT(error, HasSubstr(path));
   EXPECT_THAT(error, HasSubstr("No such file or directory"));
 }

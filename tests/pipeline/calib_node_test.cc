@@ -134,7 +134,7 @@ TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
   options.result_path = dir / "result.yaml";
   options.state_path = dir / "state.txt";
   CalibNode node(*config, options, &bus);
-  ASSERT_EQ(node.Open(), "");
+  ASSERT_TRUE(node.Open().ok());
 
   std::atomic<bool> stop{false};
   CalibNodeSummary summary;
@@ -238,7 +238,7 @@ TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
 // event (a logger killed mid-write).
 std::string WriteDamagedLog(const TempDir& dir, const RigRecording& recording) {
   const std::string path = dir / "poses.lcmlog";
-  EXPECT_EQ(WritePoseLog(path, recording), "");
+  EXPECT_TRUE(WritePoseLog(path, recording).ok());
   {
     lcm::LogFile log(path, "a");
     EXPECT_TRUE(log.good());
@@ -273,7 +273,7 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
   CalibNodeSummary first;
   {
     CalibNode node(*config, options);
-    ASSERT_EQ(node.Open(), "");
+    ASSERT_TRUE(node.Open().ok());
     std::atomic<bool> stop{false};
     first = node.Run(stop);
   }
@@ -302,16 +302,17 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
 
   // Resume from the saved state with an empty log: the estimate continues from the state.
   const std::string empty_log = dir / "empty.lcmlog";
-  ASSERT_EQ(WritePoseLog(empty_log,
-                         RigRecording{{}, {"front", {}, {}}, {{"left", {}, {}}, {"back", {}, {}}}}),
-            "");
+  ASSERT_TRUE(
+      WritePoseLog(empty_log,
+                   RigRecording{{}, {"front", {}, {}}, {{"left", {}, {}}, {"back", {}, {}}}})
+          .ok());
   options.log_path = empty_log;
   options.publish_url.clear();
   options.resume = true;
   options.result_path = dir / "result2.yaml";
   {
     CalibNode node(*config, options);
-    ASSERT_EQ(node.Open(), "");
+    ASSERT_TRUE(node.Open().ok());
     std::atomic<bool> stop{false};
     const CalibNodeSummary resumed = node.Run(stop);
     EXPECT_TRUE(resumed.resumed);
@@ -339,7 +340,7 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
     text[text.size() / 2] ^= 0x5a;
     std::ofstream(options.state_path) << text;
     CalibNode node(*config, options);
-    ASSERT_EQ(node.Open(), "");
+    ASSERT_TRUE(node.Open().ok());
     std::atomic<bool> stop{false};
     const CalibNodeSummary fresh = node.Run(stop);
     EXPECT_FALSE(fresh.resumed);
@@ -354,8 +355,9 @@ TEST(CalibNode, OpenReportsUnusableInputs) {
   CalibNodeOptions options;
   options.log_path = dir / "missing.lcmlog";
   CalibNode node(*config, options);
-  const std::string error = node.Open();
-  EXPECT_NE(error.find("missing.lcmlog"), std::string::npos) << error;
+  const Status status = node.Open();
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("missing.lcmlog"), std::string::npos) << status.message();
 }
 
 TEST(CalibNode, EstimatorStateNamesTheDecalibratedSlave) {

@@ -105,7 +105,7 @@ TEST(EurocV102Drive, OnlineEstimateConverges) {
     }
   }
   rec.master.segment.assign(rec.size(), 0);
-  ASSERT_EQ(rec.Validate(), "");
+  ASSERT_TRUE(rec.Check().ok()) << rec.Check().message();
 
   OnlineReplayOptions options;
   options.report_every_s = 10.0;

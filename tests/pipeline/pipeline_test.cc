@@ -177,9 +177,19 @@ TEST(Pipeline, RejectsInconsistentArguments) {
                std::invalid_argument);
   PipelineOptions bad;
   bad.frame_queue_capacity = 0;
-  std::string error;
-  EXPECT_FALSE(bad.Check(&error));
-  EXPECT_NE(error.find("frame_queue_capacity"), std::string::npos);
+  const Status status = bad.Check();
+  EXPECT_FALSE(status.ok());
+  EXPECT_EQ(status.message().rfind("frame_queue_capacity: ", 0), 0u) << status.message();
+  // Invalid VO options are rejected by the pipeline before any VO is built, naming the field.
+  PipelineOptions bad_vo;
+  bad_vo.vo.max_features = 1;
+  EXPECT_EQ(bad_vo.Check().message().rfind("vo.max_features: ", 0), 0u) << bad_vo.Check().message();
+  std::vector<std::unique_ptr<drivers::CameraDevice>> two_devices;
+  two_devices.push_back(nullptr);
+  two_devices.push_back(nullptr);
+  EXPECT_THROW(
+      Pipeline({"a", "b"}, std::move(two_devices), {Pinhole("a"), Pinhole("b")}, Online(), bad_vo),
+      InvalidOptions);
 }
 
 }  // namespace

@@ -84,19 +84,19 @@ TEST(ExperimentsTest, GridsNamesAndOptionChecks) {
   EXPECT_FALSE(ParseExperimentKind("stabilty", &unchanged));
   EXPECT_EQ(unchanged, ExperimentKind::kPoses);
 
-  std::string error;
-  EXPECT_TRUE(ExperimentOptions().Check(&error)) << error;
+  EXPECT_TRUE(ExperimentOptions().Check().ok()) << ExperimentOptions().Check().message();
   ExperimentOptions bad;
   bad.samples = 0;
-  EXPECT_FALSE(bad.Check(&error));
-  EXPECT_NE(error.find("samples"), std::string::npos);
+  EXPECT_FALSE(bad.Check().ok());
+  EXPECT_EQ(bad.Check().message().rfind("samples: ", 0), 0u) << bad.Check().message();
   bad = ExperimentOptions();
   bad.alpha_max_deg = {};
-  EXPECT_FALSE(bad.Check(&error));
-  EXPECT_NE(error.find("alpha_max_deg"), std::string::npos);
+  EXPECT_FALSE(bad.Check().ok());
+  EXPECT_EQ(bad.Check().message().rfind("alpha_max_deg: ", 0), 0u) << bad.Check().message();
   bad = ExperimentOptions();
   bad.poses_max = 3;
-  EXPECT_FALSE(bad.Check(&error));
+  EXPECT_FALSE(bad.Check().ok());
+  EXPECT_EQ(bad.Check().message().rfind("poses_max: ", 0), 0u) << bad.Check().message();
   const ExperimentResult result = RunStability(bad);
   EXPECT_FALSE(result.error.empty());
   EXPECT_TRUE(result.rows.empty());

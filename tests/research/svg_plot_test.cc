@@ -123,8 +123,8 @@ TEST(SvgPlotTest, WriteSvgWritesFileAndReportsErrors) {
       std::filesystem::temp_directory_path() / ("svg_plot_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "figure.svg").string();
-  std::string error;
-  ASSERT_TRUE(WriteSvg(TwoPanelFigure(), path, &error)) << error;
+  const Status written = WriteSvg(TwoPanelFigure(), path);
+  ASSERT_TRUE(written.ok()) << written.message();
   std::ifstream file(path);
   std::stringstream content;
   content << file.rdbuf();
@@ -137,8 +137,9 @@ TEST(SvgPlotTest, WriteSvgWritesFileAndReportsErrors) {
   }
   EXPECT_EQ(files, 1);
 
-  EXPECT_FALSE(WriteSvg(TwoPanelFigure(), (dir / "missing" / "figure.svg").string(), &error));
-  EXPECT_NE(error.find("missing"), std::string::npos);
+  const Status failed = WriteSvg(TwoPanelFigure(), (dir / "missing" / "figure.svg").string());
+  EXPECT_FALSE(failed.ok());
+  EXPECT_NE(failed.message().find("missing"), std::string::npos);
   std::filesystem::remove_all(dir);
 }
 

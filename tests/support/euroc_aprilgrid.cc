@@ -17,6 +17,8 @@
 #include <opencv2/core.hpp>
 #pragma GCC diagnostic pop
 
+#include "rigcal/calib/robust_statistics.h"
+
 namespace rigcal::support {
 namespace {
 
@@ -270,10 +272,7 @@ std::vector<TargetPose> EstimateTargetPoses(const std::vector<AprilGridFrame>& f
     errors.push_back(err);
     ++local.accepted;
   }
-  if (!errors.empty()) {
-    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
-    local.median_reproj_px = errors[errors.size() / 2];
-  }
+  if (!errors.empty()) local.median_reproj_px = UpperMedian(std::move(errors));
   if (stats != nullptr) *stats = local;
   return poses;
 }

@@ -12,6 +12,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <random>
 
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"
 
@@ -148,12 +149,8 @@ void CompareWithKltChain(const std::string& file, int camera, int frames, double
     affine_errors.push_back(e_affine);
   }
   ASSERT_GE(klt_errors.size(), 50u) << file;
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  *klt_median = median(klt_errors);
-  *affine_median = median(affine_errors);
+  *klt_median = UpperMedian(klt_errors);
+  *affine_median = UpperMedian(affine_errors);
   std::printf(
       "%s camera %d, %d frames, %zu tracks: median error KLT chain %.3f px, affine %.3f px\n",
       file.c_str(), camera, frames, klt_errors.size(), *klt_median, *affine_median);

@@ -15,6 +15,8 @@
 #include "rigcal/calib/quaternion.h"
 #include "support/ideal_cameras.h"
 #include "support/room_sequence.h"
+#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/camera/camera_spec.h"
 
 namespace rigcal::vo {
 namespace {
@@ -112,13 +114,12 @@ SegmentErrors Evaluate(const Sequence& s, int segment) {
 void Report(const char* name, const Sequence& s, const SegmentErrors& e) {
   std::vector<double> ms;
   for (const VoResult& r : s.results) ms.push_back(r.processing_ms);
-  std::sort(ms.begin(), ms.end());
   std::printf(
       "%s: %d poses, frame-to-frame rotation error max %.4f deg rms %.4f deg, Sim(3)-aligned "
       "centre rms %.4f = %.3f %% of path %.3f; median %.2f ms/frame (wall clock, depends on "
       "machine load)\n",
       name, e.poses, e.max_relative_rotation_deg, e.rms_relative_rotation_deg, e.aligned_rms,
-      100.0 * e.aligned_rms / e.path_length, e.path_length, ms[ms.size() / 2]);
+      100.0 * e.aligned_rms / e.path_length, e.path_length, UpperMedian(ms));
 }
 
 int FirstTracking(const Sequence& s) {
@@ -265,23 +266,48 @@ TEST(MonocularVo, FeatureBudgetFollowsTheFieldOfView) {
   options.normal_fov_sr = 0.0;  // off: max_features for every lens
   EXPECT_EQ(MonocularVo(fisheye, 1, options).feature_budget(), options.max_features);
   options.normal_fov_sr = -1.0;
-  std::string error;
-  EXPECT_FALSE(options.Check(&error));
+  const std::string error = options.Check().message();
+  EXPECT_FALSE(options.Check().ok());
   EXPECT_NE(error.find("normal_fov_sr"), std::string::npos);
 }
 
 TEST(VoOptions, CheckNamesTheField) {
   VoOptions options;
-  std::string error;
-  EXPECT_TRUE(options.Check(&error)) << error;
-  EXPECT_TRUE(error.empty());
+  EXPECT_TRUE(options.Check().ok()) << options.Check().message();
+  EXPECT_TRUE(options.Check().message().empty());
   options.klt_window_px = 20;
   options.ransac_confidence = 1.5;
-  EXPECT_FALSE(options.Check(&error));
-  EXPECT_NE(error.find("klt_window_px"), std::string::npos);
-  EXPECT_NE(error.find("ransac_confidence"), std::string::npos);
-  EXPECT_FALSE(options.Check(nullptr));
+  // The first violated constraint, in the order of the fields.
+  std::string error = options.Check().message();
+  EXPECT_FALSE(options.Check().ok());
+  EXPECT_EQ(error, "klt_window_px: must be odd and >= 5");
+  options.klt_window_px = 21;
+  error = options.Check().message();
+  EXPECT_FALSE(options.Check().ok());
+  EXPECT_EQ(error.rfind("ransac_confidence: ", 0), 0u) << error;
   EXPECT_EQ(ToString(VoState::kLost), "lost");
+}
+
+// Invalid options are rejected, not replaced by the defaults: the constructor throws
+// InvalidOptions naming the options type and the field.
+TEST(VoOptions, InvalidOptionsAreRejectedByTheConstructor) {
+  camera::CameraSpec spec;
+  spec.width = 752;
+  spec.height = 480;
+  spec.intrinsics = {450.0, 450.0, 375.5, 239.5};
+  const std::shared_ptr<const camera::CameraModel> pinhole = camera::MakeCameraModel(spec).value();
+  VoOptions options;
+  options.max_features = 5;
+  try {
+    const MonocularVo vo(pinhole, 0, options);
+    ADD_FAILURE() << "MonocularVo accepted max_features = 5";
+  } catch (const InvalidOptions& e) {
+    EXPECT_EQ(std::string(e.what()), "VoOptions: max_features: must be >= 20");
+  }
+  options = VoOptions{};
+  options.ba_window = 2;
+  EXPECT_THROW(MonocularVo(pinhole, 0, options), InvalidOptions);
+  EXPECT_NO_THROW(MonocularVo(pinhole, 0, VoOptions{}));
 }
 
 }  // namespace

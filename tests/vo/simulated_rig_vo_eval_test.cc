@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <map>
 
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
@@ -106,8 +107,7 @@ CameraRun RunCamera(const drivers::SimulatedRig& rig, int camera, int64_t frames
     }
     ++run.frames;
   }
-  std::sort(ms.begin(), ms.end());
-  run.median_ms = ms[ms.size() / 2];
+  run.median_ms = UpperMedian(std::move(ms));
   return run;
 }
 
@@ -206,8 +206,8 @@ void MaybeWritePoses(const drivers::SimulatedRig& rig, int camera, const CameraR
     truth.t_ns.push_back(rig.FrameTimeNs(k));
     truth.poses.push_back(local);
   }
-  EXPECT_EQ(tools::WriteTrajectoryNative(base + ".txt", est), "");
-  EXPECT_EQ(tools::WriteTrajectoryNative(base + "_truth.txt", truth), "");
+  EXPECT_TRUE(tools::WriteTrajectoryNative(base + ".txt", est).ok());
+  EXPECT_TRUE(tools::WriteTrajectoryNative(base + "_truth.txt", truth).ok());
 }
 
 void EvaluateConfig(const std::string& file, int64_t max_frames) {

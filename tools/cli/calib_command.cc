@@ -54,8 +54,8 @@ int RunCalib(const CalibArgs& args) {
   }
   const std::map<std::string, Similarity>* truth_ptr = truth.empty() ? nullptr : &truth;
   tools::CalibNode node(std::move(*config), options);
-  if (const std::string error = node.Open(); !error.empty()) {
-    std::cerr << "rigcal calib: " << error << "\n";
+  if (const Status status = node.Open(); !status.ok()) {
+    std::cerr << "rigcal calib: " << status.message() << "\n";
     return kExitError;
   }
   StopSignal stop_signal;

@@ -60,9 +60,8 @@ int Run(const ExperimentArgs& args) {
   options.threads = args.threads;
   options.crb_samples = args.crb_samples;
   options.partitions = args.partitions;
-  std::string error;
-  if (!options.Check(&error)) {
-    std::cerr << "rigcal experiment: invalid options: " << error << "\n";
+  if (const Status status = options.Check(); !status.ok()) {
+    std::cerr << "rigcal experiment: invalid options: " << status.message() << "\n";
     return 2;
   }
   for (ExperimentKind kind : kinds) {

@@ -147,12 +147,12 @@ void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
 }
 
 // Writes every recorded VO pose of camera i to <dir>/<name>.txt in the rigcal native format
-// (`t_ns qw qx qy qz Cx Cy Cz segment`), which `rigcal solve` reads. Returns an error or "".
-std::string WritePoses(const std::string& dir, const std::vector<std::string>& names,
-                       const tools::Pipeline& pipeline) {
+// (`t_ns qw qx qy qz Cx Cy Cz segment`), which `rigcal solve` reads.
+Status WritePoses(const std::string& dir, const std::vector<std::string>& names,
+                  const tools::Pipeline& pipeline) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) return "cannot create '" + dir + "': " + ec.message();
+  if (ec) return Error{"cannot create '" + dir + "': " + ec.message()};
   for (size_t i = 0; i < names.size(); ++i) {
     tools::TimedTrajectory trajectory;
     trajectory.name = names[i];
@@ -165,11 +165,11 @@ std::string WritePoses(const std::string& dir, const std::vector<std::string>& n
       trajectory.segment.push_back(p.segment);
     }
     const std::string path = (std::filesystem::path(dir) / (names[i] + ".txt")).string();
-    if (std::string error = tools::WriteTrajectoryNative(path, trajectory); !error.empty()) {
-      return error;
+    if (Status status = tools::WriteTrajectoryNative(path, trajectory); !status.ok()) {
+      return status;
     }
   }
-  return {};
+  return Status::Ok();
 }
 
 int RunRun(const RunArgs& args) {
@@ -307,16 +307,16 @@ int RunRun(const RunArgs& args) {
                static_cast<unsigned long long>(final_state.estimate.sets),
                static_cast<double>(tools::ResidentSetBytes()) / (1 << 20));
   if (!args.out.empty()) {
-    if (const std::string error = tools::WriteResultYaml(args.out, result); !error.empty()) {
-      std::cerr << "rigcal run: " << error << "\n";
+    if (const Status status = tools::WriteResultYaml(args.out, result); !status.ok()) {
+      std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
     log->info("result written to {}", args.out);
   }
 
   if (!args.poses_dir.empty()) {
-    if (const std::string error = WritePoses(args.poses_dir, names, pipeline); !error.empty()) {
-      std::cerr << "rigcal run: " << error << "\n";
+    if (const Status status = WritePoses(args.poses_dir, names, pipeline); !status.ok()) {
+      std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
   }

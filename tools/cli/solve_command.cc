@@ -197,11 +197,11 @@ int RunSolve(const SolveArgs& args) {
   std::cout.flush();
 
   if (!args.out.empty()) {
-    if (std::string e = tools::WriteResultYaml(args.out, result); !e.empty()) return Fail(e);
+    if (Status s = tools::WriteResultYaml(args.out, result); !s.ok()) return Fail(s.message());
     log->info("wrote result to {}", args.out);
   }
   if (!args.camchain.empty()) {
-    if (std::string e = tools::WriteCamchain(args.camchain, result); !e.empty()) return Fail(e);
+    if (Status s = tools::WriteCamchain(args.camchain, result); !s.ok()) return Fail(s.message());
     log->info("wrote camera chain to {}", args.camchain);
   }
 

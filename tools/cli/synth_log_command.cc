@@ -47,13 +47,13 @@ int RunSynthLog(const SynthLogArgs& args) {
     drive.motion = DriveOptions::Motion::kTranslationOnly;
   }
   const SyntheticDrive sim = GenerateDrive(config->CameraNames(), rigs, drive);
-  if (const std::string error = tools::WritePoseLog(args.out, sim.recording); !error.empty()) {
-    std::cerr << "rigcal synth-log: " << error << "\n";
+  if (const Status status = tools::WritePoseLog(args.out, sim.recording); !status.ok()) {
+    std::cerr << "rigcal synth-log: " << status.message() << "\n";
     return 1;
   }
   if (!args.truth_out.empty()) {
-    if (const std::string error = tools::WriteRigYaml(args.truth_out, truth); !error.empty()) {
-      std::cerr << "rigcal synth-log: " << error << "\n";
+    if (const Status status = tools::WriteRigYaml(args.truth_out, truth); !status.ok()) {
+      std::cerr << "rigcal synth-log: " << status.message() << "\n";
       return 1;
     }
   }

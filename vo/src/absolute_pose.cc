@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "ransac_sampling.h"
+#include "triangulation.h"
 
 namespace rigcal::vo {
 namespace {
@@ -154,8 +155,7 @@ std::vector<CameraPoseRC> SolveP3P(const std::array<Eigen::Vector3d, 3>& f,
 
 double AngularResidual(const CameraPoseRC& pose, const Eigen::Vector3d& f,
                        const Eigen::Vector3d& X) {
-  const Eigen::Vector3d p = pose.R_world_from_cam.transpose() * (X - pose.C);
-  return std::atan2(f.cross(p).norm(), f.dot(p));
+  return BearingAngle(pose.R_world_from_cam, pose.C, f, X);
 }
 
 PnpRansacResult EstimateAbsolutePose(const std::vector<Eigen::Vector3d>& f,

@@ -8,6 +8,8 @@
 #include <set>
 #include <unordered_set>
 
+#include "triangulation.h"
+
 namespace rigcal::vo {
 namespace {
 
@@ -35,8 +37,7 @@ struct BearingResidual {
 };
 
 double ObservationAngle(const Keyframe& kf, const Landmark& lm, const Observation& obs) {
-  const Eigen::Vector3d p = kf.q_world_from_cam.conjugate() * (lm.point - kf.C);
-  return std::atan2(obs.bearing.cross(p).norm(), obs.bearing.dot(p));
+  return VectorAngle(obs.bearing, kf.q_world_from_cam.conjugate() * (lm.point - kf.C));
 }
 
 }  // namespace

@@ -24,14 +24,13 @@ std::optional<TriangulatedPoint> TriangulateMidpoint(const Eigen::Vector3d& C_a,
   out.point = 0.5 * (C_a + s * f_a + C_b + t * f_b);
   out.depth_a = s;
   out.depth_b = t;
-  out.ray_angle_rad = std::atan2(f_a.cross(f_b).norm(), c);
+  out.ray_angle_rad = VectorAngle(f_a, f_b);
   return out;
 }
 
 double BearingAngle(const Eigen::Matrix3d& R_world_from_cam, const Eigen::Vector3d& C,
                     const Eigen::Vector3d& f_in_cam, const Eigen::Vector3d& point) {
-  const Eigen::Vector3d p_in_cam = R_world_from_cam.transpose() * (point - C);
-  return std::atan2(f_in_cam.cross(p_in_cam).norm(), f_in_cam.dot(p_in_cam));
+  return VectorAngle(f_in_cam, R_world_from_cam.transpose() * (point - C));
 }
 
 }  // namespace rigcal::vo

@@ -4,6 +4,8 @@
 // behind the image plane of a wide-angle lens) and a minimum angle between the rays.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
 #include <optional>
 
 namespace rigcal::vo {
@@ -21,6 +23,12 @@ std::optional<TriangulatedPoint> TriangulateMidpoint(const Eigen::Vector3d& C_a,
                                                      const Eigen::Vector3d& f_a,
                                                      const Eigen::Vector3d& C_b,
                                                      const Eigen::Vector3d& f_b);
+
+// Angle between two vectors (any length, not zero), radians in [0, pi]: atan2(|a x b|, a . b),
+// accurate also for tiny and near-opposite angles.
+inline double VectorAngle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
 
 // Angle between a unit bearing and the direction from a camera to a point, radians
 // (R_world_from_cam, C: the camera's pose; f_in_cam: bearing in camera coordinates).

@@ -1,12 +1,16 @@
 #pragma once
-// Private to vo/: the builders of the three camera models and the numeric helpers they share.
+// Private to rigcal_camera: the builders of the three camera models and the numeric helpers they
+// share.
 
 #include <cmath>
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <string>
+#include <string_view>
 #include <vector>
 
+#include "rigcal/calib/status.h"
 #include "rigcal/camera/camera_model.h"
 #include "rigcal/camera/camera_spec.h"
 
@@ -15,11 +19,17 @@ namespace rigcal::camera::internal {
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
-// Builders. `spec` has passed the structural checks of CameraSpec::Validate (sizes, ranges,
-// finite values). On a lens-model problem they return nullptr and fill *issue.
-std::unique_ptr<CameraModel> BuildPinholeCamera(const CameraSpec& spec, CameraSpecIssue* issue);
-std::unique_ptr<CameraModel> BuildFisheyeCamera(const CameraSpec& spec, CameraSpecIssue* issue);
-std::unique_ptr<CameraModel> BuildScaramuzzaCamera(const CameraSpec& spec, CameraSpecIssue* issue);
+// A problem of a CameraSpec: "<field>: <what>", `field` being the config key at fault
+// (`intrinsics`, `distortion`, `poly`, ...).
+inline Status Issue(std::string_view field, const std::string& what) {
+  return Error{std::string(field) + ": " + what};
+}
+
+// Builders. `spec` has passed the structural checks of CameraSpec::Check (sizes, ranges,
+// finite values). On a lens-model problem they return the Issue.
+Expected<std::unique_ptr<CameraModel>> BuildPinholeCamera(const CameraSpec& spec);
+Expected<std::unique_ptr<CameraModel>> BuildFisheyeCamera(const CameraSpec& spec);
+Expected<std::unique_ptr<CameraModel>> BuildScaramuzzaCamera(const CameraSpec& spec);
 
 // The angle one pixel subtends at `pixel` (radians): the square root of the area the
 // unprojection Jacobian maps a pixel to on the unit sphere. False when `pixel` does not

@@ -8,21 +8,20 @@
 #include <sstream>
 
 #include "camera_models.h"
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
 
 namespace rigcal::camera {
 namespace {
 
+using internal::Issue;
+
 constexpr int kMaxImageSide = 100000;
 constexpr size_t kMaxPolySize = 21;         // a0..a20
 constexpr size_t kMaxInversePolySize = 31;  // b0..b30
 
-std::string Str(double value) {
-  std::ostringstream out;
-  out.precision(10);
-  out << value;
-  return out.str();
-}
+// Numbers in messages: 10 significant digits.
+std::string Str(double value) { return SignificantText(value, 10); }
 
 bool AllFinite(const std::vector<double>& values) {
   for (const double v : values) {
@@ -36,119 +35,115 @@ bool InsideImage(double u, double v, int width, int height) {
 }
 
 // Ranges, sizes and finiteness; the lens analysis is done by the builders.
-std::optional<CameraSpecIssue> CheckStructure(const CameraSpec& spec) {
+Status CheckStructure(const CameraSpec& spec) {
   using Model = CameraSpec::Model;
   if (!(spec.width > 0 && spec.width <= kMaxImageSide && spec.height > 0 &&
         spec.height <= kMaxImageSide)) {
-    return CameraSpecIssue{"resolution", "width and height must be in [1, " +
-                                             std::to_string(kMaxImageSide) + "] (got " +
-                                             std::to_string(spec.width) + " x " +
-                                             std::to_string(spec.height) + ")"};
+    return Issue("resolution", "width and height must be in [1, " + std::to_string(kMaxImageSide) +
+                                   "] (got " + std::to_string(spec.width) + " x " +
+                                   std::to_string(spec.height) + ")");
   }
   const double max_angle = spec.max_field_angle_deg;
   const double angle_limit = spec.model == Model::kPinhole ? 90.0 : 180.0;
   if (!(max_angle == 0.0 || (max_angle > 0.0 && max_angle < angle_limit))) {
-    return CameraSpecIssue{"max_field_angle_deg", "must be 0 (automatic) or in (0, " +
-                                                      Str(angle_limit) + ") for " +
-                                                      std::string(ModelName(spec.model)) +
-                                                      " (got " + Str(max_angle) + ")"};
+    return Issue("max_field_angle_deg", "must be 0 (automatic) or in (0, " + Str(angle_limit) +
+                                            ") for " + std::string(ModelName(spec.model)) +
+                                            " (got " + Str(max_angle) + ")");
   }
   const std::string model_name(ModelName(spec.model));
   if (spec.model == Model::kPinhole || spec.model == Model::kFisheye) {
     const auto& k = spec.intrinsics;
     for (const double v : k) {
-      if (!std::isfinite(v)) return CameraSpecIssue{"intrinsics", "values must be finite"};
+      if (!std::isfinite(v)) return Issue("intrinsics", "values must be finite");
     }
     if (!(k[0] > 0.0 && k[1] > 0.0)) {
-      return CameraSpecIssue{
-          "intrinsics", "fx and fy must be > 0 (got fx " + Str(k[0]) + ", fy " + Str(k[1]) + ")"};
+      return Issue("intrinsics",
+                   "fx and fy must be > 0 (got fx " + Str(k[0]) + ", fy " + Str(k[1]) + ")");
     }
     if (!InsideImage(k[2], k[3], spec.width, spec.height)) {
-      return CameraSpecIssue{"intrinsics", "principal point (" + Str(k[2]) + ", " + Str(k[3]) +
-                                               ") is outside the " + std::to_string(spec.width) +
-                                               " x " + std::to_string(spec.height) + " image"};
+      return Issue("intrinsics", "principal point (" + Str(k[2]) + ", " + Str(k[3]) +
+                                     ") is outside the " + std::to_string(spec.width) + " x " +
+                                     std::to_string(spec.height) + " image");
     }
     const size_t n = spec.distortion.size();
     if (spec.model == Model::kPinhole && !(n == 0 || n == 4 || n == 5)) {
-      return CameraSpecIssue{"distortion",
-                             "pinhole expects [k1, k2, p1, p2] or [k1, k2, p1, p2, "
-                             "k3] (got " +
-                                 std::to_string(n) + " values)"};
+      return Issue("distortion",
+                   "pinhole expects [k1, k2, p1, p2] or [k1, k2, p1, p2, "
+                   "k3] (got " +
+                       std::to_string(n) + " values)");
     }
     if (spec.model == Model::kFisheye && !(n == 0 || n == 4)) {
-      return CameraSpecIssue{
-          "distortion", "fisheye expects [k1, k2, k3, k4] (got " + std::to_string(n) + " values)"};
+      return Issue("distortion",
+                   "fisheye expects [k1, k2, k3, k4] (got " + std::to_string(n) + " values)");
     }
     if (!AllFinite(spec.distortion)) {
-      return CameraSpecIssue{"distortion", "values must be finite"};
+      return Issue("distortion", "values must be finite");
     }
-    if (!spec.poly.empty()) return CameraSpecIssue{"poly", "not used by model " + model_name};
+    if (!spec.poly.empty()) return Issue("poly", "not used by model " + model_name);
     if (!spec.inverse_poly.empty()) {
-      return CameraSpecIssue{"inverse_poly", "not used by model " + model_name};
+      return Issue("inverse_poly", "not used by model " + model_name);
     }
     if (spec.center != std::array<double, 2>{0.0, 0.0}) {
-      return CameraSpecIssue{"center", "not used by model " + model_name};
+      return Issue("center", "not used by model " + model_name);
     }
     if (spec.affine != std::array<double, 3>{1.0, 0.0, 0.0}) {
-      return CameraSpecIssue{"affine", "not used by model " + model_name};
+      return Issue("affine", "not used by model " + model_name);
     }
-    return std::nullopt;
+    return Status::Ok();
   }
 
   // scaramuzza
   if (spec.intrinsics != std::array<double, 4>{0.0, 0.0, 0.0, 0.0}) {
-    return CameraSpecIssue{"intrinsics", "not used by model scaramuzza (use center and poly)"};
+    return Issue("intrinsics", "not used by model scaramuzza (use center and poly)");
   }
   if (!spec.distortion.empty()) {
-    return CameraSpecIssue{"distortion", "not used by model scaramuzza (use poly)"};
+    return Issue("distortion", "not used by model scaramuzza (use poly)");
   }
   if (spec.poly.empty() || spec.poly.size() > kMaxPolySize) {
-    return CameraSpecIssue{"poly", "expected 1 to " + std::to_string(kMaxPolySize) +
-                                       " coefficients a0..aN (got " +
-                                       std::to_string(spec.poly.size()) + ")"};
+    return Issue("poly", "expected 1 to " + std::to_string(kMaxPolySize) +
+                             " coefficients a0..aN (got " + std::to_string(spec.poly.size()) + ")");
   }
-  if (!AllFinite(spec.poly)) return CameraSpecIssue{"poly", "values must be finite"};
+  if (!AllFinite(spec.poly)) return Issue("poly", "values must be finite");
   if (!(spec.poly[0] < 0.0)) {
-    return CameraSpecIssue{"poly",
-                           "a0 must be < 0 (OCamCalib convention: bearing (m, -F(rho)), "
-                           "got a0 = " +
-                               Str(spec.poly[0]) + ")"};
+    return Issue("poly",
+                 "a0 must be < 0 (OCamCalib convention: bearing (m, -F(rho)), "
+                 "got a0 = " +
+                     Str(spec.poly[0]) + ")");
   }
   if (spec.inverse_poly.size() > kMaxInversePolySize) {
-    return CameraSpecIssue{
-        "inverse_poly", "expected at most " + std::to_string(kMaxInversePolySize) +
-                            " coefficients (got " + std::to_string(spec.inverse_poly.size()) + ")"};
+    return Issue("inverse_poly", "expected at most " + std::to_string(kMaxInversePolySize) +
+                                     " coefficients (got " +
+                                     std::to_string(spec.inverse_poly.size()) + ")");
   }
   if (!AllFinite(spec.inverse_poly)) {
-    return CameraSpecIssue{"inverse_poly", "values must be finite"};
+    return Issue("inverse_poly", "values must be finite");
   }
   if (!std::isfinite(spec.center[0]) || !std::isfinite(spec.center[1]) ||
       !InsideImage(spec.center[0], spec.center[1], spec.width, spec.height)) {
-    return CameraSpecIssue{"center", "(" + Str(spec.center[0]) + ", " + Str(spec.center[1]) +
-                                         ") is not inside the " + std::to_string(spec.width) +
-                                         " x " + std::to_string(spec.height) + " image"};
+    return Issue("center", "(" + Str(spec.center[0]) + ", " + Str(spec.center[1]) +
+                               ") is not inside the " + std::to_string(spec.width) + " x " +
+                               std::to_string(spec.height) + " image");
   }
   const auto& a = spec.affine;
   if (!std::isfinite(a[0]) || !std::isfinite(a[1]) || !std::isfinite(a[2]) ||
       !(a[0] - a[1] * a[2] > 0.0)) {
-    return CameraSpecIssue{"affine", "[c, d, e] must be finite with c - d e > 0 (got [" +
-                                         Str(a[0]) + ", " + Str(a[1]) + ", " + Str(a[2]) + "])"};
+    return Issue("affine", "[c, d, e] must be finite with c - d e > 0 (got [" + Str(a[0]) + ", " +
+                               Str(a[1]) + ", " + Str(a[2]) + "])");
   }
-  return std::nullopt;
+  return Status::Ok();
 }
 
-// Builds the model of a structurally valid spec, or fills *issue.
-std::unique_ptr<CameraModel> Build(const CameraSpec& spec, CameraSpecIssue* issue) {
+// Builds the model of a structurally valid spec, or says why it cannot.
+Expected<std::unique_ptr<CameraModel>> Build(const CameraSpec& spec) {
   switch (spec.model) {
     case CameraSpec::Model::kPinhole:
-      return internal::BuildPinholeCamera(spec, issue);
+      return internal::BuildPinholeCamera(spec);
     case CameraSpec::Model::kFisheye:
-      return internal::BuildFisheyeCamera(spec, issue);
+      return internal::BuildFisheyeCamera(spec);
     case CameraSpec::Model::kScaramuzza:
-      return internal::BuildScaramuzzaCamera(spec, issue);
+      return internal::BuildScaramuzzaCamera(spec);
   }
-  *issue = {"model", "unknown model"};
-  return nullptr;
+  return Issue("model", "unknown model");
 }
 
 }  // namespace
@@ -172,27 +167,19 @@ std::optional<CameraSpec::Model> ModelFromName(std::string_view name) {
   return std::nullopt;
 }
 
-std::optional<CameraSpecIssue> CameraSpec::Validate() const {
-  if (auto issue = CheckStructure(*this)) return issue;
-  CameraSpecIssue issue;
-  if (!Build(*this, &issue)) return issue;
-  return std::nullopt;
-}
-
-bool CameraSpec::Check(std::string* error) const {
-  const std::optional<CameraSpecIssue> issue = Validate();
-  if (issue && error) *error = issue->Message();
-  return !issue;
+Status CameraSpec::Check() const {
+  if (Status status = CheckStructure(*this); !status.ok()) return status;
+  return Build(*this).status();
 }
 
 Expected<std::unique_ptr<CameraModel>> MakeCameraModel(const CameraSpec& spec) {
-  if (auto issue = CheckStructure(spec)) return Error{issue->Message()};
-  CameraSpecIssue issue;
-  std::unique_ptr<CameraModel> model = Build(spec, &issue);
-  if (!model) return Error{issue.Message()};
+  if (Status status = CheckStructure(spec); !status.ok()) return status;
+  Expected<std::unique_ptr<CameraModel>> model = Build(spec);
+  if (!model.ok()) return model;
   ModuleLogger("vo")->debug("camera '{}': {} {}x{}, max field angle {:.3f} deg, {:.4f} deg/px",
                             spec.name, ModelName(spec.model), spec.width, spec.height,
-                            model->MaxFieldAngleDeg(), model->PixelAngle() * internal::kRadToDeg);
+                            (*model)->MaxFieldAngleDeg(),
+                            (*model)->PixelAngle() * internal::kRadToDeg);
   return model;
 }
 
@@ -270,7 +257,7 @@ Expected<CameraSpec> ScaramuzzaSpecForEquidistant(const std::string& name, int w
     f_power /= focal_px * focal_px;
     spec.poly[2 * (j + 1)] = -best_c[j] * f_power;
   }
-  if (auto issue = spec.Validate()) return Error{prefix + issue->Message()};
+  if (Status status = spec.Check(); !status.ok()) return Error{prefix + status.message()};
   return spec;
 }
 

@@ -33,7 +33,7 @@ class FisheyeCamera final : public CameraModel {
     }
   }
 
-  bool Initialise(double max_field_angle_deg, CameraSpecIssue* issue);
+  Status Initialise(double max_field_angle_deg);
 
   std::string type() const override { return "fisheye"; }
 
@@ -136,7 +136,7 @@ class FisheyeCamera final : public CameraModel {
   double pixel_angle_ = 0.0;
 };
 
-bool FisheyeCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issue) {
+Status FisheyeCamera::Initialise(double max_field_angle_deg) {
   const bool automatic = max_field_angle_deg == 0.0;
   const double theta_cap =
       (automatic ? kMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad;
@@ -161,12 +161,10 @@ bool FisheyeCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issu
     std::ostringstream what;
     what << "the Kannala-Brandt distortion folds back at a field angle of "
          << theta_fold * kRadToDeg << " deg; max_field_angle_deg must not exceed that";
-    *issue = {"max_field_angle_deg", what.str()};
-    return false;
+    return Issue("max_field_angle_deg", what.str());
   }
   if (!(theta_fold > 0.0)) {
-    *issue = {"distortion", "the distortion folds back at the principal point"};
-    return false;
+    return Issue("distortion", "the distortion folds back at the principal point");
   }
   double slope = 0.0;
   theta_max_ = theta_fold;
@@ -187,18 +185,17 @@ bool FisheyeCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issu
     }
   }
   if (!PixelAngleAt(*this, Eigen::Vector2d(cx_, cy_), &pixel_angle_)) {
-    *issue = {"intrinsics", "cannot unproject the principal point"};
-    return false;
+    return Issue("intrinsics", "cannot unproject the principal point");
   }
-  return true;
+  return Status::Ok();
 }
 
 }  // namespace
 
-std::unique_ptr<CameraModel> BuildFisheyeCamera(const CameraSpec& spec, CameraSpecIssue* issue) {
+Expected<std::unique_ptr<CameraModel>> BuildFisheyeCamera(const CameraSpec& spec) {
   auto camera = std::make_unique<FisheyeCamera>(spec);
-  if (!camera->Initialise(spec.max_field_angle_deg, issue)) return nullptr;
-  return camera;
+  if (Status status = camera->Initialise(spec.max_field_angle_deg); !status.ok()) return status;
+  return std::unique_ptr<CameraModel>(std::move(camera));
 }
 
 }  // namespace rigcal::camera::internal

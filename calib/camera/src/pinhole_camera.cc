@@ -32,8 +32,8 @@ class PinholeCamera final : public CameraModel {
     if (k.size() >= 5) k3_ = k[4];
   }
 
-  // Analyses the distortion and sets the domain; false (and *issue) on a problem.
-  bool Initialise(double max_field_angle_deg, CameraSpecIssue* issue);
+  // Analyses the distortion and sets the domain; the first problem as "<field>: <what>".
+  Status Initialise(double max_field_angle_deg);
 
   std::string type() const override { return "pinhole"; }
 
@@ -165,7 +165,7 @@ class PinholeCamera final : public CameraModel {
   double pixel_angle_ = 0.0;
 };
 
-bool PinholeCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issue) {
+Status PinholeCamera::Initialise(double max_field_angle_deg) {
   const bool automatic = max_field_angle_deg == 0.0;
   const double r_cap =
       std::tan((automatic ? kMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad);
@@ -196,12 +196,10 @@ bool PinholeCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issu
     std::ostringstream what;
     what << "the radial-tangential distortion folds back at a field angle of "
          << std::atan(r_fold) * kRadToDeg << " deg; max_field_angle_deg must not exceed that";
-    *issue = {"max_field_angle_deg", what.str()};
-    return false;
+    return Issue("max_field_angle_deg", what.str());
   }
   if (!(r_fold > 0.0)) {
-    *issue = {"distortion", "the distortion folds back at the principal point"};
-    return false;
+    return Issue("distortion", "the distortion folds back at the principal point");
   }
   r_max2_ = r_fold * r_fold;
   const auto update_bound = [this]() {
@@ -252,18 +250,17 @@ bool PinholeCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issu
   max_field_angle_deg_ = std::atan(std::sqrt(r_max2_)) * kRadToDeg;
 
   if (!PixelAngleAt(*this, Eigen::Vector2d(cx_, cy_), &pixel_angle_)) {
-    *issue = {"distortion", "cannot unproject the principal point"};
-    return false;
+    return Issue("distortion", "cannot unproject the principal point");
   }
-  return true;
+  return Status::Ok();
 }
 
 }  // namespace
 
-std::unique_ptr<CameraModel> BuildPinholeCamera(const CameraSpec& spec, CameraSpecIssue* issue) {
+Expected<std::unique_ptr<CameraModel>> BuildPinholeCamera(const CameraSpec& spec) {
   auto camera = std::make_unique<PinholeCamera>(spec);
-  if (!camera->Initialise(spec.max_field_angle_deg, issue)) return nullptr;
-  return camera;
+  if (Status status = camera->Initialise(spec.max_field_angle_deg); !status.ok()) return status;
+  return std::unique_ptr<CameraModel>(std::move(camera));
 }
 
 }  // namespace rigcal::camera::internal

@@ -36,7 +36,7 @@ class ScaramuzzaCamera final : public CameraModel {
     a_inv_ << c_ * inv_det, -e_ * inv_det, -d_ * inv_det, inv_det;
   }
 
-  bool Initialise(double max_field_angle_deg, CameraSpecIssue* issue);
+  Status Initialise(double max_field_angle_deg);
 
   std::string type() const override { return "scaramuzza"; }
 
@@ -204,7 +204,7 @@ std::vector<double> ScaramuzzaCamera::FitInversePoly() const {
   return best;
 }
 
-bool ScaramuzzaCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* issue) {
+Status ScaramuzzaCamera::Initialise(double max_field_angle_deg) {
   const bool automatic = max_field_angle_deg == 0.0;
   const double theta_cap =
       (automatic ? kMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad;
@@ -230,8 +230,7 @@ bool ScaramuzzaCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* i
         std::ostringstream what;
         what << "the field angle of poly stops increasing at " << previous_theta * kRadToDeg
              << " deg (radius " << previous_rho << " px) before max_field_angle_deg";
-        *issue = {"max_field_angle_deg", what.str()};
-        return false;
+        return Issue("max_field_angle_deg", what.str());
       }
       rho_max_ = previous_rho;
       break;
@@ -250,15 +249,13 @@ bool ScaramuzzaCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* i
       std::ostringstream what;
       what << "poly reaches only " << theta * kRadToDeg << " deg at a radius of " << rho
            << " px; max_field_angle_deg is beyond the lens";
-      *issue = {"max_field_angle_deg", what.str()};
-      return false;
+      return Issue("max_field_angle_deg", what.str());
     }
     previous_rho = rho;
     previous_theta = theta;
   }
   if (!(rho_max_ > 0.0)) {
-    *issue = {"poly", "the field angle does not increase from the centre"};
-    return false;
+    return Issue("poly", "the field angle does not increase from the centre");
   }
   // A given limit is kept exactly (Project accepts exactly max_field_angle_deg).
   theta_max_ = automatic ? FieldAngle(rho_max_) : theta_cap;
@@ -275,24 +272,22 @@ bool ScaramuzzaCamera::Initialise(double max_field_angle_deg, CameraSpecIssue* i
            << at_theta * kRadToDeg
            << " deg (OCamCalib convention: rho(theta - 90 deg), radians; omit it to have it "
               "fitted)";
-      *issue = {"inverse_poly", what.str()};
-      return false;
+      return Issue("inverse_poly", what.str());
     }
   }
 
   if (!PixelAngleAt(*this, Eigen::Vector2d(cx_, cy_), &pixel_angle_)) {
-    *issue = {"center", "cannot unproject the centre"};
-    return false;
+    return Issue("center", "cannot unproject the centre");
   }
-  return true;
+  return Status::Ok();
 }
 
 }  // namespace
 
-std::unique_ptr<CameraModel> BuildScaramuzzaCamera(const CameraSpec& spec, CameraSpecIssue* issue) {
+Expected<std::unique_ptr<CameraModel>> BuildScaramuzzaCamera(const CameraSpec& spec) {
   auto camera = std::make_unique<ScaramuzzaCamera>(spec);
-  if (!camera->Initialise(spec.max_field_angle_deg, issue)) return nullptr;
-  return camera;
+  if (Status status = camera->Initialise(spec.max_field_angle_deg); !status.ok()) return status;
+  return std::unique_ptr<CameraModel>(std::move(camera));
 }
 
 }  // namespace rigcal::camera::internal

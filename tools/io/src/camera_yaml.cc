@@ -70,12 +70,17 @@ std::optional<Error> CheckSpec(const FieldReader& r, const CameraSpec& spec,
                                const YAML::Node& camera, const YAML::Node& missing_at,
                                const std::string& prefix,
                                const std::map<std::string, std::string>& key_of = {}) {
-  const std::optional<camera::CameraSpecIssue> issue = spec.Validate();
-  if (!issue) return std::nullopt;
-  const auto renamed = key_of.find(issue->field);
-  const std::string key = renamed == key_of.end() ? issue->field : renamed->second;
+  const Status status = spec.Check();
+  if (status.ok()) return std::nullopt;
+  // The message is "<field>: <what>".
+  const std::string& message = status.message();
+  const size_t colon = message.find(": ");
+  const std::string field = message.substr(0, colon);
+  const std::string what = colon == std::string::npos ? message : message.substr(colon + 2);
+  const auto renamed = key_of.find(field);
+  const std::string key = renamed == key_of.end() ? field : renamed->second;
   const YAML::Node node = KeyNode(camera, key);
-  return r.Fail(node.IsDefined() ? node : missing_at, prefix + key, issue->what);
+  return r.Fail(node.IsDefined() ? node : missing_at, prefix + key, what);
 }
 
 }  // namespace

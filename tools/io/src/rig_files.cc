@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/yaml_fields.h"
@@ -27,15 +28,7 @@ const std::set<std::string> kMetadataKeys = {"master", "pairs_selected"};
 std::string Num(double v) {
   if (std::isnan(v)) return ".nan";
   if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
-  std::array<char, 32> buf{};
-  const auto [ptr, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v);
-  return std::string(buf.data(), ptr);
-}
-
-std::string FormatG(double v) {
-  std::array<char, 32> buf{};
-  std::snprintf(buf.data(), buf.size(), "%.6g", v);
-  return buf.data();
+  return ShortestText(v);
 }
 
 void EmitVector(YAML::Emitter& out, const double* v, int n) {
@@ -62,9 +55,9 @@ Expected<Similarity> ReadSlave(const FieldReader& r, const std::string& name,
   const Eigen::Vector4d q_wxyz((*q)[0], (*q)[1], (*q)[2], (*q)[3]);
   const double norm = q_wxyz.norm();
   if (!(std::abs(norm - 1.0) <= kRigQuaternionNormTolerance)) {
-    return r.Fail(
-        node["q_wxyz"], name + ".q_wxyz",
-        "norm " + FormatG(norm) + " is not 1 within " + FormatG(kRigQuaternionNormTolerance));
+    return r.Fail(node["q_wxyz"], name + ".q_wxyz",
+                  "norm " + SignificantText(norm, 6) + " is not 1 within " +
+                      SignificantText(kRigQuaternionNormTolerance, 6));
   }
   rig.q =
       Eigen::Quaterniond(q_wxyz[0] / norm, q_wxyz[1] / norm, q_wxyz[2] / norm, q_wxyz[3] / norm);
@@ -165,7 +158,7 @@ std::string RigToYaml(const std::map<std::string, Similarity>& rig) {
          out.c_str() + "\n";
 }
 
-std::string WriteRigYaml(const std::string& path, const std::map<std::string, Similarity>& rig) {
+Status WriteRigYaml(const std::string& path, const std::map<std::string, Similarity>& rig) {
   return WriteFileAtomically(path, RigToYaml(rig));
 }
 
@@ -241,12 +234,12 @@ std::string ResultToYaml(const RigCalibration& result) {
          out.c_str() + "\n";
 }
 
-std::string WriteResultYaml(const std::string& path, const RigCalibration& result) {
+Status WriteResultYaml(const std::string& path, const RigCalibration& result) {
   return WriteFileAtomically(path, ResultToYaml(result));
 }
 
-std::string WriteCamchain(const std::string& path, const RigCalibration& result,
-                          const std::vector<std::string>& camera_order) {
+Status WriteCamchain(const std::string& path, const RigCalibration& result,
+                     const std::vector<std::string>& camera_order) {
   const std::string where = "cannot write camchain '" + path + "': ";
   std::vector<std::string> order = camera_order;
   if (order.empty()) {
@@ -256,17 +249,17 @@ std::string WriteCamchain(const std::string& path, const RigCalibration& result,
     }
   }
   if (order.front() != result.master) {
-    return where + "the first camera must be the master '" + result.master + "', got '" +
-           order.front() + "'";
+    return Error{where + "the first camera must be the master '" + result.master + "', got '" +
+                 order.front() + "'"};
   }
   std::vector<Similarity> master_from_cam = {Similarity{}};
   for (size_t n = 1; n < order.size(); ++n) {
     const auto it = std::find_if(result.slaves.begin(), result.slaves.end(),
                                  [&](const SlaveCalibration& s) { return s.name == order[n]; });
-    if (it == result.slaves.end()) return where + "unknown camera '" + order[n] + "'";
+    if (it == result.slaves.end()) return Error{where + "unknown camera '" + order[n] + "'"};
     if (!it->usable()) {
-      return where + "camera '" + order[n] + "' has no usable estimate (" +
-             ToString(it->termination) + ")";
+      return Error{where + "camera '" + order[n] + "' has no usable estimate (" +
+                   ToString(it->termination) + ")"};
     }
     master_from_cam.push_back(it->estimate);
   }

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/io/config_sections.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/io/yaml_fields.h"
@@ -25,11 +26,7 @@ const std::set<std::string> kSourceKeys = {
     "fail_after_s", "render_block"};
 
 // A number as people write it: "20", "9.95", "8.33333".
-std::string Num(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
+std::string Num(double v) { return SignificantText(v, 6); }
 
 // The key node of `key` in map `map` (its line is the line of "key:"), or `map` itself.
 YAML::Node KeyOf(const YAML::Node& map, const std::string& key) {

@@ -7,12 +7,12 @@
 #include <vector>
 
 #include "rigcal/io/trajectory_io.h"
+#include "rigcal/calib/format.h"
 #include "trajectory_text.h"
 
 namespace rigcal::tools {
 namespace {
 
-using io_internal::FormatG;
 
 std::string FormatRange(const TimedTrajectory& t) {
   std::array<char, 96> buf{};
@@ -124,7 +124,7 @@ Expected<RigRecording> MatchTrajectories(const TimedTrajectory& master,
   if (master_indices.size() < 2) {
     std::string message = "only " + std::to_string(master_indices.size()) +
                           " master stamps have a pose in every slave within " +
-                          FormatG(static_cast<double>(tolerance_ns) * 1e-6) +
+                          SignificantText(static_cast<double>(tolerance_ns) * 1e-6, 9) +
                           " ms (need at least 2); per slave:";
     for (size_t s = 0; s < slaves.size(); ++s) {
       message += (s ? ", " : " ") + slaves[s].name + " matched " + std::to_string(count[s]) +

@@ -12,12 +12,12 @@
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_formats.h"
+#include "rigcal/calib/format.h"
 #include "trajectory_text.h"
 
 namespace rigcal::tools {
 namespace {
 
-using io_internal::FormatG;
 using io_internal::kPoseColumns;
 using io_internal::LineParser;
 using io_internal::ParsedLine;
@@ -105,9 +105,9 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
     const double norm = q.norm();
     const double norm_error = std::abs(norm - 1.0);
     if (!(norm_error <= options.max_quaternion_norm_error)) {
-      return Error{parser.Where() + "quaternion (w, x, y, z) = (" + FormatG(q[0]) + ", " +
-                   FormatG(q[1]) + ", " + FormatG(q[2]) + ", " + FormatG(q[3]) + ") has norm " +
-                   FormatG(norm) + ", not 1 within " + FormatG(options.max_quaternion_norm_error)};
+      return Error{parser.Where() + "quaternion (w, x, y, z) = (" + SignificantText(q[0], 9) + ", " +
+                   SignificantText(q[1], 9) + ", " + SignificantText(q[2], 9) + ", " + SignificantText(q[3], 9) + ") has norm " +
+                   SignificantText(norm, 9) + ", not 1 within " + SignificantText(options.max_quaternion_norm_error, 9)};
     }
     if (norm_error > kSilentNormError) {
       ++normalised;

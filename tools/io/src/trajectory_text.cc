@@ -55,18 +55,6 @@ std::optional<double> ParseDouble(std::string_view s) {
   return value;
 }
 
-std::string Shortest(double v) {
-  std::array<char, 32> buf{};
-  const auto [ptr, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v);
-  return ec == std::errc() ? std::string(buf.data(), ptr) : std::string("nan");
-}
-
-std::string FormatG(double v) {
-  std::array<char, 32> buf{};
-  std::snprintf(buf.data(), buf.size(), "%.9g", v);
-  return buf.data();
-}
-
 Expected<double> LineParser::Number(std::string_view field, int index) const {
   const auto value = ParseDouble(field);
   if (!value) {

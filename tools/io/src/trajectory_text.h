@@ -40,11 +40,7 @@ std::optional<Int> ParseInteger(std::string_view s) {
 // The whole of `s` as a double (from_chars syntax after an optional '+'); nullopt otherwise.
 std::optional<double> ParseDouble(std::string_view s);
 
-// `v` in the shortest text that reads back to the same double ("nan" if that fails).
-std::string Shortest(double v);
 
-// `v` with printf's "%.9g".
-std::string FormatG(double v);
 
 // Parser of the fields of one data line; every error starts with "<path>:<line>: " and names the
 // column by number and meaning. Keeps references: `path` and `column_names` must outlive it.

@@ -7,16 +7,17 @@
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_formats.h"
+#include "rigcal/calib/format.h"
 #include "trajectory_text.h"
 
 namespace rigcal::tools {
 namespace {
 
-std::string WriteTrajectory(const std::string& path, const TimedTrajectory& trajectory,
+Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajectory,
                             TrajectoryFormat format) {
   if (trajectory.poses.size() != trajectory.t_ns.size() ||
       (!trajectory.segment.empty() && trajectory.segment.size() != trajectory.t_ns.size())) {
-    return "cannot write '" + path + "': t_ns, poses and segment differ in size";
+    return Error{"cannot write '" + path + "': t_ns, poses and segment differ in size"};
   }
   const io_internal::PoseLineFormat& layout = io_internal::LineFormatOf(format);
   const bool with_segment =
@@ -37,7 +38,7 @@ std::string WriteTrajectory(const std::string& path, const TimedTrajectory& traj
     out +=
         layout.seconds ? FormatNsAsSeconds(trajectory.t_ns[k]) : std::to_string(trajectory.t_ns[k]);
     for (int col = 1; col < io_internal::kPoseColumns; ++col) {
-      out += ' ' + io_internal::Shortest(columns[col]);
+      out += ' ' + ShortestText(columns[col]);
     }
     if (with_segment) {
       out += ' ' + std::to_string(trajectory.segment.empty() ? 0 : trajectory.segment[k]);
@@ -49,11 +50,11 @@ std::string WriteTrajectory(const std::string& path, const TimedTrajectory& traj
 
 }  // namespace
 
-std::string WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory) {
+Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory) {
   return WriteTrajectory(path, trajectory, TrajectoryFormat::kTum);
 }
 
-std::string WriteTrajectoryNative(const std::string& path, const TimedTrajectory& trajectory) {
+Status WriteTrajectoryNative(const std::string& path, const TimedTrajectory& trajectory) {
   return WriteTrajectory(path, trajectory, TrajectoryFormat::kNative);
 }
 

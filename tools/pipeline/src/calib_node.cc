@@ -194,10 +194,10 @@ struct CalibNode::Impl {
 
   void SaveState() {
     if (state_path.empty()) return;
-    const std::string error = WriteFileAtomically(state_path, calibrator.SerializeState());
-    if (!error.empty()) {
-      summary.errors.push_back(error);
-      log->error("state not saved: {}", error);
+    if (const Status status = WriteFileAtomically(state_path, calibrator.SerializeState());
+        !status.ok()) {
+      summary.errors.push_back(status.message());
+      log->error("state not saved: {}", status.message());
       return;
     }
     ++summary.state_saves;
@@ -261,22 +261,23 @@ void CalibNode::HandlePose(const std::string& channel, const void* data, int64_t
 
 int64_t CalibNode::ReceivedPoses() const { return impl_->received_total.load(); }
 
-std::string CalibNode::Open() {
+Status CalibNode::Open() {
   Impl& m = *impl_;
-  if (m.opened) return "CalibNode::Open called twice";
+  if (m.opened) return Error{"CalibNode::Open called twice"};
   if (!m.options.log_path.empty()) {
     m.log_file = std::make_unique<lcm::LogFile>(m.options.log_path, "r");
-    if (!m.log_file->good()) return m.options.log_path + ": cannot open the LCM log";
+    if (!m.log_file->good()) return Error{m.options.log_path + ": cannot open the LCM log"};
     if (!m.options.publish_url.empty()) {
       m.output = std::make_unique<lcm::LCM>(m.options.publish_url);
-      if (!m.output->good()) return m.options.publish_url + ": cannot open the LCM URL";
+      if (!m.output->good()) return Error{m.options.publish_url + ": cannot open the LCM URL"};
     }
   } else if (m.bus == nullptr) {
     m.owned_bus = std::make_unique<lcm::LCM>(m.options.lcm_url);
     if (!m.owned_bus->good()) {
-      return (m.options.lcm_url.empty() ? std::string("the default LCM URL") : m.options.lcm_url) +
-             ": cannot open LCM (udpm:// needs a multicast route, e.g. on lo: "
-             "ip route add 224.0.0.0/4 dev lo)";
+      return Error{
+          (m.options.lcm_url.empty() ? std::string("the default LCM URL") : m.options.lcm_url) +
+          ": cannot open LCM (udpm:// needs a multicast route, e.g. on lo: "
+          "ip route add 224.0.0.0/4 dev lo)"};
     }
     m.bus = m.owned_bus.get();
   }
@@ -301,7 +302,7 @@ std::string CalibNode::Open() {
   }
   m.calibrator.Start();
   m.opened = true;
-  return "";
+  return Status::Ok();
 }
 
 CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
@@ -374,10 +375,9 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
   m.PublishStatus(estimate);
   m.SaveState();
   if (!m.options.result_path.empty()) {
-    const std::string error = WriteResultYaml(m.options.result_path, estimate.rig);
-    if (!error.empty()) {
-      m.summary.errors.push_back(error);
-      m.log->error("result not written: {}", error);
+    if (const Status status = WriteResultYaml(m.options.result_path, estimate.rig); !status.ok()) {
+      m.summary.errors.push_back(status.message());
+      m.log->error("result not written: {}", status.message());
     }
   }
   m.ReportLine(estimate);

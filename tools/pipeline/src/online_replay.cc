@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "rigcal/calib/robust_statistics.h"
+
 namespace rigcal::tools {
 namespace {
 
@@ -11,8 +13,7 @@ int64_t MedianStep(const std::vector<int64_t>& t) {
   if (t.size() < 2) return 50'000'000;
   std::vector<int64_t> d;
   for (size_t k = 1; k < t.size(); ++k) d.push_back(t[k] - t[k - 1]);
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return std::max<int64_t>(d[d.size() / 2], 1);
+  return std::max<int64_t>(UpperMedian(std::move(d)), 1);
 }
 
 }  // namespace

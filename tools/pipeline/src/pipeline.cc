@@ -9,28 +9,21 @@
 #include "rigcal/calib/pose_merge.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
+#include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::tools {
 namespace {
 
 constexpr size_t kTimingWindow = 64;
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
-  return values[mid];
-}
-
 }  // namespace
 
-bool PipelineOptions::Check(std::string* error) const {
-  std::string e;
-  if (frame_queue_capacity < 1) e = "frame_queue_capacity must be >= 1";
-  std::string vo_error;
-  if (e.empty() && !vo.Check(&vo_error)) e = "vo: " + vo_error;
-  if (error != nullptr) *error = e;
-  return e.empty();
+Status PipelineOptions::Check() const {
+  if (frame_queue_capacity < 1) return Error{"frame_queue_capacity: must be >= 1"};
+  if (const Status vo_status = vo.Check(); !vo_status.ok()) {
+    return Error{"vo." + vo_status.message()};
+  }
+  return Status::Ok();
 }
 
 // One camera's device, VO and threads. The capture thread owns `device` and pushes into
@@ -71,8 +64,8 @@ Pipeline::Pipeline(std::vector<std::string> names,
   if (names_.size() < 2 || devices.size() != names_.size() || cameras.size() != names_.size()) {
     throw std::invalid_argument("Pipeline: need one device and one camera model per camera (>= 2)");
   }
-  std::string error;
-  if (!options_.Check(&error)) throw std::invalid_argument("Pipeline options: " + error);
+  // Checked before any camera's MonocularVo is built from options_.vo.
+  RequireValid(options_.Check(), "PipelineOptions");
   for (size_t i = 0; i < names_.size(); ++i) {
     if (!devices[i] || !cameras[i]) {
       throw std::invalid_argument("Pipeline: camera '" + names_[i] + "' has no device or model");
@@ -205,7 +198,7 @@ PipelineSnapshot Pipeline::Snapshot() const {
     MutexLock lock(camera->mutex);
     CameraHealth h = camera->health;
     const size_t n = std::min(camera->timing_count, kTimingWindow);
-    h.vo_ms_median = Median(std::vector<double>(
+    h.vo_ms_median = UpperMedian(std::vector<double>(
         camera->timings.begin(), camera->timings.begin() + static_cast<std::ptrdiff_t>(n)));
     snapshot.cameras.push_back(std::move(h));
   }

@@ -5,6 +5,8 @@
 #include <map>
 #include <sstream>
 
+#include "rigcal/calib/format.h"
+
 namespace rigcal::tools {
 namespace {
 
@@ -129,10 +131,8 @@ std::string FormatEvaluation(const RunEvaluation& evaluation) {
   char line[200];
   const double mm = 1000.0 * evaluation.master_metres_per_unit;  // master unit -> mm
   auto figure = [](double v, bool known) {
-    char text[32];
     if (!known || !std::isfinite(v)) return std::string(known ? "-" : "unobs");
-    std::snprintf(text, sizeof(text), "%.4f", v);
-    return std::string(text);
+    return FixedText(v, 4);
   };
   std::snprintf(line, sizeof(line), "%-10s %10s %10s %10s %10s %10s %10s  %s\n", "slave",
                 "rot[deg]", "dir[deg]", "dist[%]", "scale[%]", "plane[mm]", "axis[mm]", "");

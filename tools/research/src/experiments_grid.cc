@@ -12,6 +12,7 @@
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/thread_annotations.h"
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/research/cramer_rao.h"
 #include "rigcal/research/experiments.h"
 
@@ -113,20 +114,13 @@ struct Moments {
   void Add(double v) {
     if (std::isfinite(v)) values.push_back(v);
   }
-  void Store(double* mean, double* rms, double* median) {
+  void Store(double* mean, double* rms, double* median) const {
     if (values.empty()) return;
     double sum = 0.0;
-    double sum_sq = 0.0;
-    for (double v : values) {
-      sum += v;
-      sum_sq += v * v;
-    }
-    const double n = static_cast<double>(values.size());
-    *mean = sum / n;
-    *rms = std::sqrt(sum_sq / n);
-    std::sort(values.begin(), values.end());
-    const size_t mid = values.size() / 2;
-    *median = values.size() % 2 == 1 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
+    for (double v : values) sum += v;
+    *mean = sum / static_cast<double>(values.size());
+    *rms = Rms(values);
+    *median = Median(values);
   }
 };
 
@@ -203,11 +197,7 @@ std::vector<double> LinearGrid(double first, double last, double step) {
   return grid;
 }
 
-bool ExperimentOptions::Check(std::string* error) const {
-  auto fail = [error](const std::string& message) {
-    if (error) *error = message;
-    return false;
-  };
+Status ExperimentOptions::Check() const {
   auto grid_ok = [](const std::vector<double>& grid, double max) {
     if (grid.empty()) return false;
     for (double v : grid) {
@@ -215,30 +205,29 @@ bool ExperimentOptions::Check(std::string* error) const {
     }
     return true;
   };
-  if (samples < 1) return fail("samples must be >= 1");
-  if (threads < 0) return fail("threads must be >= 0 (0 = all cores)");
-  if (crb_samples < 0) return fail("crb_samples must be >= 0 (0 = no bound)");
-  if (partitions < 0) return fail("partitions must be >= 0 (0 = one per pose)");
-  if (num_poses < 2) return fail("num_poses must be >= 2");
+  if (samples < 1) return Error{"samples: must be >= 1"};
+  if (threads < 0) return Error{"threads: must be >= 0 (0 = all cores)"};
+  if (crb_samples < 0) return Error{"crb_samples: must be >= 0 (0 = no bound)"};
+  if (partitions < 0) return Error{"partitions: must be >= 0 (0 = one per pose)"};
+  if (num_poses < 2) return Error{"num_poses: must be >= 2"};
   if (!grid_ok(stability_eps_deg, 90.0)) {
-    return fail("stability_eps_deg must be non-empty with values in [0, 90]");
+    return Error{"stability_eps_deg: must be non-empty with values in [0, 90]"};
   }
   if (!std::isfinite(poses_eps_deg) || poses_eps_deg < 0.0 || poses_eps_deg > 90.0) {
-    return fail("poses_eps_deg must be in [0, 90]");
+    return Error{"poses_eps_deg: must be in [0, 90]"};
   }
-  if (poses_min < 2 || poses_max < poses_min) {
-    return fail("poses_min must be >= 2 and poses_max >= poses_min");
-  }
+  if (poses_min < 2) return Error{"poses_min: must be >= 2"};
+  if (poses_max < poses_min) return Error{"poses_max: must be >= poses_min"};
   if (!grid_ok(model_eps_deg, 90.0)) {
-    return fail("model_eps_deg must be non-empty with values in [0, 90]");
+    return Error{"model_eps_deg: must be non-empty with values in [0, 90]"};
   }
   if (!grid_ok(alpha_max_deg, 180.0)) {
-    return fail("alpha_max_deg must be non-empty with values in [0, 180]");
+    return Error{"alpha_max_deg: must be non-empty with values in [0, 180]"};
   }
   if (!grid_ok(max_scale_error_pct, 1e4)) {
-    return fail("max_scale_error_pct must be non-empty with values in [0, 10000]");
+    return Error{"max_scale_error_pct: must be non-empty with values in [0, 10000]"};
   }
-  return true;
+  return Status::Ok();
 }
 
 BoundStats BoundStats::Scaled(double factor) const {

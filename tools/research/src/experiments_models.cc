@@ -92,7 +92,8 @@ std::string SamplesNote(const ExperimentOptions& options) {
 ExperimentResult RunMotionModel(const ExperimentOptions& options) {
   ExperimentResult result;
   result.kind = ExperimentKind::kMotionModel;
-  if (!options.Check(&result.error)) return result;
+  result.error = options.Check().message();  // empty when the options are valid
+  if (!result.error.empty()) return result;
   const std::vector<CalibrationOptions> variants = {
       ThesisCalibrationOptions(Method::kLinear, MotionModel::kTranslational, ScaleModel::kFixed),
       ThesisCalibrationOptions(Method::kLinear, MotionModel::kGeneral, ScaleModel::kFixed)};
@@ -124,7 +125,8 @@ ExperimentResult RunMotionModel(const ExperimentOptions& options) {
 ExperimentResult RunScaleModel(const ExperimentOptions& options) {
   ExperimentResult result;
   result.kind = ExperimentKind::kScaleModel;
-  if (!options.Check(&result.error)) return result;
+  result.error = options.Check().message();  // empty when the options are valid
+  if (!result.error.empty()) return result;
   const int partitions = options.partitions;  // 0: one per pose, resolved per sample
   const std::vector<CalibrationOptions> variants = {
       ThesisCalibrationOptions(Method::kLinear, MotionModel::kGeneral, ScaleModel::kFixed),

@@ -6,18 +6,14 @@
 #include <map>
 #include <sstream>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/research/experiments.h"
 
 namespace rigcal {
 namespace {
 
-std::string CsvNumber(double v) {
-  if (!std::isfinite(v)) return "";
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+std::string CsvNumber(double v) { return std::isfinite(v) ? SignificantText(v, 6) : ""; }
 
 // Fixed-width cell; "-" for unavailable values.
 std::string Cell(double v, int width = 8, int decimals = 3) {
@@ -379,18 +375,16 @@ Expected<std::vector<std::string>> WriteExperimentOutputs(const ExperimentResult
   const std::filesystem::path dir(out_dir);
   const std::string name = ToString(result.kind);
   std::vector<std::string> written;
-  std::string error;
   const std::pair<std::string, std::string> texts[] = {
       {name + ".csv", ExperimentCsv(result)}, {name + "_summary.txt", FormatSummary(result)}};
   for (const auto& [file, content] : texts) {
     const std::string path = (dir / file).string();
-    error = tools::WriteFileAtomically(path, content);
-    if (!error.empty()) return Error{error};
+    if (Status status = tools::WriteFileAtomically(path, content); !status.ok()) return status;
     written.push_back(path);
   }
   for (const NamedFigure& figure : ExperimentFigures(result)) {
     const std::string path = (dir / figure.file_name).string();
-    if (!WriteSvg(figure.figure, path, &error)) return Error{error};
+    if (Status status = WriteSvg(figure.figure, path); !status.ok()) return status;
     written.push_back(path);
   }
   return written;

@@ -48,7 +48,8 @@ void AddCommonNotes(const ExperimentOptions& options, int degenerate, Experiment
 ExperimentResult RunStability(const ExperimentOptions& options) {
   ExperimentResult result;
   result.kind = ExperimentKind::kStability;
-  if (!options.Check(&result.error)) return result;
+  result.error = options.Check().message();  // empty when the options are valid
+  if (!result.error.empty()) return result;
 
   std::vector<ThesisSampleOptions> points;
   for (double eps : options.stability_eps_deg) {
@@ -79,7 +80,8 @@ ExperimentResult RunStability(const ExperimentOptions& options) {
 ExperimentResult RunPoses(const ExperimentOptions& options) {
   ExperimentResult result;
   result.kind = ExperimentKind::kPoses;
-  if (!options.Check(&result.error)) return result;
+  result.error = options.Check().message();  // empty when the options are valid
+  if (!result.error.empty()) return result;
 
   std::vector<ThesisSampleOptions> points;
   std::vector<BoundStats> bounds;

@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/io/atomic_file.h"
 
 namespace rigcal {
@@ -24,19 +25,14 @@ constexpr double kMarginBottom = 46;
 constexpr double kFigureTitleHeight = 28;
 constexpr double kCharWidth = 6.2;  // approximate width of one 11px sans-serif character
 
-std::string Num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.2f", v);
-  return buf;
-}
+// SVG coordinates: 2 decimals.
+std::string Num(double v) { return FixedText(v, 2); }
 
 // Tick label with as many decimals as the tick step needs.
 std::string TickLabel(double v, double step) {
   int decimals = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
   if (std::abs(v) < step * 1e-6) v = 0.0;  // no "-0.0"
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
-  return buf;
+  return FixedText(v, decimals);
 }
 
 struct Range {
@@ -287,10 +283,8 @@ std::string RenderSvg(const PlotFigure& figure) {
   return out.str();
 }
 
-bool WriteSvg(const PlotFigure& figure, const std::string& path, std::string* error) {
-  const std::string message = tools::WriteFileAtomically(path, RenderSvg(figure));
-  if (!message.empty() && error) *error = message;
-  return message.empty();
+Status WriteSvg(const PlotFigure& figure, const std::string& path) {
+  return tools::WriteFileAtomically(path, RenderSvg(figure));
 }
 
 }  // namespace rigcal

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 
 namespace rigcal {
@@ -50,8 +51,8 @@ struct PairOptions {
   int max_pairs = 4000;       // anchors are thinned to at most this many pairs
   int max_pairs_per_end = 0;  // 0 = no limit
 
-  // Empty when valid, else the offending field and constraint.
-  bool Check(std::string* error) const;
+  // Success, or the first offending field and its constraint: "<field>: <constraint>".
+  Status Check() const;
 };
 
 struct IndexPair {

@@ -46,6 +46,7 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 
 namespace rigcal {
@@ -84,9 +85,8 @@ struct SyncOptions {
   int64_t EffectiveMaxWaitNs() const;
   // Whether camera `camera` must be in every set (the master always is).
   bool IsRequired(int camera) const;
-  // True when valid. Otherwise false, and *error (if not null) names the offending field and
-  // the violated constraint.
-  bool Check(std::string* error) const;
+  // Success, or the first offending field and its constraint: "<field>: <constraint>".
+  Status Check() const;
 };
 
 // The outcome of one Push. Drops of OTHER entries caused by a push (overflow, never_matched)
@@ -150,8 +150,8 @@ struct SyncStats {
 
 class SyncBuffer {
  public:
-  // Allocates all storage. Throws std::invalid_argument with Check()'s message when `options`
-  // is invalid. Starts no thread.
+  // Allocates all storage. Throws InvalidOptions ("SyncOptions: " and Check()'s message) when
+  // `options` is invalid. Starts no thread.
   explicit SyncBuffer(const SyncOptions& options);
   ~SyncBuffer();
   SyncBuffer(const SyncBuffer&) = delete;

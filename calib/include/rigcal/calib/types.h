@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/status.h"
+
 namespace rigcal {
 
 // A rigid pose: orientation world_from_cam and camera centre C in the world (reference) frame.
@@ -64,8 +66,10 @@ struct RigRecording {
   CameraPose PoseAt(int camera, size_t k) const;
   // Every camera's pose k, the set the online estimator takes (RigEstimator::AddSet).
   std::vector<std::optional<CameraPose>> SetAt(size_t k) const;
-  // Empty when consistent, else a message naming the camera whose sizes disagree.
-  std::string Validate() const;
+  // Success when consistent (one pose and at most one segment id per stamp, stamps
+  // increasing), else an error naming the camera whose sizes disagree or the first stamp out
+  // of order.
+  Status Check() const;
 };
 
 // One rig motion between two times a -> b, seen by the master and by one slave:

@@ -26,6 +26,7 @@
 #include <optional>
 #include <string>
 
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_model.h"
 
@@ -116,9 +117,8 @@ struct VoOptions {
   // Seed of the RANSAC sampling (the VO is deterministic for a given input).
   uint32_t seed = 42;
 
-  // True when every field is valid; otherwise false and *error (may be null) names the
-  // fields and the violated constraints.
-  bool Check(std::string* error) const;
+  // Success, or the first offending field and its constraint: "<field>: <constraint>".
+  Status Check() const;
 };
 
 enum class VoState {
@@ -148,9 +148,10 @@ struct VoResult {
 
 class MonocularVo {
  public:
-  // `camera` must not be null; `camera_index` is written into every CameraPose. Invalid
-  // options are logged and replaced by the defaults (see Check()).
-  MonocularVo(std::shared_ptr<const camera::CameraModel> camera, int camera_index, VoOptions options = {});
+  // `camera` must not be null; `camera_index` is written into every CameraPose. Throws
+  // InvalidOptions ("VoOptions: <field>: <constraint>") when options.Check() fails.
+  MonocularVo(std::shared_ptr<const camera::CameraModel> camera, int camera_index,
+              VoOptions options = {});
   ~MonocularVo();
   MonocularVo(const MonocularVo&) = delete;
   MonocularVo& operator=(const MonocularVo&) = delete;

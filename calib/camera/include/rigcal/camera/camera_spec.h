@@ -52,14 +52,6 @@
 
 namespace rigcal::camera {
 
-// A problem found in a CameraSpec: the config key it concerns (`intrinsics`, `distortion`,
-// `poly`, ...) and what is wrong with it.
-struct CameraSpecIssue {
-  std::string field;
-  std::string what;
-  std::string Message() const { return field + ": " + what; }  // "<field>: <what>"
-};
-
 struct CameraSpec {
   enum class Model { kPinhole, kFisheye, kScaramuzza };
 
@@ -90,14 +82,12 @@ struct CameraSpec {
   // corners see nothing (a 186-degree lens: 93).
   double max_field_angle_deg = 0.0;
 
-  // The first problem of the spec, or nullopt when MakeCameraModel will succeed. Besides the
-  // ranges above this checks the lens model itself: monotonic distortion up to
-  // max_field_angle_deg, a scaramuzza `poly` whose field angle increases with the radius,
-  // an `inverse_poly` that inverts `poly` to within 1 px.
-  std::optional<CameraSpecIssue> Validate() const;
-
-  // Validate() as a message "<field>: <what>" in *error (may be null). True when valid.
-  bool Check(std::string* error) const;
+  // Success when MakeCameraModel will succeed, else the first problem of the spec as
+  // "<field>: <what>", <field> being the config key at fault (`resolution`, `intrinsics`,
+  // `distortion`, `poly`, ...). Besides the ranges above this checks the lens model itself:
+  // monotonic distortion up to max_field_angle_deg, a scaramuzza `poly` whose field angle
+  // increases with the radius, an `inverse_poly` that inverts `poly` to within 1 px.
+  Status Check() const;
 };
 
 // "pinhole", "fisheye", "scaramuzza".
@@ -105,7 +95,7 @@ std::string_view ModelName(CameraSpec::Model model);
 // Inverse of ModelName; nullopt for anything else.
 std::optional<CameraSpec::Model> ModelFromName(std::string_view name);
 
-// The camera model of a spec. The error is Validate()'s message "<field>: <what>".
+// The camera model of a spec. The error is Check()'s message "<field>: <what>".
 // The model is immutable: its const methods may be called from any thread concurrently.
 Expected<std::unique_ptr<CameraModel>> MakeCameraModel(const CameraSpec& spec);
 

@@ -1,16 +1,54 @@
 #pragma once
-// Crash-safe file replacement: a reader sees either the old file or the complete new one.
+// Crash-safe file replacement: a reader sees either the old file or the complete new one. Every
+// file rigcal writes goes through here (WriteFileAtomically, or AtomicFile for files another
+// library writes by name, such as LCM logs).
 
 #include <string>
 #include <string_view>
+
+#include "rigcal/calib/status.h"
 
 namespace rigcal::tools {
 
 // Writes `contents` to `path` atomically: writes a temporary file in the same directory,
 // fsyncs it, renames it over `path` and fsyncs the directory. The new file gets mode 0644.
-// Returns an empty string on success, else a message that
-// names `path` and the failing step with its errno text; on failure `path` is unchanged and
-// no temporary file is left behind. Thread-safe for distinct paths.
-[[nodiscard]] std::string WriteFileAtomically(const std::string& path, std::string_view contents);
+// On failure the error names `path` and the failing step with its errno text
+// ("cannot write '<path>': <step>: <errno text>"), `path` is unchanged and no temporary file is
+// left behind. Thread-safe for distinct paths.
+[[nodiscard]] Status WriteFileAtomically(const std::string& path, std::string_view contents);
+
+// A file that is written by name by someone else (e.g. lcm::LogFile) and replaces `path`
+// atomically: Create() makes an empty temporary file (mode 0644) next to `path`; the caller
+// writes temp_path() and closes it; Commit() fsyncs it, renames it over `path` and fsyncs the
+// directory. A temporary file that was not committed is removed by the destructor. Errors as
+// WriteFileAtomically's. One thread at a time.
+class AtomicFile {
+ public:
+  // The temporary file for `path`, or the error ("cannot write '<path>': ...").
+  static Expected<AtomicFile> Create(const std::string& path);
+  ~AtomicFile();
+  AtomicFile(AtomicFile&& other) noexcept;
+  AtomicFile& operator=(AtomicFile&& other) noexcept;
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  const std::string& path() const { return path_; }
+  // Where to write the contents until Commit().
+  const std::string& temp_path() const { return temp_path_; }
+  // Appends `data` to the temporary file (for callers that write through this object).
+  [[nodiscard]] Status Write(std::string_view data);
+  // Makes the temporary file `path` (see above). After a failure the temporary file is gone
+  // and `path` is unchanged. Call at most once.
+  [[nodiscard]] Status Commit();
+
+ private:
+  AtomicFile(std::string path, std::string temp_path, int fd);
+  // "cannot write '<path>': <step>: <errno text>", and the temporary file removed.
+  Status Fail(const std::string& step, int err);
+
+  std::string path_;
+  std::string temp_path_;
+  int fd_ = -1;  // open on temp_path_ until Commit(); -1 when committed or failed
+};
 
 }  // namespace rigcal::tools

@@ -40,9 +40,9 @@ Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::stri
 // The rig YAML text of `rig` (slave name -> similarity), numbers in shortest round-trip form.
 std::string RigToYaml(const std::map<std::string, Similarity>& rig);
 
-// Writes RigToYaml(rig) atomically. Returns an empty string or an error naming the path.
-[[nodiscard]] std::string WriteRigYaml(const std::string& path,
-                                       const std::map<std::string, Similarity>& rig);
+// Writes RigToYaml(rig) atomically. The error names the path.
+[[nodiscard]] Status WriteRigYaml(const std::string& path,
+                                  const std::map<std::string, Similarity>& rig);
 
 // The result YAML text of `result`: `master`, `pairs_selected`, and per slave the rig entry
 // (the estimate; present even when unusable, so check `usable`) plus `usable`, `termination`,
@@ -54,8 +54,8 @@ std::string RigToYaml(const std::map<std::string, Similarity>& rig);
 // partition scales. Non-finite numbers are written as .nan / .inf.
 std::string ResultToYaml(const RigCalibration& result);
 
-// Writes ResultToYaml(result) atomically. Returns an empty string or an error naming the path.
-[[nodiscard]] std::string WriteResultYaml(const std::string& path, const RigCalibration& result);
+// Writes ResultToYaml(result) atomically. The error names the path.
+[[nodiscard]] Status WriteResultYaml(const std::string& path, const RigCalibration& result);
 
 // Writes a Kalibr-style camchain YAML: cam0 is the master, cam1..camN the slaves in
 // `camera_order`, which lists every camera to write, master first; empty = the master and then
@@ -64,11 +64,10 @@ std::string ResultToYaml(const RigCalibration& result);
 //   T_cn_cnm1 = inv(master_from_cam_N) * master_from_cam_{N-1},
 // built from q and C only (no scale), so translations are in master odometry units. Every
 // camera also gets `rigcal_name` (a rigcal extension). Intrinsics, distortion, resolution and
-// rostopic are not known to rigcal and are not written. Atomic. Returns an empty string or an
-// error naming the path, an unknown camera, a master not listed first, or a slave without a
-// usable estimate.
-[[nodiscard]] std::string WriteCamchain(const std::string& path, const RigCalibration& result,
-                                        const std::vector<std::string>& camera_order = {});
+// rostopic are not known to rigcal and are not written. Atomic. The error names the path, an
+// unknown camera, a master not listed first, or a slave without a usable estimate.
+[[nodiscard]] Status WriteCamchain(const std::string& path, const RigCalibration& result,
+                                   const std::vector<std::string>& camera_order = {});
 
 struct CamchainCamera {
   std::string name;  // rigcal_name, empty when absent

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "rigcal/calib/status.h"
+#include "rigcal/calib/time_format.h"  // FormatNsAsSeconds, used with these files
 #include "rigcal/calib/types.h"
 
 namespace rigcal::tools {
@@ -76,22 +77,18 @@ Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
 
 // Writes `trajectory` in TUM format (seconds with 9 decimals, so stamps round-trip exactly;
 // doubles in shortest round-trip form), with the segment as 9th column when any segment id is
-// not 0. Atomic (WriteFileAtomically). Returns an empty string or an error naming the path.
-[[nodiscard]] std::string WriteTrajectoryTum(const std::string& path,
-                                             const TimedTrajectory& trajectory);
+// not 0. Atomic (WriteFileAtomically). The error names the path.
+[[nodiscard]] Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory);
 
 // Writes `trajectory` in the native format with its `# rigcal poses` header and the segment
-// column. Atomic. Returns an empty string or an error naming the path.
-[[nodiscard]] std::string WriteTrajectoryNative(const std::string& path,
-                                                const TimedTrajectory& trajectory);
+// column. Atomic. The error names the path.
+[[nodiscard]] Status WriteTrajectoryNative(const std::string& path,
+                                           const TimedTrajectory& trajectory);
 
 // Parses a decimal number of seconds ("12.5", "-3", "1.037359e-01") to integer nanoseconds,
 // rounding half away from zero at the nanosecond, without floating point. nullopt when the
 // text is not a number or the result does not fit in int64.
 std::optional<int64_t> ParseSecondsToNs(std::string_view text);
-
-// Formats nanoseconds as seconds with 9 decimals ("-0.000000001", "12.500000000"); exact.
-std::string FormatNsAsSeconds(int64_t t_ns);
 
 // Matches the slaves' stamps to the master's. Master stamp k and slave stamp j match when
 // each is the other's nearest stamp (so no pose is used twice when the rates differ) and

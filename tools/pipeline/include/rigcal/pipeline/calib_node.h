@@ -17,6 +17,7 @@
 
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/lcm/extrinsics_message.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/status_message.h"
 
@@ -79,8 +80,8 @@ class CalibNode {
   CalibNode& operator=(const CalibNode&) = delete;
 
   // Opens LCM (or the log), subscribes RIGCAL_POSE_*, restores the state when resuming.
-  // Returns "" or an error naming the URL / file. Call once before Run.
-  [[nodiscard]] std::string Open();
+  // The error names the URL / file. Call once before Run.
+  [[nodiscard]] Status Open();
 
   // Runs until `stop` is set, the duration passes or the log ends; then flushes the estimator,
   // publishes a last RIGCAL_EXTRINSICS and RIGCAL_STATUS, saves the state and writes the result.

@@ -50,7 +50,9 @@ struct PipelineOptions {
   // Keep every pose of every camera (for evaluation against ground truth; memory grows with
   // the run length, ~100 bytes per pose).
   bool record_poses = false;
-  bool Check(std::string* error) const;
+  // Success, or the first offending field and its constraint: "<field>: <constraint>"
+  // ("vo.<field>: ..." for the VO's options).
+  Status Check() const;
 };
 
 // Health of one camera of a running pipeline.

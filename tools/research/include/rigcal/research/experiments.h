@@ -65,8 +65,8 @@ struct ExperimentOptions {
 
   ExperimentProgress progress;  // optional
 
-  // True when valid; else false and *error names the field and the violated constraint.
-  bool Check(std::string* error) const;
+  // Success, or the first offending field and its constraint: "<field>: <constraint>".
+  Status Check() const;
 };
 
 constexpr double kNotAvailable = std::numeric_limits<double>::quiet_NaN();

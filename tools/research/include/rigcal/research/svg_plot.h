@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/status.h"
+
 namespace rigcal {
 
 struct PlotSeries {
@@ -44,9 +46,9 @@ struct PlotFigure {
 // when it has no finite point), so a reader can count the series of a figure. Thread-safe.
 std::string RenderSvg(const PlotFigure& figure);
 
-// Renders `figure` and writes it to `path` atomically (temporary file in the same directory,
-// then rename). Returns false and sets *error (if not null) when the file cannot be written.
-bool WriteSvg(const PlotFigure& figure, const std::string& path, std::string* error);
+// Renders `figure` and writes it to `path` atomically (WriteFileAtomically). The error names
+// the path.
+[[nodiscard]] Status WriteSvg(const PlotFigure& figure, const std::string& path);
 
 // `text` with &, <, >, " and ' replaced by XML entities.
 std::string XmlEscape(const std::string& text);
