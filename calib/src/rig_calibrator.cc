@@ -255,9 +255,9 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   auto log = ModuleLogger("calib");
   SlaveCalibration r;
   r.name = name;
-  std::string error;
-  if (!options.Check(&error))
-    return Fail(r, Termination::kInvalidInput, "invalid options: " + error);
+  if (const Status checked = options.Check(); !checked.ok()) {
+    return Fail(r, Termination::kInvalidInput, "invalid options: " + checked.message());
+  }
 
   std::vector<MotionData> data = internal::ToMotionData(motions);
   r.motions.total = static_cast<int>(data.size());
@@ -609,8 +609,7 @@ RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOpti
   RigCalibration out;
   out.master = recording.master.name;
   const std::string invalid = recording.Validate();
-  std::string option_error;
-  const bool options_ok = options.Check(&option_error);
+  const bool options_ok = options.Check().ok();
   std::vector<IndexPair> pairs;
   if (invalid.empty() && options_ok) pairs = SelectPairs(recording, options.pairs);
   out.pairs_selected = static_cast<int>(pairs.size());

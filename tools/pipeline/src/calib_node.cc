@@ -10,6 +10,7 @@
 
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/atomic_file.h"
+#include "rigcal/io/estimator_state_file.h"
 #include "rigcal/pipeline/online_replay.h"
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/io/rig_files.h"
@@ -192,7 +193,8 @@ struct CalibNode::Impl {
 
   void SaveState() {
     if (state_path.empty()) return;
-    const std::string error = WriteFileAtomically(state_path, calibrator.SerializeState());
+    const std::string error =
+        WriteFileAtomically(state_path, FormatEstimatorState(calibrator.SaveState()));
     if (!error.empty()) {
       summary.errors.push_back(error);
       log->error("state not saved: {}", error);
@@ -286,11 +288,15 @@ std::string CalibNode::Open() {
       m.log->warn("--resume: no state file configured (state.path or --state); starting afresh");
     } else {
       auto text = ReadWholeFile(m.state_path);
-      std::string error;
+      Status restored;
+      if (text) {
+        const Expected<RigEstimatorState> state = ParseEstimatorState(*text);
+        restored = state ? m.calibrator.RestoreState(*state) : state.status();
+      }
       if (!text) {
         m.log->warn("--resume: {}; starting afresh", text.error());
-      } else if (!m.calibrator.RestoreState(*text, &error)) {
-        m.log->warn("--resume: {}: {}; ignored, starting afresh", m.state_path, error);
+      } else if (!restored.ok()) {
+        m.log->warn("--resume: {}: {}; ignored, starting afresh", m.state_path, restored.message());
       } else {
         m.summary.resumed = true;
         m.log->info("resumed from {}", m.state_path);
