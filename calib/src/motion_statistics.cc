@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <unsupported/Eigen/KroneckerProduct>
 
 #include "linear_solvers.h"
@@ -24,28 +23,6 @@ Eigen::Matrix<double, 3, 9> KronTransposeIdentity(const Eigen::Vector3d& c) {
   return k;
 }
 
-template <typename Derived>
-void Write(std::ostream& out, const char* label, const Eigen::MatrixBase<Derived>& m) {
-  out << label;
-  for (Eigen::Index i = 0; i < m.size(); ++i) out << ' ' << m.derived().data()[i];
-  out << '\n';
-}
-
-template <typename Derived>
-bool Read(std::istream& in, const char* label, Eigen::MatrixBase<Derived>& m) {
-  std::string word;
-  if (!(in >> word) || word != label) return false;
-  for (Eigen::Index i = 0; i < m.size(); ++i) {
-    if (!(in >> m.derived().data()[i]) || !std::isfinite(m.derived().data()[i])) return false;
-  }
-  return true;
-}
-
-bool ReadScalar(std::istream& in, const char* label, double* v) {
-  std::string word;
-  return (in >> word) && word == label && (in >> *v) && std::isfinite(*v);
-}
-
 }  // namespace
 
 void MotionStatistics::Add(const MotionData& m, int segment, double w) {
@@ -56,7 +33,7 @@ void MotionStatistics::Add(const MotionData& m, int segment, double w) {
   H_cc_.noalias() += w * i_r0.transpose() * i_r0;
   g_c_.noalias() += w * i_r0.transpose() * m.C0;
   c0_sq_ += w * m.C0.squaredNorm();
-  SegmentStatistics& s = segments_[segment];
+  SegmentSums& s = segments_[segment];
   s.P.noalias() += w * i_r0.transpose() * KronTransposeIdentity(m.Ci);
   s.n += w * m.Ci.squaredNorm();
   s.Q.noalias() += w * m.C0 * m.Ci.transpose();
@@ -232,7 +209,7 @@ void MotionStatistics::MarginaliseSegment(int segment, const Eigen::Quaterniond&
                                           const PlanarFrame& frame) {
   auto it = segments_.find(segment);
   if (it == segments_.end()) return;
-  const SegmentStatistics& s = it->second;
+  const SegmentSums& s = it->second;
   MarginalisePlanarSegment({segment, &s.P, &s.Q, &s.N}, frame, &planar_);
   if (s.n > 0.0) {
     const Eigen::Matrix3d dr = dq.toRotationMatrix();
@@ -264,88 +241,44 @@ void MotionStatistics::SetSegmentScale(int segment, double scale) {
   if (it != segments_.end()) it->second.last_scale = scale;
 }
 
-std::string MotionStatistics::Serialize() const {
-  std::ostringstream out;
-  out.precision(17);
-  Write(out, "M", M_);
-  Write(out, "v00", planar_.v00);
-  Write(out, "vii", planar_.vii);
-  Write(out, "v0i", planar_.v0i);
-  Write(out, "K", planar_.k);
-  Write(out, "c0c0", planar_.c0c0);
-  Write(out, "Hplmarg", planar_.h_marg);
-  Write(out, "gplmarg", planar_.g_marg);
-  out << "cplmarg " << planar_.c_marg << '\n';
-  Write(out, "Hcc", H_cc_);
-  Write(out, "gc", g_c_);
-  out << "c0sq " << c0_sq_ << '\n';
-  Write(out, "Sdir", S_dir_);
-  Write(out, "Ddir", D_dir_);
-  Write(out, "Hmarg", H_marg_);
-  Write(out, "gmarg", g_marg_);
-  out << "c0sqmarg " << c0_sq_marg_ << '\n';
-  out << "weight " << weight_ << "\nmaxrot " << max_rotation_ << "\nmotions " << motions_ << '\n';
-  out << "segments " << segments_.size() << '\n';
-  for (const auto& [id, s] : segments_) {
-    out << "segment " << id << '\n';
-    Write(out, "P", s.P);
-    Write(out, "Q", s.Q);
-    Write(out, "N", s.N);
-    out << "n " << s.n << "\nlc " << s.len_cross << "\nls " << s.len_sq << "\nw " << s.weight
-        << "\nscale " << s.last_scale << '\n';
-  }
-  out << "closed " << closed_scales_.size() << '\n';
-  for (const auto& [id, v] : closed_scales_) out << id << ' ' << v << '\n';
-  return out.str();
+MotionSums MotionStatistics::Sums() const {
+  MotionSums s;
+  s.rotation = M_;
+  s.planar = planar_;
+  s.h_cc = H_cc_;
+  s.g_c = g_c_;
+  s.c0_sq = c0_sq_;
+  s.s_dir = S_dir_;
+  s.d_dir = D_dir_;
+  s.h_marg = H_marg_;
+  s.g_marg = g_marg_;
+  s.c0_sq_marg = c0_sq_marg_;
+  s.weight = weight_;
+  s.max_rotation = max_rotation_;
+  s.motions = motions_;
+  s.segments = segments_;
+  s.closed_scales = closed_scales_;
+  return s;
 }
 
-bool MotionStatistics::Parse(const std::string& text) {
-  std::istringstream in(text);
-  MotionStatistics s;
-  // "Ddir" follows "Sdir" since state version 3; a version-2 text goes on with "Hmarg".
-  const bool has_d = text.find("\nDdir ") != std::string::npos;
-  double motions = 0.0, count = 0.0;
-  if (!Read(in, "M", s.M_) || !Read(in, "v00", s.planar_.v00) || !Read(in, "vii", s.planar_.vii) ||
-      !Read(in, "v0i", s.planar_.v0i) || !Read(in, "K", s.planar_.k) ||
-      !Read(in, "c0c0", s.planar_.c0c0) || !Read(in, "Hplmarg", s.planar_.h_marg) ||
-      !Read(in, "gplmarg", s.planar_.g_marg) || !ReadScalar(in, "cplmarg", &s.planar_.c_marg) ||
-      !Read(in, "Hcc", s.H_cc_) || !Read(in, "gc", s.g_c_) || !ReadScalar(in, "c0sq", &s.c0_sq_) ||
-      !Read(in, "Sdir", s.S_dir_) || (has_d && !Read(in, "Ddir", s.D_dir_)) ||
-      !Read(in, "Hmarg", s.H_marg_) || !Read(in, "gmarg", s.g_marg_) ||
-      !ReadScalar(in, "c0sqmarg", &s.c0_sq_marg_) || !ReadScalar(in, "weight", &s.weight_) ||
-      !ReadScalar(in, "maxrot", &s.max_rotation_) || !ReadScalar(in, "motions", &motions) ||
-      !ReadScalar(in, "segments", &count)) {
-    return false;
-  }
-  if (!has_d) {
-    // Version 2: c_0 ≈ dR c_i gives D ≈ S dR, and tr D is the sum of the weights (unit
-    // directions; every motion but a standing one has them).
-    const Eigen::Matrix3d sd = s.S_dir_ * SolveAbsoluteOrientation(s.S_dir_).toRotationMatrix();
-    const double trace = sd.trace();
-    if (trace > 0.0) s.D_dir_ = (sd + sd.transpose()) / 2.0 * (s.weight_ / trace);
-  }
-  s.motions_ = static_cast<int>(motions);
-  if (count < 0 || count > 1e6) return false;
-  for (int k = 0; k < static_cast<int>(count); ++k) {
-    double id = 0.0;
-    SegmentStatistics seg;
-    if (!ReadScalar(in, "segment", &id) || !Read(in, "P", seg.P) || !Read(in, "Q", seg.Q) ||
-        !Read(in, "N", seg.N) || !ReadScalar(in, "n", &seg.n) ||
-        !ReadScalar(in, "lc", &seg.len_cross) || !ReadScalar(in, "ls", &seg.len_sq) ||
-        !ReadScalar(in, "w", &seg.weight) || !ReadScalar(in, "scale", &seg.last_scale)) {
-      return false;
-    }
-    s.segments_[static_cast<int>(id)] = seg;
-  }
-  if (!ReadScalar(in, "closed", &count) || count < 0 || count > 1e6) return false;
-  for (int k = 0; k < static_cast<int>(count); ++k) {
-    int id = 0;
-    double v = 0.0;
-    if (!(in >> id >> v) || !std::isfinite(v)) return false;
-    s.closed_scales_[id] = v;
-  }
-  *this = s;
-  return true;
+MotionStatistics MotionStatistics::FromSums(const MotionSums& s) {
+  MotionStatistics m;
+  m.M_ = s.rotation;
+  static_cast<PlanarMotionSums&>(m.planar_) = s.planar;
+  m.H_cc_ = s.h_cc;
+  m.g_c_ = s.g_c;
+  m.c0_sq_ = s.c0_sq;
+  m.S_dir_ = s.s_dir;
+  m.D_dir_ = s.d_dir;
+  m.H_marg_ = s.h_marg;
+  m.g_marg_ = s.g_marg;
+  m.c0_sq_marg_ = s.c0_sq_marg;
+  m.weight_ = s.weight;
+  m.max_rotation_ = s.max_rotation;
+  m.motions_ = s.motions;
+  m.segments_ = s.segments;
+  m.closed_scales_ = s.closed_scales;
+  return m;
 }
 
 }  // namespace rigcal::internal

@@ -18,25 +18,14 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <map>
-#include <string>
 #include <vector>
 
 #include "motion_data.h"
 #include "planar_solver.h"
+#include "rigcal/calib/estimator_state.h"
 #include "rigcal/calib/rig_estimator.h"
 
 namespace rigcal::internal {
-
-struct SegmentStatistics {
-  Eigen::Matrix<double, 3, 9> P = Eigen::Matrix<double, 3, 9>::Zero();
-  double n = 0.0;
-  Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();
-  double len_cross = 0.0;                       // sum w |C_i| |C_0|   (4.32)
-  double len_sq = 0.0;                          // sum w |C_i|^2       (4.32), equals n
-  double weight = 0.0;                          // sum of motion weights
-  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();  // sum w C_i C_i^T (planar solver)
-  double last_scale = 0.0;  // scale at the last solve (reported after marginalisation)
-};
 
 // C restricted to fixed + basis * p (the plane of planar motion, a fixed offset along the axis).
 struct PositionConstraint {
@@ -97,7 +86,7 @@ class MotionStatistics {
   PlanarSystemSolution SolvePlanarSystem(const PlanarFrame& frame) const;
   double weight() const { return weight_; }
   double max_rotation() const { return max_rotation_; }
-  const std::map<int, SegmentStatistics>& segments() const { return segments_; }
+  const std::map<int, SegmentSums>& segments() const { return segments_; }
   const std::map<int, double>& closed_scales() const { return closed_scales_; }
   int motions() const { return motions_; }
   void SetSegmentScale(int segment, double scale);
@@ -106,10 +95,9 @@ class MotionStatistics {
   // rig_estimator.h); the segments are the open ones, ascending.
   RefinementPrior Quadratic() const;
 
-  // Plain-text serialisation of every sum (for state files); Parse returns false on a
-  // malformed text.
-  std::string Serialize() const;
-  bool Parse(const std::string& text);
+  // Every sum as plain data (the estimator's saved state), and statistics made of them.
+  MotionSums Sums() const;
+  static MotionStatistics FromSums(const MotionSums& sums);
 
  private:
   Eigen::Matrix4d M_ = Eigen::Matrix4d::Zero();
@@ -122,7 +110,7 @@ class MotionStatistics {
   Eigen::Matrix3d H_marg_ = Eigen::Matrix3d::Zero();  // marginalised segments
   Eigen::Vector3d g_marg_ = Eigen::Vector3d::Zero();
   double c0_sq_marg_ = 0.0;
-  std::map<int, SegmentStatistics> segments_;
+  std::map<int, SegmentSums> segments_;
   std::map<int, double> closed_scales_;
   double weight_ = 0.0;
   double max_rotation_ = 0.0;  // largest master rotation angle seen, radians

@@ -1,45 +1,31 @@
 #include "rigcal/calib/online_calibrator.h"
 
-#include <stdexcept>
-
 #include "rigcal/calib/logging.h"
 
 namespace rigcal {
 namespace {
 
-SyncOptions WithCameraCount(SyncOptions sync, size_t cameras) {
-  sync.num_cameras = static_cast<int>(cameras);
-  return sync;
+// The options with sync.num_cameras set from the camera count, checked (InvalidOptions).
+OnlineOptions Checked(OnlineOptions options, size_t cameras) {
+  options.sync.num_cameras = static_cast<int>(cameras);
+  RequireValid(options.Check(), "OnlineOptions");
+  return options;
 }
 
 }  // namespace
 
-bool OnlineOptions::Check(std::string* error) const {
-  std::string e;
-  if (const Status sync_status = sync.Check(); !sync_status.ok()) {
-    if (error) *error = "sync." + sync_status.message();
-    return false;
-  }
-  if (!estimator.Check(&e)) {
-    if (error) *error = "estimator." + e;
-    return false;
-  }
-  if (refine_period_s < 0.0) {
-    if (error) *error = "refine_period_s must be >= 0 (0 = no refinement)";
-    return false;
-  }
-  return true;
+Status OnlineOptions::Check() const {
+  if (const Status s = sync.Check(); !s.ok()) return Error{"sync." + s.message()};
+  if (const Status s = estimator.Check(); !s.ok()) return Error{"estimator." + s.message()};
+  if (refine_period_s < 0.0) return Error{"refine_period_s: must be >= 0 (0 = no refinement)"};
+  return Status::Ok();
 }
 
 OnlineCalibrator::OnlineCalibrator(std::vector<std::string> camera_names, OnlineOptions options)
     : names_(std::move(camera_names)),
-      options_(std::move(options)),
-      sync_(WithCameraCount(options_.sync, names_.size())),
-      estimator_(names_, options_.estimator) {
-  std::string error;
-  if (!options_.estimator.Check(&error)) throw std::invalid_argument("estimator." + error);
-  if (options_.refine_period_s < 0.0) throw std::invalid_argument("refine_period_s must be >= 0");
-}
+      options_(Checked(std::move(options), names_.size())),
+      sync_(options_.sync),
+      estimator_(names_, options_.estimator) {}
 
 OnlineCalibrator::~OnlineCalibrator() { Stop(); }
 
@@ -79,14 +65,14 @@ RigEstimate OnlineCalibrator::Estimate() const {
   return estimator_.Estimate();
 }
 
-std::string OnlineCalibrator::SerializeState() const {
+RigEstimatorState OnlineCalibrator::SaveState() const {
   MutexLock lock(estimator_mutex_);
-  return estimator_.SerializeState();
+  return estimator_.SaveState();
 }
 
-bool OnlineCalibrator::RestoreState(const std::string& text, std::string* error) {
+Status OnlineCalibrator::RestoreState(const RigEstimatorState& state) {
   MutexLock lock(estimator_mutex_);
-  return estimator_.RestoreState(text, error);
+  return estimator_.RestoreState(state);
 }
 
 void OnlineCalibrator::EstimatorLoop() {

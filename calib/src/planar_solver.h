@@ -22,23 +22,13 @@
 #include <vector>
 
 #include "motion_data.h"
+#include "rigcal/calib/estimator_state.h"
 
 namespace rigcal::internal {
 
-// Sums of the planar solver over motions (weights w) that are not per scale segment.
-struct PlanarSums {
-  // Rotation vector parts v = sin(θ/2) r of the sign-aligned master and slave quaternions.
-  Eigen::Matrix3d v00 = Eigen::Matrix3d::Zero();  // sum w v_0 v_0^T
-  Eigen::Matrix3d vii = Eigen::Matrix3d::Zero();  // sum w v_i v_i^T
-  Eigen::Matrix3d v0i = Eigen::Matrix3d::Zero();  // sum w v_0 v_i^T
-  // sum w (I - R_0)^T (C_0^T ⊗ I3), so that sum w (I - R_0)^T X C_0 = k vec(X).
-  Eigen::Matrix<double, 3, 9> k = Eigen::Matrix<double, 3, 9>::Zero();
-  Eigen::Matrix3d c0c0 = Eigen::Matrix3d::Zero();  // sum w C_0 C_0^T
-  // Closed (marginalised) segments: Schur complement of their (u, w) on dC (3-D form).
-  Eigen::Matrix3d h_marg = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d g_marg = Eigen::Vector3d::Zero();
-  double c_marg = 0.0;
-
+// Sums of the planar solver over motions (weights w) that are not per scale segment; the data
+// are PlanarMotionSums (estimator_state.h, saved with the estimator's state).
+struct PlanarSums : PlanarMotionSums {
   void Add(const MotionData& m, double w);
   void Decay(double f);
   void ResetPosition();  // the position sums (k, c0c0, marginal); the rotation sums stay

@@ -54,8 +54,8 @@ TEST(OnlineCalibrator, ThreadedProducersConverge) {
   EXPECT_GT(calibrator.refinements_applied(), 0);
   // The state can be saved from another thread and restored into a fresh calibrator.
   OnlineCalibrator other({"front", "left", "back"}, options);
-  std::string error;
-  ASSERT_TRUE(other.RestoreState(calibrator.SerializeState(), &error)) << error;
+  const Status status = other.RestoreState(calibrator.SaveState());
+  ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(other.Estimate().rig.slaves[0].motions.used, e.rig.slaves[0].motions.used);
 }
 
@@ -63,9 +63,14 @@ TEST(OnlineCalibrator, RejectsInvalidOptions) {
   OnlineOptions options;
   options.estimator.window_size = 0;
   EXPECT_THROW(OnlineCalibrator({"a", "b"}, options), std::invalid_argument);
-  std::string error;
-  EXPECT_FALSE(options.Check(&error));
-  EXPECT_NE(error.find("estimator.window_size"), std::string::npos);
+  EXPECT_THROW(OnlineCalibrator({"a", "b"}, options), InvalidOptions);
+  const Status status = options.Check();
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("estimator.window_size"), std::string::npos);
+  options = OnlineOptions{};
+  options.refine_period_s = -1.0;
+  EXPECT_EQ(options.Check().message(), "refine_period_s: must be >= 0 (0 = no refinement)");
+  EXPECT_THROW(OnlineCalibrator({"a", "b"}, options), InvalidOptions);
 }
 
 }  // namespace

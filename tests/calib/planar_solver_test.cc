@@ -472,8 +472,8 @@ TEST(PlanarOnline, NominalKeptThroughRefinementAndStateFiles) {
     ExpectWithinSigma(est.Estimate().rig.slaves[i], drive.truth[i]);
   }
   RigEstimator restored(CarRigNames(), o);
-  std::string error;
-  ASSERT_TRUE(restored.RestoreState(est.SerializeState(), &error)) << error;
+  const Status status = restored.RestoreState(est.SaveState());
+  ASSERT_TRUE(status.ok()) << status.message();
   for (int i = 0; i < 3; ++i) {
     const SlaveCalibration& a = restored.Estimate().rig.slaves[i];
     EXPECT_EQ(a.motion_model, MotionModel::kPlanar);

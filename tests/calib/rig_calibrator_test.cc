@@ -449,9 +449,10 @@ TEST(CalibrateSlave, UncertaintyWithCorrelatedErrors) {
 TEST(CalibrationOptions, CheckNamesTheField) {
   CalibrationOptions o;
   o.alpha_maxrot_deg = -1;
-  std::string error;
-  EXPECT_FALSE(o.Check(&error));
-  EXPECT_NE(error.find("alpha_maxrot_deg"), std::string::npos);
+  const Status status = o.Check();
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("alpha_maxrot_deg"), std::string::npos);
+  EXPECT_EQ(status.message(), "alpha_maxrot_deg: must be in [0, 180), got -1");
   const auto r = CalibrateSlave({}, o, "x");
   EXPECT_EQ(r.termination, Termination::kInvalidInput);
 }

@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
-#include <sstream>
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
@@ -408,8 +407,8 @@ TEST(RigEstimator, WindowPriorMakesAShortWindowRefineLikeAllMotions) {
 
   // Restarted from its state: the window is empty, the prior holds everything.
   RigEstimator c(names, short_window);
-  std::string error;
-  ASSERT_TRUE(c.RestoreState(b.SerializeState(), &error)) << error;
+  const Status restored = c.RestoreState(b.SaveState());
+  ASSERT_TRUE(restored.ok()) << restored.message();
   RefinementJob job_restored = c.MakeRefinementJob(0);
   EXPECT_TRUE(job_restored.motions.empty());
   EXPECT_EQ(job_restored.prior.motions, static_cast<int>(job_all.motions.size()));
@@ -445,8 +444,8 @@ TEST(RigEstimator, WindowPriorFollowsForgettingAndClosedSegments) {
   EXPECT_LE(job.prior.segments.size(), static_cast<size_t>(o.max_open_segments));
   const SlaveCalibration with_window = RefineWindow(job);
   RigEstimator restored(Names(drive.recording), o);
-  std::string error;
-  ASSERT_TRUE(restored.RestoreState(est.SerializeState(), &error)) << error;
+  const Status status = restored.RestoreState(est.SaveState());
+  ASSERT_TRUE(status.ok()) << status.message();
   RefinementJob prior_only = restored.MakeRefinementJob(0);
   prior_only.robust_loss = false;
   ASSERT_TRUE(prior_only.motions.empty());
@@ -496,94 +495,51 @@ TEST(RigEstimator, WindowPriorWithPlanarAndTranslationalModels) {
   }
 }
 
-TEST(RigEstimator, StateRoundTripAndCorruptFiles) {
+// The state as plain data: a fresh estimator continues from it; a state of other cameras or
+// with another number of slaves is rejected with a message and changes nothing. (The state
+// file is tests/io/estimator_state_file_test.cc.)
+TEST(RigEstimator, RestoresItsStateAndRejectsForeignOnes) {
   const SyntheticDrive drive = NoisyDrive(1200, 4, 2);
   const auto names = Names(drive.recording);
   RigEstimator est(names, RigEstimatorOptions{});
   Feed(&est, drive.recording);
-  const std::string state = est.SerializeState();
+  const RigEstimatorState state = est.SaveState();
+  ASSERT_EQ(state.cameras, names);
+  ASSERT_EQ(state.slaves.size(), 2u);
+  EXPECT_EQ(state.slaves[0].counts.used, est.Estimate().rig.slaves[0].motions.used);
+  EXPECT_GT(state.slaves[0].long_stats.motions, 0);
 
   RigEstimator restored(names, RigEstimatorOptions{});
-  std::string error;
-  ASSERT_TRUE(restored.RestoreState(state, &error)) << error;
+  const Status ok = restored.RestoreState(state);
+  ASSERT_TRUE(ok.ok()) << ok.message();
   for (int i = 0; i < 2; ++i) {
-    const auto& a = est.Estimate().rig.slaves[i].estimate;
-    const auto& b = restored.Estimate().rig.slaves[i].estimate;
-    EXPECT_LT(AngleBetween(a.q, b.q), 1e-12);
-    EXPECT_LT((a.C - b.C).norm(), 1e-12);
-    EXPECT_NEAR(a.scale, b.scale, 1e-12);
+    const SlaveCalibration& before = est.Estimate().rig.slaves[i];
+    const SlaveCalibration& after = restored.Estimate().rig.slaves[i];
+    EXPECT_EQ(after.motions.used, before.motions.used);
+    EXPECT_EQ(after.motion_model, before.motion_model);
+    EXPECT_LT(AngleBetween(after.estimate.q, before.estimate.q), 1e-12);
+    EXPECT_LT((after.estimate.C - before.estimate.C).norm(), 1e-12);
   }
+  EXPECT_EQ(restored.SaveState().slaves[1].long_stats.rotation,
+            state.slaves[1].long_stats.rotation);
 
   RigEstimator fresh(names, RigEstimatorOptions{});
-  std::string corrupt = state;
-  corrupt[corrupt.size() / 2] = corrupt[corrupt.size() / 2] == '1' ? '2' : '1';
-  EXPECT_FALSE(fresh.RestoreState(corrupt, &error));
-  EXPECT_NE(error.find("checksum"), std::string::npos) << error;
-  EXPECT_FALSE(fresh.RestoreState(state.substr(0, state.size() / 3), &error));
-  std::string other_version = state;
-  const std::string header =
-      "rigcal-estimator-state " + std::to_string(RigEstimator::kStateVersion) + "\n";
-  ASSERT_EQ(other_version.rfind(header, 0), 0u);
-  other_version.replace(0, header.size(), "rigcal-estimator-state 9\n");
-  EXPECT_FALSE(fresh.RestoreState(other_version, &error));
-  EXPECT_NE(error.find("version 9"), std::string::npos) << error;
-  RigEstimator other_rig({"front", "left", "rear"}, RigEstimatorOptions{});
-  EXPECT_FALSE(other_rig.RestoreState(state, &error));
-  EXPECT_NE(error.find("different rig"), std::string::npos) << error;
-  EXPECT_FALSE(fresh.RestoreState("garbage", &error));
+  RigEstimatorState renamed = state;
+  renamed.cameras[2] = "rear";
+  const Status foreign = fresh.RestoreState(renamed);
+  EXPECT_FALSE(foreign.ok());
+  EXPECT_NE(foreign.message().find("different rig (camera 'back')"), std::string::npos)
+      << foreign.message();
+  RigEstimator other_rig({"front", "left", "back", "rear"}, RigEstimatorOptions{});
+  EXPECT_NE(other_rig.RestoreState(state).message().find("different rig"), std::string::npos);
+  RigEstimatorState missing_slave = state;
+  missing_slave.slaves.pop_back();
+  const Status inconsistent = fresh.RestoreState(missing_slave);
+  EXPECT_FALSE(inconsistent.ok());
+  EXPECT_NE(inconsistent.message().find("1 slaves for 2"), std::string::npos)
+      << inconsistent.message();
   EXPECT_EQ(fresh.Estimate().rig.slaves[0].motions.used, 0);  // unchanged
-}
-
-uint64_t Fnv1a(const std::string& s) {  // the state files' checksum (FNV-1a, 64 bit)
-  uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
-// A version-2 state (no translation-direction moments) is read: the moments are derived from
-// the others, so the translational model's estimate is the same and its σ close.
-TEST(RigEstimator, ReadsVersionTwoStates) {
-  DriveOptions d;
-  d.motion = DriveOptions::Motion::kTranslationOnly;
-  d.rotation_noise_deg = 0.02;
-  d.position_noise = 0.002;
-  const SyntheticDrive drive = GenerateDrive({"front", "back"}, {DemoRig()[1]}, d);
-  const auto names = Names(drive.recording);
-  RigEstimator est(names, RigEstimatorOptions{});
-  Feed(&est, drive.recording);
-  const std::string state = est.SerializeState();
-
-  // The same state as version 2 wrote it: no "Ddir" lines, header 2, its checksum.
-  std::istringstream in(state);
-  std::string line, body;
-  std::getline(in, line);
-  ASSERT_EQ(line, "rigcal-estimator-state " + std::to_string(RigEstimator::kStateVersion));
-  int removed = 0;
-  while (std::getline(in, line)) {
-    if (line.rfind("checksum ", 0) == 0) break;
-    if (line.rfind("Ddir ", 0) == 0) {
-      ++removed;
-      continue;
-    }
-    body += line + '\n';
-  }
-  ASSERT_EQ(removed, 2);  // long and short statistics
-  std::ostringstream v2;
-  v2 << "rigcal-estimator-state 2\n" << body << "checksum " << std::hex << Fnv1a(body) << '\n';
-
-  RigEstimator restored(names, RigEstimatorOptions{});
-  std::string error;
-  ASSERT_TRUE(restored.RestoreState(v2.str(), &error)) << error;
-  const auto& a = est.Estimate().rig.slaves[0];
-  const auto& b = restored.Estimate().rig.slaves[0];
-  ASSERT_EQ(b.motion_model, MotionModel::kTranslational);
-  EXPECT_LT(AngleBetween(a.estimate.q, b.estimate.q), 1e-12);
-  EXPECT_NEAR(b.rot_std_deg, a.rot_std_deg, 0.05 * a.rot_std_deg);
-  EXPECT_FALSE(restored.RestoreState("rigcal-estimator-state 1\n" + body, &error));
-  EXPECT_NE(error.find("version 1"), std::string::npos) << error;
+  EXPECT_EQ(fresh.SaveState().slaves[0].long_stats.motions, 0);
 }
 
 TEST(RigEstimator, BadSetsAreCountedAndIgnored) {
@@ -608,10 +564,19 @@ TEST(RigEstimator, BadSetsAreCountedAndIgnored) {
 
 TEST(RigEstimatorOptions, CheckNamesField) {
   RigEstimatorOptions o;
+  EXPECT_TRUE(o.Check().ok()) << o.Check().message();
   o.window_size = 1;
-  std::string error;
-  EXPECT_FALSE(o.Check(&error));
-  EXPECT_NE(error.find("window_size"), std::string::npos);
+  const Status status = o.Check();
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("window_size"), std::string::npos);
+  EXPECT_EQ(status.message(), "window_size: must be >= 2");
+  // The estimator rejects invalid options instead of running with them.
+  try {
+    RigEstimator est({"front", "left"}, o);
+    ADD_FAILURE() << "invalid options accepted";
+  } catch (const InvalidOptions& e) {
+    EXPECT_STREQ(e.what(), "RigEstimatorOptions: window_size: must be >= 2");
+  }
 }
 
 }  // namespace

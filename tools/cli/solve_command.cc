@@ -105,7 +105,9 @@ int RunSolve(const SolveArgs& args) {
   if (std::string e = ApplyPairs(args.pairs, &options.pairs); !e.empty()) {
     return Fail("--pairs: " + e);
   }
-  if (std::string e; !options.Check(&e)) return Fail("invalid options: " + e);
+  if (const Status checked = options.Check(); !checked.ok()) {
+    return Fail("invalid options: " + checked.message());
+  }
 
   tools::TrajectoryReadOptions read_options;
   read_options.max_quaternion_norm_error = args.max_quaternion_norm_error;

@@ -328,8 +328,9 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
   for (size_t i = 1; i < config.cameras.size(); ++i) {
     online.estimator.nominal[i - 1] = config.cameras[i].nominal;
   }
-  std::string error;
-  if (!online.Check(&error)) return Error{path + ": estimator/sync options: " + error};
+  if (const Status checked = online.Check(); !checked.ok()) {
+    return Error{path + ": estimator/sync options: " + checked.message()};
+  }
 
   if (const YAML::Node publish = (*root)["publish"]) {
     if (auto e = r.CheckKeys(publish, "publish.", {"extrinsics_rate_hz", "status_rate_hz"})) {

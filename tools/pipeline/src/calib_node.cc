@@ -10,6 +10,7 @@
 
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/atomic_file.h"
+#include "rigcal/io/estimator_state_file.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/yaml_fields.h"
 #include "rigcal/lcm/channels.h"
@@ -194,7 +195,8 @@ struct CalibNode::Impl {
 
   void SaveState() {
     if (state_path.empty()) return;
-    if (const Status status = WriteFileAtomically(state_path, calibrator.SerializeState());
+    if (const Status status =
+            WriteFileAtomically(state_path, FormatEstimatorState(calibrator.SaveState()));
         !status.ok()) {
       summary.errors.push_back(status.message());
       log->error("state not saved: {}", status.message());
@@ -289,11 +291,15 @@ Status CalibNode::Open() {
       m.log->warn("--resume: no state file configured (state.path or --state); starting afresh");
     } else {
       auto text = ReadWholeFile(m.state_path);
-      std::string error;
+      Status restored;
+      if (text) {
+        const Expected<RigEstimatorState> state = ParseEstimatorState(*text);
+        restored = state ? m.calibrator.RestoreState(*state) : state.status();
+      }
       if (!text) {
         m.log->warn("--resume: {}; starting afresh", text.error());
-      } else if (!m.calibrator.RestoreState(*text, &error)) {
-        m.log->warn("--resume: {}: {}; ignored, starting afresh", m.state_path, error);
+      } else if (!restored.ok()) {
+        m.log->warn("--resume: {}: {}; ignored, starting afresh", m.state_path, restored.message());
       } else {
         m.summary.resumed = true;
         m.log->info("resumed from {}", m.state_path);

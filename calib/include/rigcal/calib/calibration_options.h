@@ -5,6 +5,7 @@
 #include <string>
 
 #include "rigcal/calib/pair_selection.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 
 namespace rigcal {
@@ -91,7 +92,8 @@ struct CalibrationOptions {
   // Needs at least this many usable motions per slave.
   int min_motions = 2;
 
-  bool Check(std::string* error) const;
+  // The first violated constraint as "<field>: <constraint>" (pairs: PairOptions's message).
+  Status Check() const;
 };
 
 std::string ToString(Method m);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/sync_buffer.h"
 #include "rigcal/calib/thread_annotations.h"
 
@@ -27,13 +28,15 @@ struct OnlineOptions {
   RigEstimatorOptions estimator;
   // Seconds between background non-linear window refinements (0 = none).
   double refine_period_s = 2.0;
-  bool Check(std::string* error) const;
+  // The first violated constraint as "<field>: <constraint>", nested fields as "sync.<field>" and
+  // "estimator.<field>".
+  Status Check() const;
 };
 
 class OnlineCalibrator {
  public:
   // camera_names[0] is the master; options.sync.num_cameras is set from the names. Throws
-  // std::invalid_argument on invalid options. Starts no thread.
+  // InvalidOptions (a std::invalid_argument) when options.Check() fails. Starts no thread.
   OnlineCalibrator(std::vector<std::string> camera_names, OnlineOptions options);
   // Stops and joins the threads.
   ~OnlineCalibrator();
@@ -58,9 +61,10 @@ class OnlineCalibrator {
   // Consistent snapshot of the estimate (any thread).
   RigEstimate Estimate() const;
   SyncStats sync_stats() const { return sync_.stats(); }
-  // State files (any thread; serialised with the estimator thread).
-  std::string SerializeState() const;
-  bool RestoreState(const std::string& text, std::string* error);
+  // The estimator's state, to continue after a restart (any thread; serialised with the
+  // estimator thread). See RigEstimator::SaveState / RestoreState.
+  RigEstimatorState SaveState() const;
+  Status RestoreState(const RigEstimatorState& state);
   // Number of background refinements applied so far.
   int refinements_applied() const { return refinements_applied_.load(); }
 

@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
+#include "rigcal/calib/estimator_state.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 
 namespace rigcal {
@@ -110,7 +112,8 @@ struct RigEstimatorOptions {
   // estimate as a weighted term in the general model too; 0 = used only where unobservable.
   double nominal_sigma = 0.0;
 
-  bool Check(std::string* error) const;
+  // The first violated constraint as "<field>: <constraint>".
+  Status Check() const;
 };
 
 // Flags of a slave's online state (bitmask, also the LCM flags).
@@ -181,7 +184,7 @@ struct RefinementJob {
 
 class RigEstimator {
  public:
-  // camera_names[0] is the master. Options are checked by the caller (Check()).
+  // camera_names[0] is the master. Throws InvalidOptions when options.Check() fails.
   RigEstimator(std::vector<std::string> camera_names, RigEstimatorOptions options);
   ~RigEstimator();
   RigEstimator(const RigEstimator&) = delete;
@@ -200,22 +203,25 @@ class RigEstimator {
   RefinementJob MakeRefinementJob(int slave) const;
   bool ApplyRefinement(const RefinementJob& job, const SlaveCalibration& refined);
 
-  // State files: the whole statistics as text (versioned, with a checksum).
-  std::string SerializeState() const;
-  // Restores a serialised state; on a corrupt, version-mismatched or foreign (different
-  // cameras) text returns false with a message and leaves the estimator unchanged.
-  bool RestoreState(const std::string& text, std::string* error);
-
-  // Version 3 adds the translation-direction moments (the translational model's σ);
-  // version-2 states are read too, with those moments derived from the others.
-  static constexpr int kStateVersion = 3;
-  static constexpr int kOldestStateVersion = 2;
+  // The statistics of every slave, to continue after a restart (estimator_state.h; the file
+  // format is tools/io's estimator_state_file.h).
+  RigEstimatorState SaveState() const;
+  // Continues from a saved state: the refinement window starts empty (every saved motion is in
+  // its prior) and the estimate is re-solved. A state of other cameras (names, count) or with
+  // another number of slaves is rejected with a message, and the estimator is left unchanged.
+  Status RestoreState(const RigEstimatorState& state);
 
  private:
   struct Slave;
+  // The stages of one slave's update (calib/src/: keyframe_pairing, motion_gates,
+  // statistics_accumulation), then Publish.
   void UpdateSlave(int index, int64_t t_ns, const CameraPose& master, const CameraPose& slave);
+  // Solves and publishes a slave's estimate (statistics_solution, decalibration_check,
+  // window_refinement, online_uncertainty, convergence_check, model_explanation).
   void Publish(int index);
   void PublishCounts(int index);
+  // The nominal mounting of slave `index`, when the options give one.
+  std::optional<Similarity> NominalOf(int index) const;
 
   std::vector<std::string> names_;
   RigEstimatorOptions options_;

@@ -1,0 +1,31 @@
+// The state flags of the recursive estimator's published estimate (convergence_check.h).
+#include "convergence_check.h"
+
+#include <algorithm>
+
+#include "rigcal/calib/quaternion.h"
+
+namespace rigcal::internal {
+
+uint32_t ConvergenceFlags(const RigEstimatorOptions& o, const SlaveCalibration& published,
+                          const SlaveCalibration& linear, double rot_factor, bool decalibrated,
+                          ConvergenceState* s) {
+  if (!published.usable()) return kFlagInitialising;
+  uint32_t flags = 0;
+  const double change = AngleBetween(linear.estimate.q, s->last_q) * kDegPerRad;
+  s->stable = change <= std::max(rot_factor * linear.rot_std_deg, 0.01) ? s->stable + 1 : 0;
+  s->last_q = linear.estimate.q;
+  if (published.motion_model == MotionModel::kTranslational) flags |= kFlagTranslationalOnly;
+  if (published.observability.planar) flags |= kFlagPlanar;
+  const double c_ref = std::max(1.0, published.estimate.C.norm());
+  const bool position_ok = !published.position_observable || published.observability.planar ||
+                           published.pos_std.maxCoeff() <= o.converged_pos_std_fraction * c_ref;
+  if (published.motions.used >= o.converged_min_motions &&
+      published.rot_std_deg <= o.converged_rot_std_deg && position_ok &&
+      s->stable >= o.converged_stable_keyframes && !decalibrated) {
+    flags |= kFlagConverged;
+  }
+  return flags;
+}
+
+}  // namespace rigcal::internal

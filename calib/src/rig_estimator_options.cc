@@ -1,0 +1,69 @@
+// Check() of the recursive estimator's options.
+#include <cmath>
+#include <sstream>
+
+#include "rigcal/calib/rig_estimator.h"
+
+namespace rigcal {
+
+Status RigEstimatorOptions::Check() const {
+  std::ostringstream e;
+  if (!(keyframe_min_angle_deg >= 0.0))
+    e << "keyframe_min_angle_deg: must be >= 0";
+  else if (!(keyframe_min_translation >= 0.0))
+    e << "keyframe_min_translation: must be >= 0";
+  else if (keyframe_max_interval_ns <= 0)
+    e << "keyframe_max_interval_ns: must be > 0";
+  else if (keyframe_history < 2)
+    e << "keyframe_history: must be >= 2, got " << keyframe_history;
+  else if (!(pair_target_angle_deg > 0.0))
+    e << "pair_target_angle_deg: must be > 0";
+  else if (!(pair_target_translation_fraction > 0.0))
+    e << "pair_target_translation_fraction: must be > 0";
+  else if (pair_max_span_ns <= 0)
+    e << "pair_max_span_ns: must be > 0";
+  else if (!(angle_gate_floor_deg > 0.0))
+    e << "angle_gate_floor_deg: must be > 0";
+  else if (!(gate_sigmas > 0.0))
+    e << "gate_sigmas: must be > 0";
+  else if (!(huber_sigmas > 0.0))
+    e << "huber_sigmas: must be > 0";
+  else if (!(scale_gate > 0.0))
+    e << "scale_gate: must be > 0";
+  else if (half_life_s < 0.0)
+    e << "half_life_s: must be >= 0 (0 = never forget)";
+  else if (!(short_half_life_s > 0.0))
+    e << "short_half_life_s: must be > 0";
+  else if (max_open_segments < 1)
+    e << "max_open_segments: must be >= 1";
+  else if (!(alpha_maxrot_deg >= 0.0 && alpha_maxrot_deg < 180.0))
+    e << "alpha_maxrot_deg: must be in [0, 180)";
+  else if (!(alpha_maxrot_noise_deg >= 0.0) || std::isinf(alpha_maxrot_noise_deg))
+    e << "alpha_maxrot_noise_deg: must be finite and >= 0 (0 = fixed alpha_maxrot_deg)";
+  else if (window_size < 2)
+    e << "window_size: must be >= 2";
+  else if (converged_min_motions < 2)
+    e << "converged_min_motions: must be >= 2";
+  else if (!(min_tilt_snr >= 0.0))
+    e << "min_tilt_snr: must be >= 0";
+  else if (!(max_axis_std_ratio > 0.0))
+    e << "max_axis_std_ratio: must be > 0";
+  else if (!(planar_hysteresis >= 1.0))
+    e << "planar_hysteresis: must be >= 1 (1 = none)";
+  else if (!(general_axis_spread_deg > 0.0))
+    e << "general_axis_spread_deg: must be > 0";
+  else if (!(planar_axis_spread_deg >= 0.0))
+    e << "planar_axis_spread_deg: must be >= 0";
+  else if (!(nominal_sigma >= 0.0) || std::isinf(nominal_sigma))
+    e << "nominal_sigma: must be finite and >= 0 (0 = no weighted prior)";
+  else if (!(sigma_block_s >= 0.0) || std::isinf(sigma_block_s))
+    e << "sigma_block_s: must be finite and >= 0 (0 = off), got " << sigma_block_s;
+  else if (sigma_blocks < 4 || sigma_blocks > 1000)
+    e << "sigma_blocks: must be in [4, 1000], got " << sigma_blocks;
+  else if (sigma_min_blocks < 2 || sigma_min_blocks > sigma_blocks)
+    e << "sigma_min_blocks: must be in [2, sigma_blocks], got " << sigma_min_blocks;
+  if (e.str().empty()) return Status::Ok();
+  return Error{e.str()};
+}
+
+}  // namespace rigcal

@@ -1,0 +1,170 @@
+// The estimator state file: exact round trip, corrupt, truncated, other-version and foreign
+// files, version-2 files, and a file written before the state left calib (fixtures/).
+#include "rigcal/io/estimator_state_file.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/synthetic.h"
+
+namespace rigcal::tools {
+namespace {
+
+// A drive of the demo rig's first `slaves` slaves (front is the master), fed to `est`.
+SyntheticDrive DemoDrive(DriveOptions d, int slaves) {
+  std::vector<Similarity> rigs = DemoRig();
+  rigs.resize(slaves);
+  std::vector<std::string> names = {"front", "left", "back"};
+  names.resize(slaves + 1);
+  return GenerateDrive(names, rigs, d);
+}
+
+std::vector<std::string> CameraNames(const RigRecording& rec) {
+  std::vector<std::string> names = {rec.master.name};
+  for (const auto& s : rec.slaves) names.push_back(s.name);
+  return names;
+}
+
+void FeedAll(RigEstimator* est, const RigRecording& rec) {
+  for (size_t k = 0; k < rec.size(); ++k) est->AddSet(rec.t_ns[k], rec.SetAt(k));
+}
+
+// The estimator's state file.
+std::string StateFile(const RigEstimator& est) { return FormatEstimatorState(est.SaveState()); }
+
+// Restores a state file into `est`; false with the parser's or RestoreState's message.
+bool Restore(RigEstimator* est, const std::string& text, std::string* error) {
+  const Expected<RigEstimatorState> state = ParseEstimatorState(text);
+  const Status status = state ? est->RestoreState(*state) : state.status();
+  *error = status.message();
+  return status.ok();
+}
+
+TEST(EstimatorStateFile, RoundTripAndCorruptFiles) {
+  DriveOptions d;
+  d.num_frames = 1200;
+  d.seed = 4;
+  const SyntheticDrive drive = DemoDrive(d, 2);
+  const auto names = CameraNames(drive.recording);
+  RigEstimator est(names, RigEstimatorOptions{});
+  FeedAll(&est, drive.recording);
+  const std::string state = StateFile(est);
+
+  RigEstimator restored(names, RigEstimatorOptions{});
+  std::string error;
+  ASSERT_TRUE(Restore(&restored, state, &error)) << error;
+  for (int i = 0; i < 2; ++i) {
+    const auto& a = est.Estimate().rig.slaves[i].estimate;
+    const auto& b = restored.Estimate().rig.slaves[i].estimate;
+    EXPECT_LT(AngleBetween(a.q, b.q), 1e-12);
+    EXPECT_LT((a.C - b.C).norm(), 1e-12);
+    EXPECT_NEAR(a.scale, b.scale, 1e-12);
+  }
+  // Every sum survives the text exactly (17 significant digits).
+  EXPECT_EQ(StateFile(restored), state);
+
+  RigEstimator fresh(names, RigEstimatorOptions{});
+  std::string corrupt = state;
+  corrupt[corrupt.size() / 2] = corrupt[corrupt.size() / 2] == '1' ? '2' : '1';
+  EXPECT_FALSE(Restore(&fresh, corrupt, &error));
+  EXPECT_NE(error.find("checksum"), std::string::npos) << error;
+  EXPECT_FALSE(Restore(&fresh, state.substr(0, state.size() / 3), &error));
+  std::string other_version = state;
+  const std::string header =
+      "rigcal-estimator-state " + std::to_string(kEstimatorStateVersion) + "\n";
+  ASSERT_EQ(other_version.rfind(header, 0), 0u);
+  other_version.replace(0, header.size(), "rigcal-estimator-state 9\n");
+  EXPECT_FALSE(Restore(&fresh, other_version, &error));
+  EXPECT_NE(error.find("version 9"), std::string::npos) << error;
+  RigEstimator other_rig({"front", "left", "rear"}, RigEstimatorOptions{});
+  EXPECT_FALSE(Restore(&other_rig, state, &error));
+  EXPECT_NE(error.find("different rig"), std::string::npos) << error;
+  EXPECT_FALSE(Restore(&fresh, "garbage", &error));
+  EXPECT_EQ(fresh.Estimate().rig.slaves[0].motions.used, 0);  // unchanged
+}
+
+uint64_t Fnv1a(const std::string& s) {  // the state files' checksum (FNV-1a, 64 bit)
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// A version-2 state (no translation-direction moments) is read: the moments are derived from
+// the others, so the translational model's estimate is the same and its σ close.
+TEST(EstimatorStateFile, ReadsVersionTwoStates) {
+  DriveOptions d;
+  d.motion = DriveOptions::Motion::kTranslationOnly;
+  d.rotation_noise_deg = 0.02;
+  d.position_noise = 0.002;
+  const SyntheticDrive drive = GenerateDrive({"front", "back"}, {DemoRig()[1]}, d);
+  const auto names = CameraNames(drive.recording);
+  RigEstimator est(names, RigEstimatorOptions{});
+  FeedAll(&est, drive.recording);
+  const std::string state = StateFile(est);
+
+  // The same state as version 2 wrote it: no "Ddir" lines, header 2, its checksum.
+  std::istringstream in(state);
+  std::string line, body;
+  std::getline(in, line);
+  ASSERT_EQ(line, "rigcal-estimator-state " + std::to_string(kEstimatorStateVersion));
+  int removed = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("checksum ", 0) == 0) break;
+    if (line.rfind("Ddir ", 0) == 0) {
+      ++removed;
+      continue;
+    }
+    body += line + '\n';
+  }
+  ASSERT_EQ(removed, 2);  // long and short statistics
+  std::ostringstream v2;
+  v2 << "rigcal-estimator-state 2\n" << body << "checksum " << std::hex << Fnv1a(body) << '\n';
+
+  RigEstimator restored(names, RigEstimatorOptions{});
+  std::string error;
+  ASSERT_TRUE(Restore(&restored, v2.str(), &error)) << error;
+  const auto& a = est.Estimate().rig.slaves[0];
+  const auto& b = restored.Estimate().rig.slaves[0];
+  ASSERT_EQ(b.motion_model, MotionModel::kTranslational);
+  EXPECT_LT(AngleBetween(a.estimate.q, b.estimate.q), 1e-12);
+  EXPECT_NEAR(b.rot_std_deg, a.rot_std_deg, 0.05 * a.rot_std_deg);
+  EXPECT_FALSE(Restore(&restored, "rigcal-estimator-state 1\n" + body, &error));
+  EXPECT_NE(error.find("version 1"), std::string::npos) << error;
+}
+
+// A state file written by the estimator before its state became a plain struct (a drive with
+// scale segments, two of them closed): read, restored, and written again byte for byte.
+TEST(EstimatorStateFile, ReadsAndRewritesEarlierFilesExactly) {
+  std::ifstream in(std::string(RIGCAL_SOURCE_DIR) + "/tests/io/fixtures/estimator_state_v3.txt",
+                   std::ios::binary);
+  ASSERT_TRUE(in.good());
+  std::ostringstream text;
+  text << in.rdbuf();
+  const Expected<RigEstimatorState> state = ParseEstimatorState(text.str());
+  ASSERT_TRUE(state.ok()) << state.error();
+  EXPECT_EQ(FormatEstimatorState(*state), text.str());
+  ASSERT_EQ(state->cameras, (std::vector<std::string>{"front", "left"}));
+  ASSERT_EQ(state->slaves.size(), 1u);
+  EXPECT_EQ(state->slaves[0].long_stats.closed_scales.size(), 2u);
+  EXPECT_EQ(state->slaves[0].long_stats.segments.size(), 1u);
+
+  RigEstimatorOptions options;
+  options.max_open_segments = 1;
+  RigEstimator est({"front", "left"}, options);
+  const Status restored = est.RestoreState(*state);
+  ASSERT_TRUE(restored.ok()) << restored.message();
+  const SlaveCalibration& r = est.Estimate().rig.slaves[0];
+  ASSERT_TRUE(r.usable()) << r.message;
+  EXPECT_EQ(r.motions.used, 537);
+  EXPECT_EQ(StateFile(est), text.str());
+}
+
+}  // namespace
+}  // namespace rigcal::tools

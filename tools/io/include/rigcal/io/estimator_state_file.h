@@ -1,0 +1,35 @@
+#pragma once
+// The estimator state file: a RigEstimatorState (calib/estimator_state.h) as versioned plain
+// text with a checksum, so that `rigcal calib --resume` continues where a previous run stopped.
+//
+//   rigcal-estimator-state <version>
+//   cameras <count> <name>...
+//   master_segment <segment> <0|1>
+//   slave <i>            then its counts, noise levels, segment, model and the long and short
+//   ...                  statistics (every sum, 17 significant digits: exact round trip)
+//   checksum <FNV-1a 64 of the lines between the header and this one, hex>
+//
+// Version 3 holds the translation-direction moments (Ddir, the translational model's σ);
+// version-2 files are read too, with those moments derived from the others
+// (DirectionMomentsFromCrossMoments).
+
+#include <string>
+#include <string_view>
+
+#include "rigcal/calib/estimator_state.h"
+#include "rigcal/calib/status.h"
+
+namespace rigcal::tools {
+
+inline constexpr int kEstimatorStateVersion = 3;        // written
+inline constexpr int kOldestEstimatorStateVersion = 2;  // oldest read
+
+// The state as the text of a state file (version kEstimatorStateVersion).
+std::string FormatEstimatorState(const RigEstimatorState& state);
+
+// The state in the text of a state file. Errors: not a state file, a version this build does
+// not read, a checksum mismatch (corrupt or truncated file), malformed content. Whether the
+// state fits an estimator (its cameras) is RigEstimator::RestoreState's to say.
+Expected<RigEstimatorState> ParseEstimatorState(std::string_view text);
+
+}  // namespace rigcal::tools

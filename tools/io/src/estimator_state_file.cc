@@ -1,0 +1,243 @@
+// Reading and writing the estimator state file (estimator_state_file.h).
+#include "rigcal/io/estimator_state_file.h"
+
+#include <cmath>
+#include <cstdint>
+#include <iterator>
+#include <sstream>
+
+namespace rigcal::tools {
+namespace {
+
+constexpr const char* kMagic = "rigcal-estimator-state";
+
+uint64_t Fnv1a(std::string_view s) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// A matrix as "<label> v0 v1 ...\n", column-major.
+template <typename Derived>
+void Write(std::ostream& out, const char* label, const Eigen::MatrixBase<Derived>& m) {
+  out << label;
+  for (Eigen::Index i = 0; i < m.size(); ++i) out << ' ' << m.derived().data()[i];
+  out << '\n';
+}
+
+template <typename Derived>
+bool Read(std::istream& in, const char* label, Eigen::MatrixBase<Derived>& m) {
+  std::string word;
+  if (!(in >> word) || word != label) return false;
+  for (Eigen::Index i = 0; i < m.size(); ++i) {
+    if (!(in >> m.derived().data()[i]) || !std::isfinite(m.derived().data()[i])) return false;
+  }
+  return true;
+}
+
+bool ReadScalar(std::istream& in, const char* label, double* v) {
+  std::string word;
+  return (in >> word) && word == label && (in >> *v) && std::isfinite(*v);
+}
+
+void WriteSums(std::ostream& out, const MotionSums& s) {
+  Write(out, "M", s.rotation);
+  Write(out, "v00", s.planar.v00);
+  Write(out, "vii", s.planar.vii);
+  Write(out, "v0i", s.planar.v0i);
+  Write(out, "K", s.planar.k);
+  Write(out, "c0c0", s.planar.c0c0);
+  Write(out, "Hplmarg", s.planar.h_marg);
+  Write(out, "gplmarg", s.planar.g_marg);
+  out << "cplmarg " << s.planar.c_marg << '\n';
+  Write(out, "Hcc", s.h_cc);
+  Write(out, "gc", s.g_c);
+  out << "c0sq " << s.c0_sq << '\n';
+  Write(out, "Sdir", s.s_dir);
+  Write(out, "Ddir", s.d_dir);
+  Write(out, "Hmarg", s.h_marg);
+  Write(out, "gmarg", s.g_marg);
+  out << "c0sqmarg " << s.c0_sq_marg << '\n';
+  out << "weight " << s.weight << "\nmaxrot " << s.max_rotation << "\nmotions " << s.motions
+      << '\n';
+  out << "segments " << s.segments.size() << '\n';
+  for (const auto& [id, seg] : s.segments) {
+    out << "segment " << id << '\n';
+    Write(out, "P", seg.P);
+    Write(out, "Q", seg.Q);
+    Write(out, "N", seg.N);
+    out << "n " << seg.n << "\nlc " << seg.len_cross << "\nls " << seg.len_sq << "\nw "
+        << seg.weight << "\nscale " << seg.last_scale << '\n';
+  }
+  out << "closed " << s.closed_scales.size() << '\n';
+  for (const auto& [id, v] : s.closed_scales) out << id << ' ' << v << '\n';
+}
+
+// The sums written by WriteSums; false on a malformed text. "Ddir" follows "Sdir" since state
+// version 3; a version-2 text goes on with "Hmarg" and the moments are derived.
+bool ReadSums(const std::string& text, MotionSums* out) {
+  std::istringstream in(text);
+  MotionSums s;
+  const bool has_d = text.find("\nDdir ") != std::string::npos;
+  double motions = 0.0, count = 0.0;
+  if (!Read(in, "M", s.rotation) || !Read(in, "v00", s.planar.v00) ||
+      !Read(in, "vii", s.planar.vii) || !Read(in, "v0i", s.planar.v0i) ||
+      !Read(in, "K", s.planar.k) || !Read(in, "c0c0", s.planar.c0c0) ||
+      !Read(in, "Hplmarg", s.planar.h_marg) || !Read(in, "gplmarg", s.planar.g_marg) ||
+      !ReadScalar(in, "cplmarg", &s.planar.c_marg) || !Read(in, "Hcc", s.h_cc) ||
+      !Read(in, "gc", s.g_c) || !ReadScalar(in, "c0sq", &s.c0_sq) || !Read(in, "Sdir", s.s_dir) ||
+      (has_d && !Read(in, "Ddir", s.d_dir)) || !Read(in, "Hmarg", s.h_marg) ||
+      !Read(in, "gmarg", s.g_marg) || !ReadScalar(in, "c0sqmarg", &s.c0_sq_marg) ||
+      !ReadScalar(in, "weight", &s.weight) || !ReadScalar(in, "maxrot", &s.max_rotation) ||
+      !ReadScalar(in, "motions", &motions) || !ReadScalar(in, "segments", &count)) {
+    return false;
+  }
+  if (!has_d) s.d_dir = DirectionMomentsFromCrossMoments(s.s_dir, s.weight);
+  s.motions = static_cast<int>(motions);
+  if (count < 0 || count > 1e6) return false;
+  for (int k = 0; k < static_cast<int>(count); ++k) {
+    double id = 0.0;
+    SegmentSums seg;
+    if (!ReadScalar(in, "segment", &id) || !Read(in, "P", seg.P) || !Read(in, "Q", seg.Q) ||
+        !Read(in, "N", seg.N) || !ReadScalar(in, "n", &seg.n) ||
+        !ReadScalar(in, "lc", &seg.len_cross) || !ReadScalar(in, "ls", &seg.len_sq) ||
+        !ReadScalar(in, "w", &seg.weight) || !ReadScalar(in, "scale", &seg.last_scale)) {
+      return false;
+    }
+    s.segments[static_cast<int>(id)] = seg;
+  }
+  if (!ReadScalar(in, "closed", &count) || count < 0 || count > 1e6) return false;
+  for (int k = 0; k < static_cast<int>(count); ++k) {
+    int id = 0;
+    double v = 0.0;
+    if (!(in >> id >> v) || !std::isfinite(v)) return false;
+    s.closed_scales[id] = v;
+  }
+  *out = std::move(s);
+  return true;
+}
+
+// Reads the slave blocks that follow the master_segment line (`rest`), one per slave camera.
+Status ReadSlaves(std::string rest, RigEstimatorState* state) {
+  const std::vector<std::string>& names = state->cameras;
+  for (size_t i = 0; i + 1 < names.size(); ++i) {
+    const std::string& name = names[i + 1];
+    SlaveEstimatorState& s = state->slaves.emplace_back();
+    std::istringstream sin(rest);
+    std::string word;
+    size_t idx = 0;
+    if (!(sin >> word >> idx) || word != "slave" || idx != i) {
+      return Error{"malformed slave block"};
+    }
+    MotionCounts& c = s.counts;
+    if (!(sin >> word >> c.total >> c.used >> c.small_rotation >> c.angle_mismatch >>
+          c.residual_outlier) ||
+        word != "counts") {
+      return Error{"malformed counts of slave " + name};
+    }
+    if (!(sin >> word >> s.angle_var.value >> s.angle_var.count >> s.rot_var.value >>
+          s.rot_var.count >> s.pos_var.value >> s.pos_var.count >> s.ci_sq.value >>
+          s.ci_sq.count) ||
+        word != "noise") {
+      return Error{"malformed noise of slave " + name};
+    }
+    if (!(sin >> word >> s.segment) || word != "segment") return Error{"malformed segment"};
+    int rotating = 0, general_model = 0;
+    if (!(sin >> word >> rotating >> general_model) || word != "model") {
+      return Error{"malformed model of slave " + name};
+    }
+    s.rotating = rotating != 0;
+    s.general_model = general_model != 0;
+    const std::string remaining((std::istreambuf_iterator<char>(sin)),
+                                std::istreambuf_iterator<char>());
+    const size_t long_pos = remaining.find("long\n");
+    const size_t short_pos = remaining.find("short\n");
+    if (long_pos == std::string::npos || short_pos == std::string::npos) {
+      return Error{"malformed statistics of slave " + name};
+    }
+    const size_t next = remaining.find("\nslave ", short_pos);
+    const std::string long_text = remaining.substr(long_pos + 5, short_pos - long_pos - 5);
+    const std::string short_text = remaining.substr(
+        short_pos + 6, next == std::string::npos ? std::string::npos : next + 1 - short_pos - 6);
+    if (!ReadSums(long_text, &s.long_stats) || !ReadSums(short_text, &s.short_stats)) {
+      return Error{"malformed statistics of slave " + name};
+    }
+    rest = next == std::string::npos ? "" : remaining.substr(next + 1);
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+std::string FormatEstimatorState(const RigEstimatorState& state) {
+  std::ostringstream body;
+  body.precision(17);
+  body << "cameras " << state.cameras.size();
+  for (const auto& n : state.cameras) body << ' ' << n;
+  body << "\nmaster_segment " << state.master_segment << ' ' << (state.have_master_segment ? 1 : 0)
+       << '\n';
+  for (size_t i = 0; i < state.slaves.size(); ++i) {
+    const SlaveEstimatorState& s = state.slaves[i];
+    const MotionCounts& c = s.counts;
+    body << "slave " << i << "\ncounts " << c.total << ' ' << c.used << ' ' << c.small_rotation
+         << ' ' << c.angle_mismatch << ' ' << c.residual_outlier << "\nnoise " << s.angle_var.value
+         << ' ' << s.angle_var.count << ' ' << s.rot_var.value << ' ' << s.rot_var.count << ' '
+         << s.pos_var.value << ' ' << s.pos_var.count << ' ' << s.ci_sq.value << ' '
+         << s.ci_sq.count << "\nsegment " << s.segment << "\nmodel " << (s.rotating ? 1 : 0) << ' '
+         << (s.general_model ? 1 : 0) << "\nlong\n";
+    WriteSums(body, s.long_stats);
+    body << "short\n";
+    WriteSums(body, s.short_stats);
+  }
+  const std::string text = body.str();
+  std::ostringstream out;
+  out << kMagic << ' ' << kEstimatorStateVersion << '\n'
+      << text << "checksum " << std::hex << Fnv1a(text) << '\n';
+  return out.str();
+}
+
+Expected<RigEstimatorState> ParseEstimatorState(std::string_view view) {
+  const std::string text(view);
+  std::istringstream in(text);
+  std::string magic;
+  int version = 0;
+  if (!(in >> magic >> version) || magic != kMagic) {
+    return Error{"not a rigcal estimator state (bad header)"};
+  }
+  if (version < kOldestEstimatorStateVersion || version > kEstimatorStateVersion) {
+    return Error{"state version " + std::to_string(version) + ", this build reads versions " +
+                 std::to_string(kOldestEstimatorStateVersion) + " to " +
+                 std::to_string(kEstimatorStateVersion)};
+  }
+  const size_t body_start = text.find('\n') + 1;
+  const size_t sum_pos = text.rfind("checksum ");
+  if (sum_pos == std::string::npos || sum_pos < body_start) return Error{"missing checksum"};
+  const std::string body = text.substr(body_start, sum_pos - body_start);
+  std::istringstream sum_in(text.substr(sum_pos + 9));
+  uint64_t stored = 0;
+  if (!(sum_in >> std::hex >> stored) || stored != Fnv1a(body)) {
+    return Error{"checksum mismatch (file corrupt or truncated)"};
+  }
+  RigEstimatorState state;
+  std::istringstream b(body);
+  std::string word;
+  size_t count = 0;
+  if (!(b >> word >> count) || word != "cameras") return Error{"malformed camera list"};
+  for (size_t i = 0; i < count; ++i) {
+    if (!(b >> word)) return Error{"malformed camera list"};
+    state.cameras.push_back(word);
+  }
+  int have = 0;
+  if (!(b >> word >> state.master_segment >> have) || word != "master_segment") {
+    return Error{"malformed master_segment"};
+  }
+  state.have_master_segment = have != 0;
+  const std::string rest((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
+  if (const Status read = ReadSlaves(rest, &state); !read.ok()) return read;
+  return state;
+}
+
+}  // namespace rigcal::tools
