@@ -7,7 +7,7 @@
 #include <numeric>
 
 #include "model_explanation.h"
-#include "motion_geometry.h"
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/calib/quaternion.h"
 #include "scale_measurement.h"
 
@@ -65,7 +65,7 @@ int ChoosePartitions(const std::vector<MotionData>& motions, double epsilon, boo
     const std::vector<double> scales = SolveScales(&sorted, n, setting);
     double worst = 0.0;
     if (!scales.empty()) {
-      const double center = Robust(scales).median;
+      const double center = MedianAndSigma(scales).median;
       for (double v : scales) worst = std::max(worst, std::abs(v - center) / std::abs(center));
     }
     if (worst > options.scale_deviation_threshold) {
@@ -90,14 +90,14 @@ int ChoosePartitions(const std::vector<MotionData>& motions, double epsilon, boo
   }
   std::vector<double> all;
   for (const auto& m : measurements) all.push_back(m.value);
-  const double overall = Robust(all).median;
+  const double overall = MedianAndSigma(all).median;
   double worst = 0.0;
   bool significant = false;
   for (int p = 0; p < parts; ++p) {
     const int lo = p * count / parts, hi = (p + 1) * count / parts;
     std::vector<double> v;
     for (int k = lo; k < hi; ++k) v.push_back(measurements[k].value);
-    const auto stats = Robust(v);
+    const auto stats = MedianAndSigma(v);
     const double dev = std::abs(stats.median - overall) / std::abs(overall);
     const double standard_error = 1.2533 * stats.sigma / std::sqrt(static_cast<double>(v.size()));
     worst = std::max(worst, dev);
@@ -116,7 +116,7 @@ int ChoosePartitions(const std::vector<MotionData>& motions, double epsilon, boo
     double lls_worst = 0.0;
     if (!scales.empty()) {
       std::vector<double> sorted_scales = scales;
-      const double center = Robust(sorted_scales).median;
+      const double center = MedianAndSigma(sorted_scales).median;
       for (double v : scales)
         lls_worst = std::max(lls_worst, std::abs(v - center) / std::abs(center));
     }

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "model_explanation.h"
-#include "motion_geometry.h"
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal::internal {
@@ -36,7 +36,7 @@ std::vector<MotionData> FormMotions(const std::vector<RigMotion>& motions, Motio
 
 int RemoveOutliers(std::vector<MotionData>* motions, const std::vector<double>& values,
                    double factor, double floor, bool two_sided) {
-  const RobustStats stats = Robust(values);
+  const RobustStats stats = MedianAndSigma(values);
   const double threshold = std::max(factor * stats.sigma, floor);
   std::vector<MotionData> kept;
   kept.reserve(motions->size());

@@ -182,7 +182,7 @@ void AssembleResult(const CalibrationOptions& options, const BatchSetting& setti
   r->termination = parallel ? Termination::kDegenerate
                    : (refinement.solved && !refinement.refined.converged)
                        ? Termination::kNoConvergence
-                       : Termination::kConverged;
+                       : Termination::kSolved;
 }
 
 }  // namespace rigcal::internal

@@ -7,10 +7,14 @@
 
 namespace rigcal::internal {
 
-uint32_t ConvergenceFlags(const RigEstimatorOptions& o, const SlaveCalibration& published,
+uint32_t ConvergenceCheck(const RigEstimatorOptions& o, SlaveCalibration* out,
                           const SlaveCalibration& linear, double rot_factor, bool decalibrated,
                           ConvergenceState* s) {
-  if (!published.usable()) return kFlagInitialising;
+  const SlaveCalibration& published = *out;
+  if (!published.solved()) {
+    out->state = decalibrated ? SlaveState::kDecalibrated : SlaveState::kInitialising;
+    return 0;
+  }
   uint32_t flags = 0;
   const double change = AngleBetween(linear.estimate.q, s->last_q) * kDegPerRad;
   s->stable = change <= std::max(rot_factor * linear.rot_std_deg, 0.01) ? s->stable + 1 : 0;
@@ -23,7 +27,9 @@ uint32_t ConvergenceFlags(const RigEstimatorOptions& o, const SlaveCalibration& 
   if (published.motions.used >= o.converged_min_motions &&
       published.rot_std_deg <= o.converged_rot_std_deg && position_ok &&
       s->stable >= o.converged_stable_keyframes && !decalibrated) {
-    flags |= kFlagConverged;
+    out->state = SlaveState::kConverged;
+  } else {
+    out->state = decalibrated ? SlaveState::kDecalibrated : SlaveState::kUsable;
   }
   return flags;
 }

@@ -1,7 +1,8 @@
 #pragma once
-// Stage 6 of the recursive estimator (RigEstimator): the state flags of a published estimate
-// (SlaveFlags): initialising until usable; then translational-only or planar by the motion
-// model, and converged once it rests on converged_min_motions motions, its σ (inflated,
+// Stage 6 of the recursive estimator (RigEstimator): the state of a published estimate
+// (slave_state.h) and its facts (SlaveFlags): initialising until solved, decalibrated while it
+// re-converges after a decalibration; else translational-only or planar by the motion model,
+// and converged (not just usable) once it rests on converged_min_motions motions, its σ (inflated,
 // online_uncertainty.h) are below converged_rot_std_deg and converged_pos_std_fraction, the
 // linear estimate has been stable over converged_stable_keyframes keyframes, and it is not
 // re-converging after a decalibration.
@@ -19,10 +20,10 @@ struct ConvergenceState {
   Eigen::Quaterniond last_q = Eigen::Quaterniond::Identity();  // the linear rotation then
 };
 
-// The flags kFlagInitialising, kFlagTranslationalOnly, kFlagPlanar and kFlagConverged of
+// Sets published->state and returns the facts kFlagTranslationalOnly and kFlagPlanar of
 // `published`; counts the stability of `linear` (a refinement being published is no change),
 // whose rotation σ is inflated by `rotation_inflation`.
-uint32_t ConvergenceFlags(const RigEstimatorOptions& options, const SlaveCalibration& published,
+uint32_t ConvergenceCheck(const RigEstimatorOptions& options, SlaveCalibration* published,
                           const SlaveCalibration& linear, double rotation_inflation,
                           bool decalibrated, ConvergenceState* state);
 

@@ -20,7 +20,7 @@ WindowComparison CompareWindows(const RigEstimatorOptions& o, const SlaveCalibra
   const double long_sigma = overlap * long_est.rot_std_deg;
   const bool settled = long_est.motions.used >= o.converged_min_motions && long_sigma > 0.0 &&
                        long_sigma <= o.converged_rot_std_deg;
-  if (!(settled && model_settled && long_est.usable() && short_est.usable() &&
+  if (!(settled && model_settled && long_est.solved() && short_est.solved() &&
         !long_est.observability.planar && !short_est.observability.planar &&
         short_est.motions.used >= o.converged_min_motions / 2)) {
     return out;

@@ -1,5 +1,6 @@
 // The motion-model explanation of the batch and the online results (model_explanation.h).
 #include "model_explanation.h"
+#include "rigcal/calib/format.h"
 
 #include <cmath>
 #include <sstream>
@@ -8,11 +9,8 @@
 namespace rigcal::internal {
 namespace {
 
-std::string Vec3Text(const Eigen::Vector3d& v) {
-  std::string text = "[";  // appended, not "[" + ...: GCC 12 warns (-Wrestrict) on that
-  text += FixedText(v.x(), 3) + ", " + FixedText(v.y(), 3) + ", " + FixedText(v.z(), 3) + "]";
-  return text;
-}
+std::string VectorText3(const Eigen::Vector3d& v) { return VectorText(v, 3); }
+
 
 // Thesis 5.2: the largest rotation against the equal-error boundary at the rotation noise.
 std::string BoundaryReason(const ModelExplanation& e) {
@@ -38,7 +36,7 @@ std::string Consequence(const ModelExplanation& e) {
     return ": rotation and scale only, position unobservable";
   }
   if (e.model == MotionModel::kPlanar) {
-    std::string text = ": C along the rotation axis " + Vec3Text(axis) + " is unobservable";
+    std::string text = ": C along the rotation axis " + VectorText3(axis) + " is unobservable";
     if (!e.nominal) return text + ", reported as 0 (unknown; a nominal mounting would fill it in)";
     text += ", taken from the nominal mounting (" + FixedText(e.nominal_along_axis, 4) +
             " along the axis";
@@ -46,7 +44,7 @@ std::string Consequence(const ModelExplanation& e) {
     return text + ")";
   }
   if (e.figures.axis_std_ratio > 3.0 && std::isfinite(e.axis_offset_std)) {
-    std::string text = "; nearly planar: C along the mean rotation axis " + Vec3Text(axis) +
+    std::string text = "; nearly planar: C along the mean rotation axis " + VectorText3(axis) +
                        " has sigma " + FixedText(e.axis_offset_std, 4);
     if (e.nominal && e.nominal_sigma > 0.0) text += " (with the nominal mounting as a prior)";
     return text;
@@ -56,13 +54,7 @@ std::string Consequence(const ModelExplanation& e) {
 
 }  // namespace
 
-std::string FixedText(double v, int precision) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
+
 
 std::string ExplainModel(const ModelExplanation& e) {
   std::vector<std::string> why;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "rigcal/calib/calibration_options.h"
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/calibration_result.h"
 
 namespace rigcal::internal {
@@ -46,7 +47,5 @@ struct ModelExplanation {
 //   "general motion; nearly planar: C along the mean rotation axis [...] has sigma 0.0123"
 std::string ExplainModel(const ModelExplanation& e);
 
-// The number in the fixed notation of the messages, `precision` digits after the point.
-std::string FixedText(double v, int precision = 2);
 
 }  // namespace rigcal::internal

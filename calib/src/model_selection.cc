@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-#include "motion_geometry.h"
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal::internal {
@@ -46,7 +46,7 @@ double RotationNoiseDeg(const std::vector<MotionData>& motions) {
   std::vector<double> diff;
   diff.reserve(motions.size());
   for (const auto& m : motions) diff.push_back((m.angle0 - m.anglei) * kDegPerRad);
-  return Robust(diff).sigma;
+  return MedianAndSigma(diff).sigma;
 }
 
 RotatingSolution SolveRotating(const MotionStatistics& stats, MotionModel requested,

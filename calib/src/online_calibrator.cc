@@ -117,7 +117,7 @@ void OnlineCalibrator::RefineNow() {
       MutexLock lock(estimator_mutex_);
       job = estimator_.MakeRefinementJob(static_cast<int>(i));
     }
-    if (!job.start.usable() || static_cast<int>(job.motions.size()) + job.prior.motions < 10) {
+    if (!job.start.solved() || static_cast<int>(job.motions.size()) + job.prior.motions < 10) {
       continue;
     }
     const SlaveCalibration refined = RefineWindow(job);

@@ -3,6 +3,8 @@
 //   batch_result (with model_explanation).
 #include "rigcal/calib/rig_calibrator.h"
 
+#include <cmath>
+
 #include <sstream>
 
 #include "batch_linear_solution.h"
@@ -15,9 +17,19 @@
 #include "rigcal/calib/pair_selection.h"
 
 namespace rigcal {
+namespace {
 
-SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
-                                const CalibrationOptions& options, const std::string& name) {
+// The batch state (slave_state.h): converged when the solve produced an estimate whose
+// covariance was computed (a finite, positive rotation σ), usable without it, else initialising.
+SlaveState BatchState(const SlaveCalibration& r) {
+  if (!r.solved()) return SlaveState::kInitialising;
+  const bool sigma_known = std::isfinite(r.rot_std_deg) && r.rot_std_deg > 0.0;
+  return sigma_known ? SlaveState::kConverged : SlaveState::kUsable;
+}
+
+// CalibrateSlave's stages, without the state.
+SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
+                            const CalibrationOptions& options, const std::string& name) {
   SlaveCalibration r;
   r.name = name;
   if (const Status checked = options.Check(); !checked.ok()) {
@@ -57,6 +69,15 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   return r;
 }
 
+}  // namespace
+
+SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
+                                const CalibrationOptions& options, const std::string& name) {
+  SlaveCalibration r = SolveSlave(motions, options, name);
+  r.state = BatchState(r);
+  return r;
+}
+
 RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOptions& options) {
   RigCalibration out;
   out.master = recording.master.name;
@@ -82,8 +103,8 @@ RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOpti
 
 std::string ToString(Termination t) {
   switch (t) {
-    case Termination::kConverged:
-      return "converged";
+    case Termination::kSolved:
+      return "solved";
     case Termination::kNoConvergence:
       return "no_convergence";
     case Termination::kInsufficientMotion:

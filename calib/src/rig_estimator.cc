@@ -30,9 +30,9 @@ using internal::MotionData;
 // (model_explanation.h). The online message states the equal-error boundary for the
 // translational model and the model selection's figures (`selection`) for the planar one.
 std::string OnlineMessage(const RigEstimatorOptions& o, const SlaveCalibration& published,
-                          uint32_t flags, const std::string& selection,
+                          const std::string& selection,
                           const std::optional<Similarity>& nominal) {
-  if (!published.usable()) return published.message;
+  if (!published.solved()) return published.message;
   internal::ModelExplanation e;
   e.model = published.motion_model;
   e.figures = published.observability;
@@ -46,11 +46,11 @@ std::string OnlineMessage(const RigEstimatorOptions& o, const SlaveCalibration& 
       e.model == MotionModel::kPlanar ? published.unobservable_from_prior : nominal.has_value();
   if (nominal) e.nominal_along_axis = published.observability.planar_axis.dot(nominal->C);
   e.nominal_sigma = o.nominal_sigma;
-  std::string text = (flags & kFlagConverged ? "converged: " : "converging: ") +
+  std::string text = (published.state == SlaveState::kConverged ? "converged: " : "converging: ") +
                      std::to_string(published.motions.used) + " motions used, " +
                      std::to_string(published.motions.rejected()) + " rejected; " +
                      internal::ExplainModel(e);
-  if (flags & kFlagDecalibrated) text += "; DECALIBRATED (camera moved), re-converging";
+  if (published.state == SlaveState::kDecalibrated) text += "; DECALIBRATED (camera moved), re-converging";
   return text;
 }
 
@@ -162,8 +162,8 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
 
   // Gates.
   const bool have_estimate =
-      s.linear.usable() && (s.linear.motion_model != MotionModel::kTranslational) == s.rotating;
-  if (s.linear.usable()) internal::AlignSignsWith(ToWxyz(s.linear.estimate.q), &data);
+      s.linear.solved() && (s.linear.motion_model != MotionModel::kTranslational) == s.rotating;
+  if (s.linear.solved()) internal::AlignSignsWith(ToWxyz(s.linear.estimate.q), &data);
   const internal::GateOutcome gate =
       internal::GateMotion(o, s.gates, md, s.rotating, have_estimate ? &s.linear : nullptr);
   switch (gate.verdict) {
@@ -260,11 +260,10 @@ void RigEstimator::Publish(int index) {
   }
   const bool decalibrated =
       internal::RecentlyDecalibrated(o, s.decalibration, online.last_update_ns);
-  if (decalibrated) online.flags |= kFlagDecalibrated;
 
   // The background refinement when it agrees with the linear solution, with inflated σ.
   SlaveCalibration published = s.linear;
-  if (s.refined && s.linear.usable() &&
+  if (s.refined && s.linear.solved() &&
       internal::RefinementAgrees(o, *s.refined, s.linear, inflation.rotation)) {
     published = *s.refined;
     published.motions = s.linear.motions;
@@ -274,9 +273,9 @@ void RigEstimator::Publish(int index) {
   published.motions.used = s.counts.used;
   internal::InflateSigmas(inflation, &published);
 
-  online.flags |= internal::ConvergenceFlags(o, published, s.linear, inflation.rotation,
+  online.flags |= internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation,
                                              decalibrated, &s.convergence);
-  published.message = OnlineMessage(o, published, online.flags, s.linear.message, nominal);
+  published.message = OnlineMessage(o, published, s.linear.message, nominal);
   estimate_.rig.slaves[index] = published;
   estimate_.online[index] = online;
   PublishCounts(index);
@@ -298,7 +297,7 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave) const {
 }
 
 bool RigEstimator::ApplyRefinement(const RefinementJob& job, const SlaveCalibration& refined) {
-  if (job.generation != generation_ || !refined.usable()) return false;
+  if (job.generation != generation_ || !refined.solved()) return false;
   Slave& s = *slaves_.at(job.slave);
   s.refined = refined;
   Publish(job.slave);

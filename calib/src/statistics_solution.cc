@@ -110,7 +110,7 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
   r.scale_model = r.scales.size() > 1 ? ScaleModel::kSegments : ScaleModel::kFixed;
   const bool finite = r.estimate.q.coeffs().allFinite() && r.estimate.C.allFinite() &&
                       std::isfinite(r.estimate.scale);
-  r.termination = ok && finite ? Termination::kConverged : Termination::kDegenerate;
+  r.termination = ok && finite ? Termination::kSolved : Termination::kDegenerate;
   return r;
 }
 

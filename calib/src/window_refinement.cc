@@ -17,7 +17,7 @@ namespace rigcal {
 
 SlaveCalibration RefineWindow(const RefinementJob& job) {
   SlaveCalibration out = job.start;
-  if (!job.start.usable() || static_cast<int>(job.motions.size()) + job.prior.motions < 3) {
+  if (!job.start.solved() || static_cast<int>(job.motions.size()) + job.prior.motions < 3) {
     return out;
   }
   std::vector<internal::MotionData> data = internal::ToMotionData(job.motions);
@@ -111,7 +111,7 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
       out.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
     }
   }
-  out.termination = r.converged ? Termination::kConverged : Termination::kNoConvergence;
+  out.termination = r.converged ? Termination::kSolved : Termination::kNoConvergence;
   return out;
 }
 

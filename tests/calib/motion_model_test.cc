@@ -131,7 +131,7 @@ TEST(MotionModel, OnlineEstimatorChoosesTheGeneralModelWithoutFalseAlarms) {
     bool alarm = false, translational_at_end = true;
     for (size_t k = 0; k < drive.recording.size(); ++k) {
       est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
-      alarm = alarm || (est.Estimate().online[0].flags & kFlagDecalibrated);
+      alarm = alarm || (est.Estimate().rig.slaves[0].state == SlaveState::kDecalibrated);
       translational_at_end = (est.Estimate().online[0].flags & kFlagTranslationalOnly) != 0;
     }
     const SlaveCalibration linear = est.Estimate().rig.slaves[0];
@@ -167,7 +167,7 @@ TEST(MotionModel, OnlineEstimatorKeepsTheTranslationalModelWithoutRotation) {
   EXPECT_TRUE(est.Estimate().online[0].flags & kFlagTranslationalOnly) << r.message;
   EXPECT_EQ(r.motion_model, MotionModel::kTranslational);
   EXPECT_NE(r.message.find("equal-error boundary"), std::string::npos) << r.message;
-  EXPECT_FALSE(est.Estimate().online[0].flags & kFlagDecalibrated);
+  EXPECT_FALSE(est.Estimate().rig.slaves[0].state == SlaveState::kDecalibrated);
 }
 
 }  // namespace

@@ -199,7 +199,7 @@ TEST(PlanarEval, OnlinePlanarThenRamp) {
       for (int i = 0; i < 3; ++i) {
         const uint32_t flags = est.Estimate().online[i].flags;
         const bool planar = flags & kFlagPlanar;
-        if (!(flags & kFlagConverged)) continue;
+        if (est.Estimate().rig.slaves[i].state != SlaveState::kConverged) continue;
         if (planar && flagged[i] < 0.0) flagged[i] = t;
         if (!planar && flagged[i] >= 0.0 && resolved[i] < 0.0) resolved[i] = t;
         if (flagged[i] >= 0.0 && flagged[i] < t && planar != was_planar[i]) ++changes[i];

@@ -127,8 +127,8 @@ TEST(RigEstimator, ConvergesOnGeneralDrive) {
     const auto& r = est.Estimate().rig.slaves[i];
     const auto& online = est.Estimate().online[i];
     ASSERT_TRUE(r.usable()) << r.message;
-    EXPECT_TRUE(online.flags & kFlagConverged) << r.message;
-    EXPECT_FALSE(online.flags & kFlagDecalibrated);
+    EXPECT_EQ(r.state, SlaveState::kConverged) << r.message;
+    EXPECT_EQ(online.decalibration_events, 0);
     const auto e = CompareToTruth(r.estimate, drive.truth[i]);
     EXPECT_LT(e.rot_deg, 0.2) << r.message;
     EXPECT_LT(e.trans_err, 0.03);
@@ -262,7 +262,7 @@ TEST(RigEstimator, StraightDriveDoesNotConverge) {
   EXPECT_EQ(r.motion_model, MotionModel::kTranslational);
   EXPECT_GT(r.rot_std_deg, 5.0) << r.message << "; error "
                                 << CompareToTruth(r.estimate, drive.truth[0]).rot_deg;
-  EXPECT_FALSE(est.Estimate().online[0].flags & kFlagConverged) << r.message;
+  EXPECT_FALSE(est.Estimate().rig.slaves[0].state == SlaveState::kConverged) << r.message;
   EXPECT_NE(r.message.find("undetermined"), std::string::npos) << r.message;
 }
 
@@ -307,18 +307,18 @@ TEST(RigEstimator, BumpedCameraIsFlaggedAndFollowed) {
   const SyntheticDrive drive = GenerateDrive({"front", "left"}, {DemoRig()[0]}, d);
   RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
   Feed(&est, drive.recording, 0, 2400);
-  ASSERT_TRUE(est.Estimate().online[0].flags & kFlagConverged);
+  ASSERT_TRUE(est.Estimate().rig.slaves[0].state == SlaveState::kConverged);
   EXPECT_LT(CompareToTruth(est.Estimate().rig.slaves[0].estimate, drive.truth[0]).rot_deg, 0.2);
   bool flagged = false;
   for (size_t k = 2400; k < drive.recording.size(); ++k) {
     est.AddSet(drive.recording.t_ns[k], drive.recording.SetAt(k));
-    flagged = flagged || (est.Estimate().online[0].flags & kFlagDecalibrated);
+    flagged = flagged || (est.Estimate().rig.slaves[0].state == SlaveState::kDecalibrated);
   }
   EXPECT_TRUE(flagged);
   EXPECT_GE(est.Estimate().online[0].decalibration_events, 1);
   const auto& r = est.Estimate().rig.slaves[0];
   EXPECT_LT(CompareToTruth(r.estimate, bumped).rot_deg, 0.3) << r.message;
-  EXPECT_TRUE(est.Estimate().online[0].flags & kFlagConverged) << r.message;
+  EXPECT_TRUE(est.Estimate().rig.slaves[0].state == SlaveState::kConverged) << r.message;
 }
 
 TEST(RigEstimator, GarbagePosesDoNotMoveTheEstimate) {
@@ -348,7 +348,7 @@ TEST(RigEstimator, WindowRefinementIsPublishedWhenConsistent) {
   const auto linear = est.Estimate().rig.slaves[0];
   const RefinementJob job = est.MakeRefinementJob(0);
   const SlaveCalibration refined = RefineWindow(job);
-  ASSERT_TRUE(refined.usable());
+  ASSERT_TRUE(refined.solved());
   EXPECT_TRUE(est.ApplyRefinement(job, refined));
   EXPECT_TRUE(est.Estimate().online[0].flags & kFlagRefined);
   const auto e_lin = CompareToTruth(linear.estimate, drive.truth[0]);
@@ -386,7 +386,7 @@ TEST(RigEstimator, WindowPriorMakesAShortWindowRefineLikeAllMotions) {
   const SlaveCalibration r_all = RefineWindow(job_all);
   const SlaveCalibration r_short = RefineWindow(job_short);
   const SlaveCalibration r_window_only = RefineWindow(job_window_only);
-  ASSERT_TRUE(r_all.usable() && r_short.usable() && r_window_only.usable());
+  ASSERT_TRUE(r_all.solved() && r_short.solved() && r_window_only.solved());
   ASSERT_GT(r_all.rot_std_deg, 0.0);
   // The same minimum up to rounding (the sums are accumulated in another order).
   EXPECT_LT(AngleBetween(r_short.estimate.q, r_all.estimate.q), 1e-9);
@@ -413,7 +413,7 @@ TEST(RigEstimator, WindowPriorMakesAShortWindowRefineLikeAllMotions) {
   EXPECT_TRUE(job_restored.motions.empty());
   EXPECT_EQ(job_restored.prior.motions, static_cast<int>(job_all.motions.size()));
   const SlaveCalibration r_restored = RefineWindow(job_restored);
-  ASSERT_TRUE(r_restored.usable());
+  ASSERT_TRUE(r_restored.solved());
   EXPECT_LT(AngleBetween(r_restored.estimate.q, r_all.estimate.q), 1e-9);
   EXPECT_LT((r_restored.estimate.C - r_all.estimate.C).norm(), 1e-9 * r_all.estimate.C.norm());
 }
@@ -450,7 +450,7 @@ TEST(RigEstimator, WindowPriorFollowsForgettingAndClosedSegments) {
   prior_only.robust_loss = false;
   ASSERT_TRUE(prior_only.motions.empty());
   const SlaveCalibration from_prior = RefineWindow(prior_only);
-  ASSERT_TRUE(with_window.usable() && from_prior.usable());
+  ASSERT_TRUE(with_window.solved() && from_prior.solved());
   EXPECT_LT(AngleBetween(with_window.estimate.q, from_prior.estimate.q), 1e-8);
   EXPECT_LT((with_window.estimate.C - from_prior.estimate.C).norm(),
             1e-8 * with_window.estimate.C.norm());
@@ -485,7 +485,7 @@ TEST(RigEstimator, WindowPriorWithPlanarAndTranslationalModels) {
     job_all.robust_loss = job_short.robust_loss = false;
     ASSERT_GT(job_short.prior.motions, 0);
     const SlaveCalibration r_all = RefineWindow(job_all), r_short = RefineWindow(job_short);
-    ASSERT_TRUE(r_all.usable() && r_short.usable()) << r_all.message;
+    ASSERT_TRUE(r_all.solved() && r_short.solved()) << r_all.message;
     EXPECT_EQ(r_all.motion_model, motion == DriveOptions::Motion::kPlanarYaw
                                       ? MotionModel::kPlanar
                                       : MotionModel::kTranslational);

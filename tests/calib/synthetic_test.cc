@@ -66,7 +66,7 @@ TEST(Synthetic, DriveIsDeterministicAndConsistent) {
 TEST(SyntheticCar, DriveCarRigIsConsistent) {
   const SyntheticDrive drive = DriveCarRig(CarPath({.duration_s = 30.0, .rate_hz = 10.0}),
                                            {.rotation_noise_deg = 0.0, .position_noise = 0.0});
-  ASSERT_EQ(drive.recording.Validate(), "");
+  ASSERT_TRUE(drive.recording.Check().ok()) << drive.recording.Check().message();
   ASSERT_EQ(drive.recording.size(), 300u);
   ASSERT_EQ(drive.truth.size(), 3u);
   EXPECT_EQ(drive.recording.master.name, "front");

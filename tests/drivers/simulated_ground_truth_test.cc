@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/io/ground_truth_files.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
 #include "support/ideal_cameras.h"
@@ -47,7 +48,7 @@ TEST(SimulatedGroundTruth, FilesRoundTrip) {
   const fs::path dir =
       fs::temp_directory_path() / ("rigcal_sim_truth_" + std::to_string(::getpid())) / "sub";
   fs::remove_all(dir.parent_path());
-  const Status written = rig->WriteGroundTruth(dir.string());
+  const Status written = tools::WriteGroundTruth(*rig, dir.string());
   ASSERT_TRUE(written.ok()) << written.message();
 
   // truth.yaml: one entry per slave, readable by `rigcal solve --truth`.
@@ -104,7 +105,7 @@ TEST(SimulatedGroundTruth, FilesRoundTrip) {
     EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
   }
   // An unwritable directory is an error that names it.
-  const Status unwritable = rig->WriteGroundTruth("/proc/rigcal_no_such_dir");
+  const Status unwritable = tools::WriteGroundTruth(*rig, "/proc/rigcal_no_such_dir");
   EXPECT_FALSE(unwritable.ok());
   EXPECT_NE(unwritable.message().find("/proc/rigcal_no_such_dir"), std::string::npos)
       << unwritable.message();

@@ -48,7 +48,8 @@ Fixture MakeFixture() {
   left.motions.residual_outlier = 3;
   left.motion_model = MotionModel::kGeneral;
   left.scale_model = ScaleModel::kFixed;
-  left.termination = Termination::kConverged;
+  left.termination = Termination::kSolved;
+  left.state = SlaveState::kConverged;
   left.message = "converged after 7 iterations";
   SlaveCalibration back;
   back.name = "back";
@@ -57,7 +58,8 @@ Fixture MakeFixture() {
   back.motion_model = MotionModel::kTranslational;
   back.scale_model = ScaleModel::kSegments;
   back.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ()};
-  back.termination = Termination::kConverged;
+  back.termination = Termination::kSolved;
+  back.state = SlaveState::kConverged;
   SlaveCalibration road;  // planar: C along the vertical unknown
   road.name = "road";
   road.estimate = MakeRig({0, 1, 0}, 90, {0.9, 0.0, -1.5}, 2.0);
@@ -71,7 +73,8 @@ Fixture MakeFixture() {
   road.observability.rotation_eigenvalues = Eigen::Vector4d(1e-8, 2e-8, 3.0, 4.0);
   road.observability.tilt_snr = 1.05;
   road.observability.axis_std_ratio = std::numeric_limits<double>::infinity();
-  road.termination = Termination::kConverged;
+  road.termination = Termination::kSolved;
+  road.state = SlaveState::kConverged;
   road.message = "planar motion: C along the rotation axis is unobservable";
   SlaveCalibration still;
   still.name = "still";
@@ -98,6 +101,7 @@ const std::set<std::string> kCommonKeys = {"name",
                                            "motions_used",
                                            "motions_rejected",
                                            "models",
+                                           "state",
                                            "termination",
                                            "message",
                                            "unobservable",
@@ -135,7 +139,8 @@ TEST(ResultJsonTest, ExactSchemaWithTruth) {
   EXPECT_EQ(left.at("motions_used"), 190);
   EXPECT_EQ(left.at("motions_rejected"), 10);
   EXPECT_EQ(left.at("models"), nlohmann::json({{"motion", "general"}, {"scale", "fixed"}}));
-  EXPECT_EQ(left.at("termination"), "converged");
+  EXPECT_EQ(left.at("termination"), "solved");
+  EXPECT_EQ(left.at("state"), "converged");
   EXPECT_EQ(left.at("message"), "converged after 7 iterations");
   EXPECT_EQ(left.at("unobservable"), nlohmann::json::array());
 
@@ -220,7 +225,7 @@ TEST(FormatResultTableTest, ShowsEstimatesTruthAndErrors) {
   for (const char* expected : {"master: front",
                                "left: converged",
                                "back: converged",
-                               "still: insufficient_motion",
+                               "still: initialising (insufficient_motion)",
                                "NOT USABLE",
                                "need >= 2 motions with rotation >= 2 deg, got 1",
                                "q (w, x, y, z)",

@@ -78,7 +78,8 @@ RigCalibration MakeResult() {
   left.motions.small_rotation = 6;
   left.motions.angle_mismatch = 3;
   left.motions.residual_outlier = 1;
-  left.termination = Termination::kConverged;
+  left.termination = Termination::kSolved;
+  left.state = SlaveState::kConverged;
   left.message = "ok";
   SlaveCalibration back;
   back.name = "back";
@@ -88,6 +89,7 @@ RigCalibration MakeResult() {
   back.scale_model = ScaleModel::kSegments;
   back.unobservable = {Eigen::Vector3d::UnitY()};
   back.termination = Termination::kNoConvergence;
+  back.state = SlaveState::kUsable;
   back.message = "iteration limit";
   SlaveCalibration still;
   still.name = "still";
@@ -230,7 +232,8 @@ TEST_F(RigFilesTest, ResultYamlHasStatusAndStatistics) {
         "pairs_selected: 321",
         "usable: true",
         "usable: false",
-        "termination: converged",
+        "state: converged",
+        "termination: solved",
         "termination: no_convergence",
         "termination: insufficient_motion",
         "need >= 2 motions with rotation >= 2 deg, got 0",

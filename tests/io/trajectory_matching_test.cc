@@ -23,7 +23,7 @@ TEST(MatchTrajectoriesTest, SameStampsMatchEverything) {
   const auto slave = MakeTrajectory("s", Stamps(0, 50'000'000, 10));
   const auto rec = MatchTrajectories(master, {slave}, 5'000'000);
   ASSERT_TRUE(rec.ok()) << rec.error();
-  EXPECT_EQ(rec->Validate(), "");
+  EXPECT_TRUE(rec->Check().ok()) << rec->Check().message();
   EXPECT_EQ(rec->t_ns, master.t_ns);
   EXPECT_EQ(rec->master.name, "m");
   ASSERT_EQ(rec->slaves.size(), 1u);

@@ -23,7 +23,9 @@ TEST(ExtrinsicsMessage, RoundTrip) {
   EXPECT_EQ(back.slaves[0].motions_used, 190);
   EXPECT_EQ(back.slaves[0].message, "converged: after 7 iterations");
   EXPECT_EQ(back.slaves[1].name, "back");
-  EXPECT_EQ(back.slaves[1].flags, kFlagInitialising | kFlagPlanar);
+  EXPECT_EQ(back.slaves[0].state, slave_extrinsics_t::STATE_CONVERGED);
+  EXPECT_EQ(back.slaves[1].state, slave_extrinsics_t::STATE_INITIALISING);
+  EXPECT_EQ(back.slaves[1].flags, kFlagPlanar);
   EXPECT_EQ(back.slaves[1].planar_axis[2], 1.0);
 }
 
@@ -45,11 +47,13 @@ TEST(ExtrinsicsMessage, RigCalibrationToLcmSetsFlagsAndFields) {
   translational.position_observable = false;
   SlaveCalibration planar = MakeSlave("right");
   planar.termination = Termination::kDegenerate;
+  planar.state = SlaveState::kInitialising;
   planar.message = "all rotations about one axis";
   planar.observability.planar = true;
   planar.observability.planar_axis = Eigen::Vector3d(0, -2, 0);
   SlaveCalibration waiting = MakeSlave("up");
   waiting.termination = Termination::kInsufficientMotion;
+  waiting.state = SlaveState::kInitialising;
   waiting.estimate.q = Eigen::Quaterniond(kNaN, kNaN, kNaN, kNaN);
   waiting.estimate.C = Eigen::Vector3d::Constant(kNaN);
   waiting.scales.clear();
@@ -57,13 +61,13 @@ TEST(ExtrinsicsMessage, RigCalibrationToLcmSetsFlagsAndFields) {
   waiting.rot_std_deg = kInf;
   result.slaves = {general, translational, planar, waiting};
 
-  EXPECT_EQ(SlaveFlags(general), kFlagConverged);
-  EXPECT_EQ(SlaveFlags(translational), kFlagConverged | kFlagTranslationalOnly);
-  EXPECT_EQ(SlaveFlags(planar), kFlagInitialising | kFlagPlanar);
-  EXPECT_EQ(SlaveFlags(waiting), kFlagInitialising);
+  EXPECT_EQ(SlaveFlags(general), 0);
+  EXPECT_EQ(SlaveFlags(translational), kFlagTranslationalOnly);
+  EXPECT_EQ(SlaveFlags(planar), kFlagPlanar);
+  EXPECT_EQ(SlaveFlags(waiting), 0);
   SlaveCalibration no_convergence = general;
   no_convergence.termination = Termination::kNoConvergence;  // usable: linear estimate kept
-  EXPECT_EQ(SlaveFlags(no_convergence), kFlagConverged);
+  EXPECT_EQ(SlaveFlags(no_convergence), 0);
 
   Expected<rig_extrinsics_t> msg = RigCalibrationToLcm(result, 1234, 5678);
   ASSERT_TRUE(msg.ok()) << msg.error();
@@ -77,7 +81,8 @@ TEST(ExtrinsicsMessage, RigCalibrationToLcmSetsFlagsAndFields) {
 
   const slave_extrinsics_t& left = msg->slaves[0];
   EXPECT_EQ(left.name, "left");
-  EXPECT_EQ(left.flags, kFlagConverged);
+  EXPECT_EQ(left.state, slave_extrinsics_t::STATE_CONVERGED);
+  EXPECT_EQ(left.flags, 0);
   EXPECT_NEAR(left.q[0], general.estimate.q.w(), 1e-15);
   EXPECT_NEAR(left.q[2], general.estimate.q.y(), 1e-15);
   EXPECT_EQ(left.C[0], -0.8);
@@ -92,19 +97,21 @@ TEST(ExtrinsicsMessage, RigCalibrationToLcmSetsFlagsAndFields) {
   EXPECT_EQ(left.position_min_eigenvalue, 0.25);
   EXPECT_EQ(left.axis_spread_deg, 40.0);
   EXPECT_EQ(left.planar_axis[1], 0.0);
-  EXPECT_EQ(left.message, "converged: after 5 iterations");
+  EXPECT_EQ(left.message, "solved: after 5 iterations");
 
-  EXPECT_EQ(msg->slaves[1].flags, kFlagConverged | kFlagTranslationalOnly);
+  EXPECT_EQ(msg->slaves[1].flags, kFlagTranslationalOnly);
 
   const slave_extrinsics_t& right = msg->slaves[2];
-  EXPECT_EQ(right.flags, kFlagInitialising | kFlagPlanar);
+  EXPECT_EQ(right.state, slave_extrinsics_t::STATE_INITIALISING);
+  EXPECT_EQ(right.flags, kFlagPlanar);
   EXPECT_EQ(right.planar_axis[0], 0.0);
   EXPECT_EQ(right.planar_axis[1], -1.0);  // normalised
   EXPECT_EQ(right.planar_axis[2], 0.0);
   EXPECT_EQ(right.message, "degenerate: all rotations about one axis");
 
   const slave_extrinsics_t& up = msg->slaves[3];  // placeholders instead of NaN
-  EXPECT_EQ(up.flags, kFlagInitialising);
+  EXPECT_EQ(up.state, slave_extrinsics_t::STATE_INITIALISING);
+  EXPECT_EQ(up.flags, 0);
   EXPECT_EQ(up.q[0], 1.0);
   EXPECT_EQ(up.q[1], 0.0);
   EXPECT_EQ(up.C[0], 0.0);
@@ -147,12 +154,12 @@ TEST(ExtrinsicsMessage, AxisOffsetOfPlanarAndNearlyPlanarEstimates) {
   result.slaves = {unknown, from_prior, held, nearly};
   Expected<rig_extrinsics_t> msg = RigCalibrationToLcm(result, 1, 2);
   ASSERT_TRUE(msg.ok()) << msg.error();
-  EXPECT_EQ(msg->slaves[0].flags, kFlagConverged | kFlagPlanar);
+  EXPECT_EQ(msg->slaves[0].flags, kFlagPlanar);
   EXPECT_EQ(msg->slaves[0].axis_offset_std, -1.0);
-  EXPECT_EQ(msg->slaves[1].flags, kFlagConverged | kFlagPlanar | kFlagAxisFromPrior);
+  EXPECT_EQ(msg->slaves[1].flags, kFlagPlanar | kFlagAxisFromPrior);
   EXPECT_EQ(msg->slaves[1].axis_offset_std, 0.03);
   EXPECT_EQ(msg->slaves[2].axis_offset_std, 0.0);
-  EXPECT_EQ(msg->slaves[3].flags, kFlagConverged);
+  EXPECT_EQ(msg->slaves[3].flags, 0);
   EXPECT_EQ(msg->slaves[3].axis_offset_std, 0.06);
   EXPECT_EQ(msg->slaves[3].planar_axis[1], 1.0);  // the mean axis, known
   const CameraNames names = {"front", "left", "back", "right", "up"};
@@ -262,9 +269,10 @@ TEST(ExtrinsicsMessage, RejectsOutOfRange) {
   extrinsics.slaves[0].flags = 64;
   ExpectRejected<rig_extrinsics_t>(&validator, "E", RawEncode(extrinsics), RejectCause::kOutOfRange,
                                    {"rig_extrinsics_t.slaves[0].flags", "undefined bits 64"});
-  extrinsics.slaves[0].flags = kFlagConverged | kFlagInitialising;
+  extrinsics.slaves[0].flags = 0;
+  extrinsics.slaves[0].state = 4;  // one past STATE_DECALIBRATED
   ExpectRejected<rig_extrinsics_t>(&validator, "E", RawEncode(extrinsics), RejectCause::kOutOfRange,
-                                   {"exactly one of"});
+                                   {"rig_extrinsics_t.slaves[0].state"});
   extrinsics = MakeExtrinsicsMsg();
   extrinsics.slaves[1].planar_axis[2] = 0.5;  // PLANAR flag set: must be a unit axis
   ExpectRejected<rig_extrinsics_t>(&validator, "E", RawEncode(extrinsics), RejectCause::kOutOfRange,

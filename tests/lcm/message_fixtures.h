@@ -78,7 +78,8 @@ inline slave_extrinsics_t MakeSlaveMsg(const std::string& name, double angle_deg
   s.rotation_eigen_gap = 12.5;
   s.position_min_eigenvalue = 0.3;
   s.axis_spread_deg = 35.0;
-  s.flags = kFlagConverged;
+  s.state = slave_extrinsics_t::STATE_CONVERGED;
+  s.flags = 0;
   s.message = "converged: after 7 iterations";
   return s;
 }
@@ -91,7 +92,8 @@ inline rig_extrinsics_t MakeExtrinsicsMsg() {
   m.master = "front";
   m.distance_unit = rig_extrinsics_t::UNIT_MASTER_ODOMETRY;
   m.slaves = {MakeSlaveMsg("left", -89.5), MakeSlaveMsg("back", 179.0)};
-  m.slaves[1].flags = kFlagInitialising | kFlagPlanar;
+  m.slaves[1].state = slave_extrinsics_t::STATE_INITIALISING;
+  m.slaves[1].flags = kFlagPlanar;
   m.slaves[1].planar_axis[2] = 1.0;
   m.num_slaves = 2;
   return m;
@@ -243,7 +245,8 @@ inline SlaveCalibration MakeSlave(const std::string& name) {
   s.observability.rotation_eigenvalues = Eigen::Vector4d(0.001, 4.0, 5.0, 6.0);
   s.observability.position_min_eigenvalue = 0.25;
   s.observability.axis_spread_deg = 40.0;
-  s.termination = Termination::kConverged;
+  s.termination = Termination::kSolved;
+  s.state = SlaveState::kConverged;
   s.message = "after 5 iterations";
   return s;
 }

@@ -215,7 +215,10 @@ TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
     const Similarity& estimate = summary.estimate.rig.slaves[i].estimate;
     EXPECT_NEAR(slave->C[0], estimate.C.x(), 1e-12);
     EXPECT_NEAR(slave->q[0], estimate.q.w(), 1e-12);
-    EXPECT_TRUE(slave->flags & tools::kFlagConverged) << slave->flags;
+    EXPECT_EQ(slave->state, static_cast<int8_t>(summary.estimate.rig.slaves[i].state));
+    EXPECT_TRUE(slave->state == slave_extrinsics_t::STATE_USABLE ||
+                slave->state == slave_extrinsics_t::STATE_CONVERGED)
+        << static_cast<int>(slave->state);
   }
   const rig_status_t& status = sink.status.back();
   ASSERT_EQ(status.num_cameras, 3);
@@ -324,7 +327,7 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
     const SlaveCalibration& a = first.estimate.rig.slaves[0];
     const SlaveCalibration& b = resumed.estimate.rig.slaves[0];
     ASSERT_GT(a.pos_std.x(), 0.0);
-    EXPECT_TRUE(resumed.estimate.online[0].flags & kFlagRefined);
+    EXPECT_TRUE(resumed.estimate.online[0].flags & rigcal::kFlagRefined);
     EXPECT_NEAR(b.estimate.C.x(), a.estimate.C.x(), 0.5 * a.pos_std.x());
     EXPECT_LT(AngleBetween(a.estimate.q, b.estimate.q) * kDegPerRad, 0.5 * a.rot_std_deg);
   }
@@ -369,11 +372,15 @@ TEST(CalibNode, EstimatorStateNamesTheDecalibratedSlave) {
   estimate.rig.slaves[0].name = "left";
   estimate.rig.slaves[1].name = "back";
   estimate.online.resize(2);
-  estimate.online[0].flags = rigcal::kFlagConverged;
+  EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_INITIALISING);
+  estimate.rig.slaves[0].state = SlaveState::kConverged;
   EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_DEGRADED);
-  estimate.online[1].flags = rigcal::kFlagConverged;
+  EXPECT_NE(message.find("back"), std::string::npos) << message;  // the one holding it back
+  estimate.rig.slaves[1].state = SlaveState::kUsable;
+  EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_USABLE);
+  estimate.rig.slaves[1].state = SlaveState::kConverged;
   EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_CONVERGED);
-  estimate.online[1].flags = rigcal::kFlagConverged | rigcal::kFlagDecalibrated;
+  estimate.rig.slaves[1].state = SlaveState::kDecalibrated;
   EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_DECALIBRATED);
   EXPECT_NE(message.find("back"), std::string::npos) << message;
 }

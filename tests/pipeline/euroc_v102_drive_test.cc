@@ -132,7 +132,7 @@ TEST(EurocV102Drive, OnlineEstimateConverges) {
     const auto it = true_scales.find({static_cast<int>(i), last.segment});
     ASSERT_NE(it, true_scales.end()) << "segment " << last.segment;
     EXPECT_NEAR(last.scale / it->second, 1.0, 0.02) << slave.name << " segment " << last.segment;
-    EXPECT_EQ(result.estimate.online[i].flags & kFlagDecalibrated, 0u)
+    EXPECT_EQ(result.estimate.rig.slaves[i].state == SlaveState::kDecalibrated, 0u)
         << slave.name << ": a static rig must not be flagged decalibrated";
   }
 }

@@ -27,7 +27,7 @@ TEST(OnlineReplay, ConvergesAndRecordsHistory) {
   for (int i = 0; i < 2; ++i) {
     const auto& s = r.estimate.rig.slaves[i];
     ASSERT_TRUE(s.usable()) << s.message;
-    EXPECT_TRUE(r.estimate.online[i].flags & kFlagConverged) << s.message;
+    EXPECT_TRUE(r.estimate.rig.slaves[i].state == SlaveState::kConverged) << s.message;
     const auto e = CompareToTruth(s.estimate, drive.truth[i]);
     EXPECT_LT(e.rot_deg, 0.2);
     EXPECT_LT(e.scale_pct, 1.0);
@@ -44,8 +44,10 @@ TEST(OnlineReplay, ConvergesAndRecordsHistory) {
 }
 
 TEST(OnlineReplay, FlagsAsWords) {
-  EXPECT_EQ(FlagsToString(kFlagConverged | kFlagPlanar), "converged planar");
-  EXPECT_EQ(FlagsToString(0), "converging");
+  EXPECT_EQ(StateText(SlaveState::kConverged, kFlagPlanar), "converged planar");
+  EXPECT_EQ(StateText(SlaveState::kUsable, 0), "usable");
+  EXPECT_EQ(StateText(SlaveState::kDecalibrated, kFlagTranslationalOnly | kFlagRefined),
+            "decalibrated translational-only refined");
 }
 
 }  // namespace

@@ -32,7 +32,8 @@ Similarity Truth() {
 TEST(RunEvaluation, PlanarEstimateWithoutPriorIsScoredInThePlane) {
   SlaveCalibration slave;
   slave.name = "left";
-  slave.termination = Termination::kConverged;
+  slave.termination = Termination::kSolved;
+  slave.state = SlaveState::kConverged;
   slave.estimate = Truth();
   slave.estimate.C.y() = 0.0;     // unknown offset, reported as 0
   slave.estimate.C.x() += 0.003;  // 3 units error in the plane
@@ -62,7 +63,8 @@ TEST(RunEvaluation, PlanarEstimateWithoutPriorIsScoredInThePlane) {
 
 TEST(RunEvaluation, PlanarEstimateWithPriorScoresTheAxisToo) {
   SlaveCalibration slave;
-  slave.termination = Termination::kConverged;
+  slave.termination = Termination::kSolved;
+  slave.state = SlaveState::kConverged;
   slave.estimate = Truth();
   slave.estimate.C.y() = 0.41;  // from the nominal mounting
   slave.unobservable = {Eigen::Vector3d::UnitY()};
@@ -81,7 +83,8 @@ TEST(RunEvaluation, PlanarEstimateWithPriorScoresTheAxisToo) {
 
 TEST(RunEvaluation, TranslationalEstimateHasNoPositionToScore) {
   SlaveCalibration slave;
-  slave.termination = Termination::kConverged;
+  slave.termination = Termination::kSolved;
+  slave.state = SlaveState::kConverged;
   slave.estimate = Truth();
   slave.estimate.C.setZero();
   slave.position_observable = false;

@@ -42,10 +42,9 @@ int RunDemo(const DemoArgs& args) {
               << result.pairs_selected << " time pairs, solved in " << ms << " ms\n\n"
               << tools::FormatResultTable(result, &truth);
   }
-  for (const auto& s : result.slaves) {
-    if (!s.usable()) return 3;
-  }
-  return 0;
+  std::vector<SlaveState> states;
+  for (const auto& s : result.slaves) states.push_back(s.state);
+  return ExitCodeFor(states);
 }
 
 }  // namespace

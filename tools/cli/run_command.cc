@@ -16,6 +16,7 @@
 #include "rigcal/calib/logging.h"
 #include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/io/ground_truth_files.h"
 #include "rigcal/pipeline/calib_node.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"
@@ -36,7 +37,6 @@ namespace {
 
 constexpr int kExitOk = 0;
 constexpr int kExitError = 1;
-constexpr int kExitNoCalibration = 3;
 
 struct RunArgs {
   std::string config;
@@ -97,7 +97,7 @@ std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
   line << " | sets " << s.estimate.sets;
   for (size_t i = 0; i < s.estimate.rig.slaves.size(); ++i) {
     const SlaveCalibration& slave = s.estimate.rig.slaves[i];
-    if (slave.usable()) {
+    if (slave.solved()) {
       std::snprintf(buf, sizeof(buf), " | %s C=(%.2f %.2f %.2f) ±%.2f° %d mot", slave.name.c_str(),
                     slave.estimate.C.x(), slave.estimate.C.y(), slave.estimate.C.z(),
                     slave.rot_std_deg, slave.motions.used);
@@ -106,7 +106,7 @@ std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
       line << " | " << slave.name << " " << slave.motions.used << " mot";
     }
     if (i < s.estimate.online.size()) {
-      line << " [" << tools::FlagsToString(s.estimate.online[i].flags) << "]";
+      line << " [" << tools::StateText(slave.state, s.estimate.online[i].flags) << "]";
     }
   }
   return line.str();
@@ -198,7 +198,7 @@ int RunRun(const RunArgs& args) {
     }
     rig = std::move(*made);
     if (!args.truth_dir.empty()) {
-      if (const Status status = rig->WriteGroundTruth(args.truth_dir); !status.ok()) {
+      if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
         std::cerr << "rigcal run: " << status.message() << "\n";
         return kExitError;
       }
@@ -323,7 +323,7 @@ int RunRun(const RunArgs& args) {
   if (rig && !args.truth_dir.empty() && !args.poses_dir.empty()) {
     // In real time the devices' stamps start with the rig clock: rewrite the truth now that
     // it runs, so its stamps match the written poses (before the run they count from 0).
-    if (const Status status = rig->WriteGroundTruth(args.truth_dir); !status.ok()) {
+    if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
@@ -360,7 +360,9 @@ int RunRun(const RunArgs& args) {
     }
     if (args.eval && evaluation) std::cout << tools::FormatEvaluation(*evaluation);
   }
-  return any_usable ? kExitOk : kExitNoCalibration;
+  std::vector<SlaveState> states;
+  for (const SlaveCalibration& slave : result.slaves) states.push_back(slave.state);
+  return ExitCodeFor(states);  // 0 every slave usable, 3 otherwise (slave_state.h)
 }
 
 }  // namespace

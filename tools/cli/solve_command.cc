@@ -23,7 +23,7 @@ namespace {
 // Exit codes of `rigcal solve` (0 and 1 as for every subcommand).
 constexpr int kExitOk = 0;
 constexpr int kExitError = 1;
-constexpr int kExitUnusableSlave = 3;
+
 
 struct SolveArgs {
   std::string master;
@@ -207,14 +207,14 @@ int RunSolve(const SolveArgs& args) {
     log->info("wrote camera chain to {}", args.camchain);
   }
 
-  int exit_code = kExitOk;
+  std::vector<SlaveState> states;
   for (const SlaveCalibration& slave : result.slaves) {
+    states.push_back(slave.state);
     if (slave.usable()) continue;
-    std::cerr << "rigcal solve: " << slave.name << ": " << ToString(slave.termination) << ": "
-              << slave.message << "\n";
-    exit_code = kExitUnusableSlave;
+    std::cerr << "rigcal solve: " << slave.name << ": " << ToString(slave.state) << " ("
+              << ToString(slave.termination) << "): " << slave.message << "\n";
   }
-  return exit_code;
+  return ExitCodeFor(states);
 }
 
 CLI::Validator ValueCheck(std::string (*apply)(const std::string&), const std::string& desc) {

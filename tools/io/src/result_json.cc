@@ -44,7 +44,8 @@ std::string Vec3(const Eigen::Vector3d& v, int decimals = 4) {
 
 std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth) {
   std::string out =
-      fmt::format("{}: {}{}\n", s.name, ToString(s.termination), s.usable() ? "" : " (NOT USABLE)");
+      fmt::format("{}: {} ({}){}\n", s.name, ToString(s.state), ToString(s.termination),
+                  s.usable() ? "" : " (NOT USABLE)");
   if (!s.message.empty()) out += fmt::format("  {}\n", s.message);
   out += Row("", "estimate", truth ? "truth" : "");
   out += Row("q (w, x, y, z)", Quat(s.estimate.q), truth ? Quat(truth->q) : "");
@@ -147,6 +148,7 @@ nlohmann::json ResultToJson(const RigCalibration& result,
     j["motions_used"] = s.motions.used;
     j["motions_rejected"] = s.motions.rejected();
     j["models"] = {{"motion", ToString(s.motion_model)}, {"scale", ToString(s.scale_model)}};
+    j["state"] = std::string(ToString(s.state));
     j["termination"] = ToString(s.termination);
     j["message"] = s.message;
     nlohmann::json unobservable = nlohmann::json::array();

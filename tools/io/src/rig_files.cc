@@ -169,6 +169,7 @@ std::string ResultToYaml(const RigCalibration& result) {
   out << YAML::Key << "pairs_selected" << YAML::Value << result.pairs_selected;
   for (const SlaveCalibration& slave : result.slaves) {
     out << YAML::Key << slave.name << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "state" << YAML::Value << std::string(ToString(slave.state));
     out << YAML::Key << "usable" << YAML::Value << slave.usable();
     out << YAML::Key << "termination" << YAML::Value << ToString(slave.termination);
     out << YAML::Key << "message" << YAML::Value << slave.message;

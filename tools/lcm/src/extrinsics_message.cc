@@ -32,18 +32,17 @@ void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check)
   check->Finite("planar_axis", s->planar_axis, 3);
   check->Finite("axis_offset_std", s->axis_offset_std);
 
-  const bool converged = (s->flags & kFlagConverged) != 0;
-  const bool initialising = (s->flags & kFlagInitialising) != 0;
+  check->InRange<int8_t>("state", s->state, slave_extrinsics_t::STATE_INITIALISING,
+                         slave_extrinsics_t::STATE_DECALIBRATED);
   if ((s->flags & ~kKnownFlags) != 0) {
     check->Fail(RejectCause::kOutOfRange, "flags",
                 "undefined bits " + std::to_string(s->flags & ~kKnownFlags));
-  } else if (converged == initialising) {
-    check->Fail(RejectCause::kOutOfRange, "flags",
-                "exactly one of FLAG_INITIALISING and FLAG_CONVERGED must be set");
   }
-  if (converged && !(s->scale > 0.0)) {
+  const bool usable = s->state == slave_extrinsics_t::STATE_USABLE ||
+                      s->state == slave_extrinsics_t::STATE_CONVERGED;
+  if (usable && !(s->scale > 0.0)) {
     check->Fail(RejectCause::kOutOfRange, "scale",
-                FormatNumber(s->scale) + " is not positive in a converged estimate");
+                FormatNumber(s->scale) + " is not positive in a usable estimate");
   }
   check->AtLeast<int32_t>("segment", s->segment, 0);
   check->AtLeast("rot_std_deg", s->rot_std_deg, 0.0);
@@ -103,7 +102,7 @@ struct lcm_internal::MessageTraits<rig_extrinsics_t> {
 };
 
 int32_t SlaveFlags(const SlaveCalibration& slave) {
-  int32_t flags = slave.usable() ? kFlagConverged : kFlagInitialising;
+  int32_t flags = 0;
   if (slave.motion_model == MotionModel::kTranslational || !slave.position_observable) {
     flags |= kFlagTranslationalOnly;
   }
@@ -115,7 +114,7 @@ int32_t SlaveFlags(const SlaveCalibration& slave) {
 }
 
 Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave) {
-  const bool usable = slave.usable();
+  const bool usable = slave.solved();  // the estimate is defined (the state says if it may be used)
   const std::string who = "slave '" + slave.name + "'";
   const auto or_zero = [](double v) { return std::isfinite(v) ? v : 0.0; };
 
@@ -139,7 +138,7 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
     if (!C.allFinite()) C.setZero();
     if (!std::isfinite(scale)) scale = 1.0;
   } else if (!q.coeffs().allFinite() || !C.allFinite() || !std::isfinite(scale)) {
-    return Error{who + " is usable (" + ToString(slave.termination) +
+    return Error{who + " is solved (" + ToString(slave.termination) +
                  ") but its estimate is not finite"};
   }
   if (q.norm() > 0.0) q.normalize();
@@ -160,6 +159,7 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
   msg.rotation_eigen_gap = or_zero(obs.rotation_eigenvalues[1] - obs.rotation_eigenvalues[0]);
   msg.position_min_eigenvalue = or_zero(obs.position_min_eigenvalue);
   msg.axis_spread_deg = or_zero(obs.axis_spread_deg);
+  msg.state = static_cast<int8_t>(slave.state);
   msg.flags = SlaveFlags(slave);
   Eigen::Vector3d axis = Eigen::Vector3d::Zero();
   const bool axis_known = obs.planar_axis.allFinite() && obs.planar_axis.norm() > 0.5;

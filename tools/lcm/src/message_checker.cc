@@ -5,14 +5,11 @@
 #include <sstream>
 #include <utility>
 
+#include "rigcal/calib/format.h"
+
 namespace rigcal::tools::lcm_internal {
 
-std::string FormatNumber(double value) {
-  std::ostringstream out;
-  out.precision(10);
-  out << value;
-  return out.str();
-}
+std::string FormatNumber(double value) { return SignificantText(value, 10); }
 
 Checker::Checker(std::string_view channel, std::string prefix)
     : channel_(channel), prefix_(std::move(prefix)) {}

@@ -51,7 +51,7 @@ void CheckStatus(const CameraNames& names, rig_status_t* msg, Checker* check) {
   check->AtLeast<int32_t>("sync_capacity", msg->sync_capacity, 0);
   check->InRange<int32_t>("sync_fill", msg->sync_fill, 0, msg->sync_capacity);
   check->InRange<int8_t>("estimator_state", msg->estimator_state, rig_status_t::ESTIMATOR_IDLE,
-                         rig_status_t::ESTIMATOR_FAILED);
+                         rig_status_t::ESTIMATOR_DECALIBRATED);
   check->AtLeast("cpu_percent", msg->cpu_percent, 0.0);
   check->AtLeast<int64_t>("rss_bytes", msg->rss_bytes, 0);
   check->NamedElements("cameras", &msg->cameras, {}, [&](camera_status_t* c, Checker* nested) {
@@ -112,39 +112,41 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
 }
 
 int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
+  std::vector<SlaveState> states;
+  std::string decalibrated, not_usable;
   int converged = 0;
-  int decalibrated = 0;
-  const int slaves = static_cast<int>(estimate.online.size());
-  std::string decalibrated_names;
-  for (int i = 0; i < slaves; ++i) {
-    if (estimate.online[i].flags & rigcal::kFlagConverged) ++converged;
-    if (estimate.online[i].flags & rigcal::kFlagDecalibrated) {
-      ++decalibrated;
-      if (i < static_cast<int>(estimate.rig.slaves.size())) {
-        decalibrated_names +=
-            (decalibrated_names.empty() ? "" : ", ") + estimate.rig.slaves[i].name;
-      }
-    }
+  for (const SlaveCalibration& slave : estimate.rig.slaves) {
+    states.push_back(slave.state);
+    if (slave.state == SlaveState::kConverged) ++converged;
+    std::string& list = slave.state == SlaveState::kDecalibrated ? decalibrated : not_usable;
+    if (!slave.usable()) list += (list.empty() ? "" : ", ") + slave.name;
   }
+  const RigState state = CombineStates(states, estimate.sets > 0);
+  const size_t slaves = states.size();
   std::ostringstream text;
-  int8_t state = rig_status_t::ESTIMATOR_INITIALISING;
-  if (estimate.sets == 0) {
-    state = rig_status_t::ESTIMATOR_IDLE;
-    text << "no synchronised pose sets yet";
-  } else if (decalibrated > 0) {
-    state = rig_status_t::ESTIMATOR_DECALIBRATED;
-    text << "decalibrated: " << decalibrated_names << " moved; re-estimating";
-  } else if (converged == slaves) {
-    state = rig_status_t::ESTIMATOR_CONVERGED;
-    text << "all " << slaves << " slaves converged";
-  } else if (converged > 0) {
-    state = rig_status_t::ESTIMATOR_DEGRADED;
-    text << converged << " of " << slaves << " slaves converged";
-  } else {
-    text << "collecting motion (" << estimate.sets << " sets)";
+  switch (state) {
+    case RigState::kIdle:
+      text << "no synchronised pose sets yet";
+      break;
+    case RigState::kInitialising:
+      text << "collecting motion (" << estimate.sets << " sets)";
+      break;
+    case RigState::kDegraded:
+      text << (slaves - (not_usable.empty() ? 0 : 1)) << " of " << slaves
+           << " slaves usable; not yet: " << not_usable;
+      break;
+    case RigState::kUsable:
+      text << "all " << slaves << " slaves usable, " << converged << " converged";
+      break;
+    case RigState::kConverged:
+      text << "all " << slaves << " slaves converged";
+      break;
+    case RigState::kDecalibrated:
+      text << "decalibrated: " << decalibrated << " moved; re-estimating";
+      break;
   }
   if (message != nullptr) *message = text.str();
-  return state;
+  return static_cast<int8_t>(state);
 }
 
 template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&, rig_status_t*);

@@ -44,9 +44,9 @@ Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t ut
   for (size_t i = 0; i < msg->slaves.size() && i < estimate.online.size(); ++i) {
     const uint32_t online = estimate.online[i].flags;
     int32_t& flags = msg->slaves[i].flags;
-    if (online & rigcal::kFlagDecalibrated) flags |= tools::kFlagDecalibrated;
     if (online & rigcal::kFlagPlanar) flags |= tools::kFlagPlanar;
     if (online & rigcal::kFlagTranslationalOnly) flags |= tools::kFlagTranslationalOnly;
+    if (online & rigcal::kFlagRefined) flags |= tools::kFlagRefined;
   }
   return msg;
 }
@@ -213,14 +213,15 @@ struct CalibNode::Impl {
     for (size_t i = 0; i < estimate.rig.slaves.size(); ++i) {
       const SlaveCalibration& slave = estimate.rig.slaves[i];
       line << " | " << slave.name << ": " << slave.motions.used << " motions";
-      if (slave.usable()) {
+      if (slave.solved()) {
         char buf[96];
         std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) ±%.2g°", slave.estimate.C.x(),
                       slave.estimate.C.y(), slave.estimate.C.z(), slave.rot_std_deg);
         line << buf;
       }
-      if (i < estimate.online.size())
-        line << " [" << FlagsToString(estimate.online[i].flags) << "]";
+      line << " [" << StateText(slave.state,
+                                i < estimate.online.size() ? estimate.online[i].flags : 0u)
+           << "]";
     }
     log->info("{}", line.str());
   }

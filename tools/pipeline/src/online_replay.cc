@@ -18,20 +18,15 @@ int64_t MedianStep(const std::vector<int64_t>& t) {
 
 }  // namespace
 
-std::string FlagsToString(uint32_t flags) {
-  std::string s;
+std::string StateText(SlaveState state, uint32_t facts) {
+  std::string s(ToString(state));
   auto add = [&](uint32_t bit, const char* word) {
-    if (!(flags & bit)) return;
-    if (!s.empty()) s += ' ';
-    s += word;
+    if (facts & bit) s += std::string(" ") + word;
   };
-  add(kFlagInitialising, "initialising");
-  add(kFlagConverged, "converged");
   add(kFlagTranslationalOnly, "translational-only");
   add(kFlagPlanar, "planar");
-  add(kFlagDecalibrated, "DECALIBRATED");
   add(kFlagRefined, "refined");
-  return s.empty() ? "converging" : s;
+  return s;
 }
 
 OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineReplayOptions& options,
@@ -60,8 +55,9 @@ OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineRepla
       p.estimate = s.estimate;
       p.rot_std_deg = s.rot_std_deg;
       p.motions_used = s.motions.used;
+      p.state = e.rig.slaves[i].state;
       p.flags = e.online[i].flags;
-      if (truth && truth->count(s.name) && s.usable()) {
+      if (truth && truth->count(s.name) && s.solved()) {
         p.error = CompareToTruth(s.estimate, truth->at(s.name));
       }
       out.history.push_back(p);
@@ -85,7 +81,7 @@ OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineRepla
   if (options.refine_at_end) {
     for (size_t i = 0; i < recording.slaves.size(); ++i) {
       const RefinementJob job = estimator.MakeRefinementJob(static_cast<int>(i));
-      if (job.start.usable() && static_cast<int>(job.motions.size()) + job.prior.motions >= 10) {
+      if (job.start.solved() && static_cast<int>(job.motions.size()) + job.prior.motions >= 10) {
         estimator.ApplyRefinement(job, RefineWindow(job));
       }
     }
@@ -104,7 +100,7 @@ std::string FormatConvergence(const std::vector<ConvergencePoint>& history) {
   s << line;
   for (const auto& p : history) {
     std::snprintf(line, sizeof(line), "%8.1f  %-10s %7d %9.4f  %-30s", p.t_s, p.slave.c_str(),
-                  p.motions_used, p.rot_std_deg, FlagsToString(p.flags).c_str());
+                  p.motions_used, p.rot_std_deg, StateText(p.state, p.flags).c_str());
     s << line;
     if (p.error) {
       std::snprintf(line, sizeof(line), " %.4f  %.5f  %.3f", p.error->rot_deg, p.error->trans_err,

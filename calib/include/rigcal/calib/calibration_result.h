@@ -8,12 +8,13 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_options.h"
+#include "rigcal/calib/slave_state.h"
 #include "rigcal/calib/types.h"
 
 namespace rigcal {
 
 enum class Termination {
-  kConverged,           // usable estimate
+  kSolved,              // the solve produced an estimate (see SlaveCalibration::state)
   kNoConvergence,       // refinement hit the iteration limit; linear estimate kept
   kInsufficientMotion,  // too few usable motions; no estimate
   kDegenerate,          // the motions do not determine the parameters (see message)
@@ -98,11 +99,18 @@ struct SlaveCalibration {
   ScaleModel scale_model = ScaleModel::kFixed;       // chosen model (never kAuto)
   Observability observability;
 
+  // How the solve ended, and what a caller may do with the estimate (slave_state.h: one
+  // meaning per state; batch: converged when usable with a computed covariance).
   Termination termination = Termination::kInsufficientMotion;
+  SlaveState state = SlaveState::kInitialising;
   std::string message;
-  bool usable() const {
-    return termination == Termination::kConverged || termination == Termination::kNoConvergence;
+  // The solve produced an estimate: q, C and the scales are defined (termination solved or
+  // no_convergence). Whether it may be used is `state`.
+  bool solved() const {
+    return termination == Termination::kSolved || termination == Termination::kNoConvergence;
   }
+  // The estimate may be used: state usable or converged.
+  bool usable() const { return IsUsable(state); }
 };
 
 struct RigCalibration {

@@ -116,18 +116,16 @@ struct RigEstimatorOptions {
   Status Check() const;
 };
 
-// Flags of a slave's online state (bitmask, also the LCM flags).
+// Facts about a slave's published estimate (bitmask). How far the estimate has got is not a
+// flag but its SlaveCalibration::state (slave_state.h).
 enum SlaveFlags : uint32_t {
-  kFlagInitialising = 1u << 0,
-  kFlagConverged = 1u << 1,
-  kFlagTranslationalOnly = 1u << 2,
-  kFlagPlanar = 1u << 3,
-  kFlagDecalibrated = 1u << 4,
-  kFlagRefined = 1u << 5,  // the published value comes from the non-linear window refinement
+  kFlagTranslationalOnly = 1u << 0,  // rotation and scale only (thesis 4.5)
+  kFlagPlanar = 1u << 1,             // C along the rotation axis is unobservable
+  kFlagRefined = 1u << 2,  // the published value comes from the non-linear window refinement
 };
 
 struct SlaveOnlineState {
-  uint32_t flags = kFlagInitialising;
+  uint32_t flags = 0;
   int segment = 0;                  // current odometry segment of the slave
   int64_t last_update_ns = 0;       // stream time of the last accepted motion
   double short_long_rot_deg = 0.0;  // disagreement of the short and long windows

@@ -18,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rigcal/calib/status.h"
@@ -125,7 +126,7 @@ class SimulatedRig {
   std::optional<double> CastRay(const Eigen::Vector3d& origin,
                                 const Eigen::Vector3d& direction) const;
 
-  // Writes into directory `dir` (created if missing):
+  // The ground-truth files of the simulated drive:
   //   <camera>.txt  TUM trajectory of every camera at every nominal frame stamp, in the
   //                 camera's own reference frame (its pose at frame 0 is the identity; thesis
   //                 T_i^k = (T_i,world^0)^-1 T_i,world^k), metres;
@@ -134,9 +135,9 @@ class SimulatedRig {
   //                 entry per slave: q_wxyz, C, scale 1).
   // Stamps are FrameTimeNs(k): in realtime mode they match the devices' stamps only once the
   // rig clock has started (write the truth after the run; before, stamps count from 0).
-  // Every file is written atomically (temporary file + rename). Ok, or an error naming the
-  // file or directory.
-  Status WriteGroundTruth(const std::string& dir) const;
+  // Returned as (file name, contents) in that order; rigcal_io's WriteGroundTruth writes them
+  // atomically into a directory.
+  std::vector<std::pair<std::string, std::string>> GroundTruthFiles() const;
 
  private:
   friend Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec);

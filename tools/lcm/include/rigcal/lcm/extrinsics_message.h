@@ -15,21 +15,28 @@
 namespace rigcal::tools {
 
 // slave_extrinsics_t::FLAG_* as int32_t: lcm-gen emits every constant as its own anonymous enum,
-// and C++20 deprecates `|` between different enums. Combine these instead.
-inline constexpr int32_t kFlagInitialising = slave_extrinsics_t::FLAG_INITIALISING;
-inline constexpr int32_t kFlagConverged = slave_extrinsics_t::FLAG_CONVERGED;
+// and C++20 deprecates `|` between different enums. Combine these instead. The flags are facts
+// about what the motions determine; the state is slave_extrinsics_t::state.
 inline constexpr int32_t kFlagTranslationalOnly = slave_extrinsics_t::FLAG_TRANSLATIONAL_ONLY;
 inline constexpr int32_t kFlagPlanar = slave_extrinsics_t::FLAG_PLANAR_UNOBSERVABLE_AXIS;
-inline constexpr int32_t kFlagDecalibrated = slave_extrinsics_t::FLAG_DECALIBRATED;
 inline constexpr int32_t kFlagAxisFromPrior = slave_extrinsics_t::FLAG_AXIS_FROM_PRIOR;
-inline constexpr int32_t kKnownFlags = kFlagInitialising | kFlagConverged | kFlagTranslationalOnly |
-                                       kFlagPlanar | kFlagDecalibrated | kFlagAxisFromPrior;
+inline constexpr int32_t kFlagRefined = slave_extrinsics_t::FLAG_REFINED;
+inline constexpr int32_t kKnownFlags =
+    kFlagTranslationalOnly | kFlagPlanar | kFlagAxisFromPrior | kFlagRefined;
+
+// slave_extrinsics_t::STATE_* is rigcal::SlaveState (slave_state.h), number for number.
+static_assert(slave_extrinsics_t::STATE_INITIALISING ==
+              static_cast<int>(SlaveState::kInitialising));
+static_assert(slave_extrinsics_t::STATE_USABLE == static_cast<int>(SlaveState::kUsable));
+static_assert(slave_extrinsics_t::STATE_CONVERGED == static_cast<int>(SlaveState::kConverged));
+static_assert(slave_extrinsics_t::STATE_DECALIBRATED ==
+              static_cast<int>(SlaveState::kDecalibrated));
 
 // The rules of rig_extrinsics_t (beyond message_validation.h), checked by CheckMessage,
 // EncodeMessage and MessageValidator::Decode: num_slaves agrees with slaves, the master is
 // names[0], utime and t_ns >= 0, a defined distance_unit, and per slave: a slave of the rig named
-// once, finite fields, unit q, only defined flags with exactly one of INITIALISING and CONVERGED, a
-// positive scale when converged, non-negative counters and standard deviations (axis_offset_std may
+// once, finite fields, unit q, a defined state, only defined flags, a positive scale when usable
+// or converged, non-negative counters and standard deviations (axis_offset_std may
 // be -1, unknown), axis_spread_deg in [0, 180], a unit planar_axis with
 // FLAG_PLANAR_UNOBSERVABLE_AXIS, FLAG_AXIS_FROM_PRIOR only with it.
 extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
@@ -40,20 +47,19 @@ extern template Expected<rig_extrinsics_t> MessageValidator::Decode(std::string_
                                                                     int64_t);
 
 // Flags of slave_extrinsics_t for a calibration result:
-//   CONVERGED                when slave.usable(), else INITIALISING (no usable estimate yet);
 //   TRANSLATIONAL_ONLY       when the motion model is translational (position unobservable);
-//   PLANAR_UNOBSERVABLE_AXIS when observability.planar.
-// DECALIBRATED is never set here: change detection belongs to the online estimator, which ORs
-// kFlagDecalibrated into the message it publishes.
+//   PLANAR_UNOBSERVABLE_AXIS when observability.planar, with AXIS_FROM_PRIOR when C along the
+//                            axis is the nominal mounting's.
+// REFINED is never set here: only the online estimator knows it (SlaveOnlineState::flags).
 int32_t SlaveFlags(const SlaveCalibration& slave);
 
 // slave_extrinsics_t of one slave. scale/segment/scale_std are those of the current segment
 // (the entry of slave.scales with the largest segment id; estimate.scale and segment 0 when
 // there is none). rotation_eigen_gap = λ2 - λ1 of observability.rotation_eigenvalues.
 // message = ToString(termination) + ": " + slave.message.
-// Placeholders: a slave that is not usable gets identity q, zero C and scale 1 where its
+// state = slave.state. Placeholders: a slave whose solve produced no estimate gets identity q, zero C and scale 1 where its
 // estimate is not finite; non-finite standard deviations and observability figures become 0
-// ("not computed"). Fails when a usable slave's q, C or scale is not finite, when
+// ("not computed"). Fails when a solved slave's q, C or scale is not finite, when
 // observability.planar holds without a finite non-zero axis, or when the result does not pass
 // CheckMessage.
 Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave);

@@ -46,8 +46,15 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
                            int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
                            int64_t utime);
 
-// rig_status_t estimator_state of an estimate (IDLE, INITIALISING, CONVERGED, DEGRADED,
-// DECALIBRATED) and a one-line message.
+// rig_status_t estimator_state of an estimate: the RigState (slave_state.h) combined from the
+// slaves' states (IDLE before the first set), and a one-line message naming the slaves that
+// hold it back.
+static_assert(rig_status_t::ESTIMATOR_IDLE == static_cast<int>(RigState::kIdle));
+static_assert(rig_status_t::ESTIMATOR_INITIALISING == static_cast<int>(RigState::kInitialising));
+static_assert(rig_status_t::ESTIMATOR_DEGRADED == static_cast<int>(RigState::kDegraded));
+static_assert(rig_status_t::ESTIMATOR_USABLE == static_cast<int>(RigState::kUsable));
+static_assert(rig_status_t::ESTIMATOR_CONVERGED == static_cast<int>(RigState::kConverged));
+static_assert(rig_status_t::ESTIMATOR_DECALIBRATED == static_cast<int>(RigState::kDecalibrated));
 int8_t EstimatorState(const RigEstimate& estimate, std::string* message);
 
 }  // namespace rigcal::tools

@@ -27,7 +27,8 @@ struct ConvergencePoint {
   Similarity estimate;
   double rot_std_deg = 0.0;
   int motions_used = 0;
-  uint32_t flags = 0;
+  SlaveState state = SlaveState::kInitialising;
+  uint32_t flags = 0;  // SlaveFlags: facts beside the state
   std::optional<CalibrationError> error;  // with truth
 };
 
@@ -45,7 +46,8 @@ OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineRepla
 // One line per history point: time, slave, flags, motions, σ, and the errors when known.
 std::string FormatConvergence(const std::vector<ConvergencePoint>& history);
 
-// Flags as words ("converged planar ...").
-std::string FlagsToString(uint32_t flags);
+// A slave's state and facts as words for status lines: the state's name (slave_state.h), then
+// "translational-only", "planar", "refined" ("converged planar refined").
+std::string StateText(SlaveState state, uint32_t facts);
 
 }  // namespace rigcal::tools
