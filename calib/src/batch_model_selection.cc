@@ -7,8 +7,8 @@
 #include <numeric>
 
 #include "model_explanation.h"
-#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/robust_statistics.h"
 #include "scale_measurement.h"
 
 namespace rigcal::internal {

@@ -1,16 +1,16 @@
 // The motion-model explanation of the batch and the online results (model_explanation.h).
 #include "model_explanation.h"
-#include "rigcal/calib/format.h"
 
 #include <cmath>
 #include <sstream>
 #include <vector>
 
+#include "rigcal/calib/format.h"
+
 namespace rigcal::internal {
 namespace {
 
 std::string VectorText3(const Eigen::Vector3d& v) { return VectorText(v, 3); }
-
 
 // Thesis 5.2: the largest rotation against the equal-error boundary at the rotation noise.
 std::string BoundaryReason(const ModelExplanation& e) {
@@ -53,8 +53,6 @@ std::string Consequence(const ModelExplanation& e) {
 }
 
 }  // namespace
-
-
 
 std::string ExplainModel(const ModelExplanation& e) {
   std::vector<std::string> why;

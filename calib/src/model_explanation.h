@@ -7,8 +7,8 @@
 #include <string>
 
 #include "rigcal/calib/calibration_options.h"
-#include "rigcal/calib/format.h"
 #include "rigcal/calib/calibration_result.h"
+#include "rigcal/calib/format.h"
 
 namespace rigcal::internal {
 
@@ -46,6 +46,5 @@ struct ModelExplanation {
 //    unobservable, reported as 0 (unknown; a nominal mounting would fill it in)"
 //   "general motion; nearly planar: C along the mean rotation axis [...] has sigma 0.0123"
 std::string ExplainModel(const ModelExplanation& e);
-
 
 }  // namespace rigcal::internal

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <limits>
 
-#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::internal {
 namespace {

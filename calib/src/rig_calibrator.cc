@@ -4,7 +4,6 @@
 #include "rigcal/calib/rig_calibrator.h"
 
 #include <cmath>
-
 #include <sstream>
 
 #include "batch_linear_solution.h"

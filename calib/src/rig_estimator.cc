@@ -30,8 +30,7 @@ using internal::MotionData;
 // (model_explanation.h). The online message states the equal-error boundary for the
 // translational model and the model selection's figures (`selection`) for the planar one.
 std::string OnlineMessage(const RigEstimatorOptions& o, const SlaveCalibration& published,
-                          const std::string& selection,
-                          const std::optional<Similarity>& nominal) {
+                          const std::string& selection, const std::optional<Similarity>& nominal) {
   if (!published.solved()) return published.message;
   internal::ModelExplanation e;
   e.model = published.motion_model;
@@ -50,7 +49,8 @@ std::string OnlineMessage(const RigEstimatorOptions& o, const SlaveCalibration& 
                      std::to_string(published.motions.used) + " motions used, " +
                      std::to_string(published.motions.rejected()) + " rejected; " +
                      internal::ExplainModel(e);
-  if (published.state == SlaveState::kDecalibrated) text += "; DECALIBRATED (camera moved), re-converging";
+  if (published.state == SlaveState::kDecalibrated)
+    text += "; DECALIBRATED (camera moved), re-converging";
   return text;
 }
 

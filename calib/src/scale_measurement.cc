@@ -7,8 +7,8 @@
 
 namespace rigcal::internal {
 
-std::vector<ScaleMeasurement> MeasureScales(const std::vector<MotionData>& motions,
-                                            double epsilon, bool translational) {
+std::vector<ScaleMeasurement> MeasureScales(const std::vector<MotionData>& motions, double epsilon,
+                                            bool translational) {
   std::vector<ScaleMeasurement> out;
   const double delta = 3.0 * epsilon;  // (4.23) with L = 0.5
   for (size_t k = 0; k < motions.size(); ++k) {

@@ -25,8 +25,9 @@ std::vector<std::pair<std::string, std::string>> SimulatedRig::GroundTruthFiles(
       const std::string t = FormatNsAsSeconds(FrameTimeNs(k));
       for (auto [out, pose] : {std::pair<std::ostringstream*, const Pose*>{&local, &l},
                                std::pair<std::ostringstream*, const Pose*>{&world, &w}}) {
-        *out << t << ' ' << ShortestText(pose->C.x()) << ' ' << ShortestText(pose->C.y()) << ' ' << ShortestText(pose->C.z())
-             << ' ' << ShortestText(pose->q.x()) << ' ' << ShortestText(pose->q.y()) << ' ' << ShortestText(pose->q.z()) << ' '
+        *out << t << ' ' << ShortestText(pose->C.x()) << ' ' << ShortestText(pose->C.y()) << ' '
+             << ShortestText(pose->C.z()) << ' ' << ShortestText(pose->q.x()) << ' '
+             << ShortestText(pose->q.y()) << ' ' << ShortestText(pose->q.z()) << ' '
              << ShortestText(pose->q.w()) << '\n';
       }
     }
@@ -41,9 +42,10 @@ std::vector<std::pair<std::string, std::string>> SimulatedRig::GroundTruthFiles(
   for (size_t i = 0; i < rig.size(); ++i) {
     const Similarity& s = rig[i];
     yaml << spec.names[i + 1] << ":\n"
-         << "  q_wxyz: [" << ShortestText(s.q.w()) << ", " << ShortestText(s.q.x()) << ", " << ShortestText(s.q.y()) << ", "
-         << ShortestText(s.q.z()) << "]\n"
-         << "  C: [" << ShortestText(s.C.x()) << ", " << ShortestText(s.C.y()) << ", " << ShortestText(s.C.z()) << "]\n"
+         << "  q_wxyz: [" << ShortestText(s.q.w()) << ", " << ShortestText(s.q.x()) << ", "
+         << ShortestText(s.q.y()) << ", " << ShortestText(s.q.z()) << "]\n"
+         << "  C: [" << ShortestText(s.C.x()) << ", " << ShortestText(s.C.y()) << ", "
+         << ShortestText(s.C.z()) << "]\n"
          << "  scale: 1\n";
   }
   files.emplace_back("truth.yaml", yaml.str());

@@ -66,8 +66,9 @@ std::vector<std::string> Names(const RigRecording& rec) {
 class SetFeeder {
  public:
   explicit SetFeeder(const RigRecording& rec)
-      : rec_(rec), poses_(rec.slaves.size() + 1), period_ns_(rec.t_ns.back() - rec.t_ns[0] +
-                                                             (rec.t_ns[1] - rec.t_ns[0])) {}
+      : rec_(rec),
+        poses_(rec.slaves.size() + 1),
+        period_ns_(rec.t_ns.back() - rec.t_ns[0] + (rec.t_ns[1] - rec.t_ns[0])) {}
   void Feed(RigEstimator* estimator, int64_t n) {
     const size_t k = static_cast<size_t>(n % static_cast<int64_t>(rec_.size()));
     const int64_t t = rec_.t_ns[k] + (n / static_cast<int64_t>(rec_.size())) * period_ns_;

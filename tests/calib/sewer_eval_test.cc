@@ -17,8 +17,8 @@
 
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/drivers/simulated_rig.h"
-#include "rigcal/pipeline/pipeline.h"
 #include "rigcal/io/rig_config.h"
+#include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/run_evaluation.h"
 
 namespace rigcal {

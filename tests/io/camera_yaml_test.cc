@@ -9,8 +9,8 @@
 #include <sstream>
 #include <string>
 
-#include "rigcal/io/config_sections.h"
 #include "rigcal/camera/camera_spec.h"
+#include "rigcal/io/config_sections.h"
 
 namespace rigcal::tools {
 namespace {

@@ -94,19 +94,10 @@ std::set<std::string> Keys(const nlohmann::json& j) {
   return keys;
 }
 
-const std::set<std::string> kCommonKeys = {"name",
-                                           "q_wxyz",
-                                           "C",
-                                           "std",
-                                           "motions_used",
-                                           "motions_rejected",
-                                           "models",
-                                           "state",
-                                           "termination",
-                                           "message",
-                                           "unobservable",
-                                           "unobservable_from_prior",
-                                           "observability"};
+const std::set<std::string> kCommonKeys = {
+    "name",         "q_wxyz", "C",           "std",     "motions_used", "motions_rejected",
+    "models",       "state",  "termination", "message", "unobservable", "unobservable_from_prior",
+    "observability"};
 
 std::set<std::string> With(std::set<std::string> keys, std::initializer_list<const char*> more) {
   for (const char* k : more) keys.insert(k);

@@ -16,12 +16,12 @@
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/lcm/channels.h"
-#include "rigcal/lcm/extrinsics_message.h"
-#include "rigcal/lcm/pose_message.h"
-#include "rigcal/lcm/pose_log.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/extrinsics_message.h"
+#include "rigcal/lcm/pose_log.h"
+#include "rigcal/lcm/pose_message.h"
 
 namespace rigcal::tools {
 namespace {

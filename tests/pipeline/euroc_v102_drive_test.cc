@@ -10,13 +10,14 @@
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/pipeline/online_replay.h"
 #include "rigcal/io/trajectory_io.h"
+#include "rigcal/pipeline/online_replay.h"
 
 namespace rigcal::tools {
 namespace {
 
-const std::string kPath = std::string(RIGCAL_SHARED_DATA_DIR) + "/trajectories/V102_groundtruth.csv";
+const std::string kPath =
+    std::string(RIGCAL_SHARED_DATA_DIR) + "/trajectories/V102_groundtruth.csv";
 
 constexpr double kNoiseDeg = 0.03;        // per-pose rotation noise of the VO
 constexpr double kPositionNoise = 0.002;  // per-pose position noise, metres (master units)
@@ -53,8 +54,8 @@ TEST(EurocV102Drive, OnlineEstimateConverges) {
   // Master camera: the body frame with the camera looking along body x (z_cam = x_body),
   // 20 Hz, expressed in its own first frame.
   Pose body_from_cam;
-  body_from_cam.q = Eigen::Quaterniond(
-      (Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished());
+  body_from_cam.q =
+      Eigen::Quaterniond((Eigen::Matrix3d() << 0, 0, 1, -1, 0, 0, 0, -1, 0).finished());
   const Rig rig = MakeRig();
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -63,7 +64,7 @@ TEST(EurocV102Drive, OnlineEstimateConverges) {
   rec.master.name = rig.names[0];
   for (size_t i = 1; i < rig.names.size(); ++i) rec.slaves.push_back({rig.names[i], {}, {}});
   Pose first;
-  std::vector<Pose> anchor(rig.truth.size());        // slave pose (true, metric) at segment start
+  std::vector<Pose> anchor(rig.truth.size());  // slave pose (true, metric) at segment start
   std::vector<double> segment_scale(rig.truth.size());
   std::vector<int> segment(rig.truth.size(), -1);
   std::vector<int64_t> segment_start(rig.truth.size(), 0);
@@ -77,7 +78,8 @@ TEST(EurocV102Drive, OnlineEstimateConverges) {
     const double t_s = 1e-9 * static_cast<double>(t - body->t_ns[0]);
     rec.t_ns.push_back(t);
     Pose noisy_master = PerturbPose(master, kNoiseDeg * kRadPerDeg, rng);
-    noisy_master.C = master.C + kPositionNoise * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    noisy_master.C =
+        master.C + kPositionNoise * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
     rec.master.poses.push_back(noisy_master);
     for (size_t i = 0; i < rig.truth.size(); ++i) {
       // The slave's true pose in its own first frame, metric; then its odometry: a new frame

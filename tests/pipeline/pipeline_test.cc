@@ -11,9 +11,9 @@
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/pipeline/run_evaluation.h"
-#include "rigcal/camera/camera_spec.h"
 
 namespace rigcal::tools {
 namespace {

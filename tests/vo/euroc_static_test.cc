@@ -7,8 +7,8 @@
 
 #include <filesystem>
 
-#include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/camera/camera_spec.h"
+#include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/vo/monocular_vo.h"
 
 namespace rigcal::vo {

@@ -13,10 +13,10 @@
 #include <map>
 
 #include "rigcal/calib/quaternion.h"
-#include "support/ideal_cameras.h"
-#include "support/room_sequence.h"
 #include "rigcal/calib/robust_statistics.h"
 #include "rigcal/camera/camera_spec.h"
+#include "support/ideal_cameras.h"
+#include "support/room_sequence.h"
 
 namespace rigcal::vo {
 namespace {

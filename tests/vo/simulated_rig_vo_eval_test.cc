@@ -22,10 +22,10 @@
 #include <map>
 
 #include "rigcal/calib/robust_statistics.h"
+#include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
-#include "rigcal/camera/camera_spec.h"
 #include "rigcal/vo/monocular_vo.h"
 
 namespace rigcal::vo {

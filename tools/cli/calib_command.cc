@@ -7,9 +7,9 @@
 
 #include "commands.h"
 #include "rigcal/calib/logging.h"
-#include "rigcal/pipeline/calib_node.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_config.h"
+#include "rigcal/pipeline/calib_node.h"
 #include "stop_signal.h"
 
 namespace rigcal::cli {
@@ -112,7 +112,8 @@ void RegisterCalib(CLI::App& app, int* exit_code) {
                   "Seconds between status lines on stderr (0 = none)")
       ->check(CLI::NonNegativeNumber)
       ->default_val(10.0);
-  cmd->add_flag("--json", args->json, "Print the final result as JSON (rigcal solve --json schema)");
+  cmd->add_flag("--json", args->json,
+                "Print the final result as JSON (rigcal solve --json schema)");
   cmd->callback([args, exit_code]() { *exit_code = RunCalib(*args); });
 }
 

@@ -1,6 +1,5 @@
 // The rigcal command: parses the command line and hands over to a subcommand.
 #include <CLI/CLI.hpp>
-
 #include <exception>
 #include <iostream>
 

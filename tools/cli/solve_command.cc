@@ -12,10 +12,10 @@
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/rig_calibrator.h"
-#include "rigcal/pipeline/online_replay.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
+#include "rigcal/pipeline/online_replay.h"
 
 namespace rigcal::cli {
 namespace {
@@ -23,7 +23,6 @@ namespace {
 // Exit codes of `rigcal solve` (0 and 1 as for every subcommand).
 constexpr int kExitOk = 0;
 constexpr int kExitError = 1;
-
 
 struct SolveArgs {
   std::string master;

@@ -7,9 +7,9 @@
 
 #include "commands.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/lcm/pose_log.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
+#include "rigcal/lcm/pose_log.h"
 
 namespace rigcal::cli {
 namespace {
@@ -57,8 +57,8 @@ int RunSynthLog(const SynthLogArgs& args) {
       return 1;
     }
   }
-  std::cout << "wrote " << sim.recording.size() << " poses per camera of "
-            << config->cameras.size() << " cameras to " << args.out << "\n";
+  std::cout << "wrote " << sim.recording.size() << " poses per camera of " << config->cameras.size()
+            << " cameras to " << args.out << "\n";
   return 0;
 }
 

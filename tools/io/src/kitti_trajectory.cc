@@ -8,8 +8,8 @@
 #include <fstream>
 #include <vector>
 
-#include "rigcal/io/trajectory_io.h"
 #include "rigcal/calib/format.h"
+#include "rigcal/io/trajectory_io.h"
 #include "trajectory_text.h"
 
 namespace rigcal::tools {
@@ -57,7 +57,8 @@ Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
     const double error = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
     if (!(error <= kOrthonormalTolerance) || !(r.determinant() > 0.0)) {
       return Error{p.Where() + "the rotation block is not a rotation (|R^T R - I| = " +
-                   SignificantText(error, 9) + ", det " + SignificantText(r.determinant(), 9) + ")"};
+                   SignificantText(error, 9) + ", det " + SignificantText(r.determinant(), 9) +
+                   ")"};
     }
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Pose pose;

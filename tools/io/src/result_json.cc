@@ -43,9 +43,8 @@ std::string Vec3(const Eigen::Vector3d& v, int decimals = 4) {
 }
 
 std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth) {
-  std::string out =
-      fmt::format("{}: {} ({}){}\n", s.name, ToString(s.state), ToString(s.termination),
-                  s.usable() ? "" : " (NOT USABLE)");
+  std::string out = fmt::format("{}: {} ({}){}\n", s.name, ToString(s.state),
+                                ToString(s.termination), s.usable() ? "" : " (NOT USABLE)");
   if (!s.message.empty()) out += fmt::format("  {}\n", s.message);
   out += Row("", "estimate", truth ? "truth" : "");
   out += Row("q (w, x, y, z)", Quat(s.estimate.q), truth ? Quat(truth->q) : "");

@@ -6,13 +6,12 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/io/trajectory_io.h"
 #include "rigcal/calib/format.h"
+#include "rigcal/io/trajectory_io.h"
 #include "trajectory_text.h"
 
 namespace rigcal::tools {
 namespace {
-
 
 std::string FormatRange(const TimedTrajectory& t) {
   std::array<char, 96> buf{};

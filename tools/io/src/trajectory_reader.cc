@@ -9,10 +9,10 @@
 #include <fstream>
 #include <optional>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_formats.h"
-#include "rigcal/calib/format.h"
 #include "trajectory_text.h"
 
 namespace rigcal::tools {
@@ -105,9 +105,10 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
     const double norm = q.norm();
     const double norm_error = std::abs(norm - 1.0);
     if (!(norm_error <= options.max_quaternion_norm_error)) {
-      return Error{parser.Where() + "quaternion (w, x, y, z) = (" + SignificantText(q[0], 9) + ", " +
-                   SignificantText(q[1], 9) + ", " + SignificantText(q[2], 9) + ", " + SignificantText(q[3], 9) + ") has norm " +
-                   SignificantText(norm, 9) + ", not 1 within " + SignificantText(options.max_quaternion_norm_error, 9)};
+      return Error{parser.Where() + "quaternion (w, x, y, z) = (" + SignificantText(q[0], 9) +
+                   ", " + SignificantText(q[1], 9) + ", " + SignificantText(q[2], 9) + ", " +
+                   SignificantText(q[3], 9) + ") has norm " + SignificantText(norm, 9) +
+                   ", not 1 within " + SignificantText(options.max_quaternion_norm_error, 9)};
     }
     if (norm_error > kSilentNormError) {
       ++normalised;

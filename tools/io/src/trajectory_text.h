@@ -40,8 +40,6 @@ std::optional<Int> ParseInteger(std::string_view s) {
 // The whole of `s` as a double (from_chars syntax after an optional '+'); nullopt otherwise.
 std::optional<double> ParseDouble(std::string_view s);
 
-
-
 // Parser of the fields of one data line; every error starts with "<path>:<line>: " and names the
 // column by number and meaning. Keeps references: `path` and `column_names` must outlive it.
 class LineParser {

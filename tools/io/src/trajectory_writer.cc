@@ -4,17 +4,17 @@
 #include <array>
 #include <string>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_formats.h"
-#include "rigcal/calib/format.h"
 #include "trajectory_text.h"
 
 namespace rigcal::tools {
 namespace {
 
 Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajectory,
-                            TrajectoryFormat format) {
+                       TrajectoryFormat format) {
   if (trajectory.poses.size() != trajectory.t_ns.size() ||
       (!trajectory.segment.empty() && trajectory.segment.size() != trajectory.t_ns.size())) {
     return Error{"cannot write '" + path + "': t_ns, poses and segment differ in size"};

@@ -91,8 +91,7 @@ Expected<std::string> FieldReader::String(const YAML::Node& node, const std::str
   return node.Scalar();
 }
 
-Expected<std::vector<double>> FieldReader::Numbers(const YAML::Node& parent,
-                                                   const std::string& key,
+Expected<std::vector<double>> FieldReader::Numbers(const YAML::Node& parent, const std::string& key,
                                                    const std::string& field, size_t n) const {
   const YAML::Node node = parent[key];
   if (!node) return Fail(parent, field, "missing (expected " + std::to_string(n) + " numbers)");

@@ -7,9 +7,9 @@
 #include <memory>
 #include <vector>
 
+#include "rigcal/io/atomic_file.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
-#include "rigcal/io/atomic_file.h"
 
 namespace rigcal::tools {
 

@@ -219,8 +219,8 @@ struct CalibNode::Impl {
                       slave.estimate.C.y(), slave.estimate.C.z(), slave.rot_std_deg);
         line << buf;
       }
-      line << " [" << StateText(slave.state,
-                                i < estimate.online.size() ? estimate.online[i].flags : 0u)
+      line << " ["
+           << StateText(slave.state, i < estimate.online.size() ? estimate.online[i].flags : 0u)
            << "]";
     }
     log->info("{}", line.str());

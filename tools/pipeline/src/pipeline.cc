@@ -7,9 +7,9 @@
 
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/pose_merge.h"
+#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
-#include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::tools {
 namespace {

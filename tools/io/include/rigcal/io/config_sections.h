@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "rigcal/calib/status.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/camera/camera_spec.h"
+#include "rigcal/drivers/simulated_rig.h"
 
 namespace rigcal::tools {
 

@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
 #include "rigcal/calib/online_calibrator.h"
+#include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/camera/camera_spec.h"
+#include "rigcal/drivers/simulated_rig.h"
 
 namespace rigcal::tools {
 

@@ -57,8 +57,9 @@ int32_t SlaveFlags(const SlaveCalibration& slave);
 // (the entry of slave.scales with the largest segment id; estimate.scale and segment 0 when
 // there is none). rotation_eigen_gap = λ2 - λ1 of observability.rotation_eigenvalues.
 // message = ToString(termination) + ": " + slave.message.
-// state = slave.state. Placeholders: a slave whose solve produced no estimate gets identity q, zero C and scale 1 where its
-// estimate is not finite; non-finite standard deviations and observability figures become 0
+// state = slave.state. Placeholders: a slave whose solve produced no estimate gets identity q, zero
+// C and scale 1 where its estimate is not finite; non-finite standard deviations and observability
+// figures become 0
 // ("not computed"). Fails when a solved slave's q, C or scale is not finite, when
 // observability.planar holds without a finite non-zero axis, or when the result does not pass
 // CheckMessage.

@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/calib/status.h"
 #include "rigcal/io/rig_config.h"
+#include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
 
 namespace lcm {
@@ -60,13 +60,13 @@ struct CalibNodeSummary {
   SyncStats sync;
   DecodeStats decode;
   std::vector<CameraInputStats> cameras;  // camera index order
-  int64_t unknown_channel = 0;  // RIGCAL_POSE_* messages for cameras not in the rig
+  int64_t unknown_channel = 0;            // RIGCAL_POSE_* messages for cameras not in the rig
   int64_t extrinsics_published = 0;
   int64_t status_published = 0;
   int64_t state_saves = 0;
-  bool resumed = false;        // state restored from the state file
-  bool end_of_log = false;     // replay reached the end of the log
-  std::string log_problem;     // e.g. a truncated last event; empty when the log was clean
+  bool resumed = false;             // state restored from the state file
+  bool end_of_log = false;          // replay reached the end of the log
+  std::string log_problem;          // e.g. a truncated last event; empty when the log was clean
   std::vector<std::string> errors;  // failed state/result writes, publish failures
 };
 

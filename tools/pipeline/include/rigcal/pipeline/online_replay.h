@@ -28,7 +28,7 @@ struct ConvergencePoint {
   double rot_std_deg = 0.0;
   int motions_used = 0;
   SlaveState state = SlaveState::kInitialising;
-  uint32_t flags = 0;  // SlaveFlags: facts beside the state
+  uint32_t flags = 0;                     // SlaveFlags: facts beside the state
   std::optional<CalibrationError> error;  // with truth
 };
 
