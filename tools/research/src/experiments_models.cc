@@ -90,9 +90,7 @@ std::string SamplesNote(const ExperimentOptions& options) {
 }  // namespace
 
 ExperimentResult RunMotionModel(const ExperimentOptions& options) {
-  ExperimentResult result;
-  result.kind = ExperimentKind::kMotionModel;
-  result.error = options.Check().message();  // empty when the options are valid
+  ExperimentResult result = NewExperimentResult(ExperimentKind::kMotionModel, options);
   if (!result.error.empty()) return result;
   const std::vector<CalibrationOptions> variants = {
       ThesisCalibrationOptions(Method::kLinear, MotionModel::kTranslational, ScaleModel::kFixed),
@@ -123,9 +121,7 @@ ExperimentResult RunMotionModel(const ExperimentOptions& options) {
 }
 
 ExperimentResult RunScaleModel(const ExperimentOptions& options) {
-  ExperimentResult result;
-  result.kind = ExperimentKind::kScaleModel;
-  result.error = options.Check().message();  // empty when the options are valid
+  ExperimentResult result = NewExperimentResult(ExperimentKind::kScaleModel, options);
   if (!result.error.empty()) return result;
   const int partitions = options.partitions;  // 0: one per pose, resolved per sample
   const std::vector<CalibrationOptions> variants = {

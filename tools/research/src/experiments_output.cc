@@ -390,4 +390,11 @@ Expected<std::vector<std::string>> WriteExperimentOutputs(const ExperimentResult
   return written;
 }
 
+ExperimentResult NewExperimentResult(ExperimentKind kind, const ExperimentOptions& options) {
+  ExperimentResult result;
+  result.kind = kind;
+  result.error = options.Check().message();
+  return result;
+}
+
 }  // namespace rigcal

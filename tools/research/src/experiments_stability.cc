@@ -46,9 +46,7 @@ void AddCommonNotes(const ExperimentOptions& options, int degenerate, Experiment
 }  // namespace
 
 ExperimentResult RunStability(const ExperimentOptions& options) {
-  ExperimentResult result;
-  result.kind = ExperimentKind::kStability;
-  result.error = options.Check().message();  // empty when the options are valid
+  ExperimentResult result = NewExperimentResult(ExperimentKind::kStability, options);
   if (!result.error.empty()) return result;
 
   std::vector<ThesisSampleOptions> points;
@@ -78,9 +76,7 @@ ExperimentResult RunStability(const ExperimentOptions& options) {
 }
 
 ExperimentResult RunPoses(const ExperimentOptions& options) {
-  ExperimentResult result;
-  result.kind = ExperimentKind::kPoses;
-  result.error = options.Check().message();  // empty when the options are valid
+  ExperimentResult result = NewExperimentResult(ExperimentKind::kPoses, options);
   if (!result.error.empty()) return result;
 
   std::vector<ThesisSampleOptions> points;

@@ -138,6 +138,9 @@ struct ExperimentResult {
 
 // The experiments. Thread-compatible; each uses options.threads worker threads internally and
 // joins them before returning.
+// An empty result of `kind`; its `error` is the options' Check() message (empty when valid).
+ExperimentResult NewExperimentResult(ExperimentKind kind, const ExperimentOptions& options);
+
 ExperimentResult RunStability(const ExperimentOptions& options);
 ExperimentResult RunPoses(const ExperimentOptions& options);
 ExperimentResult RunMotionModel(const ExperimentOptions& options);
