@@ -376,6 +376,7 @@ TEST(CalibNode, EstimatorStateNamesTheDecalibratedSlave) {
   estimate.rig.slaves[0].state = SlaveState::kConverged;
   EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_DEGRADED);
   EXPECT_NE(message.find("back"), std::string::npos) << message;  // the one holding it back
+  EXPECT_NE(message.find("1 of 2 slaves usable"), std::string::npos) << message;
   estimate.rig.slaves[1].state = SlaveState::kUsable;
   EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_USABLE);
   estimate.rig.slaves[1].state = SlaveState::kConverged;

@@ -115,9 +115,11 @@ int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
   std::vector<SlaveState> states;
   std::string decalibrated, not_usable;
   int converged = 0;
+  int usable = 0;
   for (const SlaveCalibration& slave : estimate.rig.slaves) {
     states.push_back(slave.state);
     if (slave.state == SlaveState::kConverged) ++converged;
+    if (slave.usable()) ++usable;
     std::string& list = slave.state == SlaveState::kDecalibrated ? decalibrated : not_usable;
     if (!slave.usable()) list += (list.empty() ? "" : ", ") + slave.name;
   }
@@ -132,8 +134,7 @@ int8_t EstimatorState(const RigEstimate& estimate, std::string* message) {
       text << "collecting motion (" << estimate.sets << " sets)";
       break;
     case RigState::kDegraded:
-      text << (slaves - (not_usable.empty() ? 0 : 1)) << " of " << slaves
-           << " slaves usable; not yet: " << not_usable;
+      text << usable << " of " << slaves << " slaves usable; not yet: " << not_usable;
       break;
     case RigState::kUsable:
       text << "all " << slaves << " slaves usable, " << converged << " converged";
