@@ -20,6 +20,7 @@ struct MotionData {
   int segment = 0;
   int scale_key = 0;    // segment id or partition number behind scale_index
   int64_t t_ns = 0;     // mid-time of the motion
+  int64_t duration_ns = 0;  // t_b - t_a
 };
 
 std::vector<MotionData> ToMotionData(const std::vector<RigMotion>& motions);

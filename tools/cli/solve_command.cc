@@ -75,11 +75,13 @@ std::string ApplyPairs(const std::string& text, PairOptions* pairs) {
     pairs->policy = PairOptions::Policy::kAuto;
   } else if (text == "start") {
     pairs->policy = PairOptions::Policy::kSinceStart;
+  } else if (text == "walk") {
+    pairs->policy = PairOptions::Policy::kWalk;
   } else if (const int step = CountAfter(text, "relative:"); step > 0) {
     pairs->policy = PairOptions::Policy::kRelative;
     pairs->step = step;
   } else {
-    return "expected auto, start or relative:STEP with STEP >= 1, got '" + text + "'";
+    return "expected auto, start, walk or relative:STEP with STEP >= 1, got '" + text + "'";
   }
   return "";
 }
@@ -276,16 +278,17 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
           "auto|fixed|segments|partitions:N"))
       ->capture_default_str();
   cmd->add_option("--pairs", args->pairs,
-                  "Which pairs of times (a, b) become motions. auto: pairs with\n"
-                  "large enough motion and bounded drift, spread over the drive;\n"
+                  "Which pairs of times (a, b) become motions. auto: per slave the\n"
+                  "span N of (k, k + N) whose estimate has the smallest σ (spans\n"
+                  "1, 2, 3, 5, 8, ... up to 1/8 of the recording are solved);\n"
                   "start: (first pose, k) for every k; relative:STEP: (k, k + STEP)\n"
-                  "for every k.")
+                  "for every k; walk: from spread anchors to a target rotation.")
       ->check(ValueCheck(
           [](const std::string& v) {
             PairOptions p;
             return ApplyPairs(v, &p);
           },
-          "auto|start|relative:STEP"))
+          "auto|start|walk|relative:STEP"))
       ->capture_default_str();
   cmd->add_option("--tolerance-ms", args->tolerance_ms,
                   "Largest time difference in milliseconds between a master pose\n"

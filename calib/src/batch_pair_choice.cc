@@ -1,0 +1,111 @@
+// Per-slave span choice by the reported σ (batch_pair_choice.h).
+#include "batch_pair_choice.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "rigcal/calib/logging.h"
+#include "rigcal/calib/pair_selection.h"
+#include "rigcal/calib/rig_calibrator.h"
+
+namespace rigcal::internal {
+namespace {
+
+struct Candidate {
+  int span = 0;
+  SlaveCalibration result;
+  double rot = std::numeric_limits<double>::quiet_NaN();  // rotation σ, degrees
+  double pos = std::numeric_limits<double>::quiet_NaN();  // |σ_C|, master units
+};
+
+// σ that can be compared: finite and positive (an unknown or zero σ says nothing).
+double Comparable(double sigma) {
+  return std::isfinite(sigma) && sigma > 0.0 ? sigma : std::numeric_limits<double>::quiet_NaN();
+}
+
+Candidate Solve(const RigRecording& recording, int slave, const CalibrationOptions& options,
+                int span, int stride) {
+  Candidate c;
+  c.span = span;
+  const auto pairs = RelativePairs(recording, span, stride);
+  c.result = CalibrateSlave(MotionsForSlave(recording, slave, pairs), options,
+                            recording.slaves[slave].name);
+  if (c.result.solved()) {
+    c.rot = Comparable(c.result.rot_std_deg);
+    if (c.result.position_observable) c.pos = Comparable(c.result.pos_std.norm());
+  }
+  return c;
+}
+
+// The candidate whose worse σ ratio to the best σ (rotation, and position where every
+// candidate has one) is smallest; -1 when none has a comparable rotation σ.
+int Best(const std::vector<Candidate>& candidates, bool usable_only) {
+  double rot_min = std::numeric_limits<double>::infinity();
+  double pos_min = std::numeric_limits<double>::infinity();
+  auto eligible = [&](const Candidate& c) {
+    return std::isfinite(c.rot) && (!usable_only || c.result.usable());
+  };
+  bool every_pos = true;
+  for (const auto& c : candidates) {
+    if (!eligible(c)) continue;
+    rot_min = std::min(rot_min, c.rot);
+    if (std::isfinite(c.pos)) {
+      pos_min = std::min(pos_min, c.pos);
+    } else {
+      every_pos = false;
+    }
+  }
+  int best = -1;
+  double best_score = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const Candidate& c = candidates[k];
+    if (!eligible(c)) continue;
+    double score = c.rot / rot_min;
+    if (every_pos && std::isfinite(pos_min)) score = std::max(score, c.pos / pos_min);
+    if (score < best_score) {
+      best_score = score;
+      best = static_cast<int>(k);
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slave,
+                                         const CalibrationOptions& options) {
+  const int n = static_cast<int>(recording.size());
+  const std::vector<int> spans = AutoSpanCandidates(n, options.pairs);
+  const int stride = std::max(1, (n + options.pairs.max_pairs - 1) / options.pairs.max_pairs);
+  std::vector<Candidate> candidates;
+  candidates.reserve(spans.size());
+  for (int span : spans) candidates.push_back(Solve(recording, slave, options, span, stride));
+
+  int best = Best(candidates, true);
+  if (best < 0) best = Best(candidates, false);
+  std::string how;
+  if (best < 0) {
+    // No candidate has a σ: the one with the most motions used says best what is missing.
+    best = 0;
+    for (size_t k = 1; k < candidates.size(); ++k) {
+      if (candidates[k].result.motions.used > candidates[best].result.motions.used) {
+        best = static_cast<int>(k);
+      }
+    }
+    how = "no span gave a σ";
+  } else {
+    how = "smallest σ among spans " + std::to_string(spans.front()) + "-" +
+          std::to_string(spans.back());
+  }
+  Candidate chosen = candidates[best];
+  if (stride > 1) chosen = Solve(recording, slave, options, chosen.span, 1);
+  SlaveCalibration r = std::move(chosen.result);
+  r.pairs = "relative:" + std::to_string(chosen.span);
+  r.message += "; pairs relative:" + std::to_string(chosen.span) + " (auto: " + how + ")";
+  ModuleLogger("calib")->debug("slave '{}': auto pairs relative:{} ({})", r.name, chosen.span, how);
+  return r;
+}
+
+}  // namespace rigcal::internal
