@@ -18,6 +18,7 @@ struct Candidate {
   SlaveCalibration result;
   double rot = std::numeric_limits<double>::quiet_NaN();  // rotation σ, degrees
   double pos = std::numeric_limits<double>::quiet_NaN();  // |σ_C|, master units
+  double pos_in_plane = std::numeric_limits<double>::quiet_NaN();  // across the rotation axis
 };
 
 // σ that can be compared: finite and positive (an unknown or zero σ says nothing).
@@ -34,36 +35,74 @@ Candidate Solve(const RigRecording& recording, int slave, const CalibrationOptio
                             recording.slaves[slave].name);
   if (c.result.solved()) {
     c.rot = Comparable(c.result.rot_std_deg);
-    if (c.result.position_observable) c.pos = Comparable(c.result.pos_std.norm());
+    if (c.result.position_observable) {
+      c.pos = Comparable(c.result.pos_std.norm());
+      // σ of C across the mean rotation axis: what a planar drive determines, whichever model
+      // (general or planar) a span's motions call for.
+      const double axis = std::isfinite(c.result.axis_offset_std) ? c.result.axis_offset_std : 0.0;
+      c.pos_in_plane =
+          Comparable(std::sqrt(std::max(0.0, c.result.pos_std.squaredNorm() - axis * axis)));
+    }
   }
   return c;
 }
 
-// The candidate whose worse σ ratio to the best σ (rotation, and position where every
-// candidate has one) is smallest; -1 when none has a comparable rotation σ.
+// σ along the ladder of spans, smoothed: the geometric mean of each σ and its neighbours' (the
+// σ of one span is itself an estimate, and the smallest of many noisy estimates is mostly the
+// one that came out too small). NaN stays NaN.
+std::vector<double> Smoothed(const std::vector<double>& sigma) {
+  std::vector<double> out(sigma.size(), std::numeric_limits<double>::quiet_NaN());
+  for (size_t k = 0; k < sigma.size(); ++k) {
+    if (!std::isfinite(sigma[k])) continue;
+    double log_sum = 0.0;
+    int count = 0;
+    for (size_t j = (k == 0 ? 0 : k - 1); j <= k + 1 && j < sigma.size(); ++j) {
+      if (std::isfinite(sigma[j])) {
+        log_sum += std::log(sigma[j]);
+        ++count;
+      }
+    }
+    out[k] = std::exp(log_sum / count);
+  }
+  return out;
+}
+
+// The candidate whose worse (smoothed) σ ratio to the best σ (rotation, and position where
+// every candidate has one) is smallest; -1 when none has a comparable rotation σ.
 int Best(const std::vector<Candidate>& candidates, bool usable_only) {
-  double rot_min = std::numeric_limits<double>::infinity();
-  double pos_min = std::numeric_limits<double>::infinity();
   auto eligible = [&](const Candidate& c) {
     return std::isfinite(c.rot) && (!usable_only || c.result.usable());
   };
-  bool every_pos = true;
+  // Position σ compare across the rotation axis when any span's motions are planar (the
+  // offset along the axis is then the nominal's or unknown, not what the span determines).
+  bool in_plane = false;
   for (const auto& c : candidates) {
+    if (eligible(c) && c.result.motion_model == MotionModel::kPlanar) in_plane = true;
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> rot(candidates.size(), nan), pos(candidates.size(), nan);
+  bool every_pos = true;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const Candidate& c = candidates[k];
     if (!eligible(c)) continue;
-    rot_min = std::min(rot_min, c.rot);
-    if (std::isfinite(c.pos)) {
-      pos_min = std::min(pos_min, c.pos);
-    } else {
-      every_pos = false;
-    }
+    rot[k] = c.rot;
+    pos[k] = in_plane ? c.pos_in_plane : c.pos;
+    if (!std::isfinite(pos[k])) every_pos = false;
+  }
+  rot = Smoothed(rot);
+  pos = Smoothed(pos);
+  double rot_min = std::numeric_limits<double>::infinity();
+  double pos_min = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    if (std::isfinite(rot[k])) rot_min = std::min(rot_min, rot[k]);
+    if (std::isfinite(pos[k])) pos_min = std::min(pos_min, pos[k]);
   }
   int best = -1;
   double best_score = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < candidates.size(); ++k) {
-    const Candidate& c = candidates[k];
-    if (!eligible(c)) continue;
-    double score = c.rot / rot_min;
-    if (every_pos && std::isfinite(pos_min)) score = std::max(score, c.pos / pos_min);
+    if (!std::isfinite(rot[k])) continue;
+    double score = rot[k] / rot_min;
+    if (every_pos && std::isfinite(pos_min)) score = std::max(score, pos[k] / pos_min);
     if (score < best_score) {
       best_score = score;
       best = static_cast<int>(k);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "rigcal/calib/logging.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/research/experiments.h"
 #include "rigcal/research/pair_evaluation.h"
@@ -51,6 +52,8 @@ ExperimentProgress StderrProgress(const std::string& name, bool quiet) {
 
 // `rigcal experiment pairs`: the pair-policy evaluation (pair_evaluation.h).
 int RunPairs(const ExperimentArgs& args) {
+  // Hundreds of solves and replays: their per-slave log lines would drown the table.
+  ModuleLogger("calib")->set_level(spdlog::level::err);
   std::vector<std::string> notes;
   const std::vector<PairScenario> scenarios = PairScenarios(args.data_dir, &notes);
   for (const auto& note : notes) std::cerr << "rigcal experiment pairs: " << note << "\n";

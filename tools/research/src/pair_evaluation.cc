@@ -26,14 +26,16 @@ struct Sums {
 
 // Position error: |C - C_hat| in master units, without the directions the estimate leaves
 // undetermined (the rotation axis of planar motion; every direction of the translational model).
-double PositionError(const SlaveCalibration& s, const Similarity& truth) {
+double PositionError(const SlaveCalibration& s, const Similarity& truth, bool planar) {
   Eigen::Vector3d d = s.estimate.C - truth.C;
   if (!s.position_observable) return kNotAvailable;
   for (const auto& u : s.unobservable) d -= u.dot(d) * u;
+  const Eigen::Vector3d& axis = s.observability.planar_axis;
+  if (planar && axis.norm() > 0.5) d -= axis.normalized().dot(d) * axis.normalized();
   return d.norm();
 }
 
-void Accumulate(const SlaveCalibration& s, const Similarity& truth, Sums* sums) {
+void Accumulate(const SlaveCalibration& s, const Similarity& truth, bool planar, Sums* sums) {
   if (!s.solved()) {
     ++sums->failed;
     return;
@@ -41,7 +43,7 @@ void Accumulate(const SlaveCalibration& s, const Similarity& truth, Sums* sums) 
   ++sums->results;
   const CalibrationError e = CompareToTruth(s.estimate, truth);
   sums->rot += e.rot_deg * e.rot_deg;
-  const double pos = PositionError(s, truth);
+  const double pos = PositionError(s, truth, planar);
   if (std::isfinite(pos)) {
     sums->pos += pos * pos;
     ++sums->pos_count;
@@ -116,13 +118,20 @@ void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOp
   for (size_t p = 0; p < results.size(); ++p) {
     for (size_t i = 0; i < results[p].slaves.size() && i < scenario.rig.size(); ++i) {
       const SlaveCalibration& s = results[p].slaves[i];
-      Accumulate(s, scenario.rig[i], &(*sums)[p]);
+      Accumulate(s, scenario.rig[i], scenario.planar, &(*sums)[p]);
       if (p == 0 && (*sums)[p].chosen.size() < 120) {
         if (!(*sums)[p].chosen.empty()) (*sums)[p].chosen += " ";
         (*sums)[p].chosen += s.pairs.empty() ? "?" : s.pairs;
       }
     }
   }
+}
+
+// A seed per scenario name (FNV-1a), so a scenario gets the same draws whichever others run.
+uint64_t NameSeed(const std::string& name) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : name) h = (h ^ c) * 1099511628211ull;
+  return h;
 }
 
 std::string Ratio(double value, double best) {
@@ -164,7 +173,7 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
     for (int64_t job = next++; job < total; job = next++) {
       const size_t c = static_cast<size_t>(job / options.repeats);
       const int draw = static_cast<int>(job % options.repeats);
-      RunDraw(*chosen[c], options.seed * 1000003 + c * 101 + draw, options, spans[c], &sums[c],
+      RunDraw(*chosen[c], options.seed * 1000003 + NameSeed(chosen[c]->name) + draw, options, spans[c], &sums[c],
               &mutex);
       const int64_t finished = ++done;
       if (options.progress) {

@@ -79,6 +79,7 @@ void Add(std::vector<PairScenario>* out, const std::string& name, const std::str
     s.names = car ? CarRigNames() : std::vector<std::string>{"front", "left", "back"};
     s.rig = car ? CarRig() : DemoRig();
     s.noise = noise;
+    s.planar = car;
     out->push_back(std::move(s));
   }
 }
