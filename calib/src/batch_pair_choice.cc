@@ -16,8 +16,8 @@ namespace {
 struct Candidate {
   int span = 0;
   SlaveCalibration result;
-  double rot = std::numeric_limits<double>::quiet_NaN();  // rotation σ, degrees
-  double pos = std::numeric_limits<double>::quiet_NaN();  // |σ_C|, master units
+  double rot = std::numeric_limits<double>::quiet_NaN();           // rotation σ, degrees
+  double pos = std::numeric_limits<double>::quiet_NaN();           // |σ_C|, master units
   double pos_in_plane = std::numeric_limits<double>::quiet_NaN();  // across the rotation axis
 };
 
@@ -26,11 +26,15 @@ double Comparable(double sigma) {
   return std::isfinite(sigma) && sigma > 0.0 ? sigma : std::numeric_limits<double>::quiet_NaN();
 }
 
+// span > 0: the pairs (k, k + span) of every stride-th k; span 0: kWalk's pairs.
 Candidate Solve(const RigRecording& recording, int slave, const CalibrationOptions& options,
                 int span, int stride) {
   Candidate c;
   c.span = span;
-  const auto pairs = RelativePairs(recording, span, stride);
+  PairOptions walk = options.pairs;
+  walk.policy = PairOptions::Policy::kWalk;
+  const auto pairs =
+      span > 0 ? RelativePairs(recording, span, stride) : SelectPairs(recording, walk);
   c.result = CalibrateSlave(MotionsForSlave(recording, slave, pairs), options,
                             recording.slaves[slave].name);
   if (c.result.solved()) {
@@ -50,14 +54,14 @@ Candidate Solve(const RigRecording& recording, int slave, const CalibrationOptio
 // σ along the ladder of spans, smoothed: the geometric mean of each σ and its neighbours' (the
 // σ of one span is itself an estimate, and the smallest of many noisy estimates is mostly the
 // one that came out too small). NaN stays NaN.
-std::vector<double> Smoothed(const std::vector<double>& sigma) {
+std::vector<double> Smoothed(const std::vector<double>& sigma, const std::vector<bool>& ladder) {
   std::vector<double> out(sigma.size(), std::numeric_limits<double>::quiet_NaN());
   for (size_t k = 0; k < sigma.size(); ++k) {
     if (!std::isfinite(sigma[k])) continue;
     double log_sum = 0.0;
     int count = 0;
     for (size_t j = (k == 0 ? 0 : k - 1); j <= k + 1 && j < sigma.size(); ++j) {
-      if (std::isfinite(sigma[j])) {
+      if (std::isfinite(sigma[j]) && (j == k || (ladder[j] && ladder[k]))) {
         log_sum += std::log(sigma[j]);
         ++count;
       }
@@ -89,8 +93,10 @@ int Best(const std::vector<Candidate>& candidates, bool usable_only) {
     pos[k] = in_plane ? c.pos_in_plane : c.pos;
     if (!std::isfinite(pos[k])) every_pos = false;
   }
-  rot = Smoothed(rot);
-  pos = Smoothed(pos);
+  std::vector<bool> ladder;
+  for (const auto& c : candidates) ladder.push_back(c.span > 0);
+  rot = Smoothed(rot, ladder);
+  pos = Smoothed(pos, ladder);
   double rot_min = std::numeric_limits<double>::infinity();
   double pos_min = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < candidates.size(); ++k) {
@@ -121,6 +127,9 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slav
   std::vector<Candidate> candidates;
   candidates.reserve(spans.size());
   for (int span : spans) candidates.push_back(Solve(recording, slave, options, span, stride));
+  // The walk: a span per anchor that reaches a large rotation (hand-held recordings with
+  // pauses, where any fixed span often spans no rotation at all).
+  candidates.push_back(Solve(recording, slave, options, 0, 1));
 
   int best = Best(candidates, true);
   if (best < 0) best = Best(candidates, false);
@@ -136,7 +145,7 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slav
     how = "no span gave a σ";
   } else {
     how = "smallest σ among spans " + std::to_string(spans.front()) + "-" +
-          std::to_string(spans.back());
+          std::to_string(spans.back()) + " and the walk";
   }
   Candidate chosen = candidates[best];
   if (stride > 1) chosen = Solve(recording, slave, options, chosen.span, 1);

@@ -10,8 +10,8 @@
 namespace rigcal::internal {
 
 // Solves slave `slave` of `recording` with the pairs (k, k + N) of every span N of
-// AutoSpanCandidates and returns the result of the span whose largest σ ratio to the best
-// candidate (rotation; position when observable) is smallest, among the usable results when
+// AutoSpanCandidates and with kWalk's pairs, and returns the result whose largest σ ratio to the
+// best candidate (rotation; position when observable) is smallest, among the usable results when
 // there are any. The result's `pairs` names the span and how it was chosen.
 SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slave,
                                          const CalibrationOptions& options);

@@ -173,8 +173,8 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
     for (int64_t job = next++; job < total; job = next++) {
       const size_t c = static_cast<size_t>(job / options.repeats);
       const int draw = static_cast<int>(job % options.repeats);
-      RunDraw(*chosen[c], options.seed * 1000003 + NameSeed(chosen[c]->name) + draw, options, spans[c], &sums[c],
-              &mutex);
+      RunDraw(*chosen[c], options.seed * 1000003 + NameSeed(chosen[c]->name) + draw, options,
+              spans[c], &sums[c], &mutex);
       const int64_t finished = ++done;
       if (options.progress) {
         const std::lock_guard<std::mutex> lock(mutex);

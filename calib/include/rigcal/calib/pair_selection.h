@@ -25,9 +25,10 @@ struct PairOptions {
   int step = 5;
 
   // kAuto: every slave is solved with the pairs (k, k + N) of each span N of a ladder 1, 2,
-  // 3, 5, 8, ... (ratio ~1.5) up to auto_max_span_fraction of the recording, and keeps the span
-  // whose reported σ are smallest: the largest of σ_rot(N) / min σ_rot and σ_C(N) / min σ_C
-  // is minimal (rotation and position both within the least factor of their best span). The σ
+  // 3, 5, 8, ... (ratio ~1.5) up to auto_max_span_fraction of the recording, and with kWalk's
+  // pairs, and keeps the candidate whose reported σ are smallest: the largest of
+  // σ_rot / min σ_rot and σ_C / min σ_C is minimal (rotation and position both within the
+  // least factor of their best candidate; the ladder's σ smoothed over neighbouring spans). The σ
   // are the cluster-robust ones (CalibrationOptions::covariance_time_blocks, blocks at least
   // three motion durations long), so what the span gains in signal is weighed against the
   // drift and shared pose errors it accumulates, as measured on this recording. Candidate solves
