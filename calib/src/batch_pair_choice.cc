@@ -148,11 +148,11 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slav
           std::to_string(spans.back()) + " and the walk";
   }
   Candidate chosen = candidates[best];
-  if (stride > 1) chosen = Solve(recording, slave, options, chosen.span, 1);
+  if (stride > 1 && chosen.span > 0) chosen = Solve(recording, slave, options, chosen.span, 1);
   SlaveCalibration r = std::move(chosen.result);
-  r.pairs = "relative:" + std::to_string(chosen.span);
-  r.message += "; pairs relative:" + std::to_string(chosen.span) + " (auto: " + how + ")";
-  ModuleLogger("calib")->debug("slave '{}': auto pairs relative:{} ({})", r.name, chosen.span, how);
+  r.pairs = chosen.span > 0 ? "relative:" + std::to_string(chosen.span) : "walk";
+  r.message += "; pairs " + r.pairs + " (auto: " + how + ")";
+  ModuleLogger("calib")->debug("slave '{}': auto pairs {} ({})", r.name, r.pairs, how);
   return r;
 }
 

@@ -109,13 +109,13 @@ void OnlineCalibrator::RefinementLoop() {
   }
 }
 
-void OnlineCalibrator::RefineNow() {
+void OnlineCalibrator::RefineNow(bool final) {
   MutexLock serial(refine_mutex_);
   for (size_t i = 0; i + 1 < names_.size(); ++i) {
     RefinementJob job;
     {
       MutexLock lock(estimator_mutex_);
-      job = estimator_.MakeRefinementJob(static_cast<int>(i));
+      job = estimator_.MakeRefinementJob(static_cast<int>(i), final);
     }
     if (!job.start.solved() || static_cast<int>(job.motions.size()) + job.prior.motions < 10) {
       continue;

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <utility>
 
 #include "convergence_check.h"
@@ -74,6 +75,26 @@ struct RigEstimator::Slave {
   int64_t model_changed_ns = -1;  // stream time of the last change of the motion model
   SlaveCalibration linear;        // latest linear solution of the long statistics
   std::optional<SlaveCalibration> refined;
+  // The pose history (RigEstimatorOptions::history_sets): every set since the last restart
+  // while `history_complete`.
+  struct HistorySet {
+    int64_t t_ns = 0;
+    Pose master;
+    Pose slave;
+    int master_segment = 0;
+    int slave_segment = 0;
+  };
+  std::deque<HistorySet> history;
+  bool history_complete = true;
+  int64_t last_history_refine_ns = std::numeric_limits<int64_t>::min();
+  bool refined_from_history = false;  // `refined` is the batch calibrator's on the history
+
+  void RestartHistory() {
+    history.clear();
+    history_complete = true;
+    last_history_refine_ns = std::numeric_limits<int64_t>::min();
+    refined_from_history = false;
+  }
 };
 
 RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOptions options)
@@ -117,6 +138,7 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
       internal::RestartPositions(&s->stats);
       s->keyframes.clear();
       s->refined.reset();
+      s->RestartHistory();
     }
     ++generation_;
   }
@@ -139,6 +161,13 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
   Slave& s = *slaves_[index];
   const RigEstimatorOptions& o = options_;
   s.online.segment = slave.segment;
+  if (o.history_sets > 0) {
+    s.history.push_back({t_ns, master.pose, slave.pose, master.segment, slave.segment});
+    if (static_cast<int>(s.history.size()) > o.history_sets) {
+      s.history.pop_front();
+      s.history_complete = false;
+    }
+  }
 
   // Keyframes, and the motion pair of a new one.
   if (!internal::OfferKeyframe(o, t_ns, master, slave, &s.keyframes)) return;
@@ -252,6 +281,7 @@ void RigEstimator::Publish(int index) {
         names_[index + 1], windows.rot_diff_deg);
     internal::RestartFromShortWindow(&s.stats);  // re-converge on the recent motions
     s.refined.reset();
+    s.RestartHistory();
     s.convergence.stable = 0;
     ++online.decalibration_events;
     ++generation_;
@@ -271,7 +301,9 @@ void RigEstimator::Publish(int index) {
   }
   published.name = names_[index + 1];
   published.motions.used = s.counts.used;
-  internal::InflateSigmas(inflation, &published);
+  // The batch calibrator's σ on the history are its time-block ones already.
+  const bool from_history = (online.flags & kFlagRefined) != 0 && s.refined_from_history;
+  if (!from_history) internal::InflateSigmas(inflation, &published);
 
   online.flags |= internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation,
                                              decalibrated, &s.convergence);
@@ -281,11 +313,39 @@ void RigEstimator::Publish(int index) {
   PublishCounts(index);
 }
 
-RefinementJob RigEstimator::MakeRefinementJob(int slave) const {
+RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
   RefinementJob job;
   job.slave = slave;
   job.generation = generation_;
   const Slave& s = *slaves_.at(slave);
+  if (options_.history_sets > 0 && s.history_complete &&
+      static_cast<int>(s.history.size()) >= options_.history_min_sets && s.linear.solved()) {
+    // The batch calibrator on every set since the restart, when due; until then no job (an
+    // unsolved start), so a window refinement does not replace the history's result.
+    const int64_t period = static_cast<int64_t>(options_.history_refine_period_s * 1e9);
+    const int64_t newest = s.history.back().t_ns;
+    if (!final && s.last_history_refine_ns != std::numeric_limits<int64_t>::min() &&
+        newest - s.last_history_refine_ns < period) {
+      return job;
+    }
+    RigRecording& h = job.history;
+    h.master.name = names_[0];
+    h.slaves.resize(1);
+    h.slaves[0].name = names_[slave + 1];
+    for (const auto& set : s.history) {
+      h.t_ns.push_back(set.t_ns);
+      h.master.poses.push_back(set.master);
+      h.master.segment.push_back(set.master_segment);
+      h.slaves[0].poses.push_back(set.slave);
+      h.slaves[0].segment.push_back(set.slave_segment);
+    }
+    job.history_t_ns = newest;
+    if (const std::optional<Similarity> nominal = NominalOf(slave)) {
+      job.history_options.nominal[names_[slave + 1]] = *nominal;
+      job.history_options.nominal_sigma = options_.nominal_sigma;
+    }
+    // The window too: the refinement falls back to it when the batch cannot solve.
+  }
   internal::CopyWindow(s.stats, &job);
   job.start = s.linear;
   const std::optional<Similarity> nominal = NominalOf(slave);
@@ -300,6 +360,8 @@ bool RigEstimator::ApplyRefinement(const RefinementJob& job, const SlaveCalibrat
   if (job.generation != generation_ || !refined.solved()) return false;
   Slave& s = *slaves_.at(job.slave);
   s.refined = refined;
+  s.refined_from_history = !job.history.t_ns.empty() && !refined.pairs.empty();
+  if (s.refined_from_history) s.last_history_refine_ns = job.history_t_ns;
   Publish(job.slave);
   return (estimate_.online[job.slave].flags & kFlagRefined) != 0;
 }
@@ -354,6 +416,7 @@ Status RigEstimator::RestoreState(const RigEstimatorState& state) {
     s->stats.long_stats = internal::MotionStatistics::FromSums(saved.long_stats);
     s->stats.short_stats = internal::MotionStatistics::FromSums(saved.short_stats);
     s->stats.outside = s->stats.long_stats;
+    s->history_complete = false;  // the saved motions are not in any history
     restored.push_back(std::move(s));
   }
   slaves_ = std::move(restored);

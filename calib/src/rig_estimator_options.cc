@@ -42,6 +42,12 @@ Status RigEstimatorOptions::Check() const {
     e << "alpha_maxrot_noise_deg: must be finite and >= 0 (0 = fixed alpha_maxrot_deg)";
   else if (window_size < 2)
     e << "window_size: must be >= 2";
+  else if (history_sets < 0)
+    e << "history_sets: must be >= 0 (0 = off)";
+  else if (!(history_refine_period_s >= 0.0))
+    e << "history_refine_period_s: must be >= 0";
+  else if (history_min_sets < 2)
+    e << "history_min_sets: must be >= 2";
   else if (converged_min_motions < 2)
     e << "converged_min_motions: must be >= 2";
   else if (!(min_tilt_snr >= 0.0))

@@ -11,11 +11,22 @@
 #include "motion_data.h"
 #include "refinement.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/rig_calibrator.h"
 #include "statistics_prior.h"
 
 namespace rigcal {
 
 SlaveCalibration RefineWindow(const RefinementJob& job) {
+  if (!job.history.t_ns.empty() && job.start.solved()) {
+    // Every set since the restart: the batch calibrator (its pair choice and σ).
+    SlaveCalibration batch = CalibrateRig(job.history, job.history_options).slaves.at(0);
+    if (batch.solved() && !batch.pairs.empty()) {
+      batch.message = "batch on the " + std::to_string(job.history.size()) +
+                      " sets since the start: " + batch.message;
+      return batch;
+    }
+    // Not solvable yet: the window refinement below.
+  }
   SlaveCalibration out = job.start;
   if (!job.start.solved() || static_cast<int>(job.motions.size()) + job.prior.motions < 3) {
     return out;

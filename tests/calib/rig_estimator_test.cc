@@ -369,6 +369,7 @@ TEST(RigEstimator, WindowPriorMakesAShortWindowRefineLikeAllMotions) {
   RigEstimatorOptions all;
   all.window_size = 1 << 20;
   all.gate_after_motions = 1 << 30;  // no Huber weights in the statistics
+  all.history_sets = 0;              // the window refinement, not the batch on the history
   RigEstimatorOptions short_window = all;
   short_window.window_size = 20;
   RigEstimator a(names, all), b(names, short_window);
@@ -433,6 +434,7 @@ TEST(RigEstimator, WindowPriorFollowsForgettingAndClosedSegments) {
   const SyntheticDrive drive = GenerateDrive({"front", "left"}, rigs, d);
   RigEstimatorOptions o;
   o.window_size = 50;
+  o.history_sets = 0;  // the window refinement, not the batch on the history
   o.half_life_s = 60.0;
   o.gate_after_motions = 1 << 30;
   RigEstimator est(Names(drive.recording), o);
@@ -577,6 +579,57 @@ TEST(RigEstimatorOptions, CheckNamesField) {
   } catch (const InvalidOptions& e) {
     EXPECT_STREQ(e.what(), "RigEstimatorOptions: window_size: must be >= 2");
   }
+}
+
+}  // namespace
+}  // namespace rigcal
+
+namespace rigcal {
+namespace {
+
+// The pose history: while it holds every set, the background refinement is the batch
+// calibrator on those sets (its pair choice and time-block σ, not inflated again), so the
+// online estimate ends exactly where the batch one does; when it has dropped sets, the window
+// refinement of the statistics; between due times, no job.
+TEST(RigEstimatorHistory, FinalRefinementIsTheBatchOnTheSameSets) {
+  const SyntheticDrive drive = NoisyDrive(1200, 5, 1);
+  RigEstimatorOptions o;
+  RigEstimator est(Names(drive.recording), o);
+  Feed(&est, drive.recording);
+  const RefinementJob job = est.MakeRefinementJob(0, /*final=*/true);
+  ASSERT_EQ(job.history.size(), drive.recording.size());
+  const SlaveCalibration refined = RefineWindow(job);
+  ASSERT_TRUE(est.ApplyRefinement(job, refined)) << refined.message;
+  const SlaveCalibration batch = CalibrateRig(drive.recording, CalibrationOptions{}).slaves[0];
+  const SlaveCalibration& online = est.Estimate().rig.slaves[0];
+  ASSERT_TRUE(batch.usable()) << batch.message;
+  EXPECT_TRUE(est.Estimate().online[0].flags & kFlagRefined);
+  EXPECT_LT(AngleBetween(online.estimate.q, batch.estimate.q), 1e-12);
+  EXPECT_LT((online.estimate.C - batch.estimate.C).norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(online.rot_std_deg, batch.rot_std_deg);
+  EXPECT_EQ(online.pairs, batch.pairs);
+  EXPECT_NE(online.message.find("converg"), std::string::npos);
+
+  // Not due again within history_refine_period_s: no job (an unsolved start).
+  const RefinementJob again = est.MakeRefinementJob(0);
+  EXPECT_FALSE(again.start.solved());
+}
+
+TEST(RigEstimatorHistory, LongerRecordingsFallBackToTheWindow) {
+  const SyntheticDrive drive = NoisyDrive(1200, 6, 1);
+  RigEstimatorOptions o;
+  o.history_sets = 500;  // fewer than the recording's sets
+  RigEstimator est(Names(drive.recording), o);
+  Feed(&est, drive.recording);
+  const RefinementJob job = est.MakeRefinementJob(0, /*final=*/true);
+  EXPECT_TRUE(job.history.t_ns.empty());
+  ASSERT_TRUE(job.start.solved());
+  EXPECT_FALSE(job.motions.empty());
+  const SlaveCalibration refined = RefineWindow(job);
+  EXPECT_TRUE(refined.pairs.empty());  // the window refinement, not a batch result
+  RigEstimatorOptions bad = o;
+  bad.history_sets = -1;
+  EXPECT_NE(bad.Check().message().find("history_sets"), std::string::npos);
 }
 
 }  // namespace

@@ -265,6 +265,9 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
   TempDir dir;
   auto config = LoadRigConfig(WriteConfig(dir));
   ASSERT_TRUE(config) << config.error();
+  // The resume check compares the window refinement of the statistics with the first run's:
+  // without the pose history (which a restored state does not have) both refine alike.
+  config->online.estimator.history_sets = 0;
   const SyntheticDrive drive = Drive(1200);
   const std::string log_path = WriteDamagedLog(dir, drive.recording);
 

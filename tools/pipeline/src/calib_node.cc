@@ -375,7 +375,7 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
 
   // Clean stop: everything received is estimated, published, saved and written.
   m.calibrator.Flush();
-  m.calibrator.RefineNow();
+  m.calibrator.RefineNow(/*final=*/true);
   m.calibrator.Stop();
   const RigEstimate estimate = m.calibrator.Estimate();
   m.PublishExtrinsics(estimate);

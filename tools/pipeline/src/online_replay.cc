@@ -80,7 +80,7 @@ OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineRepla
   drain();
   if (options.refine_at_end) {
     for (size_t i = 0; i < recording.slaves.size(); ++i) {
-      const RefinementJob job = estimator.MakeRefinementJob(static_cast<int>(i));
+      const RefinementJob job = estimator.MakeRefinementJob(static_cast<int>(i), /*final=*/true);
       if (job.start.solved() && static_cast<int>(job.motions.size()) + job.prior.motions >= 10) {
         estimator.ApplyRefinement(job, RefineWindow(job));
       }

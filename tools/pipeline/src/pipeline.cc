@@ -225,7 +225,7 @@ void Pipeline::Stop() {
     if (camera->vo_thread.joinable()) camera->vo_thread.join();
   }
   calibrator_->Flush();
-  calibrator_->RefineNow();
+  calibrator_->RefineNow(/*final=*/true);
   calibrator_->Stop();
 }
 

@@ -55,8 +55,10 @@ class OnlineCalibrator {
   // Runs the window refinement of every slave now, on the calling thread, and publishes it
   // when consistent (as the refinement thread does every refine_period_s). Call after Flush at
   // the end of a stream, so the final estimate is the refinement of the final window whatever
-  // the refinement thread's timing was. Any thread; refinements are serialised.
-  void RefineNow();
+  // the refinement thread's timing was. `final` (the end of a stream): the history refinement
+  // even when not due (RigEstimatorOptions::history_refine_period_s). Any thread; refinements
+  // are serialised.
+  void RefineNow(bool final = false);
 
   // Consistent snapshot of the estimate (any thread).
   RigEstimate Estimate() const;

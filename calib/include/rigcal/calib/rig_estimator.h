@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/estimator_state.h"
 #include "rigcal/calib/status.h"
@@ -105,6 +106,17 @@ struct RigEstimatorOptions {
   // Motions kept per slave for the background non-linear refinement window.
   int window_size = 400;
 
+  // Pose history for the background refinement: the poses of the last history_sets sets are
+  // kept per slave (about 130 bytes each). While they hold every set since the last restart
+  // (start, master re-initialisation, decalibration), the background refinement is the batch
+  // calibrator's on them (CalibrateRig: its pair choice, time-block σ), at most every
+  // history_refine_period_s of stream time, so the online estimate ends where the batch one
+  // does. Once the history has dropped sets (a longer recording), the refinement is the window
+  // refinement of the statistics. 0 = off.
+  int history_sets = 10000;
+  double history_refine_period_s = 30.0;
+  int history_min_sets = 50;  // fewer sets: the window refinement
+
   // Nominal extrinsics per slave (from the rig config), used for what the motion cannot
   // determine (the offset of C along the rotation axis of planar motion). Empty = none.
   std::vector<std::optional<Similarity>> nominal;
@@ -178,6 +190,13 @@ struct RefinementJob {
   RefinementPrior prior;
   // Huber loss (at 3 sigma) on the window's residuals; the prior has none.
   bool robust_loss = true;
+  // Every set since the last restart (master and this slave), when the pose history holds them
+  // and a history refinement is due: RefineWindow then runs the batch calibrator on it with
+  // `history_options` instead of refining the window.
+  RigRecording history;
+  CalibrationOptions history_options;
+  // Stream time of the newest set in `history` (when the refinement was made).
+  int64_t history_t_ns = 0;
 };
 
 class RigEstimator {
@@ -198,7 +217,8 @@ class RigEstimator {
 
   // Background refinement support: a copy of a slave's window, and the outcome to publish
   // when it is consistent with the current linear estimate (within gate_sigmas).
-  RefinementJob MakeRefinementJob(int slave) const;
+  // `final`: a history refinement even when not due (the end of a stream).
+  RefinementJob MakeRefinementJob(int slave, bool final = false) const;
   bool ApplyRefinement(const RefinementJob& job, const SlaveCalibration& refined);
 
   // The statistics of every slave, to continue after a restart (estimator_state.h; the file
