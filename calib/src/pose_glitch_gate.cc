@@ -43,6 +43,7 @@ PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
   Verdict out;
   out.rejected.assign(poses.size(), GlitchCause::kNone);
   out.confirmed.resize(poses.size());
+  out.warming_up.assign(poses.size(), false);
   std::vector<GlitchCause>& verdict = out.rejected;
   std::vector<double> speed(n, 0.0), turn(n, 0.0), turn_ratio(n, 0.0);
   std::vector<bool> continues(n, false);  // a step from the camera's last accepted pose
@@ -52,6 +53,8 @@ PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
     if (!present(c)) continue;
     const Camera& cam = cameras_[c];
     const CameraPose& p = *poses[c];
+    out.warming_up[c] = static_cast<int>(cam.speeds.size()) < test_.min_steps || !cam.have ||
+                        p.segment != cam.segment;
     if (!cam.have || p.segment != cam.segment || t_ns <= cam.t_ns) continue;
     continues[c] = true;
     const double dt = 1e-9 * static_cast<double>(t_ns - cam.t_ns);
@@ -105,6 +108,7 @@ PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
         continue;
       }
       verdict[c] = GlitchCause::kNone;
+      out.warming_up[c] = true;
       continues[c] = false;
       cam.run.clear();
       while (!cam.speeds.empty()) cam.speeds.PopFront();
@@ -171,7 +175,10 @@ bool CountGlitch(const PoseGlitchGate::Verdict& verdict, int slave, GlitchCounts
   auto rejected = [&](size_t camera) {
     return camera < verdict.rejected.size() && verdict.rejected[camera] != GlitchCause::kNone;
   };
-  return rejected(0) || rejected(c);
+  auto warming_up = [&](size_t camera) {
+    return camera < verdict.warming_up.size() && verdict.warming_up[camera];
+  };
+  return rejected(0) || rejected(c) || warming_up(0) || warming_up(c);
 }
 
 }  // namespace rigcal::internal

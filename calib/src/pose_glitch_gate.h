@@ -9,20 +9,24 @@
 // (bounded memory); per slave, those of the master-minus-slave rotation angle of each step
 // (scale-free: zero whatever the extrinsics). A pose is rejected when its step from the last
 // accepted pose is an outlier against these (OutlierSpeed of pose_glitches.h, the typical speed
-// being the larger of the median and the last accepted step's, so that real accelerations pass),
-// or when master and slave rotate by angles that differ beyond outlier_sigmas robust σ (the
-// glitch is then the camera whose angular speed is the further out). The bridged test of the
-// batch comes for free: the next pose is compared with the last accepted one, across the
-// glitch, and only a rejected run that the camera returns from (a pose whose step from the last
-// accepted one is normal again, and below the jump into the run by jump_factor) is counted as
-// glitches. A camera whose poses are rejected more
-// than max_run times in a row changed its motion for real (a sudden turn, a jump the odometry
-// keeps): its pose is accepted, its statistics restart and the run is not counted (it cost
-// those sets their keyframe offer, nothing else). Nothing is rejected for its speeds before
-// min_steps steps of the camera were accepted. The angle differences are kept over 10 window + 1
-// steps, and tested only once that many were accepted: their noise is stationary, and its σ
-// must be known well for a test that has only one side of the glitch (the MAD of 21 steps
-// misjudges σ by 25 %).
+// being the larger of the median and the last accepted step's, so that real accelerations
+// pass), or when master and slave rotate by angles that differ beyond outlier_sigmas robust σ
+// (the glitch is then the camera whose angular speed is the further out).
+//
+// The bridged test of the batch comes for free: the next pose is compared with the last
+// accepted one, across the glitch, and only a rejected run that the camera returns from (a pose
+// whose step from the last accepted one is normal again, and below the jump into the run by
+// jump_factor) is counted as glitches. A camera whose poses are rejected more than max_run
+// times in a row changed its motion for real (a sudden turn, a jump the odometry keeps): its
+// pose is accepted, its statistics restart and the run is not counted (it cost those sets
+// their keyframe offer, nothing else).
+//
+// A camera's first min_steps + 1 poses (after the start, a new odometry segment or such a
+// restart) only warm its statistics up: a glitch among them could not be told, so none of them
+// is offered as a keyframe (a glitched anchor would enter every motion paired with it), and
+// they are not counted. The angle differences are kept over 10 window + 1 steps and tested
+// once that many were accepted: their noise is stationary, and its σ must be known well for a
+// test that sees only one side of the glitch (the MAD of 21 steps misjudges σ by 25 %).
 
 #include <cstdint>
 #include <optional>
@@ -48,6 +52,8 @@ class PoseGlitchGate {
     // Per camera: the causes of the run of rejected poses that this set's pose, back on the
     // camera's trajectory, showed to be glitches (usually empty).
     std::vector<std::vector<GlitchCause>> confirmed;
+    // Per camera: the pose only warms the statistics up (not offered, not a glitch).
+    std::vector<bool> warming_up;
   };
 
   // The verdict on the set. Sets come in increasing time; non-finite poses are ignored (kNone,
@@ -82,7 +88,8 @@ class PoseGlitchGate {
 };
 
 // Counts the glitches the verdict confirms in the master and in slave `slave` into `counts`
-// and returns whether the slave skips the set (its pose or the master's was rejected).
+// and returns whether the slave skips the set (its pose or the master's was rejected or only
+// warms up).
 bool CountGlitch(const PoseGlitchGate::Verdict& verdict, int slave, GlitchCounts* counts);
 
 }  // namespace rigcal::internal

@@ -81,11 +81,14 @@ void MarkRuns(int first, int last, const std::vector<double>& value,
       j = exit + 1;
       continue;
     }
-    // No bridge: a run at the start of the segment (the step after it normal), or at its end
-    // (the step before it normal).
-    if (a - first + 1 <= test.max_run && (j + 1 >= last || !outlier(j + 1))) {
+    // No bridge: a run at the start of the segment (the step after it normal and below the
+    // jump by jump_factor), or at its end (the step before it so).
+    auto below = [&](int i) {
+      return i <= first || i >= last || (!outlier(i) && test.jump_factor * value[i] <= value[j]);
+    };
+    if (a - first + 1 <= test.max_run && below(j + 1)) {
       for (int k = first; k <= a; ++k) (*glitched)[k] = true;
-    } else if (last - 1 - a <= test.max_run && (j - 1 <= first || !outlier(j - 1))) {
+    } else if (last - 1 - a <= test.max_run && below(j - 1)) {
       bool tail = true;  // every step of the tail runs away from the segment's motion
       for (int k = a + 1; k < last; ++k) tail = tail && bridged(a, k) > limit[j];
       if (tail) {
@@ -218,14 +221,15 @@ double OutlierSpeed(const GlitchTest& test, double typical, double median, doubl
 
 GlitchCounts GlitchReport::CountsFor(int slave) const {
   GlitchCounts c;
-  for (const int index : dropped) {
+  // `glitches` is ordered by index: one pass over the entries of each dropped time.
+  for (size_t i = 0; i < glitches.size();) {
     GlitchCause cause = GlitchCause::kAngleMismatch;
     bool master = false, in_slave = false;
-    for (const PoseGlitch& g : glitches) {
-      if (g.index != index) continue;
-      cause = std::min(cause, g.cause);
-      master = master || g.camera == 0;
-      in_slave = in_slave || g.camera == slave + 1;
+    const int index = glitches[i].index;
+    for (; i < glitches.size() && glitches[i].index == index; ++i) {
+      cause = std::min(cause, glitches[i].cause);
+      master = master || glitches[i].camera == 0;
+      in_slave = in_slave || glitches[i].camera == slave + 1;
     }
     c.position_jump += cause == GlitchCause::kPositionJump;
     c.rotation_jump += cause == GlitchCause::kRotationJump;

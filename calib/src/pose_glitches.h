@@ -18,8 +18,9 @@
 // the run are outliers and the bridged step a -> b is not, and is below both by jump_factor:
 // real motion, however fast it turns or accelerates, bridges at about the mean of its steps
 // (a fast step makes the bridged step fast as well), while a pose that jumps away and back
-// leaves the bridged step at the typical value. A run at the
-// start or end of a segment has no bridge: the outlier step into (out of) it suffices.
+// leaves the bridged step at the typical value. A run at the start or end of a segment has no
+// bridge: the outlier step out of (into) it suffices when the step after (before) it is normal
+// and below it by jump_factor.
 
 #include <string>
 #include <vector>
