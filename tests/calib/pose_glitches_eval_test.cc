@@ -4,6 +4,7 @@
 // the glitch stage. Requirement (issue "gross outliers"): within 1.2x of the clean accuracy.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -26,7 +27,9 @@ CameraTrack& Track(RigRecording* rec, int camera) {
   return camera == 0 ? rec->master : rec->slaves[camera - 1];
 }
 
-void GlitchOnePercent(RigRecording* rec, std::mt19937_64& rng) {
+// Returns the glitched times.
+std::vector<int> GlitchOnePercent(RigRecording* rec, std::mt19937_64& rng) {
+  std::vector<int> where;
   const int n = static_cast<int>(rec->size());
   const int cameras = 1 + static_cast<int>(rec->slaves.size());
   std::uniform_int_distribution<int> index(0, n - 1), camera(0, cameras - 1), kind(0, 1);
@@ -44,7 +47,9 @@ void GlitchOnePercent(RigRecording* rec, std::mt19937_64& rng) {
     } else {
       t.poses[k].q = t.poses[k].q * AxisAngle(RandomUnitVector(rng), angle(rng) * kRadPerDeg);
     }
+    where.push_back(k);
   }
+  return where;
 }
 
 RigCalibration Online(const RigRecording& rec) {
@@ -139,16 +144,23 @@ TEST(PoseGlitchesEval, OnePercentGlitchedTable) {
          return DriveCarRig(CarPath(path), d);
        }},
   };
-  const int seeds = 6;
+  const int seeds = 12;
   std::printf("%-22s %-6s %-30s %-30s %-30s\n", "recording", "", "clean: rot [deg], C",
               "1 % glitched", "1 % glitched, walk, no stage");
   for (const Scenario& scenario : scenarios) {
     Sums clean, glitched, unguarded, clean_online, glitched_online;
+    int missed = 0, extra = 0;
     for (int seed = 1; seed <= seeds; ++seed) {
       const SyntheticDrive drive = scenario.make(static_cast<uint64_t>(seed));
       RigRecording rec = drive.recording;
       std::mt19937_64 rng(static_cast<uint64_t>(seed) + 1000);
-      GlitchOnePercent(&rec, rng);
+      const std::vector<int> where = GlitchOnePercent(&rec, rng);
+      std::vector<int> dropped;
+      WithoutGlitches(rec, &dropped);
+      for (const int k : where) {
+        missed += std::find(dropped.begin(), dropped.end(), k) == dropped.end();
+      }
+      for (const int k : dropped) extra += std::find(where.begin(), where.end(), k) == where.end();
       clean.Add(CalibrateRig(drive.recording, CalibrationOptions{}), drive.truth);
       glitched.Add(CalibrateRig(rec, CalibrationOptions{}), drive.truth);
       unguarded.Add(Unguarded(rec), drive.truth);
@@ -159,6 +171,7 @@ TEST(PoseGlitchesEval, OnePercentGlitchedTable) {
                 glitched.Text().c_str(), unguarded.Text().c_str());
     std::printf("%-22s %-6s %-30s %-30s\n", "", "online", clean_online.Text().c_str(),
                 glitched_online.Text().c_str());
+    std::printf("%-22s %d glitches missed, %d good poses dropped (batch)\n", "", missed, extra);
     EXPECT_EQ(glitched.unusable, clean.unusable) << scenario.name;
     EXPECT_LE(glitched.rot, 1.2 * clean.rot) << scenario.name;
     EXPECT_LE(glitched.pos, 1.2 * clean.pos) << scenario.name;
