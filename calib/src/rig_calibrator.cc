@@ -1,6 +1,6 @@
 // The batch rig calibrator (thesis chapter 4) as a sequence of named stages (calib/src/):
-//   batch_motions -> batch_model_selection -> batch_linear_solution -> batch_refinement ->
-//   batch_result (with model_explanation).
+//   pose_glitches (CalibrateRig, before the pairs) -> batch_motions -> batch_model_selection ->
+//   batch_linear_solution -> batch_refinement -> batch_result (with model_explanation).
 #include "rigcal/calib/rig_calibrator.h"
 
 #include <algorithm>
@@ -14,6 +14,7 @@
 #include "batch_refinement.h"
 #include "batch_result.h"
 #include "motion_data.h"
+#include "pose_glitches.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/pair_selection.h"
 
@@ -79,7 +80,10 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
   return r;
 }
 
-RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOptions& options) {
+RigCalibration CalibrateRig(const RigRecording& input, const CalibrationOptions& options) {
+  // Glitched poses (pose_glitches.h) go first: neither the pair choice nor a motion sees them.
+  internal::GlitchReport glitches;
+  const RigRecording recording = internal::WithoutGlitches(input, &glitches);
   RigCalibration out;
   out.master = recording.master.name;
   const std::string invalid = recording.Check().message();
@@ -101,6 +105,7 @@ RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOpti
       out.slaves.push_back(
           internal::CalibrateSlaveAutoPairs(recording, static_cast<int>(i), options));
       out.pairs_selected = std::max(out.pairs_selected, out.slaves.back().motions.total);
+      internal::ReportGlitches(glitches, static_cast<int>(i), &out.slaves.back());
       continue;
     }
     out.slaves.push_back(
@@ -109,6 +114,7 @@ RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOpti
         ToString(options.pairs.policy) + (options.pairs.policy == PairOptions::Policy::kRelative
                                               ? ":" + std::to_string(options.pairs.step)
                                               : "");
+    internal::ReportGlitches(glitches, static_cast<int>(i), &out.slaves.back());
   }
   return out;
 }

@@ -1,4 +1,5 @@
 // RigEstimator: the recursive estimator as a sequence of named stages (calib/src/):
+//   AddSet       pose_glitch_gate, then per slave:
 //   UpdateSlave  keyframe_pairing -> motion_gates -> statistics_accumulation
 //   Publish      statistics_solution -> decalibration_check -> window_refinement ->
 //                online_uncertainty -> convergence_check -> model_explanation
@@ -16,6 +17,7 @@
 #include "motion_data.h"
 #include "motion_gates.h"
 #include "online_uncertainty.h"
+#include "pose_glitch_gate.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/quaternion.h"
 #include "statistics_accumulation.h"
@@ -67,6 +69,7 @@ struct RigEstimator::Slave {
   internal::DecalibrationState decalibration;
   internal::ConvergenceState convergence;
   MotionCounts counts;
+  GlitchCounts glitches;  // sets skipped by pose_glitch_gate
   SlaveOnlineState online;
   // The motion model: rotating once a formed motion rotated by the equal-error boundary
   // (statistics_solution.h); then general or planar, with hysteresis.
@@ -100,6 +103,7 @@ struct RigEstimator::Slave {
 RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOptions options)
     : names_(std::move(camera_names)), options_(std::move(options)) {
   RequireValid(options_.Check(), "RigEstimatorOptions");
+  glitch_gate_ = std::make_unique<internal::PoseGlitchGate>(static_cast<int>(names_.size()));
   estimate_.rig.master = names_.empty() ? "" : names_[0];
   for (size_t i = 1; i < names_.size(); ++i) {
     slaves_.push_back(std::make_unique<Slave>(options_));
@@ -144,11 +148,18 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
   }
   master_segment_ = master.segment;
   have_master_segment_ = true;
+  const internal::PoseGlitchGate::Verdict glitches = glitch_gate_->Check(t_ns, poses);
   for (size_t i = 0; i < slaves_.size() && i + 1 < poses.size(); ++i) {
+    const bool glitched =
+        internal::CountGlitch(glitches, static_cast<int>(i), &slaves_[i]->glitches);
     if (!poses[i + 1]) continue;
     const CameraPose& slave = *poses[i + 1];
     if (!slave.pose.q.coeffs().allFinite() || !slave.pose.C.allFinite()) {
       ++slaves_[i]->counts.residual_outlier;
+      PublishCounts(static_cast<int>(i));
+      continue;
+    }
+    if (glitched) {
       PublishCounts(static_cast<int>(i));
       continue;
     }
@@ -233,6 +244,7 @@ void RigEstimator::PublishCounts(int index) {
   p.small_rotation = c.small_rotation;
   p.angle_mismatch = c.angle_mismatch;
   p.residual_outlier = c.residual_outlier;
+  estimate_.rig.slaves[index].glitches = slaves_[index]->glitches;
 }
 
 void RigEstimator::Publish(int index) {
@@ -308,6 +320,9 @@ void RigEstimator::Publish(int index) {
   online.flags |= internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation,
                                              decalibrated, &s.convergence);
   published.message = OnlineMessage(o, published, s.linear.message, nominal);
+  if (const std::string g = internal::GlitchText(s.glitches, "set", "skipped"); !g.empty()) {
+    published.message += "; " + g;
+  }
   estimate_.rig.slaves[index] = published;
   estimate_.online[index] = online;
   PublishCounts(index);

@@ -383,7 +383,8 @@ TEST(CalibrateSlave, GarbagePosesAreRemoved) {
   }
   const auto dirty = CalibrateRig(drive.recording, o).slaves[0];
   ASSERT_TRUE(dirty.usable()) << dirty.message;
-  EXPECT_GT(dirty.motions.angle_mismatch + dirty.motions.residual_outlier, 0);
+  EXPECT_GT(
+      dirty.glitches.dropped() + dirty.motions.angle_mismatch + dirty.motions.residual_outlier, 0);
   const auto e_clean = CompareToTruth(clean.estimate, drive.truth[0]);
   const auto e_dirty = CompareToTruth(dirty.estimate, drive.truth[0]);
   // Within the noise: no more than 3x the clean error (plus a tiny absolute floor).

@@ -47,6 +47,10 @@ Fixture MakeFixture() {
   left.motions.used = 190;
   left.motions.small_rotation = 7;
   left.motions.residual_outlier = 3;
+  left.glitches.position_jump = 2;
+  left.glitches.angle_mismatch = 1;
+  left.glitches.in_master = 1;
+  left.glitches.in_slave = 2;
   left.motion_model = MotionModel::kGeneral;
   left.scale_model = ScaleModel::kFixed;
   left.termination = Termination::kSolved;
@@ -103,6 +107,7 @@ const std::set<std::string> kCommonKeys = {"name",
                                            "std",
                                            "motions_used",
                                            "motions_rejected",
+                                           "glitches",
                                            "models",
                                            "state",
                                            "termination",
@@ -141,6 +146,12 @@ TEST(ResultJsonTest, ExactSchemaWithTruth) {
             nlohmann::json({{"rot_deg", 0.02}, {"pos", {0.001, 0.002, 0.003}}, {"axis", nullptr}}));
   EXPECT_EQ(left.at("motions_used"), 190);
   EXPECT_EQ(left.at("motions_rejected"), 10);
+  EXPECT_EQ(left.at("glitches"), nlohmann::json({{"dropped", 3},
+                                                 {"position_jump", 2},
+                                                 {"rotation_jump", 0},
+                                                 {"angle_mismatch", 1},
+                                                 {"in_master", 1},
+                                                 {"in_slave", 2}}));
   EXPECT_EQ(left.at("models"), nlohmann::json({{"motion", "general"}, {"scale", "fixed"}}));
   EXPECT_EQ(left.at("termination"), "solved");
   EXPECT_EQ(left.at("state"), "converged");
@@ -413,6 +424,8 @@ TEST(FormatResultTableTest, ShowsEstimatesTruthAndErrors) {
                                "scale segment 3",
                                "std rotation",
                                "used 190 of 200, rejected 10",
+                               "3 poses dropped (position jump 2, rotation jump 0, angle "
+                               "mismatch 1; in the master 1, in this camera 2)",
                                "motion general, scale fixed",
                                "motion translational, scale segments",
                                "unobservable along",

@@ -78,6 +78,8 @@ RigCalibration MakeResult() {
   left.motions.small_rotation = 6;
   left.motions.angle_mismatch = 3;
   left.motions.residual_outlier = 1;
+  left.glitches.rotation_jump = 1;
+  left.glitches.in_slave = 1;
   left.termination = Termination::kSolved;
   left.state = SlaveState::kConverged;
   left.message = "ok";
@@ -241,6 +243,8 @@ TEST_F(RigFilesTest, ResultYamlHasStatusAndStatistics) {
         "pos: [0.001, 0.002, 0.003]",
         "motions: {total: 300, used: 290, rejected: 10, small_rotation: 6, angle_mismatch: 3, "
         "residual_outlier: 1}",
+        "glitches: {dropped: 1, position_jump: 0, rotation_jump: 1, angle_mismatch: 0, "
+        "in_master: 0, in_slave: 1}",
         "models: {motion: general, scale: segments}",
         "{segment: 4, scale: 1.5, std: 0.03}",
         "unobservable: [[0, 1, 0]]",

@@ -114,6 +114,14 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
                          "residual outlier {})",
                          m.used, m.total, m.rejected(), m.small_rotation, m.angle_mismatch,
                          m.residual_outlier));
+  const GlitchCounts& g = s.glitches;
+  if (g.dropped() > 0) {
+    out += Row("glitches",
+               fmt::format("{} poses dropped (position jump {}, rotation jump {}, angle mismatch "
+                           "{}; in the master {}, in this camera {})",
+                           g.dropped(), g.position_jump, g.rotation_jump, g.angle_mismatch,
+                           g.in_master, g.in_slave));
+  }
   out += Row("models",
              fmt::format("motion {}, scale {}", ToString(s.motion_model), ToString(s.scale_model)));
   for (const Eigen::Vector3d& d : s.unobservable) {
@@ -186,6 +194,10 @@ nlohmann::json ResultToJson(const RigCalibration& result,
         {"rot_deg", Num(s.rot_std_deg)}, {"pos", Vec(s.pos_std)}, {"axis", Num(s.axis_offset_std)}};
     j["motions_used"] = s.motions.used;
     j["motions_rejected"] = s.motions.rejected();
+    j["glitches"] = {
+        {"dropped", s.glitches.dropped()},           {"position_jump", s.glitches.position_jump},
+        {"rotation_jump", s.glitches.rotation_jump}, {"angle_mismatch", s.glitches.angle_mismatch},
+        {"in_master", s.glitches.in_master},         {"in_slave", s.glitches.in_slave}};
     j["models"] = {{"motion", ToString(s.motion_model)}, {"scale", ToString(s.scale_model)}};
     j["state"] = std::string(ToString(s.state));
     j["termination"] = ToString(s.termination);

@@ -198,6 +198,15 @@ std::string ResultToYaml(const RigCalibration& result) {
     out << YAML::Key << "angle_mismatch" << YAML::Value << m.angle_mismatch;
     out << YAML::Key << "residual_outlier" << YAML::Value << m.residual_outlier;
     out << YAML::EndMap;
+    const GlitchCounts& g = slave.glitches;
+    out << YAML::Key << "glitches" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "dropped" << YAML::Value << g.dropped();
+    out << YAML::Key << "position_jump" << YAML::Value << g.position_jump;
+    out << YAML::Key << "rotation_jump" << YAML::Value << g.rotation_jump;
+    out << YAML::Key << "angle_mismatch" << YAML::Value << g.angle_mismatch;
+    out << YAML::Key << "in_master" << YAML::Value << g.in_master;
+    out << YAML::Key << "in_slave" << YAML::Value << g.in_slave;
+    out << YAML::EndMap;
     out << YAML::Key << "models" << YAML::Value << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "motion" << YAML::Value << ToString(slave.motion_model);
     out << YAML::Key << "scale" << YAML::Value << ToString(slave.scale_model);

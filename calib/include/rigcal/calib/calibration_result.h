@@ -41,6 +41,19 @@ struct MotionCounts {
   int rejected() const { return small_rotation + angle_mismatch + residual_outlier; }
 };
 
+// Poses dropped before any motion is formed because a camera's trajectory jumps there (a
+// glitch: a pose off by far more than the camera moves, a rotated pose). Batch: times whose
+// set of poses is removed from the recording (every camera's, so the pair choice never sees
+// them), each counted once under the first cause found; online: sets this slave skipped.
+struct GlitchCounts {
+  int position_jump = 0;   // a camera's position jumps and returns (robust step speed)
+  int rotation_jump = 0;   // a camera's orientation jumps and returns (robust angular speed)
+  int angle_mismatch = 0;  // master and slave rotate by different angles (scale-free)
+  int in_master = 0;       // of the dropped poses: the master's pose is a glitch
+  int in_slave = 0;        // this slave's pose is a glitch (a time may count in both)
+  int dropped() const { return position_jump + rotation_jump + angle_mismatch; }
+};
+
 // The figures that decide what the motions determine (general, planar or translational).
 struct Observability {
   // Eigenvalues of the rotation system sum A^T A (4.10), ascending. The smallest is the
@@ -98,6 +111,7 @@ struct SlaveCalibration {
   double axis_offset_std = std::numeric_limits<double>::quiet_NaN();
 
   MotionCounts motions;
+  GlitchCounts glitches;
   MotionModel motion_model = MotionModel::kGeneral;  // chosen model (never kAuto)
   ScaleModel scale_model = ScaleModel::kFixed;       // chosen model (never kAuto)
   Observability observability;

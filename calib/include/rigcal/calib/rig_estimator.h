@@ -25,6 +25,9 @@
 #include "rigcal/calib/types.h"
 
 namespace rigcal {
+namespace internal {
+class PoseGlitchGate;
+}
 
 struct RigEstimatorOptions {
   // Keyframes (per slave): a set becomes a keyframe when the master has rotated by
@@ -209,7 +212,8 @@ class RigEstimator {
 
   // Consumes one time-corresponding set: poses[0] master, poses[i] slave i (nullopt when the
   // slave is missing from this set). Sets must come in increasing time. Non-finite poses are
-  // counted as rejected and ignored.
+  // counted as rejected and ignored; glitched poses (a jump, a rotated pose: pose_glitch_gate)
+  // are skipped and counted in the slave's `glitches`.
   void AddSet(int64_t t_ns, const std::vector<std::optional<CameraPose>>& poses);
 
   // The current estimate of every slave (cheap: cached at each accepted motion).
@@ -244,6 +248,7 @@ class RigEstimator {
   std::vector<std::string> names_;
   RigEstimatorOptions options_;
   std::vector<std::unique_ptr<Slave>> slaves_;
+  std::unique_ptr<internal::PoseGlitchGate> glitch_gate_;  // pose_glitch_gate
   RigEstimate estimate_;
   int master_segment_ = 0;
   bool have_master_segment_ = false;

@@ -25,6 +25,9 @@ namespace rigcal::tools {
 //                        "axis": sigma},      σ of C along observability.mean_axis (null when
 //                                             unknown: planar motion without a prior σ)
 //                "motions_used": n, "motions_rejected": n,
+//                "glitches": {"dropped": n, "position_jump": n, "rotation_jump": n,
+//                             "angle_mismatch": n, "in_master": n, "in_slave": n},
+//                                             poses dropped before the pairs (GlitchCounts)
 //                "models": {"motion": "general"|"planar"|"translational",
 //                           "scale": "fixed"|"segments"|"partitions"},
 //                "termination": ToString(Termination), "message": text,
