@@ -92,6 +92,16 @@ struct RigEstimator::Slave {
   int64_t last_history_refine_ns = std::numeric_limits<int64_t>::min();
   bool refined_from_history = false;  // `refined` is the batch calibrator's on the history
 
+  void RecordHistory(int capacity, int64_t t_ns, const CameraPose& master,
+                     const CameraPose& slave) {
+    if (capacity <= 0) return;
+    history.push_back({t_ns, master.pose, slave.pose, master.segment, slave.segment});
+    if (static_cast<int>(history.size()) > capacity) {
+      history.pop_front();
+      history_complete = false;
+    }
+  }
+
   void RestartHistory() {
     history.clear();
     history_complete = true;
@@ -159,6 +169,8 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
       PublishCounts(static_cast<int>(i));
       continue;
     }
+    // The history holds every finite set: the batch calibrator finds glitches itself.
+    slaves_[i]->RecordHistory(options_.history_sets, t_ns, master, slave);
     if (glitched) {
       PublishCounts(static_cast<int>(i));
       continue;
@@ -172,13 +184,6 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
   Slave& s = *slaves_[index];
   const RigEstimatorOptions& o = options_;
   s.online.segment = slave.segment;
-  if (o.history_sets > 0) {
-    s.history.push_back({t_ns, master.pose, slave.pose, master.segment, slave.segment});
-    if (static_cast<int>(s.history.size()) > o.history_sets) {
-      s.history.pop_front();
-      s.history_complete = false;
-    }
-  }
 
   // Keyframes, and the motion pair of a new one.
   if (!internal::OfferKeyframe(o, t_ns, master, slave, &s.keyframes)) return;
