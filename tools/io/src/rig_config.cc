@@ -150,6 +150,8 @@ const std::map<std::string, FieldSetter>& EstimatorFields() {
       {"converged_pos_std_fraction", Double(&O::converged_pos_std_fraction)},
       {"converged_stable_keyframes", Int(&O::converged_stable_keyframes)},
       {"window_size", Int(&O::window_size)},
+      {"history_sets", Int(&O::history_sets)},
+      {"history_refine_period_s", Double(&O::history_refine_period_s)},
       {"sigma_block_s", Double(&O::sigma_block_s)},
       {"sigma_blocks", Int(&O::sigma_blocks)},
       {"sigma_min_blocks", Int(&O::sigma_min_blocks)},
