@@ -8,6 +8,7 @@
 #include <deque>
 #include <utility>
 
+#include "batch_acceptance.h"
 #include "convergence_check.h"
 #include "decalibration_check.h"
 #include "keyframe_pairing.h"
@@ -275,7 +276,20 @@ void RigEstimator::Publish(int index) {
 
   online.flags |= internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation,
                                              decalibrated, &s.convergence);
+  // Usable only when the window's motions support the estimate (batch_acceptance.h).
+  std::optional<std::string> unsupported;
+  if (IsUsable(published.state)) {
+    std::vector<MotionData> window;
+    window.reserve(s.stats.window.size());
+    for (const internal::WindowEntry& e : s.stats.window) window.push_back(e.data);
+    unsupported = internal::OnlineUnsupportedReason(window, published);
+    if (unsupported) {
+      published.state = SlaveState::kInitialising;
+      s.convergence.stable = 0;
+    }
+  }
   published.message = OnlineMessage(o, published, s.linear.message, nominal);
+  if (unsupported) published.message = "not usable: " + *unsupported + "; " + published.message;
   estimate_.rig.slaves[index] = published;
   estimate_.online[index] = online;
   PublishCounts(index);
