@@ -138,9 +138,13 @@ int IndependentMotions(const std::vector<MotionData>& motions) {
 // angle differences θ0_k − θi_k, the component of δ_k along the rotation axis, whose robust σ
 // is ε (Observability::rotation_noise_deg). The robust residual scale
 //     s = sqrt(median_k δ_k² / median(χ²(3)))
-// estimates σ from all three components. Consistent: s / max(ε, floor) ≤ F with
+// estimates σ from all three components. Consistent: s / max(ε, floor) ≤ F (1 + 3.5 / √m)
+// with
 //     F = 2 sqrt(χ²₃(0.999) / 3) ≈ 4.66,
-// the 99.9 % bound of a single motion's per-axis residual, doubled. The median (not the sum)
+// the 99.9 % bound of a single motion's per-axis residual, doubled, and m the independent
+// motions: s and ε are robust scales of m effective samples each, of relative σ ≈ 1.2 / √m,
+// whose ratio the second factor allows 3 of those σ (4 motions: 2.75, 100: 1.35, 1000: 1.11).
+// The median (not the sum)
 // and the factor make the test robust to what a plain χ² test over K motions would reject
 // on good data: overlapping pairs (their residuals are correlated, the effective dof far
 // below K), drifting odometry, anisotropic noise, and misfit removal. A model the data
@@ -156,9 +160,11 @@ int IndependentMotions(const std::vector<MotionData>& motions) {
 // differ by more than their noise. Only for a rotating rig (the translational model's
 // rotations are noise themselves).
 RotationConsistency TestRotationResiduals(const std::vector<MotionData>& motions,
-                                          const Eigen::Quaterniond& q, bool rotating) {
+                                          const Eigen::Quaterniond& q, bool rotating,
+                                          int independent) {
   RotationConsistency out;
-  out.limit = 2.0 * std::sqrt(kChi2Quantile3 / 3.0);
+  out.limit = 2.0 * std::sqrt(kChi2Quantile3 / 3.0) *
+              (1.0 + 3.5 / std::sqrt(static_cast<double>(std::max(independent, 1))));
   out.pairing_limit = kPairingLimit;
   const size_t n = motions.size();
   if (n < 2) return out;
@@ -250,7 +256,8 @@ std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
 
   // 2. Rotation residuals against the measured rotation noise, and the pairing tests.
   const bool rotating = r.motion_model != MotionModel::kTranslational;
-  const RotationConsistency rot = TestRotationResiduals(motions, r.estimate.q, rotating);
+  const RotationConsistency rot =
+      TestRotationResiduals(motions, r.estimate.q, rotating, independent);
   if (!rot.related || !rot.consistent) return RotationReason(rot, r.motion_model);
   if (!rotating) {
     const TranslationPairing t = TestTranslationPairing(
@@ -317,7 +324,8 @@ std::optional<std::string> OnlineUnsupportedReason(const std::vector<MotionData>
            " to test that the cameras move together";
   }
   if (published.motion_model != MotionModel::kTranslational) {
-    const RotationConsistency rot = TestRotationResiduals(window, published.estimate.q, true);
+    const RotationConsistency rot =
+        TestRotationResiduals(window, published.estimate.q, true, independent);
     if (!rot.related || !rot.consistent) return RotationReason(rot, published.motion_model);
     return std::nullopt;
   }

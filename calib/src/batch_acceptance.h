@@ -43,9 +43,11 @@ struct RotationConsistency {
 };
 
 // The residual rotations dq⁻¹ q0 dq qi⁻¹ of `motions` under the rotation `q`, tested against
-// the rotation noise measured from the same motions; `rotating`: also the pairing test.
+// the rotation noise measured from the same motions; `rotating`: also the pairing test;
+// `independent`: the independent motions among them (IndependentMotions).
 RotationConsistency TestRotationResiduals(const std::vector<MotionData>& motions,
-                                          const Eigen::Quaterniond& q, bool rotating);
+                                          const Eigen::Quaterniond& q, bool rotating,
+                                          int independent);
 
 // The translation pairing test of the translational model (C0 = λ dR Ci, eq. 4.29): the
 // robust residual |C0 − λ dR Ci| with the actual pairing against the master's motions of other
