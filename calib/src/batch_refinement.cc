@@ -60,8 +60,11 @@ BatchRefinement RefineBatch(const CalibrationOptions& options, const BatchSettin
         {summary.mean, summary.count >= 2 && !planar ? summary.sigma_thesis : 0.0});
   }
 
-  const int blocks = options.covariance_time_blocks;
-  if (blocks > 0 && k >= 4 * blocks) input.blocks = TimeBlocks(data, blocks);
+  const int blocks = BlocksForDurations(data, options.covariance_time_blocks);
+  if (blocks > 0 && k >= 4 * blocks) {
+    input.blocks = TimeBlocks(data, blocks);
+    out.time_blocks = blocks;
+  }
   out.solved = options.method == Method::kNonlinear;
   out.refined = RefineNonlinear(data, input, options, out.solved);
   return out;

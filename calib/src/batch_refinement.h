@@ -21,6 +21,7 @@ struct BatchRefinement {
   // Per scale index: the scale measurements' summary (the result's measured_* figures).
   std::vector<ScaleSummary> summaries;
   bool solved = false;  // options.method is non-linear (else only the covariance is computed)
+  int time_blocks = 0;  // blocks of the cluster-robust covariance (0 = none)
 };
 
 // Refines `linear` on the motions; `axis`: the mean rotation axis of a rotating rig, `planar`:

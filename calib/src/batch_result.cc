@@ -110,7 +110,7 @@ std::string BatchMessage(const CalibrationOptions& options, const BatchSetting& 
   msg << ExplainModel(e);
   msg << "; " << (scale.why.empty() ? ToString(r.scale_model) + " scale model" : scale.why);
   if (refinement.refined.clustered_larger) {
-    msg << "; sigma with errors shared within " << options.covariance_time_blocks
+    msg << "; sigma with errors shared within " << refinement.time_blocks
         << " time blocks (motions close in time share their errors)";
   }
   if (refinement.solved) msg << "; refinement: " << refinement.refined.message;

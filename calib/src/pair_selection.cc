@@ -33,15 +33,6 @@ std::vector<IndexPair> SinceStartPairs(const RigRecording& rec) {
   return pairs;
 }
 
-std::vector<IndexPair> RelativePairs(const RigRecording& rec, int step) {
-  std::vector<IndexPair> pairs;
-  const int n = static_cast<int>(rec.size());
-  for (int a = 0; a + step < n; ++a) {
-    if (SegmentOf(rec.master, a) == SegmentOf(rec.master, a + step)) pairs.push_back({a, a + step});
-  }
-  return pairs;
-}
-
 // Whether poses a and b lie in the same segment of the master and of every slave (a pair
 // across a slave's re-initialisation would be lost for that slave).
 bool SameSegments(const RigRecording& rec, int a, int b) {
@@ -139,6 +130,25 @@ SpanFigures MeasureSpan(const RigRecording& rec, int span, int samples) {
 
 }  // namespace
 
+std::vector<IndexPair> RelativePairs(const RigRecording& rec, int span, int stride) {
+  std::vector<IndexPair> pairs;
+  const int n = static_cast<int>(rec.size());
+  for (int a = 0; a + span < n; a += std::max(stride, 1)) {
+    if (SegmentOf(rec.master, a) == SegmentOf(rec.master, a + span)) pairs.push_back({a, a + span});
+  }
+  return pairs;
+}
+
+std::vector<int> AutoSpanCandidates(int poses, const PairOptions& options) {
+  const int longest = std::max(1, static_cast<int>(options.auto_max_span_fraction * poses));
+  std::vector<int> spans;
+  for (int span = 1; span <= longest;) {
+    spans.push_back(span);
+    span = std::max(span + 1, static_cast<int>(std::lround(span * 1.5)));
+  }
+  return spans;
+}
+
 int AutoPairSpan(const RigRecording& recording, const PairOptions& options) {
   const int n = static_cast<int>(recording.size());
   const int max_span = std::max(1, static_cast<int>(options.max_span_fraction * n));
@@ -175,6 +185,9 @@ Status PairOptions::Check() const {
   }
   if (max_pairs < 1) return Error{"max_pairs: must be >= 1"};
   if (max_pairs_per_end < 0) return Error{"max_pairs_per_end: must be >= 0 (0 = no limit)"};
+  if (!(auto_max_span_fraction > 0.0 && auto_max_span_fraction <= 0.5)) {
+    return Error{"auto_max_span_fraction: must be in (0, 0.5]"};
+  }
   return Status::Ok();
 }
 
@@ -184,7 +197,8 @@ std::vector<IndexPair> SelectPairs(const RigRecording& recording, const PairOpti
       return SinceStartPairs(recording);
     case PairOptions::Policy::kRelative:
       return RelativePairs(recording, options.step);
-    case PairOptions::Policy::kAuto: {
+    case PairOptions::Policy::kAuto:  // chosen per slave by CalibrateRig; here kWalk's
+    case PairOptions::Policy::kWalk: {
       // Walk to the target angle, but not beyond the spans whose motions are still better
       // than noise (twice the best span).
       PairOptions walk = options;
@@ -226,6 +240,8 @@ std::string ToString(PairOptions::Policy policy) {
       return "relative";
     case PairOptions::Policy::kAuto:
       return "auto";
+    case PairOptions::Policy::kWalk:
+      return "walk";
   }
   return "?";
 }

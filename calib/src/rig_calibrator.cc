@@ -3,6 +3,7 @@
 //   batch_result (with model_explanation).
 #include "rigcal/calib/rig_calibrator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -10,6 +11,7 @@
 #include "batch_linear_solution.h"
 #include "batch_model_selection.h"
 #include "batch_motions.h"
+#include "batch_pair_choice.h"
 #include "batch_refinement.h"
 #include "batch_result.h"
 #include "motion_data.h"
@@ -96,7 +98,8 @@ RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOpti
   const std::string invalid = recording.Check().message();
   const bool options_ok = options.Check().ok();
   std::vector<IndexPair> pairs;
-  if (invalid.empty() && options_ok) pairs = SelectPairs(recording, options.pairs);
+  const bool auto_pairs = options.pairs.policy == PairOptions::Policy::kAuto;
+  if (invalid.empty() && options_ok && !auto_pairs) pairs = SelectPairs(recording, options.pairs);
   out.pairs_selected = static_cast<int>(pairs.size());
   for (size_t i = 0; i < recording.slaves.size(); ++i) {
     const auto& name = recording.slaves[i].name;
@@ -107,8 +110,18 @@ RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOpti
           internal::Failed(r, Termination::kInvalidInput, "invalid recording: " + invalid));
       continue;
     }
+    if (auto_pairs && options_ok) {
+      out.slaves.push_back(
+          internal::CalibrateSlaveAutoPairs(recording, static_cast<int>(i), options));
+      out.pairs_selected = std::max(out.pairs_selected, out.slaves.back().motions.total);
+      continue;
+    }
     out.slaves.push_back(
         CalibrateSlave(MotionsForSlave(recording, static_cast<int>(i), pairs), options, name));
+    out.slaves.back().pairs =
+        ToString(options.pairs.policy) + (options.pairs.policy == PairOptions::Policy::kRelative
+                                              ? ":" + std::to_string(options.pairs.step)
+                                              : "");
   }
   return out;
 }

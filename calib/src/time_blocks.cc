@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <map>
 
+#include "rigcal/calib/robust_statistics.h"
+
 namespace rigcal::internal {
 
 std::vector<int> TimeBlocks(const std::vector<MotionData>& motions, int blocks) {
@@ -18,6 +20,22 @@ std::vector<int> TimeBlocks(const std::vector<MotionData>& motions, int blocks) 
     }
   }
   return block;
+}
+
+int BlocksForDurations(const std::vector<MotionData>& motions, int max_blocks) {
+  if (motions.empty() || max_blocks <= 4) return max_blocks;
+  int64_t first = motions.front().t_ns, last = first;
+  std::vector<double> durations;
+  durations.reserve(motions.size());
+  for (const auto& m : motions) {
+    first = std::min(first, m.t_ns);
+    last = std::max(last, m.t_ns);
+    durations.push_back(static_cast<double>(m.duration_ns));
+  }
+  const double median = Median(durations);
+  if (!(median > 0.0)) return max_blocks;
+  const double fit = static_cast<double>(last - first) / (3.0 * median);
+  return static_cast<int>(std::clamp(std::floor(fit), 4.0, static_cast<double>(max_blocks)));
 }
 
 }  // namespace rigcal::internal

@@ -14,4 +14,10 @@ namespace rigcal::internal {
 // share of every scale variable.
 std::vector<int> TimeBlocks(const std::vector<MotionData>& motions, int blocks);
 
+// How many blocks (at most `max_blocks`) keep the motions that share errors mostly within one
+// block: a motion shares poses and drift with every motion overlapping it in time, so a block
+// lasts at least three times the median motion duration. Never fewer than 4 (the sandwich
+// needs a few independent blocks; with fewer the σ of such long motions is optimistic).
+int BlocksForDurations(const std::vector<MotionData>& motions, int max_blocks);
+
 }  // namespace rigcal::internal

@@ -202,6 +202,110 @@ TEST_F(SolveCommandTest, TextOutputShowsErrorsAgainstTruth) {
   }
 }
 
+// The demo drive read as a monocular recording whose master unit is 0.37 m, its truth written
+// in metres (C and the scales, slave unit -> metres, times 0.37): the errors are printed after
+// fitting the master unit to the truth, small against the printed σ, and the output says so.
+constexpr double kMasterUnitM = 0.37;
+
+std::map<std::string, Similarity> InMetres(std::map<std::string, Similarity> truth) {
+  for (auto& [name, rig] : truth) {
+    rig.C *= kMasterUnitM;
+    rig.scale *= kMasterUnitM;
+  }
+  return truth;
+}
+
+TEST_F(SolveCommandTest, MetricTruthIsComparedAfterAligningTheMasterUnit) {
+  WriteDemoDrive();
+  ASSERT_TRUE(WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
+  const RunResult r = Run(DemoArgs() + " --truth " + Quote(Path("metric.yaml")) + " --json");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  const nlohmann::json j = ParseJson(r);
+  ASSERT_TRUE(j.contains("truth_alignment")) << j.dump(2);
+  const nlohmann::json& a = j["truth_alignment"];
+  EXPECT_EQ(a.value("mode", ""), "auto");
+  EXPECT_EQ(a.value("applied", false), true) << a.dump(2);
+  const double k = a.value("metres_per_master_unit", 0.0);
+  const double k_std = a.value("std", 0.0);
+  EXPECT_GT(k_std, 0.0) << a.dump(2);
+  EXPECT_NEAR(k, kMasterUnitM, 4.0 * k_std + 1e-9) << a.dump(2);
+  EXPECT_EQ(a["slaves_used"], nlohmann::json({"cam1", "cam2"}));
+  EXPECT_THAT(a.value("message", ""),
+              HasSubstr("positions compared after aligning the master unit to the truth"));
+  for (const auto& s : j["slaves"]) {
+    const std::string name = s.value("name", "");
+    ASSERT_TRUE(s.contains("errors")) << s.dump(2);
+    const nlohmann::json& e = s["errors"];
+    // Tolerances from the printed σ: the estimate's own (4 σ) plus what the unit's σ moves the
+    // aligned truth by (|C_true| σ_k / k in C, σ_k / k in the scale).
+    const Eigen::Vector3d pos_std(s["std"]["pos"][0].get<double>(),
+                                  s["std"]["pos"][1].get<double>(),
+                                  s["std"]["pos"][2].get<double>());
+    const double c_true = truth_.at(name).C.norm();  // master units
+    EXPECT_LT(e.value("rot_deg", 1e9), 4.0 * s["std"].value("rot_deg", 0.0) + 1e-6) << s.dump(2);
+    const double c_tolerance = 4.0 * (pos_std.norm() + c_true * k_std / k);
+    EXPECT_LT(e.value("trans_err", 1e9), c_tolerance) << s.dump(2);
+    EXPECT_NEAR(e.value("trans_err_m", 1e9), e.value("trans_err", 0.0) * k, 1e-12);
+    EXPECT_LT(e.value("dist_pct", 1e9), 100.0 * c_tolerance / c_true) << s.dump(2);
+    EXPECT_LT(e.value("scale_pct", 1e9), 100.0 * 4.0 * k_std / k + 0.1) << s.dump(2);
+  }
+
+  // Text: the alignment line with the unit, the truth columns in master units, C errors in m.
+  const RunResult text = Run(DemoArgs() + " --truth " + Quote(Path("metric.yaml")));
+  ASSERT_EQ(text.exit_code, 0) << Explain(text);
+  EXPECT_THAT(text.out, ::testing::ContainsRegex(
+                            "truth: positions compared after aligning the master unit to the "
+                            "truth: 1 master unit = 0\\.3[67][0-9]* m \\(± [0-9.e-]+, least "
+                            "squares of the truth's C on the estimated C of cam1, cam2\\)"))
+      << Explain(text);
+  EXPECT_THAT(text.out,
+              ::testing::ContainsRegex("C error [0-9.e-]+ master units \\([0-9.e-]+ m\\)"))
+      << Explain(text);
+  EXPECT_THAT(text.out, HasSubstr("axis, angle [deg]"));
+}
+
+TEST_F(SolveCommandTest, TruthInMasterUnitsIsComparedAsGiven) {
+  WriteDemoDrive();
+  const RunResult r = Run(DemoArgs() + " --truth " + Quote(Path("truth.yaml")) + " --json");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  const nlohmann::json j = ParseJson(r);
+  const nlohmann::json& a = j["truth_alignment"];
+  EXPECT_EQ(a.value("applied", true), false) << a.dump(2);
+  EXPECT_NEAR(a.value("metres_per_master_unit", 0.0), 1.0, 0.02) << a.dump(2);
+  EXPECT_THAT(a.value("message", ""), HasSubstr("the truth is in master units"));
+  for (const auto& s : j["slaves"]) {
+    EXPECT_FALSE(s["errors"].contains("trans_err_m")) << s.dump(2);
+    EXPECT_LT(s["errors"].value("trans_err", 1e9), 0.05) << s.dump(2);
+  }
+
+  // Declared in master units, a metric truth is not aligned: its C are 0.37 times too short.
+  ASSERT_TRUE(WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
+  const RunResult forced =
+      Run(DemoArgs() + " --truth " + Quote(Path("metric.yaml")) + " --truth-unit master --json");
+  ASSERT_EQ(forced.exit_code, 0) << Explain(forced);
+  const nlohmann::json f = ParseJson(forced);
+  EXPECT_EQ(f["truth_alignment"].value("applied", true), false);
+  EXPECT_EQ(f["truth_alignment"].value("mode", ""), "master");
+  for (const auto& s : f["slaves"]) {
+    EXPECT_GT(s["errors"].value("dist_pct", 0.0), 100.0 * (1.0 / kMasterUnitM - 1.0) * 0.9)
+        << s.dump(2);
+  }
+  // --truth-unit needs --truth.
+  const RunResult alone = Run(DemoArgs() + " --truth-unit metric");
+  EXPECT_EQ(alone.exit_code, 2) << Explain(alone);
+}
+
+TEST_F(SolveCommandTest, OnlineConvergenceErrorsUseTheAlignedTruth) {
+  WriteDemoDrive();
+  ASSERT_TRUE(WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
+  const RunResult r =
+      Run(DemoArgs() + " --online --truth " + Quote(Path("metric.yaml")) + " --truth-unit metric");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  EXPECT_THAT(r.out, HasSubstr("convergence errors in master units, the truth aligned: "
+                               "positions compared after aligning the master unit"))
+      << Explain(r);
+}
+
 TEST_F(SolveCommandTest, OptionsReachTheCalibrator) {
   WriteDemoDrive();
   const RunResult r = Run(DemoArgs() +
@@ -445,6 +549,8 @@ TEST_F(SolveCommandTest, HelpExplainsOptionsAndExitCodes) {
                                "relative:STEP",
                                "--tolerance-ms",
                                "--truth",
+                               "--truth-unit",
+                               "metric",
                                "--prior",
                                "--prior-sigma",
                                "planar",

@@ -1,4 +1,5 @@
-// The JSON schema shared by the commands, the text table and the Euler angle helper.
+// The JSON schema shared by the commands, the text table, the Euler angle and axis-angle
+// helpers (continuous through gimbal lock) and the truth's unit alignment in both views.
 #include "rigcal/io/result_json.h"
 
 #include <gmock/gmock.h>
@@ -96,10 +97,21 @@ std::set<std::string> Keys(const nlohmann::json& j) {
   return keys;
 }
 
-const std::set<std::string> kCommonKeys = {
-    "name",         "q_wxyz", "C",           "std",     "motions_used", "motions_rejected",
-    "models",       "state",  "termination", "message", "unobservable", "unobservable_from_prior",
-    "observability"};
+const std::set<std::string> kCommonKeys = {"name",
+                                           "q_wxyz",
+                                           "roll_pitch_yaw_deg",
+                                           "axis_angle",
+                                           "C",
+                                           "std",
+                                           "motions_used",
+                                           "motions_rejected",
+                                           "models",
+                                           "state",
+                                           "termination",
+                                           "message",
+                                           "unobservable",
+                                           "unobservable_from_prior",
+                                           "observability"};
 
 std::set<std::string> With(std::set<std::string> keys, std::initializer_list<const char*> more) {
   for (const char* k : more) keys.insert(k);
@@ -237,6 +249,180 @@ TEST(RollPitchYawTest, KnownRotations) {
   EXPECT_LT((rpy(zyx) - Eigen::Vector3d(10, -20, 40)).norm(), 1e-9);
 }
 
+TEST(RollPitchYawTest, GimbalLockIsDeterministic) {
+  // At pitch exactly ±90 only yaw - roll is defined: reported with roll 0.
+  for (const double pitch : {90.0, -90.0}) {
+    const Eigen::Quaterniond q =
+        AxisAngle({0, 0, 1}, 30 * kRadPerDeg) * AxisAngle({0, 1, 0}, pitch * kRadPerDeg);
+    const Eigen::Vector3d rpy = RollPitchYawDeg(q);
+    EXPECT_NEAR(rpy.x(), 0.0, 1e-9) << rpy.transpose();
+    EXPECT_NEAR(rpy.y(), pitch, 1e-6) << rpy.transpose();
+    EXPECT_NEAR(rpy.z(), 30.0, 1e-6) << rpy.transpose();
+  }
+}
+
+// The rotation Rz(30) Ry(pitch) Rx(20) swept through pitch 90 (and -90): roll and yaw jump by
+// 180 deg where pitch passes ±90 (pitch itself turns back), the axis and angle do not.
+TEST(AxisAngleTest, ContinuousThroughGimbalLock) {
+  for (const double lock : {90.0, -90.0}) {
+    const double step = 0.001;  // deg of pitch per sample
+    AxisAngleDegrees previous;
+    Eigen::Vector3d previous_rpy = Eigen::Vector3d::Zero();
+    double largest_rpy_jump = 0.0;
+    for (int k = -200; k <= 200; ++k) {
+      const double pitch = lock + k * step;
+      const Eigen::Quaterniond q = AxisAngle({0, 0, 1}, 30 * kRadPerDeg) *
+                                   AxisAngle({0, 1, 0}, pitch * kRadPerDeg) *
+                                   AxisAngle({1, 0, 0}, 20 * kRadPerDeg);
+      const AxisAngleDegrees a = AxisAngleDeg(q);
+      EXPECT_NEAR(a.axis.norm(), 1.0, 1e-12);
+      EXPECT_GE(a.angle_deg, 0.0);
+      EXPECT_LE(a.angle_deg, 180.0);
+      // The axis and angle give back the rotation.
+      EXPECT_LT(AngleBetween(AxisAngle(a.axis, a.angle_deg * kRadPerDeg), q) * kDegPerRad, 1e-9);
+      const Eigen::Vector3d rpy = RollPitchYawDeg(q);
+      if (k > -200) {
+        // One step of 0.001 deg moves the rotation by 0.001 deg: the angle by at most that, the
+        // axis by at most that over sin(angle / 2) (here angle > 90 deg: < 0.002 deg).
+        EXPECT_LE(std::abs(a.angle_deg - previous.angle_deg), step + 1e-9) << pitch;
+        const double axis_turn =
+            std::atan2(a.axis.cross(previous.axis).norm(), a.axis.dot(previous.axis)) * kDegPerRad;
+        EXPECT_LT(axis_turn, 2.0 * step) << pitch;
+        largest_rpy_jump = std::max(largest_rpy_jump, (rpy - previous_rpy).cwiseAbs().maxCoeff());
+      }
+      previous = a;
+      previous_rpy = rpy;
+    }
+    // Roll/pitch/yaw do flip here (what the axis and angle are printed for).
+    EXPECT_GT(largest_rpy_jump, 90.0) << lock;
+  }
+}
+
+TEST(AxisAngleTest, KnownRotationsAndJson) {
+  const AxisAngleDegrees identity = AxisAngleDeg(Eigen::Quaterniond::Identity());
+  EXPECT_EQ(identity.angle_deg, 0.0);
+  EXPECT_EQ(identity.axis, Eigen::Vector3d::UnitZ());
+  // -q is the same rotation: the representative with w >= 0, angle in [0, 180].
+  const Eigen::Quaterniond q = AxisAngle({1, 2, 2}, -120 * kRadPerDeg);
+  const Eigen::Quaterniond minus_q(-q.w(), -q.x(), -q.y(), -q.z());
+  for (const Eigen::Quaterniond& r : {q, minus_q}) {
+    const AxisAngleDegrees a = AxisAngleDeg(r);
+    EXPECT_NEAR(a.angle_deg, 120.0, 1e-9);
+    EXPECT_LT((a.axis - Eigen::Vector3d(-1, -2, -2) / 3.0).norm(), 1e-12);
+  }
+
+  // JSON: every slave carries roll/pitch/yaw and axis/angle; "left" sits at pitch -89.5.
+  const Fixture f = MakeFixture();
+  const nlohmann::json j = ResultToJson(f.result, &f.truth);
+  const nlohmann::json& left = j.at("slaves")[0];
+  ASSERT_TRUE(left.contains("axis_angle")) << left.dump();
+  EXPECT_NEAR(left["axis_angle"]["angle_deg"].get<double>(), 89.5, 1e-9);
+  EXPECT_EQ(left["axis_angle"]["axis"], nlohmann::json({0.0, -1.0, 0.0}));
+  EXPECT_NEAR(left["roll_pitch_yaw_deg"][1].get<double>(), -89.5, 1e-9);
+  // The table shows both, and warns that roll and yaw are not unique near pitch ±90.
+  const std::string table = FormatResultTable(f.result, &f.truth);
+  EXPECT_THAT(table,
+              ::testing::ContainsRegex(
+                  "axis, angle \\[deg\\] +-?0\\.000000 +-1\\.000000 +-?0\\.000000 +89\\.5000"));
+  EXPECT_THAT(table, HasSubstr("roll and yaw are not unique"));
+}
+
+TEST(TruthAlignmentTest, AppliedAlignmentInJsonAndTable) {
+  Fixture f = MakeFixture();
+  f.result.slaves[1].position_observable = false;  // back: translational, no C estimated
+  // The truth in metres, the master unit 0.37 m: C and scales times 0.37.
+  std::map<std::string, Similarity> metric = f.truth;
+  for (auto& [name, rig] : metric) {
+    rig.C *= 0.37;
+    rig.scale *= 0.37;
+  }
+  const TruthAlignment a = AlignTruthUnit(f.result, metric, TruthUnit::kAuto);
+  ASSERT_TRUE(a.applied) << a.message;
+  EXPECT_NEAR(a.metres_per_unit, 0.37, 0.005) << a.message;
+  // left and road (in the plane) have positions; back is translational, still not usable.
+  EXPECT_EQ(a.slaves_used, std::vector<std::string>({"left", "road"}));
+  const std::map<std::string, Similarity> aligned = TruthInMasterUnits(metric, a);
+  EXPECT_NEAR(aligned.at("left").scale, 0.5 * 0.37 / a.metres_per_unit, 1e-12);
+
+  const nlohmann::json j = ResultToJson(f.result, &aligned, &a);
+  ASSERT_TRUE(j.contains("truth_alignment")) << j.dump(2);
+  const nlohmann::json& t = j["truth_alignment"];
+  EXPECT_EQ(Keys(t),
+            std::set<std::string>({"mode", "applied", "metres_per_master_unit", "std", "fit_rms_m",
+                                   "slaves_used", "slave_excluded", "message"}));
+  EXPECT_EQ(t["mode"], "auto");
+  EXPECT_EQ(t["applied"], true);
+  EXPECT_EQ(t["metres_per_master_unit"], a.metres_per_unit);
+  EXPECT_TRUE(t["slave_excluded"].is_null());
+  const nlohmann::json& errors = j["slaves"][0]["errors"];
+  EXPECT_NEAR(errors["trans_err_m"].get<double>(),
+              errors["trans_err"].get<double>() * a.metres_per_unit, 1e-15);
+
+  const std::string table = FormatResultTable(f.result, &aligned, &a);
+  EXPECT_THAT(table, HasSubstr("truth: positions compared after aligning the master unit to the "
+                               "truth: 1 master unit = 0.3"));
+  EXPECT_THAT(table, ::testing::ContainsRegex("C error [0-9.e-]+ master units \\([0-9.e-]+ m\\)"));
+
+  // Without an alignment: no truth_alignment, no trans_err_m (the schema as before).
+  const nlohmann::json plain = ResultToJson(f.result, &f.truth);
+  EXPECT_FALSE(plain.contains("truth_alignment"));
+  EXPECT_FALSE(plain["slaves"][0]["errors"].contains("trans_err_m"));
+}
+
+TEST(TruthAlignmentTest, TruthInMasterUnitsIsNotAligned) {
+  const Fixture f = MakeFixture();
+  const TruthAlignment a = AlignTruthUnit(f.result, f.truth, TruthUnit::kAuto);
+  EXPECT_FALSE(a.applied) << a.message;
+  EXPECT_NEAR(a.metres_per_unit, 1.0, 0.02);
+  EXPECT_THAT(a.message, HasSubstr("the truth is in master units"));
+  const nlohmann::json j = ResultToJson(f.result, &f.truth, &a);
+  EXPECT_EQ(j["truth_alignment"]["applied"], false);
+  EXPECT_FALSE(j["slaves"][0]["errors"].contains("trans_err_m"));
+  // Forced: the same truth declared metric is aligned (by a unit close to 1).
+  EXPECT_TRUE(AlignTruthUnit(f.result, f.truth, TruthUnit::kMetric).applied);
+  // Declared in master units: never aligned, whatever the fit says.
+  std::map<std::string, Similarity> metric = f.truth;
+  for (auto& [name, rig] : metric) rig.C *= 0.37;
+  const TruthAlignment master = AlignTruthUnit(f.result, metric, TruthUnit::kMaster);
+  EXPECT_FALSE(master.applied);
+  EXPECT_NEAR(master.metres_per_unit, 0.37, 0.005);
+}
+
+// Four slaves, one of which has a position estimate 30 % off: with 3 or more slaves that one is
+// left out of the unit's fit, which then is the others' unit.
+TEST(TruthAlignmentTest, OneBadSlaveIsLeftOut) {
+  RigCalibration result;
+  std::map<std::string, Similarity> metric;
+  const std::vector<Eigen::Vector3d> centres = {
+      {0.5, 0.0, 0.1}, {-0.4, 0.2, 0.0}, {0.0, -0.3, 0.6}, {0.3, 0.3, -0.3}};
+  const double unit = 0.37;  // metres per master unit
+  for (size_t i = 0; i < centres.size(); ++i) {
+    SlaveCalibration s;
+    s.name = "cam" + std::to_string(i + 1);
+    s.estimate.C = centres[i] + Eigen::Vector3d(1e-4, -1e-4, 2e-4) * static_cast<double>(i);
+    if (i == 2) s.estimate.C *= 1.3;
+    s.pos_std = Eigen::Vector3d::Constant(1e-4);
+    s.termination = Termination::kSolved;
+    s.state = SlaveState::kConverged;
+    result.slaves.push_back(s);
+    Similarity t;
+    t.C = centres[i] * unit;
+    metric[s.name] = t;
+  }
+  const TruthAlignment a = AlignTruthUnit(result, metric, TruthUnit::kAuto);
+  ASSERT_TRUE(a.applied) << a.message;
+  EXPECT_EQ(a.slave_excluded, "cam3") << a.message;
+  EXPECT_EQ(a.slaves_used, std::vector<std::string>({"cam1", "cam2", "cam4"}));
+  EXPECT_NEAR(a.metres_per_unit, unit, 1e-3) << a.message;
+  EXPECT_THAT(a.message, HasSubstr("cam3 left out"));
+  // All four good: none left out.
+  result.slaves[2].estimate.C = centres[2];
+  const TruthAlignment good = AlignTruthUnit(result, metric, TruthUnit::kAuto);
+  EXPECT_TRUE(good.slave_excluded.empty()) << good.message;
+  EXPECT_EQ(good.slaves_used.size(), 4u);
+  EXPECT_NEAR(good.metres_per_unit, unit, 1e-3);
+}
+
 TEST(FormatResultTableTest, ShowsEstimatesTruthAndErrors) {
   const Fixture f = MakeFixture();
   const std::string table = FormatResultTable(f.result, &f.truth);
@@ -248,6 +434,7 @@ TEST(FormatResultTableTest, ShowsEstimatesTruthAndErrors) {
                                "need >= 2 motions with rotation >= 2 deg, got 1",
                                "q (w, x, y, z)",
                                "roll pitch yaw [deg]",
+                               "axis, angle [deg]",
                                "C [master units]",
                                "truth",
                                "scale segment 3",

@@ -79,6 +79,14 @@ TEST(RunEvaluation, PlanarEstimateWithPriorScoresTheAxisToo) {
   const std::string table = FormatEvaluation(run);
   EXPECT_EQ(table.find("unobs"), std::string::npos) << table;
   EXPECT_NE(table.find("20.0000"), std::string::npos) << table;  // 0.01 units of 2 m
+  // The unit alignment is said, in the table and as the JSON's truth_alignment.
+  EXPECT_NE(table.find("positions compared after aligning the master unit to the truth: 1 master "
+                       "unit = 2 m"),
+            std::string::npos)
+      << table;
+  const TruthAlignment alignment = AlignmentOf(run);
+  EXPECT_TRUE(alignment.applied);
+  EXPECT_EQ(alignment.metres_per_unit, 2.0);
 }
 
 TEST(RunEvaluation, TranslationalEstimateHasNoPositionToScore) {

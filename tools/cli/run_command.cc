@@ -351,7 +351,12 @@ int RunRun(const RunArgs& args) {
       for (const tools::SlaveEvaluation& e : evaluation->slaves)
         truth[e.name] = e.truth_master_units;
     }
-    std::cout << tools::ResultToJson(result, evaluation ? &truth : nullptr).dump(2) << "\n";
+    std::optional<tools::TruthAlignment> alignment;
+    if (evaluation) alignment = tools::AlignmentOf(*evaluation);
+    std::cout << tools::ResultToJson(result, evaluation ? &truth : nullptr,
+                                     alignment ? &*alignment : nullptr)
+                     .dump(2)
+              << "\n";
   } else {
     std::cout << tools::FormatResultTable(result, nullptr);
     if (!any_usable) {

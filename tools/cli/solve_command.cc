@@ -15,6 +15,7 @@
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
+#include "rigcal/io/truth_alignment.h"
 #include "rigcal/pipeline/online_replay.h"
 
 namespace rigcal::cli {
@@ -34,6 +35,7 @@ struct SolveArgs {
   double tolerance_ms = 5.0;
   double max_quaternion_norm_error = 1e-6;
   std::string truth;
+  std::string truth_unit = "auto";
   std::string prior;
   double prior_sigma = 0.0;
   int time_blocks = CalibrationOptions{}.covariance_time_blocks;
@@ -75,11 +77,13 @@ std::string ApplyPairs(const std::string& text, PairOptions* pairs) {
     pairs->policy = PairOptions::Policy::kAuto;
   } else if (text == "start") {
     pairs->policy = PairOptions::Policy::kSinceStart;
+  } else if (text == "walk") {
+    pairs->policy = PairOptions::Policy::kWalk;
   } else if (const int step = CountAfter(text, "relative:"); step > 0) {
     pairs->policy = PairOptions::Policy::kRelative;
     pairs->step = step;
   } else {
-    return "expected auto, start or relative:STEP with STEP >= 1, got '" + text + "'";
+    return "expected auto, start, walk or relative:STEP with STEP >= 1, got '" + text + "'";
   }
   return "";
 }
@@ -165,6 +169,7 @@ int RunSolve(const SolveArgs& args) {
 
   RigCalibration result;
   const std::map<std::string, Similarity>* truth_for_replay = args.truth.empty() ? nullptr : &truth;
+  std::vector<tools::ConvergencePoint> history;
   try {
     if (args.online) {
       tools::OnlineReplayOptions replay;
@@ -177,9 +182,8 @@ int RunSolve(const SolveArgs& args) {
       }
       const tools::OnlineReplayResult online =
           tools::ReplayOnline(*recording, replay, truth_for_replay);
-      // Convergence goes to stderr with --json so stdout stays one JSON object.
-      (args.json ? std::cerr : std::cout) << tools::FormatConvergence(online.history) << "\n";
       log->info("sync buffer: {}", online.sync.BriefReport());
+      history = online.history;
       result = online.estimate.rig;
     } else {
       result = CalibrateRig(*recording, options);
@@ -189,11 +193,39 @@ int RunSolve(const SolveArgs& args) {
   }
   if (result.master.empty()) result.master = master->name;
 
-  const std::map<std::string, Similarity>* truth_ptr = args.truth.empty() ? nullptr : &truth;
+  // The truth in the estimate's unit (a metric truth against monocular odometry: the master
+  // unit fitted to the truth's C), also for the convergence history's errors.
+  std::optional<tools::TruthAlignment> alignment;
+  std::map<std::string, Similarity> truth_master_units;
+  if (!args.truth.empty()) {
+    tools::TruthUnit unit = tools::TruthUnit::kAuto;
+    tools::ParseTruthUnit(args.truth_unit, &unit);
+    alignment = tools::AlignTruthUnit(result, truth, unit);
+    truth_master_units = tools::TruthInMasterUnits(truth, *alignment);
+    log->info("--truth: {}", alignment->message);
+    for (tools::ConvergencePoint& p : history) {
+      const auto it = truth_master_units.find(p.slave);
+      if (p.error && it != truth_master_units.end()) {
+        p.error = CompareToTruth(p.estimate, it->second);
+      }
+    }
+  }
+  if (args.online) {
+    // Convergence goes to stderr with --json so stdout stays one JSON object.
+    std::ostream& stream = args.json ? std::cerr : std::cout;
+    if (alignment && alignment->applied) {
+      stream << "convergence errors in master units, the truth aligned: " << alignment->message
+             << "\n";
+    }
+    stream << tools::FormatConvergence(history) << "\n";
+  }
+  const std::map<std::string, Similarity>* truth_ptr =
+      args.truth.empty() ? nullptr : &truth_master_units;
+  const tools::TruthAlignment* alignment_ptr = alignment ? &*alignment : nullptr;
   if (args.json) {
-    std::cout << tools::ResultToJson(result, truth_ptr).dump(2) << "\n";
+    std::cout << tools::ResultToJson(result, truth_ptr, alignment_ptr).dump(2) << "\n";
   } else {
-    std::cout << tools::FormatResultTable(result, truth_ptr);
+    std::cout << tools::FormatResultTable(result, truth_ptr, alignment_ptr);
   }
   std::cout.flush();
 
@@ -276,16 +308,17 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
           "auto|fixed|segments|partitions:N"))
       ->capture_default_str();
   cmd->add_option("--pairs", args->pairs,
-                  "Which pairs of times (a, b) become motions. auto: pairs with\n"
-                  "large enough motion and bounded drift, spread over the drive;\n"
+                  "Which pairs of times (a, b) become motions. auto: per slave the\n"
+                  "span N of (k, k + N) whose estimate has the smallest σ (spans\n"
+                  "1, 2, 3, 5, 8, ... up to 1/8 of the recording are solved);\n"
                   "start: (first pose, k) for every k; relative:STEP: (k, k + STEP)\n"
-                  "for every k.")
+                  "for every k; walk: from spread anchors to a target rotation.")
       ->check(ValueCheck(
           [](const std::string& v) {
             PairOptions p;
             return ApplyPairs(v, &p);
           },
-          "auto|start|relative:STEP"))
+          "auto|start|walk|relative:STEP"))
       ->capture_default_str();
   cmd->add_option("--tolerance-ms", args->tolerance_ms,
                   "Largest time difference in milliseconds between a master pose\n"
@@ -301,10 +334,26 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       ->type_name("X")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--truth", args->truth,
-                  "Rig YAML with the true parameters of every slave (see below):\n"
-                  "prints the errors of thesis 5.1.1 and adds \"errors\" to the JSON.")
-      ->type_name("FILE");
+  auto* truth =
+      cmd->add_option("--truth", args->truth,
+                      "Rig YAML with the true parameters of every slave (see below):\n"
+                      "prints the errors of thesis 5.1.1 (rotation: geodesic angle) and adds\n"
+                      "\"errors\" to the JSON. Its unit may differ from the master odometry's\n"
+                      "(metres against monocular VO): see --truth-unit.");
+  truth->type_name("FILE");
+  cmd->add_option("--truth-unit", args->truth_unit,
+                  "Unit of the --truth file's C. metric: metres, while the master odometry\n"
+                  "has its own unit: that unit is fitted (least squares of the truth's C on\n"
+                  "the estimated C over the usable slaves, the in-plane part for planar\n"
+                  "ones; with 3 or more, one slave that disagrees with the others is left\n"
+                  "out) and the truth's C and scales (then slave unit -> metres) are divided\n"
+                  "by it before comparing; the output says so and gives the unit. With one\n"
+                  "slave the fit absorbs its distance error. master: the truth is in the\n"
+                  "master's unit, compared as given. auto: master when the fitted unit is 1\n"
+                  "within 3 sigma (or 2 %), else metric.")
+      ->check(CLI::IsMember({"auto", "metric", "master"}))
+      ->needs(truth)
+      ->capture_default_str();
   auto* prior =
       cmd->add_option("--prior", args->prior,
                       "Nominal mountings (e.g. from CAD): a rig YAML as for --truth, or a rig\n"
@@ -365,7 +414,8 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       "Rig YAML (--truth, --prior, and the rig part of --out), per slave name:\n"
       "  cam1: {q_wxyz: [w, x, y, z], C: [x, y, z], scale: s}\n"
       "  the slave's orientation and centre in the master frame (master units), and the\n"
-      "  scale: the factor from slave odometry units to master units.\n"
+      "  scale: the factor from slave odometry units to master units. A metric truth\n"
+      "  (--truth-unit) has C in metres and scales from slave units to metres.\n"
       "Exit status: 0 every slave calibrated; 1 bad input or output error (message\n"
       "'rigcal solve: <file>:<line>: <what>' on stderr); 3 the solve ran but at least one\n"
       "slave has no usable estimate (too little motion, degenerate motion); the result is\n"

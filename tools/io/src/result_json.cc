@@ -50,7 +50,22 @@ std::string Sigma3(const Eigen::Vector3d& v) {
   return Vec3(v);
 }
 
-std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth) {
+std::string AxisAngleText(const Eigen::Quaterniond& q) {
+  const AxisAngleDegrees a = AxisAngleDeg(q);
+  return fmt::format("{:9.6f} {:9.6f} {:9.6f} {:9.4f}", a.axis.x(), a.axis.y(), a.axis.z(),
+                     a.angle_deg);
+}
+
+// Within 1 degree of pitch ±90 roll and yaw are ill-defined (gimbal lock).
+bool NearGimbalLock(const Eigen::Quaterniond& q) { return std::abs(RollPitchYawDeg(q).y()) > 89.0; }
+
+nlohmann::json AxisAngleJson(const Eigen::Quaterniond& q) {
+  const AxisAngleDegrees a = AxisAngleDeg(q);
+  return {{"axis", Vec(a.axis)}, {"angle_deg", Num(a.angle_deg)}};
+}
+
+std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
+                        const TruthAlignment* alignment) {
   std::string out = fmt::format("{}: {} ({}){}\n", s.name, ToString(s.state),
                                 ToString(s.termination), s.usable() ? "" : " (NOT USABLE)");
   if (!s.message.empty()) out += fmt::format("  {}\n", s.message);
@@ -58,6 +73,12 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth) {
   out += Row("q (w, x, y, z)", Quat(s.estimate.q), truth ? Quat(truth->q) : "");
   out += Row("roll pitch yaw [deg]", Vec3(RollPitchYawDeg(s.estimate.q), 3),
              truth ? Vec3(RollPitchYawDeg(truth->q), 3) : "");
+  out +=
+      Row("axis, angle [deg]", AxisAngleText(s.estimate.q), truth ? AxisAngleText(truth->q) : "");
+  if (NearGimbalLock(s.estimate.q) || (truth != nullptr && NearGimbalLock(truth->q))) {
+    out += Row("", "pitch near ±90 deg: roll and yaw are not unique there (gimbal lock);");
+    out += Row("", "compare q or the axis and angle");
+  }
   out += Row("C [master units]",
              s.position_observable ? Vec3(s.estimate.C) : "not observable with this motion",
              truth ? Vec3(truth->C) : "");
@@ -112,8 +133,12 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth) {
     out += Row("errors vs truth",
                fmt::format("rotation {:.3g} deg, C direction {:.3g} deg, C distance {:.3g} %,",
                            e.rot_deg, e.dir_deg, e.dist_pct));
+    const bool metric = alignment != nullptr && alignment->applied;
     out += Row(
-        "", fmt::format("C error {:.3g} master units, scale {:.3g} %", e.trans_err, e.scale_pct));
+        "", fmt::format(
+                "C error {:.3g} master units{}, scale {:.3g} %", e.trans_err,
+                metric ? fmt::format(" ({:.3g} m)", e.trans_err * alignment->metres_per_unit) : "",
+                e.scale_pct));
     if (std::isfinite(e.plane_err)) {
       out += Row("", fmt::format("C error in the plane {:.3g}, along the mean axis {:.3g}",
                                  e.plane_err, e.axis_err));
@@ -127,19 +152,34 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth) {
 Eigen::Vector3d RollPitchYawDeg(const Eigen::Quaterniond& q) {
   const Eigen::Matrix3d r = q.normalized().toRotationMatrix();
   const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  if (std::hypot(r(2, 1), r(2, 2)) < 1e-12) {
+    // Gimbal lock: R = Rz(yaw) Ry(±90) with roll 0 gives r01 = -sin(yaw), r11 = cos(yaw).
+    return Eigen::Vector3d(0.0, pitch, std::atan2(-r(0, 1), r(1, 1))) * kDegPerRad;
+  }
   const double roll = std::atan2(r(2, 1), r(2, 2));
   const double yaw = std::atan2(r(1, 0), r(0, 0));
   return Eigen::Vector3d(roll, pitch, yaw) * kDegPerRad;
 }
 
+AxisAngleDegrees AxisAngleDeg(const Eigen::Quaterniond& q) {
+  const Eigen::Quaterniond c = Canonical(q.normalized());
+  AxisAngleDegrees a;
+  a.angle_deg = RotationAngle(c) * kDegPerRad;
+  a.axis = RotationAxis(c);
+  return a;
+}
+
 nlohmann::json ResultToJson(const RigCalibration& result,
-                            const std::map<std::string, Similarity>* truth) {
+                            const std::map<std::string, Similarity>* truth,
+                            const TruthAlignment* alignment) {
   nlohmann::json slaves = nlohmann::json::array();
   for (const SlaveCalibration& s : result.slaves) {
     nlohmann::json j;
     j["name"] = s.name;
     const Eigen::Quaterniond& q = s.estimate.q;
     j["q_wxyz"] = {Num(q.w()), Num(q.x()), Num(q.y()), Num(q.z())};
+    j["roll_pitch_yaw_deg"] = Vec(RollPitchYawDeg(q));
+    j["axis_angle"] = AxisAngleJson(q);
     j["C"] = Vec(s.estimate.C);
     if (s.scales.size() > 1) {
       nlohmann::json scales = nlohmann::json::array();
@@ -188,21 +228,43 @@ nlohmann::json ResultToJson(const RigCalibration& result,
                      {"dist_pct", Num(e.dist_pct)},   {"trans_err", Num(e.trans_err)},
                      {"scale_pct", Num(e.scale_pct)}, {"plane_err", Num(e.plane_err)},
                      {"axis_err", Num(e.axis_err)}};
+      if (alignment != nullptr && alignment->applied) {
+        j["errors"]["trans_err_m"] = Num(e.trans_err * alignment->metres_per_unit);
+      }
     }
     slaves.push_back(std::move(j));
   }
-  return {{"master", result.master}, {"slaves", slaves}};
+  nlohmann::json out = {{"master", result.master}, {"slaves", slaves}};
+  if (alignment != nullptr) {
+    const TruthAlignment& a = *alignment;
+    out["truth_alignment"] = {
+        {"mode", ToString(a.mode)},
+        {"applied", a.applied},
+        {"metres_per_master_unit", Num(a.metres_per_unit)},
+        {"std", Num(a.std)},
+        {"fit_rms_m", Num(a.fit_rms_m)},
+        {"slaves_used", a.slaves_used},
+        {"slave_excluded",
+         a.slave_excluded.empty() ? nlohmann::json() : nlohmann::json(a.slave_excluded)},
+        {"message", a.message}};
+  }
+  return out;
 }
 
 std::string FormatResultTable(const RigCalibration& result,
-                              const std::map<std::string, Similarity>* truth) {
+                              const std::map<std::string, Similarity>* truth,
+                              const TruthAlignment* alignment) {
   std::string out = fmt::format(
       "master: {}  (pairs of times used: {}; C in master units, scale = slave unit -> master "
       "unit)\n",
       result.master, result.pairs_selected);
+  if (alignment != nullptr && truth != nullptr) {
+    out += "truth: " + alignment->message + "\n";
+    if (alignment->applied) out += "truth columns: in master units (divided by the fitted unit)\n";
+  }
   for (const SlaveCalibration& s : result.slaves) {
     out += '\n';
-    out += FormatSlave(s, TruthOf(truth, s.name));
+    out += FormatSlave(s, TruthOf(truth, s.name), alignment);
   }
   return out;
 }

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "rigcal/calib/format.h"
+#include "rigcal/io/truth_alignment.h"
 
 namespace rigcal::tools {
 namespace {
@@ -22,24 +23,17 @@ std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int came
     // The reference frame of the segment: its first pose (the identity at the segment start).
     const Pose reference = rig.CameraPoseAt(camera, stream_time(members.front()->t_ns));
     const Pose reference_inverse = reference.Inverse();
-    double num = 0.0;
-    double den = 0.0;
     std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;
     for (const CameraPose* pose : members) {
       const Pose truth = reference_inverse * rig.CameraPoseAt(camera, stream_time(pose->t_ns));
       pairs.emplace_back(truth.C, pose->pose.C);
-      num += truth.C.dot(pose->pose.C);
-      den += pose->pose.C.squaredNorm();
     }
+    const UnitFit fit = FitUnit(pairs);
     SegmentUnit unit;
     unit.segment = segment;
     unit.poses = static_cast<int>(members.size());
-    unit.metres_per_unit = den > 0.0 ? num / den : 0.0;
-    double sum_sq = 0.0;
-    for (const auto& [truth, vo] : pairs) {
-      sum_sq += (truth - unit.metres_per_unit * vo).squaredNorm();
-    }
-    unit.fit_rms_m = std::sqrt(sum_sq / static_cast<double>(pairs.size()));
+    unit.metres_per_unit = fit.metres_per_unit;
+    unit.fit_rms_m = fit.fit_rms_m;
     units.push_back(unit);
   }
   return units;
@@ -126,6 +120,22 @@ void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveE
   }
 }
 
+TruthAlignment AlignmentOf(const RunEvaluation& evaluation) {
+  TruthAlignment a;
+  a.mode = TruthUnit::kMetric;
+  a.applied = true;
+  a.metres_per_unit = evaluation.master_metres_per_unit;
+  for (const SegmentUnit& unit :
+       evaluation.units.empty() ? std::vector<SegmentUnit>{} : evaluation.units[0]) {
+    if (unit.segment == evaluation.master_segment) a.fit_rms_m = unit.fit_rms_m;
+  }
+  a.message = "positions compared after aligning the master unit to the truth: 1 master unit = " +
+              SignificantText(a.metres_per_unit, 6) +
+              " m (least squares of the master's VO poses on its true trajectory, VO segment " +
+              std::to_string(evaluation.master_segment) + ")";
+  return a;
+}
+
 std::string FormatEvaluation(const RunEvaluation& evaluation) {
   std::ostringstream out;
   char line[200];
@@ -157,9 +167,7 @@ std::string FormatEvaluation(const RunEvaluation& evaluation) {
     }
     out << line;
   }
-  std::snprintf(line, sizeof(line), "master unit: %.6g m (VO segment %d)\n",
-                evaluation.master_metres_per_unit, evaluation.master_segment);
-  out << line;
+  out << AlignmentOf(evaluation).message << "\n";
   if (any_in_plane) {
     out << "planar motion: dir and dist compare C in the plane orthogonal to the rotation axis "
            "(the offset along it is unobservable without a nominal mounting)\n";

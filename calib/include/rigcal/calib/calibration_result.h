@@ -77,6 +77,9 @@ struct Observability {
 
 struct SlaveCalibration {
   std::string name;
+  // The pairs of times the motions came from: "relative:N", "start", "walk" (batch), empty
+  // for the online estimator's keyframe pairs.
+  std::string pairs;
   Similarity estimate;               // q, C and the first segment's scale
   std::vector<SegmentScale> scales;  // one per segment / partition
   bool position_observable = true;   // false for the purely translational model
@@ -123,7 +126,7 @@ struct SlaveCalibration {
 struct RigCalibration {
   std::string master;
   std::vector<SlaveCalibration> slaves;
-  int pairs_selected = 0;
+  int pairs_selected = 0;  // time pairs (auto: the most any slave's chosen span has)
   std::string BriefReport() const;
 };
 

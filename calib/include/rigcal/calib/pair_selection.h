@@ -16,14 +16,26 @@ struct PairOptions {
   enum class Policy {
     kSinceStart,  // (0, k) for every k: the thesis's camera-local poses
     kRelative,    // (k, k + step) for every k
-    kAuto,        // information-driven, see below (default)
+    kAuto,        // per slave, the span whose estimate is most certain (default, see below)
+    kWalk,        // anchors walk to a target motion (see below; the earlier default)
   };
   Policy policy = Policy::kAuto;
 
   // kRelative: frames between a and b.
   int step = 5;
 
-  // kAuto. For anchors a spread evenly over the recording, b walks forward from a until the
+  // kAuto: every slave is solved with the pairs (k, k + N) of each span N of a ladder 1, 2,
+  // 3, 5, 8, ... (ratio ~1.5) up to auto_max_span_fraction of the recording, and with kWalk's
+  // pairs, and keeps the candidate whose reported σ are smallest: the largest of
+  // σ_rot / min σ_rot and σ_C / min σ_C is minimal (rotation and position both within the
+  // least factor of their best candidate; the ladder's σ smoothed over neighbouring spans). The σ
+  // are the cluster-robust ones (CalibrationOptions::covariance_time_blocks, blocks at least
+  // three motion durations long), so what the span gains in signal is weighed against the
+  // drift and shared pose errors it accumulates, as measured on this recording. Candidate solves
+  // use at most max_pairs pairs (every k-th anchor); the chosen span is solved with all.
+  double auto_max_span_fraction = 0.125;
+
+  // kWalk. For anchors a spread evenly over the recording, b walks forward from a until the
   // master motion a->b is "large enough": its rotation angle reaches target_angle_deg or its
   // translation reaches target_translation_fraction of the master trajectory's extent
   // (bounding-box diagonal). The walk stops at the longest useful span: twice the span whose
@@ -48,7 +60,7 @@ struct PairOptions {
   double min_angle_deg = 3.0;
   double min_translation_fraction = 0.05;
   double max_span_fraction = 0.5;
-  int max_pairs = 4000;       // anchors are thinned to at most this many pairs
+  int max_pairs = 4000;       // kWalk, kAuto's candidates: at most this many pairs
   int max_pairs_per_end = 0;  // 0 = no limit
 
   // Success, or the first offending field and its constraint: "<field>: <constraint>".
@@ -61,7 +73,8 @@ struct IndexPair {
 };
 
 // Pairs (a, b), a < b, of indices into `recording`. Pairs never cross a scale segment
-// boundary of the master; slave boundaries are handled by MotionsForSlave.
+// boundary of the master; slave boundaries are handled by MotionsForSlave. kAuto is resolved
+// per slave by CalibrateRig (it solves each candidate span); here it gives kWalk's pairs.
 std::vector<IndexPair> SelectPairs(const RigRecording& recording, const PairOptions& options);
 
 // The motions of slave `slave_index` for the given pairs. A pair whose ends lie in different
@@ -71,12 +84,19 @@ std::vector<RigMotion> MotionsForSlave(const RigRecording& recording, int slave_
 
 std::string ToString(PairOptions::Policy policy);
 
-// The span (in poses) that kAuto uses when the rig rotates: among the spans 1, 2, 4, ... up to
+// The spans kAuto tries on a recording of `poses` poses (ascending, at least {1}).
+std::vector<int> AutoSpanCandidates(int poses, const PairOptions& options);
+
+// Pairs (k, k + span) for every stride-th k within one master segment (kRelative for
+// stride 1).
+std::vector<IndexPair> RelativePairs(const RigRecording& recording, int span, int stride = 1);
+
+// The span (in poses) that kWalk uses when the rig rotates: among the spans 1, 2, 4, ... up to
 // max_span_fraction of the recording, the one whose motions have the best ratio of master
 // rotation angle (capped at target_angle_deg) to scale-free noise (the spread of the
 // difference of master and slave rotation angles, which must be equal). White pose noise
 // favours long spans, accumulating drift short ones. 0 when the rig hardly rotates (median
-// angle below min_angle_deg at every span): kAuto then walks by translation instead.
+// angle below min_angle_deg at every span): kWalk then walks by translation instead.
 int AutoPairSpan(const RigRecording& recording, const PairOptions& options);
 
 }  // namespace rigcal

@@ -15,6 +15,7 @@
 #include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/io/truth_alignment.h"
 
 namespace rigcal::tools {
 
@@ -57,6 +58,10 @@ Expected<RunEvaluation> EvaluateRun(const drivers::SimulatedRig& rig,
 // Fills e->error, position_observable, axis and axis_unknown from the slave's estimate (with
 // the scale of the scored segment) against e->truth_master_units.
 void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveEvaluation* e);
+
+// The master unit of the run as a truth alignment (for ResultToJson): applied, the unit of
+// the master's scored VO segment (FitUnit of its poses against the true trajectory).
+TruthAlignment AlignmentOf(const RunEvaluation& evaluation);
 
 // A table: slave, rotation error (deg), position direction error (deg), distance error (%),
 // scale error (%), position error in the plane and along the axis of planar motion (mm), and

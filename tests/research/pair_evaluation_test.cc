@@ -1,0 +1,114 @@
+// The pair-policy evaluation's noise models, and the auto pair policy on them.
+#include "rigcal/research/pair_evaluation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/rig_calibrator.h"
+
+namespace rigcal {
+namespace {
+
+CameraTrack Straight(int n) {
+  CameraTrack t;
+  t.name = "cam";
+  for (int k = 0; k < n; ++k) {
+    Pose p;
+    p.q = AxisAngle(Eigen::Vector3d::UnitY(), 0.01 * k);
+    p.C = Eigen::Vector3d(0.0, 0.0, 0.1 * k);
+    t.poses.push_back(p);
+    t.segment.push_back(0);
+  }
+  return t;
+}
+
+// White noise: every pose off by σ per axis, independently; pose 0 (the frame) exact.
+TEST(PoseNoise, WhiteNoiseHasItsSigma) {
+  const CameraTrack exact = Straight(4001);
+  std::mt19937_64 rng(5);
+  const PoseNoiseModel white{"white", 0.1, 0.01, 0.0, 0.0};
+  const CameraTrack noisy = AddPoseNoise(exact, white, 2.0, rng);  // 2 master units per unit
+  double rot = 0.0, pos = 0.0;
+  for (size_t k = 1; k < exact.poses.size(); ++k) {
+    rot += std::pow(AngleBetween(exact.poses[k].q, noisy.poses[k].q) * kDegPerRad, 2);
+    pos += (exact.poses[k].C - noisy.poses[k].C).squaredNorm();
+  }
+  const double n = 4000.0;
+  // E|e|^2 = 3 σ^2 for 3 independent axes; 4000 samples: ~2 % relative error of the RMS.
+  EXPECT_NEAR(std::sqrt(rot / n), std::sqrt(3.0) * 0.1, 0.1 * 0.1 * std::sqrt(3.0));
+  EXPECT_NEAR(std::sqrt(pos / n), std::sqrt(3.0) * 0.005, 0.1 * 0.005 * std::sqrt(3.0));
+  EXPECT_EQ(noisy.poses[0].C, exact.poses[0].C);
+}
+
+// Drift: the error of a motion over N frames grows like sqrt(N) (a random walk of the
+// relative motions), where white noise's does not grow.
+TEST(PoseNoise, DriftGrowsWithTheSpan) {
+  const CameraTrack exact = Straight(4001);
+  std::mt19937_64 rng(6);
+  const PoseNoiseModel drift{"drift", 0.0, 0.0, 0.05, 0.0};
+  const CameraTrack noisy = AddPoseNoise(exact, drift, 1.0, rng);
+  auto rms_over = [&](int span) {
+    double sum = 0.0;
+    int count = 0;
+    for (size_t a = 0; a + span < exact.poses.size(); a += span) {
+      const Pose e = exact.poses[a].Between(exact.poses[a + span]);
+      const Pose m = noisy.poses[a].Between(noisy.poses[a + span]);
+      sum += std::pow(AngleBetween(e.q, m.q) * kDegPerRad, 2);
+      ++count;
+    }
+    return std::sqrt(sum / count);
+  };
+  // E|e|^2 = 3 N σ^2; a quarter of the expectation either way covers the sampling spread.
+  EXPECT_NEAR(rms_over(1), std::sqrt(3.0) * 0.05, 0.25 * std::sqrt(3.0) * 0.05);
+  EXPECT_NEAR(rms_over(100), std::sqrt(300.0) * 0.05, 0.25 * std::sqrt(300.0) * 0.05);
+}
+
+// The auto policy follows the recording's noise: on the same trajectory, white pose noise
+// calls for long spans (same noise, more signal), VO-like drift for short ones.
+TEST(AutoPairs, SpanFollowsTheNoiseOfTheRecording) {
+  std::vector<std::string> notes;
+  const std::vector<PairScenario> scenarios = PairScenarios("", &notes);
+  const PairScenario* mocap = nullptr;
+  const PairScenario* vo = nullptr;
+  for (const auto& s : scenarios) {
+    if (s.name == "sim-30Hz-fast-mocap") mocap = &s;
+    if (s.name == "sim-30Hz-fast-vo-strong") vo = &s;
+  }
+  ASSERT_TRUE(mocap && vo);
+  PairEvaluationOptions options;
+  options.repeats = 1;
+  options.spans = {};
+  options.online = false;
+  options.threads = 1;
+  options.only = "sim-30Hz-fast-";
+  const auto results = RunPairEvaluation(scenarios, options);
+  ASSERT_EQ(results.size(), 3u);
+  auto spans_of = [](const PairScenarioResult& r) {
+    std::vector<int> spans;
+    std::string chosen = r.Find("auto")->chosen + " ";
+    for (size_t at = chosen.find("relative:"); at != std::string::npos;
+         at = chosen.find("relative:", at + 1)) {
+      spans.push_back(std::stoi(chosen.substr(at + 9)));
+    }
+    return spans;
+  };
+  const auto white = spans_of(results[0]);  // mocap
+  const auto drift = spans_of(results[2]);  // vo-strong
+  ASSERT_EQ(results[0].name, "sim-30Hz-fast-mocap");
+  ASSERT_EQ(results[2].name, "sim-30Hz-fast-vo-strong");
+  ASSERT_EQ(white.size(), 2u);
+  ASSERT_EQ(drift.size(), 2u);
+  const std::string chosen =
+      results[0].Find("auto")->chosen + " vs " + results[2].Find("auto")->chosen;
+  for (size_t i = 0; i < 2; ++i) EXPECT_GT(white[i], drift[i]) << chosen;
+  // Over both slaves, white spans several times longer (geometric mean).
+  EXPECT_GE(std::sqrt(1.0 * white[0] * white[1]), 3.0 * std::sqrt(1.0 * drift[0] * drift[1]))
+      << chosen;
+}
+
+}  // namespace
+}  // namespace rigcal

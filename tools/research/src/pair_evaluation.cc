@@ -1,0 +1,299 @@
+// Runs the pair-policy evaluation and formats its table (pair_evaluation.h).
+#include "rigcal/research/pair_evaluation.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "rigcal/calib/error_model.h"
+#include "rigcal/calib/format.h"
+#include "rigcal/calib/rig_calibrator.h"
+#include "rigcal/pipeline/online_replay.h"
+
+namespace rigcal {
+namespace {
+
+// Sums of squares of one policy over the draws of a scenario.
+struct Sums {
+  int results = 0, failed = 0;
+  double rot = 0, pos = 0, scale = 0, rot_sigma = 0, pos_sigma = 0;
+  int pos_count = 0, rot_sigma_count = 0, pos_sigma_count = 0;
+  std::string chosen;
+};
+
+// Position error: |C - C_hat| in master units, without the directions the estimate leaves
+// undetermined (the rotation axis of planar motion; every direction of the translational model).
+double PositionError(const SlaveCalibration& s, const Similarity& truth, bool planar) {
+  Eigen::Vector3d d = s.estimate.C - truth.C;
+  if (!s.position_observable) return kNotAvailable;
+  for (const auto& u : s.unobservable) d -= u.dot(d) * u;
+  const Eigen::Vector3d& axis = s.observability.planar_axis;
+  if (planar && axis.norm() > 0.5) d -= axis.normalized().dot(d) * axis.normalized();
+  return d.norm();
+}
+
+void Accumulate(const SlaveCalibration& s, const Similarity& truth, bool planar, Sums* sums) {
+  if (!s.solved()) {
+    ++sums->failed;
+    return;
+  }
+  ++sums->results;
+  const CalibrationError e = CompareToTruth(s.estimate, truth);
+  sums->rot += e.rot_deg * e.rot_deg;
+  const double pos = PositionError(s, truth, planar);
+  if (std::isfinite(pos)) {
+    sums->pos += pos * pos;
+    ++sums->pos_count;
+  }
+  sums->scale += e.scale_pct * e.scale_pct;
+  if (std::isfinite(s.rot_std_deg)) {
+    sums->rot_sigma += s.rot_std_deg * s.rot_std_deg;
+    ++sums->rot_sigma_count;
+  }
+  if (s.pos_std.allFinite() && s.position_observable) {
+    sums->pos_sigma += s.pos_std.squaredNorm();
+    ++sums->pos_sigma_count;
+  }
+}
+
+PolicyFigures Figures(const std::string& policy, int span, const Sums& s) {
+  PolicyFigures f;
+  f.policy = policy;
+  f.span = span;
+  f.results = s.results;
+  f.failed = s.failed;
+  f.chosen = s.chosen;
+  if (s.results > 0) {
+    f.rot_rms_deg = std::sqrt(s.rot / s.results);
+    // No position from some result (translational model): no comparable position error.
+    if (s.pos_count == s.results) f.pos_rms = std::sqrt(s.pos / s.results);
+    f.scale_rms_pct = std::sqrt(s.scale / s.results);
+  }
+  if (s.rot_sigma_count > 0) f.rot_sigma_rms_deg = std::sqrt(s.rot_sigma / s.rot_sigma_count);
+  if (s.pos_sigma_count > 0) f.pos_sigma_rms = std::sqrt(s.pos_sigma / s.pos_sigma_count);
+  return f;
+}
+
+// One noisy recording of a scenario: the exact drive along its master, then each camera's
+// odometry errors.
+RigRecording NoisyRecording(const PairScenario& scenario, uint64_t seed) {
+  DriveOptions exact;
+  exact.rotation_noise_deg = 0.0;
+  exact.position_noise = 0.0;
+  exact.seed = seed;
+  SyntheticDrive drive = GenerateDriveAlong(scenario.names, scenario.rig, scenario.master, exact);
+  std::mt19937_64 rng(seed * 7919 + 17);
+  RigRecording& rec = drive.recording;
+  rec.master = AddPoseNoise(rec.master, scenario.noise, 1.0, rng);
+  for (size_t i = 0; i < rec.slaves.size(); ++i) {
+    rec.slaves[i] = AddPoseNoise(rec.slaves[i], scenario.noise, scenario.rig[i].scale, rng);
+  }
+  return rec;
+}
+
+// The policies of one draw, in the order of PairScenarioResult::policies.
+void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOptions& options,
+             const std::vector<int>& spans, std::vector<Sums>* sums, std::mutex* mutex) {
+  const RigRecording rec = NoisyRecording(scenario, seed);
+  std::vector<RigCalibration> results;
+  CalibrationOptions calib = options.calibration;
+  calib.pairs.policy = PairOptions::Policy::kAuto;
+  results.push_back(CalibrateRig(rec, calib));
+  for (int span : spans) {
+    calib.pairs.policy = PairOptions::Policy::kRelative;
+    calib.pairs.step = span;
+    results.push_back(CalibrateRig(rec, calib));
+  }
+  if (options.online) {
+    std::map<std::string, Similarity> truth;
+    for (size_t i = 0; i < scenario.rig.size(); ++i) truth[scenario.names[i + 1]] = scenario.rig[i];
+    tools::OnlineReplayOptions replay;
+    replay.report_every_s = 0.0;
+    results.push_back(tools::ReplayOnline(rec, replay, &truth).estimate.rig);
+  }
+  const std::lock_guard<std::mutex> lock(*mutex);
+  for (size_t p = 0; p < results.size(); ++p) {
+    for (size_t i = 0; i < results[p].slaves.size() && i < scenario.rig.size(); ++i) {
+      const SlaveCalibration& s = results[p].slaves[i];
+      Accumulate(s, scenario.rig[i], scenario.planar, &(*sums)[p]);
+      if (p == 0 && (*sums)[p].chosen.size() < 120) {
+        if (!(*sums)[p].chosen.empty()) (*sums)[p].chosen += " ";
+        (*sums)[p].chosen += s.pairs.empty() ? "?" : s.pairs;
+      }
+    }
+  }
+}
+
+// A seed per scenario name (FNV-1a), so a scenario gets the same draws whichever others run.
+uint64_t NameSeed(const std::string& name) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : name) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+std::string Ratio(double value, double best) {
+  if (!std::isfinite(value) || !std::isfinite(best) || best <= 0.0) return "-";
+  return FixedText(value / best, 2);
+}
+
+}  // namespace
+
+const PolicyFigures* PairScenarioResult::Find(const std::string& policy) const {
+  for (const auto& p : policies) {
+    if (p.policy == policy) return &p;
+  }
+  return nullptr;
+}
+
+std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario>& scenarios,
+                                                  const PairEvaluationOptions& options) {
+  std::vector<const PairScenario*> chosen;
+  for (const auto& s : scenarios) {
+    if (options.only.empty() || s.name.find(options.only) != std::string::npos)
+      chosen.push_back(&s);
+  }
+  std::vector<PairScenarioResult> out(chosen.size());
+  std::vector<std::vector<Sums>> sums(chosen.size());
+  std::vector<std::vector<int>> spans(chosen.size());
+  for (size_t c = 0; c < chosen.size(); ++c) {
+    const int n = static_cast<int>(chosen[c]->master.poses.size());
+    for (int span : options.spans) {
+      if (span < n / 2) spans[c].push_back(span);
+    }
+    sums[c].resize(1 + spans[c].size() + (options.online ? 1 : 0));
+  }
+  const int64_t total = static_cast<int64_t>(chosen.size()) * options.repeats;
+  std::atomic<int64_t> next{0};
+  std::atomic<int64_t> done{0};
+  std::mutex mutex;
+  auto worker = [&] {
+    for (int64_t job = next++; job < total; job = next++) {
+      const size_t c = static_cast<size_t>(job / options.repeats);
+      const int draw = static_cast<int>(job % options.repeats);
+      RunDraw(*chosen[c], options.seed * 1000003 + NameSeed(chosen[c]->name) + draw, options,
+              spans[c], &sums[c], &mutex);
+      const int64_t finished = ++done;
+      if (options.progress) {
+        const std::lock_guard<std::mutex> lock(mutex);
+        options.progress(finished, total);
+      }
+    }
+  };
+  const int threads =
+      options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+
+  for (size_t c = 0; c < chosen.size(); ++c) {
+    const PairScenario& s = *chosen[c];
+    PairScenarioResult& r = out[c];
+    r.name = s.name;
+    r.source = s.source;
+    r.noise = s.noise.name;
+    r.poses = static_cast<int>(s.master.poses.size());
+    r.duration_s =
+        r.poses > 1 ? 1e-9 * static_cast<double>(s.master.t_ns.back() - s.master.t_ns.front()) : 0;
+    r.rate_hz = r.duration_s > 0 ? (r.poses - 1) / r.duration_s : 0.0;
+    r.policies.push_back(Figures("auto", 0, sums[c][0]));
+    for (size_t k = 0; k < spans[c].size(); ++k) {
+      r.policies.push_back(
+          Figures("relative:" + std::to_string(spans[c][k]), spans[c][k], sums[c][1 + k]));
+    }
+    if (options.online) r.policies.push_back(Figures("online", 0, sums[c].back()));
+    for (size_t p = 1; p <= spans[c].size(); ++p) {
+      const PolicyFigures& f = r.policies[p];
+      if (f.failed > 0 || !std::isfinite(f.rot_rms_deg)) continue;
+      if (r.best_rot < 0 || f.rot_rms_deg < r.policies[r.best_rot].rot_rms_deg) {
+        r.best_rot = static_cast<int>(p);
+      }
+      if (std::isfinite(f.pos_rms) &&
+          (r.best_pos < 0 || f.pos_rms < r.policies[r.best_pos].pos_rms)) {
+        r.best_pos = static_cast<int>(p);
+      }
+    }
+  }
+  return out;
+}
+
+std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
+  std::ostringstream s;
+  char line[512];
+  std::snprintf(line, sizeof(line),
+                "%-30s %6s %5s | %-14s %-14s | %9s %5s %9s %5s | %-6s %-6s %-6s | %s\n", "scenario",
+                "poses", "Hz", "best rot span", "best pos span", "auto rot", "x", "auto pos", "x",
+                "onl/b", "onl/b", "onl/b", "auto pairs (per slave, draw)");
+  s << line;
+  std::snprintf(
+      line, sizeof(line), "%-30s %6s %5s | %-14s %-14s | %9s %5s %9s %5s | %-6s %-6s %-6s |\n", "",
+      "", "", "(RMS deg)", "(RMS units)", "RMS deg", "best", "RMS", "best", "rot", "pos", "scale");
+  s << line;
+  int within_12 = 0, within_15 = 0, online_13 = 0, scored = 0, online_scored = 0;
+  for (const auto& r : results) {
+    const PolicyFigures* a = r.Find("auto");
+    const PolicyFigures* o = r.Find("online");
+    const PolicyFigures* br = r.best_rot >= 0 ? &r.policies[r.best_rot] : nullptr;
+    const PolicyFigures* bp = r.best_pos >= 0 ? &r.policies[r.best_pos] : nullptr;
+    auto best = [](const PolicyFigures* f, double v) {
+      return f ? std::to_string(f->span) + " " + SignificantText(v, 2) : std::string("-");
+    };
+    const double xr = br && a ? a->rot_rms_deg / br->rot_rms_deg : kNotAvailable;
+    const double xp = bp && a ? a->pos_rms / bp->pos_rms : kNotAvailable;
+    std::snprintf(
+        line, sizeof(line),
+        "%-30s %6d %5.0f | %-14s %-14s | %9s %5s %9s %5s | %-6s %-6s %-6s | %s%s\n", r.name.c_str(),
+        r.poses, r.rate_hz, best(br, br ? br->rot_rms_deg : 0).c_str(),
+        best(bp, bp ? bp->pos_rms : 0).c_str(),
+        a ? SignificantText(a->rot_rms_deg, 2).c_str() : "-",
+        Ratio(a ? a->rot_rms_deg : kNotAvailable, br ? br->rot_rms_deg : kNotAvailable).c_str(),
+        a ? SignificantText(a->pos_rms, 2).c_str() : "-",
+        Ratio(a ? a->pos_rms : kNotAvailable, bp ? bp->pos_rms : kNotAvailable).c_str(),
+        o && a ? Ratio(o->rot_rms_deg, a->rot_rms_deg).c_str() : "-",
+        o && a ? Ratio(o->pos_rms, a->pos_rms).c_str() : "-",
+        o && a ? Ratio(o->scale_rms_pct, a->scale_rms_pct).c_str() : "-",
+        a && a->failed > 0 ? ("FAILED " + std::to_string(a->failed) + " ").c_str() : "",
+        a ? a->chosen.c_str() : "");
+    s << line;
+    if (std::isfinite(xr)) {
+      ++scored;
+      const double worst = std::isfinite(xp) ? std::max(xr, xp) : xr;
+      if (worst <= 1.2) ++within_12;
+      if (worst <= 1.5) ++within_15;
+    }
+    if (o && a && std::isfinite(o->rot_rms_deg)) {
+      ++online_scored;
+      const double worst = std::max({o->rot_rms_deg / a->rot_rms_deg,
+                                     std::isfinite(o->pos_rms) ? o->pos_rms / a->pos_rms : 0.0,
+                                     o->scale_rms_pct / a->scale_rms_pct});
+      if (worst <= 1.3) ++online_13;
+    }
+  }
+  s << "\nauto within 1.2x of the best fixed span (rotation and position): " << within_12 << "/"
+    << scored << "; within 1.5x: " << within_15 << "/" << scored << "\n";
+  if (online_scored > 0) {
+    s << "online within 1.3x of the batch auto (rotation, position, scale): " << online_13 << "/"
+      << online_scored << "\n";
+  }
+  return s.str();
+}
+
+std::string PairCsv(const std::vector<PairScenarioResult>& results) {
+  std::ostringstream s;
+  s << "scenario,noise,poses,rate_hz,policy,span,results,failed,rot_rms_deg,pos_rms,scale_rms_pct,"
+       "rot_sigma_rms_deg,pos_sigma_rms\n";
+  for (const auto& r : results) {
+    for (const auto& p : r.policies) {
+      s << r.name << "," << r.noise << "," << r.poses << "," << ShortestText(r.rate_hz) << ","
+        << p.policy << "," << p.span << "," << p.results << "," << p.failed << ","
+        << ShortestText(p.rot_rms_deg) << "," << ShortestText(p.pos_rms) << ","
+        << ShortestText(p.scale_rms_pct) << "," << ShortestText(p.rot_sigma_rms_deg) << ","
+        << ShortestText(p.pos_sigma_rms) << "\n";
+    }
+  }
+  return s.str();
+}
+
+}  // namespace rigcal
