@@ -238,8 +238,9 @@ TranslationPairing TestTranslationPairing(const std::vector<MotionData>& motions
 std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
                                              const BatchSetting& setting,
                                              const std::vector<MotionData>& motions,
-                                             const SlaveCalibration& r) {
+                                             const SlaveCalibration& r, bool* contradiction) {
   (void)setting;
+  if (contradiction != nullptr) *contradiction = false;
   // 1. Independent motions: K independent motions give e K equations (EquationsPerMotion)
   // for p parameters; the model needs e K ≥ 2 p (as many redundant equations as parameters,
   // for the residual test) and K ≥ kMinIndependent.
@@ -258,6 +259,7 @@ std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
   const bool rotating = r.motion_model != MotionModel::kTranslational;
   const RotationConsistency rot =
       TestRotationResiduals(motions, r.estimate.q, rotating, independent);
+  if (contradiction != nullptr) *contradiction = true;  // until the tests below pass
   if (!rot.related || !rot.consistent) return RotationReason(rot, r.motion_model);
   if (!rotating) {
     const TranslationPairing t = TestTranslationPairing(
@@ -278,6 +280,7 @@ std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
            " deg), the motion is not about one axis; use the general model (motion model auto "
            "or general)";
   }
+  if (contradiction != nullptr) *contradiction = false;
 
   // 4. Every parameter determined: where the covariance was computed, the rotation σ below
   // kMaxRotationStdDeg and every scale's σ below kMaxScaleStdFraction of the scale (a larger σ

@@ -63,11 +63,14 @@ TranslationPairing TestTranslationPairing(const std::vector<MotionData>& motions
                                           const std::vector<double>& scales);
 
 // Why the data do not support the solved estimate `r` (fitted to `motions` under `setting`),
-// or nullopt when they do.
+// or nullopt when they do; `contradiction` (nullable) is set when the reason is that the data
+// contradict the model (criterion 2 or the planar model's axes), not merely too few motions or
+// an undetermined parameter.
 std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
                                              const BatchSetting& setting,
                                              const std::vector<MotionData>& motions,
-                                             const SlaveCalibration& r);
+                                             const SlaveCalibration& r,
+                                             bool* contradiction = nullptr);
 
 // The same for the online estimator's published estimate, on the motions of its window
 // (statistics_accumulation.h): at least 4 independent motions, and the rotation tests

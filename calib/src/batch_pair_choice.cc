@@ -150,6 +150,19 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slav
   Candidate chosen = candidates[best];
   if (stride > 1) chosen = Solve(recording, slave, options, chosen.span, 1);
   SlaveCalibration r = std::move(chosen.result);
+  // A motion model given in the options must hold on every span: a span whose solve finds the
+  // data contradicting it (batch_acceptance.h) makes the result not usable, however well the
+  // model fits the chosen span's (shorter) motions.
+  if (options.motion_model != MotionModel::kAuto && r.contradiction.empty()) {
+    for (const Candidate& c : candidates) {
+      if (c.result.contradiction.empty()) continue;
+      r.state = SlaveState::kInitialising;
+      r.contradiction = c.result.contradiction;
+      r.message = "not usable: on the motions of pairs relative:" + std::to_string(c.span) + ": " +
+                  c.result.contradiction + "; " + r.message;
+      break;
+    }
+  }
   r.pairs = "relative:" + std::to_string(chosen.span);
   r.message += "; pairs relative:" + std::to_string(chosen.span) + " (auto: " + how + ")";
   ModuleLogger("calib")->debug("slave '{}': auto pairs relative:{} ({})", r.name, chosen.span, how);

@@ -73,8 +73,10 @@ SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
                             r.motion_model == MotionModel::kPlanar, scale.epsilon);
   internal::AssembleResult(options, setting, data, linear, refinement, scale, &r);
   if (r.solved()) {
-    if (auto reason = internal::UnsupportedReason(options, setting, data, r)) {
+    bool contradiction = false;
+    if (auto reason = internal::UnsupportedReason(options, setting, data, r, &contradiction)) {
       *supported = false;
+      if (contradiction) r.contradiction = *reason;
       r.message = "not usable: " + *reason + "; " + r.message;
     }
   }

@@ -114,6 +114,10 @@ struct SlaveCalibration {
   Termination termination = Termination::kInsufficientMotion;
   SlaveState state = SlaveState::kInitialising;
   std::string message;
+  // Batch: why the data contradict the model of a solved estimate (residuals beyond the
+  // measured noise, unrelated trajectories, the planar model on tilting axes; the state is then
+  // initialising), empty when they do not.
+  std::string contradiction;
   // The solve produced an estimate: q, C and the scales are defined (termination solved or
   // no_convergence). Whether it may be used is `state`.
   bool solved() const {
