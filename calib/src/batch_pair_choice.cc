@@ -153,14 +153,19 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slav
   // A motion model given in the options must hold on every span: a span whose solve finds the
   // data contradicting it (batch_acceptance.h) makes the result not usable, however well the
   // model fits the chosen span's (shorter) motions.
+  // The longest such span is named: its motions show the contradiction most clearly.
   if (options.motion_model != MotionModel::kAuto && r.contradiction.empty()) {
+    const Candidate* worst = nullptr;
     for (const Candidate& c : candidates) {
-      if (c.result.contradiction.empty()) continue;
+      if (!c.result.contradiction.empty() && (worst == nullptr || c.span > worst->span)) {
+        worst = &c;
+      }
+    }
+    if (worst != nullptr) {
       r.state = SlaveState::kInitialising;
-      r.contradiction = c.result.contradiction;
-      r.message = "not usable: on the motions of pairs relative:" + std::to_string(c.span) + ": " +
-                  c.result.contradiction + "; " + r.message;
-      break;
+      r.contradiction = worst->result.contradiction;
+      r.message = "not usable: on the motions of pairs relative:" + std::to_string(worst->span) +
+                  ": " + worst->result.contradiction + "; " + r.message;
     }
   }
   r.pairs = "relative:" + std::to_string(chosen.span);
