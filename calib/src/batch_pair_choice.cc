@@ -150,6 +150,26 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slav
   Candidate chosen = candidates[best];
   if (stride > 1 && chosen.span > 0) chosen = Solve(recording, slave, options, chosen.span, 1);
   SlaveCalibration r = std::move(chosen.result);
+  // A motion model given in the options must hold on every span: a span whose solve finds the
+  // data contradicting it (batch_acceptance.h) makes the result not usable, however well the
+  // model fits the chosen span's (shorter) motions.
+  // The longest such span is named: its motions show the contradiction most clearly.
+  if (options.motion_model != MotionModel::kAuto && r.contradiction.empty()) {
+    const Candidate* worst = nullptr;
+    for (const Candidate& c : candidates) {
+      if (!c.result.contradiction.empty() && (worst == nullptr || c.span > worst->span)) {
+        worst = &c;
+      }
+    }
+    if (worst != nullptr) {
+      const std::string label =
+          worst->span > 0 ? "relative:" + std::to_string(worst->span) : "walk";
+      r.state = SlaveState::kInitialising;
+      r.contradiction = worst->result.contradiction;
+      r.message = "not usable: on the motions of pairs " + label + ": " +
+                  worst->result.contradiction + "; " + r.message;
+    }
+  }
   r.pairs = chosen.span > 0 ? "relative:" + std::to_string(chosen.span) : "walk";
   r.message += "; pairs " + r.pairs + " (auto: " + how + ")";
   ModuleLogger("calib")->debug("slave '{}': auto pairs {} ({})", r.name, r.pairs, how);

@@ -39,10 +39,16 @@ bool TakeRefinedEstimate(const BatchSetting& setting, const std::vector<MotionDa
     seg.measured_count = refinement.summaries[s].count;
     r.scales.push_back(seg);
   }
+  // Without a covariance (not computed, or Ceres failed) every σ is unknown (NaN), never 0.
+  constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
+  r.rot_std_deg = kUnknown;
+  r.pos_std.setConstant(kUnknown);
   if (refined.covariance_ok) {
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(refined.cov_rotation);
     r.rot_std_deg = std::sqrt(std::max(0.0, eig.eigenvalues()(2))) * kDegPerRad;
     r.pos_std = refined.cov_position.diagonal().cwiseMax(0.0).cwiseSqrt();
+  } else {
+    for (SegmentScale& seg : r.scales) seg.std = kUnknown;
   }
   // Translations all along one line leave the rotation about it to their noise (Ceres's
   // covariance would take that noise for information).
@@ -70,7 +76,7 @@ bool TakeRefinedEstimate(const BatchSetting& setting, const std::vector<MotionDa
                             ? refined.axis_std
                             : std::sqrt(std::max(0.0, axis.dot(refined.cov_position * axis)));
   } else {
-    r.axis_offset_std = linear.fit.solution.axis_std;
+    r.axis_offset_std = kUnknown;
   }
   return parallel;
 }

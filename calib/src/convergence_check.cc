@@ -2,6 +2,7 @@
 #include "convergence_check.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "rigcal/calib/quaternion.h"
 
@@ -22,10 +23,13 @@ uint32_t ConvergenceCheck(const RigEstimatorOptions& o, SlaveCalibration* out,
   if (published.motion_model == MotionModel::kTranslational) flags |= kFlagTranslationalOnly;
   if (published.observability.planar) flags |= kFlagPlanar;
   const double c_ref = std::max(1.0, published.estimate.C.norm());
+  // σ must be known (finite): an unknown σ (NaN) has not settled.
   const bool position_ok = !published.position_observable || published.observability.planar ||
-                           published.pos_std.maxCoeff() <= o.converged_pos_std_fraction * c_ref;
-  if (published.motions.used >= o.converged_min_motions &&
-      published.rot_std_deg <= o.converged_rot_std_deg && position_ok &&
+                           (published.pos_std.allFinite() &&
+                            published.pos_std.maxCoeff() <= o.converged_pos_std_fraction * c_ref);
+  const bool rotation_ok =
+      std::isfinite(published.rot_std_deg) && published.rot_std_deg <= o.converged_rot_std_deg;
+  if (published.motions.used >= o.converged_min_motions && rotation_ok && position_ok &&
       s->stable >= o.converged_stable_keyframes && !decalibrated) {
     out->state = SlaveState::kConverged;
   } else {

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 
 namespace rigcal {
@@ -23,6 +24,10 @@ std::string FixedText(double v, int decimals) {
   std::array<char, 384> buffer{};
   std::snprintf(buffer.data(), buffer.size(), "%.*f", decimals, v);
   return buffer.data();
+}
+
+std::string SigmaText(double sigma, int digits) {
+  return std::isfinite(sigma) ? SignificantText(sigma, digits) : "unknown";
 }
 
 std::string VectorText(const Eigen::Vector3d& v, int decimals) {

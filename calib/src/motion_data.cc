@@ -18,6 +18,8 @@ std::vector<MotionData> ToMotionData(const std::vector<RigMotion>& motions) {
     d.anglei = RotationAngle(m.slave.q);
     d.segment = m.segment;
     d.t_ns = m.t_a_ns + (m.t_b_ns - m.t_a_ns) / 2;
+    d.t_a_ns = m.t_a_ns;
+    d.t_b_ns = m.t_b_ns;
     d.duration_ns = m.t_b_ns - m.t_a_ns;
     out.push_back(d);
   }

@@ -18,9 +18,11 @@ struct MotionData {
   double anglei = 0.0;
   int scale_index = 0;  // which scale variable this motion's slave translation uses
   int segment = 0;
-  int scale_key = 0;    // segment id or partition number behind scale_index
-  int64_t t_ns = 0;     // mid-time of the motion
+  int scale_key = 0;        // segment id or partition number behind scale_index
+  int64_t t_ns = 0;         // mid-time of the motion
   int64_t duration_ns = 0;  // t_b - t_a
+  int64_t t_a_ns = 0;       // times of its two poses (start, end)
+  int64_t t_b_ns = 0;
 };
 
 std::vector<MotionData> ToMotionData(const std::vector<RigMotion>& motions);

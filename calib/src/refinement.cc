@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <unordered_set>
 
@@ -342,7 +343,8 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   out.q = Canonical(FromWxyz(q).normalized());
   out.C = c;
   out.scales = scales;
-  out.scale_std.assign(num_scales, 0.0);
+  // Unknown (NaN) until the covariance gives them.
+  out.scale_std.assign(num_scales, std::numeric_limits<double>::quiet_NaN());
 
   if (!options.compute_covariance) return out;
   double cost = 0.0;

@@ -54,11 +54,11 @@ struct RefinementResult {
   std::vector<double> scales;
   bool converged = false;
   std::string message;  // Ceres termination message
-  // Covariance (0 when not computed or rank deficient).
+  // Covariance (0 and covariance_ok false when not computed or rank deficient).
   bool covariance_ok = false;
   Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Zero();  // rotation vector, rad^2
   Eigen::Matrix3d cov_position = Eigen::Matrix3d::Zero();  // of C; 0 along a fixed axis offset
-  std::vector<double> scale_std;
+  std::vector<double> scale_std;                           // NaN when not computed
   double axis_std = 0.0;  // σ of h with the axis parameterisation (0 when h is fixed)
   // With input.blocks: the cluster-robust covariance was larger than the one of independent
   // motions in some direction, and the covariance above is the smallest one above both.

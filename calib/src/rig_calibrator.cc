@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "batch_acceptance.h"
 #include "batch_linear_solution.h"
 #include "batch_model_selection.h"
 #include "batch_motions.h"
@@ -21,17 +22,22 @@
 namespace rigcal {
 namespace {
 
-// The batch state (slave_state.h): converged when the solve produced an estimate whose
-// covariance was computed (a finite, positive rotation σ), usable without it, else initialising.
-SlaveState BatchState(const SlaveCalibration& r) {
-  if (!r.solved()) return SlaveState::kInitialising;
-  const bool sigma_known = std::isfinite(r.rot_std_deg) && r.rot_std_deg > 0.0;
+// The batch state (slave_state.h): initialising unless the solve produced an estimate the data
+// support (`supported`, batch_acceptance.h); then converged when its σ were computed from the
+// covariance (finite), else usable.
+SlaveState BatchState(const SlaveCalibration& r, bool supported) {
+  if (!r.solved() || !supported) return SlaveState::kInitialising;
+  bool sigma_known = std::isfinite(r.rot_std_deg) && r.rot_std_deg > 0.0 &&
+                     (!r.position_observable || r.pos_std.allFinite());
+  for (const SegmentScale& s : r.scales) sigma_known = sigma_known && std::isfinite(s.std);
   return sigma_known ? SlaveState::kConverged : SlaveState::kUsable;
 }
 
-// CalibrateSlave's stages, without the state.
+// CalibrateSlave's stages, without the state; `supported`: whether the data support a solved
+// estimate (batch_acceptance.h; the message then says what is missing).
 SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
-                            const CalibrationOptions& options, const std::string& name) {
+                            const CalibrationOptions& options, const std::string& name,
+                            bool* supported) {
   SlaveCalibration r;
   r.name = name;
   if (const Status checked = options.Check(); !checked.ok()) {
@@ -67,6 +73,14 @@ SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
       internal::RefineBatch(options, setting, data, linear, r.observability.planar_axis,
                             r.motion_model == MotionModel::kPlanar, scale.epsilon);
   internal::AssembleResult(options, setting, data, linear, refinement, scale, &r);
+  if (r.solved()) {
+    bool contradiction = false;
+    if (auto reason = internal::UnsupportedReason(options, setting, data, r, &contradiction)) {
+      *supported = false;
+      if (contradiction) r.contradiction = *reason;
+      r.message = "not usable: " + *reason + "; " + r.message;
+    }
+  }
   ModuleLogger("calib")->debug("slave '{}': {}", name, r.message);
   return r;
 }
@@ -75,8 +89,9 @@ SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
 
 SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
                                 const CalibrationOptions& options, const std::string& name) {
-  SlaveCalibration r = SolveSlave(motions, options, name);
-  r.state = BatchState(r);
+  bool supported = true;
+  SlaveCalibration r = SolveSlave(motions, options, name, &supported);
+  r.state = BatchState(r, supported);
   return r;
 }
 

@@ -10,6 +10,7 @@
 #include <limits>
 #include <utility>
 
+#include "batch_acceptance.h"
 #include "convergence_check.h"
 #include "decalibration_check.h"
 #include "keyframe_pairing.h"
@@ -324,10 +325,23 @@ void RigEstimator::Publish(int index) {
 
   online.flags |= internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation,
                                              decalibrated, &s.convergence);
+  // Usable only when the window's motions support the estimate (batch_acceptance.h).
+  std::optional<std::string> unsupported;
+  if (IsUsable(published.state)) {
+    std::vector<MotionData> window;
+    window.reserve(s.stats.window.size());
+    for (const internal::WindowEntry& e : s.stats.window) window.push_back(e.data);
+    unsupported = internal::OnlineUnsupportedReason(window, published);
+    if (unsupported) {
+      published.state = SlaveState::kInitialising;
+      s.convergence.stable = 0;
+    }
+  }
   published.message = OnlineMessage(o, published, s.linear.message, nominal);
   if (const std::string g = internal::GlitchText(s.glitches, "set", "skipped"); !g.empty()) {
     published.message += "; " + g;
   }
+  if (unsupported) published.message = "not usable: " + *unsupported + "; " + published.message;
   estimate_.rig.slaves[index] = published;
   estimate_.online[index] = online;
   PublishCounts(index);

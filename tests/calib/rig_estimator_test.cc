@@ -247,7 +247,8 @@ TEST(RigEstimator, PureTranslationSigmaMatchesError) {
 }
 
 // Translations all along one line do not determine the rotation about it: the σ says so
-// (no small number) and the estimate is never called converged.
+// (no small number) and the estimate is not usable (initialising, as the batch calibrator's
+// degenerate result), never converged.
 TEST(RigEstimator, StraightDriveDoesNotConverge) {
   DriveOptions d;
   d.motion = DriveOptions::Motion::kStraight;
@@ -258,7 +259,10 @@ TEST(RigEstimator, StraightDriveDoesNotConverge) {
   RigEstimator est(Names(drive.recording), RigEstimatorOptions{});
   Feed(&est, drive.recording);
   const auto& r = est.Estimate().rig.slaves[0];
-  ASSERT_TRUE(r.usable()) << r.message;
+  ASSERT_TRUE(r.solved()) << r.message;
+  EXPECT_FALSE(r.usable()) << r.message;
+  EXPECT_NE(r.message.find("not usable: the rotation is not determined"), std::string::npos)
+      << r.message;
   EXPECT_EQ(r.motion_model, MotionModel::kTranslational);
   EXPECT_GT(r.rot_std_deg, 5.0) << r.message << "; error "
                                 << CompareToTruth(r.estimate, drive.truth[0]).rot_deg;

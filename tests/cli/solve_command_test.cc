@@ -417,6 +417,44 @@ TEST_F(SolveCommandTest, UnusableSlaveExitsWith3AndStillWritesTheResult) {
   EXPECT_THAT(Slurp(Path("result.yaml")), HasSubstr("usable: false"));
 }
 
+// Data that do not support a result exit with 3 and say what is missing (batch_acceptance):
+// a "slave" that is the master's trajectory played backwards (no rig at all), and the planar
+// model forced on 6-DoF motion.
+TEST_F(SolveCommandTest, UnsupportedResultsExitWith3AndSayWhy) {
+  DriveOptions d;
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.002;
+  const SyntheticDrive drive = GenerateDrive({"m", "s"}, {DemoRig()[0]}, d);
+  const RigRecording& rec = drive.recording;
+  WriteTrack(rec, rec.master, 0);
+  CameraTrack reversed = rec.master;
+  reversed.name = "s";
+  const size_t n = rec.size();
+  for (size_t k = 0; k < n; ++k) {
+    reversed.poses[k] = rec.master.poses[n - 1].Between(rec.master.poses[n - 1 - k]);
+  }
+  WriteTrack(rec, reversed, 0);
+  const std::string inputs =
+      "solve --master " + Quote(Path("m.txt")) + " --slave " + Quote(Path("s.txt"));
+  RunResult r = Run(inputs + " --json");
+  EXPECT_EQ(r.exit_code, 3) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("rigcal solve: s: initialising (solved): not usable: the "
+                               "trajectories are unrelated"))
+      << Explain(r);
+  const nlohmann::json j = ParseJson(r);
+  ASSERT_TRUE(j.contains("slaves") && j["slaves"].size() == 1u) << Explain(r);
+  EXPECT_EQ(j["slaves"][0].value("state", ""), "initialising") << Explain(r);
+
+  WriteTrack(rec, rec.slaves[0], 0);  // the real slave
+  r = Run(inputs + " --motion planar");
+  EXPECT_EQ(r.exit_code, 3) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("the data contradict the planar model")) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("rigcal solve: s: initialising (solved): not usable: "))
+      << Explain(r);
+  r = Run(inputs);
+  EXPECT_EQ(r.exit_code, 0) << Explain(r);
+}
+
 // A car rig (front master, left, right, rear) on a level road, yaw only: planar motion. The
 // offset of every slave along the vertical (the cameras' y axis) is reported unknown, or taken
 // from --prior (with --prior-sigma as its σ).

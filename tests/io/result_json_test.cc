@@ -10,6 +10,8 @@
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/rig_calibrator.h"
+#include "rigcal/calib/synthetic.h"
 
 namespace rigcal::tools {
 namespace {
@@ -142,8 +144,10 @@ TEST(ResultJsonTest, ExactSchemaWithTruth) {
   EXPECT_EQ(left["C"], nlohmann::json({-0.84, 0.05, -0.61}));
   EXPECT_EQ(left.at("scale"), 0.505);
   // σ along the mean axis: not computed here (NaN) -> null.
-  EXPECT_EQ(left.at("std"),
-            nlohmann::json({{"rot_deg", 0.02}, {"pos", {0.001, 0.002, 0.003}}, {"axis", nullptr}}));
+  EXPECT_EQ(left.at("std"), nlohmann::json({{"rot_deg", 0.02},
+                                            {"pos", {0.001, 0.002, 0.003}},
+                                            {"axis", nullptr},
+                                            {"scale", 0.002}}));
   EXPECT_EQ(left.at("motions_used"), 190);
   EXPECT_EQ(left.at("motions_rejected"), 10);
   EXPECT_EQ(left.at("glitches"), nlohmann::json({{"dropped", 3},
@@ -218,6 +222,33 @@ TEST(ResultJsonTest, SerialisesAndParsesBack) {
   const Fixture f = MakeFixture();
   const nlohmann::json j = ResultToJson(f.result, &f.truth);
   EXPECT_EQ(nlohmann::json::parse(j.dump()), j);
+}
+
+// A covariance that was not computed (or failed) leaves every σ unknown: null in JSON,
+// "unknown" in the table, and the state usable, never converged.
+TEST(ResultJsonTest, UnknownSigmaIsNullAndNotConverged) {
+  DriveOptions d;
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.002;
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {DemoRig()[0]}, d);
+  CalibrationOptions o;
+  o.compute_covariance = false;
+  const RigCalibration result = CalibrateRig(drive.recording, o);
+  ASSERT_EQ(result.slaves.size(), 1u);
+  EXPECT_EQ(result.slaves[0].state, SlaveState::kUsable) << result.slaves[0].message;
+  const nlohmann::json j = ResultToJson(result, nullptr);
+  const nlohmann::json& left = j.at("slaves")[0];
+  EXPECT_EQ(left.at("state"), "usable");
+  EXPECT_TRUE(left.at("std").at("rot_deg").is_null()) << left.dump();
+  EXPECT_EQ(left.at("std").at("pos"), nlohmann::json({nullptr, nullptr, nullptr}));
+  if (left.contains("scales")) {  // one σ per scale
+    for (const auto& seg : left.at("scales")) EXPECT_TRUE(seg.at("std").is_null()) << left.dump();
+  } else {
+    EXPECT_TRUE(left.at("std").at("scale").is_null()) << left.dump();
+  }
+  const std::string table = FormatResultTable(result, nullptr);
+  EXPECT_NE(table.find("std rotation [deg]    unknown"), std::string::npos) << table;
+  EXPECT_EQ(table.find("nan"), std::string::npos) << table;
 }
 
 TEST(RollPitchYawTest, KnownRotations) {

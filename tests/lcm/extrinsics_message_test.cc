@@ -117,7 +117,9 @@ TEST(ExtrinsicsMessage, RigCalibrationToLcmSetsFlagsAndFields) {
   EXPECT_EQ(up.C[0], 0.0);
   EXPECT_EQ(up.scale, 1.0);
   EXPECT_EQ(up.segment, 0);
-  EXPECT_EQ(up.rot_std_deg, 0.0);
+  // Unknown σ (infinite, or NaN: not computed) is -1 on the wire, never 0.
+  EXPECT_EQ(up.rot_std_deg, -1.0);
+  EXPECT_EQ(up.scale_std, -1.0);
   EXPECT_EQ(up.message, "insufficient_motion: after 5 iterations");
 
   // Survives the wire with the rig's name table.

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "commands.h"
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/image_folder_device.h"
@@ -98,9 +99,9 @@ std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
   for (size_t i = 0; i < s.estimate.rig.slaves.size(); ++i) {
     const SlaveCalibration& slave = s.estimate.rig.slaves[i];
     if (slave.solved()) {
-      std::snprintf(buf, sizeof(buf), " | %s C=(%.2f %.2f %.2f) ±%.2f° %d mot", slave.name.c_str(),
+      std::snprintf(buf, sizeof(buf), " | %s C=(%.2f %.2f %.2f) ±%s° %d mot", slave.name.c_str(),
                     slave.estimate.C.x(), slave.estimate.C.y(), slave.estimate.C.z(),
-                    slave.rot_std_deg, slave.motions.used);
+                    SigmaText(slave.rot_std_deg, 2).c_str(), slave.motions.used);
       line << buf;
     } else {
       line << " | " << slave.name << " " << slave.motions.used << " mot";

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "rigcal/calib/error_model.h"
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal::tools {
@@ -40,6 +42,12 @@ std::string Quat(const Eigen::Quaterniond& q) {
 std::string Vec3(const Eigen::Vector3d& v, int decimals = 4) {
   return fmt::format("{:10.{}f} {:10.{}f} {:10.{}f}", v.x(), decimals, v.y(), decimals, v.z(),
                      decimals);
+}
+
+// σ per axis, "unknown" when not computed.
+std::string Sigma3(const Eigen::Vector3d& v) {
+  if (!v.allFinite()) return "unknown";
+  return Vec3(v);
 }
 
 std::string AxisAngleText(const Eigen::Quaterniond& q) {
@@ -77,11 +85,12 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
   if (s.scales.size() > 1) {
     for (const SegmentScale& seg : s.scales) {
       out += Row(fmt::format("scale segment {}", seg.segment),
-                 fmt::format("{:.6g} (std {:.2g})", seg.scale, seg.std));
+                 fmt::format("{:.6g} (std {})", seg.scale, SigmaText(seg.std, 2)));
     }
   } else {
-    const double std = s.scales.empty() ? 0.0 : s.scales.front().std;
-    out += Row("scale", fmt::format("{:.6g} (std {:.2g})", s.estimate.scale, std),
+    const double std =
+        s.scales.empty() ? std::numeric_limits<double>::quiet_NaN() : s.scales.front().std;
+    out += Row("scale", fmt::format("{:.6g} (std {})", s.estimate.scale, SigmaText(std, 2)),
                truth ? fmt::format("{:.6g}", truth->scale) : "");
   }
   const bool rotating = s.observability.planar_axis.norm() > 0.0;
@@ -91,12 +100,12 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
       along = s.unobservable_from_prior ? "unobservable: the nominal mounting's value"
                                         : "unobservable: unknown (0 shown; give a nominal)";
     } else {
-      along = fmt::format("estimated, std {:.3g}", s.axis_offset_std);
+      along = "estimated, std " + SigmaText(s.axis_offset_std, 3);
     }
     out += Row("C along mean axis", Vec3(s.observability.planar_axis, 3) + "  " + along);
   }
-  out += Row("std rotation [deg]", fmt::format("{:.3g}", s.rot_std_deg));
-  out += Row("std C", Vec3(s.pos_std));
+  out += Row("std rotation [deg]", SigmaText(s.rot_std_deg, 3));
+  out += Row("std C", Sigma3(s.pos_std));
   if (rotating && std::isfinite(s.axis_offset_std)) {
     out += Row("std C along axis", fmt::format("{:.3g}", s.axis_offset_std));
   }
@@ -190,8 +199,14 @@ nlohmann::json ResultToJson(const RigCalibration& result,
     } else {
       j["scale"] = Num(s.estimate.scale);
     }
+    // σ: null when unknown (the covariance was not computed or failed), never 0; the scale's
+    // here when there is one (else in "scales").
     j["std"] = {
         {"rot_deg", Num(s.rot_std_deg)}, {"pos", Vec(s.pos_std)}, {"axis", Num(s.axis_offset_std)}};
+    if (s.scales.size() <= 1) {
+      j["std"]["scale"] =
+          Num(s.scales.empty() ? std::numeric_limits<double>::quiet_NaN() : s.scales.front().std);
+    }
     j["motions_used"] = s.motions.used;
     j["motions_rejected"] = s.motions.rejected();
     j["glitches"] = {

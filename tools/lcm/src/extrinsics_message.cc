@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <string>
 #include <utility>
@@ -16,6 +17,11 @@ namespace {
 using lcm_internal::Checker;
 using lcm_internal::FormatNumber;
 using lcm_internal::LayoutWalk;
+
+// The encoding of an unknown standard deviation in slave_extrinsics_t (rot_std_deg, pos_std,
+// scale_std, axis_offset_std): a σ that was not computed, whose covariance failed, or that is
+// infinite (undetermined).
+constexpr double kUnknownStd = -1.0;
 
 // The rules of one slave_extrinsics_t (extrinsics_message.h).
 void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check) {
@@ -45,11 +51,13 @@ void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check)
                 FormatNumber(s->scale) + " is not positive in a usable estimate");
   }
   check->AtLeast<int32_t>("segment", s->segment, 0);
-  check->AtLeast("rot_std_deg", s->rot_std_deg, 0.0);
-  for (int i = 0; i < 3; ++i) {
-    check->AtLeast("pos_std[" + std::to_string(i) + "]", s->pos_std[i], 0.0);
-  }
-  check->AtLeast("scale_std", s->scale_std, 0.0);
+  // Standard deviations: >= 0, or exactly -1 = unknown.
+  const auto check_std = [&](const std::string& field, double v) {
+    if (v != kUnknownStd) check->AtLeast(field, v, 0.0);
+  };
+  check_std("rot_std_deg", s->rot_std_deg);
+  for (int i = 0; i < 3; ++i) check_std("pos_std[" + std::to_string(i) + "]", s->pos_std[i]);
+  check_std("scale_std", s->scale_std);
   check->AtLeast<int32_t>("motions_used", s->motions_used, 0);
   check->AtLeast<int32_t>("motions_rejected", s->motions_rejected, 0);
   check->AtLeast("rotation_eigen_gap", s->rotation_eigen_gap, 0.0);
@@ -61,7 +69,7 @@ void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check)
     check->Fail(RejectCause::kOutOfRange, "flags",
                 "FLAG_AXIS_FROM_PRIOR without FLAG_PLANAR_UNOBSERVABLE_AXIS");
   }
-  if (s->axis_offset_std != -1.0) check->AtLeast("axis_offset_std", s->axis_offset_std, 0.0);
+  check_std("axis_offset_std", s->axis_offset_std);
 }
 
 // The fields of rig_extrinsics_t.lcm up to num_slaves.
@@ -117,6 +125,7 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
   const bool usable = slave.solved();  // the estimate is defined (the state says if it may be used)
   const std::string who = "slave '" + slave.name + "'";
   const auto or_zero = [](double v) { return std::isfinite(v) ? v : 0.0; };
+  const auto std_or_unknown = [](double v) { return std::isfinite(v) ? v : kUnknownStd; };
 
   slave_extrinsics_t msg;
   msg.name = slave.name;
@@ -124,7 +133,7 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
   Eigen::Vector3d C = slave.estimate.C;
   double scale = slave.estimate.scale;
   int32_t segment = 0;
-  double scale_std = 0.0;
+  double scale_std = std::numeric_limits<double>::quiet_NaN();
   if (!slave.scales.empty()) {
     const SegmentScale& current = *std::max_element(
         slave.scales.begin(), slave.scales.end(),
@@ -149,9 +158,9 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
   for (int i = 0; i < 3; ++i) msg.C[i] = C[i];
   msg.scale = scale;
   msg.segment = segment;
-  msg.rot_std_deg = or_zero(slave.rot_std_deg);
-  for (int i = 0; i < 3; ++i) msg.pos_std[i] = or_zero(slave.pos_std[i]);
-  msg.scale_std = or_zero(scale_std);
+  msg.rot_std_deg = std_or_unknown(slave.rot_std_deg);
+  for (int i = 0; i < 3; ++i) msg.pos_std[i] = std_or_unknown(slave.pos_std[i]);
+  msg.scale_std = std_or_unknown(scale_std);
   msg.motions_used = slave.motions.used;
   msg.motions_rejected = slave.motions.rejected();
 
@@ -171,12 +180,14 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
   msg.axis_offset_std = 0.0;
   if (axis_known && usable && slave.position_observable) {
     if (obs.planar && !slave.unobservable_from_prior) {
-      msg.axis_offset_std = -1.0;  // unknown
+      msg.axis_offset_std = kUnknownStd;
     } else if (std::isfinite(slave.axis_offset_std) && slave.axis_offset_std >= 0.0) {
       msg.axis_offset_std = slave.axis_offset_std;
     } else if (!obs.planar) {
       msg.axis_offset_std =
-          std::sqrt(std::max(0.0, axis.dot(slave.pos_std.cwiseAbs2().asDiagonal() * axis)));
+          slave.pos_std.allFinite()
+              ? std::sqrt(std::max(0.0, axis.dot(slave.pos_std.cwiseAbs2().asDiagonal() * axis)))
+              : kUnknownStd;
     }
   }
   msg.message = ToString(slave.termination);

@@ -8,6 +8,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <sstream>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/estimator_state_file.h"
@@ -215,8 +216,9 @@ struct CalibNode::Impl {
       line << " | " << slave.name << ": " << slave.motions.used << " motions";
       if (slave.solved()) {
         char buf[96];
-        std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) ±%.2g°", slave.estimate.C.x(),
-                      slave.estimate.C.y(), slave.estimate.C.z(), slave.rot_std_deg);
+        std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) ±%s°", slave.estimate.C.x(),
+                      slave.estimate.C.y(), slave.estimate.C.z(),
+                      SigmaText(slave.rot_std_deg, 2).c_str());
         line << buf;
       }
       line << " ["

@@ -1,9 +1,11 @@
 #include "rigcal/pipeline/online_replay.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
+#include "rigcal/calib/format.h"
 #include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::tools {
@@ -99,8 +101,10 @@ std::string FormatConvergence(const std::vector<ConvergencePoint>& history) {
                 "σ rot[deg]", "state", "errors (rot deg, C, scale %)");
   s << line;
   for (const auto& p : history) {
-    std::snprintf(line, sizeof(line), "%8.1f  %-10s %7d %9.4f  %-30s", p.t_s, p.slave.c_str(),
-                  p.motions_used, p.rot_std_deg, StateText(p.state, p.flags).c_str());
+    std::snprintf(line, sizeof(line), "%8.1f  %-10s %7d %9s  %-30s", p.t_s, p.slave.c_str(),
+                  p.motions_used,
+                  std::isfinite(p.rot_std_deg) ? FixedText(p.rot_std_deg, 4).c_str() : "unknown",
+                  StateText(p.state, p.flags).c_str());
     s << line;
     if (p.error) {
       std::snprintf(line, sizeof(line), " %.4f  %.5f  %.3f", p.error->rot_deg, p.error->trans_err,

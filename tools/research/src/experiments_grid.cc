@@ -286,7 +286,10 @@ std::vector<std::vector<ErrorStats>> RunGrid(const std::vector<ThesisSampleOptio
         }
         const SlaveCalibration result = CalibrateSlave(motions, calib);
         SampleOutcome& outcome = outcomes[static_cast<size_t>(i) * num_variants + v];
-        outcome.usable = result.usable() && !truth.empty();
+        // The thesis's experiments measure the error of every estimate a model produces,
+        // including a model forced against the data (5.2, 5.3): counted when the solve produced
+        // one (solved), whether or not the data support it (its state).
+        outcome.usable = result.solved() && !truth.empty();
         if (!outcome.usable) continue;
         outcome.error = CompareToTruth(result.estimate, truth[0]);
         if (!result.position_observable) {

@@ -111,7 +111,7 @@ ExperimentResult RunMotionModel(const ExperimentOptions& options) {
   result.notes.push_back(SamplesNote(options) +
                          "; pose k rotates by (k/K) alpha_max about a random axis");
   result.notes.push_back(
-      "errors: rot_mean_deg = mean rotation orientation error over usable estimates; the "
+      "errors: rot_mean_deg = mean rotation orientation error over solved estimates; the "
       "translational model does not estimate positions (dir/dist empty)");
   result.notes.push_back(
       "equal-error boundary: for each eps the smallest alpha_max from which on (to the end of "
@@ -143,7 +143,7 @@ ExperimentResult RunScaleModel(const ExperimentOptions& options) {
   result.notes.push_back(SamplesNote(options) +
                          "; slave position k scaled by 1 + (k/K) max_scale_error");
   result.notes.push_back(
-      "errors: dir_mean_deg = mean position orientation error over usable estimates; the "
+      "errors: dir_mean_deg = mean position orientation error over solved estimates; the "
       "time-dependent model has no single scale (scale columns empty)");
   result.notes.push_back(
       "equal-error boundary: for each eps the smallest max_scale_error from which on (to the "

@@ -26,9 +26,9 @@ void AddCommonNotes(const ExperimentOptions& options, int degenerate, Experiment
                           std::to_string(options.samples) + " samples per point, seed " +
                           std::to_string(options.seed) + "; lls and nl on the same samples");
   result->notes.push_back(
-      "errors: *_mean = mean of the absolute errors of thesis 5.1.1 over the usable estimates "
+      "errors: *_mean = mean of the absolute errors of thesis 5.1.1 over the solved estimates "
       "(what the thesis plots), *_rms = root mean square, *_median = median (robust to rare gross "
-      "failures); failed = estimates reported unusable");
+      "failures); failed = samples without an estimate");
   if (options.crb_samples > 0) {
     result->notes.push_back(
         "crb_*: Cramer-Rao bound of the linear-Gaussian model (rotation noise per-axis sigma "

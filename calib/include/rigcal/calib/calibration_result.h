@@ -25,7 +25,9 @@ enum class Termination {
 struct SegmentScale {
   int segment = 0;  // segment id, or partition index for the partition model
   double scale = 1.0;
-  double std = 0.0;  // standard deviation from the covariance (0 when not computed)
+  // Standard deviation from the covariance; NaN = unknown (the covariance was not computed or
+  // failed), never a silent 0.
+  double std = std::numeric_limits<double>::quiet_NaN();
   // Scale measurements of eq. (4.18) / (4.31) in this segment: mean, std, count.
   double measured_mean = 0.0;
   double measured_std = 0.0;
@@ -99,11 +101,13 @@ struct SlaveCalibration {
   std::vector<Eigen::Vector3d> unobservable;
   bool unobservable_from_prior = false;
 
-  // Standard deviations from the covariance of the refined parameters.
-  double rot_std_deg = 0.0;  // largest axis
+  // Standard deviations from the covariance of the refined parameters (online: of the linear
+  // solution, inflated). NaN = unknown: the covariance was not computed or failed; an estimate
+  // with unknown σ is never converged.
+  double rot_std_deg = std::numeric_limits<double>::quiet_NaN();  // largest axis
   // σ of C per master axis. Along an unobservable direction only the prior's σ is included
   // (nothing when the prior has none).
-  Eigen::Vector3d pos_std = Eigen::Vector3d::Zero();
+  Eigen::Vector3d pos_std = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   // σ of C along the mean rotation axis (observability.planar_axis), master units: estimated
   // (general model; large for nearly planar drives), the prior's σ (planar model with a
   // weighted prior), NaN when unknown (planar model otherwise) or not applicable
@@ -117,10 +121,17 @@ struct SlaveCalibration {
   Observability observability;
 
   // How the solve ended, and what a caller may do with the estimate (slave_state.h: one
-  // meaning per state; batch: converged when usable with a computed covariance).
+  // meaning per state; batch: usable when the data support the estimate (batch_acceptance in
+  // calib/src: enough independent motions, residuals consistent with the measured noise,
+  // every parameter determined; else initialising and the message says what is missing),
+  // converged when usable with σ computed from the covariance).
   Termination termination = Termination::kInsufficientMotion;
   SlaveState state = SlaveState::kInitialising;
   std::string message;
+  // Batch: why the data contradict the model of a solved estimate (residuals beyond the
+  // measured noise, unrelated trajectories, the planar model on tilting axes; the state is then
+  // initialising), empty when they do not.
+  std::string contradiction;
   // The solve produced an estimate: q, C and the scales are defined (termination solved or
   // no_convergence). Whether it may be used is `state`.
   bool solved() const {

@@ -18,6 +18,10 @@ std::string SignificantText(double v, int digits);
 // `v` with `decimals` digits after the point, as printf's "%.<decimals>f": "0.250".
 std::string FixedText(double v, int decimals);
 
+// A standard deviation with `digits` significant digits (SignificantText), or "unknown" when it
+// is not finite (not computed, the covariance failed, or undetermined): never "nan" or a 0.
+std::string SigmaText(double sigma, int digits);
+
 // "[x, y, z]" with FixedText(., decimals) per coordinate.
 std::string VectorText(const Eigen::Vector3d& v, int decimals);
 

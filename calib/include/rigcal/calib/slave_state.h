@@ -4,13 +4,18 @@
 // lines and exit codes — reports exactly one SlaveState, mapped from here:
 //
 //   state          meaning                                             LCM  file / line    exit
-//   initialising   no usable estimate yet: too few motions, or the     0    initialising   3
-//                  motions do not determine the parameters
+//   initialising   no usable estimate yet: too few (independent)      0    initialising   3
+//                  motions, the motions do not determine the
+//                  parameters, or the data do not support the
+//                  estimate (residuals beyond the measured noise,
+//                  unrelated trajectories, a model the data
+//                  contradict; calib/src/batch_acceptance.h)
 //   usable         an estimate the data support; its σ has not settled 1    usable         0
 //                  (online) or could not be computed (batch)
 //   converged      usable, and σ has settled: below the thresholds and 2    converged      0
 //                  stable over the last keyframes (online), computed
-//                  from the covariance (batch)
+//                  from the covariance (batch); never with an unknown
+//                  (NaN) σ
 //   decalibrated   the rig moved: the estimate no longer fits the      3    decalibrated   3
 //                  recent motions (online only); it re-converges
 //

@@ -22,8 +22,11 @@ namespace rigcal::tools {
 //                "scale": s,                  when the slave has one scale, or else
 //                "scales": [{"segment": id, "scale": s, "std": sigma}, ...],
 //                "std": {"rot_deg": sigma, "pos": [sx, sy, sz],
-//                        "axis": sigma},      σ of C along observability.mean_axis (null when
+//                        "axis": sigma,       σ of C along observability.mean_axis (null when
 //                                             unknown: planar motion without a prior σ)
+//                        "scale": sigma},     the one scale's σ (absent with "scales")
+//                                             every σ null when unknown: the covariance was
+//                                             not computed or failed (never 0)
 //                "motions_used": n, "motions_rejected": n,
 //                "glitches": {"dropped": n, "position_jump": n, "rotation_jump": n,
 //                             "angle_mismatch": n, "in_master": n, "in_slave": n},

@@ -36,9 +36,9 @@ static_assert(slave_extrinsics_t::STATE_DECALIBRATED ==
 // EncodeMessage and MessageValidator::Decode: num_slaves agrees with slaves, the master is
 // names[0], utime and t_ns >= 0, a defined distance_unit, and per slave: a slave of the rig named
 // once, finite fields, unit q, a defined state, only defined flags, a positive scale when usable
-// or converged, non-negative counters and standard deviations (axis_offset_std may
-// be -1, unknown), axis_spread_deg in [0, 180], a unit planar_axis with
-// FLAG_PLANAR_UNOBSERVABLE_AXIS, FLAG_AXIS_FROM_PRIOR only with it.
+// or converged, non-negative counters, standard deviations non-negative or -1 (unknown),
+// axis_spread_deg in [0, 180], a unit planar_axis with FLAG_PLANAR_UNOBSERVABLE_AXIS,
+// FLAG_AXIS_FROM_PRIOR only with it.
 extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
                                                       rig_extrinsics_t*);
 extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
@@ -58,9 +58,9 @@ int32_t SlaveFlags(const SlaveCalibration& slave);
 // there is none). rotation_eigen_gap = λ2 - λ1 of observability.rotation_eigenvalues.
 // message = ToString(termination) + ": " + slave.message.
 // state = slave.state. Placeholders: a slave whose solve produced no estimate gets identity q, zero
-// C and scale 1 where its estimate is not finite; non-finite standard deviations and observability
-// figures become 0
-// ("not computed"). Fails when a solved slave's q, C or scale is not finite, when
+// C and scale 1 where its estimate is not finite; non-finite standard deviations become -1
+// (unknown: not computed, the covariance failed, or undetermined), never 0; non-finite
+// observability figures become 0. Fails when a solved slave's q, C or scale is not finite, when
 // observability.planar holds without a finite non-zero axis, or when the result does not pass
 // CheckMessage.
 Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave);

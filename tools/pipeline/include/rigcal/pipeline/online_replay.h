@@ -2,6 +2,7 @@
 // Replays a recording through the online path (SyncBuffer -> RigEstimator), deterministically
 // in one thread, and records how the estimate converges over stream time.
 
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -25,7 +26,7 @@ struct ConvergencePoint {
   double t_s = 0.0;  // seconds since the first stamp
   std::string slave;
   Similarity estimate;
-  double rot_std_deg = 0.0;
+  double rot_std_deg = std::numeric_limits<double>::quiet_NaN();  // NaN = unknown
   int motions_used = 0;
   SlaveState state = SlaveState::kInitialising;
   uint32_t flags = 0;                     // SlaveFlags: facts beside the state

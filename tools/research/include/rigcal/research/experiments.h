@@ -71,11 +71,12 @@ struct ExperimentOptions {
 
 constexpr double kNotAvailable = std::numeric_limits<double>::quiet_NaN();
 
-// Mean, RMS and median of the thesis 5.1.1 error measures over the usable estimates of one grid
-// point. The mean is what the thesis plots; the RMS is what the Cramer-Rao bound bounds; the
-// median is robust to the rare gross failures that dominate mean and RMS of small sample counts.
-// A measure a model does not estimate (positions of the translational model, the single scale of
-// the time-dependent model) is NaN.
+// Mean, RMS and median of the thesis 5.1.1 error measures over the estimates of one grid point
+// (`usable`: the solve produced one, SlaveCalibration::solved(), whether or not the data support
+// it: the thesis measures models forced against the data too). The mean is what the thesis plots;
+// the RMS is what the Cramer-Rao bound bounds; the median is robust to the rare gross failures that
+// dominate mean and RMS of small sample counts. A measure a model does not estimate (positions of
+// the translational model, the single scale of the time-dependent model) is NaN.
 struct ErrorStats {
   int usable = 0;
   int failed = 0;  // the calibrator reported no usable estimate
