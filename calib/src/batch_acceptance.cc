@@ -29,8 +29,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kMinIndependent = 4;
 // Least motions before the online estimator's pairing tests decide: the estimate is fitted to
 // the same motions (4 to 7 parameters), and on fewer motions that fit alone can make the actual
-// pairing look 3 times better than a shifted one.
-constexpr int kMinOnlinePairing = 20;
+// pairing look 3 times better than a shifted one (measured: unrelated random trajectories
+// passed at 20 motions).
+constexpr int kMinOnlinePairing = 30;
 // Largest σ of a determined rotation (degrees) and scale (fraction of the scale).
 constexpr double kMaxRotationStdDeg = 10.0;
 constexpr double kMaxScaleStdFraction = 0.5;
