@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "glitch_injection.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
 #include "rigcal/calib/quaternion.h"
@@ -23,34 +24,8 @@
 namespace rigcal {
 namespace {
 
-CameraTrack& Track(RigRecording* rec, int camera) {
-  return camera == 0 ? rec->master : rec->slaves[camera - 1];
-}
-
-// Returns the glitched times.
-std::vector<int> GlitchOnePercent(RigRecording* rec, std::mt19937_64& rng) {
-  std::vector<int> where;
-  const int n = static_cast<int>(rec->size());
-  const int cameras = 1 + static_cast<int>(rec->slaves.size());
-  std::uniform_int_distribution<int> index(0, n - 1), camera(0, cameras - 1), kind(0, 1);
-  std::uniform_real_distribution<double> fraction(0.2, 1.0), angle(30.0, 180.0);
-  for (int g = 0; g < n / 100; ++g) {
-    const int k = index(rng);
-    CameraTrack& t = Track(rec, camera(rng));
-    Eigen::Vector3d lo = t.poses[0].C, hi = lo;
-    for (const Pose& p : t.poses) {
-      lo = lo.cwiseMin(p.C);
-      hi = hi.cwiseMax(p.C);
-    }
-    if (kind(rng) == 0) {
-      t.poses[k].C += fraction(rng) * (hi - lo).norm() * RandomUnitVector(rng);
-    } else {
-      t.poses[k].q = t.poses[k].q * AxisAngle(RandomUnitVector(rng), angle(rng) * kRadPerDeg);
-    }
-    where.push_back(k);
-  }
-  return where;
-}
+using testing::GlitchOnePercent;
+using testing::Track;
 
 RigCalibration Online(const RigRecording& rec) {
   std::vector<std::string> names = {rec.master.name};
