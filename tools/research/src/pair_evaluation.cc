@@ -2,6 +2,7 @@
 #include "rigcal/research/pair_evaluation.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <mutex>
@@ -96,7 +97,8 @@ RigRecording NoisyRecording(const PairScenario& scenario, uint64_t seed) {
 
 // The policies of one draw, in the order of PairScenarioResult::policies.
 void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOptions& options,
-             const std::vector<int>& spans, std::vector<Sums>* sums, std::mutex* mutex) {
+             const std::vector<int>& spans, std::vector<Sums>* sums, std::vector<Sums>* half,
+             std::mutex* mutex) {
   const RigRecording rec = NoisyRecording(scenario, seed);
   std::vector<RigCalibration> results;
   CalibrationOptions calib = options.calibration;
@@ -119,12 +121,38 @@ void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOp
     for (size_t i = 0; i < results[p].slaves.size() && i < scenario.rig.size(); ++i) {
       const SlaveCalibration& s = results[p].slaves[i];
       Accumulate(s, scenario.rig[i], scenario.planar, &(*sums)[p]);
+      Accumulate(s, scenario.rig[i], scenario.planar, &(*half)[p]);
       if (p == 0 && (*sums)[p].chosen.size() < 120) {
         if (!(*sums)[p].chosen.empty()) (*sums)[p].chosen += " ";
         (*sums)[p].chosen += s.pairs.empty() ? "?" : s.pairs;
       }
     }
   }
+}
+
+// The fixed span (policies 1..spans) best on one half of the draws, judged on the other; RMS
+// of both ways.
+double CrossValidated(const std::array<std::vector<Sums>, 2>& halves, size_t spans,
+                      double PolicyFigures::*measure) {
+  double sum = 0.0;
+  for (int h = 0; h < 2; ++h) {
+    int best = -1;
+    double best_value = 0.0;
+    for (size_t p = 1; p <= spans; ++p) {
+      const PolicyFigures f = Figures("", 0, halves[h][p]);
+      const double v = f.*measure;
+      if (f.failed > 0 || !std::isfinite(v)) continue;
+      if (best < 0 || v < best_value) {
+        best = static_cast<int>(p);
+        best_value = v;
+      }
+    }
+    if (best < 0) return kNotAvailable;
+    const double judged = Figures("", 0, halves[1 - h][best]).*measure;
+    if (!std::isfinite(judged)) return kNotAvailable;
+    sum += judged * judged;
+  }
+  return std::sqrt(sum / 2.0);
 }
 
 // A seed per scenario name (FNV-1a), so a scenario gets the same draws whichever others run.
@@ -157,6 +185,7 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
   }
   std::vector<PairScenarioResult> out(chosen.size());
   std::vector<std::vector<Sums>> sums(chosen.size());
+  std::vector<std::array<std::vector<Sums>, 2>> halves(chosen.size());
   std::vector<std::vector<int>> spans(chosen.size());
   for (size_t c = 0; c < chosen.size(); ++c) {
     const int n = static_cast<int>(chosen[c]->master.poses.size());
@@ -164,6 +193,7 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
       if (span < n / 2) spans[c].push_back(span);
     }
     sums[c].resize(1 + spans[c].size() + (options.online ? 1 : 0));
+    for (auto& half : halves[c]) half.resize(sums[c].size());
   }
   const int64_t total = static_cast<int64_t>(chosen.size()) * options.repeats;
   std::atomic<int64_t> next{0};
@@ -174,7 +204,7 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
       const size_t c = static_cast<size_t>(job / options.repeats);
       const int draw = static_cast<int>(job % options.repeats);
       RunDraw(*chosen[c], options.seed * 1000003 + NameSeed(chosen[c]->name) + draw, options,
-              spans[c], &sums[c], &mutex);
+              spans[c], &sums[c], &halves[c][draw % 2], &mutex);
       const int64_t finished = ++done;
       if (options.progress) {
         const std::lock_guard<std::mutex> lock(mutex);
@@ -215,6 +245,10 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
         r.best_pos = static_cast<int>(p);
       }
     }
+    if (options.repeats >= 2) {
+      r.cv_rot_rms_deg = CrossValidated(halves[c], spans[c].size(), &PolicyFigures::rot_rms_deg);
+      r.cv_pos_rms = CrossValidated(halves[c], spans[c].size(), &PolicyFigures::pos_rms);
+    }
   }
   return out;
 }
@@ -223,15 +257,18 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
   std::ostringstream s;
   char line[512];
   std::snprintf(line, sizeof(line),
-                "%-30s %6s %5s | %-14s %-14s | %9s %5s %9s %5s | %-6s %-6s %-6s | %s\n", "scenario",
-                "poses", "Hz", "best rot span", "best pos span", "auto rot", "x", "auto pos", "x",
-                "onl/b", "onl/b", "onl/b", "auto pairs (per slave, draw)");
+                "%-30s %6s %5s | %-14s %-14s | %9s %5s %9s %5s | %5s %5s | %-6s %-6s %-6s | %s\n",
+                "scenario", "poses", "Hz", "best rot span", "best pos span", "auto rot", "x",
+                "auto pos", "x", "x cv", "x cv", "onl/b", "onl/b", "onl/b",
+                "auto pairs (per slave, draw)");
   s << line;
-  std::snprintf(
-      line, sizeof(line), "%-30s %6s %5s | %-14s %-14s | %9s %5s %9s %5s | %-6s %-6s %-6s |\n", "",
-      "", "", "(RMS deg)", "(RMS units)", "RMS deg", "best", "RMS", "best", "rot", "pos", "scale");
+  std::snprintf(line, sizeof(line),
+                "%-30s %6s %5s | %-14s %-14s | %9s %5s %9s %5s | %5s %5s | %-6s %-6s %-6s |\n", "",
+                "", "", "(RMS deg)", "(RMS units)", "RMS deg", "best", "RMS", "best", "rot", "pos",
+                "rot", "pos", "scale");
   s << line;
   int within_12 = 0, within_15 = 0, online_13 = 0, scored = 0, online_scored = 0;
+  int cv_12 = 0, cv_15 = 0, cv_scored = 0;
   for (const auto& r : results) {
     const PolicyFigures* a = r.Find("auto");
     const PolicyFigures* o = r.Find("online");
@@ -244,13 +281,15 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
     const double xp = bp && a ? a->pos_rms / bp->pos_rms : kNotAvailable;
     std::snprintf(
         line, sizeof(line),
-        "%-30s %6d %5.0f | %-14s %-14s | %9s %5s %9s %5s | %-6s %-6s %-6s | %s%s\n", r.name.c_str(),
-        r.poses, r.rate_hz, best(br, br ? br->rot_rms_deg : 0).c_str(),
+        "%-30s %6d %5.0f | %-14s %-14s | %9s %5s %9s %5s | %5s %5s | %-6s %-6s %-6s | %s%s\n",
+        r.name.c_str(), r.poses, r.rate_hz, best(br, br ? br->rot_rms_deg : 0).c_str(),
         best(bp, bp ? bp->pos_rms : 0).c_str(),
         a ? SignificantText(a->rot_rms_deg, 2).c_str() : "-",
         Ratio(a ? a->rot_rms_deg : kNotAvailable, br ? br->rot_rms_deg : kNotAvailable).c_str(),
         a ? SignificantText(a->pos_rms, 2).c_str() : "-",
         Ratio(a ? a->pos_rms : kNotAvailable, bp ? bp->pos_rms : kNotAvailable).c_str(),
+        Ratio(a ? a->rot_rms_deg : kNotAvailable, r.cv_rot_rms_deg).c_str(),
+        Ratio(a ? a->pos_rms : kNotAvailable, r.cv_pos_rms).c_str(),
         o && a ? Ratio(o->rot_rms_deg, a->rot_rms_deg).c_str() : "-",
         o && a ? Ratio(o->pos_rms, a->pos_rms).c_str() : "-",
         o && a ? Ratio(o->scale_rms_pct, a->scale_rms_pct).c_str() : "-",
@@ -263,6 +302,13 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
       if (worst <= 1.2) ++within_12;
       if (worst <= 1.5) ++within_15;
     }
+    if (a && std::isfinite(r.cv_rot_rms_deg)) {
+      ++cv_scored;
+      const double cr = a->rot_rms_deg / r.cv_rot_rms_deg;
+      const double cp = std::isfinite(r.cv_pos_rms) ? a->pos_rms / r.cv_pos_rms : 0.0;
+      if (std::max(cr, cp) <= 1.2) ++cv_12;
+      if (std::max(cr, cp) <= 1.5) ++cv_15;
+    }
     if (o && a && std::isfinite(o->rot_rms_deg)) {
       ++online_scored;
       const double worst = std::max({o->rot_rms_deg / a->rot_rms_deg,
@@ -273,6 +319,11 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
   }
   s << "\nauto within 1.2x of the best fixed span (rotation and position): " << within_12 << "/"
     << scored << "; within 1.5x: " << within_15 << "/" << scored << "\n";
+  if (cv_scored > 0) {
+    s << "auto within 1.2x of the cross-validated best fixed span (best on half the draws, judged "
+         "on the other half): "
+      << cv_12 << "/" << cv_scored << "; within 1.5x: " << cv_15 << "/" << cv_scored << "\n";
+  }
   if (online_scored > 0) {
     s << "online within 1.3x of the batch auto (rotation, position, scale): " << online_13 << "/"
       << online_scored << "\n";

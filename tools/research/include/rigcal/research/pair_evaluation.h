@@ -88,6 +88,12 @@ struct PairScenarioResult {
   // The fixed span with the smallest rotation / position RMS (index into policies).
   int best_rot = -1;
   int best_pos = -1;
+  // The best fixed span's error without the luck of the draws: the span best on the even draws
+  // judged on the odd ones and vice versa (RMS of the two). The minimum over spans of errors
+  // measured on the same draws is biased low by their noise; this reference is not. NaN with
+  // fewer than 2 repeats.
+  double cv_rot_rms_deg = kNotAvailable;
+  double cv_pos_rms = kNotAvailable;
   const PolicyFigures* Find(const std::string& policy) const;
 };
 
