@@ -48,10 +48,10 @@ std::string RigToYaml(const std::map<std::string, Similarity>& rig);
 // (the estimate; present even when unusable, so check `usable`) plus `usable`, `termination`,
 // `message`, `std: {rot_deg, pos, axis}`, `motions: {total, used, rejected, small_rotation,
 // angle_mismatch, residual_outlier}`, `glitches: {dropped, position_jump, rotation_jump,
-// angle_mismatch, in_master, in_slave}` (calibration_result.h), `models: {motion, scale}`, `position_observable`,
-// `unobservable` (unit directions in the master frame), `unobservable_from_prior` and
-// `observability` (the figures behind the model, keys as in the JSON schema of
-// result_json.h). `scales` (with `std`) is written when the slave has several segment or
+// angle_mismatch, in_master, in_slave}` (calibration_result.h), `models: {motion, scale}`,
+// `position_observable`, `unobservable` (unit directions in the master frame),
+// `unobservable_from_prior` and `observability` (the figures behind the model, keys as in the JSON
+// schema of result_json.h). `scales` (with `std`) is written when the slave has several segment or
 // partition scales. Non-finite numbers are written as .nan / .inf.
 std::string ResultToYaml(const RigCalibration& result);
 
