@@ -26,17 +26,13 @@ double Comparable(double sigma) {
   return std::isfinite(sigma) && sigma > 0.0 ? sigma : std::numeric_limits<double>::quiet_NaN();
 }
 
-// span > 0: the pairs (k, k + span) of every stride-th k; span 0: kWalk's pairs.
 Candidate Solve(const RigRecording& recording, int slave, const CalibrationOptions& options,
-                int span, int stride) {
+                const PairOptions& policy, const std::vector<IndexPair>& pairs) {
   Candidate c;
-  c.span = span;
-  PairOptions walk = options.pairs;
-  walk.policy = PairOptions::Policy::kWalk;
-  const auto pairs =
-      span > 0 ? RelativePairs(recording, span, stride) : SelectPairs(recording, walk);
+  c.span = policy.policy == PairOptions::Policy::kRelative ? policy.step : 0;
   c.result = CalibrateSlave(MotionsForSlave(recording, slave, pairs), options,
                             recording.slaves[slave].name);
+  c.result.pairs = PairsText(policy);
   if (c.result.solved()) {
     c.rot = Comparable(c.result.rot_std_deg);
     if (c.result.position_observable) {
@@ -119,17 +115,35 @@ int Best(const std::vector<Candidate>& candidates, bool usable_only) {
 
 }  // namespace
 
-SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slave,
-                                         const CalibrationOptions& options) {
+AutoPairCandidates MakeAutoPairCandidates(const RigRecording& recording,
+                                          const PairOptions& options) {
+  AutoPairCandidates out;
   const int n = static_cast<int>(recording.size());
-  const std::vector<int> spans = AutoSpanCandidates(n, options.pairs);
-  const int stride = std::max(1, (n + options.pairs.max_pairs - 1) / options.pairs.max_pairs);
-  std::vector<Candidate> candidates;
-  candidates.reserve(spans.size());
-  for (int span : spans) candidates.push_back(Solve(recording, slave, options, span, stride));
+  out.stride = std::max(1, (n + options.max_pairs - 1) / options.max_pairs);
+  for (int span : AutoSpanCandidates(n, options)) {
+    PairOptions relative = options;
+    relative.policy = PairOptions::Policy::kRelative;
+    relative.step = span;
+    out.policies.push_back(relative);
+    out.pairs.push_back(RelativePairs(recording, span, out.stride));
+  }
   // The walk: a span per anchor that reaches a large rotation (hand-held recordings with
   // pauses, where any fixed span often spans no rotation at all).
-  candidates.push_back(Solve(recording, slave, options, 0, 1));
+  PairOptions walk = options;
+  walk.policy = PairOptions::Policy::kWalk;
+  out.policies.push_back(walk);
+  out.pairs.push_back(SelectPairs(recording, walk));
+  return out;
+}
+
+SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording,
+                                         const AutoPairCandidates& choices, int slave,
+                                         const CalibrationOptions& options) {
+  std::vector<Candidate> candidates;
+  candidates.reserve(choices.policies.size());
+  for (size_t k = 0; k < choices.policies.size(); ++k) {
+    candidates.push_back(Solve(recording, slave, options, choices.policies[k], choices.pairs[k]));
+  }
 
   int best = Best(candidates, true);
   if (best < 0) best = Best(candidates, false);
@@ -144,11 +158,14 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slav
     }
     how = "no span gave a σ";
   } else {
-    how = "smallest σ among spans " + std::to_string(spans.front()) + "-" +
-          std::to_string(spans.back()) + " and the walk";
+    how = "smallest σ among spans " + std::to_string(candidates.front().span) + "-" +
+          std::to_string(candidates[candidates.size() - 2].span) + " and the walk";
   }
   Candidate chosen = candidates[best];
-  if (stride > 1 && chosen.span > 0) chosen = Solve(recording, slave, options, chosen.span, 1);
+  if (choices.stride > 1 && chosen.span > 0) {
+    const PairOptions& policy = choices.policies[best];
+    chosen = Solve(recording, slave, options, policy, RelativePairs(recording, chosen.span));
+  }
   SlaveCalibration r = std::move(chosen.result);
   // A motion model given in the options must hold on every span: a span whose solve finds the
   // data contradicting it (batch_acceptance.h) makes the result not usable, however well the
@@ -162,15 +179,12 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording, int slav
       }
     }
     if (worst != nullptr) {
-      const std::string label =
-          worst->span > 0 ? "relative:" + std::to_string(worst->span) : "walk";
       r.state = SlaveState::kInitialising;
       r.contradiction = worst->result.contradiction;
-      r.message = "not usable: on the motions of pairs " + label + ": " +
+      r.message = "not usable: on the motions of pairs " + worst->result.pairs + ": " +
                   worst->result.contradiction + "; " + r.message;
     }
   }
-  r.pairs = chosen.span > 0 ? "relative:" + std::to_string(chosen.span) : "walk";
   r.message += "; pairs " + r.pairs + " (auto: " + how + ")";
   ModuleLogger("calib")->debug("slave '{}': auto pairs {} ({})", r.name, r.pairs, how);
   return r;

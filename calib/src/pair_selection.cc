@@ -232,6 +232,13 @@ std::vector<RigMotion> MotionsForSlave(const RigRecording& recording, int slave_
   return motions;
 }
 
+std::string PairsText(const PairOptions& options) {
+  const std::string policy = ToString(options.policy);
+  return options.policy == PairOptions::Policy::kRelative
+             ? policy + ":" + std::to_string(options.step)
+             : policy;
+}
+
 std::string ToString(PairOptions::Policy policy) {
   switch (policy) {
     case PairOptions::Policy::kSinceStart:

@@ -103,33 +103,31 @@ RigCalibration CalibrateRig(const RigRecording& input, const CalibrationOptions&
   out.master = recording.master.name;
   const std::string invalid = recording.Check().message();
   const bool options_ok = options.Check().ok();
-  std::vector<IndexPair> pairs;
+  const bool solvable = invalid.empty() && options_ok;
   const bool auto_pairs = options.pairs.policy == PairOptions::Policy::kAuto;
-  if (invalid.empty() && options_ok && !auto_pairs) pairs = SelectPairs(recording, options.pairs);
+  std::vector<IndexPair> pairs;
+  internal::AutoPairCandidates candidates;
+  if (solvable && auto_pairs) {
+    candidates = internal::MakeAutoPairCandidates(recording, options.pairs);
+  } else if (solvable) {
+    pairs = SelectPairs(recording, options.pairs);
+  }
   out.pairs_selected = static_cast<int>(pairs.size());
   for (size_t i = 0; i < recording.slaves.size(); ++i) {
-    const auto& name = recording.slaves[i].name;
+    const int slave = static_cast<int>(i);
+    SlaveCalibration r;
+    r.name = recording.slaves[i].name;
     if (!invalid.empty()) {
-      SlaveCalibration r;
-      r.name = name;
-      out.slaves.push_back(
-          internal::Failed(r, Termination::kInvalidInput, "invalid recording: " + invalid));
-      continue;
+      r = internal::Failed(r, Termination::kInvalidInput, "invalid recording: " + invalid);
+    } else if (solvable && auto_pairs) {
+      r = internal::CalibrateSlaveAutoPairs(recording, candidates, slave, options);
+      out.pairs_selected = std::max(out.pairs_selected, r.motions.total);
+    } else {
+      r = CalibrateSlave(MotionsForSlave(recording, slave, pairs), options, r.name);
+      r.pairs = PairsText(options.pairs);
     }
-    if (auto_pairs && options_ok) {
-      out.slaves.push_back(
-          internal::CalibrateSlaveAutoPairs(recording, static_cast<int>(i), options));
-      out.pairs_selected = std::max(out.pairs_selected, out.slaves.back().motions.total);
-      internal::ReportGlitches(glitches, static_cast<int>(i), &out.slaves.back());
-      continue;
-    }
-    out.slaves.push_back(
-        CalibrateSlave(MotionsForSlave(recording, static_cast<int>(i), pairs), options, name));
-    out.slaves.back().pairs =
-        ToString(options.pairs.policy) + (options.pairs.policy == PairOptions::Policy::kRelative
-                                              ? ":" + std::to_string(options.pairs.step)
-                                              : "");
-    internal::ReportGlitches(glitches, static_cast<int>(i), &out.slaves.back());
+    if (invalid.empty()) internal::ReportGlitches(glitches, slave, &r);
+    out.slaves.push_back(std::move(r));
   }
   return out;
 }

@@ -394,6 +394,8 @@ bool RigEstimator::ApplyRefinement(const RefinementJob& job, const SlaveCalibrat
   if (job.generation != generation_ || !refined.solved()) return false;
   Slave& s = *slaves_.at(job.slave);
   s.refined = refined;
+  // A batch result names its pairs; the window refinement (also the fallback of a history
+  // job) keeps the online estimate's empty ones.
   s.refined_from_history = !job.history.t_ns.empty() && !refined.pairs.empty();
   if (s.refined_from_history) s.last_history_refine_ns = job.history_t_ns;
   Publish(job.slave);

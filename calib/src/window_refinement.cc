@@ -20,7 +20,7 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
   if (!job.history.t_ns.empty() && job.start.solved()) {
     // Every set since the restart: the batch calibrator (its pair choice and σ).
     SlaveCalibration batch = CalibrateRig(job.history, job.history_options).slaves.at(0);
-    if (batch.solved() && !batch.pairs.empty()) {
+    if (batch.solved()) {
       batch.message = "batch on the " + std::to_string(job.history.size()) +
                       " sets since the start: " + batch.message;
       return batch;

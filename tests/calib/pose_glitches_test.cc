@@ -189,12 +189,12 @@ TEST(PoseGlitches, ShortRunsAndRecordingEnds) {
 struct MeanErrors {
   double rot_deg = 0.0;
   double trans = 0.0;
+  void Add(const SlaveCalibration& s, const Similarity& truth) {
+    const CalibrationError e = CompareToTruth(s.estimate, truth);
+    rot_deg += e.rot_deg;
+    trans += e.trans_err;
+  }
 };
-
-void GlitchOnePercent(RigRecording* rec, std::mt19937_64& rng, std::vector<int>* where) {
-  const std::vector<int> glitched = testing::GlitchOnePercent(rec, rng);
-  where->insert(where->end(), glitched.begin(), glitched.end());
-}
 
 // Up to 1 % of the poses glitched leave the accuracy within 1.2x of the clean recording's
 // (mean over 12 drives and both slaves: the drop of ~1 % of the poses changes the errors by a
@@ -207,8 +207,7 @@ TEST(PoseGlitches, OnePercentGlitchedKeepsTheAccuracy) {
     const SyntheticDrive drive = Drive(100 + seed);
     RigRecording rec = drive.recording;
     std::mt19937_64 rng(seed);
-    std::vector<int> where;
-    GlitchOnePercent(&rec, rng, &where);
+    const std::vector<int> where = testing::GlitchOnePercent(&rec, rng);
     std::vector<int> dropped;
     WithoutGlitches(rec, &dropped);
     for (const int k : where) {
@@ -221,12 +220,8 @@ TEST(PoseGlitches, OnePercentGlitchedKeepsTheAccuracy) {
     for (size_t i = 0; i < drive.truth.size(); ++i) {
       ASSERT_TRUE(a.slaves[i].usable()) << a.slaves[i].message;
       ASSERT_TRUE(b.slaves[i].usable()) << b.slaves[i].message;
-      const CalibrationError ea = CompareToTruth(a.slaves[i].estimate, drive.truth[i]);
-      const CalibrationError eb = CompareToTruth(b.slaves[i].estimate, drive.truth[i]);
-      clean.rot_deg += ea.rot_deg;
-      clean.trans += ea.trans_err;
-      glitched.rot_deg += eb.rot_deg;
-      glitched.trans += eb.trans_err;
+      clean.Add(a.slaves[i], drive.truth[i]);
+      glitched.Add(b.slaves[i], drive.truth[i]);
     }
   }
   std::printf(
@@ -345,8 +340,7 @@ TEST(PoseGlitchGate, OnePercentGlitchedKeepsTheAccuracy) {
     const SyntheticDrive drive = Drive(100 + seed);
     RigRecording rec = drive.recording;
     std::mt19937_64 rng(seed);
-    std::vector<int> where;
-    GlitchOnePercent(&rec, rng, &where);
+    const std::vector<int> where = testing::GlitchOnePercent(&rec, rng);
     injected += static_cast<int>(where.size());
     const RigCalibration a = RunOnline(drive.recording);
     const RigCalibration b = RunOnline(rec);
@@ -354,12 +348,8 @@ TEST(PoseGlitchGate, OnePercentGlitchedKeepsTheAccuracy) {
       ASSERT_TRUE(a.slaves[i].usable()) << a.slaves[i].message;
       ASSERT_TRUE(b.slaves[i].usable()) << b.slaves[i].message;
       counted += b.slaves[i].glitches.dropped();
-      const CalibrationError ea = CompareToTruth(a.slaves[i].estimate, drive.truth[i]);
-      const CalibrationError eb = CompareToTruth(b.slaves[i].estimate, drive.truth[i]);
-      clean.rot_deg += ea.rot_deg;
-      clean.trans += ea.trans_err;
-      glitched.rot_deg += eb.rot_deg;
-      glitched.trans += eb.trans_err;
+      clean.Add(a.slaves[i], drive.truth[i]);
+      glitched.Add(b.slaves[i], drive.truth[i]);
     }
   }
   std::printf(

@@ -83,6 +83,8 @@ std::vector<RigMotion> MotionsForSlave(const RigRecording& recording, int slave_
                                        const std::vector<IndexPair>& pairs);
 
 std::string ToString(PairOptions::Policy policy);
+// The pairs as the command line names them: "auto", "start", "walk", "relative:<step>".
+std::string PairsText(const PairOptions& options);
 
 // The spans kAuto tries on a recording of `poses` poses (ascending, at least {1}).
 std::vector<int> AutoSpanCandidates(int poses, const PairOptions& options);
