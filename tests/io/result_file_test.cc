@@ -93,9 +93,13 @@ class ResultFileTest : public ::testing::Test {
       EXPECT_EQ(a.scale_model, b.scale_model);
       EXPECT_EQ(a.motions.used, b.motions.used);
       EXPECT_EQ(a.motions.rejected(), b.motions.rejected());
-      if (!json) EXPECT_EQ(a.motions.small_rotation, b.motions.small_rotation);
+      if (!json) {
+        EXPECT_EQ(a.motions.small_rotation, b.motions.small_rotation);
+      }
     }
-    if (!json) EXPECT_EQ(read.pairs_selected, 77);
+    if (!json) {
+      EXPECT_EQ(read.pairs_selected, 77);
+    }
   }
   std::filesystem::path dir_;
 };

@@ -7,27 +7,9 @@
 set -euo pipefail
 rigcal=$(readlink -f "$1")
 
-if [ "${RIGCAL_IN_PRIVATE_NETNS:-}" != 1 ]; then
-  for tool in unshare ip lcm-logger lcm-logplayer; do
-    command -v "$tool" >/dev/null || { echo "skip: $tool not found"; exit 77; }
-  done
-  if ! unshare --net true 2>/dev/null; then
-    echo "skip: cannot create a network namespace here (needs root or user namespaces)"
-    exit 77
-  fi
-  RIGCAL_IN_PRIVATE_NETNS=1 exec unshare --net --fork bash "$0" "$@"
-fi
-
-# Inside the new namespace: lo must be the only link, or this is not a private namespace.
-links=$(ip -o link show | awk -F': ' '{print $2}' | tr '\n' ' ')
-if [ "$links" != "lo " ]; then
-  echo "FAIL: expected only lo in the private namespace, found: $links"
-  exit 1
-fi
-ip link set lo up
-ip link set lo multicast on
-ip route add 224.0.0.0/4 dev lo
-url='udpm://239.255.76.67:7667?ttl=0'
+RIGCAL_NETNS_TOOLS="lcm-logger lcm-logplayer"
+# shellcheck source=../support/private_netns.sh
+source "$(dirname "$0")/../support/private_netns.sh" "$0" "$@"
 
 dir=$(mktemp -d)
 pids=()

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <thread>
 
+#include "monitor/status_fixtures.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
@@ -20,66 +21,6 @@ namespace {
 
 using ::testing::HasSubstr;
 using ::testing::Not;
-
-rig_status_t MakeStatus(int8_t state, int64_t utime = 1000) {
-  rig_status_t s{};
-  s.version = rig_status_t::VERSION;
-  s.utime = utime;
-  for (const char* name : {"front", "left"}) {
-    camera_status_t c{};
-    c.name = name;
-    c.fps = 19.5;
-    c.frames_received = 1234;
-    c.dropped_late = 3;
-    c.dropped_never_matched = 7;
-    c.vo_state = camera_status_t::VO_TRACKING;
-    c.last_pose_age_ms = 42;
-    s.cameras.push_back(c);
-  }
-  s.cameras[1].vo_state = camera_status_t::VO_LOST;
-  s.num_cameras = 2;
-  s.sync_sets_emitted = 999;
-  s.sync_fill = 5;
-  s.sync_capacity = 64;
-  s.estimator_state = state;
-  s.estimator_message = "left holds the rig back";
-  s.cpu_percent = 87.5;
-  s.rss_bytes = 123 << 20;
-  return s;
-}
-
-rig_extrinsics_t MakeExtrinsics(int8_t state, double rot_std_deg) {
-  rig_extrinsics_t e{};
-  e.version = rig_extrinsics_t::VERSION;
-  e.utime = 2000;
-  e.t_ns = 5'000'000'000;
-  e.master = "front";
-  e.distance_unit = rig_extrinsics_t::UNIT_MASTER_ODOMETRY;
-  slave_extrinsics_t s{};
-  s.name = "left";
-  const double h = std::sqrt(0.5);
-  s.q[0] = h;  // 90 degrees about y
-  s.q[2] = h;
-  s.C[0] = -1.0;
-  s.C[1] = 1.0;
-  s.C[2] = 3.0;
-  s.scale = 0.5;
-  s.segment = 4;
-  s.rot_std_deg = rot_std_deg;
-  s.pos_std[0] = 0.01;
-  s.pos_std[1] = -1;
-  s.pos_std[2] = 0.03;
-  s.scale_std = 0.002;
-  s.motions_used = 321;
-  s.motions_rejected = 9;
-  s.state = state;
-  s.flags = kFlagRefined;
-  s.axis_offset_std = -1;
-  s.message = "solved: fine";
-  e.slaves.push_back(s);
-  e.num_slaves = 1;
-  return e;
-}
 
 template <typename Message>
 void Publish(lcm::LCM* lcm, const char* channel, const Message& msg) {

@@ -34,6 +34,16 @@ struct HistoryFiles {
   std::map<std::string, Similarity> truth_rig;
 };
 
+// How often `needle` occurs in `text` (plots, ids, attributes of a page).
+inline int CountOf(const std::string& text, const std::string& needle) {
+  int n = 0;
+  for (size_t pos = text.find(needle); pos != std::string::npos;
+       pos = text.find(needle, pos + needle.size())) {
+    ++n;
+  }
+  return n;
+}
+
 // Appends one checked message to `log` as an event at `utime`; false when it fails.
 template <typename Message>
 bool WriteEvent(lcm::LogFile* log, const std::string& channel, const Message& msg, int64_t utime,
@@ -49,12 +59,15 @@ bool WriteEvent(lcm::LogFile* log, const std::string& channel, const Message& ms
   return log->writeEvent(&event) == 0;
 }
 
-// Writes the files into a fresh directory under the temp dir named after `tag`. `frames` poses
-// per camera at 20 Hz.
-inline HistoryFiles MakeHistory(const std::string& tag, int frames = 600) {
+// Writes the files into a fresh directory under the temp dir named after `tag` (and the process
+// id unless `per_process` is false: then a later run replaces it). `frames` poses per camera at
+// 20 Hz.
+inline HistoryFiles MakeHistory(const std::string& tag, int frames = 600,
+                                bool per_process = true) {
   HistoryFiles files;
   files.dir = std::filesystem::temp_directory_path() /
-              ("rigcal_report_" + tag + "_" + std::to_string(::getpid()));
+              ("rigcal_report_" + tag +
+               (per_process ? "_" + std::to_string(::getpid()) : std::string()));
   std::filesystem::remove_all(files.dir);
   std::filesystem::create_directories(files.dir);
   files.history_log = (files.dir / "history.lcmlog").string();

@@ -73,15 +73,6 @@ int Attribute(const std::string& dom, const std::string& name) {
   return std::regex_search(dom, m, re) ? std::stoi(m[1]) : -1;
 }
 
-int Count(const std::string& text, const std::string& needle) {
-  int n = 0;
-  for (size_t pos = text.find(needle); pos != std::string::npos;
-       pos = text.find(needle, pos + needle.size())) {
-    ++n;
-  }
-  return n;
-}
-
 class ReportBrowserTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -98,12 +89,13 @@ class ReportBrowserTest : public ::testing::Test {
 };
 
 TEST_F(ReportBrowserTest, EveryPlotRendersAndTheConsoleIsEmpty) {
-  const HistoryFiles files = MakeHistory("browser");
+  // One directory for every run: the screenshot of the last run stays for a look.
+  const HistoryFiles files = MakeHistory("browser", 600, false);
   auto data = LoadReport({files.history_log, files.pose_log, files.truth});
   ASSERT_TRUE(data.ok()) << data.error();
   const std::string html = (files.dir / "report.html").string();
   ASSERT_TRUE(WriteReportHtml(html, *data).ok());
-  const int plots = Count(ReadText(html), "<figure class=\"plot\"");
+  const int plots = CountOf(ReadText(html), "<figure class=\"plot\"");
   ASSERT_EQ(plots, 8);
 
   const BrowserRun run = RunBrowser(chromium_, html, (files.dir / "report").string());
@@ -113,9 +105,10 @@ TEST_F(ReportBrowserTest, EveryPlotRendersAndTheConsoleIsEmpty) {
   EXPECT_GT(std::filesystem::file_size(run.screenshot), 50'000u);
   EXPECT_EQ(Attribute(run.dom, "data-plots-expected"), plots) << run.dom.substr(0, 400);
   EXPECT_EQ(Attribute(run.dom, "data-plots-rendered"), plots);
-  EXPECT_EQ(Count(run.dom, "data-rendered=\"true\""), plots);
+  EXPECT_EQ(CountOf(run.dom, "data-rendered=\"true\""), plots);
   EXPECT_THAT(run.dom, ::testing::HasSubstr("(8/8 plots rendered)</title>"));
   EXPECT_EQ(run.console, "");
+  std::filesystem::remove_all(files.dir / "report.profile");
 }
 
 // The check can fail: a plot whose series has no points and a script error are seen.
@@ -142,6 +135,7 @@ TEST_F(ReportBrowserTest, BrokenPageIsDetected) {
   EXPECT_GT(expected, 0);
   EXPECT_EQ(Attribute(run.dom, "data-plots-rendered"), expected - 1);
   EXPECT_THAT(run.console, ::testing::HasSubstr("undefinedFunction"));
+  if (!HasFailure()) std::filesystem::remove_all(files.dir);
 }
 
 }  // namespace

@@ -17,15 +17,6 @@ namespace {
 
 using ::testing::HasSubstr;
 
-int Count(const std::string& text, const std::string& needle) {
-  int n = 0;
-  for (size_t pos = text.find(needle); pos != std::string::npos;
-       pos = text.find(needle, pos + needle.size())) {
-    ++n;
-  }
-  return n;
-}
-
 class ReportTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() { files_ = new HistoryFiles(MakeHistory("data")); }
@@ -100,18 +91,18 @@ TEST_F(ReportTest, PageHasEveryPlotWithData) {
   ASSERT_TRUE(data.ok()) << data.error();
   const std::string html = RenderReportHtml(*data);
   // rig view, 2 histories, 2 x (scales, residua), health: 8 plots, none missing.
-  EXPECT_EQ(Count(html, "<figure class=\"plot\""), 8);
-  EXPECT_EQ(Count(html, "<figure class=\"plot missing\""), 0);
+  EXPECT_EQ(CountOf(html, "<figure class=\"plot\""), 8);
+  EXPECT_EQ(CountOf(html, "<figure class=\"plot missing\""), 0);
   // Self-contained: no external references.
-  EXPECT_EQ(Count(html, "src="), 0);
-  EXPECT_EQ(Count(html, "href="), 0);
-  EXPECT_EQ(Count(html, "@import"), 0);
+  EXPECT_EQ(CountOf(html, "src="), 0);
+  EXPECT_EQ(CountOf(html, "href="), 0);
+  EXPECT_EQ(CountOf(html, "@import"), 0);
   // Every series of the history has points; bands for the σ; truth lines; frusta of 3 cameras
   // and 2 truths in two views.
-  EXPECT_EQ(Count(html, "data-points=\"0\""), 0);
-  EXPECT_GT(Count(html, "class=\"band\""), 10);
-  EXPECT_GT(Count(html, "class=\"reference\""), 10);
-  EXPECT_EQ(Count(html, "class=\"frustum\""), 10);
+  EXPECT_EQ(CountOf(html, "data-points=\"0\""), 0);
+  EXPECT_GT(CountOf(html, "class=\"band\""), 10);
+  EXPECT_GT(CountOf(html, "class=\"reference\""), 10);
+  EXPECT_EQ(CountOf(html, "class=\"frustum\""), 10);
   // Clip-path ids are unique in the page.
   std::set<std::string> ids;
   const std::regex id_re("<clipPath id=\"([^\"]+)\"");
@@ -121,9 +112,9 @@ TEST_F(ReportTest, PageHasEveryPlotWithData) {
   }
   EXPECT_GT(ids.size(), 10u);
   // The table carries the thesis's error-model columns and the truth rows.
-  EXPECT_EQ(Count(html, "position direction error [°]"), 1);
-  EXPECT_EQ(Count(html, "<table class=\"final errors\">"), 1);
-  EXPECT_EQ(Count(html, "<tr class=\"truth\">"), 2);
+  EXPECT_EQ(CountOf(html, "position direction error [°]"), 1);
+  EXPECT_EQ(CountOf(html, "<table class=\"final errors\">"), 1);
+  EXPECT_EQ(CountOf(html, "<tr class=\"truth\">"), 2);
 }
 
 TEST_F(ReportTest, ResultFileGivesTableAndRigButNoHistory) {
@@ -136,13 +127,13 @@ TEST_F(ReportTest, ResultFileGivesTableAndRigButNoHistory) {
   EXPECT_FALSE(data->from_log);
   EXPECT_THAT(data->slaves, ::testing::ElementsAre("cam1", "cam2"));
   const std::string html = RenderReportHtml(*data);
-  EXPECT_EQ(Count(html, "no history in a result file"), 4);  // note, 2 histories, health
-  EXPECT_EQ(Count(html, "<figure class=\"plot\""), 1);       // the rig
-  EXPECT_EQ(Count(html, "class=\"frustum\""), 6);
+  EXPECT_EQ(CountOf(html, "no history in a result file"), 4);  // note, 2 histories, health
+  EXPECT_EQ(CountOf(html, "<figure class=\"plot\""), 1);       // the rig
+  EXPECT_EQ(CountOf(html, "class=\"frustum\""), 6);
   // With the poses the per-motion plots come back.
   auto with_poses = LoadReport({result, files_->pose_log, ""});
   ASSERT_TRUE(with_poses.ok()) << with_poses.error();
-  EXPECT_EQ(Count(RenderReportHtml(*with_poses), "<figure class=\"plot\""), 5);
+  EXPECT_EQ(CountOf(RenderReportHtml(*with_poses), "<figure class=\"plot\""), 5);
 }
 
 TEST_F(ReportTest, DamagedLogIsUsedUpToTheDamage) {
@@ -163,7 +154,7 @@ TEST_F(ReportTest, BadInputsAreNamed) {
   auto data = LoadReport({junk, "", ""});
   ASSERT_FALSE(data.ok());
   EXPECT_THAT(data.error(), HasSubstr(junk));
-  EXPECT_THAT(data.error(), HasSubstr("not an LCM log"));
+  EXPECT_THAT(data.error(), HasSubstr("nor an LCM log"));
 
   // A pose log has no history.
   auto poses_only = LoadReport({files_->pose_log, "", ""});

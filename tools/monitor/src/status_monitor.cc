@@ -170,7 +170,12 @@ int RunStatusMonitor(const StatusRunOptions& options, std::ostream& out, std::os
       break;
     }
   }
-  return static_cast<int>(HealthOf(monitor.Snapshot()));
+  const MonitorSnapshot last = monitor.Snapshot();
+  if (options.ansi) {  // the screen keeps the last state
+    out << AnsiFrame(FormatDashboard(last, options.width));
+    out.flush();
+  }
+  return static_cast<int>(HealthOf(last));
 }
 
 }  // namespace rigcal::tools

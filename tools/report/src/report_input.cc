@@ -155,7 +155,8 @@ Expected<ReportData> LoadReport(const ReportOptions& options) {
     auto result = ReadResultFile(options.input);
     if (!result) {
       return Error{result.error() + " (" + options.input +
-                   " is not an LCM log either: it does not start with LCM's sync word)"};
+                   " is neither a result file nor an LCM log, which starts with LCM's sync "
+                   "word)"};
     }
     data.final_result = std::move(*result);
     data.master = data.final_result.master;

@@ -36,9 +36,17 @@ ReportFigure Missing(const std::string& name, const std::string& title, const st
   return f;
 }
 
+// Points of a line series are marked when there are few of them (a single point has no line).
+constexpr size_t kMarkBelowPoints = 30;
+
 ReportFigure Drawn(const std::string& name, const std::string& title, PlotFigure figure,
                    const std::string& note = "") {
   figure.id_prefix = Slug(name) + "-";
+  for (PlotPanel& panel : figure.panels) {
+    for (PlotSeries& series : panel.series) {
+      if (series.x.size() < kMarkBelowPoints) series.markers = true;
+    }
+  }
   ReportFigure f;
   f.name = name;
   f.title = title;
@@ -47,20 +55,18 @@ ReportFigure Drawn(const std::string& name, const std::string& title, PlotFigure
   return f;
 }
 
-PlotSeries Series(const std::string& label, const std::string& color) {
+// A line (markers only when few points, see Drawn) or, with `scatter`, markers only.
+PlotSeries Series(const std::string& label, const std::string& color, bool scatter = false) {
   PlotSeries s;
   s.label = label;
   s.color = color;
-  s.markers = false;
+  s.lines = !scatter;
+  s.markers = scatter;
   return s;
 }
 
 PlotSeries Scatter(const std::string& label, const std::string& color) {
-  PlotSeries s;
-  s.label = label;
-  s.color = color;
-  s.lines = false;
-  return s;
+  return Series(label, color, true);
 }
 
 // Three components over time with ±σ bands and the truth as dashed lines in their colours.

@@ -1,0 +1,32 @@
+# Sourced at the top of a multi-process LCM test script: runs the script inside a private network
+# namespace (unshare --net) whose only link, lo, gets a multicast route, so udpm:// traffic never
+# leaves it (DESIGN.md "LCM"); sets `url` to the udpm URL to use there.
+#   source "$(dirname "$0")/../support/private_netns.sh" "$0" "$@"
+# Needs unshare, ip and the tools named in RIGCAL_NETNS_TOOLS (space-separated). A missing tool
+# or no namespace support skips the test (exit 77); under CI=true that is a failure (exit 1).
+
+rigcal_netns_skip() {
+  echo "skip: $1"
+  if [ "${CI:-}" = true ]; then exit 1; fi
+  exit 77
+}
+
+if [ "${RIGCAL_IN_PRIVATE_NETNS:-}" != 1 ]; then
+  for tool in unshare ip ${RIGCAL_NETNS_TOOLS:-}; do
+    command -v "$tool" >/dev/null || rigcal_netns_skip "$tool not found"
+  done
+  unshare --net true 2>/dev/null ||
+    rigcal_netns_skip "cannot create a network namespace here (needs root or user namespaces)"
+  RIGCAL_IN_PRIVATE_NETNS=1 exec unshare --net --fork bash "$@"
+fi
+
+# Inside the new namespace: lo must be the only link, or this is not a private namespace.
+rigcal_netns_links=$(ip -o link show | awk -F': ' '{print $2}' | tr '\n' ' ')
+if [ "$rigcal_netns_links" != "lo " ]; then
+  echo "FAIL: expected only lo in the private namespace, found: $rigcal_netns_links"
+  exit 1
+fi
+ip link set lo up
+ip link set lo multicast on
+ip route add 224.0.0.0/4 dev lo
+url='udpm://239.255.76.67:7667?ttl=0'
