@@ -14,14 +14,6 @@ RIGCAL_NETNS_TOOLS="lcm-logger lcm-logplayer"
 # shellcheck source=../support/private_netns.sh
 source "$(dirname "$0")/../support/private_netns.sh" "$0" "$@"
 
-dir=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
-  rm -rf "$dir"
-}
-trap cleanup EXIT
-
 cat > "$dir/rig.yaml" <<YAML
 rig: {name: status_test, master: front}
 cameras:
@@ -35,15 +27,7 @@ YAML
 
 "$rigcal" synth-log --config "$dir/rig.yaml" --out "$dir/poses.lcmlog" --frames 1200
 
-stop() {  # stop a process we started, by PID: SIGINT, then SIGTERM if it does not end
-  local pid=$1
-  kill -INT "$pid" 2>/dev/null || return 0
-  for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.1; done
-  kill -TERM "$pid" 2>/dev/null || true
-}
 
-fail=0
-check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
 
 # Nobody publishes yet: no data within the timeout.
 no_data_rc=0

@@ -11,14 +11,6 @@ RIGCAL_NETNS_TOOLS="lcm-logger lcm-logplayer"
 # shellcheck source=../support/private_netns.sh
 source "$(dirname "$0")/../support/private_netns.sh" "$0" "$@"
 
-dir=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
-  rm -rf "$dir"
-}
-trap cleanup EXIT
-
 cat > "$dir/rig.yaml" <<YAML
 rig: {name: netns_test, master: front}
 cameras:
@@ -46,12 +38,6 @@ sleep 1
 lcm-logplayer --lcm-url="$url" --speed=6 "$dir/poses.lcmlog"
 sleep 1
 
-stop() {  # stop a process we started, by PID: SIGINT, then SIGTERM if it does not end
-  local pid=$1
-  kill -INT "$pid" 2>/dev/null || return 0
-  for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.1; done
-  kill -TERM "$pid" 2>/dev/null || true
-}
 stop "$node_pid"
 node_rc=0
 wait "$node_pid" || node_rc=$?
@@ -59,8 +45,6 @@ stop "$logger_pid"
 wait "$logger_pid" || true
 pids=()
 
-fail=0
-check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
 check "rigcal calib exits 0 after SIGINT (got $node_rc)" '[ "$node_rc" -eq 0 ]'
 check "result YAML written" '[ -s "$dir/result.yaml" ]'
 check "both slaves usable in the result" \

@@ -62,12 +62,11 @@ bool WriteEvent(lcm::LogFile* log, const std::string& channel, const Message& ms
 // Writes the files into a fresh directory under the temp dir named after `tag` (and the process
 // id unless `per_process` is false: then a later run replaces it). `frames` poses per camera at
 // 20 Hz.
-inline HistoryFiles MakeHistory(const std::string& tag, int frames = 600,
-                                bool per_process = true) {
+inline HistoryFiles MakeHistory(const std::string& tag, int frames = 600, bool per_process = true) {
   HistoryFiles files;
-  files.dir = std::filesystem::temp_directory_path() /
-              ("rigcal_report_" + tag +
-               (per_process ? "_" + std::to_string(::getpid()) : std::string()));
+  files.dir =
+      std::filesystem::temp_directory_path() /
+      ("rigcal_report_" + tag + (per_process ? "_" + std::to_string(::getpid()) : std::string()));
   std::filesystem::remove_all(files.dir);
   std::filesystem::create_directories(files.dir);
   files.history_log = (files.dir / "history.lcmlog").string();

@@ -1,6 +1,9 @@
 # Sourced at the top of a multi-process LCM test script: runs the script inside a private network
 # namespace (unshare --net) whose only link, lo, gets a multicast route, so udpm:// traffic never
-# leaves it (DESIGN.md "LCM"); sets `url` to the udpm URL to use there.
+# leaves it (DESIGN.md "LCM"); sets `url` to the udpm URL to use there. Also gives the script
+# what a multi-process test needs: `dir`, a temporary directory removed at exit; `pids`, the
+# processes it started (add with pids+=("$pid"); TERMed at exit unless emptied); `stop PID`;
+# `check NAME EXPR` (prints ok/FAIL, sets `fail` to 1 on a failure).
 #   source "$(dirname "$0")/../support/private_netns.sh" "$0" "$@"
 # Needs unshare, ip and the tools named in RIGCAL_NETNS_TOOLS (space-separated). A missing tool
 # or no namespace support skips the test (exit 77); under CI=true that is a failure (exit 1).
@@ -30,3 +33,21 @@ ip link set lo up
 ip link set lo multicast on
 ip route add 224.0.0.0/4 dev lo
 url='udpm://239.255.76.67:7667?ttl=0'
+
+dir=$(mktemp -d)
+pids=()
+rigcal_netns_cleanup() {
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  rm -rf "$dir"
+}
+trap rigcal_netns_cleanup EXIT
+
+stop() {  # stop a process we started, by PID: SIGINT, then SIGTERM if it does not end
+  local pid=$1
+  kill -INT "$pid" 2>/dev/null || return 0
+  for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.1; done
+  kill -TERM "$pid" 2>/dev/null || true
+}
+
+fail=0
+check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
