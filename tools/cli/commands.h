@@ -12,5 +12,7 @@ void RegisterDemo(CLI::App& app, int* exit_code);
 void RegisterCalib(CLI::App& app, int* exit_code);
 void RegisterSynthLog(CLI::App& app, int* exit_code);
 void RegisterRun(CLI::App& app, int* exit_code);
+void RegisterStatus(CLI::App& app, int* exit_code);
+void RegisterReport(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

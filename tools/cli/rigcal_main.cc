@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   rigcal::cli::RegisterCalib(app, &exit_code);
   rigcal::cli::RegisterSynthLog(app, &exit_code);
   rigcal::cli::RegisterDemo(app, &exit_code);
+  rigcal::cli::RegisterStatus(app, &exit_code);
+  rigcal::cli::RegisterReport(app, &exit_code);
 
   try {
     app.parse(argc, argv);
