@@ -64,18 +64,6 @@ const char* VoStateShort(vo::VoState state) {
   return "?";
 }
 
-int8_t VoStateToLcm(const tools::CameraHealth& h) {
-  if (h.dead) return camera_status_t::VO_DEAD;
-  switch (h.vo_state) {
-    case vo::VoState::kTracking:
-      return camera_status_t::VO_TRACKING;
-    case vo::VoState::kLost:
-      return camera_status_t::VO_LOST;
-    default:
-      return camera_status_t::VO_INITIALISING;
-  }
-}
-
 // One line: time, per camera fps / VO state / segment / VO ms, sets, per slave estimate.
 std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
                        const std::vector<int64_t>& frames_before, double period_s) {
@@ -124,7 +112,7 @@ void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
     c.fps = period_s > 0 ? (h.frames_processed - frames_before[i]) / period_s : 0.0;
     c.frames_received = h.frames_captured;
     c.dropped_backlog = h.dropped_backlog;
-    c.vo_state = VoStateToLcm(h);
+    c.vo_state = tools::CameraStatusVoState(h);
     c.last_pose_age_ms =
         h.last_pose_t_ns >= 0 && h.last_frame_t_ns >= 0
             ? std::max<int64_t>(0, (h.last_frame_t_ns - h.last_pose_t_ns) / 1'000'000)
@@ -381,8 +369,7 @@ void RegisterRun(CLI::App& app, int* exit_code) {
       "matching and the recursive rig estimator; a status line per second, LCM publishing with\n"
       "--lcm, the result YAML on exit. Exit 3 when no slave could be calibrated.");
   cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();
   cmd->add_option("--lcm", args->lcm_url,
                   "Publish RIGCAL_POSE_<camera>, RIGCAL_EXTRINSICS and RIGCAL_STATUS on this LCM "
                   "URL (default: no LCM)");

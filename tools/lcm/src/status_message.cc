@@ -88,7 +88,8 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
       cam.dropped_late = static_cast<int64_t>(s.late);
       cam.dropped_duplicate = static_cast<int64_t>(s.duplicate);
       cam.dropped_out_of_order = static_cast<int64_t>(s.out_of_order);
-      cam.dropped_overflow += static_cast<int64_t>(s.overflow);
+      // Ring overflow, and this camera's members of sets the full ready queue dropped.
+      cam.dropped_overflow += static_cast<int64_t>(s.overflow + s.consumer_overflow);
       cam.dropped_never_matched = static_cast<int64_t>(s.never_matched);
       cam.dropped_invalid += static_cast<int64_t>(s.invalid);
     }

@@ -1,0 +1,154 @@
+// `rigcal replay` and `rigcal calib --log` through the built binary: the same log gives the same
+// result bit for bit (and the same as calib --log), damage is reported with its byte offset,
+// and the exit codes agree: 0 every slave usable, 3 nothing calibrated (with the reason), 1 bad
+// input (a missing config), 2 usage (an unknown subcommand, named). `rigcal --version` exists.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string Slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class ReplayCommandTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+#ifndef RIGCAL_BINARY
+    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
+#else
+    binary_ = RIGCAL_BINARY;
+#endif
+    std::string pattern = (fs::path(::testing::TempDir()) / "replay_command_XXXXXX").string();
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+    std::ofstream(Path("rig.yaml"))
+        << "rig: {name: test, master: front}\n"
+           "cameras:\n"
+           "  - name: front\n"
+           "  - name: left\n"
+           "    truth: {q_wxyz: [0.9238795, 0, 0.3826834, 0], C: [0.3, 0.05, -0.2]}\n"
+           "publish: {extrinsics_rate_hz: 2, status_rate_hz: 1}\n";
+    const RunResult synth = Run("synth-log --config " + Path("rig.yaml") + " --out " +
+                                Path("poses.lcmlog") + " --frames 800");
+    ASSERT_EQ(synth.exit_code, 0) << synth.err;
+  }
+  void TearDown() override {
+    std::error_code ec;
+    if (!HasFailure()) fs::remove_all(dir_, ec);
+  }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  RunResult Run(const std::string& args) {
+    const std::string out = (dir_ / "stdout.txt").string();
+    const std::string err = (dir_ / "stderr.txt").string();
+    const std::string command = "'" + binary_ + "' " + args + " > '" + out + "' 2> '" + err + "'";
+    RunResult r;
+    const int status = std::system(command.c_str());
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = Slurp(out);
+    r.err = Slurp(err);
+    return r;
+  }
+
+  std::string binary_;
+  fs::path dir_;
+};
+
+TEST_F(ReplayCommandTest, SameLogSameResultAsCalibLog) {
+  const std::string common = Path("poses.lcmlog") + " --config " + Path("rig.yaml") + " --json";
+  const RunResult a = Run("replay " + common + " --out " + Path("a.yaml"));
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const RunResult b = Run("replay " + common + " --out " + Path("b.yaml") + " --camchain " +
+                          Path("chain.yaml"));
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_EQ(a.out, b.out);  // the JSON result, bit for bit
+  EXPECT_NE(a.out.find("\"slaves\""), std::string::npos) << a.out;
+  EXPECT_EQ(Slurp(Path("a.yaml")), Slurp(Path("b.yaml")));
+  EXPECT_NE(Slurp(Path("chain.yaml")).find("T_cn_cnm1"), std::string::npos);
+  // Not a terminal: plain progress lines, the last one at 100 %.
+  EXPECT_NE(a.err.find("rigcal replay: 100%"), std::string::npos) << a.err;
+
+  const RunResult calib = Run("calib --log " + Path("poses.lcmlog") + " --config " +
+                              Path("rig.yaml") + " --out " + Path("calib.yaml"));
+  ASSERT_EQ(calib.exit_code, 0) << calib.err;
+  EXPECT_EQ(Slurp(Path("a.yaml")), Slurp(Path("calib.yaml")));
+}
+
+TEST_F(ReplayCommandTest, DamagedLogReportsTheByteOffsetAndStillWritesTheResult) {
+  const auto size = fs::file_size(Path("poses.lcmlog"));
+  fs::resize_file(Path("poses.lcmlog"), size - 10);
+  const RunResult r = Run("replay " + Path("poses.lcmlog") + " --config " + Path("rig.yaml") +
+                          " --out " + Path("cut.yaml"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;  // the undamaged part calibrates
+  EXPECT_NE(r.err.find("poses.lcmlog: byte "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("truncated"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(Path("cut.yaml")));
+}
+
+TEST_F(ReplayCommandTest, NothingCalibratedExitsThreeWithTheReason) {
+  std::ofstream(Path("empty.lcmlog")).close();
+  RunResult r = Run("replay " + Path("empty.lcmlog") + " --config " + Path("rig.yaml"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("holds no events"), std::string::npos) << r.err;
+  r = Run("calib --log " + Path("empty.lcmlog") + " --config " + Path("rig.yaml"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+
+  // Camera names that match nothing in the log.
+  std::ofstream(Path("other.yaml")) << "rig: {name: other, master: a}\n"
+                                       "cameras:\n"
+                                       "  - name: a\n"
+                                       "  - name: b\n";
+  r = Run("replay " + Path("poses.lcmlog") + " --config " + Path("other.yaml"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("no synchronised pose set"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("cameras not in the config"), std::string::npos) << r.err;
+}
+
+TEST_F(ReplayCommandTest, ExitCodesAgreeAcrossCommands) {
+  // A missing config is bad input (1), named, for every command that takes one.
+  for (const std::string& command : {"replay " + Path("poses.lcmlog"), std::string("calib"),
+                                    std::string("run"), std::string("synth-log --out x.log")}) {
+    const RunResult r = Run(command + " --config " + Path("missing.yaml"));
+    EXPECT_EQ(r.exit_code, 1) << command << ": " << r.err;
+    EXPECT_NE(r.err.find("missing.yaml"), std::string::npos) << command << ": " << r.err;
+  }
+  RunResult r = Run("replay " + Path("missing.lcmlog") + " --config " + Path("rig.yaml"));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("missing.lcmlog"), std::string::npos) << r.err;
+  r = Run("solve --master " + Path("missing.txt") + " --slave " + Path("missing2.txt"));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+
+  // Usage errors (2): an unknown subcommand is named as one; a missing argument.
+  r = Run("frobnicate --config x");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown subcommand 'frobnicate'"), std::string::npos) << r.err;
+  r = Run("replay --config " + Path("rig.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  r = Run("replay " + Path("poses.lcmlog") + " --config " + Path("rig.yaml") +
+          " --from 5 --to 2");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+
+  r = Run("--version");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.out.rfind("rigcal 0.", 0), 0u) << r.out;
+}
+
+}  // namespace

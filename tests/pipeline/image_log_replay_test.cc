@@ -1,0 +1,192 @@
+// A recorded live session replays to the result the live run gave: a lossless live pipeline on
+// a simulated rig (rendered images -> VO -> sync -> estimator) records its poses on a file://
+// bus; the rig's images are written as an image log. Replaying the image log (through VO again)
+// and replaying the pose recording both give the live result bit for bit.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <lcm/lcm-cpp.hpp>
+#include <thread>
+
+#include "rigcal/calib/quaternion.h"
+#include "rigcal/camera/camera_spec.h"
+#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/image_message.h"
+#include "rigcal/pipeline/calib_node.h"
+#include "rigcal/pipeline/image_frames.h"
+#include "rigcal/pipeline/pipeline.h"
+
+namespace rigcal::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+camera::CameraSpec PinholeSpec(const std::string& name) {
+  camera::CameraSpec spec;
+  spec.name = name;
+  spec.model = camera::CameraSpec::Model::kPinhole;
+  spec.width = 480;
+  spec.height = 320;
+  spec.intrinsics = {300.0, 300.0, 240.0, 160.0};
+  return spec;
+}
+
+// A 2-camera rig in the default room, turning about varied axes for 8 s at 20 Hz.
+drivers::SimulatedRigSpec Spec() {
+  drivers::SimulatedRigSpec spec;
+  spec.names = {"front", "side"};
+  for (const std::string& name : spec.names) {
+    auto model = camera::MakeCameraModel(PinholeSpec(name));
+    EXPECT_TRUE(model) << model.error();
+    spec.cameras.emplace_back(std::move(*model));
+  }
+  Pose side;
+  side.q = AxisAngle(Eigen::Vector3d::UnitY(), 70.0 * kRadPerDeg);
+  side.C = Eigen::Vector3d(0.4, 0.0, -0.2);
+  spec.master_from_camera = {Pose(), side};
+  spec.frame_rate_hz = 20.0;
+  spec.duration_s = 8.0;
+  spec.noise_sigma = 1.0;
+  spec.waypoint_interval_s = 2.0;
+  const double ypr[][3] = {{0, 0, 0}, {25, 8, 5}, {50, -6, -8}, {20, 12, 10}, {-15, -10, 0}};
+  const double p[][3] = {{-2, 0, 2.5}, {-1, 1, 2.8}, {0, 1.5, 2.2}, {1, 0.5, 2.6}, {1.5, -1, 2.9}};
+  for (int i = 0; i < 5; ++i) {
+    drivers::SimulatedRigSpec::Waypoint w;
+    w.position = Eigen::Vector3d(p[i][0], p[i][1], p[i][2]);
+    w.world_from_master = drivers::WaypointOrientationFromYpr(ypr[i][0], ypr[i][1], ypr[i][2]);
+    spec.waypoints.push_back(w);
+  }
+  return spec;
+}
+
+RigConfig Config(const drivers::SimulatedRigSpec& spec) {
+  RigConfig config;
+  config.path = "test-config";
+  config.name = "test";
+  for (const std::string& name : spec.names) {
+    CameraConfig camera;
+    camera.name = name;
+    camera.spec = PinholeSpec(name);
+    config.cameras.push_back(camera);
+  }
+  config.online.refine_period_s = 0.5;  // several refinements on stream time
+  return config;
+}
+
+// Every frame of the rig as an image log, in stamp order (master first at equal stamps).
+void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<std::string>& names,
+                   const std::string& path) {
+  std::vector<drivers::Frame> frames;
+  auto devices = rig.MakeDevices();
+  for (size_t i = 0; i < devices.size(); ++i) {
+    while (true) {
+      auto grabbed = devices[i]->Grab();
+      ASSERT_TRUE(grabbed) << grabbed.error();
+      if (!grabbed->has_value()) break;
+      frames.push_back(std::move(**grabbed));
+      frames.back().camera = static_cast<int>(i);
+    }
+  }
+  std::stable_sort(frames.begin(), frames.end(), [](const auto& a, const auto& b) {
+    return a.t_ns != b.t_ns ? a.t_ns < b.t_ns : a.camera < b.camera;
+  });
+  lcm::LogFile log(path, "w");
+  ASSERT_TRUE(log.good());
+  int64_t n = 0;
+  for (const drivers::Frame& frame : frames) {
+    const std::string& name = names[static_cast<size_t>(frame.camera)];
+    const std::string channel = ImageChannel(name);
+    auto bytes = EncodeMessage(channel, names, ImageOfFrame(frame, name));
+    ASSERT_TRUE(bytes) << bytes.error();
+    lcm::LogEvent event;
+    event.eventnum = n++;
+    event.timestamp = frame.t_ns / 1000;
+    event.channel = channel;
+    event.datalen = static_cast<int32_t>(bytes->size());
+    event.data = bytes->data();
+    ASSERT_EQ(log.writeEvent(&event), 0);
+  }
+}
+
+CalibNodeSummary ReplayLog(const RigConfig& config, const std::string& path, bool poses_only) {
+  CalibNodeOptions options;
+  options.log_path = path;
+  options.replay.poses_only = poses_only;
+  CalibNode node(config, options);
+  const Status opened = node.Open();
+  EXPECT_TRUE(opened.ok()) << opened.message();
+  std::atomic<bool> stop{false};
+  return node.Run(stop);
+}
+
+void ExpectSameEstimate(const RigEstimate& live, const RigEstimate& replayed, const char* what) {
+  EXPECT_EQ(live.sets, replayed.sets) << what;
+  ASSERT_EQ(live.rig.slaves.size(), replayed.rig.slaves.size());
+  for (size_t i = 0; i < live.rig.slaves.size(); ++i) {
+    const SlaveCalibration& a = live.rig.slaves[i];
+    const SlaveCalibration& b = replayed.rig.slaves[i];
+    EXPECT_GT(a.motions.used, 0) << a.name;
+    EXPECT_EQ(a.motions.used, b.motions.used) << what << " " << a.name;
+    EXPECT_EQ(a.estimate.q.coeffs(), b.estimate.q.coeffs()) << what << " " << a.name;
+    EXPECT_EQ(a.estimate.C, b.estimate.C) << what << " " << a.name;
+    EXPECT_EQ(a.estimate.scale, b.estimate.scale) << what << " " << a.name;
+    EXPECT_EQ(a.state, b.state) << what << " " << a.name;
+  }
+}
+
+TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
+  const fs::path dir = fs::temp_directory_path() / ("rigcal_image_replay_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const drivers::SimulatedRigSpec spec = Spec();
+  auto rig = drivers::MakeSimulatedRig(spec);
+  ASSERT_TRUE(rig) << rig.error();
+  const RigConfig config = Config(spec);
+  const std::string images = (dir / "images.lcmlog").string();
+  const std::string poses = (dir / "poses.lcmlog").string();
+  WriteImageLog(*rig, spec.names, images);
+
+  // The live run: lossless, publishing every pose on a file:// bus (the recording).
+  PipelineSnapshot live;
+  {
+    lcm::LCM recorder("file://" + poses + "?mode=w");
+    ASSERT_TRUE(recorder.good());
+    PipelineOptions options;
+    options.lossless = true;
+    Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, config.online, options,
+                      &recorder);
+    pipeline.Start();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+    while (!pipeline.Finished() && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    ASSERT_TRUE(pipeline.Finished());
+    pipeline.Stop();
+    live = pipeline.Snapshot();
+  }
+  ASSERT_EQ(live.sync.consumer_overflow, 0u) << live.sync.BriefReport();  // dropped nothing
+  for (const CameraHealth& h : live.cameras) EXPECT_EQ(h.dropped_backlog, 0) << h.name;
+
+  const CalibNodeSummary from_images = ReplayLog(config, images, /*poses_only=*/false);
+  EXPECT_TRUE(from_images.image_replay);
+  EXPECT_TRUE(from_images.log_problem.empty()) << from_images.log_problem;
+  EXPECT_EQ(from_images.cameras[0].images, rig->num_frames());
+  ExpectSameEstimate(live.estimate, from_images.estimate, "image log");
+
+  const CalibNodeSummary from_poses = ReplayLog(config, poses, /*poses_only=*/false);
+  EXPECT_FALSE(from_poses.image_replay);
+  ExpectSameEstimate(live.estimate, from_poses.estimate, "pose recording");
+
+  // --poses-only on the image log: it has no poses, nothing is calibrated, and says so.
+  const CalibNodeSummary no_poses = ReplayLog(config, images, /*poses_only=*/true);
+  EXPECT_EQ(no_poses.estimate.sets, 0u);
+  EXPECT_EQ(no_poses.skipped_channels.at(ImageChannel("front")), rig->num_frames());
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace rigcal::tools
