@@ -92,6 +92,21 @@ TEST_F(ReplayCommandTest, SameLogSameResultAsCalibLog) {
   EXPECT_EQ(Slurp(Path("a.yaml")), Slurp(Path("calib.yaml")));
 }
 
+// A live session (the thesis 5.4 simulated rig through rendering and VO, not paced, so it
+// drops nothing) recorded with --lcm file://: its replay gives the result the live run gave.
+TEST_F(ReplayCommandTest, RecordedLiveRunReplaysToTheLiveResult) {
+  const std::string config = std::string(RIGCAL_SOURCE_DIR) + "/config/sim_thesis_virtual.yaml";
+  const RunResult live = Run("run --config " + config + " --fast --status-every 0 --lcm file://" +
+                             Path("session.lcmlog") + "?mode=w --out " + Path("live.yaml"));
+  ASSERT_EQ(live.exit_code, 0) << live.err;
+  EXPECT_EQ(live.err.find("dropped"), std::string::npos) << live.err;
+  const RunResult replay = Run("replay " + Path("session.lcmlog") + " --config " + config +
+                               " --out " + Path("replayed.yaml"));
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  EXPECT_NE(replay.err.find("RIGCAL_STATUS"), std::string::npos) << replay.err;  // not replayed
+  EXPECT_EQ(Slurp(Path("live.yaml")), Slurp(Path("replayed.yaml")));
+}
+
 TEST_F(ReplayCommandTest, DamagedLogReportsTheByteOffsetAndStillWritesTheResult) {
   const auto size = fs::file_size(Path("poses.lcmlog"));
   fs::resize_file(Path("poses.lcmlog"), size - 10);

@@ -95,8 +95,10 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
     if (!summary.skipped_channels.empty()) {
       log->info("channels not replayed: {}", ChannelList(summary.skipped_channels));
     }
-    log->info("published {} RIGCAL_EXTRINSICS, {} RIGCAL_STATUS", summary.extrinsics_published,
-              summary.status_published);
+    if (!options.publish_url.empty()) {
+      log->info("published {} RIGCAL_EXTRINSICS, {} RIGCAL_STATUS on {}",
+                summary.extrinsics_published, summary.status_published, options.publish_url);
+    }
   }
   if (!summary.log_problem.empty()) std::cerr << prefix << summary.log_problem << "\n";
   const RigCalibration& result = summary.estimate.rig;

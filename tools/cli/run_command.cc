@@ -102,14 +102,14 @@ std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
 }
 
 void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
-                   const std::vector<int64_t>& frames_before, double period_s, int32_t capacity,
-                   tools::CpuMeter* cpu, const std::vector<std::string>& names) {
+                   std::vector<tools::StampRate>* rates, int32_t capacity, tools::CpuMeter* cpu,
+                   const std::vector<std::string>& names) {
   std::vector<tools::CameraStatusInput> cameras;
   for (size_t i = 0; i < s.cameras.size(); ++i) {
     const tools::CameraHealth& h = s.cameras[i];
     tools::CameraStatusInput c;
     c.name = h.name;
-    c.fps = period_s > 0 ? (h.frames_processed - frames_before[i]) / period_s : 0.0;
+    c.fps = (*rates)[i].Update(h.frames_processed, h.last_frame_t_ns, -1);
     c.frames_received = h.frames_captured;
     c.dropped_backlog = h.dropped_backlog;
     c.vo_state = tools::CameraStatusVoState(h);
@@ -245,6 +245,7 @@ int RunRun(const RunArgs& args) {
   pipeline.Start();
   std::cerr << "rigcal run: running; Ctrl-C stops cleanly\n";
   std::vector<int64_t> frames_before(names.size(), 0);
+  std::vector<tools::StampRate> rates(names.size());
   auto last_status = start;
   tools::CpuMeter cpu;
   const int32_t capacity = config->online.sync.capacity * static_cast<int32_t>(names.size());
@@ -258,7 +259,7 @@ int RunRun(const RunArgs& args) {
       const tools::PipelineSnapshot snapshot = pipeline.Snapshot();
       if (args.status_every_s > 0)
         std::cerr << StatusLine(elapsed, snapshot, frames_before, period) << "\n";
-      if (bus) PublishStatus(bus.get(), snapshot, frames_before, period, capacity, &cpu, names);
+      if (bus) PublishStatus(bus.get(), snapshot, &rates, capacity, &cpu, names);
       for (size_t i = 0; i < names.size(); ++i) {
         frames_before[i] = snapshot.cameras[i].frames_processed;
       }
@@ -269,7 +270,7 @@ int RunRun(const RunArgs& args) {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const tools::PipelineSnapshot final_state = pipeline.Snapshot();
-  if (bus) PublishStatus(bus.get(), final_state, frames_before, 0.0, capacity, &cpu, names);
+  if (bus) PublishStatus(bus.get(), final_state, &rates, capacity, &cpu, names);
   const RigCalibration& result = final_state.estimate.rig;
 
   // What happened to the cameras.

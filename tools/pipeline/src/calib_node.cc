@@ -52,17 +52,6 @@ Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t ut
   return msg;
 }
 
-double StampRate::Update(int64_t count_now, int64_t newest_t_ns, int64_t start_ns) {
-  const int64_t since = t_ns >= 0 ? t_ns : start_ns;
-  double rate = 0.0;
-  if (newest_t_ns > since && since >= 0) {
-    rate = static_cast<double>(count_now - count) / (static_cast<double>(newest_t_ns - since) * 1e-9);
-  }
-  count = count_now;
-  if (newest_t_ns >= 0) t_ns = newest_t_ns;
-  return std::max(0.0, rate);
-}
-
 CalibNode::Impl::Impl(RigConfig c, CalibNodeOptions o)
     : config(std::move(c)),
       options(std::move(o)),

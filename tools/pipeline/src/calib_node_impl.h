@@ -20,20 +20,11 @@
 #include "rigcal/calib/logging.h"
 #include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/process_stats.h"
+#include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
 #include "rigcal/pipeline/pipeline.h"
 
 namespace rigcal::tools {
-
-// Poses (or frames) per second of one camera from its stamps, between two status messages.
-struct StampRate {
-  int64_t count = 0;  // at the previous status
-  int64_t t_ns = -1;  // newest stamp at the previous status
-
-  // Rate from `count` items up to stamp `newest_t_ns`; `start_ns` stands for the previous stamp
-  // at the first status. Remembers this status.
-  double Update(int64_t count_now, int64_t newest_t_ns, int64_t start_ns);
-};
 
 struct CalibNode::Impl {
   using Clock = std::chrono::steady_clock;
