@@ -44,8 +44,8 @@ OnlineOptions SmallQueues() {
 
 TEST(OnlineCalibratorLossless, SlowConsumerDropsAreCountedPerCamera) {
   const Outcome run = PushAll(Recording(), SmallQueues());
-  ASSERT_GT(run.sync.consumer_overflow, 0u) << "the estimator kept up with a one-set queue: "
-                                            << run.sync.BriefReport();
+  ASSERT_GT(run.sync.consumer_overflow, 0u)
+      << "the estimator kept up with a one-set queue: " << run.sync.BriefReport();
   // Every lost set held one entry of every camera (all cameras are required).
   for (const SyncCameraStats& camera : run.sync.cameras) {
     EXPECT_EQ(camera.consumer_overflow, run.sync.consumer_overflow) << run.sync.BriefReport();

@@ -76,8 +76,8 @@ TEST_F(ReplayCommandTest, SameLogSameResultAsCalibLog) {
   const std::string common = Path("poses.lcmlog") + " --config " + Path("rig.yaml") + " --json";
   const RunResult a = Run("replay " + common + " --out " + Path("a.yaml"));
   ASSERT_EQ(a.exit_code, 0) << a.err;
-  const RunResult b = Run("replay " + common + " --out " + Path("b.yaml") + " --camchain " +
-                          Path("chain.yaml"));
+  const RunResult b =
+      Run("replay " + common + " --out " + Path("b.yaml") + " --camchain " + Path("chain.yaml"));
   ASSERT_EQ(b.exit_code, 0) << b.err;
   EXPECT_EQ(a.out, b.out);  // the JSON result, bit for bit
   EXPECT_NE(a.out.find("\"slaves\""), std::string::npos) << a.out;
@@ -140,7 +140,7 @@ TEST_F(ReplayCommandTest, NothingCalibratedExitsThreeWithTheReason) {
 TEST_F(ReplayCommandTest, ExitCodesAgreeAcrossCommands) {
   // A missing config is bad input (1), named, for every command that takes one.
   for (const std::string& command : {"replay " + Path("poses.lcmlog"), std::string("calib"),
-                                    std::string("run"), std::string("synth-log --out x.log")}) {
+                                     std::string("run"), std::string("synth-log --out x.log")}) {
     const RunResult r = Run(command + " --config " + Path("missing.yaml"));
     EXPECT_EQ(r.exit_code, 1) << command << ": " << r.err;
     EXPECT_NE(r.err.find("missing.yaml"), std::string::npos) << command << ": " << r.err;
@@ -157,8 +157,7 @@ TEST_F(ReplayCommandTest, ExitCodesAgreeAcrossCommands) {
   EXPECT_NE(r.err.find("unknown subcommand 'frobnicate'"), std::string::npos) << r.err;
   r = Run("replay --config " + Path("rig.yaml"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  r = Run("replay " + Path("poses.lcmlog") + " --config " + Path("rig.yaml") +
-          " --from 5 --to 2");
+  r = Run("replay " + Path("poses.lcmlog") + " --config " + Path("rig.yaml") + " --from 5 --to 2");
   EXPECT_EQ(r.exit_code, 2) << r.err;
 
   r = Run("--version");

@@ -18,10 +18,9 @@ namespace fs = std::filesystem;
 class LogReaderTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    path_ = (fs::temp_directory_path() / ("rigcal_log_reader_" + std::to_string(::getpid()) + "_" +
-                                          ::testing::UnitTest::GetInstance()
-                                              ->current_test_info()
-                                              ->name()))
+    path_ = (fs::temp_directory_path() /
+             ("rigcal_log_reader_" + std::to_string(::getpid()) + "_" +
+              ::testing::UnitTest::GetInstance()->current_test_info()->name()))
                 .string();
   }
   void TearDown() override { fs::remove(path_); }
@@ -48,7 +47,8 @@ class LogReaderTest : public ::testing::Test {
 
   void Append(const std::vector<uint8_t>& bytes) {
     std::ofstream out(path_, std::ios::binary | std::ios::app);
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
   }
 
   std::unique_ptr<LogReader> Open(LogReaderOptions options = {}) {
@@ -78,7 +78,8 @@ TEST_F(LogReaderTest, ReadsWhatLcmWrote) {
     EXPECT_EQ(event.event_number, k);
     EXPECT_EQ(event.timestamp_us, 1000 * k + 7);
     EXPECT_EQ(event.channel, "CH" + std::to_string(k % 3));
-    EXPECT_EQ(event.data, std::vector<uint8_t>(static_cast<size_t>(k + 1), static_cast<uint8_t>(k)));
+    EXPECT_EQ(event.data,
+              std::vector<uint8_t>(static_cast<size_t>(k + 1), static_cast<uint8_t>(k)));
     EXPECT_EQ(event.offset, offsets[static_cast<size_t>(k)]);
   }
   EXPECT_EQ(reader->Next(&event), LogReader::Outcome::kEnd);
@@ -141,8 +142,8 @@ TEST_F(LogReaderTest, OversizedLengthsAreRejectedBeforeAllocation) {
   WriteEvents(3);
   const int64_t bad = static_cast<int64_t>(fs::file_size(path_));
   // A header announcing 2 GiB - 1 of data (lcm::LogFile would try to allocate it).
-  Append({0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0, 0, 3, 0, 0, 0, 0, 0, 0, 0, 9,
-          0, 0, 0, 2, 0x7F, 0xFF, 0xFF, 0xFF, 'C', 'H'});
+  Append({0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0,    0,    3,    0,    0,   0,
+          0,    0,    0,    0,    9, 0, 0, 0, 2, 0x7F, 0xFF, 0xFF, 0xFF, 'C', 'H'});
   LogReaderOptions options;
   options.max_event_bytes = 1 << 20;
   auto reader = Open(options);

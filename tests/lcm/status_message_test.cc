@@ -72,7 +72,7 @@ TEST(StatusMessage, RejectsOutOfRange) {
 TEST(StatusMessage, RatesFromStampsNotTheWallClock) {
   StampRate rate;
   const int64_t t0 = 5'000'000'000;
-  EXPECT_EQ(rate.Update(0, -1, -1), 0.0);                             // nothing yet
+  EXPECT_EQ(rate.Update(0, -1, -1), 0.0);  // nothing yet
   EXPECT_DOUBLE_EQ(rate.Update(20, t0 + 19 * 50'000'000, t0 - 50'000'000), 20.0);
   EXPECT_DOUBLE_EQ(rate.Update(30, t0 + 29 * 50'000'000, -1), 20.0);  // 10 more in 0.5 s
   EXPECT_EQ(rate.Update(30, t0 + 29 * 50'000'000, -1), 0.0);          // no new stamp

@@ -140,7 +140,8 @@ void ExpectSameEstimate(const RigEstimate& live, const RigEstimate& replayed, co
 }
 
 TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
-  const fs::path dir = fs::temp_directory_path() / ("rigcal_image_replay_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("rigcal_image_replay_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const drivers::SimulatedRigSpec spec = Spec();
   auto rig = drivers::MakeSimulatedRig(spec);

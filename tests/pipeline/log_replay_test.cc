@@ -175,7 +175,8 @@ TEST_F(LogReplayTest, WindowAndPacingFollowLogTime) {
 // Appends raw bytes to a file.
 void Append(const std::string& path, const std::vector<uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::app);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 TEST_F(LogReplayTest, DamagedLogsReplayUpToTheDamage) {
@@ -194,8 +195,8 @@ TEST_F(LogReplayTest, DamagedLogsReplayUpToTheDamage) {
     ASSERT_EQ(file.writeEvent(&event), 0);
   }
   const auto damage = fs::file_size(log);
-  Append(log, {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0, 0, 3, 0, 0, 0, 0, 0, 0, 0, 9,
-               0, 0, 0, 2, 0x7F, 0xFF, 0xFF, 0xFF, 'C', 'H'});
+  Append(log, {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0,    0,    3,    0,    0,   0,
+               0,    0,    0,    0,    9, 0, 0, 0, 2, 0x7F, 0xFF, 0xFF, 0xFF, 'C', 'H'});
   const CalibNodeSummary summary = Replay(log, "damaged");
   EXPECT_NE(summary.log_problem.find("byte " + std::to_string(damage) + ": data length"),
             std::string::npos)

@@ -122,7 +122,8 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
     for (const std::string& error : summary.errors) std::cerr << prefix << error << "\n";
     return kExitError;
   }
-  if (summary.estimate.sets == 0) std::cerr << prefix << NoSetsMessage(options, names, summary) << "\n";
+  if (summary.estimate.sets == 0)
+    std::cerr << prefix << NoSetsMessage(options, names, summary) << "\n";
   std::vector<SlaveState> states;
   for (const SlaveCalibration& slave : result.slaves) {
     states.push_back(slave.state);

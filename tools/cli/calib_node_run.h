@@ -10,10 +10,10 @@
 namespace rigcal::cli {
 
 struct NodeRunArgs {
-  std::string command;  // "calib" or "replay": names the command in messages
-  std::string config;   // rig config YAML
-  std::string camchain;  // Kalibr-style camchain written at the end; empty = none
-  bool json = false;     // the result as JSON (rigcal solve --json schema) on stdout
+  std::string command;    // "calib" or "replay": names the command in messages
+  std::string config;     // rig config YAML
+  std::string camchain;   // Kalibr-style camchain written at the end; empty = none
+  bool json = false;      // the result as JSON (rigcal solve --json schema) on stdout
   bool progress = false;  // replay: a progress bar on a TTY, progress lines otherwise (stderr)
 };
 

@@ -369,8 +369,7 @@ void RegisterRun(CLI::App& app, int* exit_code) {
       "The live pipeline: capture from the configured source, monocular VO per camera, pose\n"
       "matching and the recursive rig estimator; a status line per second, LCM publishing with\n"
       "--lcm, the result YAML on exit. Exit 3 when no slave could be calibrated.");
-  cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")
-      ->required();
+  cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")->required();
   cmd->add_option("--lcm", args->lcm_url,
                   "Publish RIGCAL_POSE_<camera>, RIGCAL_EXTRINSICS and RIGCAL_STATUS on this LCM "
                   "URL (default: no LCM)");

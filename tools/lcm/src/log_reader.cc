@@ -91,8 +91,7 @@ LogReader::Outcome LogReader::Read(LogEvent* event, bool with_data) {
   }
   event->channel.resize(static_cast<size_t>(channel_len));
   event->data.resize(with_data ? static_cast<size_t>(data_len) : 0);
-  if (std::fread(event->channel.data(), 1, event->channel.size(), file_) !=
-      event->channel.size()) {
+  if (std::fread(event->channel.data(), 1, event->channel.size(), file_) != event->channel.size()) {
     return Damaged(start, "read failed inside the event");
   }
   if (with_data ? std::fread(event->data.data(), 1, event->data.size(), file_) != event->data.size()

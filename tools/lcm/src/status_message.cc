@@ -72,7 +72,8 @@ double StampRate::Update(int64_t count_now, int64_t newest_t_ns, int64_t start_n
   const int64_t since = t_ns >= 0 ? t_ns : start_ns;
   double rate = 0.0;
   if (since >= 0 && newest_t_ns > since) {
-    rate = static_cast<double>(count_now - count) / (static_cast<double>(newest_t_ns - since) * 1e-9);
+    rate =
+        static_cast<double>(count_now - count) / (static_cast<double>(newest_t_ns - since) * 1e-9);
   }
   count = count_now;
   if (newest_t_ns >= 0) t_ns = newest_t_ns;

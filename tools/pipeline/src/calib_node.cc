@@ -33,9 +33,7 @@ void OnPoseMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel, C
   node->HandlePose(channel, rbuf->data, rbuf->data_size);
 }
 
-int64_t PeriodNs(double rate_hz) {
-  return rate_hz > 0.0 ? static_cast<int64_t>(1e9 / rate_hz) : 0;
-}
+int64_t PeriodNs(double rate_hz) { return rate_hz > 0.0 ? static_cast<int64_t>(1e9 / rate_hz) : 0; }
 
 }  // namespace
 
@@ -214,10 +212,10 @@ std::vector<CameraStatusInput> CalibNode::Impl::CameraInputs() {
 }
 
 void CalibNode::Impl::PublishStatus(const RigEstimate& estimate, int64_t utime) {
-  const rig_status_t msg = MakeRigStatus(
-      CameraInputs(), calibrator.sync_stats(),
-      config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate, cpu.Sample(),
-      utime);
+  const rig_status_t msg =
+      MakeRigStatus(CameraInputs(), calibrator.sync_stats(),
+                    config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
+                    cpu.Sample(), utime);
   Publish(kStatusChannel, msg, &summary.status_published);
 }
 
@@ -366,7 +364,8 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
     int job = 0;
     int64_t deadline = 0;
     while (m.schedule.NextDue(now, &job, &deadline)) m.RunJob(job, now / 1000);
-    if (m.options.duration_s > 0 && static_cast<double>(now - start) * 1e-9 >= m.options.duration_s) {
+    if (m.options.duration_s > 0 &&
+        static_cast<double>(now - start) * 1e-9 >= m.options.duration_s) {
       break;
     }
   }

@@ -136,7 +136,8 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
   LogEvent event;
   int64_t window_start = -1;  // first stamp of the log: the origin of --from / --to
   const auto from_ns = static_cast<int64_t>(std::llround(replay.from_s * 1e9));
-  const int64_t to_ns = replay.to_s < 0.0 ? -1 : static_cast<int64_t>(std::llround(replay.to_s * 1e9));
+  const int64_t to_ns =
+      replay.to_s < 0.0 ? -1 : static_cast<int64_t>(std::llround(replay.to_s * 1e9));
   Clock::time_point next_progress = Clock::now();
   const auto progress_period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(options.progress_every_s));
@@ -176,7 +177,8 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
       }
       auto image = validator.Decode<image_t>(event.channel, event.data.data(),
                                              static_cast<int64_t>(event.data.size()));
-      auto decoded = image ? FrameFromImage(*image, camera) : Expected<drivers::Frame>(image.status());
+      auto decoded =
+          image ? FrameFromImage(*image, camera) : Expected<drivers::Frame>(image.status());
       if (!decoded) {
         ++summary.cameras[camera].invalid;
         images_invalid[camera].fetch_add(1);
@@ -205,16 +207,16 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
     const int64_t since_ns = t_ns - window_start;
     if (since_ns < from_ns) continue;
     if (to_ns >= 0 && since_ns > to_ns) break;
-    summary.log_span_s = std::max(summary.log_span_s, static_cast<double>(since_ns - from_ns) * 1e-9);
+    summary.log_span_s =
+        std::max(summary.log_span_s, static_cast<double>(since_ns - from_ns) * 1e-9);
     if (replay.speed > 0.0) {
       if (pace_stamp_start < 0) {
         pace_stamp_start = t_ns;
         pace_wall_start = Clock::now();
       }
-      const auto due = pace_wall_start + std::chrono::duration_cast<Clock::duration>(
-                                             std::chrono::duration<double>(
-                                                 static_cast<double>(t_ns - pace_stamp_start) *
-                                                 1e-9 / replay.speed));
+      const auto due = pace_wall_start +
+                       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                           static_cast<double>(t_ns - pace_stamp_start) * 1e-9 / replay.speed));
       while (!stop.load() && Clock::now() < due) {
         std::this_thread::sleep_for(
             std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(100)));

@@ -8,8 +8,8 @@
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/pose_merge.h"
 #include "rigcal/calib/robust_statistics.h"
-#include "rigcal/lcm/channels.h"
 #include "rigcal/camera_status_t.hpp"
+#include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
 
 namespace rigcal::tools {

@@ -129,7 +129,7 @@ struct SyncCameraStats {
   // Entries of this camera that were members of an emitted set (counted in `used`) and were
   // lost with it when the full ready queue dropped it (SyncStats::consumer_overflow).
   uint64_t consumer_overflow = 0;
-  uint64_t fill = 0;              // entries buffered now (<= capacity)
+  uint64_t fill = 0;  // entries buffered now (<= capacity)
 
   uint64_t Dropped() const {
     return stopped + invalid + late + duplicate + out_of_order + overflow + never_matched;

@@ -61,8 +61,8 @@ struct ReplayOptions {
 
 // Where a replay stands; handed to CalibNodeOptions::on_progress.
 struct ReplayProgress {
-  int64_t bytes_read = 0;  // of the log
-  int64_t log_bytes = 0;   // the log's size
+  int64_t bytes_read = 0;   // of the log
+  int64_t log_bytes = 0;    // the log's size
   double log_time_s = 0.0;  // log time since the first message stamp
   uint64_t sets = 0;        // sets the estimator has received
   bool done = false;        // the last call, after the result
@@ -98,7 +98,7 @@ struct CameraInputStats {
   int64_t received = 0;  // poses accepted by the decoder (image replay: poses from the VO)
   int64_t invalid = 0;   // messages on the camera's channel rejected by validation
   int64_t last_t_ns = -1;
-  int64_t images = 0;        // image replay: frames handed to the camera's VO
+  int64_t images = 0;         // image replay: frames handed to the camera's VO
   int64_t sync_rejected = 0;  // poses the sync buffer refused (late, out of order, ...)
 };
 
