@@ -3,41 +3,26 @@
 // and the exit codes agree: 0 every slave usable, 3 nothing calibrated (with the reason), 1 bad
 // input (a missing config), 2 usage (an unknown subcommand, named). `rigcal --version` exists.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "cli/command_test.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
+using rigcal::cli_test::RunResult;
+using rigcal::cli_test::Slurp;
 
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-class ReplayCommandTest : public ::testing::Test {
+// A 2-camera rig config and an 800-set synthetic pose log of it (rigcal synth-log).
+class ReplayCommandTest : public rigcal::cli_test::CommandTest {
  protected:
   void SetUp() override {
-#ifndef RIGCAL_BINARY
-    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
-#else
-    binary_ = RIGCAL_BINARY;
-#endif
-    std::string pattern = (fs::path(::testing::TempDir()) / "replay_command_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
+    CommandTest::SetUp();
+    if (HasFatalFailure()) return;
     std::ofstream(Path("rig.yaml"))
         << "rig: {name: test, master: front}\n"
            "cameras:\n"
@@ -49,27 +34,6 @@ class ReplayCommandTest : public ::testing::Test {
                                 Path("poses.lcmlog") + " --frames 800");
     ASSERT_EQ(synth.exit_code, 0) << synth.err;
   }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-
-  RunResult Run(const std::string& args) {
-    const std::string out = (dir_ / "stdout.txt").string();
-    const std::string err = (dir_ / "stderr.txt").string();
-    const std::string command = "'" + binary_ + "' " + args + " > '" + out + "' 2> '" + err + "'";
-    RunResult r;
-    const int status = std::system(command.c_str());
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = Slurp(out);
-    r.err = Slurp(err);
-    return r;
-  }
-
-  std::string binary_;
-  fs::path dir_;
 };
 
 TEST_F(ReplayCommandTest, SameLogSameResultAsCalibLog) {

@@ -1,7 +1,7 @@
 // A recorded live session replays to the result the live run gave: a lossless live pipeline on
-// a simulated rig (rendered images -> VO -> sync -> estimator) records its poses on a file://
-// bus; the rig's images are written as an image log. Replaying the image log (through VO again)
-// and replaying the pose recording both give the live result bit for bit.
+// the simulated room rig (room_rig.h) (rendered images -> VO -> sync -> estimator) records its
+// poses on a file:// bus; the rig's images are written as an image log. Replaying the image log
+// (through VO again) and replaying the pose recording both give the live result bit for bit.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -12,6 +12,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
+#include "pipeline/room_rig.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
@@ -26,44 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-camera::CameraSpec PinholeSpec(const std::string& name) {
-  camera::CameraSpec spec;
-  spec.name = name;
-  spec.model = camera::CameraSpec::Model::kPinhole;
-  spec.width = 480;
-  spec.height = 320;
-  spec.intrinsics = {300.0, 300.0, 240.0, 160.0};
-  return spec;
-}
-
-// A 2-camera rig in the default room, turning about varied axes for 8 s at 20 Hz.
-drivers::SimulatedRigSpec Spec() {
-  drivers::SimulatedRigSpec spec;
-  spec.names = {"front", "side"};
-  for (const std::string& name : spec.names) {
-    auto model = camera::MakeCameraModel(PinholeSpec(name));
-    EXPECT_TRUE(model) << model.error();
-    spec.cameras.emplace_back(std::move(*model));
-  }
-  Pose side;
-  side.q = AxisAngle(Eigen::Vector3d::UnitY(), 70.0 * kRadPerDeg);
-  side.C = Eigen::Vector3d(0.4, 0.0, -0.2);
-  spec.master_from_camera = {Pose(), side};
-  spec.frame_rate_hz = 20.0;
-  spec.duration_s = 8.0;
-  spec.noise_sigma = 1.0;
-  spec.waypoint_interval_s = 2.0;
-  const double ypr[][3] = {{0, 0, 0}, {25, 8, 5}, {50, -6, -8}, {20, 12, 10}, {-15, -10, 0}};
-  const double p[][3] = {{-2, 0, 2.5}, {-1, 1, 2.8}, {0, 1.5, 2.2}, {1, 0.5, 2.6}, {1.5, -1, 2.9}};
-  for (int i = 0; i < 5; ++i) {
-    drivers::SimulatedRigSpec::Waypoint w;
-    w.position = Eigen::Vector3d(p[i][0], p[i][1], p[i][2]);
-    w.world_from_master = drivers::WaypointOrientationFromYpr(ypr[i][0], ypr[i][1], ypr[i][2]);
-    spec.waypoints.push_back(w);
-  }
-  return spec;
-}
-
 RigConfig Config(const drivers::SimulatedRigSpec& spec) {
   RigConfig config;
   config.path = "test-config";
@@ -71,7 +34,7 @@ RigConfig Config(const drivers::SimulatedRigSpec& spec) {
   for (const std::string& name : spec.names) {
     CameraConfig camera;
     camera.name = name;
-    camera.spec = PinholeSpec(name);
+    camera.spec = RoomRigCameraSpec(name);
     config.cameras.push_back(camera);
   }
   config.online.refine_period_s = 0.5;  // several refinements on stream time
@@ -143,7 +106,7 @@ TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
   const fs::path dir =
       fs::temp_directory_path() / ("rigcal_image_replay_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const drivers::SimulatedRigSpec spec = Spec();
+  const drivers::SimulatedRigSpec spec = RoomRigSpec(8.0);
   auto rig = drivers::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   const RigConfig config = Config(spec);
