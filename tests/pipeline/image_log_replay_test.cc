@@ -123,13 +123,7 @@ TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
     options.lossless = true;
     Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, config.online, options,
                       &recorder);
-    pipeline.Start();
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-    while (!pipeline.Finished() && std::chrono::steady_clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    ASSERT_TRUE(pipeline.Finished());
-    pipeline.Stop();
+    ASSERT_TRUE(RunToEnd(&pipeline));
     live = pipeline.Snapshot();
   }
   ASSERT_EQ(live.sync.consumer_overflow, 0u) << live.sync.BriefReport();  // dropped nothing

@@ -35,13 +35,7 @@ TEST(Pipeline, SimulatedDriveConverges) {
   options.lossless = true;
   options.record_poses = true;
   Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, Online(), options);
-  pipeline.Start();
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-  while (!pipeline.Finished() && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ASSERT_TRUE(pipeline.Finished());
-  pipeline.Stop();
+  ASSERT_TRUE(RunToEnd(&pipeline));
   const PipelineSnapshot s = pipeline.Snapshot();
   for (const CameraHealth& h : s.cameras) {
     EXPECT_TRUE(h.ended) << h.name;
@@ -72,13 +66,7 @@ TEST(Pipeline, DeadCameraLeavesOthersCalibrating) {
   PipelineOptions options;
   options.lossless = true;
   Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, Online(), options);
-  pipeline.Start();
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-  while (!pipeline.Finished() && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ASSERT_TRUE(pipeline.Finished());
-  pipeline.Stop();
+  ASSERT_TRUE(RunToEnd(&pipeline));
   const PipelineSnapshot s = pipeline.Snapshot();
   const CameraHealth& up = s.cameras[2];
   EXPECT_TRUE(up.dead);
@@ -103,13 +91,7 @@ TEST(Pipeline, LosslessRunsAreDeterministic) {
     options.lossless = true;
     options.frame_queue_capacity = run == 0 ? 1 : 16;  // different thread interleavings
     Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, Online(), options);
-    pipeline.Start();
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-    while (!pipeline.Finished() && std::chrono::steady_clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    ASSERT_TRUE(pipeline.Finished());
-    pipeline.Stop();
+    ASSERT_TRUE(RunToEnd(&pipeline));
     runs.push_back(pipeline.Snapshot());
   }
   ASSERT_EQ(runs[0].estimate.sets, runs[1].estimate.sets);

@@ -1,13 +1,16 @@
 #pragma once
 // The simulated rig of the pipeline tests: three 480x320 pinhole cameras (front, side, up) in the
-// default room, moving and rotating about varied axes.
+// default room, moving and rotating about varied axes; and a run of a pipeline to its end.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <string>
+#include <thread>
 
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/pipeline/pipeline.h"
 
 namespace rigcal::tools {
 
@@ -56,6 +59,19 @@ inline drivers::SimulatedRigSpec RoomRigSpec(double seconds) {
     spec.waypoints.push_back(w);
   }
   return spec;
+}
+
+// Starts `pipeline`, waits (at most 5 minutes) until every camera's stream has been processed,
+// stops it; false when it did not finish in time.
+inline bool RunToEnd(Pipeline* pipeline) {
+  pipeline->Start();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+  while (!pipeline->Finished() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const bool finished = pipeline->Finished();
+  pipeline->Stop();
+  return finished;
 }
 
 }  // namespace rigcal::tools
