@@ -41,41 +41,6 @@ RigConfig Config(const drivers::SimulatedRigSpec& spec) {
   return config;
 }
 
-// Every frame of the rig as an image log, in stamp order (master first at equal stamps).
-void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<std::string>& names,
-                   const std::string& path) {
-  std::vector<drivers::Frame> frames;
-  auto devices = rig.MakeDevices();
-  for (size_t i = 0; i < devices.size(); ++i) {
-    while (true) {
-      auto grabbed = devices[i]->Grab();
-      ASSERT_TRUE(grabbed) << grabbed.error();
-      if (!grabbed->has_value()) break;
-      frames.push_back(std::move(**grabbed));
-      frames.back().camera = static_cast<int>(i);
-    }
-  }
-  std::stable_sort(frames.begin(), frames.end(), [](const auto& a, const auto& b) {
-    return a.t_ns != b.t_ns ? a.t_ns < b.t_ns : a.camera < b.camera;
-  });
-  lcm::LogFile log(path, "w");
-  ASSERT_TRUE(log.good());
-  int64_t n = 0;
-  for (const drivers::Frame& frame : frames) {
-    const std::string& name = names[static_cast<size_t>(frame.camera)];
-    const std::string channel = ImageChannel(name);
-    auto bytes = EncodeMessage(channel, names, ImageOfFrame(frame, name));
-    ASSERT_TRUE(bytes) << bytes.error();
-    lcm::LogEvent event;
-    event.eventnum = n++;
-    event.timestamp = frame.t_ns / 1000;
-    event.channel = channel;
-    event.datalen = static_cast<int32_t>(bytes->size());
-    event.data = bytes->data();
-    ASSERT_EQ(log.writeEvent(&event), 0);
-  }
-}
-
 CalibNodeSummary ReplayLog(const RigConfig& config, const std::string& path, bool poses_only) {
   CalibNodeOptions options;
   options.log_path = path;

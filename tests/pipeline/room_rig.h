@@ -1,15 +1,21 @@
 #pragma once
 // The simulated rig of the pipeline tests: three 480x320 pinhole cameras (front, side, up) in the
-// default room, moving and rotating about varied axes; and a run of a pipeline to its end.
+// default room, moving and rotating about varied axes; a run of a pipeline to its end; a rig's
+// images as an LCM log.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
 
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/image_message.h"
+#include "rigcal/pipeline/image_frames.h"
 #include "rigcal/pipeline/pipeline.h"
 
 namespace rigcal::tools {
@@ -72,6 +78,41 @@ inline bool RunToEnd(Pipeline* pipeline) {
   const bool finished = pipeline->Finished();
   pipeline->Stop();
   return finished;
+}
+
+// Every frame of the rig as an image log, in stamp order (master first at equal stamps).
+inline void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<std::string>& names,
+                          const std::string& path) {
+  std::vector<drivers::Frame> frames;
+  auto devices = rig.MakeDevices();
+  for (size_t i = 0; i < devices.size(); ++i) {
+    while (true) {
+      auto grabbed = devices[i]->Grab();
+      ASSERT_TRUE(grabbed) << grabbed.error();
+      if (!grabbed->has_value()) break;
+      frames.push_back(std::move(**grabbed));
+      frames.back().camera = static_cast<int>(i);
+    }
+  }
+  std::stable_sort(frames.begin(), frames.end(), [](const auto& a, const auto& b) {
+    return a.t_ns != b.t_ns ? a.t_ns < b.t_ns : a.camera < b.camera;
+  });
+  lcm::LogFile log(path, "w");
+  ASSERT_TRUE(log.good());
+  int64_t n = 0;
+  for (const drivers::Frame& frame : frames) {
+    const std::string& name = names[static_cast<size_t>(frame.camera)];
+    const std::string channel = ImageChannel(name);
+    auto bytes = EncodeMessage(channel, names, ImageOfFrame(frame, name));
+    ASSERT_TRUE(bytes) << bytes.error();
+    lcm::LogEvent event;
+    event.eventnum = n++;
+    event.timestamp = frame.t_ns / 1000;
+    event.channel = channel;
+    event.datalen = static_cast<int32_t>(bytes->size());
+    event.data = bytes->data();
+    ASSERT_EQ(log.writeEvent(&event), 0);
+  }
 }
 
 }  // namespace rigcal::tools
