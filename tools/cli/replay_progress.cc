@@ -36,10 +36,13 @@ void ReplayProgressDisplay::Update(const tools::ReplayProgress& p) {
   const double fraction =
       p.log_bytes > 0 ? std::clamp(static_cast<double>(p.bytes_read) / p.log_bytes, 0.0, 1.0) : 1.0;
   const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
-  const std::string eta = p.done ? "done"
-                          : fraction > 0.0
-                              ? "ETA " + ClockText(elapsed * (1.0 - fraction) / fraction)
-                              : "ETA ?";
+  // Too early to extrapolate below 1 % or within the first second.
+  std::string eta = "ETA ?";
+  if (p.done) {
+    eta = "done";
+  } else if (fraction >= 0.01 && elapsed >= 1.0) {
+    eta = "ETA " + ClockText(elapsed * (1.0 - fraction) / fraction);
+  }
   char figures[160];
   std::snprintf(figures, sizeof(figures), "%3.0f%% %.1f/%.1f MB  log %s  %llu sets  %s  %s",
                 100.0 * fraction, p.bytes_read / 1e6, p.log_bytes / 1e6,
