@@ -28,8 +28,7 @@ void RegisterCalib(CLI::App& app, int* exit_code) {
       "publishes RIGCAL_EXTRINSICS and RIGCAL_STATUS. Writes the result YAML on exit (Ctrl-C,\n"
       "SIGTERM, --duration or the end of a replayed --log; --log replays as `rigcal replay`\n"
       "does). Exit 0 every slave usable, 3 some slave not (or nothing received), 1 bad input.");
-  cmd->add_option("--config", args->run.config, "Rig config YAML (see config/README.md)")
-      ->required();
+  AddNodeOptions(cmd, &args->run, &args->node);
   cmd->add_option("--lcm", args->node.lcm_url,
                   "LCM URL to listen and publish on (default: LCM's default udpm URL)");
   cmd->add_option("--log", args->node.log_path,
@@ -39,16 +38,6 @@ void RegisterCalib(CLI::App& app, int* exit_code) {
   cmd->add_option("--publish-lcm", args->node.publish_url,
                   "With --log: LCM URL to publish on (e.g. file:///tmp/out.log?mode=w); default "
                   "none");
-  cmd->add_option("--out", args->node.result_path, "Result YAML written on exit (atomically)")
-      ->default_val("rigcal_result.yaml");
-  cmd->add_option("--camchain", args->run.camchain,
-                  "Also write a Kalibr-style camchain YAML (as rigcal solve --camchain)");
-  cmd->add_option("--state", args->node.state_path,
-                  "Estimator state file (overrides state.path of the config); saved atomically "
-                  "every state.save_interval_s and on stop");
-  cmd->add_flag("--resume", args->node.resume,
-                "Continue from the state file; a missing, corrupt or foreign one is reported and "
-                "ignored");
   cmd->add_option("--duration", args->node.duration_s,
                   "Stop after this many seconds (0 = never; live input)")
       ->check(CLI::NonNegativeNumber);
@@ -56,8 +45,6 @@ void RegisterCalib(CLI::App& app, int* exit_code) {
                   "Seconds between status lines on stderr (log time with --log; 0 = none)")
       ->check(CLI::NonNegativeNumber)
       ->default_val(10.0);
-  cmd->add_flag("--json", args->run.json,
-                "Print the final result as JSON (rigcal solve --json schema)");
   cmd->callback([args, exit_code]() { *exit_code = RunCalibNode(args->run, args->node); });
 }
 

@@ -54,6 +54,24 @@ std::string NoSetsMessage(const tools::CalibNodeOptions& options,
 
 }  // namespace
 
+void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, tools::CalibNodeOptions* node) {
+  cmd->add_option("--config", run->config,
+                  "Rig config YAML (see config/README.md; camera models for image logs)")
+      ->required();
+  cmd->add_option("--out", node->result_path, "Result YAML written at the end (atomically)")
+      ->default_val("rigcal_result.yaml");
+  cmd->add_option("--camchain", run->camchain,
+                  "Also write a Kalibr-style camchain YAML (as rigcal solve --camchain)");
+  cmd->add_flag("--json", run->json,
+                "Print the final result as JSON on stdout (rigcal solve --json schema)");
+  cmd->add_option("--state", node->state_path,
+                  "Estimator state file (overrides state.path of the config); saved atomically "
+                  "every state.save_interval_s (of log time in a replay) and at the end");
+  cmd->add_flag("--resume", node->resume,
+                "Continue from the state file; a missing, corrupt or foreign one is reported and "
+                "ignored");
+}
+
 int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
   auto log = ModuleLogger("tools");
   const std::string prefix = "rigcal " + args.command + ": ";

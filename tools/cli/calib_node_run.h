@@ -3,6 +3,7 @@
 // ends (Ctrl-C / SIGTERM stop it cleanly), show the progress of a replay, print and write the
 // result, and map it to the exit code (0 every slave usable, 3 some slave not, 1 bad input).
 
+#include <CLI/CLI.hpp>
 #include <string>
 
 #include "rigcal/pipeline/calib_node.h"
@@ -16,6 +17,9 @@ struct NodeRunArgs {
   bool json = false;      // the result as JSON (rigcal solve --json schema) on stdout
   bool progress = false;  // replay: a progress bar on a TTY, progress lines otherwise (stderr)
 };
+
+// The options calib and replay share: --config, --out, --camchain, --json, --state, --resume.
+void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, tools::CalibNodeOptions* node);
 
 // Runs the node; returns the process exit code.
 int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options);

@@ -33,9 +33,7 @@ void RegisterReplay(CLI::App& app, int* exit_code) {
       "Exit 0 every slave usable, 3 some slave not (or nothing in the log for the config's\n"
       "cameras), 1 bad input, 2 usage.");
   cmd->add_option("log", args->node.log_path, "The LCM log file")->required();
-  cmd->add_option("--config", args->run.config,
-                  "Rig config YAML (cameras, sync, publish rates; camera models for images)")
-      ->required();
+  AddNodeOptions(cmd, &args->run, &args->node);
   cmd->add_option("--speed", args->node.replay.speed,
                   "Pace by log time at this multiple of real time (default: as fast as possible)")
       ->check(CLI::PositiveNumber);
@@ -49,20 +47,10 @@ void RegisterReplay(CLI::App& app, int* exit_code) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--poses-only", args->node.replay.poses_only,
                 "Replay the pose channels even when the log has images");
-  cmd->add_option("--out", args->node.result_path, "Result YAML written at the end (atomically)")
-      ->default_val("rigcal_result.yaml");
-  cmd->add_option("--camchain", args->run.camchain,
-                  "Also write a Kalibr-style camchain YAML (as rigcal solve --camchain)");
-  cmd->add_flag("--json", args->run.json,
-                "Print the final result as JSON on stdout (rigcal solve --json schema)");
   cmd->add_option("--publish-lcm", args->node.publish_url,
                   "Publish RIGCAL_EXTRINSICS and RIGCAL_STATUS (utime = log time; and the VO's "
                   "RIGCAL_POSE_<camera> of an image log) on this LCM URL, e.g. "
                   "file:///tmp/out.lcmlog?mode=w");
-  cmd->add_option("--state", args->node.state_path,
-                  "Estimator state file (overrides state.path of the config); saved every "
-                  "state.save_interval_s of log time and at the end");
-  cmd->add_flag("--resume", args->node.resume, "Start from the state file");
   cmd->add_option("--report-every", args->node.report_every_s,
                   "Seconds of log time between status lines on stderr (0 = none)")
       ->check(CLI::NonNegativeNumber)
