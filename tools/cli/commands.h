@@ -12,5 +12,7 @@ void RegisterDemo(CLI::App& app, int* exit_code);
 void RegisterCalib(CLI::App& app, int* exit_code);
 void RegisterSynthLog(CLI::App& app, int* exit_code);
 void RegisterRun(CLI::App& app, int* exit_code);
+void RegisterRecord(CLI::App& app, int* exit_code);
+void RegisterImport(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   rigcal::cli::RegisterCalib(app, &exit_code);
   rigcal::cli::RegisterSynthLog(app, &exit_code);
   rigcal::cli::RegisterDemo(app, &exit_code);
+  rigcal::cli::RegisterRecord(app, &exit_code);
+  rigcal::cli::RegisterImport(app, &exit_code);
 
   try {
     app.parse(argc, argv);
