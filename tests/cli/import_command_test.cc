@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -19,6 +18,8 @@
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "support/command_runner.h"
+#include "support/lcm_log_events.h"
+#include "support/rigcal_command_test.h"
 
 namespace rigcal {
 namespace {
@@ -26,25 +27,9 @@ namespace {
 namespace fs = std::filesystem;
 using support::ShellQuote;
 
-struct LogEvent {
-  std::string channel;
-  int64_t timestamp = 0;
-  std::vector<uint8_t> data;
-};
-
-std::vector<LogEvent> ReadEvents(const std::string& path) {
-  std::vector<LogEvent> events;
-  lcm::LogFile log(path, "r");
-  EXPECT_TRUE(log.good()) << path;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    const auto* data = static_cast<const uint8_t*>(e->data);
-    events.push_back({e->channel, e->timestamp, std::vector<uint8_t>(data, data + e->datalen)});
-  }
-  return events;
-}
-
 // One camera's track as a EuRoC CSV file (t_ns,p,q_wxyz).
-void WriteEurocCsv(const fs::path& path, const std::vector<int64_t>& t_ns, const CameraTrack& track) {
+void WriteEurocCsv(const fs::path& path, const std::vector<int64_t>& t_ns,
+                   const CameraTrack& track) {
   fs::create_directories(path.parent_path());
   std::ofstream out(path);
   out << "#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z\n";
@@ -58,27 +43,8 @@ void WriteEurocCsv(const fs::path& path, const std::vector<int64_t>& t_ns, const
   }
 }
 
-class ImportCommandTest : public ::testing::Test {
+class ImportCommandTest : public support::RigcalCommandTest {
  protected:
-  void SetUp() override {
-#ifndef RIGCAL_BINARY
-    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
-#else
-    binary_ = RIGCAL_BINARY;
-#endif
-    std::string pattern = (fs::path(::testing::TempDir()) / "import_command_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-  support::CommandResult Rigcal(const std::string& args) {
-    return support::RunShell(ShellQuote(binary_) + " " + args, dir_);
-  }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-
   // A simulated drive of a 2-camera rig as EuRoC CSV files mav0/cam0/data.csv, mav0/cam1/...
   SyntheticDrive WriteDriveCsv() {
     DriveOptions drive;
@@ -92,9 +58,6 @@ class ImportCommandTest : public ::testing::Test {
     WriteEurocCsv(dir_ / "mav0/cam1/data.csv", sim.recording.t_ns, sim.recording.slaves[0]);
     return sim;
   }
-
-  std::string binary_;
-  fs::path dir_;
 };
 
 TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
@@ -102,8 +65,8 @@ TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
   const std::string cam0 = Path("mav0/cam0/data.csv");
   const std::string cam1 = Path("mav0/cam1/data.csv");
   // Both files are "data": without names the cameras collide.
-  const auto unnamed = Rigcal("import tum " + ShellQuote(cam0) + " " + ShellQuote(cam1) +
-                              " -o " + ShellQuote(Path("poses.lcmlog")));
+  const auto unnamed = Rigcal("import tum " + ShellQuote(cam0) + " " + ShellQuote(cam1) + " -o " +
+                              ShellQuote(Path("poses.lcmlog")));
   EXPECT_EQ(unnamed.exit_code, 1);
   EXPECT_NE(unnamed.err.find("a second camera named 'data' (name them with NAME=FILE)"),
             std::string::npos)
@@ -114,7 +77,7 @@ TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
                         " -o " + ShellQuote(Path("poses.lcmlog")));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("imported 1200 poses of 2 cameras"), std::string::npos) << r.out;
-  const std::vector<LogEvent> events = ReadEvents(Path("poses.lcmlog"));
+  const std::vector<support::LoggedEvent> events = support::ReadLcmLog(Path("poses.lcmlog"));
   ASSERT_EQ(events.size(), 1200u);
   EXPECT_EQ(events[0].channel, "RIGCAL_POSE_front");
   EXPECT_EQ(events[1].channel, "RIGCAL_POSE_side");
@@ -125,9 +88,9 @@ TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
   ASSERT_TRUE(config.ok()) << config.error();
   EXPECT_EQ(config->CameraNames(), (std::vector<std::string>{"front", "side"}));
 
-  const auto replay = Rigcal("calib --config " + ShellQuote(Path("poses.lcmlog.yaml")) +
-                             " --log " + ShellQuote(Path("poses.lcmlog")) + " --json --out " +
-                             ShellQuote(Path("result.yaml")));
+  const auto replay =
+      Rigcal("calib --config " + ShellQuote(Path("poses.lcmlog.yaml")) + " --log " +
+             ShellQuote(Path("poses.lcmlog")) + " --json --out " + ShellQuote(Path("result.yaml")));
   EXPECT_TRUE(replay.exit_code == 0 || replay.exit_code == 3) << replay.err;
   EXPECT_NE(replay.err.find("decoder: accepted 1200, rejected 0; unknown cameras: 0"),
             std::string::npos)
@@ -153,8 +116,8 @@ TEST_F(ImportCommandTest, SolveTakesNamedTrajectoryFiles) {
       Rigcal("solve --master " + ShellQuote(cam0) + " --slave " + ShellQuote(cam1));
   EXPECT_EQ(unnamed.exit_code, 1);
   EXPECT_NE(unnamed.err.find("two cameras are named 'data'"), std::string::npos) << unnamed.err;
-  const auto r = Rigcal("solve --master cam0=" + ShellQuote(cam0) + " --slave cam1=" +
-                        ShellQuote(cam1) + " --json");
+  const auto r = Rigcal("solve --master cam0=" + ShellQuote(cam0) +
+                        " --slave cam1=" + ShellQuote(cam1) + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto json = nlohmann::json::parse(r.out, nullptr, /*allow_exceptions=*/false);
   ASSERT_FALSE(json.is_discarded()) << r.out;
@@ -211,19 +174,19 @@ TEST_F(ImportCommandTest, EurocImagesInTimeOrder) {
                   EurocImage(camera, k));
     }
   }
-  const auto r = Rigcal("import euroc " + ShellQuote((dir_ / "rec").string()) + " -o " +
-                        ShellQuote(Path("images.lcmlog")) + " --config-out " +
-                        ShellQuote(Path("rig.yaml")));
+  const auto r =
+      Rigcal("import euroc " + ShellQuote((dir_ / "rec").string()) + " -o " +
+             ShellQuote(Path("images.lcmlog")) + " --config-out " + ShellQuote(Path("rig.yaml")));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("camera 'cam1': 1 listed images missing or unreadable"), std::string::npos)
       << r.err;
   EXPECT_NE(r.out.find("5 frames of cam0, 4 frames of cam1"), std::string::npos) << r.out;
 
-  const std::vector<LogEvent> events = ReadEvents(Path("images.lcmlog"));
+  const std::vector<support::LoggedEvent> events = support::ReadLcmLog(Path("images.lcmlog"));
   ASSERT_EQ(events.size(), 9u);
   tools::MessageValidator validator({"cam0", "cam1"});
   int64_t last_t_ns = 0;
-  for (const LogEvent& e : events) {
+  for (const support::LoggedEvent& e : events) {
     auto msg = validator.Decode<image_t>(e.channel, e.data.data(), e.data.size());
     ASSERT_TRUE(msg.ok()) << msg.error();
     EXPECT_EQ(e.channel, "RIGCAL_IMAGE_" + msg->camera);

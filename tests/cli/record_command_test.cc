@@ -6,14 +6,16 @@
 
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "rigcal/lcm/image_message.h"
+#include "rigcal/lcm/log_writer.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "support/command_runner.h"
+#include "support/lcm_log_events.h"
+#include "support/rigcal_command_test.h"
 #include "support/simulated_rig_config.h"
 
 namespace rigcal {
@@ -30,13 +32,11 @@ struct LogSummary {
 
 LogSummary ReadLog(const std::string& path) {
   LogSummary summary;
-  lcm::LogFile log(path, "r");
-  EXPECT_TRUE(log.good()) << path;
   tools::MessageValidator validator;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    ++summary.events[e->channel];
-    if (e->channel.rfind("RIGCAL_IMAGE_", 0) != 0) continue;
-    auto image = validator.Decode<image_t>(e->channel, e->data, e->datalen);
+  for (const support::LoggedEvent& e : support::ReadLcmLog(path)) {
+    ++summary.events[e.channel];
+    if (e.channel.rfind("RIGCAL_IMAGE_", 0) != 0) continue;
+    auto image = validator.Decode<image_t>(e.channel, e.data.data(), e.data.size());
     if (image) {
       summary.images.push_back(*image);
     } else {
@@ -46,33 +46,13 @@ LogSummary ReadLog(const std::string& path) {
   return summary;
 }
 
-class RecordCommandTest : public ::testing::Test {
+class RecordCommandTest : public support::RigcalCommandTest {
  protected:
-  void SetUp() override {
-#ifndef RIGCAL_BINARY
-    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
-#else
-    binary_ = RIGCAL_BINARY;
-#endif
-    std::string pattern = (fs::path(::testing::TempDir()) / "record_command_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
   std::string WriteConfig(int width, int height, int frames) {
     const std::string path = (dir_ / "rig.yaml").string();
     std::ofstream(path) << support::SimulatedRigConfig(width, height, frames);
     return path;
   }
-  support::CommandResult Rigcal(const std::string& args) {
-    return support::RunShell(ShellQuote(binary_) + " " + args, dir_);
-  }
-
-  std::string binary_;
-  fs::path dir_;
 };
 
 TEST_F(RecordCommandTest, RecordsEveryFrameWithProgress) {
@@ -125,9 +105,7 @@ TEST_F(RecordCommandTest, SplitsBySize) {
   int frames = 0;
   int parts = 0;
   for (;; ++parts) {
-    char suffix[8];
-    std::snprintf(suffix, sizeof(suffix), ".%02d", parts);
-    const std::string part = log + suffix;
+    const std::string part = tools::LogPartPath(log, parts);
     if (!fs::exists(part)) break;
     EXPECT_LE(fs::file_size(part), 100'000u) << part;
     const LogSummary summary = ReadLog(part);
@@ -163,9 +141,8 @@ TEST_F(RecordCommandTest, RecordsVoPosesAndSurvivesACut) {
   for (const auto& [channel, n] : cut.events) cut_total += n;
   EXPECT_EQ(cut_total, total - 1);
   // The poses replay: the node reads up to the cut and says where the log is damaged.
-  const auto replay = Rigcal("calib --config " + ShellQuote(config) + " --log " +
-                             ShellQuote(log) + " --out " +
-                             ShellQuote((dir_ / "result.yaml").string()));
+  const auto replay = Rigcal("calib --config " + ShellQuote(config) + " --log " + ShellQuote(log) +
+                             " --out " + ShellQuote((dir_ / "result.yaml").string()));
   EXPECT_NE(replay.exit_code, 1) << replay.err;
   EXPECT_NE(replay.err.find("truncated or corrupt event after byte"), std::string::npos)
       << replay.err;

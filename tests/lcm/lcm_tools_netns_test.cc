@@ -8,12 +8,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "support/command_runner.h"
+#include "support/lcm_log_events.h"
+#include "support/rigcal_command_test.h"
 #include "support/simulated_rig_config.h"
 
 namespace rigcal {
@@ -22,70 +23,29 @@ namespace {
 namespace fs = std::filesystem;
 using support::ShellQuote;
 
-struct Event {
-  std::string channel;
-  std::vector<uint8_t> data;
-  bool operator==(const Event& other) const {
-    return channel == other.channel && data == other.data;
-  }
-};
-
-std::vector<Event> ReadEvents(const std::string& path) {
-  std::vector<Event> events;
-  lcm::LogFile log(path, "r");
-  EXPECT_TRUE(log.good()) << path;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    const auto* data = static_cast<const uint8_t*>(e->data);
-    events.push_back({e->channel, std::vector<uint8_t>(data, data + e->datalen)});
-  }
-  return events;
-}
-
-// Plays each log (argument pairs IN OUT) with lcm-logplayer while lcm-logger records the bus.
+// Plays each log (argument triples IN OUT SPEED) with lcm-logplayer while lcm-logger records the
+// bus. A receive buffer of 4 MB keeps the kernel from dropping datagrams of image bursts.
 constexpr char kPlayAndRecordScript[] = R"(set -euo pipefail
 links=$(ip -o link show | awk -F': ' '{print $2}' | tr '\n' ' ')
 if [ "$links" != "lo " ]; then echo "FAIL: not a private namespace, links: $links"; exit 1; fi
 ip link set lo up
 ip link set lo multicast on
 ip route add 224.0.0.0/4 dev lo
-url='udpm://239.255.76.67:7667?ttl=0'
-speed=$1; shift
-while [ $# -ge 2 ]; do
+sysctl -qw net.core.rmem_max=8388608 2>/dev/null || true
+url='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'
+while [ $# -ge 3 ]; do
   lcm-logger --lcm-url="$url" --quiet --force "$2" &
   logger=$!
   sleep 0.5
-  lcm-logplayer --lcm-url="$url" --speed="$speed" "$1"
+  lcm-logplayer --lcm-url="$url" --speed="$3" "$1"
   sleep 0.5
   kill -INT "$logger"
   wait "$logger" || true
-  shift 2
+  shift 3
 done
 )";
 
-class LcmToolsNetnsTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-#ifndef RIGCAL_BINARY
-    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
-#else
-    binary_ = RIGCAL_BINARY;
-#endif
-    std::string pattern = (fs::path(::testing::TempDir()) / "lcm_tools_netns_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-  support::CommandResult Rigcal(const std::string& args) {
-    return support::RunShell(ShellQuote(binary_) + " " + args, dir_);
-  }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-
-  std::string binary_;
-  fs::path dir_;
-};
+class LcmToolsNetnsTest : public support::RigcalCommandTest {};
 
 TEST_F(LcmToolsNetnsTest, RigcalLogsPlayInLcmToolsAndTheirRecordingsReplay) {
   for (const char* tool : {"unshare", "ip", "lcm-logger", "lcm-logplayer"}) {
@@ -111,22 +71,22 @@ TEST_F(LcmToolsNetnsTest, RigcalLogsPlayInLcmToolsAndTheirRecordingsReplay) {
 
   std::ofstream(Path("play.sh")) << kPlayAndRecordScript;
   const auto played = support::RunShell(
-      "unshare --net --fork bash " + ShellQuote(Path("play.sh")) + " 4 " +
-          ShellQuote(Path("images.lcmlog")) + " " + ShellQuote(Path("bus_images.lcmlog")) + " " +
-          ShellQuote(Path("poses.lcmlog")) + " " + ShellQuote(Path("bus_poses.lcmlog")),
+      "unshare --net --fork bash " + ShellQuote(Path("play.sh")) + " " +
+          ShellQuote(Path("images.lcmlog")) + " " + ShellQuote(Path("bus_images.lcmlog")) + " 1 " +
+          ShellQuote(Path("poses.lcmlog")) + " " + ShellQuote(Path("bus_poses.lcmlog")) + " 4",
       dir_);
   ASSERT_EQ(played.exit_code, 0) << played.out << played.err;
 
   // lcm-logplayer published every event of rigcal's logs, byte for byte, in order.
   for (const auto& [written, bus] : {std::pair{"images.lcmlog", "bus_images.lcmlog"},
                                      std::pair{"poses.lcmlog", "bus_poses.lcmlog"}}) {
-    const std::vector<Event> original = ReadEvents(Path(written));
-    const std::vector<Event> received = ReadEvents(Path(bus));
+    const std::vector<support::LoggedEvent> original = support::ReadLcmLog(Path(written));
+    const std::vector<support::LoggedEvent> received = support::ReadLcmLog(Path(bus));
     EXPECT_EQ(original.size(), written == std::string("images.lcmlog") ? 80u : 1200u);
     ASSERT_EQ(received.size(), original.size()) << bus;
     for (size_t i = 0; i < original.size(); ++i) {
-      ASSERT_TRUE(received[i] == original[i]) << bus << " event " << i << " "
-                                              << original[i].channel;
+      ASSERT_TRUE(received[i] == original[i])
+          << bus << " event " << i << " " << original[i].channel;
     }
   }
 

@@ -8,38 +8,20 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <vector>
 
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_log.h"
 #include "rigcal/lcm/pose_message.h"
+#include "support/lcm_log_events.h"
 
 namespace rigcal::tools {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct ReadEvent {
-  int64_t eventnum = 0;
-  int64_t timestamp = 0;
-  std::string channel;
-  std::vector<uint8_t> data;
-};
-
-// Every event LCM's reader returns (it stops at the first incomplete or corrupt one).
-std::vector<ReadEvent> ReadWithLcm(const std::string& path) {
-  lcm::LogFile log(path, "r");
-  EXPECT_TRUE(log.good()) << path;
-  std::vector<ReadEvent> events;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    const auto* data = static_cast<const uint8_t*>(e->data);
-    events.push_back({e->eventnum, e->timestamp, e->channel,
-                      std::vector<uint8_t>(data, data + e->datalen)});
-  }
-  return events;
-}
+using support::LoggedEvent;
 
 std::vector<uint8_t> FileBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -68,16 +50,16 @@ TEST(LogWriter, WritesLcmLoggerFormat) {
   ASSERT_TRUE((*writer)->Write("RIGCAL_POSE_cam1", 99, data.data(), 0).ok());
   ASSERT_TRUE((*writer)->Close().ok());
   // sync word, event number 0, timestamp, channel length 2, data length 3, "CH", data.
-  const std::vector<uint8_t> first = {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0, 0, 0,
-                                      1,    2,    3,    4,    5, 6, 7, 8, 0, 0, 0, 2,
-                                      0,    0,    0,    3,    'C', 'H', 1, 2, 3};
+  const std::vector<uint8_t> first = {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0,   0,   0, 0, 0,
+                                      0,    1,    2,    3,    4, 5, 6,   7,   8, 0, 0,
+                                      0,    2,    0,    0,    0, 3, 'C', 'H', 1, 2, 3};
   const std::vector<uint8_t> bytes = FileBytes(path);
   ASSERT_GE(bytes.size(), first.size());
   EXPECT_EQ(std::vector<uint8_t>(bytes.begin(), bytes.begin() + first.size()), first);
   EXPECT_EQ(static_cast<int64_t>(bytes.size()), (*writer)->bytes());
   EXPECT_EQ(bytes.size(), first.size() + 28 + 16);
 
-  const std::vector<ReadEvent> events = ReadWithLcm(path);
+  const std::vector<LoggedEvent> events = support::ReadLcmLog(path);
   ASSERT_EQ(events.size(), 2u);
   EXPECT_EQ(events[0].channel, "CH");
   EXPECT_EQ(events[0].timestamp, 0x0102030405060708);
@@ -134,8 +116,8 @@ TEST(LogWriter, SplitsBySizeIntoNumberedParts) {
   ASSERT_TRUE((*writer)->Close().ok());
 
   // 3 events (993 bytes) per part: 4 parts for the 10 small ones, then the big one alone.
-  const std::vector<std::string> expected = {path + ".00", path + ".01", path + ".02",
-                                             path + ".03", path + ".04"};
+  const std::vector<std::string> expected = {path + ".00", path + ".01", path + ".02", path + ".03",
+                                             path + ".04"};
   EXPECT_EQ((*writer)->files(), expected);
   EXPECT_FALSE(fs::exists(path));
   int64_t next_event = 0;
@@ -146,11 +128,12 @@ TEST(LogWriter, SplitsBySizeIntoNumberedParts) {
     if (part != expected.back()) {
       EXPECT_LE(fs::file_size(part), 1000u) << part;
     }
-    for (const ReadEvent& e : ReadWithLcm(part)) EXPECT_EQ(e.eventnum, next_event++) << part;
+    for (const LoggedEvent& e : support::ReadLcmLog(part))
+      EXPECT_EQ(e.eventnum, next_event++) << part;
   }
   EXPECT_EQ(next_event, 11);
   EXPECT_EQ(total, (*writer)->bytes());
-  EXPECT_EQ(ReadWithLcm(expected.back()).at(0).data, big);
+  EXPECT_EQ(support::ReadLcmLog(expected.back()).at(0).data, big);
   EXPECT_EQ(LogPartPath("x", 7), "x.07");
   EXPECT_EQ(LogPartPath("x", 123), "x.123");
 }
@@ -175,7 +158,7 @@ TEST(LogWriter, AtomicPartAppearsOnlyWhenClosed) {
   const std::vector<uint8_t> data = Payload(10, 1);
   ASSERT_TRUE((*writer)->Write("A", 1, data.data(), data.size()).ok());
   ASSERT_TRUE((*writer)->Close().ok());
-  EXPECT_EQ(ReadWithLcm(path).size(), 1u);
+  EXPECT_EQ(support::ReadLcmLog(path).size(), 1u);
 }
 
 // Power loss or a crash cuts the file anywhere: every event before the cut reads back, the torn
@@ -200,7 +183,7 @@ TEST(LogWriter, TruncatedLogReadsUpToLastCompleteEvent) {
     const std::string cut_path = (dir / ("cut_" + std::to_string(cut))).string();
     std::ofstream(cut_path, std::ios::binary)
         .write(reinterpret_cast<const char*>(full.data()), cut);
-    const std::vector<ReadEvent> events = ReadWithLcm(cut_path);
+    const std::vector<LoggedEvent> events = support::ReadLcmLog(cut_path);
     ASSERT_EQ(events.size(), 3u) << "cut at byte " << cut;
     EXPECT_EQ(events[2].channel, "CAM2");
     EXPECT_EQ(events[2].data, Payload(120, 2));
@@ -226,9 +209,9 @@ TEST(PoseLog, WritePoseEventsSortsAndRoundTrips) {
   MessageValidator validator(names);
   int64_t last_t = -1;
   int last_camera = -1;
-  const std::vector<ReadEvent> events = ReadWithLcm(path);
+  const std::vector<LoggedEvent> events = support::ReadLcmLog(path);
   ASSERT_EQ(events.size(), poses.size());
-  for (const ReadEvent& e : events) {
+  for (const LoggedEvent& e : events) {
     auto pose = validator.DecodeCameraPose(e.channel, e.data.data(), e.data.size());
     ASSERT_TRUE(pose.ok()) << pose.error();
     const CameraPose& p = pose->pose;

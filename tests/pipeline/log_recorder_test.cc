@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -24,6 +23,7 @@
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/pipeline/capture_loops.h"
 #include "rigcal/pipeline/image_codec.h"
+#include "support/lcm_log_events.h"
 
 namespace rigcal::tools {
 namespace {
@@ -35,7 +35,8 @@ cv::Mat TestImage(int camera, int64_t k, int width = 64, int height = 48) {
   cv::Mat image(height, width, CV_8UC1);
   for (int r = 0; r < height; ++r) {
     for (int c = 0; c < width; ++c) {
-      image.at<uint8_t>(r, c) = static_cast<uint8_t>((r * 7 + c * 3 + k * 11 + camera * 50) ^ (c * r));
+      image.at<uint8_t>(r, c) =
+          static_cast<uint8_t>((r * 7 + c * 3 + k * 11 + camera * 50) ^ (c * r));
     }
   }
   return image;
@@ -113,7 +114,7 @@ TEST(ImageCodec, DecodesOtherRawFormatsAndRejectsBadData) {
   msg.height = 1;
   msg.encoding = image_t::ENCODING_RAW;
   msg.pixel_format = "BGR3";
-  msg.stride = 8;  // padded rows
+  msg.stride = 8;                               // padded rows
   msg.data = {0, 0, 255, 255, 255, 255, 9, 9};  // red, white
   msg.size = 8;
   auto grey = ImageMessageToMat(msg);
@@ -147,14 +148,12 @@ struct LogContents {
 
 LogContents ReadLog(const std::string& path, const CameraNames& names) {
   LogContents contents;
-  lcm::LogFile log(path, "r");
-  EXPECT_TRUE(log.good()) << path;
   MessageValidator validator(names);
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    ++contents.events_per_channel[e->channel];
-    contents.timestamps.push_back(e->timestamp);
-    if (e->channel.rfind("RIGCAL_IMAGE_", 0) == 0) {
-      auto image = validator.Decode<image_t>(e->channel, e->data, e->datalen);
+  for (const support::LoggedEvent& e : support::ReadLcmLog(path)) {
+    ++contents.events_per_channel[e.channel];
+    contents.timestamps.push_back(e.timestamp);
+    if (e.channel.rfind("RIGCAL_IMAGE_", 0) == 0) {
+      auto image = validator.Decode<image_t>(e.channel, e.data.data(), e.data.size());
       EXPECT_TRUE(image.ok()) << image.error();
       if (image) contents.images.push_back(*image);
     }

@@ -12,8 +12,7 @@ std::string SimulatedRigConfig(int width, int height, int frames) {
   return "rig: {name: simulated_test_rig, master: cam0}\n"
          "cameras:\n"
          "  - name: cam0\n" +
-         camera +
-         "  - name: cam1\n" + camera +
+         camera + "  - name: cam1\n" + camera +
          "    truth: {q_wxyz: [0.70710678118654752, 0, 0.70710678118654752, 0], C: [-1, 1, 3]}\n"
          "source:\n"
          "  type: simulated\n"

@@ -57,9 +57,8 @@ std::string ConfigPath(const ImportArgs& args) {
 // Camera names become LCM channels and YAML strings: letters, digits, '_', '-', '.'.
 bool ValidCameraName(const std::string& name) {
   return !name.empty() && name.size() <= 40 && std::all_of(name.begin(), name.end(), [](char c) {
-           return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' ||
-                  c == '.';
-         });
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' || c == '.';
+  });
 }
 
 // Refuses to replace existing files without --force (a recording is not to be lost by a typo).
@@ -187,8 +186,8 @@ int RunImportEuroc(const ImportArgs& args) {
   for (size_t i = 0; i < names.size(); ++i) {
     std::cout << (i == 0 ? " " : ", ") << frames[i] << " frames of " << names[i];
   }
-  std::cout << " (" << tools::ToString(encode.encoding) << ", " << static_cast<double>((*log)->bytes()) / 1e6
-            << " MB) into";
+  std::cout << " (" << tools::ToString(encode.encoding) << ", "
+            << static_cast<double>((*log)->bytes()) / 1e6 << " MB) into";
   for (const std::string& file : (*log)->files()) std::cout << " " << file;
   std::cout << "\nrig config: " << config_path << "\n";
   return kExitOk;
@@ -240,8 +239,8 @@ int RunImportTum(const ImportArgs& args) {
       !status.ok()) {
     return Fail(status.message());
   }
-  std::cout << "imported " << count << " poses of " << names.size() << " cameras into "
-            << args.out << "\nrig config: " << config_path << "\n";
+  std::cout << "imported " << count << " poses of " << names.size() << " cameras into " << args.out
+            << "\nrig config: " << config_path << "\n";
   return kExitOk;
 }
 
@@ -261,8 +260,9 @@ void RegisterImport(CLI::App& app, int* exit_code) {
       "Convert a dataset into a rigcal LCM log (lcm-logger format) and a rig config naming its\n"
       "cameras: `rigcal calib --log OUT --config OUT.yaml` replays a pose log.");
   cmd->require_subcommand(1);
-  cmd->footer("Exit status: 0 imported; 1 bad input or output error (the message names the file); "
-              "2 usage.");
+  cmd->footer(
+      "Exit status: 0 imported; 1 bad input or output error (the message names the file); "
+      "2 usage.");
 
   CLI::App* euroc = cmd->add_subcommand(
       "euroc",
@@ -272,15 +272,17 @@ void RegisterImport(CLI::App& app, int* exit_code) {
   euroc->add_option("DIR", args->dir, "The recording's folder (holding mav0/) or mav0 itself")
       ->required();
   AddOutputOptions(euroc, args.get());
-  euroc->add_option("--image-encoding", args->image_encoding,
-                    "raw, png (lossless, as EuRoC ships them) or jpeg")
+  euroc
+      ->add_option("--image-encoding", args->image_encoding,
+                   "raw, png (lossless, as EuRoC ships them) or jpeg")
       ->check(CLI::IsMember({"raw", "png", "jpeg"}))
       ->capture_default_str();
   euroc->add_option("--jpeg-quality", args->jpeg_quality, "JPEG quality, 1..100")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
-  euroc->add_option("--split-mb", args->split_mb,
-                    "Split into files of at most this many MB: OUT.00, OUT.01, ... (0 = one file)")
+  euroc
+      ->add_option("--split-mb", args->split_mb,
+                   "Split into files of at most this many MB: OUT.00, OUT.01, ... (0 = one file)")
       ->check(CLI::NonNegativeNumber);
   euroc->callback([args, exit_code]() { *exit_code = RunImportEuroc(*args); });
 

@@ -60,8 +60,7 @@ void OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel, PoseTap*
   auto msg = tap->validator.Decode<camera_pose_t>(channel, rbuf->data, rbuf->data_size);
   if (!msg) return;
   const auto* begin = static_cast<const uint8_t*>(rbuf->data);
-  tap->recorder->Record(channel, msg->utime,
-                        std::vector<uint8_t>(begin, begin + rbuf->data_size));
+  tap->recorder->Record(channel, msg->utime, std::vector<uint8_t>(begin, begin + rbuf->data_size));
 }
 
 // "  12.0 s | 86.4 MB (7.2 MB/s) | frames 240 240 | drops 0 | 1 file".
@@ -193,8 +192,8 @@ int RunRecord(const RecordArgs& args) {
     const double elapsed = std::chrono::duration<double>(now - start).count();
     if (args.duration_s > 0 && elapsed >= args.duration_s) break;
     if (pipeline ? pipeline->Finished() : capture->Finished()) break;
-    if (pipeline && std::chrono::duration<double>(now - last_extrinsics).count() >=
-                        extrinsics_period_s) {
+    if (pipeline &&
+        std::chrono::duration<double>(now - last_extrinsics).count() >= extrinsics_period_s) {
       record_extrinsics();
       last_extrinsics = now;
     }
@@ -221,7 +220,8 @@ int RunRecord(const RecordArgs& args) {
   }
   if (pipeline) {
     for (const tools::CameraHealth& h : pipeline->Snapshot().cameras) {
-      if (h.dead) std::cerr << kPrefix << "camera '" << h.name << "' died: " << h.dead_reason << "\n";
+      if (h.dead)
+        std::cerr << kPrefix << "camera '" << h.name << "' died: " << h.dead_reason << "\n";
     }
   }
   tools::ReportFolderProblems(sources->folders, kPrefix, std::cerr);

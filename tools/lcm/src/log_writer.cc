@@ -75,9 +75,8 @@ Expected<std::unique_ptr<LogWriter>> LogWriter::Open(const std::string& path,
 }
 
 Status LogWriter::OpenPart() {
-  const std::string path = options_.split_bytes > 0
-                               ? LogPartPath(path_, static_cast<int>(files_.size()))
-                               : path_;
+  const std::string path =
+      options_.split_bytes > 0 ? LogPartPath(path_, static_cast<int>(files_.size())) : path_;
   auto part = std::make_unique<Part>();
   part->path = path;
   std::error_code ec;
@@ -154,8 +153,7 @@ Status LogWriter::Write(std::string_view channel, int64_t utime, const void* dat
       return Error{CannotWrite(part_->path, "write", err)};
     }
     const Clock::time_point now = Clock::now();
-    if (std::chrono::duration<double>(now - part_->last_sync).count() >=
-        options_.sync_interval_s) {
+    if (std::chrono::duration<double>(now - part_->last_sync).count() >= options_.sync_interval_s) {
       if (::fdatasync(part_->fd) != 0) {
         failed_ = true;
         return Error{CannotWrite(part_->path, "fdatasync", errno)};

@@ -53,8 +53,7 @@ Status WritePoseEvents(const std::string& path, const CameraNames& names,
     const std::string channel = PoseChannel(name);
     auto bytes = EncodeMessage(channel, names, *msg);
     if (!bytes) return Error{path + ": " + bytes.error()};
-    if (Status status = (*log)->Write(channel, utime, bytes->data(), bytes->size());
-        !status.ok()) {
+    if (Status status = (*log)->Write(channel, utime, bytes->data(), bytes->size()); !status.ok()) {
       return status;
     }
   }

@@ -84,8 +84,9 @@ Expected<image_t> FrameToImageMessage(const drivers::Frame& frame, const std::st
   return msg;
 }
 
-Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame, const CameraNames& names,
-                                                int camera, const ImageEncodeOptions& options) {
+Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
+                                                const CameraNames& names, int camera,
+                                                const ImageEncodeOptions& options) {
   const std::string& name = names.at(static_cast<size_t>(camera));
   Expected<image_t> msg = FrameToImageMessage(frame, name, frame.t_ns / 1000, options);
   if (!msg) return msg.status();

@@ -38,8 +38,9 @@ Expected<image_t> FrameToImageMessage(const drivers::Frame& frame, const std::st
 
 // FrameToImageMessage at utime = t_ns / 1000 for camera names[camera], checked and encoded for
 // RIGCAL_IMAGE_<name> (EncodeMessage): the data of one log event.
-Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame, const CameraNames& names,
-                                                int camera, const ImageEncodeOptions& options);
+Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
+                                                const CameraNames& names, int camera,
+                                                const ImageEncodeOptions& options);
 
 // The pixels of a (checked, see image_message.h) image_t as a CV_8UC1 image of width x height:
 // raw GREY, "Y16 " (the high byte), "YUYV" (the luma), "RGB3"/"BGR3" (converted to grey), or a
