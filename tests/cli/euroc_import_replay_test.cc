@@ -15,19 +15,19 @@
 #include <string>
 #include <vector>
 
+#include "cli/command_test.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "support/command_runner.h"
 #include "support/euroc_aprilgrid.h"
 #include "support/lcm_log_events.h"
-#include "support/rigcal_command_test.h"
 
 namespace rigcal {
 namespace {
 
 namespace fs = std::filesystem;
-using support::ShellQuote;
+using cli_test::Quote;
 
 // As tests/calib/euroc_aprilgrid_test.cc: cam1's positions in an arbitrary unit, and the batch
 // test's accuracy targets.
@@ -36,7 +36,7 @@ constexpr double kMaxRotDeg = 0.15;
 constexpr double kMaxTransMm = 2.5;
 constexpr double kMaxScalePct = 0.3;
 
-class EurocImportReplayTest : public support::RigcalCommandTest {};
+using EurocImportReplayTest = cli_test::CommandTest;
 
 Similarity SlaveEstimate(const nlohmann::json& slave) {
   Similarity s;
@@ -64,12 +64,12 @@ TEST_F(EurocImportReplayTest, AprilGridPoseLogReplayReachesBatchAccuracy) {
       << error;
 
   const auto imported =
-      Rigcal("import tum cam0=" + ShellQuote(Path("cam0.txt")) +
-             " cam1=" + ShellQuote(Path("cam1.txt")) + " -o " + ShellQuote(Path("april.lcmlog")));
+      Run("import tum cam0=" + Quote(Path("cam0.txt")) + " cam1=" + Quote(Path("cam1.txt")) +
+          " -o " + Quote(Path("april.lcmlog")));
   ASSERT_EQ(imported.exit_code, 0) << imported.err;
   const auto replay =
-      Rigcal("calib --config " + ShellQuote(Path("april.lcmlog.yaml")) + " --log " +
-             ShellQuote(Path("april.lcmlog")) + " --json --out " + ShellQuote(Path("result.yaml")));
+      Run("calib --config " + Quote(Path("april.lcmlog.yaml")) + " --log " +
+          Quote(Path("april.lcmlog")) + " --json --out " + Quote(Path("result.yaml")));
   ASSERT_EQ(replay.exit_code, 0) << replay.err;
   EXPECT_NE(replay.err.find("decoder: accepted " + std::to_string(2 * rec.size()) + ", rejected 0"),
             std::string::npos)
@@ -106,8 +106,8 @@ TEST_F(EurocImportReplayTest, StaticFramesImageLogReportsInsufficientMotion) {
                           " not found (set RIGCAL_SHARED_DATA_DIR at configure "
                           "time)");
   }
-  const auto imported = Rigcal("import euroc " + ShellQuote(data.string()) + " -o " +
-                               ShellQuote(Path("static.lcmlog")));
+  const auto imported =
+      Run("import euroc " + Quote(data.string()) + " -o " + Quote(Path("static.lcmlog")));
   ASSERT_EQ(imported.exit_code, 0) << imported.err;
   // README-provenance.txt: 95 frames per camera, 4 PNGs of cam1 listed but absent.
   EXPECT_NE(imported.err.find("camera 'cam1': 4 listed images missing or unreadable"),
@@ -133,14 +133,14 @@ TEST_F(EurocImportReplayTest, StaticFramesImageLogReportsInsufficientMotion) {
   EXPECT_EQ(frames["cam1"], 95);
 
   // The image log through the image pipeline (images -> VO -> sync -> estimator).
-  if (Rigcal("--help").out.find("\n  replay ") == std::string::npos) {
+  if (Run("--help").out.find("\n  replay ") == std::string::npos) {
     RIGCAL_SKIP_UNLESS_CI(
         "`rigcal replay` (image-log replay, issue 12 section 1) is not in this "
         "build");
   }
   const auto replay =
-      Rigcal("replay " + ShellQuote(Path("static.lcmlog")) + " --config " +
-             ShellQuote(Path("static.lcmlog.yaml")) + " --out " + ShellQuote(Path("result.yaml")));
+      Run("replay " + Quote(Path("static.lcmlog")) + " --config " +
+          Quote(Path("static.lcmlog.yaml")) + " --out " + Quote(Path("result.yaml")));
   EXPECT_EQ(replay.exit_code, 3) << replay.out << replay.err;
   EXPECT_NE((replay.out + replay.err).find("insufficient motion"), std::string::npos)
       << replay.out << replay.err;

@@ -12,20 +12,19 @@
 #include <string>
 #include <vector>
 
+#include "cli/command_test.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/pipeline/image_codec.h"
-#include "support/command_runner.h"
 #include "support/lcm_log_events.h"
-#include "support/rigcal_command_test.h"
 
 namespace rigcal {
 namespace {
 
 namespace fs = std::filesystem;
-using support::ShellQuote;
+using cli_test::Quote;
 
 // One camera's track as a EuRoC CSV file (t_ns,p,q_wxyz).
 void WriteEurocCsv(const fs::path& path, const std::vector<int64_t>& t_ns,
@@ -43,7 +42,7 @@ void WriteEurocCsv(const fs::path& path, const std::vector<int64_t>& t_ns,
   }
 }
 
-class ImportCommandTest : public support::RigcalCommandTest {
+class ImportCommandTest : public cli_test::CommandTest {
  protected:
   // A simulated drive of a 2-camera rig as EuRoC CSV files mav0/cam0/data.csv, mav0/cam1/...
   SyntheticDrive WriteDriveCsv() {
@@ -65,16 +64,16 @@ TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
   const std::string cam0 = Path("mav0/cam0/data.csv");
   const std::string cam1 = Path("mav0/cam1/data.csv");
   // Both files are "data": without names the cameras collide.
-  const auto unnamed = Rigcal("import tum " + ShellQuote(cam0) + " " + ShellQuote(cam1) + " -o " +
-                              ShellQuote(Path("poses.lcmlog")));
+  const auto unnamed =
+      Run("import tum " + Quote(cam0) + " " + Quote(cam1) + " -o " + Quote(Path("poses.lcmlog")));
   EXPECT_EQ(unnamed.exit_code, 1);
   EXPECT_NE(unnamed.err.find("a second camera named 'data' (name them with NAME=FILE)"),
             std::string::npos)
       << unnamed.err;
   EXPECT_FALSE(fs::exists(Path("poses.lcmlog")));
 
-  const auto r = Rigcal("import tum front=" + ShellQuote(cam0) + " side=" + ShellQuote(cam1) +
-                        " -o " + ShellQuote(Path("poses.lcmlog")));
+  const auto r = Run("import tum front=" + Quote(cam0) + " side=" + Quote(cam1) + " -o " +
+                     Quote(Path("poses.lcmlog")));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("imported 1200 poses of 2 cameras"), std::string::npos) << r.out;
   const std::vector<support::LoggedEvent> events = support::ReadLcmLog(Path("poses.lcmlog"));
@@ -89,8 +88,8 @@ TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
   EXPECT_EQ(config->CameraNames(), (std::vector<std::string>{"front", "side"}));
 
   const auto replay =
-      Rigcal("calib --config " + ShellQuote(Path("poses.lcmlog.yaml")) + " --log " +
-             ShellQuote(Path("poses.lcmlog")) + " --json --out " + ShellQuote(Path("result.yaml")));
+      Run("calib --config " + Quote(Path("poses.lcmlog.yaml")) + " --log " +
+          Quote(Path("poses.lcmlog")) + " --json --out " + Quote(Path("result.yaml")));
   EXPECT_TRUE(replay.exit_code == 0 || replay.exit_code == 3) << replay.err;
   EXPECT_NE(replay.err.find("decoder: accepted 1200, rejected 0; unknown cameras: 0"),
             std::string::npos)
@@ -102,8 +101,8 @@ TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
   EXPECT_EQ(json["slaves"][0].value("name", ""), "side");
 
   // Existing outputs are not replaced without --force.
-  const auto again = Rigcal("import tum front=" + ShellQuote(cam0) + " side=" + ShellQuote(cam1) +
-                            " -o " + ShellQuote(Path("poses.lcmlog")));
+  const auto again = Run("import tum front=" + Quote(cam0) + " side=" + Quote(cam1) + " -o " +
+                         Quote(Path("poses.lcmlog")));
   EXPECT_EQ(again.exit_code, 1);
   EXPECT_NE(again.err.find("exists (use --force to replace it)"), std::string::npos) << again.err;
 }
@@ -112,12 +111,11 @@ TEST_F(ImportCommandTest, SolveTakesNamedTrajectoryFiles) {
   WriteDriveCsv();
   const std::string cam0 = Path("mav0/cam0/data.csv");
   const std::string cam1 = Path("mav0/cam1/data.csv");
-  const auto unnamed =
-      Rigcal("solve --master " + ShellQuote(cam0) + " --slave " + ShellQuote(cam1));
+  const auto unnamed = Run("solve --master " + Quote(cam0) + " --slave " + Quote(cam1));
   EXPECT_EQ(unnamed.exit_code, 1);
   EXPECT_NE(unnamed.err.find("two cameras are named 'data'"), std::string::npos) << unnamed.err;
-  const auto r = Rigcal("solve --master cam0=" + ShellQuote(cam0) +
-                        " --slave cam1=" + ShellQuote(cam1) + " --json");
+  const auto r =
+      Run("solve --master cam0=" + Quote(cam0) + " --slave cam1=" + Quote(cam1) + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto json = nlohmann::json::parse(r.out, nullptr, /*allow_exceptions=*/false);
   ASSERT_FALSE(json.is_discarded()) << r.out;
@@ -127,7 +125,7 @@ TEST_F(ImportCommandTest, SolveTakesNamedTrajectoryFiles) {
   EXPECT_NEAR(json["slaves"][0].value("scale", 0.0), 0.5, 0.01) << r.out;
   // A missing file after NAME= is named.
   const auto missing =
-      Rigcal("solve --master cam0=" + ShellQuote(cam0) + " --slave cam1=/nonexistent/x.csv");
+      Run("solve --master cam0=" + Quote(cam0) + " --slave cam1=/nonexistent/x.csv");
   EXPECT_EQ(missing.exit_code, 1);
   EXPECT_NE(missing.err.find("/nonexistent/x.csv"), std::string::npos) << missing.err;
 }
@@ -174,9 +172,8 @@ TEST_F(ImportCommandTest, EurocImagesInTimeOrder) {
                   EurocImage(camera, k));
     }
   }
-  const auto r =
-      Rigcal("import euroc " + ShellQuote((dir_ / "rec").string()) + " -o " +
-             ShellQuote(Path("images.lcmlog")) + " --config-out " + ShellQuote(Path("rig.yaml")));
+  const auto r = Run("import euroc " + Quote((dir_ / "rec").string()) + " -o " +
+                     Quote(Path("images.lcmlog")) + " --config-out " + Quote(Path("rig.yaml")));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("camera 'cam1': 1 listed images missing or unreadable"), std::string::npos)
       << r.err;
@@ -216,13 +213,13 @@ TEST_F(ImportCommandTest, EurocImagesInTimeOrder) {
                                                   "distortion_model: radial-tangential\n"
                                                   "intrinsics: [1, 2, 3]\n"
                                                   "resolution: [64, 48]\n";
-  const auto bad = Rigcal("import euroc " + ShellQuote((dir_ / "rec").string()) + " -o " +
-                          ShellQuote(Path("bad.lcmlog")));
+  const auto bad =
+      Run("import euroc " + Quote((dir_ / "rec").string()) + " -o " + Quote(Path("bad.lcmlog")));
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.err.find("cam1/sensor.yaml:3: intrinsics"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(Path("bad.lcmlog")));
-  const auto empty = Rigcal("import euroc " + ShellQuote(dir_.string()) + " -o " +
-                            ShellQuote(Path("none.lcmlog")));
+  const auto empty =
+      Run("import euroc " + Quote(dir_.string()) + " -o " + Quote(Path("none.lcmlog")));
   EXPECT_EQ(empty.exit_code, 1);
   EXPECT_NE(empty.err.find("no camera folders"), std::string::npos) << empty.err;
 }

@@ -10,19 +10,18 @@
 #include <string>
 #include <vector>
 
+#include "cli/command_test.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/lcm/log_writer.h"
 #include "rigcal/pipeline/image_codec.h"
-#include "support/command_runner.h"
 #include "support/lcm_log_events.h"
-#include "support/rigcal_command_test.h"
 #include "support/simulated_rig_config.h"
 
 namespace rigcal {
 namespace {
 
 namespace fs = std::filesystem;
-using support::ShellQuote;
+using cli_test::Quote;
 
 struct LogSummary {
   std::map<std::string, int> events;  // per channel
@@ -46,7 +45,7 @@ LogSummary ReadLog(const std::string& path) {
   return summary;
 }
 
-class RecordCommandTest : public support::RigcalCommandTest {
+class RecordCommandTest : public cli_test::CommandTest {
  protected:
   std::string WriteConfig(int width, int height, int frames) {
     const std::string path = (dir_ / "rig.yaml").string();
@@ -58,8 +57,8 @@ class RecordCommandTest : public support::RigcalCommandTest {
 TEST_F(RecordCommandTest, RecordsEveryFrameWithProgress) {
   const std::string config = WriteConfig(160, 120, 30);
   const std::string log = (dir_ / "drive.lcmlog").string();
-  const auto r = Rigcal("record --config " + ShellQuote(config) + " -o " + ShellQuote(log) +
-                        " --no-vo --fast --image-encoding png");
+  const auto r = Run("record --config " + Quote(config) + " -o " + Quote(log) +
+                     " --no-vo --fast --image-encoding png");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const LogSummary summary = ReadLog(log);
   EXPECT_EQ(summary.events.at("RIGCAL_IMAGE_cam0"), 30);
@@ -82,12 +81,12 @@ TEST_F(RecordCommandTest, RecordsEveryFrameWithProgress) {
   EXPECT_NE(r.out.find("CPU"), std::string::npos) << r.out;
 
   // An existing log is not replaced without --force.
-  const auto again = Rigcal("record --config " + ShellQuote(config) + " -o " + ShellQuote(log) +
-                            " --no-vo --fast --image-encoding jpeg");
+  const auto again = Run("record --config " + Quote(config) + " -o " + Quote(log) +
+                         " --no-vo --fast --image-encoding jpeg");
   EXPECT_EQ(again.exit_code, 1) << again.err;
   EXPECT_NE(again.err.find(log + "': the file exists"), std::string::npos) << again.err;
-  const auto forced = Rigcal("record --config " + ShellQuote(config) + " -o " + ShellQuote(log) +
-                             " --no-vo --fast --image-encoding jpeg --force");
+  const auto forced = Run("record --config " + Quote(config) + " -o " + Quote(log) +
+                          " --no-vo --fast --image-encoding jpeg --force");
   ASSERT_EQ(forced.exit_code, 0) << forced.err;
   const LogSummary jpeg = ReadLog(log);
   ASSERT_EQ(jpeg.images.size(), 60u);
@@ -98,8 +97,8 @@ TEST_F(RecordCommandTest, SplitsBySize) {
   const std::string config = WriteConfig(160, 120, 40);
   const std::string log = (dir_ / "split.lcmlog").string();
   // Raw frames of 19.2 kB: 5 per 100 kB part.
-  const auto r = Rigcal("record --config " + ShellQuote(config) + " -o " + ShellQuote(log) +
-                        " --no-vo --fast --split-mb 0.1");
+  const auto r = Run("record --config " + Quote(config) + " -o " + Quote(log) +
+                     " --no-vo --fast --split-mb 0.1");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_FALSE(fs::exists(log));
   int frames = 0;
@@ -122,8 +121,7 @@ TEST_F(RecordCommandTest, SplitsBySize) {
 TEST_F(RecordCommandTest, RecordsVoPosesAndSurvivesACut) {
   const std::string config = WriteConfig(376, 240, 160);
   const std::string log = (dir_ / "vo.lcmlog").string();
-  const auto r =
-      Rigcal("record --config " + ShellQuote(config) + " -o " + ShellQuote(log) + " --fast");
+  const auto r = Run("record --config " + Quote(config) + " -o " + Quote(log) + " --fast");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   LogSummary summary = ReadLog(log);
   EXPECT_EQ(summary.events.at("RIGCAL_IMAGE_cam0"), 160);
@@ -141,8 +139,8 @@ TEST_F(RecordCommandTest, RecordsVoPosesAndSurvivesACut) {
   for (const auto& [channel, n] : cut.events) cut_total += n;
   EXPECT_EQ(cut_total, total - 1);
   // The poses replay: the node reads up to the cut and says where the log is damaged.
-  const auto replay = Rigcal("calib --config " + ShellQuote(config) + " --log " + ShellQuote(log) +
-                             " --out " + ShellQuote((dir_ / "result.yaml").string()));
+  const auto replay = Run("calib --config " + Quote(config) + " --log " + Quote(log) + " --out " +
+                          Quote((dir_ / "result.yaml").string()));
   EXPECT_NE(replay.exit_code, 1) << replay.err;
   EXPECT_NE(replay.err.find("truncated or corrupt event after byte"), std::string::npos)
       << replay.err;

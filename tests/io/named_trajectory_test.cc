@@ -7,21 +7,15 @@
 
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
+#include "support/temp_dir.h"
 
 namespace rigcal::tools {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("rigcal_named_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 TEST(NamedTrajectoryPath, SplitsNameUnlessTheArgumentIsAFile) {
-  const fs::path dir = TempDir("parse");
+  const fs::path dir = support::FreshTempDir("named_parse");
   NamedTrajectoryPath p = ParseNamedTrajectoryPath("cam1=mav0/cam1/data.csv");
   EXPECT_EQ(p.name, "cam1");
   EXPECT_EQ(p.path, "mav0/cam1/data.csv");
@@ -50,7 +44,7 @@ TEST(NamedTrajectoryPath, SplitsNameUnlessTheArgumentIsAFile) {
 }
 
 TEST(WriteRigConfig, RoundTripsThroughTheLoader) {
-  const fs::path dir = TempDir("config");
+  const fs::path dir = support::FreshTempDir("named_config");
   std::vector<CameraConfig> cameras(2);
   cameras[0].name = "cam0";
   camera::CameraSpec spec;

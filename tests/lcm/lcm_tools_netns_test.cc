@@ -12,16 +12,16 @@
 #include <string>
 #include <vector>
 
+#include "cli/command_test.h"
 #include "support/command_runner.h"
 #include "support/lcm_log_events.h"
-#include "support/rigcal_command_test.h"
 #include "support/simulated_rig_config.h"
 
 namespace rigcal {
 namespace {
 
 namespace fs = std::filesystem;
-using support::ShellQuote;
+using cli_test::Quote;
 
 // Plays each log (argument triples IN OUT SPEED) with lcm-logplayer while lcm-logger records the
 // bus. A receive buffer of 4 MB keeps the kernel from dropping datagrams of image bursts.
@@ -45,7 +45,7 @@ while [ $# -ge 3 ]; do
 done
 )";
 
-class LcmToolsNetnsTest : public support::RigcalCommandTest {};
+using LcmToolsNetnsTest = cli_test::CommandTest;
 
 TEST_F(LcmToolsNetnsTest, RigcalLogsPlayInLcmToolsAndTheirRecordingsReplay) {
   for (const char* tool : {"unshare", "ip", "lcm-logger", "lcm-logplayer"}) {
@@ -62,18 +62,18 @@ TEST_F(LcmToolsNetnsTest, RigcalLogsPlayInLcmToolsAndTheirRecordingsReplay) {
   // A rigcal image log (rigcal record) and a rigcal pose log (rigcal synth-log: a simulated
   // drive's poses, written by the same LogWriter).
   std::ofstream(Path("rig.yaml")) << support::SimulatedRigConfig(160, 120, 40);
-  const auto recorded = Rigcal("record --config " + ShellQuote(Path("rig.yaml")) + " -o " +
-                               ShellQuote(Path("images.lcmlog")) + " --no-vo --fast");
+  const auto recorded = Run("record --config " + Quote(Path("rig.yaml")) + " -o " +
+                            Quote(Path("images.lcmlog")) + " --no-vo --fast");
   ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
-  const auto synth = Rigcal("synth-log --config " + ShellQuote(Path("rig.yaml")) + " --out " +
-                            ShellQuote(Path("poses.lcmlog")) + " --frames 600");
+  const auto synth = Run("synth-log --config " + Quote(Path("rig.yaml")) + " --out " +
+                         Quote(Path("poses.lcmlog")) + " --frames 600");
   ASSERT_EQ(synth.exit_code, 0) << synth.err;
 
   std::ofstream(Path("play.sh")) << kPlayAndRecordScript;
   const auto played = support::RunShell(
-      "unshare --net --fork bash " + ShellQuote(Path("play.sh")) + " " +
-          ShellQuote(Path("images.lcmlog")) + " " + ShellQuote(Path("bus_images.lcmlog")) + " 1 " +
-          ShellQuote(Path("poses.lcmlog")) + " " + ShellQuote(Path("bus_poses.lcmlog")) + " 4",
+      "unshare --net --fork bash " + Quote(Path("play.sh")) + " " + Quote(Path("images.lcmlog")) +
+          " " + Quote(Path("bus_images.lcmlog")) + " 1 " + Quote(Path("poses.lcmlog")) + " " +
+          Quote(Path("bus_poses.lcmlog")) + " 4",
       dir_);
   ASSERT_EQ(played.exit_code, 0) << played.out << played.err;
 
@@ -93,9 +93,9 @@ TEST_F(LcmToolsNetnsTest, RigcalLogsPlayInLcmToolsAndTheirRecordingsReplay) {
   // lcm-logger's recording replays in rigcal: every pose decoded, every stamp matched into a
   // set, the slave in the result. (How well the replay calibrates is the replay tests' subject;
   // the bytes are rigcal's own, compared above.)
-  const auto replay = Rigcal("calib --config " + ShellQuote(Path("rig.yaml")) + " --log " +
-                             ShellQuote(Path("bus_poses.lcmlog")) + " --json --out " +
-                             ShellQuote(Path("result.yaml")));
+  const auto replay =
+      Run("calib --config " + Quote(Path("rig.yaml")) + " --log " +
+          Quote(Path("bus_poses.lcmlog")) + " --json --out " + Quote(Path("result.yaml")));
   EXPECT_TRUE(replay.exit_code == 0 || replay.exit_code == 3) << replay.err;
   EXPECT_NE(replay.err.find("decoder: accepted 1200, rejected 0; unknown cameras: 0"),
             std::string::npos)

@@ -15,6 +15,7 @@
 #include "rigcal/lcm/pose_log.h"
 #include "rigcal/lcm/pose_message.h"
 #include "support/lcm_log_events.h"
+#include "support/temp_dir.h"
 
 namespace rigcal::tools {
 namespace {
@@ -28,13 +29,6 @@ std::vector<uint8_t> FileBytes(const std::string& path) {
   return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
 }
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("rigcal_log_writer_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 std::vector<uint8_t> Payload(size_t size, uint8_t seed) {
   std::vector<uint8_t> data(size);
   for (size_t i = 0; i < size; ++i) data[i] = static_cast<uint8_t>(seed + i * 7);
@@ -42,7 +36,7 @@ std::vector<uint8_t> Payload(size_t size, uint8_t seed) {
 }
 
 TEST(LogWriter, WritesLcmLoggerFormat) {
-  const std::string path = (TempDir("format") / "a.lcmlog").string();
+  const std::string path = (support::FreshTempDir("log_writer_format") / "a.lcmlog").string();
   auto writer = LogWriter::Open(path);
   ASSERT_TRUE(writer.ok()) << writer.error();
   const std::vector<uint8_t> data = {1, 2, 3};
@@ -70,7 +64,7 @@ TEST(LogWriter, WritesLcmLoggerFormat) {
 }
 
 TEST(LogWriter, RejectsBadChannelsAndExistingFiles) {
-  const fs::path dir = TempDir("reject");
+  const fs::path dir = support::FreshTempDir("log_writer_reject");
   const std::string path = (dir / "a.lcmlog").string();
   auto writer = LogWriter::Open(path);
   ASSERT_TRUE(writer.ok()) << writer.error();
@@ -101,7 +95,7 @@ TEST(LogWriter, RejectsBadChannelsAndExistingFiles) {
 }
 
 TEST(LogWriter, SplitsBySizeIntoNumberedParts) {
-  const fs::path dir = TempDir("split");
+  const fs::path dir = support::FreshTempDir("log_writer_split");
   const std::string path = (dir / "drive.lcmlog").string();
   LogWriterOptions options;
   options.split_bytes = 1000;
@@ -139,7 +133,7 @@ TEST(LogWriter, SplitsBySizeIntoNumberedParts) {
 }
 
 TEST(LogWriter, AtomicPartAppearsOnlyWhenClosed) {
-  const fs::path dir = TempDir("atomic");
+  const fs::path dir = support::FreshTempDir("log_writer_atomic");
   const std::string path = (dir / "import.lcmlog").string();
   LogWriterOptions options;
   options.atomic = true;
@@ -164,7 +158,7 @@ TEST(LogWriter, AtomicPartAppearsOnlyWhenClosed) {
 // Power loss or a crash cuts the file anywhere: every event before the cut reads back, the torn
 // one and nothing after it.
 TEST(LogWriter, TruncatedLogReadsUpToLastCompleteEvent) {
-  const fs::path dir = TempDir("truncated");
+  const fs::path dir = support::FreshTempDir("log_writer_truncated");
   const std::string path = (dir / "a.lcmlog").string();
   auto writer = LogWriter::Open(path);
   ASSERT_TRUE(writer.ok()) << writer.error();
@@ -191,7 +185,7 @@ TEST(LogWriter, TruncatedLogReadsUpToLastCompleteEvent) {
 }
 
 TEST(PoseLog, WritePoseEventsSortsAndRoundTrips) {
-  const fs::path dir = TempDir("poses");
+  const fs::path dir = support::FreshTempDir("log_writer_poses");
   const std::string path = (dir / "poses.lcmlog").string();
   const CameraNames names = {"front", "left"};
   std::vector<CameraPose> poses;

@@ -24,6 +24,7 @@
 #include "rigcal/pipeline/capture_loops.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "support/lcm_log_events.h"
+#include "support/temp_dir.h"
 
 namespace rigcal::tools {
 namespace {
@@ -67,13 +68,6 @@ class ScriptedDevice final : public drivers::CameraDevice {
   std::vector<int64_t> seqs_;
   size_t next_ = 0;
 };
-
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("rigcal_log_recorder_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 TEST(ImageCodec, RoundTripsEveryEncoding) {
   drivers::Frame frame;
@@ -162,7 +156,7 @@ LogContents ReadLog(const std::string& path, const CameraNames& names) {
 }
 
 TEST(LogRecorder, RecordsTappedFramesAndMessages) {
-  const fs::path dir = TempDir("frames");
+  const fs::path dir = support::FreshTempDir("log_recorder_frames");
   const std::string path = (dir / "rec.lcmlog").string();
   const CameraNames names = {"cam0", "cam1"};
   RecorderOptions options;
@@ -211,7 +205,7 @@ TEST(LogRecorder, RecordsTappedFramesAndMessages) {
 
 // A recording cut inside its last event (power loss) reads back up to the event before.
 TEST(LogRecorder, CutRecordingReadsUpToLastCompleteEvent) {
-  const fs::path dir = TempDir("cut");
+  const fs::path dir = support::FreshTempDir("log_recorder_cut");
   const std::string path = (dir / "rec.lcmlog").string();
   const CameraNames names = {"cam0"};
   RecorderOptions options;
@@ -239,7 +233,7 @@ TEST(LogRecorder, CutRecordingReadsUpToLastCompleteEvent) {
 }
 
 TEST(LogRecorder, ReportsAnUnwritableLog) {
-  const fs::path dir = TempDir("unwritable");
+  const fs::path dir = support::FreshTempDir("log_recorder_unwritable");
   auto recorder = LogRecorder::Open((dir / "missing" / "rec.lcmlog").string(), {"cam0"}, {});
   ASSERT_FALSE(recorder.ok());
   EXPECT_NE(recorder.error().find("missing/rec.lcmlog"), std::string::npos) << recorder.error();

@@ -1,30 +1,38 @@
 #pragma once
-// Tests that run programs (the built rigcal binary, lcm-logger, ...): a shell command with its
-// stdout and stderr captured, and the rule for what cannot run here: skipped with the reason, a
-// failure under CI=true.
+// Tests that run other programs (unshare, lcm-logger, ...) beside the rigcal binary
+// (cli/command_test.h), and the rule for what cannot run here: skipped with the reason, a failure
+// under CI=true.
 
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 
+#include "cli/command_test.h"
+
 namespace rigcal::support {
 
-struct CommandResult {
-  int exit_code = -1;  // -1 when the command did not exit normally
-  std::string out;
-  std::string err;
-};
-
-// The whole file as text ("" when it cannot be read).
-std::string Slurp(const std::filesystem::path& path);
-
 // Runs `command` with /bin/sh, stdout and stderr captured through files in `dir`.
-CommandResult RunShell(const std::string& command, const std::filesystem::path& dir);
-
-// "'text'" with every ' escaped, for a shell command line.
-std::string ShellQuote(const std::string& text);
+inline cli_test::RunResult RunShell(const std::string& command, const std::filesystem::path& dir) {
+  const std::filesystem::path out = dir / "shell_stdout.txt";
+  const std::filesystem::path err = dir / "shell_stderr.txt";
+  const std::string line = "(" + command + ") >" + cli_test::Quote(out.string()) + " 2>" +
+                           cli_test::Quote(err.string()) + " </dev/null";
+  const int status = std::system(line.c_str());
+  cli_test::RunResult result;
+  result.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  result.out = cli_test::Slurp(out);
+  result.err = cli_test::Slurp(err);
+  return result;
+}
 
 // True when the environment variable CI is "true".
-bool InCi();
+inline bool InCi() {
+  const char* ci = std::getenv("CI");
+  return ci != nullptr && std::string(ci) == "true";
+}
 
 }  // namespace rigcal::support
 

@@ -1,37 +1,35 @@
 #include "support/simulated_rig_config.h"
 
+#include <fstream>
+#include <sstream>
+
 namespace rigcal::support {
+namespace {
+
+// `text` with every occurrence of `from` replaced by `to`.
+std::string ReplaceAll(std::string text, const std::string& from, const std::string& to) {
+  for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) {
+    text.replace(at, from.size(), to);
+  }
+  return text;
+}
+
+}  // namespace
 
 std::string SimulatedRigConfig(int width, int height, int frames) {
-  const double f = 0.866 * width;  // 60 degrees horizontal field of view
-  const std::string camera = "    model: pinhole\n    resolution: [" + std::to_string(width) +
-                             ", " + std::to_string(height) + "]\n    intrinsics: [" +
-                             std::to_string(f) + ", " + std::to_string(f) + ", " +
-                             std::to_string(width / 2.0 - 0.5) + ", " +
-                             std::to_string(height / 2.0 - 0.5) + "]\n";
-  return "rig: {name: simulated_test_rig, master: cam0}\n"
-         "cameras:\n"
-         "  - name: cam0\n" +
-         camera + "  - name: cam1\n" + camera +
-         "    truth: {q_wxyz: [0.70710678118654752, 0, 0.70710678118654752, 0], C: [-1, 1, 3]}\n"
-         "source:\n"
-         "  type: simulated\n"
-         "  frame_rate_hz: 20\n"
-         "  num_frames: " +
-         std::to_string(frames) +
-         "\n"
-         "  seed: 1\n"
-         "  realtime: true\n"
-         "  scene: {type: room, size: [20, 16, 6], boxes: 10}\n"
-         "  trajectory:\n"
-         "    waypoint_interval_s: 2\n"
-         "    waypoints:\n"
-         "      - {p: [-3.0, 0.0, 3.0], ypr_deg: [0, 0, 0]}\n"
-         "      - {p: [-2.3, 0.8, 3.2], ypr_deg: [20, -10, 8]}\n"
-         "      - {p: [-1.4, 1.5, 3.0], ypr_deg: [38, 5, -6]}\n"
-         "      - {p: [-0.4, 1.2, 2.8], ypr_deg: [15, 15, -15]}\n"
-         "      - {p: [0.5, 0.4, 3.1], ypr_deg: [-10, 0, 5]}\n"
-         "      - {p: [1.2, -0.6, 3.4], ypr_deg: [-35, -15, 12]}\n";
+  std::ifstream in(std::string(RIGCAL_SOURCE_DIR) + "/config/sim_thesis_virtual.yaml");
+  std::stringstream shipped;
+  shipped << in.rdbuf();
+  const double f = 0.866 * width;  // 60 degrees horizontal field of view, as shipped
+  std::ostringstream intrinsics;
+  intrinsics << "intrinsics: [" << f << ", " << f << ", " << width / 2.0 - 0.5 << ", "
+             << height / 2.0 - 0.5 << "]";
+  std::string config = shipped.str();
+  config =
+      ReplaceAll(config, "resolution: [752, 480]",
+                 "resolution: [" + std::to_string(width) + ", " + std::to_string(height) + "]");
+  config = ReplaceAll(config, "intrinsics: [651.2511, 651.2511, 375.5, 239.5]", intrinsics.str());
+  return ReplaceAll(config, "num_frames: 468", "num_frames: " + std::to_string(frames));
 }
 
 }  // namespace rigcal::support

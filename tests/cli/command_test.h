@@ -1,0 +1,76 @@
+#pragma once
+// The harness of the tests that run the built rigcal binary (RIGCAL_BINARY, set by
+// tests/CMakeLists.txt): a fresh temporary directory per test, kept when the test fails, and
+// Run(args) -> exit code, stdout and stderr.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+namespace rigcal::cli_test {
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+inline std::string Slurp(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+inline std::string Quote(const std::string& s) { return "'" + s + "'"; }
+
+class CommandTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+#ifndef RIGCAL_BINARY
+    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
+#else
+    binary_ = RIGCAL_BINARY;
+    ASSERT_TRUE(std::filesystem::exists(binary_)) << binary_;
+#endif
+    std::string pattern =
+        (std::filesystem::path(::testing::TempDir()) / "rigcal_command_XXXXXX").string();
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override {
+    if (HasFailure()) {
+      std::cerr << "test files kept in " << dir_ << "\n";
+      return;
+    }
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
+  }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  // Runs `rigcal <args>` (a shell command line) with stdin from /dev/null.
+  RunResult Run(const std::string& args) const {
+    const std::string out = Path("stdout.txt");
+    const std::string err = Path("stderr.txt");
+    const std::string cmd =
+        Quote(binary_) + " " + args + " >" + Quote(out) + " 2>" + Quote(err) + " </dev/null";
+    const int status = std::system(cmd.c_str());
+    RunResult r;
+    r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+    r.out = Slurp(out);
+    r.err = Slurp(err);
+    return r;
+  }
+
+  std::string binary_;
+  std::filesystem::path dir_;
+};
+
+}  // namespace rigcal::cli_test
