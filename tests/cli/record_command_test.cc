@@ -93,6 +93,14 @@ TEST_F(RecordCommandTest, RecordsEveryFrameWithProgress) {
   EXPECT_EQ(jpeg.images[0].encoding, image_t::ENCODING_JPEG);
 }
 
+TEST_F(RecordCommandTest, MissingConfigIsBadInput) {
+  const auto r =
+      Run("record --config " + Quote(Path("none.yaml")) + " -o " + Quote(Path("x.lcmlog")));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find(Path("none.yaml")), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(Path("x.lcmlog")));
+}
+
 TEST_F(RecordCommandTest, SplitsBySize) {
   const std::string config = WriteConfig(160, 120, 40);
   const std::string log = (dir_ / "split.lcmlog").string();

@@ -192,6 +192,7 @@ int RunRecord(const RecordArgs& args) {
     const double elapsed = std::chrono::duration<double>(now - start).count();
     if (args.duration_s > 0 && elapsed >= args.duration_s) break;
     if (pipeline ? pipeline->Finished() : capture->Finished()) break;
+    if (!recorder.Stats().error.empty()) break;  // the disk failed: reported below
     if (pipeline &&
         std::chrono::duration<double>(now - last_extrinsics).count() >= extrinsics_period_s) {
       record_extrinsics();
@@ -253,9 +254,8 @@ void RegisterRecord(CLI::App& app, int* exit_code) {
       "A progress line (MB, frames per camera, drops) refreshes in place on a terminal, one line\n"
       "per second otherwise. Every event is written whole and the log synced every second: after\n"
       "a crash or power loss it is readable up to its last complete event.");
-  cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")
-      ->required()
-      ->check(CLI::ExistingFile);
+  // A missing config is bad input (exit 1, named by the loader), not a usage error.
+  cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")->required();
   cmd->add_option("-o,--out", args->out, "LCM log file to write")->required();
   cmd->add_option("--duration", args->duration_s, "Stop after this many seconds (0 = source end)")
       ->check(CLI::NonNegativeNumber);
