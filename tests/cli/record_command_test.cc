@@ -146,12 +146,12 @@ TEST_F(RecordCommandTest, RecordsVoPosesAndSurvivesACut) {
   int cut_total = 0;
   for (const auto& [channel, n] : cut.events) cut_total += n;
   EXPECT_EQ(cut_total, total - 1);
-  // The poses replay: the node reads up to the cut and says where the log is damaged.
+  // The log replays: the node reads up to the cut and says at which byte the log is damaged.
   const auto replay = Run("calib --config " + Quote(config) + " --log " + Quote(log) + " --out " +
                           Quote((dir_ / "result.yaml").string()));
   EXPECT_NE(replay.exit_code, 1) << replay.err;
-  EXPECT_NE(replay.err.find("truncated or corrupt event after byte"), std::string::npos)
-      << replay.err;
+  EXPECT_NE(replay.err.find("truncated"), std::string::npos) << replay.err;
+  EXPECT_NE(replay.err.find("byte "), std::string::npos) << replay.err;
 }
 
 }  // namespace
