@@ -121,13 +121,13 @@ TEST_F(EurocImportReplayTest, StaticFramesImageLogReportsInsufficientMotion) {
     auto msg = validator.Decode<image_t>(e.channel, e.data.data(), e.data.size());
     ASSERT_TRUE(msg.ok()) << msg.error();
     ++frames[msg->camera];
-    auto image = tools::ImageMessageToMat(*msg);
+    auto image = tools::FrameFromImage(*msg, 0);
     ASSERT_TRUE(image.ok()) << image.error();
     const fs::path png =
         data / "mav0" / msg->camera / "data" / (std::to_string(msg->t_ns) + ".png");
     const cv::Mat original = cv::imread(png.string(), cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(original.empty()) << png;
-    ASSERT_EQ(cv::norm(*image, original, cv::NORM_INF), 0.0) << png;
+    ASSERT_EQ(cv::norm(image->image, original, cv::NORM_INF), 0.0) << png;
   }
   EXPECT_EQ(frames["cam0"], 95);
   EXPECT_EQ(frames["cam1"], 95);

@@ -190,11 +190,11 @@ TEST_F(ImportCommandTest, EurocImagesInTimeOrder) {
     EXPECT_GT(msg->t_ns, last_t_ns);  // time order across the cameras
     last_t_ns = msg->t_ns;
     EXPECT_EQ(msg->encoding, image_t::ENCODING_PNG);  // the default for imports
-    auto image = tools::ImageMessageToMat(*msg);
+    auto image = tools::FrameFromImage(*msg, 0);
     ASSERT_TRUE(image.ok()) << image.error();
     const int camera = msg->camera == "cam0" ? 0 : 1;
     const int k = static_cast<int>(msg->trigger_seq);  // the CSV line index
-    EXPECT_EQ(cv::norm(*image, EurocImage(camera, k), cv::NORM_INF), 0.0)
+    EXPECT_EQ(cv::norm(image->image, EurocImage(camera, k), cv::NORM_INF), 0.0)
         << msg->camera << " frame " << k;
   }
 

@@ -67,10 +67,10 @@ TEST_F(RecordCommandTest, RecordsEveryFrameWithProgress) {
   EXPECT_EQ(summary.bad_images, 0);
   for (const image_t& msg : summary.images) {
     EXPECT_EQ(msg.encoding, image_t::ENCODING_PNG);
-    auto image = tools::ImageMessageToMat(msg);
+    auto image = tools::FrameFromImage(msg, 0);
     ASSERT_TRUE(image.ok()) << image.error();
-    EXPECT_EQ(image->cols, 160);
-    EXPECT_GT(cv::norm(*image, cv::NORM_L1), 0.0);  // rendered, not blank
+    EXPECT_EQ(image->image.cols, 160);
+    EXPECT_GT(cv::norm(image->image, cv::NORM_L1), 0.0);  // rendered, not blank
   }
   // Not a terminal: plain progress lines, the last with every frame; the summary with figures.
   EXPECT_EQ(r.err.find('\r'), std::string::npos);

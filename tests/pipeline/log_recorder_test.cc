@@ -85,13 +85,15 @@ TEST(ImageCodec, RoundTripsEveryEncoding) {
     EXPECT_EQ(msg->trigger_seq, 42);
     EXPECT_EQ(msg->pixel_format, "GREY");
     EXPECT_FALSE(CheckMessage(ImageChannel("cam1"), {"cam0", "cam1"}, &*msg).has_value());
-    auto back = ImageMessageToMat(*msg);
+    auto back = FrameFromImage(*msg, 0);
     ASSERT_TRUE(back.ok()) << back.error();
-    ASSERT_EQ(back->size(), frame.image.size());
-    const double max_diff = cv::norm(*back, frame.image, cv::NORM_INF);
+    ASSERT_EQ(back->image.size(), frame.image.size());
+    EXPECT_EQ(back->t_ns, frame.t_ns);
+    EXPECT_EQ(back->seq, 42);
+    const double max_diff = cv::norm(back->image, frame.image, cv::NORM_INF);
     if (encoding == ImageEncoding::kJpeg) {
-      EXPECT_GT(cv::mean(cv::abs(*back - frame.image))[0], 0.0);  // lossy, but close
-      EXPECT_LT(cv::norm(*back, frame.image, cv::NORM_L1) / frame.image.total(), 12.0);
+      EXPECT_GT(cv::mean(cv::abs(back->image - frame.image))[0], 0.0);  // lossy, but close
+      EXPECT_LT(cv::norm(back->image, frame.image, cv::NORM_L1) / frame.image.total(), 12.0);
     } else {
       EXPECT_EQ(max_diff, 0.0);
     }
@@ -111,25 +113,25 @@ TEST(ImageCodec, DecodesOtherRawFormatsAndRejectsBadData) {
   msg.stride = 8;                               // padded rows
   msg.data = {0, 0, 255, 255, 255, 255, 9, 9};  // red, white
   msg.size = 8;
-  auto grey = ImageMessageToMat(msg);
+  auto grey = FrameFromImage(msg, 0);
   ASSERT_TRUE(grey.ok()) << grey.error();
-  EXPECT_EQ(grey->at<uint8_t>(0, 0), 76);  // 0.299 * 255
-  EXPECT_EQ(grey->at<uint8_t>(0, 1), 255);
+  EXPECT_EQ(grey->image.at<uint8_t>(0, 0), 76);  // 0.299 * 255
+  EXPECT_EQ(grey->image.at<uint8_t>(0, 1), 255);
   msg.pixel_format = "Y16 ";
   msg.stride = 4;
   msg.data = {0x00, 0x80, 0xFF, 0xFF};  // little-endian 0x8000, 0xFFFF
   msg.size = 4;
-  grey = ImageMessageToMat(msg);
+  grey = FrameFromImage(msg, 0);
   ASSERT_TRUE(grey.ok()) << grey.error();
-  EXPECT_EQ(grey->at<uint8_t>(0, 0), 128);
-  EXPECT_EQ(grey->at<uint8_t>(0, 1), 255);
+  EXPECT_EQ(grey->image.at<uint8_t>(0, 0), 128);
+  EXPECT_EQ(grey->image.at<uint8_t>(0, 1), 255);
   msg.pixel_format = "NV12";
-  grey = ImageMessageToMat(msg);
+  grey = FrameFromImage(msg, 0);
   ASSERT_FALSE(grey.ok());
   EXPECT_NE(grey.error().find("'NV12' is not supported"), std::string::npos) << grey.error();
   msg.encoding = image_t::ENCODING_PNG;
   msg.data = {1, 2, 3, 4};
-  grey = ImageMessageToMat(msg);
+  grey = FrameFromImage(msg, 0);
   ASSERT_FALSE(grey.ok());
   EXPECT_NE(grey.error().find("do not decode as PNG"), std::string::npos) << grey.error();
 }
@@ -195,9 +197,9 @@ TEST(LogRecorder, RecordsTappedFramesAndMessages) {
   for (const image_t& msg : log.images) {
     const int camera = msg.camera == "cam0" ? 0 : 1;
     EXPECT_EQ(msg.encoding, image_t::ENCODING_PNG);
-    auto image = ImageMessageToMat(msg);
+    auto image = FrameFromImage(msg, 0);
     ASSERT_TRUE(image.ok()) << image.error();
-    EXPECT_EQ(cv::norm(*image, TestImage(camera, msg.trigger_seq), cv::NORM_INF), 0.0)
+    EXPECT_EQ(cv::norm(image->image, TestImage(camera, msg.trigger_seq), cv::NORM_INF), 0.0)
         << msg.camera << " frame " << msg.trigger_seq;
     EXPECT_EQ(msg.t_ns, 1'000'000'000 + msg.trigger_seq * 50'000'000);
   }
@@ -227,9 +229,9 @@ TEST(LogRecorder, CutRecordingReadsUpToLastCompleteEvent) {
   const LogContents log = ReadLog(path, names);
   ASSERT_EQ(log.images.size(), 4u);
   EXPECT_EQ(log.images.back().trigger_seq, 3);
-  auto image = ImageMessageToMat(log.images.back());
+  auto image = FrameFromImage(log.images.back(), 0);
   ASSERT_TRUE(image.ok()) << image.error();
-  EXPECT_EQ(cv::norm(*image, TestImage(0, 3), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(image->image, TestImage(0, 3), cv::NORM_INF), 0.0);
 }
 
 TEST(LogRecorder, ReportsAnUnwritableLog) {

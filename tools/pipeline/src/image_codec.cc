@@ -93,8 +93,10 @@ Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
   return EncodeMessage(ImageChannel(name), names, std::move(*msg));
 }
 
-Expected<cv::Mat> ImageMessageToMat(const image_t& msg) {
-  const std::string who = "camera '" + msg.camera + "' image at t_ns " + std::to_string(msg.t_ns);
+namespace {
+
+// The pixels of `msg` as grey (FrameFromImage); `who` names the image in errors.
+Expected<cv::Mat> GreyPixels(const image_t& msg, const std::string& who) {
   if (msg.encoding != image_t::ENCODING_RAW) {
     cv::Mat decoded;
     try {
@@ -136,6 +138,20 @@ Expected<cv::Mat> ImageMessageToMat(const image_t& msg) {
                  "' is not supported (GREY, Y16 , YUYV, RGB3, BGR3)"};
   }
   return grey;
+}
+
+}  // namespace
+
+Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera) {
+  Expected<cv::Mat> grey =
+      GreyPixels(msg, "camera '" + msg.camera + "' image at t_ns " + std::to_string(msg.t_ns));
+  if (!grey) return grey.status();
+  drivers::Frame frame;
+  frame.camera = camera;
+  frame.t_ns = msg.t_ns;
+  frame.seq = msg.trigger_seq;
+  frame.image = std::move(*grey);
+  return frame;
 }
 
 }  // namespace rigcal::tools

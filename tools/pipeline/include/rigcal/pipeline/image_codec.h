@@ -1,6 +1,6 @@
 #pragma once
 // Camera frames <-> image_t (RIGCAL_IMAGE_<camera>, lcmtypes/image_t.lcm): how `rigcal record`
-// and `rigcal import` store images, and how a reader gets them back as the CV_8UC1 grey images
+// and `rigcal import` store images, and how a replay gets them back as the frames (CV_8UC1 grey)
 // the VO takes.
 
 #include <cstdint>
@@ -42,10 +42,11 @@ Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
                                                 const CameraNames& names, int camera,
                                                 const ImageEncodeOptions& options);
 
-// The pixels of a (checked, see image_message.h) image_t as a CV_8UC1 image of width x height:
-// raw GREY, "Y16 " (the high byte), "YUYV" (the luma), "RGB3"/"BGR3" (converted to grey), or a
-// PNG/JPEG file decoded to grey. Errors name the camera and say what is wrong: an unsupported
-// pixel format, data that does not decode, a decoded size other than width x height.
-Expected<cv::Mat> ImageMessageToMat(const image_t& msg);
+// The frame of a (checked, see image_message.h) image_t for camera index `camera`: t_ns and seq
+// (trigger_seq) from the message, the pixels as a CV_8UC1 image of width x height: raw GREY,
+// "Y16 " (the high byte), "YUYV" (the luma), "RGB3"/"BGR3" (converted to grey), or a PNG/JPEG
+// file decoded to grey. Errors name the camera and say what is wrong: an unsupported pixel
+// format, data that does not decode, a decoded size other than width x height.
+Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera);
 
 }  // namespace rigcal::tools
