@@ -14,6 +14,7 @@
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/lcm/log_writer.h"
 #include "rigcal/pipeline/image_codec.h"
+#include "support/command_runner.h"
 #include "support/lcm_log_events.h"
 #include "support/simulated_rig_config.h"
 
@@ -91,6 +92,21 @@ TEST_F(RecordCommandTest, RecordsEveryFrameWithProgress) {
   const LogSummary jpeg = ReadLog(log);
   ASSERT_EQ(jpeg.images.size(), 60u);
   EXPECT_EQ(jpeg.images[0].encoding, image_t::ENCODING_JPEG);
+}
+
+// On a terminal the progress line is rewritten in place (\r, erase to the end of the line).
+TEST_F(RecordCommandTest, ProgressInPlaceOnATerminal) {
+  if (support::RunShell("command -v script", dir_).exit_code != 0) {
+    RIGCAL_SKIP_UNLESS_CI("`script` (util-linux) not found: no pseudo-terminal to test with");
+  }
+  const std::string config = WriteConfig(160, 120, 200);
+  const std::string command = Quote(binary_) + " record --config " + Quote(config) + " -o " +
+                              Quote(Path("tty.lcmlog")) + " --no-vo --duration 1.5";
+  // script runs the command on a pseudo-terminal and copies what it printed to stdout.
+  const auto r = support::RunShell("script -qec " + Quote(command) + " /dev/null", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("\rrigcal record: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\033[K"), std::string::npos) << r.out;
 }
 
 TEST_F(RecordCommandTest, MissingConfigIsBadInput) {
