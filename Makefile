@@ -53,7 +53,7 @@ test-asan: deps
 test-tsan: deps
 	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,-DRIGCAL_TSAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
 	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test \
-	  calib_pose_merge_test
+	  calib_pose_merge_test calib_online_calibrator_lossless_test
 	TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
 	  ctest --test-dir $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)'
 

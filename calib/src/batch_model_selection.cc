@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "model_explanation.h"
+#include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/robust_statistics.h"
 #include "scale_measurement.h"
@@ -176,11 +177,11 @@ ScaleModelChoice SelectScaleModel(const CalibrationOptions& options, const Batch
                                   std::vector<MotionData>* motions) {
   const std::vector<MotionData>& data = *motions;
   const bool translational = setting.translational;
-  double rms_ci = 0.0;
-  for (const auto& m : data) rms_ci += m.Ci.squaredNorm();
-  rms_ci = std::sqrt(rms_ci / data.size());
+  std::vector<Eigen::Vector3d> slave_translations;
+  slave_translations.reserve(data.size());
+  for (const auto& m : data) slave_translations.push_back(m.Ci);
   ScaleModelChoice choice;
-  choice.epsilon = options.scale_dot_epsilon > 0.0 ? options.scale_dot_epsilon : 1e-3 * rms_ci;
+  choice.epsilon = ScaleDotEpsilon(options.scale_dot_epsilon, slave_translations);
   choice.model = options.scale_model;
   int partitions = options.partitions;
   if (choice.model == ScaleModel::kAuto) {

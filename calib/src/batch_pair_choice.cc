@@ -1,77 +1,147 @@
-// Per-slave span choice by the reported σ (batch_pair_choice.h).
+// Per-slave span choice by the σ a fitted drift model predicts (batch_pair_choice.h).
 #include "batch_pair_choice.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
 
+#include "batch_solve_details.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/pair_selection.h"
+#include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
+#include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::internal {
 namespace {
 
 struct Candidate {
-  int span = 0;
+  int span = 0;       // relative:N, 0 for the walk
+  double frames = 0;  // the median span of the pairs, in poses
   SlaveCalibration result;
-  double rot = std::numeric_limits<double>::quiet_NaN();           // rotation σ, degrees
-  double pos = std::numeric_limits<double>::quiet_NaN();           // |σ_C|, master units
-  double pos_in_plane = std::numeric_limits<double>::quiet_NaN();  // across the rotation axis
+  SlaveSolveDetails details;
 };
 
-// σ that can be compared: finite and positive (an unknown or zero σ says nothing).
-double Comparable(double sigma) {
-  return std::isfinite(sigma) && sigma > 0.0 ? sigma : std::numeric_limits<double>::quiet_NaN();
+// Variances the candidates are compared by (rotation: largest axis, deg²; position: trace of C's
+// covariance across the rotation axis when `in_plane`, master units²), reported and of
+// independent motions. NaN when unknown or zero (a zero σ says nothing).
+struct Variances {
+  double rot = std::numeric_limits<double>::quiet_NaN();
+  double pos = std::numeric_limits<double>::quiet_NaN();
+  double rot_independent = std::numeric_limits<double>::quiet_NaN();
+  double pos_independent = std::numeric_limits<double>::quiet_NaN();
+};
+
+double Comparable(double variance) {
+  return std::isfinite(variance) && variance > 0.0 ? variance
+                                                   : std::numeric_limits<double>::quiet_NaN();
+}
+
+double LargestEigenvalue(const Eigen::Matrix3d& m) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m).eigenvalues()(2);
+}
+
+Variances VariancesOf(const Candidate& c, bool in_plane) {
+  Variances v;
+  const SlaveCalibration& r = c.result;
+  if (!r.solved() || !c.details.covariance_ok) return v;
+  const double deg2 = kDegPerRad * kDegPerRad;
+  v.rot = Comparable(LargestEigenvalue(c.details.cov_rotation) * deg2);
+  v.rot_independent = Comparable(LargestEigenvalue(c.details.independent_cov_rotation) * deg2);
+  if (!r.position_observable) return v;
+  Eigen::Matrix3d across = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d& axis = r.observability.planar_axis;
+  if (in_plane && axis.norm() > 0.5) across -= axis.normalized() * axis.normalized().transpose();
+  v.pos = Comparable((across * c.details.cov_position * across).trace());
+  v.pos_independent = Comparable((across * c.details.independent_cov_position * across).trace());
+  return v;
 }
 
 Candidate Solve(const RigRecording& recording, int slave, const CalibrationOptions& options,
                 const PairOptions& policy, const std::vector<IndexPair>& pairs) {
   Candidate c;
   c.span = policy.policy == PairOptions::Policy::kRelative ? policy.step : 0;
+  std::vector<double> spans;
+  spans.reserve(pairs.size());
+  for (const IndexPair& p : pairs) spans.push_back(p.b - p.a);
+  c.frames = spans.empty() ? 0.0 : Median(spans);
   c.result = CalibrateSlave(MotionsForSlave(recording, slave, pairs), options,
-                            recording.slaves[slave].name);
+                            recording.slaves[slave].name, &c.details);
   c.result.pairs = PairsText(policy);
-  if (c.result.solved()) {
-    c.rot = Comparable(c.result.rot_std_deg);
-    if (c.result.position_observable) {
-      c.pos = Comparable(c.result.pos_std.norm());
-      // σ of C across the mean rotation axis: what a planar drive determines, whichever model
-      // (general or planar) a span's motions call for.
-      const double axis = std::isfinite(c.result.axis_offset_std) ? c.result.axis_offset_std : 0.0;
-      c.pos_in_plane =
-          Comparable(std::sqrt(std::max(0.0, c.result.pos_std.squaredNorm() - axis * axis)));
-    }
-  }
   return c;
 }
 
-// σ along the ladder of spans, smoothed: the geometric mean of each σ and its neighbours' (the
-// σ of one span is itself an estimate, and the smallest of many noisy estimates is mostly the
-// one that came out too small). NaN stays NaN.
-std::vector<double> Smoothed(const std::vector<double>& sigma, const std::vector<bool>& ladder) {
-  std::vector<double> out(sigma.size(), std::numeric_limits<double>::quiet_NaN());
-  for (size_t k = 0; k < sigma.size(); ++k) {
-    if (!std::isfinite(sigma[k])) continue;
-    double log_sum = 0.0;
-    int count = 0;
-    for (size_t j = (k == 0 ? 0 : k - 1); j <= k + 1 && j < sigma.size(); ++j) {
-      if (std::isfinite(sigma[j]) && (j == k || (ladder[j] && ladder[k]))) {
-        log_sum += std::log(sigma[j]);
-        ++count;
+// Errors shared by overlapping motions (odometry drift) make the variance of an estimate from
+// motions N poses long larger than that of independent motions by the design effect
+// (1 + ρN²) / (1 + ρN), ρ the drift variance per pose over the white part: N motions share each
+// drift step (the cluster-robust covariance measures the effect, refinement.h).
+double DesignEffect(double frames, double rho) {
+  return (1.0 + rho * frames * frames) / (1.0 + rho * frames);
+}
+
+// ρ and a level common to every span (errors of unequal size raise every span's measured
+// effect alike) fitted to the candidates' measured design effects (reported over independent
+// variance, in logarithms, each weighted by the degrees of freedom of its cluster-robust
+// estimate, the time blocks - 1): the measured effect of a single span is itself noisy (few
+// blocks for long spans), the fit pools every span's.
+struct DriftFit {
+  double rho = 0.0;
+  double level = 1.0;  // the design effect's factor common to every span
+};
+DriftFit FitDrift(const std::vector<Candidate>& candidates, const std::vector<double>& reported,
+                  const std::vector<double>& independent) {
+  DriftFit best;
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (int step = -1; step <= 200; ++step) {
+    const double rho = step < 0 ? 0.0 : std::pow(10.0, -8.0 + 0.05 * step);
+    double sum_w = 0.0, sum_wm = 0.0, sum_wmm = 0.0;
+    for (size_t k = 0; k < candidates.size(); ++k) {
+      const int blocks = candidates[k].details.time_blocks;
+      if (candidates[k].span == 0 || blocks < 2 || !std::isfinite(reported[k]) ||
+          !std::isfinite(independent[k])) {
+        continue;
       }
+      const double misfit = std::log(reported[k] / independent[k]) -
+                            std::log(DesignEffect(candidates[k].frames, rho));
+      sum_w += blocks - 1;
+      sum_wm += (blocks - 1) * misfit;
+      sum_wmm += (blocks - 1) * misfit * misfit;
     }
-    out[k] = std::exp(log_sum / count);
+    if (sum_w <= 0.0) return best;
+    const double mean = sum_wm / sum_w;
+    const double cost = sum_wmm - 2.0 * mean * sum_wm + mean * mean * sum_w;
+    if (cost < best_cost) {
+      best_cost = cost;
+      best = {rho, std::exp(mean)};
+    }
+  }
+  return best;
+}
+
+// Per candidate, the variance predicted by the drift model: the independent motions' variance
+// times the fitted design effect. The walk (spans of every length, overlapping unlike a fixed
+// span's) and candidates without a cluster-robust estimate keep the reported variance.
+std::vector<double> Predicted(const std::vector<Candidate>& candidates,
+                              const std::vector<double>& reported,
+                              const std::vector<double>& independent) {
+  const DriftFit fit = FitDrift(candidates, reported, independent);
+  std::vector<double> out = reported;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    if (candidates[k].span > 0 && std::isfinite(independent[k]) &&
+        candidates[k].details.time_blocks >= 2) {
+      out[k] = independent[k] * fit.level * DesignEffect(candidates[k].frames, fit.rho);
+    }
   }
   return out;
 }
 
-// The candidate whose worse (smoothed) σ ratio to the best σ (rotation, and position where
-// every candidate has one) is smallest; -1 when none has a comparable rotation σ.
+// The candidate whose worse predicted σ ratio to the best (rotation, and position where every
+// candidate has one) is smallest; -1 when none has a comparable rotation σ.
 int Best(const std::vector<Candidate>& candidates, bool usable_only) {
   auto eligible = [&](const Candidate& c) {
-    return std::isfinite(c.rot) && (!usable_only || c.result.usable());
+    return c.result.solved() && (!usable_only || c.result.usable());
   };
   // Position σ compare across the rotation axis when any span's motions are planar (the
   // offset along the axis is then the nominal's or unknown, not what the span determines).
@@ -81,18 +151,19 @@ int Best(const std::vector<Candidate>& candidates, bool usable_only) {
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> rot(candidates.size(), nan), pos(candidates.size(), nan);
+  std::vector<double> rot_independent = rot, pos_independent = pos;
   bool every_pos = true;
   for (size_t k = 0; k < candidates.size(); ++k) {
-    const Candidate& c = candidates[k];
-    if (!eligible(c)) continue;
-    rot[k] = c.rot;
-    pos[k] = in_plane ? c.pos_in_plane : c.pos;
-    if (!std::isfinite(pos[k])) every_pos = false;
+    if (!eligible(candidates[k])) continue;
+    const Variances v = VariancesOf(candidates[k], in_plane);
+    rot[k] = v.rot;
+    pos[k] = v.pos;
+    rot_independent[k] = v.rot_independent;
+    pos_independent[k] = v.pos_independent;
+    if (std::isfinite(rot[k]) && !std::isfinite(pos[k])) every_pos = false;
   }
-  std::vector<bool> ladder;
-  for (const auto& c : candidates) ladder.push_back(c.span > 0);
-  rot = Smoothed(rot, ladder);
-  pos = Smoothed(pos, ladder);
+  rot = Predicted(candidates, rot, rot_independent);
+  pos = Predicted(candidates, pos, pos_independent);
   double rot_min = std::numeric_limits<double>::infinity();
   double pos_min = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < candidates.size(); ++k) {
@@ -158,7 +229,8 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording,
     }
     how = "no span gave a σ";
   } else {
-    how = "smallest σ among spans " + std::to_string(candidates.front().span) + "-" +
+    how = "smallest σ predicted by the drift fit among spans " +
+          std::to_string(candidates.front().span) + "-" +
           std::to_string(candidates[candidates.size() - 2].span) + " and the walk";
   }
   Candidate chosen = candidates[best];

@@ -23,8 +23,13 @@ AutoPairCandidates MakeAutoPairCandidates(const RigRecording& recording,
 
 // Solves slave `slave` of `recording` with each candidate's pairs and returns the result whose
 // largest σ ratio to the best candidate (rotation; position when observable) is smallest,
-// among the usable results when there are any (a thinned span solved again with every k). The
-// result's `pairs` names the candidate and its message how it was chosen.
+// among the usable results when there are any (a thinned span solved again with every k).
+// The σ compared are predicted, not the reported ones: each span's σ of independent motions
+// (precise: every motion's residual counts) times a design effect (1 + ρN²)/(1 + ρN) for
+// errors shared by overlapping motions of N poses (odometry drift), with ρ and a common level
+// fitted to every span's cluster-robust σ at once (the cluster-robust σ of one long span rests
+// on a few time blocks and is too noisy to rank spans by). The result's `pairs` names the
+// candidate and its message how it was chosen.
 SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording,
                                          const AutoPairCandidates& candidates, int slave,
                                          const CalibrationOptions& options);

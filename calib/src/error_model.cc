@@ -46,13 +46,22 @@ ConstraintResidual ResidualOf(const RigMotion& motion, const Similarity& rig) {
   Eigen::Quaterniond qi = Canonical(motion.slave.q);
   const double v0 = q0.vec().norm(), vi = qi.vec().norm();
   if (v0 > 1e-9 && vi > 1e-9) {
-    const double si = motion.slave.C.dot(qi.vec() / vi);
-    if (std::abs(si) > 1e-12) {
-      const double measured = motion.master.C.dot(q0.vec() / v0) / si;  // (4.18)
-      r.scale_pct = std::abs(rig.scale - measured) / std::abs(rig.scale) * 100.0;
+    r.master_axis_dot = motion.master.C.dot(q0.vec() / v0);
+    r.slave_axis_dot = motion.slave.C.dot(qi.vec() / vi);
+    if (std::abs(r.slave_axis_dot) > 1e-12) {
+      r.measured_scale = r.master_axis_dot / r.slave_axis_dot;  // (4.18)
+      r.scale_pct = std::abs(rig.scale - r.measured_scale) / std::abs(rig.scale) * 100.0;
     }
   }
   return r;
+}
+
+double ScaleDotEpsilon(double configured, const std::vector<Eigen::Vector3d>& slave_translations) {
+  if (configured > 0.0) return configured;
+  if (slave_translations.empty()) return 0.0;
+  double sum = 0.0;
+  for (const Eigen::Vector3d& c : slave_translations) sum += c.squaredNorm();
+  return 1e-3 * std::sqrt(sum / static_cast<double>(slave_translations.size()));
 }
 
 }  // namespace rigcal

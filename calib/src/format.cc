@@ -30,6 +30,17 @@ std::string SigmaText(double sigma, int digits) {
   return std::isfinite(sigma) ? SignificantText(sigma, digits) : "unknown";
 }
 
+std::string SigmaVectorText(const Eigen::Vector3d& sigma, int digits) {
+  std::string text = "[";  // piece by piece, as VectorText
+  text += SigmaText(sigma.x(), digits);
+  text += ", ";
+  text += SigmaText(sigma.y(), digits);
+  text += ", ";
+  text += SigmaText(sigma.z(), digits);
+  text += "]";
+  return text;
+}
+
 std::string VectorText(const Eigen::Vector3d& v, int decimals) {
   std::string text = "[";  // appended piece by piece: GCC 12 warns (-Wrestrict) on "[" + ...
   text += FixedText(v.x(), decimals);

@@ -1,16 +1,24 @@
 #include "rigcal/calib/online_calibrator.h"
 
+#include <algorithm>
+
 #include "rigcal/calib/logging.h"
 
 namespace rigcal {
 namespace {
 
 // The options with sync.num_cameras set from the camera count, checked (InvalidOptions).
+// Lossless: the ready queue can take every set one push may complete (SyncBuffer::ReadyBound).
 OnlineOptions Checked(OnlineOptions options, size_t cameras) {
   options.sync.num_cameras = static_cast<int>(cameras);
   RequireValid(options.Check(), "OnlineOptions");
+  if (options.lossless) {
+    options.sync.ready_capacity = std::max(options.sync.ready_capacity, options.sync.capacity + 1);
+  }
   return options;
 }
+
+constexpr auto kWaitSlice = std::chrono::milliseconds(50);
 
 }  // namespace
 
@@ -31,15 +39,45 @@ OnlineCalibrator::~OnlineCalibrator() { Stop(); }
 
 void OnlineCalibrator::Start() {
   estimator_thread_ = std::thread(&OnlineCalibrator::EstimatorLoop, this);
-  if (options_.refine_period_s > 0.0) {
+  if (options_.refine_period_s > 0.0 && !options_.refine_on_stream_time) {
     refinement_thread_ = std::thread(&OnlineCalibrator::RefinementLoop, this);
   }
 }
 
-PushResult OnlineCalibrator::Push(const CameraPose& pose) { return sync_.Push(pose); }
+PushResult OnlineCalibrator::Push(const CameraPose& pose) {
+  if (!options_.lossless) return sync_.Push(pose);
+  MutexLock serial(push_mutex_);
+  WaitForRoom();
+  return sync_.Push(pose);
+}
+
+void OnlineCalibrator::WaitForRoom() {
+  const auto limit = static_cast<uint64_t>(options_.sync.ready_capacity);
+  if (sync_.ReadyBound() <= limit) return;
+  MutexLock lock(estimator_mutex_);
+  while (sync_.ReadyBound() > limit && !sync_.stopped()) {
+    lock.WaitUntil(consumed_, std::chrono::steady_clock::now() + kWaitSlice);
+  }
+}
+
+void OnlineCalibrator::Drain() {
+  MutexLock lock(estimator_mutex_);
+  // Every set emitted so far is consumed, or was dropped (consumer_overflow, not lossless).
+  while (!sync_.stopped()) {
+    const SyncStats stats = sync_.stats();
+    if (sets_consumed_ + stats.consumer_overflow >= stats.sets_emitted) break;
+    lock.WaitUntil(consumed_, std::chrono::steady_clock::now() + kWaitSlice);
+  }
+}
 
 void OnlineCalibrator::Flush() {
-  sync_.Flush();
+  if (options_.lossless) {
+    MutexLock serial(push_mutex_);
+    WaitForRoom();
+    sync_.Flush();
+  } else {
+    sync_.Flush();
+  }
   const uint64_t target = sync_.stats().sets_emitted;
   MutexLock lock(estimator_mutex_);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
@@ -77,11 +115,27 @@ Status OnlineCalibrator::RestoreState(const RigEstimatorState& state) {
 
 void OnlineCalibrator::EstimatorLoop() {
   MatchedSet set;
+  const bool stream_refinement = options_.refine_on_stream_time && options_.refine_period_s > 0.0;
+  const auto refine_period_ns = static_cast<int64_t>(options_.refine_period_s * 1e9);
+  bool refined_once = false;
+  int64_t next_refine_ns = 0;
   while (sync_.Pop(&set, std::chrono::milliseconds(200)) || !sync_.stopped()) {
     if (set.poses.empty()) continue;
+    if (stream_refinement && !refined_once) {
+      refined_once = true;
+      next_refine_ns = set.t_ns + refine_period_ns;
+    }
     {
       MutexLock lock(estimator_mutex_);
       estimator_.AddSet(set.t_ns, set.poses);
+    }
+    // Before the set counts as consumed, so that Drain also waits for a refinement it is due.
+    if (stream_refinement && set.t_ns >= next_refine_ns) {
+      RefineNow();
+      while (next_refine_ns <= set.t_ns) next_refine_ns += refine_period_ns;
+    }
+    {
+      MutexLock lock(estimator_mutex_);
       ++sets_consumed_;
     }
     consumed_.notify_all();

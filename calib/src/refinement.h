@@ -63,6 +63,10 @@ struct RefinementResult {
   // With input.blocks: the cluster-robust covariance was larger than the one of independent
   // motions in some direction, and the covariance above is the smallest one above both.
   bool clustered_larger = false;
+  // The covariance of independent motions of equal error (the one above before the
+  // cluster-robust raise).
+  Eigen::Matrix3d independent_cov_rotation = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d independent_cov_position = Eigen::Matrix3d::Zero();
 };
 
 // Minimises eq. (4.26)+(4.27): rotation residuals q0·dq - dq·qi and position residuals

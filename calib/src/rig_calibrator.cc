@@ -14,6 +14,7 @@
 #include "batch_pair_choice.h"
 #include "batch_refinement.h"
 #include "batch_result.h"
+#include "batch_solve_details.h"
 #include "motion_data.h"
 #include "pose_glitches.h"
 #include "rigcal/calib/logging.h"
@@ -37,7 +38,7 @@ SlaveState BatchState(const SlaveCalibration& r, bool supported) {
 // estimate (batch_acceptance.h; the message then says what is missing).
 SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
                             const CalibrationOptions& options, const std::string& name,
-                            bool* supported) {
+                            bool* supported, internal::SlaveSolveDetails* details) {
   SlaveCalibration r;
   r.name = name;
   if (const Status checked = options.Check(); !checked.ok()) {
@@ -73,6 +74,15 @@ SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
       internal::RefineBatch(options, setting, data, linear, r.observability.planar_axis,
                             r.motion_model == MotionModel::kPlanar, scale.epsilon);
   internal::AssembleResult(options, setting, data, linear, refinement, scale, &r);
+  if (details != nullptr) {
+    const internal::RefinementResult& refined = refinement.refined;
+    details->covariance_ok = refined.covariance_ok;
+    details->time_blocks = refinement.time_blocks;
+    details->cov_rotation = refined.cov_rotation;
+    details->cov_position = refined.cov_position;
+    details->independent_cov_rotation = refined.independent_cov_rotation;
+    details->independent_cov_position = refined.independent_cov_position;
+  }
   if (r.solved()) {
     bool contradiction = false;
     if (auto reason = internal::UnsupportedReason(options, setting, data, r, &contradiction)) {
@@ -89,11 +99,21 @@ SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
 
 SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
                                 const CalibrationOptions& options, const std::string& name) {
+  return internal::CalibrateSlave(motions, options, name, nullptr);
+}
+
+namespace internal {
+
+SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
+                                const CalibrationOptions& options, const std::string& name,
+                                SlaveSolveDetails* details) {
   bool supported = true;
-  SlaveCalibration r = SolveSlave(motions, options, name, &supported);
+  SlaveCalibration r = SolveSlave(motions, options, name, &supported, details);
   r.state = BatchState(r, supported);
   return r;
 }
+
+}  // namespace internal
 
 RigCalibration CalibrateRig(const RigRecording& input, const CalibrationOptions& options) {
   // Glitched poses (pose_glitches.h) go first: neither the pair choice nor a motion sees them.

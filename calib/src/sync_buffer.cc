@@ -94,6 +94,7 @@ std::string SyncStats::BriefReport() const {
     field("invalid", k.invalid);
     field("stopped", k.stopped);
     field("optional_missing", k.optional_missing);
+    field("consumer_overflow", k.consumer_overflow);
   }
   return s.str();
 }
@@ -122,5 +123,6 @@ void SyncBuffer::Flush() { impl_->Flush(); }
 void SyncBuffer::Stop() { impl_->Stop(); }
 bool SyncBuffer::stopped() const { return impl_->stopped(); }
 SyncStats SyncBuffer::stats() const { return impl_->stats(); }
+uint64_t SyncBuffer::ReadyBound() const { return impl_->ReadyBound(); }
 
 }  // namespace rigcal

@@ -64,6 +64,7 @@ SyncStats SyncBuffer::Impl::stats() const {
     t.overflow += k.overflow;
     t.never_matched += k.never_matched;
     t.optional_missing += k.optional_missing;
+    t.consumer_overflow += k.consumer_overflow;
     t.fill += k.fill;
   }
   s.unknown_camera = unknown_camera_;
@@ -72,6 +73,11 @@ SyncStats SyncBuffer::Impl::stats() const {
   s.consumer_overflow = consumer_overflow_;
   s.ready_fill = ready_.size();
   return s;
+}
+
+uint64_t SyncBuffer::Impl::ReadyBound() const {
+  MutexLock lock(mutex_);
+  return ready_.size() + cameras_[0].ring.size() + 1;
 }
 
 bool SyncBuffer::Impl::TakeReady(MatchedSet* out) {

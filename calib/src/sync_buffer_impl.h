@@ -41,6 +41,7 @@ class SyncBuffer::Impl {
   void Stop() RIGCAL_EXCLUDES(mutex_);
   bool stopped() const RIGCAL_EXCLUDES(mutex_);
   SyncStats stats() const RIGCAL_EXCLUDES(mutex_);
+  uint64_t ReadyBound() const RIGCAL_EXCLUDES(mutex_);
 
  private:
   struct CameraState {

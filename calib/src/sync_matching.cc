@@ -173,6 +173,12 @@ int SyncBuffer::Impl::Process(bool flush) {
 
 void SyncBuffer::Impl::Emit() {
   if (ready_.full()) {
+    // The consumer fell behind: the oldest ready set is lost, and with it one entry of every
+    // camera in it (counted where it happens, per camera).
+    const MatchedSet& lost = ready_.front();
+    for (int c = 0; c < n_; ++c) {
+      if (lost.poses[c].has_value()) ++cameras_[c].stats.consumer_overflow;
+    }
     ready_.PopFront();
     ++consumer_overflow_;
   }

@@ -9,55 +9,15 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli/command_test.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-class RunCommandTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-#ifndef RIGCAL_BINARY
-    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
-#else
-    binary_ = RIGCAL_BINARY;
-#endif
-    std::string pattern = (fs::path(::testing::TempDir()) / "run_command_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-
-  RunResult Run(const std::string& args) {
-    const std::string out = (dir_ / "stdout.txt").string();
-    const std::string err = (dir_ / "stderr.txt").string();
-    const std::string command = "'" + binary_ + "' " + args + " > '" + out + "' 2> '" + err + "'";
-    RunResult r;
-    const int status = std::system(command.c_str());
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = Slurp(out);
-    r.err = Slurp(err);
-    return r;
-  }
-
-  std::string binary_;
-  fs::path dir_;
-};
+using RunCommandTest = rigcal::cli_test::CommandTest;
+using rigcal::cli_test::RunResult;
+using rigcal::cli_test::Slurp;
 
 TEST_F(RunCommandTest, StaticEurocFramesGiveInsufficientMotion) {
   const fs::path mav0 = fs::path(RIGCAL_SHARED_DATA_DIR) / "euroc_v101_static" / "mav0";

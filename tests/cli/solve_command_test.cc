@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli/command_test.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/calib/synthetic_car.h"
@@ -24,45 +25,12 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
+using cli_test::Quote;
+using cli_test::RunResult;
+using cli_test::Slurp;
 
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string Quote(const std::string& s) { return "'" + s + "'"; }
-
-class SolveCommandTest : public ::testing::Test {
+class SolveCommandTest : public cli_test::CommandTest {
  protected:
-  void SetUp() override {
-#ifndef RIGCAL_BINARY
-    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
-#else
-    binary_ = RIGCAL_BINARY;
-    ASSERT_TRUE(fs::exists(binary_)) << binary_;
-#endif
-    std::string pattern = (fs::path(::testing::TempDir()) / "solve_command_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    if (HasFailure()) {
-      std::cerr << "test files kept in " << dir_ << "\n";
-      return;
-    }
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-
   // Writes cam0.txt (master), cam1.txt, cam2.txt and truth.yaml of the demo rig drive.
   void WriteDemoDrive(int64_t slave_time_offset_ns = 0) {
     const std::vector<std::string> names = {"cam0", "cam1", "cam2"};
@@ -85,26 +53,11 @@ class SolveCommandTest : public ::testing::Test {
     ASSERT_TRUE(WriteTrajectoryTum(Path(track.name + ".txt"), t).ok());
   }
 
-  RunResult Run(const std::string& args) const {
-    const std::string out = Path("stdout.txt");
-    const std::string err = Path("stderr.txt");
-    const std::string cmd =
-        Quote(binary_) + " " + args + " >" + Quote(out) + " 2>" + Quote(err) + " </dev/null";
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-    r.out = Slurp(out);
-    r.err = Slurp(err);
-    return r;
-  }
-
   std::string DemoArgs() const {
     return "solve --master " + Quote(Path("cam0.txt")) + " --slave " + Quote(Path("cam1.txt")) +
            " --slave " + Quote(Path("cam2.txt"));
   }
 
-  std::string binary_;
-  fs::path dir_;
   std::map<std::string, Similarity> truth_;
 };
 

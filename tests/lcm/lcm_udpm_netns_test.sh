@@ -7,35 +7,9 @@
 set -euo pipefail
 rigcal=$(readlink -f "$1")
 
-if [ "${RIGCAL_IN_PRIVATE_NETNS:-}" != 1 ]; then
-  for tool in unshare ip lcm-logger lcm-logplayer; do
-    command -v "$tool" >/dev/null || { echo "skip: $tool not found"; exit 77; }
-  done
-  if ! unshare --net true 2>/dev/null; then
-    echo "skip: cannot create a network namespace here (needs root or user namespaces)"
-    exit 77
-  fi
-  RIGCAL_IN_PRIVATE_NETNS=1 exec unshare --net --fork bash "$0" "$@"
-fi
-
-# Inside the new namespace: lo must be the only link, or this is not a private namespace.
-links=$(ip -o link show | awk -F': ' '{print $2}' | tr '\n' ' ')
-if [ "$links" != "lo " ]; then
-  echo "FAIL: expected only lo in the private namespace, found: $links"
-  exit 1
-fi
-ip link set lo up
-ip link set lo multicast on
-ip route add 224.0.0.0/4 dev lo
-url='udpm://239.255.76.67:7667?ttl=0'
-
-dir=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
-  rm -rf "$dir"
-}
-trap cleanup EXIT
+RIGCAL_NETNS_TOOLS="lcm-logger lcm-logplayer"
+# shellcheck source=../support/private_netns.sh
+source "$(dirname "$0")/../support/private_netns.sh" "$0" "$@"
 
 cat > "$dir/rig.yaml" <<YAML
 rig: {name: netns_test, master: front}
@@ -64,12 +38,6 @@ sleep 1
 lcm-logplayer --lcm-url="$url" --speed=6 "$dir/poses.lcmlog"
 sleep 1
 
-stop() {  # stop a process we started, by PID: SIGINT, then SIGTERM if it does not end
-  local pid=$1
-  kill -INT "$pid" 2>/dev/null || return 0
-  for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.1; done
-  kill -TERM "$pid" 2>/dev/null || true
-}
 stop "$node_pid"
 node_rc=0
 wait "$node_pid" || node_rc=$?
@@ -77,8 +45,6 @@ stop "$logger_pid"
 wait "$logger_pid" || true
 pids=()
 
-fail=0
-check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
 check "rigcal calib exits 0 after SIGINT (got $node_rc)" '[ "$node_rc" -eq 0 ]'
 check "result YAML written" '[ -s "$dir/result.yaml" ]'
 check "both slaves usable in the result" \

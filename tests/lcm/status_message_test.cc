@@ -68,5 +68,31 @@ TEST(StatusMessage, RejectsOutOfRange) {
                                {"rig_status_t.sync_fill"});
 }
 
+// fps comes from the stamps: 20 frames 50 ms apart are 20 fps however fast they were replayed.
+TEST(StatusMessage, RatesFromStampsNotTheWallClock) {
+  StampRate rate;
+  const int64_t t0 = 5'000'000'000;
+  EXPECT_EQ(rate.Update(0, -1, -1), 0.0);  // nothing yet
+  EXPECT_DOUBLE_EQ(rate.Update(20, t0 + 19 * 50'000'000, t0 - 50'000'000), 20.0);
+  EXPECT_DOUBLE_EQ(rate.Update(30, t0 + 29 * 50'000'000, -1), 20.0);  // 10 more in 0.5 s
+  EXPECT_EQ(rate.Update(30, t0 + 29 * 50'000'000, -1), 0.0);          // no new stamp
+}
+
+// A set dropped by a full ready queue shows as an overflow drop of every camera in it.
+TEST(StatusMessage, ConsumerOverflowIsAnOverflowDrop) {
+  SyncStats sync;
+  sync.cameras.resize(2);
+  sync.cameras[0].overflow = 2;
+  sync.cameras[0].consumer_overflow = 5;
+  sync.cameras[1].consumer_overflow = 4;
+  std::vector<CameraStatusInput> cameras(2);
+  cameras[0].name = kNames[0];
+  cameras[1].name = kNames[1];
+  cameras[1].dropped_backlog = 1;
+  const rig_status_t msg = MakeRigStatus(cameras, sync, 64, RigEstimate{}, 0.0, 1);
+  EXPECT_EQ(msg.cameras[0].dropped_overflow, 7);
+  EXPECT_EQ(msg.cameras[1].dropped_overflow, 5);
+}
+
 }  // namespace
 }  // namespace rigcal::tools::lcm_test

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <thread>
 
+#include "pipeline/room_rig.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
@@ -17,50 +18,6 @@
 
 namespace rigcal::tools {
 namespace {
-
-std::shared_ptr<const camera::CameraModel> Pinhole(const std::string& name) {
-  camera::CameraSpec spec;
-  spec.name = name;
-  spec.model = camera::CameraSpec::Model::kPinhole;
-  spec.width = 480;
-  spec.height = 320;
-  spec.intrinsics = {300.0, 300.0, 240.0, 160.0};
-  auto model = camera::MakeCameraModel(spec);
-  EXPECT_TRUE(model) << model.error();
-  return std::shared_ptr<const camera::CameraModel>(std::move(*model));
-}
-
-// A 3-camera rig in the default room, moving and rotating about varied axes for `seconds`.
-drivers::SimulatedRigSpec Spec(double seconds) {
-  drivers::SimulatedRigSpec spec;
-  spec.names = {"front", "side", "up"};
-  for (const std::string& name : spec.names) spec.cameras.push_back(Pinhole(name));
-  Pose side;
-  side.q = AxisAngle(Eigen::Vector3d::UnitY(), 70.0 * kRadPerDeg);
-  side.C = Eigen::Vector3d(0.4, 0.0, -0.2);
-  Pose up;
-  up.q = AxisAngle(Eigen::Vector3d::UnitX(), 60.0 * kRadPerDeg);
-  up.C = Eigen::Vector3d(0.0, -0.3, 0.1);
-  spec.master_from_camera = {Pose(), side, up};
-  spec.frame_rate_hz = 20.0;
-  spec.duration_s = seconds;
-  spec.noise_sigma = 1.0;
-  spec.waypoint_interval_s = 2.0;
-  // Around the middle of the room at 2-3 m height, yawing, pitching and rolling.
-  const double ypr[][3] = {{0, 0, 0},     {25, 8, 5},   {50, -6, -8}, {20, 12, 10},
-                           {-15, -10, 0}, {-40, 5, -6}, {-10, -8, 8}, {15, 10, -5},
-                           {40, 0, 6},    {10, -10, 0}, {-20, 6, 8},  {0, 0, 0}};
-  const double p[][3] = {{-2, 0, 2.5},     {-1, 1, 2.8},     {0, 1.5, 2.2},     {1, 0.5, 2.6},
-                         {1.5, -1, 2.9},   {0.5, -1.5, 2.3}, {-0.5, -0.5, 2.7}, {-1.5, 0.5, 2.4},
-                         {-0.5, 1.2, 2.6}, {0.8, 0.8, 2.2},  {1.2, -0.6, 2.8},  {0, 0, 2.5}};
-  for (int i = 0; i < 12; ++i) {
-    drivers::SimulatedRigSpec::Waypoint w;
-    w.position = Eigen::Vector3d(p[i][0], p[i][1], p[i][2]);
-    w.world_from_master = drivers::WaypointOrientationFromYpr(ypr[i][0], ypr[i][1], ypr[i][2]);
-    spec.waypoints.push_back(w);
-  }
-  return spec;
-}
 
 OnlineOptions Online() {
   OnlineOptions online;
@@ -71,20 +28,14 @@ OnlineOptions Online() {
 }
 
 TEST(Pipeline, SimulatedDriveConverges) {
-  const drivers::SimulatedRigSpec spec = Spec(20.0);
+  const drivers::SimulatedRigSpec spec = RoomRigSpec(20.0);
   auto rig = drivers::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   PipelineOptions options;
   options.lossless = true;
   options.record_poses = true;
   Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, Online(), options);
-  pipeline.Start();
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-  while (!pipeline.Finished() && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ASSERT_TRUE(pipeline.Finished());
-  pipeline.Stop();
+  ASSERT_TRUE(RunToEnd(&pipeline));
   const PipelineSnapshot s = pipeline.Snapshot();
   for (const CameraHealth& h : s.cameras) {
     EXPECT_TRUE(h.ended) << h.name;
@@ -108,20 +59,14 @@ TEST(Pipeline, SimulatedDriveConverges) {
 }
 
 TEST(Pipeline, DeadCameraLeavesOthersCalibrating) {
-  drivers::SimulatedRigSpec spec = Spec(16.0);
+  drivers::SimulatedRigSpec spec = RoomRigSpec(16.0);
   spec.fail_after_s["up"] = 4.0;
   auto rig = drivers::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   PipelineOptions options;
   options.lossless = true;
   Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, Online(), options);
-  pipeline.Start();
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-  while (!pipeline.Finished() && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ASSERT_TRUE(pipeline.Finished());
-  pipeline.Stop();
+  ASSERT_TRUE(RunToEnd(&pipeline));
   const PipelineSnapshot s = pipeline.Snapshot();
   const CameraHealth& up = s.cameras[2];
   EXPECT_TRUE(up.dead);
@@ -137,7 +82,7 @@ TEST(Pipeline, DeadCameraLeavesOthersCalibrating) {
 // A lossless run does not depend on how the VO threads are scheduled: the same source gives
 // the same sets and the same estimate, however far one thread gets ahead of another.
 TEST(Pipeline, LosslessRunsAreDeterministic) {
-  const drivers::SimulatedRigSpec spec = Spec(8.0);
+  const drivers::SimulatedRigSpec spec = RoomRigSpec(8.0);
   auto rig = drivers::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   std::vector<PipelineSnapshot> runs;
@@ -146,13 +91,7 @@ TEST(Pipeline, LosslessRunsAreDeterministic) {
     options.lossless = true;
     options.frame_queue_capacity = run == 0 ? 1 : 16;  // different thread interleavings
     Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, Online(), options);
-    pipeline.Start();
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-    while (!pipeline.Finished() && std::chrono::steady_clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    ASSERT_TRUE(pipeline.Finished());
-    pipeline.Stop();
+    ASSERT_TRUE(RunToEnd(&pipeline));
     runs.push_back(pipeline.Snapshot());
   }
   ASSERT_EQ(runs[0].estimate.sets, runs[1].estimate.sets);
@@ -171,10 +110,11 @@ TEST(Pipeline, LosslessRunsAreDeterministic) {
 }
 
 TEST(Pipeline, RejectsInconsistentArguments) {
+  const auto models = RoomRigSpec(1.0).cameras;
   std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
-  EXPECT_THROW(Pipeline({"a", "b"}, std::move(devices), {Pinhole("a"), Pinhole("b")}, Online(),
-                        PipelineOptions()),
-               std::invalid_argument);
+  EXPECT_THROW(
+      Pipeline({"a", "b"}, std::move(devices), {models[0], models[1]}, Online(), PipelineOptions()),
+      std::invalid_argument);
   PipelineOptions bad;
   bad.frame_queue_capacity = 0;
   const Status status = bad.Check();
@@ -188,7 +128,7 @@ TEST(Pipeline, RejectsInconsistentArguments) {
   two_devices.push_back(nullptr);
   two_devices.push_back(nullptr);
   EXPECT_THROW(
-      Pipeline({"a", "b"}, std::move(two_devices), {Pinhole("a"), Pinhole("b")}, Online(), bad_vo),
+      Pipeline({"a", "b"}, std::move(two_devices), {models[0], models[1]}, Online(), bad_vo),
       InvalidOptions);
 }
 

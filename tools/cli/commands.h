@@ -1,6 +1,7 @@
 #pragma once
 // Subcommands of the rigcal command. Each Register* adds one subcommand to `app`; its
-// callback stores the process exit code in *exit_code (0 success, 1 failure, 2 usage).
+// callback stores the process exit code in *exit_code (0 every slave usable, 3 some slave not,
+// 1 bad input; usage errors, 2, are CLI11's parse errors).
 
 #include <CLI/CLI.hpp>
 
@@ -12,6 +13,9 @@ void RegisterDemo(CLI::App& app, int* exit_code);
 void RegisterCalib(CLI::App& app, int* exit_code);
 void RegisterSynthLog(CLI::App& app, int* exit_code);
 void RegisterRun(CLI::App& app, int* exit_code);
+void RegisterStatus(CLI::App& app, int* exit_code);
+void RegisterReport(CLI::App& app, int* exit_code);
+void RegisterReplay(CLI::App& app, int* exit_code);
 void RegisterRecord(CLI::App& app, int* exit_code);
 void RegisterImport(CLI::App& app, int* exit_code);
 

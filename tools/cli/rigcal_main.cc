@@ -2,9 +2,32 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "commands.h"
 #include "rigcal/calib/logging.h"
+
+namespace {
+
+// The first word of the command line that is not an option (nor --log-level's value) when it
+// names no subcommand, else null.
+const char* UnknownSubcommand(const CLI::App& app, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word == "--log-level") {
+      ++i;
+      continue;
+    }
+    if (word.empty() || word[0] == '-') continue;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      if (sub->check_name(word)) return nullptr;
+    }
+    return argv[i];
+  }
+  return nullptr;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -12,6 +35,7 @@ int main(int argc, char** argv) {
       "Estimates every slave camera's rotation, position and odometry scale relative to a\n"
       "master camera (hand-eye calibration with scale)."};
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("rigcal ") + RIGCAL_VERSION);
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->default_val("info")
@@ -29,8 +53,11 @@ int main(int argc, char** argv) {
 #endif
   rigcal::cli::RegisterRun(app, &exit_code);
   rigcal::cli::RegisterCalib(app, &exit_code);
+  rigcal::cli::RegisterReplay(app, &exit_code);
   rigcal::cli::RegisterSynthLog(app, &exit_code);
   rigcal::cli::RegisterDemo(app, &exit_code);
+  rigcal::cli::RegisterStatus(app, &exit_code);
+  rigcal::cli::RegisterReport(app, &exit_code);
   rigcal::cli::RegisterRecord(app, &exit_code);
   rigcal::cli::RegisterImport(app, &exit_code);
 
@@ -38,6 +65,10 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // --help and --version exit 0; every other parse error is a usage error (2).
+    if (const char* unknown = UnknownSubcommand(app, argc, argv)) {
+      std::cerr << "rigcal: unknown subcommand '" << unknown << "' (rigcal --help lists them)\n";
+      return 2;
+    }
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const std::exception& e) {
     std::cerr << "rigcal: error: " << e.what() << "\n";

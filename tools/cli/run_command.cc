@@ -63,18 +63,6 @@ const char* VoStateShort(vo::VoState state) {
   return "?";
 }
 
-int8_t VoStateToLcm(const tools::CameraHealth& h) {
-  if (h.dead) return camera_status_t::VO_DEAD;
-  switch (h.vo_state) {
-    case vo::VoState::kTracking:
-      return camera_status_t::VO_TRACKING;
-    case vo::VoState::kLost:
-      return camera_status_t::VO_LOST;
-    default:
-      return camera_status_t::VO_INITIALISING;
-  }
-}
-
 // One line: time, per camera fps / VO state / segment / VO ms, sets, per slave estimate.
 std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
                        const std::vector<int64_t>& frames_before, double period_s) {
@@ -113,17 +101,17 @@ std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
 }
 
 void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
-                   const std::vector<int64_t>& frames_before, double period_s, int32_t capacity,
-                   tools::CpuMeter* cpu, const std::vector<std::string>& names) {
+                   std::vector<tools::StampRate>* rates, int32_t capacity, tools::CpuMeter* cpu,
+                   const std::vector<std::string>& names) {
   std::vector<tools::CameraStatusInput> cameras;
   for (size_t i = 0; i < s.cameras.size(); ++i) {
     const tools::CameraHealth& h = s.cameras[i];
     tools::CameraStatusInput c;
     c.name = h.name;
-    c.fps = period_s > 0 ? (h.frames_processed - frames_before[i]) / period_s : 0.0;
+    c.fps = (*rates)[i].Update(h.frames_processed, h.last_frame_t_ns, -1);
     c.frames_received = h.frames_captured;
     c.dropped_backlog = h.dropped_backlog;
-    c.vo_state = VoStateToLcm(h);
+    c.vo_state = tools::CameraStatusVoState(h);
     c.last_pose_age_ms =
         h.last_pose_t_ns >= 0 && h.last_frame_t_ns >= 0
             ? std::max<int64_t>(0, (h.last_frame_t_ns - h.last_pose_t_ns) / 1'000'000)
@@ -216,6 +204,7 @@ int RunRun(const RunArgs& args) {
   pipeline.Start();
   std::cerr << "rigcal run: running; Ctrl-C stops cleanly\n";
   std::vector<int64_t> frames_before(names.size(), 0);
+  std::vector<tools::StampRate> rates(names.size());
   auto last_status = start;
   tools::CpuMeter cpu;
   const int32_t capacity = config->online.sync.capacity * static_cast<int32_t>(names.size());
@@ -229,7 +218,7 @@ int RunRun(const RunArgs& args) {
       const tools::PipelineSnapshot snapshot = pipeline.Snapshot();
       if (args.status_every_s > 0)
         std::cerr << StatusLine(elapsed, snapshot, frames_before, period) << "\n";
-      if (bus) PublishStatus(bus.get(), snapshot, frames_before, period, capacity, &cpu, names);
+      if (bus) PublishStatus(bus.get(), snapshot, &rates, capacity, &cpu, names);
       for (size_t i = 0; i < names.size(); ++i) {
         frames_before[i] = snapshot.cameras[i].frames_processed;
       }
@@ -240,7 +229,7 @@ int RunRun(const RunArgs& args) {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const tools::PipelineSnapshot final_state = pipeline.Snapshot();
-  if (bus) PublishStatus(bus.get(), final_state, frames_before, 0.0, capacity, &cpu, names);
+  if (bus) PublishStatus(bus.get(), final_state, &rates, capacity, &cpu, names);
   const RigCalibration& result = final_state.estimate.rig;
 
   // What happened to the cameras.
@@ -329,9 +318,7 @@ void RegisterRun(CLI::App& app, int* exit_code) {
       "The live pipeline: capture from the configured source, monocular VO per camera, pose\n"
       "matching and the recursive rig estimator; a status line per second, LCM publishing with\n"
       "--lcm, the result YAML on exit. Exit 3 when no slave could be calibrated.");
-  cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")
-      ->required()
-      ->check(CLI::ExistingFile);
+  cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")->required();
   cmd->add_option("--lcm", args->lcm_url,
                   "Publish RIGCAL_POSE_<camera>, RIGCAL_EXTRINSICS and RIGCAL_STATUS on this LCM "
                   "URL (default: no LCM)");

@@ -71,8 +71,7 @@ void RegisterSynthLog(CLI::App& app, int* exit_code) {
       "Write the odometry poses of a simulated drive of the config's rig (cameras[].truth) as an\n"
       "LCM log of RIGCAL_POSE_<camera> events, to try `rigcal calib`.");
   cmd->add_option("--config", args->config, "Rig config YAML with `truth` for every slave")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();
   cmd->add_option("--out", args->out, "LCM log file to write")->required();
   cmd->add_option("--truth-out", args->truth_out, "Also write the true rig as a rig YAML");
   cmd->add_option("--motion", args->motion, "general, planar (car-like yaw) or translation")

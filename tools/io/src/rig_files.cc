@@ -129,18 +129,32 @@ Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path)
   return rig;
 }
 
-Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::string& path) {
+namespace {
+
+// A rig YAML, or the mountings `field` (named `key`) of a rig config's cameras.
+Expected<std::map<std::string, Similarity>> ReadMountings(
+    const std::string& path, std::optional<Similarity> CameraConfig::*field, const char* key) {
   auto root = LoadYaml(path);
   if (!root) return Error{root.error()};
   if (!root->IsMap() || !(*root)["cameras"]) return ReadRigYaml(path);
   auto config = LoadRigConfig(path);
   if (!config) return Error{config.error()};
-  std::map<std::string, Similarity> nominal;
+  std::map<std::string, Similarity> mountings;
   for (const CameraConfig& camera : config->cameras) {
-    if (camera.nominal) nominal.emplace(camera.name, *camera.nominal);
+    if (camera.*field) mountings.emplace(camera.name, *(camera.*field));
   }
-  if (nominal.empty()) return Error{path + ": no camera has a `nominal` mounting"};
-  return nominal;
+  if (mountings.empty()) return Error{path + ": no camera has a `" + key + "` mounting"};
+  return mountings;
+}
+
+}  // namespace
+
+Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::string& path) {
+  return ReadMountings(path, &CameraConfig::nominal, "nominal");
+}
+
+Expected<std::map<std::string, Similarity>> ReadTrueMountings(const std::string& path) {
+  return ReadMountings(path, &CameraConfig::truth, "truth");
 }
 
 std::string RigToYaml(const std::map<std::string, Similarity>& rig) {
@@ -188,6 +202,9 @@ std::string ResultToYaml(const RigCalibration& result) {
     out << YAML::Key << "pos" << YAML::Value;
     EmitVector(out, slave.pos_std.data(), 3);
     out << YAML::Key << "axis" << YAML::Value << Num(slave.axis_offset_std);
+    if (slave.scales.size() == 1) {
+      out << YAML::Key << "scale" << YAML::Value << Num(slave.scales.front().std);
+    }
     out << YAML::EndMap;
     const MotionCounts& m = slave.motions;
     out << YAML::Key << "motions" << YAML::Value << YAML::Flow << YAML::BeginMap;

@@ -42,7 +42,8 @@ class Checker {
   void Finite(std::string_view field, const double* values, int count);
   void Finite(std::string_view field, double value) { Finite(field, &value, 1); }
 
-  // A unit vector within kUnitTolerance, normalised in place; `cause` for a wrong norm.
+  // A unit vector within kUnitTolerance, normalised in place (unless unit within 4 ulp);
+  // `cause` for a wrong norm.
   void Unit(std::string_view field, double* values, int count, RejectCause cause,
             std::string_view what);
   // A unit quaternion (w, x, y, z), normalised in place.

@@ -68,6 +68,18 @@ struct lcm_internal::MessageTraits<rig_status_t> {
   static constexpr auto CheckContent = &CheckStatus;
 };
 
+double StampRate::Update(int64_t count_now, int64_t newest_t_ns, int64_t start_ns) {
+  const int64_t since = t_ns >= 0 ? t_ns : start_ns;
+  double rate = 0.0;
+  if (since >= 0 && newest_t_ns > since) {
+    rate =
+        static_cast<double>(count_now - count) / (static_cast<double>(newest_t_ns - since) * 1e-9);
+  }
+  count = count_now;
+  if (newest_t_ns >= 0) t_ns = newest_t_ns;
+  return std::max(0.0, rate);
+}
+
 rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const SyncStats& sync,
                            int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
                            int64_t utime) {
@@ -88,7 +100,8 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
       cam.dropped_late = static_cast<int64_t>(s.late);
       cam.dropped_duplicate = static_cast<int64_t>(s.duplicate);
       cam.dropped_out_of_order = static_cast<int64_t>(s.out_of_order);
-      cam.dropped_overflow += static_cast<int64_t>(s.overflow);
+      // Ring overflow, and this camera's members of sets the full ready queue dropped.
+      cam.dropped_overflow += static_cast<int64_t>(s.overflow + s.consumer_overflow);
       cam.dropped_never_matched = static_cast<int64_t>(s.never_matched);
       cam.dropped_invalid += static_cast<int64_t>(s.invalid);
     }

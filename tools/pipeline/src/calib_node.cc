@@ -3,20 +3,16 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <sstream>
 
+#include "calib_node_impl.h"
 #include "rigcal/calib/format.h"
-#include "rigcal/calib/logging.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/estimator_state_file.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/yaml_fields.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
-#include "rigcal/lcm/process_stats.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/online_replay.h"
 
@@ -25,8 +21,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-int64_t MonotonicMicros() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch())
+int64_t MonotonicNanos() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
       .count();
 }
 
@@ -36,6 +32,8 @@ constexpr int64_t kLoudRejections = 10;
 void OnPoseMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel, CalibNode* node) {
   node->HandlePose(channel, rbuf->data, rbuf->data_size);
 }
+
+int64_t PeriodNs(double rate_hz) { return rate_hz > 0.0 ? static_cast<int64_t>(1e9 / rate_hz) : 0; }
 
 }  // namespace
 
@@ -52,213 +50,259 @@ Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t ut
   return msg;
 }
 
-struct CalibNode::Impl {
-  RigConfig config;
-  CalibNodeOptions options;
-  CameraNames names;
-  std::shared_ptr<spdlog::logger> log = ModuleLogger("tools");
-  lcm::LCM* bus = nullptr;  // input + output for live runs (owned or external)
-  std::unique_ptr<lcm::LCM> owned_bus;
-  std::unique_ptr<lcm::LCM> output;  // replay: optional output
-  std::unique_ptr<lcm::LogFile> log_file;
-  OnlineCalibrator calibrator;
-  MessageValidator validator;
-  CalibNodeSummary summary;
-  std::string state_path;
-  // Status bookkeeping (LCM thread only).
-  std::vector<int64_t> received_at_last_status;
-  std::vector<Clock::time_point> last_pose_wall;
-  Clock::time_point last_status_wall = Clock::now();
-  CpuMeter cpu;
-  bool opened = false;
-  std::atomic<int64_t> received_total{0};  // written by the LCM thread, read by ReceivedPoses
-  long log_good_end = 0;  // file offset after the last complete event of the replayed log
+CalibNode::Impl::Impl(RigConfig c, CalibNodeOptions o)
+    : config(std::move(c)),
+      options(std::move(o)),
+      names(config.CameraNames()),
+      calibrator(names, ProcessOnlineOptions(config.online, names.size(),
+                                             /*lossless=*/!options.log_path.empty())),
+      validator(names),
+      schedule(/*catch_up=*/!options.log_path.empty()) {
+  summary.cameras.resize(names.size());
+  rates.resize(names.size());
+  last_pose_wall.assign(names.size(), Clock::time_point::min());
+  state_path = options.state_path.empty() ? config.state.path : options.state_path;
+  job_extrinsics = schedule.Add(PeriodNs(config.publish.extrinsics_rate_hz));
+  job_status = schedule.Add(PeriodNs(config.publish.status_rate_hz));
+  job_state = schedule.Add(static_cast<int64_t>(config.state.save_interval_s * 1e9));
+  job_report = schedule.Add(static_cast<int64_t>(options.report_every_s * 1e9));
+}
 
-  Impl(RigConfig c, CalibNodeOptions o)
-      : config(std::move(c)),
-        options(std::move(o)),
-        names(config.CameraNames()),
-        calibrator(names, config.online),
-        validator(names) {
-    summary.cameras.resize(names.size());
-    received_at_last_status.assign(names.size(), 0);
-    last_pose_wall.assign(names.size(), Clock::time_point::min());
-    state_path = options.state_path.empty() ? config.state.path : options.state_path;
+int CalibNode::Impl::CameraOfChannel(const std::string& channel, bool images) const {
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (channel == (images ? ImageChannel(names[i]) : PoseChannel(names[i]))) {
+      return static_cast<int>(i);
+    }
   }
+  return -1;
+}
 
-  lcm::LCM* Output() { return options.log_path.empty() ? bus : output.get(); }
+void CalibNode::Impl::Reject(const std::string& what) {
+  if (validator.stats().TotalRejected() + summary.unknown_channel <= kLoudRejections) {
+    log->warn("rejected: {}", what);
+  } else {
+    log->debug("rejected: {}", what);
+  }
+}
 
-  int CameraOfChannel(const std::string& channel) const {
+void CalibNode::Impl::HandlePose(const std::string& channel, const void* data, int64_t size) {
+  const int camera = CameraOfChannel(channel, /*images=*/false);
+  if (camera < 0) {
+    ++summary.unknown_channel;
+    Reject(channel + ": no camera of that name in the rig");
+    return;
+  }
+  auto pose = validator.DecodeCameraPose(channel, data, size);
+  if (!pose) {
+    ++summary.cameras[camera].invalid;
+    Reject(pose.error());
+    return;
+  }
+  if (pose->pose.camera != camera) {
+    ++summary.cameras[camera].invalid;
+    Reject(channel + ": camera_pose_t.camera '" + names[pose->pose.camera] +
+           "' does not match the channel");
+    return;
+  }
+  if (replaying()) AdvanceLogTime(pose->pose.t_ns);
+  Accept(camera, pose->pose);
+}
+
+void CalibNode::Impl::Accept(int camera, const CameraPose& pose) {
+  CameraInputStats& stats = summary.cameras[camera];
+  ++stats.received;
+  received_total.fetch_add(1);
+  stats.last_t_ns = pose.t_ns;
+  last_pose_wall[camera] = Clock::now();
+  const PushResult result = calibrator.Push(pose);
+  if (result != PushResult::kAccepted) {
+    ++stats.sync_rejected;
+    log->debug("{}: pose at {} ns not buffered: {}", names[camera], pose.t_ns, ToString(result));
+  }
+}
+
+void CalibNode::Impl::AcceptVoPose(const CameraPose& pose) {
+  AdvanceLogTime(pose.t_ns);
+  if (auto msg = CameraPoseToLcm(pose, names, pose.t_ns / 1000)) {
+    int64_t published = 0;
+    Publish(PoseChannel(names[pose.camera]), *msg, &published);
+  }
+  Accept(pose.camera, pose);
+}
+
+template <typename Message>
+void CalibNode::Impl::Publish(const std::string& channel, const Message& msg, int64_t* counter) {
+  lcm::LCM* out = Output();
+  if (out == nullptr) return;
+  auto bytes = EncodeMessage(channel, names, msg);
+  if (!bytes) {
+    summary.errors.push_back(bytes.error());
+    log->error("not published: {}", bytes.error());
+    return;
+  }
+  if (out->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size())) != 0) {
+    summary.errors.push_back(channel + ": LCM publish failed");
+    log->error("{}: LCM publish failed", channel);
+    return;
+  }
+  ++*counter;
+}
+
+void CalibNode::Impl::RunJob(int job, int64_t utime) {
+  if (job == job_extrinsics) PublishExtrinsics(calibrator.Estimate(), utime);
+  if (job == job_status) PublishStatus(calibrator.Estimate(), utime);
+  if (job == job_state) SaveState();
+  if (job == job_report) ReportLine(calibrator.Estimate());
+}
+
+void CalibNode::Impl::PublishExtrinsics(const RigEstimate& estimate, int64_t utime) {
+  auto msg = EstimateToLcm(estimate, utime);
+  if (!msg) {
+    log->error("RIGCAL_EXTRINSICS not published: {}", msg.error());
+    summary.errors.push_back(msg.error());
+    return;
+  }
+  Publish(kExtrinsicsChannel, *msg, &summary.extrinsics_published);
+}
+
+std::vector<CameraStatusInput> CalibNode::Impl::CameraInputs() {
+  std::vector<CameraStatusInput> cameras;
+  const int64_t start = first_stamp_ns;
+  if (pipeline) {
+    // Image replay: the VO's view of every camera, rates from the frame stamps.
+    const PipelineSnapshot snapshot = pipeline->Snapshot();
     for (size_t i = 0; i < names.size(); ++i) {
-      if (channel == PoseChannel(names[i])) return static_cast<int>(i);
-    }
-    return -1;
-  }
-
-  void Reject(const std::string& what) {
-    if (validator.stats().TotalRejected() + summary.unknown_channel <= kLoudRejections) {
-      log->warn("rejected: {}", what);
-    } else {
-      log->debug("rejected: {}", what);
-    }
-  }
-
-  void HandlePose(const std::string& channel, const void* data, int64_t size) {
-    const int camera = CameraOfChannel(channel);
-    if (camera < 0) {
-      ++summary.unknown_channel;
-      Reject(channel + ": no camera of that name in the rig");
-      return;
-    }
-    auto pose = validator.DecodeCameraPose(channel, data, size);
-    if (!pose) {
-      ++summary.cameras[camera].invalid;
-      Reject(pose.error());
-      return;
-    }
-    if (pose->pose.camera != camera) {
-      ++summary.cameras[camera].invalid;
-      Reject(channel + ": camera_pose_t.camera '" + names[pose->pose.camera] +
-             "' does not match the channel");
-      return;
-    }
-    CameraInputStats& stats = summary.cameras[camera];
-    ++stats.received;
-    received_total.fetch_add(1);
-    stats.last_t_ns = pose->pose.t_ns;
-    last_pose_wall[camera] = Clock::now();
-    const PushResult result = calibrator.Push(pose->pose);
-    if (result != PushResult::kAccepted) {
-      log->debug("{}: pose at {} ns not buffered: {}", channel, pose->pose.t_ns, ToString(result));
-    }
-  }
-
-  template <typename Message>
-  void Publish(const std::string& channel, const Message& msg, int64_t* counter) {
-    lcm::LCM* out = Output();
-    if (out == nullptr) return;
-    auto bytes = EncodeMessage(channel, names, msg);
-    if (!bytes) {
-      summary.errors.push_back(bytes.error());
-      log->error("not published: {}", bytes.error());
-      return;
-    }
-    if (out->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size())) != 0) {
-      summary.errors.push_back(channel + ": LCM publish failed");
-      log->error("{}: LCM publish failed", channel);
-      return;
-    }
-    ++*counter;
-  }
-
-  void PublishExtrinsics(const RigEstimate& estimate) {
-    auto msg = EstimateToLcm(estimate, MonotonicMicros());
-    if (!msg) {
-      log->error("RIGCAL_EXTRINSICS not published: {}", msg.error());
-      summary.errors.push_back(msg.error());
-      return;
-    }
-    Publish(kExtrinsicsChannel, *msg, &summary.extrinsics_published);
-  }
-
-  rig_status_t MakeStatus(const RigEstimate& estimate, const SyncStats& sync) {
-    const Clock::time_point now = Clock::now();
-    const double period_s = std::chrono::duration<double>(now - last_status_wall).count();
-    last_status_wall = now;
-    std::vector<CameraStatusInput> cameras;
-    for (size_t i = 0; i < names.size(); ++i) {
+      const CameraHealth& h = snapshot.cameras[i];
       CameraStatusInput cam;
-      const CameraInputStats& input = summary.cameras[i];
       cam.name = names[i];
-      cam.frames_received = input.received;
-      cam.fps = period_s > 0.0 ? (input.received - received_at_last_status[i]) / period_s : 0.0;
-      received_at_last_status[i] = input.received;
-      cam.dropped_invalid = input.invalid;
-      // The VO runs elsewhere: its state is inferred from the pose stream.
-      if (input.received > 0) {
-        const double age_s = std::chrono::duration<double>(now - last_pose_wall[i]).count();
-        cam.last_pose_age_ms = static_cast<int64_t>(age_s * 1e3);
-        cam.vo_state = options.log_path.empty() && age_s > options.camera_timeout_s
-                           ? camera_status_t::VO_DEAD
-                           : camera_status_t::VO_TRACKING;
-      }
+      cam.frames_received = h.frames_captured;
+      cam.fps = rates[i].Update(h.frames_processed, h.last_frame_t_ns, start);
+      cam.dropped_invalid = images_invalid[i].load();
+      cam.dropped_backlog = h.dropped_backlog;
+      cam.vo_state = CameraStatusVoState(h);
+      cam.last_pose_age_ms =
+          h.last_pose_t_ns >= 0 && h.last_frame_t_ns >= 0
+              ? std::max<int64_t>(0, (h.last_frame_t_ns - h.last_pose_t_ns) / 1'000'000)
+              : -1;
       cameras.push_back(cam);
     }
-    return MakeRigStatus(cameras, sync,
-                         config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
-                         cpu.Sample(), MonotonicMicros());
+    return cameras;
   }
-
-  void PublishStatus(const RigEstimate& estimate) {
-    rig_status_t msg = MakeStatus(estimate, calibrator.sync_stats());
-    Publish(kStatusChannel, msg, &summary.status_published);
+  const Clock::time_point now = Clock::now();
+  for (size_t i = 0; i < names.size(); ++i) {
+    CameraStatusInput cam;
+    const CameraInputStats& input = summary.cameras[i];
+    cam.name = names[i];
+    cam.frames_received = input.received;
+    cam.fps = rates[i].Update(input.received, input.last_t_ns, start);
+    cam.dropped_invalid = input.invalid;
+    // The VO runs elsewhere: its state is inferred from the pose stream.
+    if (input.received > 0) {
+      const double age_s = replaying()
+                               ? static_cast<double>(clock_ns - input.last_t_ns) * 1e-9
+                               : std::chrono::duration<double>(now - last_pose_wall[i]).count();
+      cam.last_pose_age_ms = static_cast<int64_t>(age_s * 1e3);
+      cam.vo_state = !replaying() && age_s > options.camera_timeout_s
+                         ? camera_status_t::VO_DEAD
+                         : camera_status_t::VO_TRACKING;
+    }
+    cameras.push_back(cam);
   }
+  return cameras;
+}
 
-  void SaveState() {
-    if (state_path.empty()) return;
-    if (const Status status =
-            WriteFileAtomically(state_path, FormatEstimatorState(calibrator.SaveState()));
-        !status.ok()) {
+void CalibNode::Impl::PublishStatus(const RigEstimate& estimate, int64_t utime) {
+  const rig_status_t msg =
+      MakeRigStatus(CameraInputs(), calibrator.sync_stats(),
+                    config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
+                    cpu.Sample(), utime);
+  Publish(kStatusChannel, msg, &summary.status_published);
+}
+
+void CalibNode::Impl::SaveState() {
+  if (state_path.empty()) return;
+  if (const Status status =
+          WriteFileAtomically(state_path, FormatEstimatorState(calibrator.SaveState()));
+      !status.ok()) {
+    summary.errors.push_back(status.message());
+    log->error("state not saved: {}", status.message());
+    return;
+  }
+  ++summary.state_saves;
+}
+
+void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
+  std::string state_message;
+  EstimatorState(estimate, &state_message);
+  std::ostringstream line;
+  line << "sets " << estimate.sets << " | " << state_message;
+  for (size_t i = 0; i < estimate.rig.slaves.size(); ++i) {
+    const SlaveCalibration& slave = estimate.rig.slaves[i];
+    line << " | " << slave.name << ": " << slave.motions.used << " motions";
+    if (slave.solved()) {
+      char buf[96];
+      std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) ±%s°", slave.estimate.C.x(),
+                    slave.estimate.C.y(), slave.estimate.C.z(),
+                    SigmaText(slave.rot_std_deg, 2).c_str());
+      line << buf;
+    }
+    line << " ["
+         << StateText(slave.state, i < estimate.online.size() ? estimate.online[i].flags : 0u)
+         << "]";
+  }
+  log->info("{}", line.str());
+}
+
+void CalibNode::Impl::RestoreState() {
+  if (state_path.empty()) {
+    log->warn("--resume: no state file configured (state.path or --state); starting afresh");
+    return;
+  }
+  auto text = ReadWholeFile(state_path);
+  if (!text) {
+    log->warn("--resume: {}; starting afresh", text.error());
+    return;
+  }
+  const Expected<RigEstimatorState> state = ParseEstimatorState(*text);
+  const Status restored = state ? calibrator.RestoreState(*state) : state.status();
+  if (!restored.ok()) {
+    log->warn("--resume: {}: {}; ignored, starting afresh", state_path, restored.message());
+    return;
+  }
+  summary.resumed = true;
+  log->info("resumed from {}", state_path);
+}
+
+void CalibNode::Impl::Finish(int64_t utime) {
+  // Clean stop: everything received is estimated, published, saved and written.
+  calibrator.Flush();
+  calibrator.RefineNow(/*final=*/true);
+  calibrator.Stop();
+  const RigEstimate estimate = calibrator.Estimate();
+  PublishExtrinsics(estimate, utime);
+  PublishStatus(estimate, utime);
+  SaveState();
+  if (!options.result_path.empty()) {
+    if (const Status status = WriteResultYaml(options.result_path, estimate.rig); !status.ok()) {
       summary.errors.push_back(status.message());
-      log->error("state not saved: {}", status.message());
-      return;
+      log->error("result not written: {}", status.message());
     }
-    ++summary.state_saves;
   }
-
-  void ReportLine(const RigEstimate& estimate) {
-    std::string state_message;
-    EstimatorState(estimate, &state_message);
-    std::ostringstream line;
-    line << "sets " << estimate.sets << " | " << state_message;
-    for (size_t i = 0; i < estimate.rig.slaves.size(); ++i) {
-      const SlaveCalibration& slave = estimate.rig.slaves[i];
-      line << " | " << slave.name << ": " << slave.motions.used << " motions";
-      if (slave.solved()) {
-        char buf[96];
-        std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) ±%s°", slave.estimate.C.x(),
-                      slave.estimate.C.y(), slave.estimate.C.z(),
-                      SigmaText(slave.rot_std_deg, 2).c_str());
-        line << buf;
-      }
-      line << " ["
-           << StateText(slave.state, i < estimate.online.size() ? estimate.online[i].flags : 0u)
-           << "]";
-    }
-    log->info("{}", line.str());
-  }
-
-  // Reads the next event of the replayed log; false at its end.
-  bool ReplayOne() {
-    const lcm::LogEvent* event = log_file->readNextEvent();
-    if (event == nullptr) {
-      summary.end_of_log = true;
-      // LCM reports a clean end and a damaged tail alike: compare where the last complete
-      // event ended with the file size.
-      std::error_code ec;
-      const auto size = std::filesystem::file_size(options.log_path, ec);
-      if (!ec && log_good_end >= 0 && static_cast<uintmax_t>(log_good_end) < size) {
-        summary.log_problem = options.log_path + ": truncated or corrupt event after byte " +
-                              std::to_string(log_good_end) + " of " + std::to_string(size) +
-                              "; replay stopped there";
-        log->warn("{}", summary.log_problem);
-      }
-      return false;
-    }
-    if (FILE* file = log_file->getFilePtr()) log_good_end = std::ftell(file);
-    if (event->channel.rfind("RIGCAL_POSE_", 0) == 0) {
-      HandlePose(event->channel, event->data, event->datalen);
-    }
-    return true;
-  }
-};
+  ReportLine(estimate);
+  summary.estimate = estimate;
+  summary.sync = calibrator.sync_stats();
+  summary.decode = validator.stats();
+}
 
 CalibNode::CalibNode(RigConfig config, CalibNodeOptions options, lcm::LCM* lcm)
     : impl_(std::make_unique<Impl>(std::move(config), std::move(options))) {
   impl_->bus = lcm;
 }
 
-CalibNode::~CalibNode() { impl_->calibrator.Stop(); }
+CalibNode::~CalibNode() {
+  if (impl_->pipeline) impl_->pipeline->Stop();
+  impl_->calibrator.Stop();
+}
 
 void CalibNode::HandlePose(const std::string& channel, const void* data, int64_t size) {
   impl_->HandlePose(channel, data, size);
@@ -269,13 +313,8 @@ int64_t CalibNode::ReceivedPoses() const { return impl_->received_total.load(); 
 Status CalibNode::Open() {
   Impl& m = *impl_;
   if (m.opened) return Error{"CalibNode::Open called twice"};
-  if (!m.options.log_path.empty()) {
-    m.log_file = std::make_unique<lcm::LogFile>(m.options.log_path, "r");
-    if (!m.log_file->good()) return Error{m.options.log_path + ": cannot open the LCM log"};
-    if (!m.options.publish_url.empty()) {
-      m.output = std::make_unique<lcm::LCM>(m.options.publish_url);
-      if (!m.output->good()) return Error{m.options.publish_url + ": cannot open the LCM URL"};
-    }
+  if (m.replaying()) {
+    if (const Status status = m.OpenLog(); !status.ok()) return status;
   } else if (m.bus == nullptr) {
     m.owned_bus = std::make_unique<lcm::LCM>(m.options.lcm_url);
     if (!m.owned_bus->good()) {
@@ -286,29 +325,10 @@ Status CalibNode::Open() {
     }
     m.bus = m.owned_bus.get();
   }
-  if (m.bus != nullptr) {
+  if (m.bus != nullptr && !m.replaying()) {
     m.bus->subscribeFunction("RIGCAL_POSE_.*", &OnPoseMessage, this);
   }
-  if (m.options.resume) {
-    if (m.state_path.empty()) {
-      m.log->warn("--resume: no state file configured (state.path or --state); starting afresh");
-    } else {
-      auto text = ReadWholeFile(m.state_path);
-      Status restored;
-      if (text) {
-        const Expected<RigEstimatorState> state = ParseEstimatorState(*text);
-        restored = state ? m.calibrator.RestoreState(*state) : state.status();
-      }
-      if (!text) {
-        m.log->warn("--resume: {}; starting afresh", text.error());
-      } else if (!restored.ok()) {
-        m.log->warn("--resume: {}: {}; ignored, starting afresh", m.state_path, restored.message());
-      } else {
-        m.summary.resumed = true;
-        m.log->info("resumed from {}", m.state_path);
-      }
-    }
-  }
+  if (m.options.resume) m.RestoreState();
   m.calibrator.Start();
   m.opened = true;
   return Status::Ok();
@@ -320,79 +340,36 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
     m.summary.errors.push_back("CalibNode::Run before a successful Open");
     return m.summary;
   }
-  const Clock::time_point start = Clock::now();
-  auto every = [](double rate_hz) {
-    return std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(1.0 / rate_hz));
-  };
-  const Clock::duration extrinsics_period = every(m.config.publish.extrinsics_rate_hz);
-  const Clock::duration status_period = every(m.config.publish.status_rate_hz);
-  const Clock::duration state_period = every(1.0 / m.config.state.save_interval_s);
-  const Clock::duration report_period =
-      m.options.report_every_s > 0 ? every(1.0 / m.options.report_every_s) : Clock::duration::max();
-  Clock::time_point next_extrinsics = start + extrinsics_period;
-  Clock::time_point next_status = start + status_period;
-  Clock::time_point next_state = start + state_period;
-  Clock::time_point next_report =
-      report_period == Clock::duration::max() ? Clock::time_point::max() : start + report_period;
-
+  if (m.replaying()) {
+    m.ReplayLog(stop);
+    m.Finish(std::max<int64_t>(m.clock_ns, 0) / 1000);
+    if (m.options.on_progress) {
+      ReplayProgress progress = m.Progress();
+      progress.done = true;
+      m.options.on_progress(progress);
+    }
+    return m.summary;
+  }
+  const int64_t start = MonotonicNanos();
   while (!stop.load()) {
-    if (m.log_file) {
-      // Replay: a batch of events between housekeeping checks.
-      bool more = true;
-      for (int i = 0; i < 256 && more; ++i) more = m.ReplayOne();
-      if (!more) break;
-    } else {
-      errno = 0;
-      const int rc = m.bus->handleTimeout(50);
-      // A signal interrupts the wait (EINTR): the loop condition decides.
-      if (rc < 0 && errno != EINTR && !stop.load()) {
-        m.summary.errors.push_back("LCM receive failed; stopping");
-        m.log->error("LCM receive failed; stopping");
-        break;
-      }
+    errno = 0;
+    const int rc = m.bus->handleTimeout(50);
+    // A signal interrupts the wait (EINTR): the loop condition decides.
+    if (rc < 0 && errno != EINTR && !stop.load()) {
+      m.summary.errors.push_back("LCM receive failed; stopping");
+      m.log->error("LCM receive failed; stopping");
+      break;
     }
-    const Clock::time_point now = Clock::now();
-    if (now >= next_extrinsics) {
-      m.PublishExtrinsics(m.calibrator.Estimate());
-      next_extrinsics = now + extrinsics_period;
-    }
-    if (now >= next_status) {
-      m.PublishStatus(m.calibrator.Estimate());
-      next_status = now + status_period;
-    }
-    if (now >= next_state) {
-      m.SaveState();
-      next_state = now + state_period;
-    }
-    if (now >= next_report) {
-      m.ReportLine(m.calibrator.Estimate());
-      next_report = now + report_period;
-    }
+    const int64_t now = MonotonicNanos();
+    int job = 0;
+    int64_t deadline = 0;
+    while (m.schedule.NextDue(now, &job, &deadline)) m.RunJob(job, now / 1000);
     if (m.options.duration_s > 0 &&
-        std::chrono::duration<double>(now - start).count() >= m.options.duration_s) {
+        static_cast<double>(now - start) * 1e-9 >= m.options.duration_s) {
       break;
     }
   }
-
-  // Clean stop: everything received is estimated, published, saved and written.
-  m.calibrator.Flush();
-  m.calibrator.RefineNow(/*final=*/true);
-  m.calibrator.Stop();
-  const RigEstimate estimate = m.calibrator.Estimate();
-  m.PublishExtrinsics(estimate);
-  m.PublishStatus(estimate);
-  m.SaveState();
-  if (!m.options.result_path.empty()) {
-    if (const Status status = WriteResultYaml(m.options.result_path, estimate.rig); !status.ok()) {
-      m.summary.errors.push_back(status.message());
-      m.log->error("result not written: {}", status.message());
-    }
-  }
-  m.ReportLine(estimate);
-  m.summary.estimate = estimate;
-  m.summary.sync = m.calibrator.sync_stats();
-  m.summary.decode = m.validator.stats();
+  m.Finish(MonotonicNanos() / 1000);
   return m.summary;
 }
 

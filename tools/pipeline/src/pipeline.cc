@@ -8,6 +8,7 @@
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/pose_merge.h"
 #include "rigcal/calib/robust_statistics.h"
+#include "rigcal/camera_status_t.hpp"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
 
@@ -17,6 +18,28 @@ namespace {
 constexpr size_t kTimingWindow = 64;
 
 }  // namespace
+
+OnlineOptions ProcessOnlineOptions(OnlineOptions online, size_t cameras, bool lossless) {
+  if (online.sync.required.empty() && cameras > 0) {
+    online.sync.required.assign(cameras, false);
+    online.sync.required[0] = true;
+  }
+  online.lossless = lossless;
+  online.refine_on_stream_time = lossless;
+  return online;
+}
+
+int8_t CameraStatusVoState(const CameraHealth& health) {
+  if (health.dead) return camera_status_t::VO_DEAD;
+  switch (health.vo_state) {
+    case vo::VoState::kTracking:
+      return camera_status_t::VO_TRACKING;
+    case vo::VoState::kLost:
+      return camera_status_t::VO_LOST;
+    default:
+      return camera_status_t::VO_INITIALISING;
+  }
+}
 
 Status PipelineOptions::Check() const {
   if (frame_queue_capacity < 1) return Error{"frame_queue_capacity: must be >= 1"};
@@ -71,11 +94,9 @@ Pipeline::Pipeline(std::vector<std::string> names,
       throw std::invalid_argument("Pipeline: camera '" + names_[i] + "' has no device or model");
     }
   }
-  // A dead or lagging slave must not stop the others: only the master is required.
-  online.sync.required.assign(names_.size(), false);
-  online.sync.required[0] = true;
+  online = ProcessOnlineOptions(std::move(online), names_.size(), options_.lossless);
   const int64_t lead_ns = online.sync.EffectiveMaxWaitNs() / 3;
-  calibrator_ = std::make_unique<OnlineCalibrator>(names_, online);
+  if (!options_.pose_sink) calibrator_ = std::make_unique<OnlineCalibrator>(names_, online);
   if (options_.lossless) {
     merge_ = std::make_unique<PoseMerge>(static_cast<int>(names_.size()), lead_ns,
                                          [this](const CameraPose& pose) { Forward(pose); });
@@ -92,7 +113,7 @@ void Pipeline::Start() {
   MutexLock lock(stop_mutex_);
   if (started_) return;
   started_ = true;
-  calibrator_->Start();
+  if (calibrator_) calibrator_->Start();
   for (auto& camera : cameras_) {
     const int i = camera->index;
     camera->vo_thread = std::thread([this, i] { VoLoop(i); });
@@ -141,6 +162,10 @@ void Pipeline::CaptureLoop(int index) {
 
 void Pipeline::Forward(const CameraPose& pose) {
   const auto index = static_cast<size_t>(pose.camera);
+  if (options_.pose_sink) {
+    options_.pose_sink(pose);
+    return;
+  }
   const PushResult pushed = calibrator_->Push(pose);
   if (pushed != PushResult::kAccepted) {
     Camera& camera = *cameras_[index];
@@ -202,8 +227,10 @@ PipelineSnapshot Pipeline::Snapshot() const {
         camera->timings.begin(), camera->timings.begin() + static_cast<std::ptrdiff_t>(n)));
     snapshot.cameras.push_back(std::move(h));
   }
-  snapshot.sync = calibrator_->sync_stats();
-  snapshot.estimate = calibrator_->Estimate();
+  if (calibrator_) {
+    snapshot.sync = calibrator_->sync_stats();
+    snapshot.estimate = calibrator_->Estimate();
+  }
   snapshot.finished = Finished();
   return snapshot;
 }
@@ -224,9 +251,11 @@ void Pipeline::Stop() {
     if (camera->capture_thread.joinable()) camera->capture_thread.join();
     if (camera->vo_thread.joinable()) camera->vo_thread.join();
   }
-  calibrator_->Flush();
-  calibrator_->RefineNow(/*final=*/true);
-  calibrator_->Stop();
+  if (calibrator_) {
+    calibrator_->Flush();
+    calibrator_->RefineNow(/*final=*/true);
+    calibrator_->Stop();
+  }
 }
 
 std::vector<CameraPose> Pipeline::RecordedPoses(int camera) const {

@@ -24,14 +24,27 @@ struct CalibrationError {
 CalibrationError CompareToTruth(const Similarity& estimate, const Similarity& truth,
                                 const Eigen::Vector3d& axis = Eigen::Vector3d::Zero());
 
-// Constraint residua of one motion against given rig parameters (thesis 5.1.1).
+// Constraint residua of one motion against given rig parameters (thesis 5.1.1, fig. 5.11), and
+// its direct scale measurement (4.18, fig. 5.12).
 struct ConstraintResidual {
   double rotation_deg = 0.0;      // angle between R_0 dR and dR R_i
   double position_dir_deg = 0.0;  // angle between R_0 dC + C_0 and s dR C_i + dC
   double position_abs = 0.0;      // |(R_0 - I) dC + C_0 - s dR C_i|
   double scale_pct = 0.0;         // |s - lambda_meas| / s, percent (0 if degenerate)
+  // The products C_0^T r_0 and C_i^T r_i of (4.18) (r: unit rotation axis of the motion, in its
+  // canonical w >= 0 form) and their ratio, the measured scale λ^k; NaN without a rotation axis
+  // (or, for the scale, when C_i^T r_i is 0). (4.23) rejects λ^k when |C_i^T r_i| <= 3 ε
+  // (ScaleDotEpsilon).
+  double master_axis_dot = std::numeric_limits<double>::quiet_NaN();
+  double slave_axis_dot = std::numeric_limits<double>::quiet_NaN();
+  double measured_scale = std::numeric_limits<double>::quiet_NaN();
 };
 
 ConstraintResidual ResidualOf(const RigMotion& motion, const Similarity& rig);
+
+// ε of (4.23), the absolute error expected on the products C^T r of (4.18): `configured`
+// (CalibrationOptions::scale_dot_epsilon) when > 0, else 1e-3 of the RMS length of the slave
+// translations C_i of the motions. A measured scale is used when |C_i^T r_i| > 3 ε.
+double ScaleDotEpsilon(double configured, const std::vector<Eigen::Vector3d>& slave_translations);
 
 }  // namespace rigcal

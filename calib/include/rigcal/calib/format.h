@@ -25,4 +25,7 @@ std::string SigmaText(double sigma, int digits);
 // "[x, y, z]" with FixedText(., decimals) per coordinate.
 std::string VectorText(const Eigen::Vector3d& v, int decimals);
 
+// "[sx, sy, sz]" with SigmaText(., digits) per coordinate ("unknown" where not finite).
+std::string SigmaVectorText(const Eigen::Vector3d& sigma, int digits);
+
 }  // namespace rigcal

@@ -28,6 +28,14 @@ struct OnlineOptions {
   RigEstimatorOptions estimator;
   // Seconds between background non-linear window refinements (0 = none).
   double refine_period_s = 2.0;
+  // Back-pressure instead of drops, for sources that can wait (log replay, lossless pipeline):
+  // Push waits until the estimator has made room, so no matched set is lost to
+  // consumer_overflow (the ready queue holds at least sync.capacity + 1 sets then).
+  bool lossless = false;
+  // Refinements run on the estimator thread every refine_period_s of STREAM time (set stamps)
+  // instead of on a wall-clock thread, so they see the same sets in every run of the same
+  // input: together with `lossless` the same pushes give the same result bit for bit.
+  bool refine_on_stream_time = false;
   // The first violated constraint as "<field>: <constraint>", nested fields as "sync.<field>" and
   // "estimator.<field>".
   Status Check() const;
@@ -45,10 +53,15 @@ class OnlineCalibrator {
 
   // Starts the estimator and refinement threads. Call once.
   void Start();
-  // Offers a pose (any thread, never blocks on the estimator).
-  PushResult Push(const CameraPose& pose);
+  // Offers a pose (any thread). Never blocks on the estimator, unless options.lossless: then it
+  // waits (pushes serialised) until the ready queue has room for every set it may complete.
+  PushResult Push(const CameraPose& pose) RIGCAL_EXCLUDES(push_mutex_, estimator_mutex_);
   // End of stream: resolves buffered sets and waits until the estimator has consumed them.
-  void Flush();
+  void Flush() RIGCAL_EXCLUDES(push_mutex_, estimator_mutex_);
+  // Waits until the estimator has consumed every set completed so far (without resolving the
+  // sets still waiting for partners, unlike Flush): Estimate() then reflects every push made
+  // before the call. For publishing on stream time; any thread but the estimator thread.
+  void Drain() RIGCAL_EXCLUDES(estimator_mutex_);
   // Stops the threads (after consuming what is ready) and joins them. Idempotent.
   void Stop();
 
@@ -72,6 +85,8 @@ class OnlineCalibrator {
 
  private:
   void EstimatorLoop() RIGCAL_EXCLUDES(estimator_mutex_);
+  // lossless: waits until one more push cannot overflow the ready queue (or Stop).
+  void WaitForRoom() RIGCAL_EXCLUDES(estimator_mutex_);
   void RefinementLoop() RIGCAL_EXCLUDES(stop_mutex_);
 
   std::vector<std::string> names_;
@@ -80,6 +95,7 @@ class OnlineCalibrator {
   mutable Mutex estimator_mutex_;
   RigEstimator estimator_ RIGCAL_GUARDED_BY(estimator_mutex_);
   std::condition_variable consumed_;  // signalled when the estimator thread consumed a set
+  Mutex push_mutex_ RIGCAL_ACQUIRED_BEFORE(estimator_mutex_);  // serialises lossless pushes
   uint64_t sets_consumed_ RIGCAL_GUARDED_BY(estimator_mutex_) = 0;
   Mutex stop_mutex_;
   std::condition_variable stop_cv_;  // signalled by Stop

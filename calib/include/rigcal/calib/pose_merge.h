@@ -13,7 +13,8 @@
 //
 // Threads: each camera's VO thread calls Deliver and End for its own camera; any thread calls
 // Stop. All state is guarded by mutex_. The sink runs with mutex_ held, on whichever thread
-// releases the poses: it must not block and must not call back into the merge.
+// releases the poses: it must not call back into the merge nor wait for a VO thread; it may wait
+// for a consumer that does not depend on the merge (a lossless OnlineCalibrator's Push).
 
 #include <condition_variable>
 #include <cstdint>

@@ -126,7 +126,10 @@ struct SyncCameraStats {
   uint64_t overflow = 0;          // accepted, then dropped as the oldest entry of a full ring
   uint64_t never_matched = 0;     // accepted, then dropped unused (see the matching rule)
   uint64_t optional_missing = 0;  // emitted sets without this (optional) camera
-  uint64_t fill = 0;              // entries buffered now (<= capacity)
+  // Entries of this camera that were members of an emitted set (counted in `used`) and were
+  // lost with it when the full ready queue dropped it (SyncStats::consumer_overflow).
+  uint64_t consumer_overflow = 0;
+  uint64_t fill = 0;  // entries buffered now (<= capacity)
 
   uint64_t Dropped() const {
     return stopped + invalid + late + duplicate + out_of_order + overflow + never_matched;
@@ -187,6 +190,12 @@ class SyncBuffer {
 
   // A consistent snapshot of the counters (allocates the per-camera vector). Any thread.
   SyncStats stats() const;
+
+  // How many sets could be ready once one more Push (or a Flush) has run: the sets ready now
+  // plus the master entries buffered plus one (every set takes a master entry). A producer
+  // that waits until this is <= options().ready_capacity never loses a set to
+  // consumer_overflow (back-pressure, OnlineOptions::lossless). Any thread; never allocates.
+  uint64_t ReadyBound() const;
 
  private:
   class Impl;

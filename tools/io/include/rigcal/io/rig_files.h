@@ -37,6 +37,10 @@ Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path)
 // camera with a nominal mounting.
 Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::string& path);
 
+// True mountings (`rigcal report --truth`): a rig YAML, or a rig config whose cameras[].truth are
+// taken (simulated rigs). Errors as ReadNominalMountings.
+Expected<std::map<std::string, Similarity>> ReadTrueMountings(const std::string& path);
+
 // The rig YAML text of `rig` (slave name -> similarity), numbers in shortest round-trip form.
 std::string RigToYaml(const std::map<std::string, Similarity>& rig);
 
@@ -46,13 +50,13 @@ std::string RigToYaml(const std::map<std::string, Similarity>& rig);
 
 // The result YAML text of `result`: `master`, `pairs_selected`, and per slave the rig entry
 // (the estimate; present even when unusable, so check `usable`) plus `usable`, `termination`,
-// `message`, `std: {rot_deg, pos, axis}`, `motions: {total, used, rejected, small_rotation,
-// angle_mismatch, residual_outlier}`, `glitches: {dropped, position_jump, rotation_jump,
-// angle_mismatch, in_master, in_slave}` (calibration_result.h), `models: {motion, scale}`,
-// `position_observable`, `unobservable` (unit directions in the master frame),
-// `unobservable_from_prior` and `observability` (the figures behind the model, keys as in the JSON
-// schema of result_json.h). `scales` (with `std`) is written when the slave has several segment or
-// partition scales. Non-finite numbers are written as .nan / .inf.
+// `message`, `std: {rot_deg, pos, axis[, scale]}` (scale: the σ of a single scale), `motions:
+// {total, used, rejected, small_rotation, angle_mismatch, residual_outlier}`, `glitches: {dropped,
+// position_jump, rotation_jump, angle_mismatch, in_master, in_slave}` (calibration_result.h),
+// `models: {motion, scale}`, `position_observable`, `unobservable` (unit directions in the master
+// frame), `unobservable_from_prior` and `observability` (the figures behind the model, keys as in
+// the JSON schema of result_json.h). `scales` (with `std`) is written when the slave has several
+// segment or partition scales. Non-finite numbers are written as .nan / .inf.
 std::string ResultToYaml(const RigCalibration& result);
 
 // Writes ResultToYaml(result) atomically. The error names the path.

@@ -21,7 +21,8 @@
 //     schema version (the VERSION constant of the .lcm file);
 //   - array lengths are >= 0 and agree with the vectors and with the buffer size;
 //   - every floating-point field is finite (covariance only when has_covariance is set);
-//   - quaternions are unit within kUnitTolerance; within it they are normalised exactly;
+//   - quaternions are unit within kUnitTolerance; within it they are normalised exactly (one
+//     already unit to rounding, within 4 ulp, is left bit for bit);
 //   - camera names are non-empty and, with a non-empty name table, in the table (the master of
 //     rig_extrinsics_t must be names[0]); no name appears twice in one message;
 //   - times, counters and standard deviations are >= 0, enum fields hold a defined constant,

@@ -32,12 +32,24 @@ extern template Expected<rig_status_t> MessageValidator::Decode(std::string_view
 // What the caller knows of one camera beyond the sync buffer's counters.
 struct CameraStatusInput {
   std::string name;
-  double fps = 0.0;             // over the last status period
+  double fps = 0.0;             // over the last status period, from stamps (StampRate)
   int64_t frames_received = 0;  // cumulative
   int64_t dropped_invalid = 0;  // rejected before the sync buffer (decoder, ...)
   int64_t dropped_backlog = 0;  // dropped before the sync buffer because a stage fell behind
   int8_t vo_state = camera_status_t::VO_INITIALISING;
   int64_t last_pose_age_ms = -1;  // -1 when no pose yet
+};
+
+// camera_status_t.fps: frames (or poses) per second of one camera from their STAMPS between two
+// status messages, so a replay or a run faster than real time reports the camera's rate, not
+// the wall clock's.
+struct StampRate {
+  int64_t count = 0;  // at the previous status
+  int64_t t_ns = -1;  // newest stamp at the previous status
+
+  // The rate of `count_now - count` items up to stamp `newest_t_ns`; `start_ns` stands for the
+  // previous stamp at the first status (-1: none, rate 0). Remembers this status.
+  double Update(int64_t count_now, int64_t newest_t_ns, int64_t start_ns);
 };
 
 // rig_status_t from the caller's per-camera view, the sync buffer's counters (drops by cause,

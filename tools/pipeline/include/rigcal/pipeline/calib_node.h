@@ -1,16 +1,31 @@
 #pragma once
-// CalibNode: the `rigcal calib` LCM node. Receives RIGCAL_POSE_<camera> messages (VO running in
-// other processes or on other computers), feeds them through SyncBuffer + RigEstimator (the
-// OnlineCalibrator threads), publishes RIGCAL_EXTRINSICS and RIGCAL_STATUS at their rates, saves
-// the estimator state atomically at an interval and on stop, and writes the result YAML at the
-// end.
+// CalibNode: the `rigcal calib` LCM node and `rigcal replay`. Receives RIGCAL_POSE_<camera>
+// messages (VO running in other processes or on other computers), feeds them through SyncBuffer +
+// RigEstimator (the OnlineCalibrator threads), publishes RIGCAL_EXTRINSICS and RIGCAL_STATUS at
+// their rates, saves the estimator state atomically at an interval and on stop, and writes the
+// result YAML at the end.
 //
-// Threads: Run() handles LCM on the caller's thread (receive, publish, state saves); the
-// OnlineCalibrator owned by the node runs the estimator and refinement threads. Stop by setting
-// the `stop` flag passed to Run (e.g. from a signal handler).
+// Replay (log_path set): the log (lcm-logger format, read by LogReader) runs through the same
+// node. A log with RIGCAL_IMAGE_<camera> images of the rig's cameras (unless replay.poses_only)
+// runs through the live pipeline instead, images -> VO per camera -> sync -> estimator (Pipeline
+// with FrameFeedDevices), and its pose channels are ignored. A replay loses nothing: the reader
+// waits for the VO and the estimator (back-pressure, ProcessOnlineOptions lossless), so the same
+// log gives the same result bit for bit, and the same result as the live run it was recorded
+// from whenever that run dropped nothing. Every timer (publish, status, state save, status
+// line, refinement) runs on LOG time, the newest message stamp (t_ns) read, so the published
+// messages (utime = log time) hold the whole history of the estimate. A damaged log is replayed
+// up to the damage (log_problem names the byte offset).
+//
+// Threads: Run() handles LCM (or reads the log) on the caller's thread; the OnlineCalibrator
+// owned by the node runs the estimator (and, live, the refinement) thread; an image replay adds
+// the pipeline's capture and VO threads, and then the publishing runs on the VO thread that
+// hands over the poses. Stop by setting the `stop` flag passed to Run (e.g. from a signal
+// handler).
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -27,6 +42,32 @@ class LCM;
 
 namespace rigcal::tools {
 
+// How a log is replayed.
+struct ReplayOptions {
+  // Pace by log time at this multiple of real time; 0 = as fast as possible (default).
+  double speed = 0.0;
+  // Replay only log time [from_s, to_s] after the first message stamp; to_s < 0 = to the end.
+  double from_s = 0.0;
+  double to_s = -1.0;
+  // Ignore image channels: replay the pose channels even when the log has images.
+  bool poses_only = false;
+  // An event longer than this is damage (rejected before any allocation).
+  int64_t max_event_bytes = int64_t{64} << 20;
+  // Image replay: frames buffered per camera between the log reader and the pipeline.
+  int frame_feed_capacity = 64;
+  // Success, or the first offending field: "<field>: <constraint>".
+  Status Check() const;
+};
+
+// Where a replay stands; handed to CalibNodeOptions::on_progress.
+struct ReplayProgress {
+  int64_t bytes_read = 0;   // of the log
+  int64_t log_bytes = 0;    // the log's size
+  double log_time_s = 0.0;  // log time since the first message stamp
+  uint64_t sets = 0;        // sets the estimator has received
+  bool done = false;        // the last call, after the result
+};
+
 struct CalibNodeOptions {
   // Live input: an LCM URL ("" = LCM's default, udpm://239.255.76.67:7667). Poses are received
   // and the node's messages published on it.
@@ -38,21 +79,27 @@ struct CalibNodeOptions {
   // Where to publish when replaying a log (e.g. "file:///tmp/out.log?mode=w"); empty = publish
   // nothing. Ignored for live input (the node publishes on lcm_url).
   std::string publish_url;
+  ReplayOptions replay;
+  // Replay: called on Run's thread about every progress_every_s of wall time, and once at the end.
+  std::function<void(const ReplayProgress&)> on_progress;
+  double progress_every_s = 0.2;
   std::string result_path;  // result YAML written on exit (atomically); empty = none
   std::string state_path;   // overrides the config's state.path when not empty
   bool resume = false;      // continue from the state file (ignored with a warning if unusable)
-  double duration_s = 0.0;  // wall-clock limit of Run, 0 = none
+  double duration_s = 0.0;  // wall-clock limit of Run, 0 = none (live input)
   // A camera whose newest pose is older than this (wall clock) is reported VO_DEAD (live input).
   double camera_timeout_s = 5.0;
-  // Seconds between status lines in the log (info level), 0 = none.
+  // Seconds between status lines in the log (info level; log time in a replay), 0 = none.
   double report_every_s = 0.0;
 };
 
 // Per-camera counters of the node (the sync buffer's drops are in SyncStats).
 struct CameraInputStats {
-  int64_t received = 0;  // poses accepted by the decoder
+  int64_t received = 0;  // poses accepted by the decoder (image replay: poses from the VO)
   int64_t invalid = 0;   // messages on the camera's channel rejected by validation
   int64_t last_t_ns = -1;
+  int64_t images = 0;         // image replay: frames handed to the camera's VO
+  int64_t sync_rejected = 0;  // poses the sync buffer refused (late, out of order, ...)
 };
 
 struct CalibNodeSummary {
@@ -61,6 +108,12 @@ struct CalibNodeSummary {
   DecodeStats decode;
   std::vector<CameraInputStats> cameras;  // camera index order
   int64_t unknown_channel = 0;            // RIGCAL_POSE_* messages for cameras not in the rig
+  // Replay: events on channels the replay does not use (other channels, the image channels of
+  // a pose replay, the pose channels of an image replay, rigcal's own outputs), per channel.
+  std::map<std::string, int64_t> skipped_channels;
+  bool image_replay = false;  // the log was replayed from its images through VO
+  int64_t log_events = 0;     // events read from the log
+  double log_span_s = 0.0;    // log time replayed (newest minus first message stamp)
   int64_t extrinsics_published = 0;
   int64_t status_published = 0;
   int64_t state_saves = 0;
@@ -79,8 +132,9 @@ class CalibNode {
   CalibNode(const CalibNode&) = delete;
   CalibNode& operator=(const CalibNode&) = delete;
 
-  // Opens LCM (or the log), subscribes RIGCAL_POSE_*, restores the state when resuming.
-  // The error names the URL / file. Call once before Run.
+  // Opens LCM (or the log: a log with images builds the pipeline from the config's camera
+  // models), subscribes RIGCAL_POSE_*, restores the state when resuming. The error names the
+  // URL / file / camera. Call once before Run.
   [[nodiscard]] Status Open();
 
   // Runs until `stop` is set, the duration passes or the log ends; then flushes the estimator,

@@ -20,6 +20,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -50,6 +51,11 @@ struct PipelineOptions {
   // Keep every pose of every camera (for evaluation against ground truth; memory grows with
   // the run length, ~100 bytes per pose).
   bool record_poses = false;
+  // When set, every pose goes to this function (in the PoseMerge's canonical order when
+  // lossless; on a VO thread, one call at a time when lossless) instead of to a calibrator the
+  // pipeline owns: `rigcal replay` of an image log hands them to its CalibNode. The snapshot
+  // then carries no sync statistics or estimate, and calibrator() must not be called.
+  std::function<void(const CameraPose&)> pose_sink;
   // Success, or the first offending field and its constraint: "<field>: <constraint>"
   // ("vo.<field>: ..." for the VO's options).
   Status Check() const;
@@ -74,6 +80,9 @@ struct CameraHealth {
   std::string vo_message;  // why the VO is initialising or lost
 };
 
+// camera_status_t::VO_* of a camera's health (DEAD when its device failed).
+int8_t CameraStatusVoState(const CameraHealth& health);
+
 struct PipelineSnapshot {
   std::vector<CameraHealth> cameras;
   SyncStats sync;
@@ -81,10 +90,17 @@ struct PipelineSnapshot {
   bool finished = false;  // every camera ended or died and its frames were processed
 };
 
+// The online options of a rigcal process for `cameras` cameras: slaves are optional members of
+// a set unless the config names the required ones (a dead slave must not stop the others);
+// `lossless` (a source that can wait: a log, a simulation not paced in real time): back-pressure
+// instead of drops and refinements on stream time (OnlineOptions), so the same input gives the
+// same result bit for bit, live or replayed.
+OnlineOptions ProcessOnlineOptions(OnlineOptions online, size_t cameras, bool lossless);
+
 class Pipeline {
  public:
   // names[0] is the master; devices[i] and cameras[i] belong to names[i]. `online` are the
-  // calibrator's options (sync.required is set to master-only: slaves are optional). `lcm`
+  // calibrator's options, completed by ProcessOnlineOptions (options.lossless). `lcm`
   // (optional, not owned, must outlive the pipeline): every pose is also published on
   // RIGCAL_POSE_<camera>. Throws std::invalid_argument on inconsistent arguments.
   Pipeline(std::vector<std::string> names,

@@ -20,7 +20,7 @@
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/status.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/research/svg_plot.h"
+#include "rigcal/report/svg_plot.h"
 
 namespace rigcal {
 

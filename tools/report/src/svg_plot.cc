@@ -1,4 +1,4 @@
-#include "rigcal/research/svg_plot.h"
+#include "rigcal/report/svg_plot.h"
 
 #include <algorithm>
 #include <cmath>
@@ -65,10 +65,10 @@ struct Axis {
   double step = 1;
 };
 
-Axis MakeAxis(Range r) {
+Axis MakeAxis(Range r, int tick_count = 6) {
   Widen(&r);
   Axis axis;
-  axis.ticks = NiceTicks(r.lo, r.hi, 6);
+  axis.ticks = NiceTicks(r.lo, r.hi, tick_count);
   axis.lo = axis.ticks.front();
   axis.hi = axis.ticks.back();
   axis.step = axis.ticks.size() > 1 ? axis.ticks[1] - axis.ticks[0] : 1.0;
@@ -79,7 +79,40 @@ std::string SeriesColor(const PlotSeries& s, size_t index) {
   return s.color.empty() ? kPalette[index % kPaletteSize] : s.color;
 }
 
-void RenderPanel(const PlotPanel& panel, int index, double x0, double y0, double width,
+bool HasBand(const PlotSeries& s) {
+  return !s.band_lo.empty() && s.band_lo.size() == s.x.size() && s.band_hi.size() == s.x.size();
+}
+
+// The band of `s` as filled polygons, one per run of finite bounds.
+template <typename ToX, typename ToY>
+void RenderBand(const PlotSeries& s, const std::string& color, ToX px, ToY py,
+                std::ostringstream& out) {
+  size_t i = 0;
+  const size_t n = s.x.size();
+  auto finite = [&](size_t k) {
+    return std::isfinite(s.x[k]) && std::isfinite(s.band_lo[k]) && std::isfinite(s.band_hi[k]);
+  };
+  while (i < n) {
+    while (i < n && !finite(i)) ++i;
+    size_t end = i;
+    while (end < n && finite(end)) ++end;
+    if (end > i) {
+      std::string points;
+      for (size_t k = i; k < end; ++k) {
+        points += Num(px(s.x[k])) + "," + Num(py(s.band_hi[k])) + " ";
+      }
+      for (size_t k = end; k-- > i;) {
+        points += Num(px(s.x[k])) + "," + Num(py(s.band_lo[k])) + " ";
+      }
+      points.pop_back();
+      out << "<polygon class=\"band\" fill=\"" << color
+          << "\" fill-opacity=\"0.18\" stroke=\"none\" points=\"" << points << "\"/>\n";
+    }
+    i = end;
+  }
+}
+
+void RenderPanel(const PlotPanel& panel, const std::string& id, double x0, double y0, double width,
                  double height, std::ostringstream& out) {
   Range xr;
   Range yr;
@@ -91,10 +124,21 @@ void RenderPanel(const PlotPanel& panel, int index, double x0, double y0, double
         yr.Add(s.y[i]);
       }
     }
+    if (HasBand(s)) {
+      for (size_t i = 0; i < s.x.size(); ++i) {
+        if (!std::isfinite(s.x[i])) continue;
+        yr.Add(s.band_lo[i]);
+        yr.Add(s.band_hi[i]);
+      }
+    }
   }
+  for (const ReferenceLine& line : panel.reference_lines) yr.Add(line.y);
   if (panel.y_from_zero) yr.Add(0.0);
+  if (std::isfinite(panel.y_min) && std::isfinite(panel.y_max) && panel.y_min < panel.y_max) {
+    yr = Range{panel.y_min, panel.y_max};
+  }
   Axis xa = MakeAxis(xr);
-  Axis ya = MakeAxis(yr);
+  Axis ya = MakeAxis(yr, panel.y_tick_count);
 
   // Legend size (entries with a label only).
   size_t longest = 0;
@@ -102,6 +146,11 @@ void RenderPanel(const PlotPanel& panel, int index, double x0, double y0, double
   for (const PlotSeries& s : panel.series) {
     if (s.label.empty()) continue;
     longest = std::max(longest, s.label.size());
+    ++entries;
+  }
+  for (const ReferenceLine& line : panel.reference_lines) {
+    if (line.label.empty()) continue;
+    longest = std::max(longest, line.label.size());
     ++entries;
   }
   const double legend_w = 34 + kCharWidth * static_cast<double>(longest);
@@ -146,18 +195,21 @@ void RenderPanel(const PlotPanel& panel, int index, double x0, double y0, double
       << "\" text-anchor=\"middle\" font-weight=\"bold\">" << XmlEscape(panel.title) << "</text>\n";
 
   // Series, clipped to the plot area.
-  std::string clip_id = "clip" + std::to_string(index);
+  const std::string clip_id = id;
   out << "<clipPath id=\"" << clip_id << "\"><rect x=\"" << Num(left) << "\" y=\"" << Num(top)
       << "\" width=\"" << Num(pw) << "\" height=\"" << Num(ph) << "\"/></clipPath>\n";
   for (size_t si = 0; si < panel.series.size(); ++si) {
     const PlotSeries& s = panel.series[si];
     std::string color = SeriesColor(s, si);
-    out << "<g class=\"series\" data-label=\"" << XmlEscape(s.label) << "\" clip-path=\"url(#"
-        << clip_id << ")\">\n";
     size_t n = std::min(s.x.size(), s.y.size());
+    int finite_points = 0;
+    for (size_t i = 0; i < n; ++i) finite_points += std::isfinite(s.x[i]) && std::isfinite(s.y[i]);
+    out << "<g class=\"series\" data-label=\"" << XmlEscape(s.label) << "\" data-points=\""
+        << finite_points << "\" clip-path=\"url(#" << clip_id << ")\">\n";
+    if (HasBand(s)) RenderBand(s, color, px, py, out);
     std::string points;
     auto flush = [&]() {
-      if (!points.empty()) {
+      if (!points.empty() && s.lines) {
         out << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"1.6\""
             << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << " points=\"" << points << "\"/>\n";
       }
@@ -181,6 +233,13 @@ void RenderPanel(const PlotPanel& panel, int index, double x0, double y0, double
     }
     out << "</g>\n";
   }
+  for (const ReferenceLine& line : panel.reference_lines) {
+    if (!std::isfinite(line.y) || line.y < ya.lo || line.y > ya.hi) continue;
+    out << "<line class=\"reference\" x1=\"" << Num(left) << "\" y1=\"" << Num(py(line.y))
+        << "\" x2=\"" << Num(left + pw) << "\" y2=\"" << Num(py(line.y)) << "\" stroke=\""
+        << (line.color.empty() ? "#666666" : line.color) << "\" stroke-width=\"1.2\""
+        << (line.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
+  }
 
   if (entries > 0) {
     const double lw = legend_w;
@@ -197,10 +256,25 @@ void RenderPanel(const PlotPanel& panel, int index, double x0, double y0, double
       const PlotSeries& s = panel.series[si];
       if (s.label.empty()) continue;
       double ey = by + 11 + 14.0 * row++;
-      out << "<line x1=\"" << Num(bx + 5) << "\" y1=\"" << Num(ey - 3) << "\" x2=\"" << Num(bx + 27)
-          << "\" y2=\"" << Num(ey - 3) << "\" stroke=\"" << SeriesColor(s, si)
-          << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
+      if (s.lines) {
+        out << "<line x1=\"" << Num(bx + 5) << "\" y1=\"" << Num(ey - 3) << "\" x2=\""
+            << Num(bx + 27) << "\" y2=\"" << Num(ey - 3) << "\" stroke=\"" << SeriesColor(s, si)
+            << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
+      } else {
+        out << "<circle cx=\"" << Num(bx + 16) << "\" cy=\"" << Num(ey - 3)
+            << "\" r=\"2.6\" fill=\"" << SeriesColor(s, si) << "\"/>\n";
+      }
       out << "<text x=\"" << Num(bx + 31) << "\" y=\"" << Num(ey) << "\">" << XmlEscape(s.label)
+          << "</text>\n";
+    }
+    for (const ReferenceLine& line : panel.reference_lines) {
+      if (line.label.empty()) continue;
+      double ey = by + 11 + 14.0 * row++;
+      out << "<line x1=\"" << Num(bx + 5) << "\" y1=\"" << Num(ey - 3) << "\" x2=\"" << Num(bx + 27)
+          << "\" y2=\"" << Num(ey - 3) << "\" stroke=\""
+          << (line.color.empty() ? "#666666" : line.color) << "\" stroke-width=\"1.2\""
+          << (line.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
+      out << "<text x=\"" << Num(bx + 31) << "\" y=\"" << Num(ey) << "\">" << XmlEscape(line.label)
           << "</text>\n";
     }
     out << "</g>\n";
@@ -256,6 +330,10 @@ std::vector<double> NiceTicks(double lo, double hi, int target_count) {
 }
 
 std::string RenderSvg(const PlotFigure& figure) {
+  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + RenderSvgElement(figure);
+}
+
+std::string RenderSvgElement(const PlotFigure& figure) {
   const int n = static_cast<int>(figure.panels.size());
   const int columns =
       figure.columns > 0 ? std::min(figure.columns, std::max(n, 1)) : std::max(n, 1);
@@ -265,7 +343,6 @@ std::string RenderSvg(const PlotFigure& figure) {
   const double height = title_h + static_cast<double>(rows) * figure.panel_height;
 
   std::ostringstream out;
-  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   out << "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"" << Num(width)
       << "\" height=\"" << Num(height) << "\" viewBox=\"0 0 " << Num(width) << " " << Num(height)
       << "\" font-family=\"DejaVu Sans, Arial, Helvetica, sans-serif\" font-size=\"11\">\n";
@@ -277,7 +354,8 @@ std::string RenderSvg(const PlotFigure& figure) {
   for (int i = 0; i < n; ++i) {
     double x0 = static_cast<double>(i % columns) * figure.panel_width;
     double y0 = title_h + static_cast<double>(i / columns) * figure.panel_height;
-    RenderPanel(figure.panels[i], i, x0, y0, figure.panel_width, figure.panel_height, out);
+    RenderPanel(figure.panels[i], figure.id_prefix + "clip" + std::to_string(i), x0, y0,
+                figure.panel_width, figure.panel_height, out);
   }
   out << "</svg>\n";
   return out.str();

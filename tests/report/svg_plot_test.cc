@@ -1,4 +1,4 @@
-#include "rigcal/research/svg_plot.h"
+#include "rigcal/report/svg_plot.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,0 +1,83 @@
+#pragma once
+// Running the built rigcal binary from a test: its exit code, stdout and stderr, and a fixture
+// with the binary's path (RIGCAL_BINARY, set by tests/CMakeLists.txt) and a temporary directory.
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+namespace rigcal::cli_test {
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+  // "exit N", stdout and stderr, for failure messages.
+  std::string Explain() const {
+    return "exit " + std::to_string(exit_code) + "\n--- stdout:\n" + out + "\n--- stderr:\n" + err;
+  }
+};
+
+inline std::string Slurp(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+inline std::string Quote(const std::string& s) { return "'" + s + "'"; }
+
+// Runs `command` (a shell command line) with stdin from /dev/null, stdout and stderr captured in
+// files of `dir`.
+inline RunResult RunShell(const std::string& command, const std::filesystem::path& dir) {
+  const std::string out = (dir / "stdout.txt").string();
+  const std::string err = (dir / "stderr.txt").string();
+  const int status =
+      std::system((command + " >" + Quote(out) + " 2>" + Quote(err) + " </dev/null").c_str());
+  RunResult r;
+  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  r.out = Slurp(out);
+  r.err = Slurp(err);
+  return r;
+}
+
+// binary_: the rigcal binary; dir_: a fresh directory, removed after a passing test (kept, and
+// named, after a failure).
+class BinaryTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+#ifndef RIGCAL_BINARY
+    FAIL() << "RIGCAL_BINARY is not defined: tests/CMakeLists.txt must pass the rigcal path";
+#else
+    binary_ = RIGCAL_BINARY;
+#endif
+    std::string pattern =
+        (std::filesystem::path(::testing::TempDir()) / "rigcal_cli_XXXXXX").string();
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override {
+    if (HasFailure()) {
+      std::cerr << "test files kept in " << dir_ << "\n";
+      return;
+    }
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
+  }
+  // `rigcal <args>` (args already quoted where needed).
+  RunResult Rigcal(const std::string& args) const {
+    return RunShell(Quote(binary_) + " " + args, dir_);
+  }
+
+  std::string binary_;
+  std::filesystem::path dir_;
+};
+
+}  // namespace rigcal::cli_test

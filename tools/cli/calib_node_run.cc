@@ -1,0 +1,156 @@
+#include "calib_node_run.h"
+
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "replay_progress.h"
+#include "rigcal/calib/logging.h"
+#include "rigcal/io/result_json.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/rig_files.h"
+#include "stop_signal.h"
+
+namespace rigcal::cli {
+namespace {
+
+constexpr int kExitError = 1;
+
+// "a (12), b (3)" of the channels a replay skipped.
+std::string ChannelList(const std::map<std::string, int64_t>& channels) {
+  std::ostringstream text;
+  for (const auto& [channel, count] : channels) {
+    text << (text.tellp() > 0 ? ", " : "") << channel << " (" << count << ")";
+  }
+  return text.str();
+}
+
+// Why nothing was calibrated when no set reached the estimator.
+std::string NoSetsMessage(const tools::CalibNodeOptions& options,
+                          const std::vector<std::string>& names,
+                          const tools::CalibNodeSummary& summary) {
+  std::ostringstream text;
+  text << "no synchronised pose set reached the estimator: ";
+  if (options.log_path.empty()) {
+    text << "no RIGCAL_POSE_<camera> messages of the config's cameras were received";
+  } else if (summary.log_events == 0) {
+    text << options.log_path << " holds no events";
+  } else {
+    text << options.log_path << " holds no usable "
+         << (summary.image_replay ? "RIGCAL_IMAGE_<camera>" : "RIGCAL_POSE_<camera>")
+         << " messages of the config's cameras";
+  }
+  text << " (cameras:";
+  for (const std::string& name : names) text << " " << name;
+  text << ")";
+  if (!summary.skipped_channels.empty()) {
+    text << "; channels in the log: " << ChannelList(summary.skipped_channels);
+  }
+  if (summary.unknown_channel > 0) {
+    text << "; " << summary.unknown_channel << " pose messages of cameras not in the config";
+  }
+  return text.str();
+}
+
+}  // namespace
+
+void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, tools::CalibNodeOptions* node) {
+  cmd->add_option("--config", run->config,
+                  "Rig config YAML (see config/README.md; camera models for image logs)")
+      ->required();
+  cmd->add_option("--out", node->result_path, "Result YAML written at the end (atomically)")
+      ->default_val("rigcal_result.yaml");
+  cmd->add_option("--camchain", run->camchain,
+                  "Also write a Kalibr-style camchain YAML (as rigcal solve --camchain)");
+  cmd->add_flag("--json", run->json,
+                "Print the final result as JSON on stdout (rigcal solve --json schema)");
+  cmd->add_option("--state", node->state_path,
+                  "Estimator state file (overrides state.path of the config); saved atomically "
+                  "every state.save_interval_s (of log time in a replay) and at the end");
+  cmd->add_flag("--resume", node->resume,
+                "Continue from the state file; a missing, corrupt or foreign one is reported and "
+                "ignored");
+}
+
+int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
+  auto log = ModuleLogger("tools");
+  const std::string prefix = "rigcal " + args.command + ": ";
+  auto config = tools::LoadRigConfig(args.config);
+  if (!config) {
+    std::cerr << prefix << config.error() << "\n";
+    return kExitError;
+  }
+  const std::vector<std::string> names = config->CameraNames();
+  // With true mountings in the config (simulations), the result also shows the errors.
+  std::map<std::string, Similarity> truth;
+  for (const tools::CameraConfig& camera : config->cameras) {
+    if (camera.truth) truth[camera.name] = *camera.truth;
+  }
+  const std::map<std::string, Similarity>* truth_ptr = truth.empty() ? nullptr : &truth;
+  std::unique_ptr<ReplayProgressDisplay> display;
+  if (args.progress && !options.log_path.empty()) {
+    display = std::make_unique<ReplayProgressDisplay>("rigcal " + args.command);
+    options.on_progress = [&display](const tools::ReplayProgress& p) { display->Update(p); };
+  }
+  tools::CalibNode node(std::move(*config), options);
+  if (const Status status = node.Open(); !status.ok()) {
+    std::cerr << prefix << status.message() << "\n";
+    return kExitError;
+  }
+  StopSignal stop_signal;
+  if (options.log_path.empty()) {
+    log->info("listening for RIGCAL_POSE_<camera>; stop with Ctrl-C (SIGINT) or SIGTERM");
+  }
+  const tools::CalibNodeSummary summary = node.Run(stop_signal.flag());
+  if (stop_signal.received() != 0) {
+    log->info("signal {} received: stopped cleanly", stop_signal.received());
+  }
+  log->info("sync: {}", summary.sync.BriefReport());
+  log->info("decoder: {}; unknown cameras: {}", summary.decode.Summary(), summary.unknown_channel);
+  if (!options.log_path.empty()) {
+    log->info("log: {} events, {:.1f} s of log time, replayed from its {}", summary.log_events,
+              summary.log_span_s, summary.image_replay ? "images through VO" : "poses");
+    if (!summary.skipped_channels.empty()) {
+      log->info("channels not replayed: {}", ChannelList(summary.skipped_channels));
+    }
+    if (!options.publish_url.empty()) {
+      log->info("published {} RIGCAL_EXTRINSICS, {} RIGCAL_STATUS on {}",
+                summary.extrinsics_published, summary.status_published, options.publish_url);
+    }
+  }
+  if (!summary.log_problem.empty()) std::cerr << prefix << summary.log_problem << "\n";
+  const RigCalibration& result = summary.estimate.rig;
+  if (args.json) {
+    std::cout << tools::ResultToJson(result, truth_ptr).dump(2) << "\n";
+  } else {
+    std::cout << tools::FormatResultTable(result, truth_ptr);
+  }
+  std::cout.flush();
+  if (!options.result_path.empty() && summary.errors.empty()) {
+    log->info("result written to {}", options.result_path);
+  }
+  if (!args.camchain.empty()) {
+    if (const Status status = tools::WriteCamchain(args.camchain, result); !status.ok()) {
+      std::cerr << prefix << status.message() << "\n";
+      return kExitError;
+    }
+    log->info("camera chain written to {}", args.camchain);
+  }
+  if (!summary.errors.empty()) {
+    for (const std::string& error : summary.errors) std::cerr << prefix << error << "\n";
+    return kExitError;
+  }
+  if (summary.estimate.sets == 0)
+    std::cerr << prefix << NoSetsMessage(options, names, summary) << "\n";
+  std::vector<SlaveState> states;
+  for (const SlaveCalibration& slave : result.slaves) {
+    states.push_back(slave.state);
+    if (!slave.usable()) {
+      std::cerr << prefix << slave.name << ": " << ToString(slave.state) << ": " << slave.message
+                << "\n";
+    }
+  }
+  return ExitCodeFor(states);  // 0 every slave usable, 3 otherwise (slave_state.h)
+}
+
+}  // namespace rigcal::cli

@@ -1,0 +1,29 @@
+#pragma once
+// Progress of a replay on stderr: a bar redrawn in place with the ETA on a terminal, a plain
+// line every few seconds otherwise (logs, CI).
+
+#include <chrono>
+#include <string>
+
+#include "rigcal/pipeline/calib_node.h"
+
+namespace rigcal::cli {
+
+class ReplayProgressDisplay {
+ public:
+  // `label` starts every line ("rigcal replay").
+  explicit ReplayProgressDisplay(std::string label);
+  // Shows `progress` (called about every 0.2 s, and once with done = true).
+  void Update(const tools::ReplayProgress& progress);
+
+ private:
+  std::string label_;
+  bool tty_;
+  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point next_line_;
+};
+
+// "1:05" / "1:02:03" for a number of seconds.
+std::string ClockText(double seconds);
+
+}  // namespace rigcal::cli

@@ -1,0 +1,37 @@
+#pragma once
+// FrameFeedDevice: a CameraDevice whose frames are handed in by another thread (the log replay
+// reads every camera's images from one log and feeds them here). Feed waits while the device's
+// queue is full, so a slow VO holds the reader back instead of losing frames.
+//
+// Threads: one feeding thread calls Feed and End; the pipeline's capture thread calls Grab; any
+// thread calls Interrupt.
+
+#include <string>
+
+#include "rigcal/calib/bounded_queue.h"
+#include "rigcal/drivers/capture_device.h"
+
+namespace rigcal::tools {
+
+class FrameFeedDevice : public drivers::CameraDevice {
+ public:
+  FrameFeedDevice(std::string name, double frame_rate_hz, size_t capacity)
+      : name_(std::move(name)), frame_rate_hz_(frame_rate_hz), frames_(capacity) {}
+
+  const std::string& name() const override { return name_; }
+  double frame_rate_hz() const override { return frame_rate_hz_; }
+  Expected<std::optional<drivers::Frame>> Grab() override { return frames_.Pop(); }
+  void Interrupt() override { frames_.Stop(); }
+
+  // Hands a frame over, waiting for room; false after Interrupt/End.
+  bool Feed(drivers::Frame frame) { return frames_.PushWait(std::move(frame)); }
+  // End of stream: Grab returns the queued frames, then nullopt.
+  void End() { frames_.Stop(); }
+
+ private:
+  const std::string name_;
+  const double frame_rate_hz_;
+  BoundedQueue<drivers::Frame> frames_;
+};
+
+}  // namespace rigcal::tools

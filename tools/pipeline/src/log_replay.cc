@@ -1,0 +1,243 @@
+// CalibNode's replay of an LCM log (calib_node.h): the reader loop, the time window, pacing,
+// the log-time timers and the image path through the pipeline.
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <thread>
+
+#include "calib_node_impl.h"
+#include "rigcal/camera/camera_spec.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/image_message.h"
+#include "rigcal/lcm/pose_message.h"
+#include "rigcal/pipeline/image_codec.h"
+
+namespace rigcal::tools {
+namespace {
+
+constexpr char kImagePrefix[] = "RIGCAL_IMAGE_";
+
+// Whether the log holds images of one of `names` (headers only: a quick scan).
+Expected<bool> LogHasImages(const std::string& path, const CameraNames& names,
+                            const LogReaderOptions& options) {
+  auto scan = LogReader::Open(path, options);
+  if (!scan) return scan.status();
+  LogEvent event;
+  while ((*scan)->NextHeader(&event) == LogReader::Outcome::kEvent) {
+    if (event.channel.rfind(kImagePrefix, 0) != 0) continue;
+    for (const std::string& name : names) {
+      if (event.channel == ImageChannel(name)) return true;
+    }
+  }
+  return false;
+}
+
+// The camera models VO needs for an image replay: cameras[].model of the config, or the
+// simulated source's.
+Expected<std::vector<std::shared_ptr<const camera::CameraModel>>> CameraModels(
+    const RigConfig& config) {
+  std::vector<std::shared_ptr<const camera::CameraModel>> models;
+  for (size_t i = 0; i < config.cameras.size(); ++i) {
+    const CameraConfig& camera = config.cameras[i];
+    if (camera.spec) {
+      auto model = camera::MakeCameraModel(*camera.spec);
+      if (!model) return Error{config.path + ": camera '" + camera.name + "': " + model.error()};
+      models.emplace_back(std::move(*model));
+    } else if (config.simulated_source && i < config.simulated_source->cameras.size()) {
+      models.push_back(config.simulated_source->cameras[i]);
+    } else {
+      return Error{config.path + ": camera '" + camera.name +
+                   "' has no camera model; the VO of an image replay needs one (or replay the "
+                   "log's poses with --poses-only)"};
+    }
+  }
+  return models;
+}
+
+}  // namespace
+
+Status ReplayOptions::Check() const {
+  if (!(speed >= 0.0)) return Error{"speed: must be >= 0 (0 = as fast as possible)"};
+  if (!(from_s >= 0.0)) return Error{"from_s: must be >= 0"};
+  if (to_s >= 0.0 && to_s < from_s) return Error{"to_s: must be >= from_s (or < 0 = the end)"};
+  if (max_event_bytes < 1) return Error{"max_event_bytes: must be >= 1"};
+  if (frame_feed_capacity < 1) return Error{"frame_feed_capacity: must be >= 1"};
+  return Status::Ok();
+}
+
+Status CalibNode::Impl::OpenLog() {
+  if (const Status status = options.replay.Check(); !status.ok()) {
+    return Error{"replay options: " + status.message()};
+  }
+  LogReaderOptions reader_options;
+  reader_options.max_event_bytes = options.replay.max_event_bytes;
+  auto opened = LogReader::Open(options.log_path, reader_options);
+  if (!opened) return opened.status();
+  reader = std::move(*opened);
+  if (!options.publish_url.empty()) {
+    output = std::make_unique<lcm::LCM>(options.publish_url);
+    if (!output->good()) return Error{options.publish_url + ": cannot open the LCM URL"};
+  }
+  if (options.replay.poses_only) return Status::Ok();
+  auto images = LogHasImages(options.log_path, names, reader_options);
+  if (!images) return images.status();
+  if (!*images) return Status::Ok();
+
+  auto models = CameraModels(config);
+  if (!models) return models.status();
+  const double rate_hz = 1e9 / static_cast<double>(config.online.sync.frame_period_ns);
+  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  for (const std::string& name : names) {
+    auto feed = std::make_unique<FrameFeedDevice>(
+        name, rate_hz, static_cast<size_t>(options.replay.frame_feed_capacity));
+    feeds.push_back(feed.get());
+    devices.push_back(std::move(feed));
+  }
+  PipelineOptions pipeline_options;
+  pipeline_options.lossless = true;
+  pipeline_options.pose_sink = [this](const CameraPose& pose) { AcceptVoPose(pose); };
+  pipeline = std::make_unique<Pipeline>(names, std::move(devices), std::move(*models),
+                                        config.online, pipeline_options);
+  images_invalid = std::make_unique<std::atomic<int64_t>[]>(names.size());
+  summary.image_replay = true;
+  log->info("{}: replaying the images through VO (--poses-only replays the poses)",
+            options.log_path);
+  return Status::Ok();
+}
+
+void CalibNode::Impl::AdvanceLogTime(int64_t t_ns) {
+  if (t_ns <= clock_ns) return;
+  clock_ns = t_ns;
+  if (first_stamp_ns < 0) first_stamp_ns = t_ns;
+  bool caught_up = false;
+  int job = 0;
+  int64_t deadline = 0;
+  while (schedule.NextDue(clock_ns, &job, &deadline)) {
+    if (!caught_up) {
+      calibrator.Drain();
+      caught_up = true;
+    }
+    RunJob(job, deadline / 1000);
+  }
+}
+
+ReplayProgress CalibNode::Impl::Progress() const {
+  ReplayProgress p;
+  p.bytes_read = reader ? reader->position() : 0;
+  p.log_bytes = reader ? reader->size() : 0;
+  p.log_time_s = summary.log_span_s;
+  p.sets = calibrator.sync_stats().sets_popped;
+  return p;
+}
+
+void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
+  const ReplayOptions& replay = options.replay;
+  if (pipeline) pipeline->Start();
+  LogEvent event;
+  int64_t window_start = -1;  // first stamp of the log: the origin of --from / --to
+  const auto from_ns = static_cast<int64_t>(std::llround(replay.from_s * 1e9));
+  const int64_t to_ns =
+      replay.to_s < 0.0 ? -1 : static_cast<int64_t>(std::llround(replay.to_s * 1e9));
+  Clock::time_point next_progress = Clock::now();
+  const auto progress_period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(options.progress_every_s));
+  while (!stop.load()) {
+    const LogReader::Outcome outcome = reader->Next(&event);
+    if (outcome == LogReader::Outcome::kEnd) {
+      summary.end_of_log = true;
+      break;
+    }
+    if (outcome == LogReader::Outcome::kDamaged) {
+      summary.end_of_log = true;
+      summary.log_problem = reader->problem() + "; replayed the " +
+                            std::to_string(summary.log_events) + " events before it";
+      log->warn("{}", summary.log_problem);
+      break;
+    }
+    ++summary.log_events;
+    if (options.on_progress && Clock::now() >= next_progress) {
+      options.on_progress(Progress());
+      next_progress = Clock::now() + progress_period;
+    }
+    const bool images = pipeline != nullptr;
+    const bool ours = event.channel.rfind(images ? kImagePrefix : "RIGCAL_POSE_", 0) == 0;
+    if (!ours) {
+      ++summary.skipped_channels[event.channel];
+      continue;
+    }
+    // The message's stamp decides the window and the pacing.
+    int camera = -1;
+    std::optional<CameraPose> pose;
+    std::optional<drivers::Frame> frame;
+    if (images) {
+      camera = CameraOfChannel(event.channel, /*images=*/true);
+      if (camera < 0) {
+        ++summary.skipped_channels[event.channel];
+        continue;
+      }
+      auto image = validator.Decode<image_t>(event.channel, event.data.data(),
+                                             static_cast<int64_t>(event.data.size()));
+      auto decoded =
+          image ? FrameFromImage(*image, camera) : Expected<drivers::Frame>(image.status());
+      if (!decoded) {
+        ++summary.cameras[camera].invalid;
+        images_invalid[camera].fetch_add(1);
+        Reject(decoded.error());
+        continue;
+      }
+      frame = std::move(*decoded);
+    } else {
+      camera = CameraOfChannel(event.channel, /*images=*/false);
+      if (camera < 0) {
+        HandlePose(event.channel, event.data.data(), static_cast<int64_t>(event.data.size()));
+        continue;
+      }
+      auto decoded = validator.DecodeCameraPose(event.channel, event.data.data(),
+                                                static_cast<int64_t>(event.data.size()));
+      if (!decoded || decoded->pose.camera != camera) {
+        ++summary.cameras[camera].invalid;
+        Reject(decoded ? event.channel + ": camera_pose_t.camera does not match the channel"
+                       : decoded.error());
+        continue;
+      }
+      pose = decoded->pose;
+    }
+    const int64_t t_ns = images ? frame->t_ns : pose->t_ns;
+    if (window_start < 0) window_start = t_ns;
+    const int64_t since_ns = t_ns - window_start;
+    if (since_ns < from_ns) continue;
+    if (to_ns >= 0 && since_ns > to_ns) break;
+    summary.log_span_s =
+        std::max(summary.log_span_s, static_cast<double>(since_ns - from_ns) * 1e-9);
+    if (replay.speed > 0.0) {
+      if (pace_stamp_start < 0) {
+        pace_stamp_start = t_ns;
+        pace_wall_start = Clock::now();
+      }
+      const auto due = pace_wall_start +
+                       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                           static_cast<double>(t_ns - pace_stamp_start) * 1e-9 / replay.speed));
+      while (!stop.load() && Clock::now() < due) {
+        std::this_thread::sleep_for(
+            std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(100)));
+      }
+    }
+    if (images) {
+      ++summary.cameras[camera].images;
+      if (!feeds[camera]->Feed(std::move(*frame))) break;
+    } else {
+      AdvanceLogTime(t_ns);
+      Accept(camera, *pose);
+    }
+  }
+  if (pipeline) {
+    // Every fed frame through the VO and its poses handed over, then the threads joined.
+    for (FrameFeedDevice* feed : feeds) feed->End();
+    while (!pipeline->Finished() && !stop.load()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    pipeline->Stop();
+  }
+}
+
+}  // namespace rigcal::tools
