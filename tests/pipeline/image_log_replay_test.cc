@@ -19,7 +19,7 @@
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/pipeline/calib_node.h"
-#include "rigcal/pipeline/image_frames.h"
+#include "rigcal/pipeline/image_codec.h"
 #include "rigcal/pipeline/pipeline.h"
 
 namespace rigcal::tools {

@@ -15,7 +15,7 @@
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
-#include "rigcal/pipeline/image_frames.h"
+#include "rigcal/pipeline/image_codec.h"
 #include "rigcal/pipeline/pipeline.h"
 
 namespace rigcal::tools {
@@ -103,7 +103,7 @@ inline void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<st
   for (const drivers::Frame& frame : frames) {
     const std::string& name = names[static_cast<size_t>(frame.camera)];
     const std::string channel = ImageChannel(name);
-    auto bytes = EncodeMessage(channel, names, ImageOfFrame(frame, name));
+    auto bytes = EncodeImageEvent(frame, names, frame.camera, {});
     ASSERT_TRUE(bytes) << bytes.error();
     lcm::LogEvent event;
     event.eventnum = n++;

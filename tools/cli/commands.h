@@ -16,5 +16,7 @@ void RegisterRun(CLI::App& app, int* exit_code);
 void RegisterStatus(CLI::App& app, int* exit_code);
 void RegisterReport(CLI::App& app, int* exit_code);
 void RegisterReplay(CLI::App& app, int* exit_code);
+void RegisterRecord(CLI::App& app, int* exit_code);
+void RegisterImport(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

@@ -58,6 +58,8 @@ int main(int argc, char** argv) {
   rigcal::cli::RegisterDemo(app, &exit_code);
   rigcal::cli::RegisterStatus(app, &exit_code);
   rigcal::cli::RegisterReport(app, &exit_code);
+  rigcal::cli::RegisterRecord(app, &exit_code);
+  rigcal::cli::RegisterImport(app, &exit_code);
 
   try {
     app.parse(argc, argv);

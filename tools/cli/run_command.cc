@@ -15,8 +15,6 @@
 #include "commands.h"
 #include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
-#include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/ground_truth_files.h"
 #include "rigcal/io/result_json.h"
@@ -28,6 +26,7 @@
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
+#include "rigcal/pipeline/capture_sources.h"
 #include "rigcal/pipeline/online_replay.h"
 #include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/run_evaluation.h"
@@ -169,63 +168,22 @@ int RunRun(const RunArgs& args) {
     return kExitError;
   }
   const std::vector<std::string> names = config->CameraNames();
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
-  std::vector<std::shared_ptr<const camera::CameraModel>> models;
-  std::vector<drivers::ImageFolderDevice*> folders;  // not owned: for the end report
-  std::optional<drivers::SimulatedRig> rig;
-  bool realtime = false;
-  if (config->simulated_source) {
-    drivers::SimulatedRigSpec spec = *config->simulated_source;
-    if (args.fast) spec.realtime = false;
-    realtime = spec.realtime;
-    std::cerr << "rigcal run: building the simulated rig (" << spec.names.size() << " cameras, "
-              << drivers::ToString(spec.scene.type) << " scene)...\n";
-    auto made = drivers::MakeSimulatedRig(spec);
-    if (!made) {
-      std::cerr << "rigcal run: " << args.config << ": " << made.error() << "\n";
-      return kExitError;
-    }
-    rig = std::move(*made);
-    if (!args.truth_dir.empty()) {
-      if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
-        std::cerr << "rigcal run: " << status.message() << "\n";
-        return kExitError;
-      }
-    }
-    devices = rig->MakeDevices();
-    models = spec.cameras;
-    std::cerr << "rigcal run: " << rig->num_frames() << " frames per camera at "
-              << rig->frame_rate_hz() << " Hz"
-              << (realtime ? " (real time)" : " (as fast as possible)") << "\n";
-  } else if (!config->image_folders.empty()) {
-    if (args.eval) {
-      std::cerr << "rigcal run: --eval needs a simulated source (ground truth)\n";
-      return kExitError;
-    }
-    for (size_t i = 0; i < names.size(); ++i) {
-      auto device =
-          drivers::ImageFolderDevice::Open(config->image_folders[i], names[i], static_cast<int>(i));
-      if (!device) {
-        std::cerr << "rigcal run: " << args.config << ": camera '" << names[i]
-                  << "': " << device.error() << "\n";
-        return kExitError;
-      }
-      auto model = camera::MakeCameraModel(*config->cameras[i].spec);
-      if (!model) {
-        std::cerr << "rigcal run: " << args.config << ": camera '" << names[i]
-                  << "': " << model.error() << "\n";
-        return kExitError;
-      }
-      std::cerr << "rigcal run: camera '" << names[i] << "': " << (*device)->size()
-                << " images listed in " << config->image_folders[i] << "\n";
-      folders.push_back(device->get());
-      devices.push_back(std::move(*device));
-      models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
-    }
-  } else {
-    std::cerr << "rigcal run: " << args.config
-              << ": no `source:` section (supported: simulated, image_folders)\n";
+  if (args.eval && !config->simulated_source) {
+    std::cerr << "rigcal run: --eval needs a simulated source (ground truth)\n";
     return kExitError;
+  }
+  auto sources = tools::OpenCaptureSources(*config, args.fast, "rigcal run: ", std::cerr);
+  if (!sources) {
+    std::cerr << "rigcal run: " << sources.error() << "\n";
+    return kExitError;
+  }
+  const std::optional<drivers::SimulatedRig>& rig = sources->rig;
+  const bool realtime = sources->realtime;
+  if (rig && !args.truth_dir.empty()) {
+    if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
+      std::cerr << "rigcal run: " << status.message() << "\n";
+      return kExitError;
+    }
   }
   std::unique_ptr<lcm::LCM> bus;
   if (!args.lcm_url.empty()) {
@@ -238,7 +196,8 @@ int RunRun(const RunArgs& args) {
   tools::PipelineOptions options;
   options.lossless = !realtime;
   options.record_poses = (rig.has_value() && (args.eval || args.json)) || !args.poses_dir.empty();
-  tools::Pipeline pipeline(names, std::move(devices), models, config->online, options, bus.get());
+  tools::Pipeline pipeline(names, std::move(sources->devices), sources->models, config->online,
+                           options, bus.get());
 
   StopSignal stop_signal;
   const auto start = std::chrono::steady_clock::now();
@@ -282,17 +241,7 @@ int RunRun(const RunArgs& args) {
                 << " frames dropped because its VO fell behind\n";
     }
   }
-  for (const drivers::ImageFolderDevice* folder : folders) {
-    const std::vector<std::string> skipped = folder->skipped_files();
-    if (!skipped.empty()) {
-      std::cerr << "rigcal run: camera '" << folder->name() << "': " << skipped.size()
-                << " listed images missing or unreadable, skipped:\n";
-      for (const std::string& file : skipped) std::cerr << "  " << file << "\n";
-    }
-    for (const std::string& problem : folder->csv_problems()) {
-      std::cerr << "rigcal run: " << problem << "\n";
-    }
-  }
+  tools::ReportFolderProblems(sources->folders, "rigcal run: ", std::cerr);
   std::fprintf(stderr, "rigcal run: %.1f s, %llu sets; RSS %.0f MB\n", elapsed,
                static_cast<unsigned long long>(final_state.estimate.sets),
                static_cast<double>(tools::ResidentSetBytes()) / (1 << 20));

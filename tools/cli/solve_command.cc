@@ -114,11 +114,12 @@ int RunSolve(const SolveArgs& args) {
 
   tools::TrajectoryReadOptions read_options;
   read_options.max_quaternion_norm_error = args.max_quaternion_norm_error;
-  auto read = [&](const std::string& path) {
+  auto read = [&](const std::string& argument) {
     tools::TrajectoryFormat format = tools::TrajectoryFormat::kTum;
-    auto trajectory = tools::ReadTrajectory(path, read_options, &format);
+    auto trajectory = tools::ReadNamedTrajectory(argument, read_options, &format);
     if (trajectory) {
-      log->info("{}: {} poses ({} format), camera '{}'", path, trajectory->size(),
+      log->info("{}: {} poses ({} format), camera '{}'",
+                tools::ParseNamedTrajectoryPath(argument).path, trajectory->size(),
                 tools::ToString(format), trajectory->name);
     }
     return trajectory;
@@ -263,13 +264,16 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
 
   cmd->add_option("--master", args->master,
                   "Trajectory file of the master camera. It defines the rig frame\n"
-                  "and the unit of every position in the result.")
-      ->type_name("FILE")
+                  "and the unit of every position in the result. NAME=FILE names the\n"
+                  "camera NAME (default: the file name without directory and extension).")
+      ->type_name("[NAME=]FILE")
       ->required();
   cmd->add_option("--slave", args->slaves,
                   "Trajectory file of a slave camera; repeat for every slave. A\n"
-                  "camera's name is its file name without directory and extension.")
-      ->type_name("FILE")
+                  "camera's name is its file name without directory and extension,\n"
+                  "or NAME with NAME=FILE (EuRoC: --master cam0=mav0/cam0/data.csv\n"
+                  "--slave cam1=mav0/cam1/data.csv).")
+      ->type_name("[NAME=]FILE")
       ->required();
   cmd->add_option("--method", args->method,
                   "lls: linear least squares only (thesis 4.3); nl: the linear\n"

@@ -15,8 +15,16 @@ namespace {
 
 std::string ErrnoText(int err) { return std::strerror(err); }
 
-// Writes all of `data`, retrying short writes and EINTR. Returns 0 or an errno value.
-int WriteAll(int fd, std::string_view data) {
+// The directory `path` lives in ("." for a bare file name).
+std::filesystem::path DirectoryOf(const std::string& path) {
+  std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  return dir;
+}
+
+}  // namespace
+
+int WriteAllBytes(int fd, std::string_view data) {
   while (!data.empty()) {
     const ssize_t n = ::write(fd, data.data(), data.size());
     if (n < 0) {
@@ -27,15 +35,6 @@ int WriteAll(int fd, std::string_view data) {
   }
   return 0;
 }
-
-// The directory `path` lives in ("." for a bare file name).
-std::filesystem::path DirectoryOf(const std::string& path) {
-  std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  if (dir.empty()) dir = ".";
-  return dir;
-}
-
-}  // namespace
 
 AtomicFile::AtomicFile(std::string path, std::string temp_path, int fd)
     : path_(std::move(path)), temp_path_(std::move(temp_path)), fd_(fd) {}
@@ -94,7 +93,7 @@ Status AtomicFile::Fail(const std::string& step, int err) {
 
 Status AtomicFile::Write(std::string_view data) {
   if (fd_ < 0) return Error{"cannot write '" + path_ + "': write: the file is closed"};
-  if (const int err = WriteAll(fd_, data); err != 0) return Fail("write", err);
+  if (const int err = WriteAllBytes(fd_, data); err != 0) return Fail("write", err);
   return Status::Ok();
 }
 

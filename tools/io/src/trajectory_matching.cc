@@ -77,7 +77,8 @@ Expected<RigRecording> MatchTrajectories(const TimedTrajectory& master,
     for (size_t j = 0; j < i; ++j) {
       if (all[i]->name == all[j]->name) {
         return Error{"two cameras are named '" + all[i]->name +
-                     "' (camera names are file stems and must differ)"};
+                     "' (camera names are file stems, or NAME of a NAME=FILE argument, and must "
+                     "differ)"};
       }
     }
   }

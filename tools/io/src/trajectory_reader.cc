@@ -134,4 +134,22 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
   return trajectory;
 }
 
+NamedTrajectoryPath ParseNamedTrajectoryPath(const std::string& argument) {
+  std::error_code ec;
+  const size_t eq = argument.find('=');
+  if (eq == std::string::npos || eq == 0 || std::filesystem::is_regular_file(argument, ec)) {
+    return {"", argument};
+  }
+  return {argument.substr(0, eq), argument.substr(eq + 1)};
+}
+
+Expected<TimedTrajectory> ReadNamedTrajectory(const std::string& argument,
+                                              const TrajectoryReadOptions& options,
+                                              TrajectoryFormat* format) {
+  const NamedTrajectoryPath named = ParseNamedTrajectoryPath(argument);
+  auto trajectory = ReadTrajectory(named.path, options, format);
+  if (trajectory && !named.name.empty()) trajectory->name = named.name;
+  return trajectory;
+}
+
 }  // namespace rigcal::tools

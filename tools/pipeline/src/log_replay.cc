@@ -10,7 +10,7 @@
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/lcm/pose_message.h"
-#include "rigcal/pipeline/image_frames.h"
+#include "rigcal/pipeline/image_codec.h"
 
 namespace rigcal::tools {
 namespace {

@@ -17,6 +17,10 @@ namespace rigcal::tools {
 // left behind. Thread-safe for distinct paths.
 [[nodiscard]] Status WriteFileAtomically(const std::string& path, std::string_view contents);
 
+// Writes all of `data` to the open file descriptor `fd`, retrying short writes and EINTR.
+// Returns 0 or the errno value of the failing write. Thread-safe for distinct descriptors.
+int WriteAllBytes(int fd, std::string_view data);
+
 // A file that is written by name by someone else (e.g. lcm::LogFile) and replaces `path`
 // atomically: Create() makes an empty temporary file (mode 0644) next to `path`; the caller
 // writes temp_path() and closes it; Commit() fsyncs it, renames it over `path` and fsyncs the

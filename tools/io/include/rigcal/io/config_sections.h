@@ -24,6 +24,12 @@ Expected<camera::CameraSpec> ParseCameraSection(const YAML::Node& camera, const 
 // `rigcal_name` when present, else "cam0", "cam1", ...
 Expected<std::vector<camera::CameraSpec>> ReadKalibrIntrinsics(const std::string& path);
 
+// The intrinsics of a EuRoC / ASL camera `sensor.yaml` (mav0/camN/sensor.yaml): camera_model
+// pinhole with distortion_model radial-tangential (as pinhole) or equidistant (as fisheye),
+// intrinsics [fu, fv, cu, cv], distortion_coefficients, resolution [width, height]. `name` names
+// the camera. Errors read "<path>:<line>: <key>: <what>".
+Expected<camera::CameraSpec> ReadEurocSensorYaml(const std::string& path, const std::string& name);
+
 // The `source:` section of type `simulated`. Fills every field of SimulatedRigSpec that the
 // section owns; cameras and their true mounting are filled by the caller from `cameras:`.
 Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,

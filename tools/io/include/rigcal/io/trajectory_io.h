@@ -65,6 +65,20 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
                                          const TrajectoryReadOptions& options = {},
                                          TrajectoryFormat* format = nullptr);
 
+// A camera's trajectory argument on the command line: "NAME=FILE" names the camera NAME (EuRoC's
+// mav0/cam1/data.csv would otherwise be "data"), "FILE" names it after the file's stem. An
+// argument that is an existing file is always a FILE, even with a '=' in it.
+struct NamedTrajectoryPath {
+  std::string name;  // empty: the file's stem
+  std::string path;
+};
+NamedTrajectoryPath ParseNamedTrajectoryPath(const std::string& argument);
+
+// ReadTrajectory of a "NAME=FILE" or "FILE" argument, the trajectory named NAME when given.
+Expected<TimedTrajectory> ReadNamedTrajectory(const std::string& argument,
+                                              const TrajectoryReadOptions& options = {},
+                                              TrajectoryFormat* format = nullptr);
+
 // Reads a KITTI odometry pose file and its time file: `poses_path` has one pose per line, the
 // 12 numbers of the row-major 3x4 matrix [R | t] (camera frame: x right, y down, z forward;
 // world = the first camera pose), `times_path` one time in seconds per line (the same count).

@@ -1,0 +1,76 @@
+// "NAME=FILE" camera arguments (rigcal solve, rigcal import tum) and the rig config written for
+// imported logs.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/trajectory_io.h"
+#include "support/temp_dir.h"
+
+namespace rigcal::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(NamedTrajectoryPath, SplitsNameUnlessTheArgumentIsAFile) {
+  const fs::path dir = support::FreshTempDir("named_parse");
+  NamedTrajectoryPath p = ParseNamedTrajectoryPath("cam1=mav0/cam1/data.csv");
+  EXPECT_EQ(p.name, "cam1");
+  EXPECT_EQ(p.path, "mav0/cam1/data.csv");
+  p = ParseNamedTrajectoryPath("mav0/cam1/data.csv");
+  EXPECT_EQ(p.name, "");
+  EXPECT_EQ(p.path, "mav0/cam1/data.csv");
+  p = ParseNamedTrajectoryPath("=x.txt");  // no name before '='
+  EXPECT_EQ(p.name, "");
+  EXPECT_EQ(p.path, "=x.txt");
+  const std::string odd = (dir / "a=b.txt").string();  // an existing file with '=' in its name
+  std::ofstream(odd) << "0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n";
+  p = ParseNamedTrajectoryPath(odd);
+  EXPECT_EQ(p.name, "");
+  EXPECT_EQ(p.path, odd);
+
+  auto named = ReadNamedTrajectory("front=" + odd);
+  ASSERT_TRUE(named.ok()) << named.error();
+  EXPECT_EQ(named->name, "front");
+  EXPECT_EQ(named->size(), 2u);
+  auto stem = ReadNamedTrajectory(odd);
+  ASSERT_TRUE(stem.ok()) << stem.error();
+  EXPECT_EQ(stem->name, "a=b");
+  auto missing = ReadNamedTrajectory("front=" + (dir / "none.txt").string());
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().find("none.txt"), std::string::npos) << missing.error();
+}
+
+TEST(WriteRigConfig, RoundTripsThroughTheLoader) {
+  const fs::path dir = support::FreshTempDir("named_config");
+  std::vector<CameraConfig> cameras(2);
+  cameras[0].name = "cam0";
+  camera::CameraSpec spec;
+  spec.model = camera::CameraSpec::Model::kFisheye;
+  spec.width = 640;
+  spec.height = 480;
+  spec.intrinsics = {300.1234567890123, 301.5, 319.5, 239.25};
+  spec.distortion = {0.01, -0.002, 0.0003, -4e-05};
+  cameras[0].spec = spec;
+  cameras[1].name = "cam-1.b";
+  const std::string path = (dir / "rig.yaml").string();
+  ASSERT_TRUE(WriteRigConfig(path, "imported", cameras, "first line\nsecond line").ok());
+  auto config = LoadRigConfig(path);
+  ASSERT_TRUE(config.ok()) << config.error();
+  EXPECT_EQ(config->name, "imported");
+  ASSERT_EQ(config->CameraNames(), (std::vector<std::string>{"cam0", "cam-1.b"}));
+  ASSERT_TRUE(config->cameras[0].spec.has_value());
+  EXPECT_EQ(config->cameras[0].spec->model, camera::CameraSpec::Model::kFisheye);
+  EXPECT_EQ(config->cameras[0].spec->intrinsics, spec.intrinsics);
+  EXPECT_EQ(config->cameras[0].spec->distortion, spec.distortion);
+  EXPECT_FALSE(config->cameras[1].spec.has_value());
+
+  const Status none = WriteRigConfig(path, "x", {}, "");
+  ASSERT_FALSE(none.ok());
+  EXPECT_NE(none.message().find("needs a camera"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rigcal::tools

@@ -1,0 +1,52 @@
+// WriteRigConfig (rig_config.h): the camera part of a rig config, for configs made by tools
+// (`rigcal import`).
+#include <iomanip>
+#include <sstream>
+
+#include "rigcal/io/atomic_file.h"
+#include "rigcal/io/rig_config.h"
+
+namespace rigcal::tools {
+namespace {
+
+template <typename Container>
+std::string List(const Container& values) {
+  std::ostringstream out;
+  out << std::setprecision(17) << "[";
+  bool first = true;
+  for (const auto& v : values) {
+    out << (first ? "" : ", ") << v;
+    first = false;
+  }
+  out << "]";
+  return out.str();
+}
+
+}  // namespace
+
+Status WriteRigConfig(const std::string& path, const std::string& rig_name,
+                      const std::vector<CameraConfig>& cameras, const std::string& comment) {
+  if (cameras.empty()) return Error{"cannot write '" + path + "': a rig config needs a camera"};
+  std::ostringstream out;
+  std::istringstream comment_lines(comment);
+  for (std::string line; std::getline(comment_lines, line);) out << "# " << line << "\n";
+  out << "rig:\n  name: \"" << rig_name << "\"\n  master: \"" << cameras.front().name
+      << "\"\n\ncameras:\n";
+  for (const CameraConfig& camera : cameras) {
+    out << "  - name: \"" << camera.name << "\"\n";
+    if (!camera.spec) continue;
+    const camera::CameraSpec& spec = *camera.spec;
+    if (spec.model == camera::CameraSpec::Model::kScaramuzza) {
+      return Error{"cannot write '" + path + "': camera '" + camera.name +
+                   "': writing a scaramuzza model is not supported"};
+    }
+    out << "    model: "
+        << (spec.model == camera::CameraSpec::Model::kFisheye ? "fisheye" : "pinhole") << "\n"
+        << "    resolution: [" << spec.width << ", " << spec.height << "]\n"
+        << "    intrinsics: " << List(spec.intrinsics) << "\n";
+    if (!spec.distortion.empty()) out << "    distortion: " << List(spec.distortion) << "\n";
+  }
+  return WriteFileAtomically(path, out.str());
+}
+
+}  // namespace rigcal::tools

@@ -1,0 +1,42 @@
+#pragma once
+// The capture devices of a rig config's `source:` section, shared by `rigcal run` and
+// `rigcal record`: the simulated rig (paced in real time unless `fast`) or one EuRoC image folder
+// per camera, with the camera model of every camera.
+
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/status.h"
+#include "rigcal/camera/camera_model.h"
+#include "rigcal/drivers/capture_device.h"
+#include "rigcal/drivers/image_folder_device.h"
+#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/io/rig_config.h"
+
+namespace rigcal::tools {
+
+struct CaptureSources {
+  // One device and one model per camera, camera index order (config.CameraNames()).
+  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::shared_ptr<const camera::CameraModel>> models;
+  std::vector<drivers::ImageFolderDevice*> folders;  // not owned: the image-folder devices
+  std::optional<drivers::SimulatedRig> rig;          // the simulated source, when it is one
+  bool realtime = false;  // the devices pace themselves in real time (a live source)
+};
+
+// Opens the devices of `config`'s source. `fast`: do not pace a simulated rig in real time.
+// What is opened goes to `progress` as lines starting with `prefix` ("rigcal run: camera 'cam0':
+// 95 images listed in ..."). Errors name the config file and the camera; a config without a
+// source says which sources exist.
+Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
+                                            const std::string& prefix, std::ostream& progress);
+
+// The end-of-run report of the image folders: skipped images and CSV problems, as lines
+// starting with `prefix`.
+void ReportFolderProblems(const std::vector<drivers::ImageFolderDevice*>& folders,
+                          const std::string& prefix, std::ostream& out);
+
+}  // namespace rigcal::tools

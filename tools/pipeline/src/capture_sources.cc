@@ -1,0 +1,60 @@
+#include "rigcal/pipeline/capture_sources.h"
+
+#include "rigcal/camera/camera_spec.h"
+
+namespace rigcal::tools {
+
+Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
+                                            const std::string& prefix, std::ostream& progress) {
+  CaptureSources sources;
+  const std::vector<std::string> names = config.CameraNames();
+  if (config.simulated_source) {
+    drivers::SimulatedRigSpec spec = *config.simulated_source;
+    if (fast) spec.realtime = false;
+    sources.realtime = spec.realtime;
+    progress << prefix << "building the simulated rig (" << spec.names.size() << " cameras, "
+             << drivers::ToString(spec.scene.type) << " scene)...\n";
+    auto made = drivers::MakeSimulatedRig(spec);
+    if (!made) return Error{config.path + ": " + made.error()};
+    sources.rig = std::move(*made);
+    sources.devices = sources.rig->MakeDevices();
+    sources.models = spec.cameras;
+    progress << prefix << sources.rig->num_frames() << " frames per camera at "
+             << sources.rig->frame_rate_hz() << " Hz"
+             << (sources.realtime ? " (real time)" : " (as fast as possible)") << "\n";
+    return sources;
+  }
+  if (config.image_folders.empty()) {
+    return Error{config.path + ": no `source:` section (supported: simulated, image_folders)"};
+  }
+  for (size_t i = 0; i < names.size(); ++i) {
+    auto device =
+        drivers::ImageFolderDevice::Open(config.image_folders[i], names[i], static_cast<int>(i));
+    if (!device) {
+      return Error{config.path + ": camera '" + names[i] + "': " + device.error()};
+    }
+    auto model = camera::MakeCameraModel(*config.cameras[i].spec);
+    if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
+    progress << prefix << "camera '" << names[i] << "': " << (*device)->size()
+             << " images listed in " << config.image_folders[i] << "\n";
+    sources.folders.push_back(device->get());
+    sources.devices.push_back(std::move(*device));
+    sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
+  }
+  return sources;
+}
+
+void ReportFolderProblems(const std::vector<drivers::ImageFolderDevice*>& folders,
+                          const std::string& prefix, std::ostream& out) {
+  for (const drivers::ImageFolderDevice* folder : folders) {
+    const std::vector<std::string> skipped = folder->skipped_files();
+    if (!skipped.empty()) {
+      out << prefix << "camera '" << folder->name() << "': " << skipped.size()
+          << " listed images missing or unreadable, skipped:\n";
+      for (const std::string& file : skipped) out << "  " << file << "\n";
+    }
+    for (const std::string& problem : folder->csv_problems()) out << prefix << problem << "\n";
+  }
+}
+
+}  // namespace rigcal::tools
