@@ -30,6 +30,10 @@ namespace {
 
 using internal::MotionData;
 
+// Updates between two runs of a slave's window acceptance test (a new generation or a slave
+// becoming usable runs it at once).
+constexpr int kAcceptanceEvery = 8;
+
 // The message of a published estimate: its state, the motions, the motion model and why
 // (model_explanation.h). The online message states the equal-error boundary for the
 // translational model and the model selection's figures (`selection`) for the planar one.
@@ -92,6 +96,11 @@ struct RigEstimator::Slave {
   bool history_complete = true;
   int64_t last_history_refine_ns = std::numeric_limits<int64_t>::min();
   bool refined_from_history = false;  // `refined` is the batch calibrator's on the history
+  // The window's acceptance test (batch_acceptance.h) costs O(window) per update: its outcome
+  // is kept for kAcceptanceEvery updates of the same generation and state.
+  std::optional<std::string> unsupported;
+  int acceptance_age = -1;  // updates since the test; -1 = not tested
+  int64_t acceptance_generation = -1;
 
   void RecordHistory(int capacity, int64_t t_ns, const CameraPose& master,
                      const CameraPose& slave) {
@@ -327,11 +336,20 @@ void RigEstimator::Publish(int index) {
                                              decalibrated, &s.convergence);
   // Usable only when the window's motions support the estimate (batch_acceptance.h).
   std::optional<std::string> unsupported;
-  if (IsUsable(published.state)) {
-    std::vector<MotionData> window;
-    window.reserve(s.stats.window.size());
-    for (const internal::WindowEntry& e : s.stats.window) window.push_back(e.data);
-    unsupported = internal::OnlineUnsupportedReason(window, published);
+  if (!IsUsable(published.state)) {
+    s.acceptance_age = -1;
+  } else {
+    if (s.acceptance_age < 0 || s.acceptance_age >= kAcceptanceEvery ||
+        s.acceptance_generation != static_cast<int64_t>(generation_)) {
+      std::vector<MotionData> window;
+      window.reserve(s.stats.window.size());
+      for (const internal::WindowEntry& e : s.stats.window) window.push_back(e.data);
+      s.unsupported = internal::OnlineUnsupportedReason(window, published);
+      s.acceptance_age = 0;
+      s.acceptance_generation = static_cast<int64_t>(generation_);
+    }
+    ++s.acceptance_age;
+    unsupported = s.unsupported;
     if (unsupported) {
       published.state = SlaveState::kInitialising;
       s.convergence.stable = 0;

@@ -1,5 +1,6 @@
 // LogWriter: the bytes of lcm-logger's format, reading back through LCM's own reader, splitting,
 // atomic parts, and what is left readable after a crash cut the file inside an event.
+#include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/log_writer.h"
 
 #include <gtest/gtest.h>
@@ -130,6 +131,43 @@ TEST(LogWriter, SplitsBySizeIntoNumberedParts) {
   EXPECT_EQ(support::ReadLcmLog(expected.back()).at(0).data, big);
   EXPECT_EQ(LogPartPath("x", 7), "x.07");
   EXPECT_EQ(LogPartPath("x", 123), "x.123");
+}
+
+TEST(LogWriter, SplitLogReadsBackAsOneLog) {
+  const fs::path dir = support::FreshTempDir("log_writer_split_read");
+  const std::string path = (dir / "drive.lcmlog").string();
+  LogWriterOptions options;
+  options.split_bytes = 1000;
+  auto writer = LogWriter::Open(path, options);
+  ASSERT_TRUE(writer.ok()) << writer.error();
+  for (int i = 0; i < 10; ++i) {
+    const std::vector<uint8_t> data = Payload(300, i);
+    ASSERT_TRUE((*writer)->Write("IMG", 1000 * i, data.data(), data.size()).ok());
+  }
+  ASSERT_TRUE((*writer)->Close().ok());
+  ASSERT_GE((*writer)->files().size(), 3u);
+
+  // LogReader given the name without a part suffix reads every part in order.
+  auto reader = LogReader::Open(path);
+  ASSERT_TRUE(reader.ok()) << reader.error();
+  LogEvent event;
+  int64_t count = 0;
+  while ((*reader)->Next(&event) == LogReader::Outcome::kEvent) {
+    EXPECT_EQ(event.event_number, count);
+    EXPECT_EQ(event.timestamp_us, 1000 * count);
+    EXPECT_EQ(event.data, Payload(300, static_cast<int>(count)));
+    ++count;
+  }
+  EXPECT_EQ(count, 10);
+  EXPECT_TRUE((*reader)->problem().empty()) << (*reader)->problem();
+  EXPECT_EQ((*reader)->position(), (*writer)->bytes());
+  EXPECT_EQ((*reader)->size(), (*writer)->bytes());
+
+  // A missing middle part is named, not skipped.
+  fs::remove(LogPartPath(path, 1));
+  auto gap = LogReader::Open(path);
+  ASSERT_FALSE(gap.ok());
+  EXPECT_NE(gap.error().find(LogPartPath(path, 1)), std::string::npos) << gap.error();
 }
 
 TEST(LogWriter, AtomicPartAppearsOnlyWhenClosed) {

@@ -1,8 +1,13 @@
 #include "rigcal/lcm/log_reader.h"
 
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
+
+#include "rigcal/lcm/log_writer.h"
 
 namespace rigcal::tools {
 namespace {
@@ -18,23 +23,88 @@ uint64_t BigEndian(const uint8_t* p, int bytes) {
 
 }  // namespace
 
-Expected<std::unique_ptr<LogReader>> LogReader::Open(const std::string& path,
-                                                     LogReaderOptions options) {
+namespace {
+
+// Opens one file of a log; its size through *size.
+Expected<std::FILE*> OpenPart(const std::string& path, int64_t* size) {
   std::FILE* file = std::fopen(path.c_str(), "rb");
   if (file == nullptr) {
     return Error{path + ": cannot open the LCM log: " + std::strerror(errno)};
   }
-  int64_t size = -1;
-  if (std::fseek(file, 0, SEEK_END) == 0) size = std::ftell(file);
-  if (size < 0 || std::fseek(file, 0, SEEK_SET) != 0) {
+  *size = -1;
+  if (std::fseek(file, 0, SEEK_END) == 0) *size = std::ftell(file);
+  if (*size < 0 || std::fseek(file, 0, SEEK_SET) != 0) {
     std::fclose(file);
     return Error{path + ": cannot read the LCM log (not a regular file?)"};
   }
-  return std::unique_ptr<LogReader>(new LogReader(path, file, size, options));
+  return file;
+}
+
+bool IsRegularFile(const std::string& path) {
+  struct stat info {};
+  return ::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode);
+}
+
+// The parts of a log split by size (`lcm-logger --split-mb`, `rigcal record --split-mb`):
+// PATH.00, PATH.01, ... while they exist; empty when PATH.00 does not exist.
+std::vector<std::string> SplitParts(const std::string& path) {
+  std::vector<std::string> parts;
+  while (IsRegularFile(LogPartPath(path, static_cast<int>(parts.size())))) {
+    parts.push_back(LogPartPath(path, static_cast<int>(parts.size())));
+  }
+  return parts;
+}
+
+}  // namespace
+
+Expected<std::unique_ptr<LogReader>> LogReader::Open(const std::string& path,
+                                                     LogReaderOptions options) {
+  struct stat info {};
+  std::vector<std::string> parts;
+  if (::stat(path.c_str(), &info) != 0 && errno == ENOENT) parts = SplitParts(path);
+  if (!parts.empty()) {
+    const int n = static_cast<int>(parts.size());
+    for (int k = n + 1; k <= n + 10; ++k) {
+      if (IsRegularFile(LogPartPath(path, k))) {
+        return Error{LogPartPath(path, n) + ": missing part of a split LCM log (" +
+                     LogPartPath(path, k) + " exists)"};
+      }
+    }
+  }
+  if (parts.empty()) parts = {path};
+  int64_t total = 0;
+  for (const std::string& part : parts) {
+    if (::stat(part.c_str(), &info) == 0) total += info.st_size;
+  }
+  int64_t size = 0;
+  auto file = OpenPart(parts.front(), &size);
+  if (!file) return Error{file.error()};
+  auto reader = std::unique_ptr<LogReader>(new LogReader(parts.front(), *file, size, options));
+  reader->parts_ = std::move(parts);
+  reader->total_size_ = std::max(total, size);
+  return reader;
 }
 
 LogReader::LogReader(std::string path, std::FILE* file, int64_t size, LogReaderOptions options)
     : path_(std::move(path)), file_(file), size_(size), options_(options) {}
+
+bool LogReader::NextPart(std::string* error) {
+  if (part_ + 1 >= parts_.size()) return false;
+  int64_t size = 0;
+  auto file = OpenPart(parts_[part_ + 1], &size);
+  if (!file) {
+    *error = file.error();
+    return false;
+  }
+  std::fclose(file_);
+  file_ = *file;
+  ++part_;
+  done_bytes_ += position_;
+  path_ = parts_[part_];
+  size_ = size;
+  position_ = 0;
+  return true;
+}
 
 LogReader::~LogReader() {
   if (file_ != nullptr) std::fclose(file_);
@@ -57,6 +127,9 @@ LogReader::Outcome LogReader::Read(LogEvent* event, bool with_data) {
   std::array<uint8_t, kHeaderBytes> header{};
   const size_t got = std::fread(header.data(), 1, header.size(), file_);
   if (got == 0 && std::feof(file_)) {
+    std::string error;
+    if (NextPart(&error)) return Read(event, with_data);
+    if (!error.empty()) return Damaged(start, "end of this part, and the next: " + error);
     finished_ = true;
     final_outcome_ = Outcome::kEnd;
     return final_outcome_;

@@ -10,6 +10,7 @@
 //
 // Threads: one thread uses a reader at a time.
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -44,7 +45,8 @@ class LogReader {
     kDamaged,  // truncated or corrupt event; problem() says where and why; no further events
   };
 
-  // Opens `path`. The error names the file.
+  // Opens `path`; when no file `path` exists but `path`.00 does, the parts `path`.00, .01, ...
+  // of a log split by size are read one after the other as one log. The error names the file.
   static Expected<std::unique_ptr<LogReader>> Open(const std::string& path,
                                                    LogReaderOptions options = {});
   ~LogReader();
@@ -60,15 +62,19 @@ class LogReader {
 
   // "<path>: byte <offset>: <what>" after kDamaged, else empty.
   const std::string& problem() const { return problem_; }
-  // Bytes consumed so far (the offset after the last complete event) and the file size.
-  int64_t position() const { return position_; }
-  int64_t size() const { return size_; }
+  // Bytes consumed so far (after the last complete event) and the log's size, over every part.
+  int64_t position() const { return done_bytes_ + position_; }
+  int64_t size() const { return std::max(total_size_, size_); }
+  // The file being read (the current part of a split log).
   const std::string& path() const { return path_; }
 
  private:
   LogReader(std::string path, std::FILE* file, int64_t size, LogReaderOptions options);
   Outcome Damaged(int64_t offset, const std::string& what);
   Outcome Read(LogEvent* event, bool with_data);
+  // At the clean end of a part: opens the next one; false when there is none or it cannot be
+  // opened (then *error says why).
+  bool NextPart(std::string* error);
 
   std::string path_;
   std::FILE* file_ = nullptr;
@@ -78,6 +84,10 @@ class LogReader {
   std::string problem_;
   bool finished_ = false;
   Outcome final_outcome_ = Outcome::kEnd;
+  std::vector<std::string> parts_;  // the files of the log (one unless split by size)
+  size_t part_ = 0;
+  int64_t done_bytes_ = 0;  // bytes of the parts before the current one
+  int64_t total_size_ = 0;
 };
 
 }  // namespace rigcal::tools
