@@ -19,6 +19,10 @@ struct RunResult {
   int exit_code = -1;
   std::string out;
   std::string err;
+  // "exit N", stdout and stderr, for failure messages.
+  std::string Explain() const {
+    return "exit " + std::to_string(exit_code) + "\n--- stdout:\n" + out + "\n--- stderr:\n" + err;
+  }
 };
 
 inline std::string Slurp(const std::filesystem::path& path) {
@@ -29,6 +33,20 @@ inline std::string Slurp(const std::filesystem::path& path) {
 }
 
 inline std::string Quote(const std::string& s) { return "'" + s + "'"; }
+
+// Runs `command` (a shell command line) with stdin from /dev/null, stdout and stderr captured in
+// files of `dir`.
+inline RunResult RunShell(const std::string& command, const std::filesystem::path& dir) {
+  const std::string out = (dir / "stdout.txt").string();
+  const std::string err = (dir / "stderr.txt").string();
+  const int status =
+      std::system((command + " >" + Quote(out) + " 2>" + Quote(err) + " </dev/null").c_str());
+  RunResult r;
+  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  r.out = Slurp(out);
+  r.err = Slurp(err);
+  return r;
+}
 
 class CommandTest : public ::testing::Test {
  protected:
@@ -57,16 +75,7 @@ class CommandTest : public ::testing::Test {
 
   // Runs `rigcal <args>` (a shell command line) with stdin from /dev/null.
   RunResult Run(const std::string& args) const {
-    const std::string out = Path("stdout.txt");
-    const std::string err = Path("stderr.txt");
-    const std::string cmd =
-        Quote(binary_) + " " + args + " >" + Quote(out) + " 2>" + Quote(err) + " </dev/null";
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-    r.out = Slurp(out);
-    r.err = Slurp(err);
-    return r;
+    return RunShell(Quote(binary_) + " " + args, dir_);
   }
 
   std::string binary_;

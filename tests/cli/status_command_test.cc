@@ -10,7 +10,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 
-#include "cli/cli_runner.h"
+#include "cli/command_test.h"
 #include "monitor/status_fixtures.h"
 #include "rigcal/lcm/channels.h"
 
@@ -21,7 +21,7 @@ using cli_test::Quote;
 using cli_test::RunResult;
 using ::testing::HasSubstr;
 
-class StatusCommandTest : public cli_test::BinaryTest {
+class StatusCommandTest : public cli_test::CommandTest {
  protected:
   // A log of `statuses` RIGCAL_STATUS in `state`, each followed by a RIGCAL_EXTRINSICS.
   std::string WriteLog(const std::string& name, int8_t state, int statuses) {
@@ -50,7 +50,7 @@ class StatusCommandTest : public cli_test::BinaryTest {
   }
 
   RunResult Status(const std::string& log, const std::string& args) const {
-    return Rigcal("status --lcm " + Quote("file://" + log + "?speed=0") + " " + args);
+    return Run("status --lcm " + Quote("file://" + log + "?speed=0") + " " + args);
   }
 };
 
@@ -83,7 +83,7 @@ TEST_F(StatusCommandTest, NoDataIsExitCode3) {
   EXPECT_EQ(r.exit_code, 3) << r.Explain();
   EXPECT_THAT(r.out, HasSubstr("\"health\": \"no_data\""));
   // An URL LCM cannot open: no data can arrive, and the message says why.
-  const RunResult bad = Rigcal("status --lcm 'bogus://nowhere' --once --timeout 1");
+  const RunResult bad = Run("status --lcm 'bogus://nowhere' --once --timeout 1");
   EXPECT_EQ(bad.exit_code, 3) << bad.Explain();
   EXPECT_THAT(bad.err, HasSubstr("bogus://nowhere: cannot open LCM"));
 }
@@ -121,9 +121,9 @@ TEST_F(StatusCommandTest, DashboardOnATerminal) {
 }
 
 TEST_F(StatusCommandTest, UsageErrors) {
-  const RunResult r = Rigcal("status --once --timeout -1");
+  const RunResult r = Run("status --once --timeout -1");
   EXPECT_EQ(r.exit_code, 2) << r.Explain();
-  const RunResult help = Rigcal("status --help");
+  const RunResult help = Run("status --help");
   EXPECT_EQ(help.exit_code, 0);
   for (const char* option :
        {"--lcm", "--once", "--json", "--timeout", "--refresh", "0 converged, 1 still"}) {
