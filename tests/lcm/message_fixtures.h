@@ -112,6 +112,7 @@ inline camera_status_t MakeCameraStatus(const std::string& name, int k) {
   c.dropped_invalid = 6 + k;
   c.vo_state = camera_status_t::VO_TRACKING;
   c.last_pose_age_ms = 33 + k;
+  c.vo_segment = 2 + k;
   return c;
 }
 

@@ -19,6 +19,7 @@ TEST(StatusMessage, RoundTrip) {
   EXPECT_EQ(back.cameras[1].name, "left");
   EXPECT_EQ(back.cameras[1].dropped_never_matched, 6);
   EXPECT_EQ(back.cameras[2].vo_state, camera_status_t::VO_LOST);
+  EXPECT_EQ(back.cameras[2].vo_segment, 4);
   EXPECT_EQ(back.estimator_state, rig_status_t::ESTIMATOR_DEGRADED);
   EXPECT_EQ(back.estimator_message, "back: insufficient motion");
   EXPECT_EQ(back.rss_bytes, 123'456'789);
@@ -63,6 +64,10 @@ TEST(StatusMessage, RejectsOutOfRange) {
   ExpectRejected<rig_status_t>(&validator, "S", RawEncode(status), RejectCause::kOutOfRange,
                                {"rig_status_t.cameras[1].vo_state", "outside [0, 3]"});
   status = MakeStatusMsg();
+  status.cameras[0].vo_segment = -2;
+  ExpectRejected<rig_status_t>(&validator, "S", RawEncode(status), RejectCause::kOutOfRange,
+                               {"rig_status_t.cameras[0].vo_segment"});
+  status = MakeStatusMsg();
   status.sync_fill = 65;
   ExpectRejected<rig_status_t>(&validator, "S", RawEncode(status), RejectCause::kOutOfRange,
                                {"rig_status_t.sync_fill"});
@@ -89,9 +94,12 @@ TEST(StatusMessage, ConsumerOverflowIsAnOverflowDrop) {
   cameras[0].name = kNames[0];
   cameras[1].name = kNames[1];
   cameras[1].dropped_backlog = 1;
+  cameras[1].vo_segment = 3;
   const rig_status_t msg = MakeRigStatus(cameras, sync, 64, RigEstimate{}, 0.0, 1);
   EXPECT_EQ(msg.cameras[0].dropped_overflow, 7);
   EXPECT_EQ(msg.cameras[1].dropped_overflow, 5);
+  EXPECT_EQ(msg.cameras[0].vo_segment, -1);  // no pose yet
+  EXPECT_EQ(msg.cameras[1].vo_segment, 3);
 }
 
 }  // namespace

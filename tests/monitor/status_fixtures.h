@@ -24,6 +24,7 @@ inline rig_status_t MakeStatus(int8_t state, int64_t utime = 1000) {
     c.dropped_never_matched = 7;
     c.vo_state = camera_status_t::VO_TRACKING;
     c.last_pose_age_ms = 42;
+    c.vo_segment = 1;
     s.cameras.push_back(c);
   }
   s.cameras[1].vo_state = camera_status_t::VO_LOST;

@@ -164,9 +164,11 @@ TEST(StatusMonitor, DashboardShowsEveryFigure) {
         "health: converging (exit code 1)"}) {
     EXPECT_THAT(text, HasSubstr(expected));
   }
-  // The left camera's segment comes from the extrinsics, the master's is not published.
-  EXPECT_THAT(text, ::testing::ContainsRegex("left +19.5 +1234 +3 .*lost +4 +42 ms"));
-  EXPECT_THAT(text, ::testing::ContainsRegex("front +19.5 .*tracking +- +42 ms"));
+  // Every camera's segment from its camera_status_t (the master's too); none yet: "-".
+  EXPECT_THAT(text, ::testing::ContainsRegex("left +19.5 +1234 +3 .*lost +1 +42 ms"));
+  EXPECT_THAT(text, ::testing::ContainsRegex("front +19.5 .*tracking +1 +42 ms"));
+  s.status->cameras[0].vo_segment = -1;
+  EXPECT_THAT(FormatDashboard(s), ::testing::ContainsRegex("front +19.5 .*tracking +- +42 ms"));
   // Cut at the terminal's width; framed for in-place refresh.
   for (size_t pos = 0, next; (next = FormatDashboard(s, 40).find('\n', pos)) != std::string::npos;
        pos = next + 1) {

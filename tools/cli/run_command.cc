@@ -106,16 +106,8 @@ void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
   std::vector<tools::CameraStatusInput> cameras;
   for (size_t i = 0; i < s.cameras.size(); ++i) {
     const tools::CameraHealth& h = s.cameras[i];
-    tools::CameraStatusInput c;
-    c.name = h.name;
+    tools::CameraStatusInput c = tools::StatusInputOf(h);
     c.fps = (*rates)[i].Update(h.frames_processed, h.last_frame_t_ns, -1);
-    c.frames_received = h.frames_captured;
-    c.dropped_backlog = h.dropped_backlog;
-    c.vo_state = tools::CameraStatusVoState(h);
-    c.last_pose_age_ms =
-        h.last_pose_t_ns >= 0 && h.last_frame_t_ns >= 0
-            ? std::max<int64_t>(0, (h.last_frame_t_ns - h.last_pose_t_ns) / 1'000'000)
-            : -1;
     cameras.push_back(c);
   }
   const int64_t utime = std::chrono::duration_cast<std::chrono::microseconds>(

@@ -32,6 +32,7 @@ void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* ch
   check->InRange<int8_t>("vo_state", c->vo_state, camera_status_t::VO_INITIALISING,
                          camera_status_t::VO_DEAD);
   check->AtLeast<int64_t>("last_pose_age_ms", c->last_pose_age_ms, -1);
+  check->AtLeast<int32_t>("vo_segment", c->vo_segment, -1);
 }
 
 // The fields of rig_status_t.lcm up to num_cameras.
@@ -107,6 +108,7 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
     }
     cam.vo_state = input.vo_state;
     cam.last_pose_age_ms = input.last_pose_age_ms;
+    cam.vo_segment = input.vo_segment;
     msg.cameras.push_back(cam);
   }
   msg.sync_sets_emitted = static_cast<int64_t>(sync.sets_emitted);

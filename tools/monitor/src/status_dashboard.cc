@@ -28,16 +28,6 @@ std::string Bytes(int64_t bytes) {
   return FixedText(bytes / double(1 << 20), 1) + " MiB";
 }
 
-// The segment of `camera` when it is a slave of the extrinsics, "-" otherwise (rig_status_t
-// carries no segment; the master's is not published).
-std::string SegmentOf(const MonitorSnapshot& snapshot, const std::string& camera) {
-  if (!snapshot.extrinsics) return "-";
-  for (const slave_extrinsics_t& s : snapshot.extrinsics->slaves) {
-    if (s.name == camera) return std::to_string(s.segment);
-  }
-  return "-";
-}
-
 void AppendCameras(const MonitorSnapshot& snapshot, std::vector<std::string>* lines) {
   const rig_status_t& st = *snapshot.status;
   lines->push_back(
@@ -46,13 +36,14 @@ void AppendCameras(const MonitorSnapshot& snapshot, std::vector<std::string>* li
                   "camera", "fps", "frames", "late", "dup", "order", "ovfl", "unmatch", "invalid",
                   "VO", "seg", "pose age"));
   for (const camera_status_t& c : st.cameras) {
+    const std::string segment = c.vo_segment >= 0 ? std::to_string(c.vo_segment) : "-";
     const std::string age =
         c.last_pose_age_ms >= 0 ? std::to_string(c.last_pose_age_ms) + " ms" : "none";
     lines->push_back(fmt::format(
         "{:<12} {:>6} {:>8} {:>6} {:>5} {:>5} {:>6} {:>8} {:>7}  {:<12} {:>4} {:>9}", c.name,
         FixedText(c.fps, 1), c.frames_received, c.dropped_late, c.dropped_duplicate,
         c.dropped_out_of_order, c.dropped_overflow, c.dropped_never_matched, c.dropped_invalid,
-        VoStateName(c.vo_state), SegmentOf(snapshot, c.name), age));
+        VoStateName(c.vo_state), segment, age));
   }
   lines->push_back(fmt::format("sync: {} sets emitted, buffer {} / {}", st.sync_sets_emitted,
                                st.sync_fill, st.sync_capacity));

@@ -33,6 +33,7 @@ nlohmann::json CameraJson(const camera_status_t& c) {
         {"never_matched", c.dropped_never_matched},
         {"invalid", c.dropped_invalid}}},
       {"vo_state", VoStateName(c.vo_state)},
+      {"vo_segment", c.vo_segment >= 0 ? nlohmann::json(c.vo_segment) : nullptr},
       {"last_pose_age_ms", c.last_pose_age_ms >= 0 ? nlohmann::json(c.last_pose_age_ms) : nullptr}};
 }
 

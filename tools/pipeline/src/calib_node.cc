@@ -113,6 +113,7 @@ void CalibNode::Impl::Accept(int camera, const CameraPose& pose) {
   ++stats.received;
   received_total.fetch_add(1);
   stats.last_t_ns = pose.t_ns;
+  stats.last_segment = pose.segment;
   last_pose_wall[camera] = Clock::now();
   const PushResult result = calibrator.Push(pose);
   if (result != PushResult::kAccepted) {
@@ -173,17 +174,10 @@ std::vector<CameraStatusInput> CalibNode::Impl::CameraInputs() {
     const PipelineSnapshot snapshot = pipeline->Snapshot();
     for (size_t i = 0; i < names.size(); ++i) {
       const CameraHealth& h = snapshot.cameras[i];
-      CameraStatusInput cam;
+      CameraStatusInput cam = StatusInputOf(h);
       cam.name = names[i];
-      cam.frames_received = h.frames_captured;
       cam.fps = rates[i].Update(h.frames_processed, h.last_frame_t_ns, start);
       cam.dropped_invalid = images_invalid[i].load();
-      cam.dropped_backlog = h.dropped_backlog;
-      cam.vo_state = CameraStatusVoState(h);
-      cam.last_pose_age_ms =
-          h.last_pose_t_ns >= 0 && h.last_frame_t_ns >= 0
-              ? std::max<int64_t>(0, (h.last_frame_t_ns - h.last_pose_t_ns) / 1'000'000)
-              : -1;
       cameras.push_back(cam);
     }
     return cameras;
@@ -202,6 +196,7 @@ std::vector<CameraStatusInput> CalibNode::Impl::CameraInputs() {
                                ? static_cast<double>(clock_ns - input.last_t_ns) * 1e-9
                                : std::chrono::duration<double>(now - last_pose_wall[i]).count();
       cam.last_pose_age_ms = static_cast<int64_t>(age_s * 1e3);
+      cam.vo_segment = input.last_segment;
       cam.vo_state = !replaying() && age_s > options.camera_timeout_s
                          ? camera_status_t::VO_DEAD
                          : camera_status_t::VO_TRACKING;

@@ -41,6 +41,22 @@ int8_t CameraStatusVoState(const CameraHealth& health) {
   }
 }
 
+CameraStatusInput StatusInputOf(const CameraHealth& health) {
+  CameraStatusInput c;
+  c.name = health.name;
+  c.frames_received = health.frames_captured;
+  c.dropped_backlog = health.dropped_backlog;
+  c.vo_state = CameraStatusVoState(health);
+  if (health.last_pose_t_ns >= 0) {
+    c.vo_segment = health.segment;
+    if (health.last_frame_t_ns >= 0) {
+      c.last_pose_age_ms =
+          std::max<int64_t>(0, (health.last_frame_t_ns - health.last_pose_t_ns) / 1'000'000);
+    }
+  }
+  return c;
+}
+
 Status PipelineOptions::Check() const {
   if (frame_queue_capacity < 1) return Error{"frame_queue_capacity: must be >= 1"};
   if (const Status vo_status = vo.Check(); !vo_status.ok()) {

@@ -21,7 +21,7 @@ namespace rigcal::tools {
 // and MessageValidator::Decode: num_cameras agrees with cameras, finite cpu_percent >= 0, utime,
 // sync_sets_emitted, sync_capacity and rss_bytes >= 0, sync_fill in [0, sync_capacity], a defined
 // estimator_state, and per camera: a camera of the rig named once, finite fps >= 0, counters >= 0,
-// a defined vo_state, last_pose_age_ms >= -1.
+// a defined vo_state, last_pose_age_ms >= -1, vo_segment >= -1.
 extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
                                                       rig_status_t*);
 extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
@@ -38,6 +38,7 @@ struct CameraStatusInput {
   int64_t dropped_backlog = 0;  // dropped before the sync buffer because a stage fell behind
   int8_t vo_state = camera_status_t::VO_INITIALISING;
   int64_t last_pose_age_ms = -1;  // -1 when no pose yet
+  int32_t vo_segment = -1;        // scale segment of the newest pose, -1 when no pose yet
 };
 
 // camera_status_t.fps: frames (or poses) per second of one camera from their STAMPS between two

@@ -98,6 +98,7 @@ struct CameraInputStats {
   int64_t received = 0;  // poses accepted by the decoder (image replay: poses from the VO)
   int64_t invalid = 0;   // messages on the camera's channel rejected by validation
   int64_t last_t_ns = -1;
+  int32_t last_segment = -1;  // scale segment of the newest pose
   int64_t images = 0;         // image replay: frames handed to the camera's VO
   int64_t sync_rejected = 0;  // poses the sync buffer refused (late, out of order, ...)
 };

@@ -30,6 +30,7 @@
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/calib/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
+#include "rigcal/lcm/status_message.h"
 #include "rigcal/vo/monocular_vo.h"
 
 namespace lcm {
@@ -82,6 +83,9 @@ struct CameraHealth {
 
 // camera_status_t::VO_* of a camera's health (DEAD when its device failed).
 int8_t CameraStatusVoState(const CameraHealth& health);
+// The STATUS view of a camera's health (name, frames, backlog drops, VO state and segment, pose
+// age in stream time); the caller adds fps and the drops it counts itself.
+CameraStatusInput StatusInputOf(const CameraHealth& health);
 
 struct PipelineSnapshot {
   std::vector<CameraHealth> cameras;
