@@ -207,6 +207,10 @@ nlohmann::json ResultToJson(const RigCalibration& result,
       j["std"]["scale"] =
           Num(s.scales.empty() ? std::numeric_limits<double>::quiet_NaN() : s.scales.front().std);
     }
+    if (std::isfinite(s.time_offset_s)) {
+      j["time_offset_s"] = Num(s.time_offset_s);
+      j["time_offset_std_s"] = Num(s.time_offset_std_s);
+    }
     j["motions_used"] = s.motions.used;
     j["motions_rejected"] = s.motions.rejected();
     j["glitches"] = {
