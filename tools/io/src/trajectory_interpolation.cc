@@ -27,13 +27,39 @@ std::optional<InterpolatedPose> InterpolatePose(const TimedTrajectory& trajector
   if (hi == 0) return std::nullopt;
   const size_t lo = hi - 1;
   if (t[hi] - t[lo] > max_gap_ns || segment_of(lo) != segment_of(hi)) return std::nullopt;
-  const double f = static_cast<double>(t_ns - t[lo]) / static_cast<double>(t[hi] - t[lo]);
-  const Pose& a = trajectory.poses[lo];
-  const Pose& b = trajectory.poses[hi];
   InterpolatedPose out;
-  out.pose.q = a.q.slerp(f, b.q).normalized();
-  out.pose.C = (1.0 - f) * a.C + f * b.C;
   out.segment = segment_of(lo);
+  const Pose& a = trajectory.poses[lo];
+  const bool cubic = lo > 0 && hi + 1 < t.size() && t[lo] - t[lo - 1] <= max_gap_ns &&
+                     t[hi + 1] - t[hi] <= max_gap_ns && segment_of(lo - 1) == out.segment &&
+                     segment_of(hi + 1) == out.segment;
+  if (!cubic) {
+    const double f = static_cast<double>(t_ns - t[lo]) / static_cast<double>(t[hi] - t[lo]);
+    const Pose& b = trajectory.poses[hi];
+    out.pose.q = a.q.slerp(f, b.q).normalized();
+    out.pose.C = (1.0 - f) * a.C + f * b.C;
+    return out;
+  }
+  // Cubic Lagrange through the poses lo - 1 .. hi + 1: the centre directly, the rotation as
+  // rotation vectors in the tangent space of pose lo.
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  for (size_t i = lo - 1; i <= hi + 1; ++i) {
+    double w = 1.0;
+    for (size_t m = lo - 1; m <= hi + 1; ++m) {
+      if (m == i) continue;
+      w *= static_cast<double>(t_ns - t[m]) / static_cast<double>(t[i] - t[m]);
+    }
+    const Pose& p = trajectory.poses[i];
+    c += w * p.C;
+    const Eigen::AngleAxisd rel(a.q.conjugate() * p.q);
+    v += w * rel.angle() * rel.axis();
+  }
+  out.pose.C = c;
+  out.pose.q =
+      v.norm() > 0.0
+          ? (a.q * Eigen::Quaterniond(Eigen::AngleAxisd(v.norm(), v.normalized()))).normalized()
+          : a.q;
   return out;
 }
 

@@ -1,8 +1,12 @@
 #pragma once
 // Poses of a camera that runs free (its own capture instants, its own clock) at the master's
-// instants: SLERP of the rotation and linear interpolation of the centre between the two
-// poses around the instant, never across a gap of more than a few of the camera's frame
-// intervals and never across a scale segment boundary.
+// instants, never across a gap of more than a few of the camera's frame intervals and never
+// across a scale segment boundary: cubic (Lagrange through the two poses on either side, the
+// rotation as rotation vectors in the tangent space of the pose before the instant) when the
+// poses on both sides are there, else SLERP of the rotation and linear interpolation of the
+// centre between the two poses around it. SLERP/linear alone err by a·dt²/8 (a the angular or
+// linear acceleration), a bias that shrinks the motion and shifts the estimated centre by
+// several σ on brisk drives; the cubic error is O(dt⁴).
 
 #include <cstdint>
 #include <optional>
