@@ -14,6 +14,7 @@
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_files.h"
+#include "rigcal/io/time_offset.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/io/truth_alignment.h"
 #include "rigcal/pipeline/online_replay.h"
@@ -33,6 +34,8 @@ struct SolveArgs {
   std::string scale = "auto";
   std::string pairs = "auto";
   double tolerance_ms = 5.0;
+  std::string time_offset = "0";
+  double time_offset_window_s = tools::TimeOffsetOptions{}.search_window_s;
   double max_quaternion_norm_error = 1e-6;
   std::string truth;
   std::string truth_unit = "auto";
@@ -86,6 +89,14 @@ std::string ApplyPairs(const std::string& text, PairOptions* pairs) {
     return "expected auto, start, walk or relative:STEP with STEP >= 1, got '" + text + "'";
   }
   return "";
+}
+
+// --time-offset value: nullopt for auto, else seconds; returns an error text or "".
+std::optional<double> ParseTimeOffset(const std::string& text, std::string* error = nullptr) {
+  if (text == "auto") return std::nullopt;
+  const auto ns = tools::ParseSecondsToNs(text);
+  if (!ns && error != nullptr) *error = "expected auto or a number of seconds, got '" + text + "'";
+  return ns ? static_cast<double>(*ns) * 1e-9 : 0.0;
 }
 
 int Fail(const std::string& message) {
@@ -163,8 +174,12 @@ int RunSolve(const SolveArgs& args) {
   }
 
   const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
-  auto recording = tools::MatchTrajectories(*master, slaves, tolerance_ns);
-  if (!recording) return Fail(recording.error());
+  tools::TimeOffsetOptions offset_options;
+  offset_options.search_window_s = args.time_offset_window_s;
+  auto matched = tools::MatchWithTimeOffsets(*master, slaves, ParseTimeOffset(args.time_offset),
+                                             tolerance_ns, options, offset_options);
+  if (!matched) return Fail(matched.error());
+  const RigRecording* recording = &matched->recording;
   log->info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
             slaves.size() + 1, args.tolerance_ms);
 
@@ -193,6 +208,10 @@ int RunSolve(const SolveArgs& args) {
     return Fail(std::string("calibration failed: ") + e.what());
   }
   if (result.master.empty()) result.master = master->name;
+  for (size_t i = 0; i < result.slaves.size() && i < matched->offsets.size(); ++i) {
+    result.slaves[i].time_offset_s = matched->offsets[i].offset_s;
+    result.slaves[i].time_offset_std_s = matched->offsets[i].std_s;
+  }
 
   // The truth in the estimate's unit (a metric truth against monocular odometry: the master
   // unit fitted to the truth's C), also for the convergence history's errors.
@@ -330,6 +349,31 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
                   "Master poses without a match in every slave are dropped.")
       ->type_name("MS")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--time-offset", args->time_offset,
+                  "Clock offset of the slaves: a slave's stamp minus the master clock at the\n"
+                  "same instant, seconds (the same for every slave), or auto: estimated per\n"
+                  "slave, first by cross-correlating the angular speeds of master and slave\n"
+                  "within --time-offset-window, then by minimising the rotation residuals of\n"
+                  "a calibration over the offset; the result gives time_offset_s and its σ\n"
+                  "time_offset_std_s. Slave stamps are moved to the master clock; a slave\n"
+                  "whose stamps then coincide with the master's (90 % within 1/50 frame) is\n"
+                  "matched by stamp, any other (free-running camera) interpolated at the\n"
+                  "master's instants (SLERP, linear position; not across gaps of more than 3\n"
+                  "frame intervals nor across scale segments).")
+      ->type_name("auto|SECONDS")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            std::string error;
+            ParseTimeOffset(v, &error);
+            return error;
+          },
+          "auto|SECONDS"))
+      ->capture_default_str();
+  cmd->add_option("--time-offset-window", args->time_offset_window_s,
+                  "With --time-offset auto: the offset is searched within ± this many seconds")
+      ->type_name("S")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--max-quaternion-norm-error", args->max_quaternion_norm_error,
                   "Quaternions whose norm differs from 1 by at most this are\n"

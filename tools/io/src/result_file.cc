@@ -141,6 +141,12 @@ Status ReadUncertainty(const FieldReader& r, const YAML::Node& node, const std::
   auto axis = MaybeNumber(r, std["axis"], name + ".std.axis");
   if (!axis) return Error{axis.error()};
   slave->axis_offset_std = *axis;
+  auto offset = MaybeNumber(r, node["time_offset_s"], name + ".time_offset_s");
+  if (!offset) return Error{offset.error()};
+  slave->time_offset_s = *offset;
+  auto offset_std = MaybeNumber(r, node["time_offset_std_s"], name + ".time_offset_std_s");
+  if (!offset_std) return Error{offset_std.error()};
+  slave->time_offset_std_s = *offset_std;
   return {};
 }
 

@@ -131,6 +131,10 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
                            g.dropped(), g.position_jump, g.rotation_jump, g.angle_mismatch,
                            g.in_master, g.in_slave));
   }
+  if (std::isfinite(s.time_offset_s)) {
+    out += Row("time offset [s]",
+               fmt::format("{:.6g} (std {})", s.time_offset_s, SigmaText(s.time_offset_std_s, 2)));
+  }
   out += Row("models",
              fmt::format("motion {}, scale {}", ToString(s.motion_model), ToString(s.scale_model)));
   for (const Eigen::Vector3d& d : s.unobservable) {
@@ -206,6 +210,10 @@ nlohmann::json ResultToJson(const RigCalibration& result,
     if (s.scales.size() <= 1) {
       j["std"]["scale"] =
           Num(s.scales.empty() ? std::numeric_limits<double>::quiet_NaN() : s.scales.front().std);
+    }
+    if (std::isfinite(s.time_offset_s)) {
+      j["time_offset_s"] = Num(s.time_offset_s);
+      j["time_offset_std_s"] = Num(s.time_offset_std_s);
     }
     j["motions_used"] = s.motions.used;
     j["motions_rejected"] = s.motions.rejected();

@@ -206,6 +206,10 @@ std::string ResultToYaml(const RigCalibration& result) {
       out << YAML::Key << "scale" << YAML::Value << Num(slave.scales.front().std);
     }
     out << YAML::EndMap;
+    if (std::isfinite(slave.time_offset_s)) {
+      out << YAML::Key << "time_offset_s" << YAML::Value << Num(slave.time_offset_s);
+      out << YAML::Key << "time_offset_std_s" << YAML::Value << Num(slave.time_offset_std_s);
+    }
     const MotionCounts& m = slave.motions;
     out << YAML::Key << "motions" << YAML::Value << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "total" << YAML::Value << m.total;

@@ -132,6 +132,11 @@ struct SlaveCalibration {
   // measured noise, unrelated trajectories, the planar model on tilting axes; the state is then
   // initialising), empty when they do not.
   std::string contradiction;
+  // Clock offset of the slave (its stamp - the master clock at the same instant), seconds, and
+  // its σ: set by `rigcal solve` (given or estimated, tools/io time_offset.h); NaN = not set
+  // (offset) or unknown (σ).
+  double time_offset_s = std::numeric_limits<double>::quiet_NaN();
+  double time_offset_std_s = std::numeric_limits<double>::quiet_NaN();
   // The solve produced an estimate: q, C and the scales are defined (termination solved or
   // no_convergence). Whether it may be used is `state`.
   bool solved() const {

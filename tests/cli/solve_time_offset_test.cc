@@ -1,0 +1,107 @@
+// `rigcal solve --time-offset`: a rig whose slaves run free (other rates and phases, clock
+// offsets) written as TUM files and solved by the built binary.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli/command_test.h"
+#include "io/free_running_rig.h"
+#include "rigcal/io/rig_files.h"
+
+namespace rigcal::tools {
+namespace {
+
+using cli_test::Quote;
+using cli_test::RunResult;
+using ::testing::HasSubstr;
+
+constexpr double kSigmas = 4.0;
+
+class SolveTimeOffsetTest : public cli_test::CommandTest {
+ protected:
+  // Writes master.txt, cam1.txt, cam2.txt and truth.yaml; returns the solve arguments.
+  std::string WriteRig(const std::vector<free_running::CameraClock>& clocks) {
+    DriveOptions options;
+    options.seed = 3;
+    const std::vector<Similarity> demo = DemoRig();
+    rig_ = free_running::MakeFreeRunningRig({}, clocks, {demo[0], demo[1]}, 40.0, options);
+    std::string args = "solve --master " + Quote(Path("master.txt"));
+    EXPECT_TRUE(WriteTrajectoryTum(Path("master.txt"), rig_.master).ok());
+    std::map<std::string, Similarity> truth;
+    for (size_t i = 0; i < rig_.slaves.size(); ++i) {
+      const std::string path = Path(rig_.slaves[i].name + ".txt");
+      EXPECT_TRUE(WriteTrajectoryTum(path, rig_.slaves[i]).ok());
+      args += " --slave " + Quote(path);
+      truth[rig_.slaves[i].name] = rig_.truth[i];
+    }
+    EXPECT_TRUE(WriteRigYaml(Path("truth.yaml"), truth).ok());
+    return args + " --truth " + Quote(Path("truth.yaml")) + " --truth-unit master";
+  }
+
+  free_running::FreeRunningRig rig_;
+};
+
+std::string Explain(const RunResult& r) {
+  return "exit " + std::to_string(r.exit_code) + "\n--- stdout:\n" + r.out + "\n--- stderr:\n" +
+         r.err;
+}
+
+TEST_F(SolveTimeOffsetTest, AutoEstimatesEverySlavesOffsetWithItsSigma) {
+  const std::vector<free_running::CameraClock> clocks = {{20.0, 0.017, 0.060},
+                                                         {30.0, 0.004, -0.090}};
+  const std::string args = WriteRig(clocks);
+  const RunResult r = Run(args + " --time-offset auto --json --out " + Quote(Path("out.yaml")));
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["slaves"].size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const auto& s = j["slaves"][i];
+    SCOPED_TRACE(s.dump());
+    ASSERT_TRUE(s["time_offset_s"].is_number() && s["time_offset_std_s"].is_number());
+    const double offset = s["time_offset_s"].get<double>();
+    const double std = s["time_offset_std_s"].get<double>();
+    EXPECT_GT(std, 0.0);
+    EXPECT_LE(std::abs(offset - clocks[i].offset_s), kSigmas * std);
+    EXPECT_LE(s["errors"]["rot_deg"].get<double>(),
+              kSigmas * std::sqrt(3.0) * s["std"]["rot_deg"].get<double>());
+  }
+  EXPECT_THAT(cli_test::Slurp(Path("out.yaml")), HasSubstr("time_offset_std_s:"));
+}
+
+TEST_F(SolveTimeOffsetTest, GivenOffsetIsAppliedAndReportedWithoutSigma) {
+  const std::string args = WriteRig({{20.0, 0.0, 0.050}, {20.0, 0.0, 0.050}});
+  const RunResult r = Run(args + " --time-offset 0.05 --json");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  const auto j = nlohmann::json::parse(r.out);
+  for (const auto& s : j["slaves"]) {
+    EXPECT_DOUBLE_EQ(s["time_offset_s"].get<double>(), 0.05);
+    EXPECT_TRUE(s["time_offset_std_s"].is_null());
+  }
+}
+
+TEST_F(SolveTimeOffsetTest, BadInputIsAClearError) {
+  const std::string args = WriteRig({{20.0, 0.0, 0.0}, {20.0, 0.0, 0.0}});
+  RunResult r = Run(args + " --time-offset soon");
+  EXPECT_EQ(r.exit_code, 2) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("expected auto or a number of seconds, got 'soon'"));
+  // A slave with too few poses.
+  TimedTrajectory few = rig_.slaves[1];
+  few.t_ns.resize(4), few.poses.resize(4), few.segment.resize(4);
+  ASSERT_TRUE(WriteTrajectoryTum(Path("cam2.txt"), few).ok());
+  r = Run(args + " --time-offset auto");
+  EXPECT_EQ(r.exit_code, 1) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("rigcal solve: time offset of 'cam2': camera 'cam2' has 4 poses"));
+  // A search window without enough overlap (the slave's clock 100 s ahead).
+  TimedTrajectory late = rig_.slaves[1];
+  for (int64_t& t : late.t_ns) t += 100'000'000'000;
+  ASSERT_TRUE(WriteTrajectoryTum(Path("cam2.txt"), late).ok());
+  r = Run(args + " --time-offset auto --time-offset-window 0.2");
+  EXPECT_EQ(r.exit_code, 1) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("time offset of 'cam2': master and slave overlap by less than"));
+}
+
+}  // namespace
+}  // namespace rigcal::tools
