@@ -27,23 +27,9 @@ namespace fs = std::filesystem;
 using rigcal::cli_test::RunResult;
 using rigcal::cli_test::Slurp;
 
-// A 2-camera rig config and an 800-set synthetic pose log of it (rigcal synth-log).
-class CalibFilesFault : public rigcal::cli_test::CommandTest {
+// The rig config and pose log of SynthLogTest.
+class CalibFilesFault : public rigcal::cli_test::SynthLogTest {
  protected:
-  void SetUp() override {
-    CommandTest::SetUp();
-    if (HasFatalFailure()) return;
-    std::ofstream(Path("rig.yaml"))
-        << "rig: {name: test, master: front}\n"
-           "cameras:\n"
-           "  - name: front\n"
-           "  - name: left\n"
-           "    truth: {q_wxyz: [0.9238795, 0, 0.3826834, 0], C: [0.3, 0.05, -0.2]}\n"
-           "publish: {extrinsics_rate_hz: 2, status_rate_hz: 1}\n";
-    const RunResult synth = Run("synth-log --config " + Path("rig.yaml") + " --out " +
-                                Path("poses.lcmlog") + " --frames 800");
-    ASSERT_EQ(synth.exit_code, 0) << synth.err;
-  }
   RunResult Replay(const std::string& log, const std::string& extra) const {
     return Run("replay " + log + " --config " + Path("rig.yaml") + " --no-progress " + extra);
   }

@@ -10,25 +10,18 @@
 #include <fstream>
 #include <sstream>
 
+#include "io/trajectory_fixtures.h"
 #include "rigcal/io/atomic_file.h"
 
 namespace rigcal::tools {
 namespace {
 
+using trajectory_test::HasSubstr;
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 
-class OutputFileFault : public ::testing::Test {
+// The temporary directory of the io tests (trajectory_fixtures.h).
+class OutputFileFault : public trajectory_test::TrajectoryIoTest {
  protected:
-  void SetUp() override {
-    std::string pattern = (fs::path(::testing::TempDir()) / "output_file_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   static std::string Read(const std::string& path) {
     std::ifstream in(path);
@@ -36,8 +29,8 @@ class OutputFileFault : public ::testing::Test {
     text << in.rdbuf();
     return text.str();
   }
-  // The error of writing `path`, expected to be a refusal naming the path and `kind`; the
-  // directory must then hold exactly `listing` (no temporary file left).
+  // Writing `path` (directly and through AtomicFile) must be refused, naming the path and
+  // `kind`.
   void ExpectRefused(const std::string& path, const std::string& kind) {
     const Status status = WriteFileAtomically(path, "new contents\n");
     ASSERT_FALSE(status.ok()) << path << " was replaced";
