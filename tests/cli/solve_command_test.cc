@@ -494,7 +494,8 @@ TEST_F(SolveCommandTest, PriorSigmaNeedsAPrior) {
 // Options without effect together are usage errors (2) naming both options.
 TEST_F(SolveCommandTest, IneffectiveOptionCombinationsAreUsageErrors) {
   WriteDemoDrive();
-  for (const std::string& option : {"--pairs start", "--method lls", "--scale fixed"}) {
+  for (const char* given : {"--pairs start", "--method lls", "--scale fixed"}) {
+    const std::string option = given;
     const RunResult r = Run(DemoArgs() + " --online " + option);
     EXPECT_EQ(r.exit_code, 2) << option << ": " << Explain(r);
     const std::string name = option.substr(0, option.find(' '));

@@ -43,7 +43,6 @@ class OutputFileFault : public trajectory_test::TrajectoryIoTest {
   size_t Entries() const {
     return static_cast<size_t>(std::distance(fs::directory_iterator(dir_), {}));
   }
-  fs::path dir_;
 };
 
 TEST_F(OutputFileFault, FifoIsRefusedAndStaysAFifo) {
