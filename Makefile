@@ -5,6 +5,8 @@ ASAN_DIR  ?= build-asan
 TSAN_DIR  ?= build-tsan
 JOBS      ?= $(shell nproc)
 CTEST_ARGS ?=
+# ctest, then the number of skipped tests and why (scripts/ctest_with_skips.sh).
+CTEST     = bash scripts/ctest_with_skips.sh
 
 .PHONY: all deps configure build demo test test-fast test-asan test-tsan eval bench format tidy clean
 
@@ -37,16 +39,16 @@ demo: build
 # suite includes the static thread-contract check (label threads: clang -Wthread-safety over
 # the threaded sources with $(BUILD_DIR)/compile_commands.json, no extra build tree).
 test: build test-asan test-tsan
-	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
+	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
 
 test-fast: build
-	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
+	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
 
 test-asan: deps
 	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,-DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
 	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_calib_tests
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  ctest --test-dir $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval
+	  $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval
 
 # The multi-threaded calib tests (SyncBuffer producers, PoseMerge, OnlineCalibrator threads)
 # under TSan.
@@ -55,11 +57,11 @@ test-tsan: deps
 	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test \
 	  calib_pose_merge_test calib_online_calibrator_lossless_test
 	TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
-	  ctest --test-dir $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)'
+	  $(CTEST) $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)'
 
 # Long evaluations (not part of make test).
 eval: build
-	ctest --test-dir $(BUILD_DIR) --output-on-failure -L eval
+	$(CTEST) $(BUILD_DIR) --output-on-failure -L eval
 
 bench: build
 	./$(BUILD_DIR)/tests/bench/rigcal_calib_bench

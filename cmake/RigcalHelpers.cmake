@@ -12,12 +12,14 @@ function(rigcal_add_library)
 endfunction()
 
 # rigcal_add_test(MODULE <module> NAME <name> SRCS ... DEPS ... [LABELS ...] [TIMEOUT s])
-# Builds <module>_<name>_test and registers it with ctest as <module>/<name>.
+# Builds <module>_<name>_test and registers it with ctest as <module>/<name>. The binary's main
+# (rigcal_gtest_main, tests/support/main) exits 77 when a test skipped and none failed, which
+# ctest reports as skipped (SKIP_RETURN_CODE), never as passed.
 function(rigcal_add_test)
   cmake_parse_arguments(ARG "" "MODULE;NAME;TIMEOUT" "SRCS;DEPS;LABELS" ${ARGN})
   set(target ${ARG_MODULE}_${ARG_NAME}_test)
   add_executable(${target} ${ARG_SRCS})
-  target_link_libraries(${target} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main GTest::gmock)
+  target_link_libraries(${target} PRIVATE ${ARG_DEPS} rigcal_gtest_main GTest::gtest GTest::gmock)
   target_compile_options(${target} PRIVATE ${RIGCAL_WARNING_FLAGS})
   target_compile_definitions(${target} PRIVATE
     RIGCAL_SHARED_DATA_DIR="${RIGCAL_SHARED_DATA_DIR}"
@@ -27,5 +29,6 @@ function(rigcal_add_test)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
-  set_tests_properties(${ARG_MODULE}/${ARG_NAME} PROPERTIES LABELS "${labels}" TIMEOUT ${ARG_TIMEOUT})
+  set_tests_properties(${ARG_MODULE}/${ARG_NAME} PROPERTIES LABELS "${labels}" TIMEOUT ${ARG_TIMEOUT}
+                       SKIP_RETURN_CODE 77)
 endfunction()

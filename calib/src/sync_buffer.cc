@@ -70,6 +70,8 @@ const char* ToString(PushResult result) {
       return "duplicate";
     case PushResult::kOutOfOrder:
       return "out_of_order";
+    case PushResult::kClockGlitch:
+      return "clock_glitch";
   }
   return "?";
 }
@@ -91,6 +93,7 @@ std::string SyncStats::BriefReport() const {
     field("late", k.late);
     field("duplicate", k.duplicate);
     field("out_of_order", k.out_of_order);
+    field("clock_glitch", k.clock_glitch);
     field("invalid", k.invalid);
     field("stopped", k.stopped);
     field("optional_missing", k.optional_missing);

@@ -2,13 +2,21 @@
 // producer side is in sync_matching.cc.
 #include "sync_buffer_impl.h"
 
+#include <algorithm>
+
 namespace rigcal {
+namespace {
+
+constexpr int64_t kMinGlitchHorizonNs = 2'000'000'000;  // 2 s
+
+}  // namespace
 
 SyncBuffer::Impl::Impl(const SyncOptions& options)
     : options_(options),
       n_(options.num_cameras),
       tolerance_ns_(options.EffectiveToleranceNs()),
       max_wait_ns_(options.EffectiveMaxWaitNs()),
+      glitch_horizon_ns_(std::max(kMinGlitchHorizonNs, 10 * options.EffectiveMaxWaitNs())),
       by_seq_(options.match_by_trigger_seq),
       ready_(static_cast<size_t>(options.ready_capacity),
              MatchedSet{0, std::vector<std::optional<CameraPose>>(options.num_cameras)}),
@@ -61,6 +69,7 @@ SyncStats SyncBuffer::Impl::stats() const {
     t.late += k.late;
     t.duplicate += k.duplicate;
     t.out_of_order += k.out_of_order;
+    t.clock_glitch += k.clock_glitch;
     t.overflow += k.overflow;
     t.never_matched += k.never_matched;
     t.optional_missing += k.optional_missing;

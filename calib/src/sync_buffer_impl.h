@@ -55,6 +55,11 @@ class SyncBuffer::Impl {
     bool any_used = false;        // an entry was a member of an emitted set
     SyncKey last_used;            // the member of the last emitted set that had this camera
     SyncCameraStats stats;        // fill is filled in by stats()
+    // Clock glitches: the stamp of the last pose held back as a jump ahead, how many poses in a
+    // row have followed it on the new timeline, and whether a burst is being reported.
+    int64_t jump_t = 0;
+    int jump_run = 0;
+    bool in_glitch_burst = false;
   };
 
   // The partner of the current master entry in one slave ring.
@@ -76,6 +81,9 @@ class SyncBuffer::Impl {
   }
   // kAccepted, or why `pose` (of a camera in range) is rejected.
   PushResult Classify(const CameraPose& pose) const RIGCAL_REQUIRES(mutex_);
+  // Whether `pose` (otherwise acceptable) is a clock glitch: see sync_buffer.h. Updates the
+  // camera's jump confirmation.
+  bool ClockGlitch(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
   // Buffers an accepted pose (dropping its ring's oldest entry when full).
   void Accept(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
   // Stream time against which master entries time out.
@@ -108,6 +116,7 @@ class SyncBuffer::Impl {
   const int n_;
   const int64_t tolerance_ns_;
   const int64_t max_wait_ns_;
+  const int64_t glitch_horizon_ns_;
   const bool by_seq_;
   std::vector<bool> required_;  // per camera; [0] is true
 

@@ -2,6 +2,7 @@
 // matching rule stated in rigcal/calib/sync_buffer.h. Runs with the buffer's mutex held.
 #include <cmath>
 
+#include "rigcal/calib/logging.h"
 #include "sync_buffer_impl.h"
 
 namespace rigcal {
@@ -13,6 +14,9 @@ bool IsValid(const CameraPose& p) {
 }
 
 SyncKey KeyOf(const CameraPose& p) { return {p.t_ns, p.trigger_seq}; }
+
+// Poses in a row on a jumped timeline that make the jump accepted.
+constexpr int kJumpConfirmations = 5;
 
 }  // namespace
 
@@ -43,12 +47,49 @@ PushResult SyncBuffer::Impl::Push(const CameraPose& pose) {
     case PushResult::kOutOfOrder:
       ++cam.stats.out_of_order;
       return result;
+    case PushResult::kClockGlitch:
+      return result;
     case PushResult::kUnknownCamera:
       return result;
   }
+  if (ClockGlitch(pose)) {
+    ++cam.stats.clock_glitch;
+    if (!cam.in_glitch_burst) {
+      cam.in_glitch_burst = true;
+      ModuleLogger("calib")->warn(
+          "sync: camera {} pose stamped {} ns is far ahead of every camera's clock (newest {} "
+          "ns): a clock glitch, not buffered (counted clock_glitch; warned once per burst)",
+          pose.camera, pose.t_ns, now_ns_);
+    }
+    return PushResult::kClockGlitch;
+  }
+  cam.in_glitch_burst = false;
   Accept(pose);
   if (Process(/*flush=*/false) > 0) ready_cv_.notify_all();
   return PushResult::kAccepted;
+}
+
+bool SyncBuffer::Impl::ClockGlitch(const CameraPose& pose) {
+  if (by_seq_ || !has_stream_) return false;  // trigger mode: clocks may be offset
+  CameraState& cam = cameras_[pose.camera];
+  // now_ns_: the newest stamp of any camera, this one included. Stamps are >= 0 (IsValid), so
+  // the differences below cannot overflow.
+  if (pose.t_ns - now_ns_ <= glitch_horizon_ns_) {
+    cam.jump_run = 0;
+    return false;
+  }
+  // Ahead of every clock: a glitch unless the camera keeps to the new timeline.
+  if (cam.jump_run > 0 && pose.t_ns > cam.jump_t && pose.t_ns - cam.jump_t <= glitch_horizon_ns_) {
+    ++cam.jump_run;
+  } else {
+    cam.jump_run = 1;
+  }
+  cam.jump_t = pose.t_ns;
+  if (cam.jump_run >= kJumpConfirmations) {
+    cam.jump_run = 0;
+    return false;
+  }
+  return true;
 }
 
 void SyncBuffer::Impl::Flush() {

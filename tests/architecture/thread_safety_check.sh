@@ -43,7 +43,7 @@ if [ -z "$clang" ] || ! command -v "$clang" >/dev/null 2>&1; then
     echo "thread-safety: FAILED: clang++ not found (CI=true; scripts/install-deps.sh installs clang)"
     exit 1
   fi
-  echo "thread-safety: SKIPPED: clang++ not found (scripts/install-deps.sh installs package clang)"
+  echo "SKIP: thread-safety: clang++ not found (scripts/install-deps.sh installs package clang)"
   exit 77
 fi
 if [ ! -f "$db" ]; then

@@ -30,6 +30,7 @@
 #include "rigcal/calib/types.h"
 #include "rigcal/io/trajectory_io.h"
 #include "support/opencv_handeye.h"
+#include "support/skip.h"
 
 #if defined(RIGCAL_BINARY) && __has_include(<nlohmann/json.hpp>)
 #include <nlohmann/json.hpp>
@@ -86,7 +87,7 @@ class EurocAprilGridTest : public ::testing::Test {
     load_error_ = nullptr;
   }
   void SetUp() override {
-    if (skip_reason_ != nullptr) GTEST_SKIP() << *skip_reason_;
+    if (skip_reason_ != nullptr) RIGCAL_SKIP_MISSING() << *skip_reason_;
     ASSERT_EQ(load_error_, nullptr) << *load_error_;
     ASSERT_NE(rig_, nullptr);
   }
@@ -294,7 +295,7 @@ TEST_F(EurocAprilGridTest, RigcalSolveOnTumFiles) {
 
 #if defined(RIGCAL_EUROC_RUN_SOLVE)
   const fs::path binary = RIGCAL_BINARY;
-  if (!fs::exists(binary)) GTEST_SKIP() << "rigcal binary not built: " << binary;
+  if (!fs::exists(binary)) RIGCAL_SKIP_MISSING() << "rigcal binary not built: " << binary;
   const fs::path log = dir / "solve.stderr";
   const std::string cmd = "'" + binary.string() + "' solve --master '" +
                           (dir / "cam0.txt").string() + "' --slave '" +

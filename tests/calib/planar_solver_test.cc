@@ -13,6 +13,7 @@
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/calib/synthetic_car.h"
 #include "support/kitti.h"
+#include "support/skip.h"
 
 namespace rigcal {
 namespace {
@@ -230,7 +231,7 @@ class Kitti : public ::testing::Test {
  protected:
   void SetUp() override {
     auto kitti = support::LoadKitti00();
-    if (!kitti) GTEST_SKIP() << kitti.error();
+    if (!kitti) RIGCAL_SKIP_MISSING() << kitti.error();
     path_ = std::move(*kitti);
   }
   SampledTrajectory path_;

@@ -16,14 +16,10 @@
 #include "rigcal/calib/synthetic_car.h"
 #include "rigcal/io/trajectory_io.h"
 #include "support/kitti.h"
+#include "support/skip.h"
 
 namespace rigcal {
 namespace {
-
-bool InCi() {
-  const char* ci = std::getenv("CI");
-  return ci != nullptr && std::string(ci) == "true";
-}
 
 // The trajectory alone (the master of a rig without slaves).
 RigRecording MasterOnly(const SampledTrajectory& path) {
@@ -87,8 +83,7 @@ void ExpectNoGlitches(const std::string& what, const SampledTrajectory& full, in
 TEST(PoseGlitchesRealTrajectories, Kitti00) {
   auto kitti = support::LoadKitti00();
   if (!kitti) {
-    if (InCi()) FAIL() << kitti.error();
-    GTEST_SKIP() << kitti.error();
+    RIGCAL_SKIP_MISSING() << kitti.error();
   }
   for (const int stride : {1, 5}) ExpectNoGlitches("KITTI 00", *kitti, stride);
 }
@@ -97,8 +92,7 @@ TEST(PoseGlitchesRealTrajectories, EurocV102) {
   const std::filesystem::path path =
       std::filesystem::path(RIGCAL_SHARED_DATA_DIR) / "trajectories" / "V102_groundtruth.csv";
   if (!std::filesystem::exists(path)) {
-    if (InCi()) FAIL() << path << " not found";
-    GTEST_SKIP() << path << " not found";
+    RIGCAL_SKIP_MISSING() << path << " not found";
   }
   tools::TrajectoryReadOptions read;
   read.max_quaternion_norm_error = 1e-3;  // the ground truth has 6-decimal quaternions

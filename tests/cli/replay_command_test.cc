@@ -17,24 +17,7 @@ namespace fs = std::filesystem;
 using rigcal::cli_test::RunResult;
 using rigcal::cli_test::Slurp;
 
-// A 2-camera rig config and an 800-set synthetic pose log of it (rigcal synth-log).
-class ReplayCommandTest : public rigcal::cli_test::CommandTest {
- protected:
-  void SetUp() override {
-    CommandTest::SetUp();
-    if (HasFatalFailure()) return;
-    std::ofstream(Path("rig.yaml"))
-        << "rig: {name: test, master: front}\n"
-           "cameras:\n"
-           "  - name: front\n"
-           "  - name: left\n"
-           "    truth: {q_wxyz: [0.9238795, 0, 0.3826834, 0], C: [0.3, 0.05, -0.2]}\n"
-           "publish: {extrinsics_rate_hz: 2, status_rate_hz: 1}\n";
-    const RunResult synth = Run("synth-log --config " + Path("rig.yaml") + " --out " +
-                                Path("poses.lcmlog") + " --frames 800");
-    ASSERT_EQ(synth.exit_code, 0) << synth.err;
-  }
-};
+using ReplayCommandTest = rigcal::cli_test::SynthLogTest;
 
 TEST_F(ReplayCommandTest, SameLogSameResultAsCalibLog) {
   const std::string common = Path("poses.lcmlog") + " --config " + Path("rig.yaml") + " --json";

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "cli/command_test.h"
+#include "support/skip.h"
 
 namespace {
 
@@ -21,7 +22,7 @@ using rigcal::cli_test::Slurp;
 
 TEST_F(RunCommandTest, StaticEurocFramesGiveInsufficientMotion) {
   const fs::path mav0 = fs::path(RIGCAL_SHARED_DATA_DIR) / "euroc_v101_static" / "mav0";
-  if (!fs::exists(mav0)) GTEST_SKIP() << mav0 << " not found";
+  if (!fs::exists(mav0)) RIGCAL_SKIP_MISSING() << mav0 << " not found";
   const std::string config = (dir_ / "euroc.yaml").string();
   std::ofstream(config)
       << "rig: {name: euroc_static, master: cam0}\n"

@@ -490,6 +490,21 @@ TEST_F(SolveCommandTest, PriorSigmaNeedsAPrior) {
   EXPECT_THAT(missing.err, HasSubstr("rigcal solve: " + Path("none.yaml")));
 }
 
+// Options without effect together are usage errors (2) naming both options.
+TEST_F(SolveCommandTest, IneffectiveOptionCombinationsAreUsageErrors) {
+  WriteDemoDrive();
+  for (const char* given : {"--pairs start", "--method lls", "--scale fixed"}) {
+    const std::string option = given;
+    const RunResult r = Run(DemoArgs() + " --online " + option);
+    EXPECT_EQ(r.exit_code, 2) << option << ": " << Explain(r);
+    const std::string name = option.substr(0, option.find(' '));
+    EXPECT_THAT(r.err, HasSubstr(name + " excludes --online")) << Explain(r);
+  }
+  const RunResult every = Run(DemoArgs() + " --report-every 5");
+  EXPECT_EQ(every.exit_code, 2) << Explain(every);
+  EXPECT_THAT(every.err, HasSubstr("--report-every requires --online")) << Explain(every);
+}
+
 TEST_F(SolveCommandTest, HelpExplainsOptionsAndExitCodes) {
   const RunResult r = Run("solve --help");
   EXPECT_EQ(r.exit_code, 0) << Explain(r);

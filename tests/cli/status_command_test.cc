@@ -13,6 +13,7 @@
 #include "cli/command_test.h"
 #include "monitor/status_fixtures.h"
 #include "rigcal/lcm/channels.h"
+#include "support/skip.h"
 
 namespace rigcal::tools {
 namespace {
@@ -104,9 +105,7 @@ TEST_F(StatusCommandTest, PlainLinesWhenNotATerminal) {
 
 TEST_F(StatusCommandTest, DashboardOnATerminal) {
   if (std::system("command -v script >/dev/null 2>&1") != 0) {
-    const char* ci = std::getenv("CI");
-    if (ci != nullptr && std::string(ci) == "true") FAIL() << "`script` (util-linux) missing";
-    GTEST_SKIP() << "`script` (util-linux) is not installed: no pseudo-terminal";
+    RIGCAL_SKIP_MISSING() << "`script` (util-linux) is not installed: no pseudo-terminal";
   }
   const std::string log = WriteLog("tty.lcmlog", rig_status_t::ESTIMATOR_CONVERGED, 3);
   // script runs the command on a pseudo-terminal and copies what it printed.

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <opencv2/core.hpp>
 
+#include "support/skip.h"
+
 namespace rigcal::drivers {
 namespace {
 
@@ -28,7 +30,7 @@ std::vector<Frame> GrabAll(ImageFolderDevice* device) {
 }
 
 TEST(ImageFolderDevice, EurocCam1ReportsExactlyTheFourMissingImages) {
-  if (!std::filesystem::exists(kEuroc + "/cam1/data.csv")) GTEST_SKIP() << "no " << kEuroc;
+  if (!std::filesystem::exists(kEuroc + "/cam1/data.csv")) RIGCAL_SKIP_MISSING() << "no " << kEuroc;
   auto opened = ImageFolderDevice::Open(kEuroc + "/cam1", "cam1", 1);
   ASSERT_TRUE(opened.ok()) << opened.error();
   ImageFolderDevice& device = **opened;
@@ -64,7 +66,7 @@ TEST(ImageFolderDevice, EurocCam1ReportsExactlyTheFourMissingImages) {
 }
 
 TEST(ImageFolderDevice, EurocCam0IsComplete) {
-  if (!std::filesystem::exists(kEuroc + "/cam0/data.csv")) GTEST_SKIP() << "no " << kEuroc;
+  if (!std::filesystem::exists(kEuroc + "/cam0/data.csv")) RIGCAL_SKIP_MISSING() << "no " << kEuroc;
   auto opened = ImageFolderDevice::Open(kEuroc + "/cam0", "cam0", 0);
   ASSERT_TRUE(opened.ok()) << opened.error();
   EXPECT_EQ(GrabAll(opened->get()).size(), 95u);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include "rigcal/calib/quaternion.h"
@@ -164,6 +165,42 @@ TEST(EstimatorStateFile, ReadsAndRewritesEarlierFilesExactly) {
   ASSERT_TRUE(r.usable()) << r.message;
   EXPECT_EQ(r.motions.used, 537);
   EXPECT_EQ(StateFile(est), text.str());
+}
+
+// A hand-edited file with a valid checksum: values no estimator can have are rejected, and the
+// error names the slave and the field.
+TEST(EstimatorStateFile, ValuesOutOfRangeAreRejectedDespiteTheChecksum) {
+  std::ifstream in(std::string(RIGCAL_SOURCE_DIR) + "/tests/io/fixtures/estimator_state_v3.txt",
+                   std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const Expected<RigEstimatorState> good = ParseEstimatorState(text.str());
+  ASSERT_TRUE(good.ok()) << good.error();
+  const auto error_of = [&](const std::function<void(SlaveEstimatorState*)>& edit) {
+    RigEstimatorState state = *good;
+    edit(&state.slaves[0]);
+    const Expected<RigEstimatorState> parsed = ParseEstimatorState(FormatEstimatorState(state));
+    return parsed.ok() ? std::string("accepted") : parsed.error();
+  };
+  EXPECT_EQ(error_of([](SlaveEstimatorState*) {}), "accepted");
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) { s->counts.total = -3; }),
+            "slave left: counts total = -3 is out of range [0, 1e+100]");
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) { s->counts.used = s->counts.total + 1; }),
+            "slave left: counts used = " + std::to_string(good->slaves[0].counts.total + 1) +
+                " is out of range [0, " + std::to_string(good->slaves[0].counts.total) + "]");
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) { s->long_stats.weight = 1e300; }),
+            "slave left: long: weight = 1e+300 is out of range [0, 1e+100]");
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) { s->pos_var.value = -1.0; }),
+            "slave left: noise position = -1 is out of range [0, 1e+100]");
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) { s->short_stats.rotation(2, 1) = -1e300; }),
+            "slave left: short: M[6] = -1e+300 is out of range [-1e+100, 1e+100]");
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) {
+              s->long_stats.segments.begin()->second.weight = -2.0;
+            }).find("slave left: long: segment "),
+            0u);
+  EXPECT_EQ(
+      error_of([](SlaveEstimatorState* s) { s->long_stats.max_rotation = 7.0; }).substr(0, 34),
+      "slave left: long: maxrot = 7 is ou");
 }
 
 }  // namespace

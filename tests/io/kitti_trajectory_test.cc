@@ -9,6 +9,7 @@
 
 #include "io/trajectory_fixtures.h"
 #include "rigcal/io/trajectory_io.h"
+#include "support/skip.h"
 
 namespace rigcal::tools::trajectory_test {
 namespace {
@@ -55,7 +56,8 @@ TEST_F(TrajectoryIoTest, KittiErrorsNameFileLineAndColumn) {
 
 TEST(TrajectoryIoDataTest, KittiGroundTruth) {
   const fs::path dir = fs::path(RIGCAL_SHARED_DATA_DIR) / "trajectories";
-  if (!fs::exists(dir / "KITTI_00_gt.txt")) GTEST_SKIP() << dir << " has no KITTI_00_gt.txt";
+  if (!fs::exists(dir / "KITTI_00_gt.txt"))
+    RIGCAL_SKIP_MISSING() << dir << " has no KITTI_00_gt.txt";
   const auto t = ReadKittiTrajectory((dir / "KITTI_00_gt.txt").string(),
                                      (dir / "KITTI_00_gt_times.txt").string());
   ASSERT_TRUE(t.ok()) << t.error();

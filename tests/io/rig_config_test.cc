@@ -119,6 +119,18 @@ TEST(RigConfig, ErrorsNameFileLineAndKey) {
       {"rig: {master: front}\ncameras:\n  - name: front\n",
        "cameras: expected a list of at least two"},
       {"rig: [\n", "YAML syntax error"},
+      // Strict inputs: duplicate keys (at any depth) and a second document are errors.
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nrig: {master: left}\n",
+       ":5: rig: duplicate key"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\n    nominal: {q_wxyz: "
+       "[1,0,0,0], C: [0,0,0], C: [1,0,0]}\n",
+       ":5: C: duplicate key"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\n---\nrig: {master: "
+       "left}\n",
+       ":6: a second YAML document"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\n    truth: {q_wxyz: "
+       "[1,0,0,0], C: [0,0,0], skale: 1}\n",
+       ":5: left.truth.skale: unknown key"},
   };
   for (const BadCase& c : cases) {
     const std::string path = Write(c.text);

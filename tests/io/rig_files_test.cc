@@ -215,6 +215,32 @@ TEST_F(RigFilesTest, RigYamlStructure) {
               HasSubstr("scalar.yaml:1: cam1: expected a map with q_wxyz, C and scale"));
 }
 
+TEST_F(RigFilesTest, RigYamlStrictKeysAndDocuments) {
+  EXPECT_THAT(ReadRigError("typo.yaml",
+                           "cam1:\n  q_wxyz: [1, 0, 0, 0]\n  C: [0, 0, 0]\n"
+                           "  scale: 1\n  sclae: 2\n"),
+              HasSubstr("typo.yaml:5: cam1.sclae: unknown key"));
+  EXPECT_THAT(ReadRigError("segkey.yaml",
+                           "cam1:\n  q_wxyz: [1, 0, 0, 0]\n  C: [0, 0, 0]\n"
+                           "  scale: 1\n  scales:\n  - {segment: 0, scale: 1, "
+                           "x: 2}\n"),
+              HasSubstr("segkey.yaml:6: cam1.scales[0].x: unknown key"));
+  EXPECT_THAT(ReadRigError("dup.yaml",
+                           "cam1:\n  q_wxyz: [1, 0, 0, 0]\n  C: [0, 0, 0]\n"
+                           "  scale: 1\n  C: [1, 1, 1]\n"),
+              HasSubstr("dup.yaml:5: C: duplicate key"));
+  EXPECT_THAT(ReadRigError("dupslave.yaml",
+                           "cam1: {q_wxyz: [1, 0, 0, 0], C: [0, 0, 0], scale: "
+                           "1}\ncam1: {q_wxyz: [1, 0, 0, 0], C: [1, 0, 0], "
+                           "scale: 1}\n"),
+              HasSubstr("dupslave.yaml:2: cam1: duplicate key"));
+  EXPECT_THAT(ReadRigError("docs.yaml",
+                           "cam1: {q_wxyz: [1, 0, 0, 0], C: [0, 0, 0], scale: 1}\n"
+                           "---\ncam2: {q_wxyz: [1, 0, 0, 0], C: [0, 0, 0], scale: "
+                           "1}\n"),
+              HasSubstr("docs.yaml:3: a second YAML document"));
+}
+
 TEST_F(RigFilesTest, ResultYamlRoundTripsThroughReadRigYaml) {
   const RigCalibration result = MakeResult();
   ASSERT_TRUE(WriteResultYaml(Path("result.yaml"), result).ok());
@@ -393,11 +419,11 @@ TEST_F(RigFilesTest, AtomicWriteErrorNamesPathAndErrno) {
   const std::string error = WriteFileAtomically(path, "x").message();
   EXPECT_THAT(error, HasSubstr(path));
   EXPECT_THAT(error, HasSubstr("No such file or directory"));
-  // Renaming over a directory fails after the temporary file was written: it is removed.
+  // A directory is refused before anything is written (output_file_fault_test: the others).
   fs::create_directory(Path("a_dir"));
   const std::string over_dir = WriteFileAtomically(Path("a_dir"), "x").message();
   EXPECT_THAT(over_dir, HasSubstr(Path("a_dir")));
-  EXPECT_THAT(over_dir, HasSubstr("rename"));
+  EXPECT_THAT(over_dir, HasSubstr("it is a directory, not a regular file"));
   EXPECT_EQ(Listing(), std::vector<std::string>({"a_dir"}));
 }
 

@@ -13,6 +13,7 @@
 
 #include "io/trajectory_fixtures.h"
 #include "rigcal/calib/logging.h"
+#include "support/skip.h"
 
 namespace rigcal::tools::trajectory_test {
 namespace {
@@ -262,7 +263,7 @@ TEST_F(TrajectoryIoTest, WriterReportsUnwritablePath) {
 // the default tolerance (naming the line), read with a loose one.
 TEST(TrajectoryIoDataTest, EurocGroundTruth) {
   const fs::path path = fs::path(RIGCAL_SHARED_DATA_DIR) / "trajectories" / "V102_groundtruth.csv";
-  if (!fs::exists(path)) GTEST_SKIP() << path << " not present";
+  if (!fs::exists(path)) RIGCAL_SKIP_MISSING() << path << " not present";
   const auto strict = ReadTrajectory(path.string());
   ASSERT_FALSE(strict.ok());
   EXPECT_THAT(strict.error(), ::testing::MatchesRegex(".*V102_groundtruth.csv:[0-9]+: .*norm.*"));

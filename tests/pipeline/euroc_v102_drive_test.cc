@@ -12,6 +12,7 @@
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/pipeline/online_replay.h"
+#include "support/skip.h"
 
 namespace rigcal::tools {
 namespace {
@@ -44,7 +45,7 @@ Rig MakeRig() {
 }
 
 TEST(EurocV102Drive, OnlineEstimateConverges) {
-  if (!std::filesystem::exists(kPath)) GTEST_SKIP() << kPath << " not found";
+  if (!std::filesystem::exists(kPath)) RIGCAL_SKIP_MISSING() << kPath << " not found";
   TrajectoryReadOptions read;
   read.max_quaternion_norm_error = 1e-3;  // the ground truth has 6-decimal quaternions
   auto body = ReadTrajectory(kPath, read);

@@ -14,6 +14,7 @@
 #include "report/history_fixture.h"
 #include "rigcal/report/report_html.h"
 #include "rigcal/report/report_input.h"
+#include "support/skip.h"
 
 namespace rigcal::tools::report_test {
 namespace {
@@ -78,11 +79,7 @@ class ReportBrowserTest : public ::testing::Test {
   void SetUp() override {
     chromium_ = FindChromium();
     if (chromium_.empty()) {
-      const char* ci = std::getenv("CI");
-      if (ci != nullptr && std::string(ci) == "true") {
-        FAIL() << "chromium is not installed (scripts/install-deps.sh installs it)";
-      }
-      GTEST_SKIP() << "chromium is not installed (scripts/install-deps.sh installs it)";
+      RIGCAL_SKIP_MISSING() << "chromium is not installed (scripts/install-deps.sh installs it)";
     }
   }
   std::string chromium_;

@@ -9,8 +9,8 @@
 # or no namespace support skips the test (exit 77); under CI=true that is a failure (exit 1).
 
 rigcal_netns_skip() {
-  echo "skip: $1"
-  if [ "${CI:-}" = true ]; then exit 1; fi
+  if [ "${CI:-}" = true ]; then echo "FAILED (CI=true, a skip is a failure): $1"; exit 1; fi
+  echo "SKIP: $1"
   exit 77
 }
 

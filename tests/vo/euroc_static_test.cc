@@ -10,6 +10,7 @@
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/vo/monocular_vo.h"
+#include "support/skip.h"
 
 namespace rigcal::vo {
 namespace {
@@ -70,7 +71,7 @@ StaticRun RunCamera(int index) {
 }
 
 TEST(EurocStatic, VoReportsNoMotionAndMissingImagesAreReported) {
-  if (!std::filesystem::exists(kEuroc + "/cam0/data.csv")) GTEST_SKIP() << "no " << kEuroc;
+  if (!std::filesystem::exists(kEuroc + "/cam0/data.csv")) RIGCAL_SKIP_MISSING() << "no " << kEuroc;
   for (int index : {0, 1}) {
     SCOPED_TRACE("cam" + std::to_string(index));
     const StaticRun run = RunCamera(index);

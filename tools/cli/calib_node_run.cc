@@ -99,7 +99,7 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
   }
   StopSignal stop_signal;
   if (options.log_path.empty()) {
-    log->info("listening for RIGCAL_POSE_<camera>; stop with Ctrl-C (SIGINT) or SIGTERM");
+    log->info("listening for RIGCAL_POSE_<camera>; stop with Ctrl-C (SIGINT), SIGTERM or SIGHUP");
   }
   const tools::CalibNodeSummary summary = node.Run(stop_signal.flag());
   if (stop_signal.received() != 0) {
@@ -126,8 +126,9 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
     std::cout << tools::FormatResultTable(result, truth_ptr);
   }
   std::cout.flush();
-  if (!options.result_path.empty() && summary.errors.empty()) {
-    log->info("result written to {}", options.result_path);
+  if (summary.result_written) log->info("result written to {}", options.result_path);
+  for (const std::string& kept : summary.kept_files) {
+    std::cerr << prefix << "calibrated nothing: " << kept << " left as it was\n";
   }
   if (!args.camchain.empty()) {
     if (const Status status = tools::WriteCamchain(args.camchain, result); !status.ok()) {

@@ -237,7 +237,10 @@ int RunRun(const RunArgs& args) {
   std::fprintf(stderr, "rigcal run: %.1f s, %llu sets; RSS %.0f MB\n", elapsed,
                static_cast<unsigned long long>(final_state.estimate.sets),
                static_cast<double>(tools::ResidentSetBytes()) / (1 << 20));
-  if (!args.out.empty()) {
+  if (!args.out.empty() && final_state.estimate.sets == 0 && std::filesystem::exists(args.out)) {
+    // A run that calibrated nothing never replaces an earlier result.
+    std::cerr << "rigcal run: calibrated nothing: " << args.out << " left as it was\n";
+  } else if (!args.out.empty()) {
     if (const Status status = tools::WriteResultYaml(args.out, result); !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;

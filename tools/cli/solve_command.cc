@@ -437,15 +437,22 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
                   "the usable slaves in --slave order, each with T_cn_cnm1\n"
                   "(extrinsics only, no intrinsics).")
       ->type_name("FILE");
-  cmd->add_flag("--online", args->online,
-                "Feed the trajectories through the online path instead (sync buffer and "
-                "recursive estimator, as `rigcal calib` does live) and print how the estimate "
-                "converges over time (errors too with --truth). --method/--pairs/--scale do "
-                "not apply: the online estimator picks keyframe pairs and segment scales.");
+  // Options that would have no effect together are usage errors naming both.
+  auto* online =
+      cmd->add_flag("--online", args->online,
+                    "Feed the trajectories through the online path instead (sync buffer and "
+                    "recursive estimator, as `rigcal calib` does live) and print how the "
+                    "estimate converges over time (errors too with --truth). --method/--pairs/"
+                    "--scale do not apply (the online estimator picks keyframe pairs and segment "
+                    "scales): giving one of them is a usage error.")
+          ->excludes("--method")
+          ->excludes("--pairs")
+          ->excludes("--scale");
   cmd->add_option("--report-every", args->report_every_s,
                   "With --online: seconds of stream time between convergence lines")
       ->default_val(10.0)
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->needs(online);
   cmd->add_flag("--json", args->json,
                 "Print only the result, as one JSON object, on stdout (logs stay\n"
                 "on stderr).");

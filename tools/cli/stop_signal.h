@@ -1,7 +1,8 @@
 #pragma once
-// StopSignal: while alive, SIGINT and SIGTERM set a flag instead of killing the process, so
-// long-running subcommands stop cleanly (flush, publish, save state, write the result).
-// One instance at a time; the previous handlers are restored on destruction.
+// StopSignal: while alive, SIGINT, SIGTERM and SIGHUP (the terminal or session went away) set a
+// flag instead of killing the process, so long-running subcommands stop cleanly (flush, publish,
+// save state, write the result). One instance at a time; the previous handlers are restored on
+// destruction.
 
 #include <atomic>
 #include <csignal>

@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <utility>
 #include <vector>
@@ -20,6 +21,40 @@ std::filesystem::path DirectoryOf(const std::string& path) {
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   if (dir.empty()) dir = ".";
   return dir;
+}
+
+// What a non-regular file is, for the error message.
+const char* KindOf(mode_t mode) {
+  if (S_ISLNK(mode)) return "a symbolic link";
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+constexpr mode_t kNewFileMode = 0644;
+
+// Ok when `path` may be replaced: it does not exist, or it is a regular file (lstat: a symbolic
+// link is not followed). *mode gets the permission bits the new file keeps (the existing file's,
+// else kNewFileMode).
+Status CheckReplaceable(const std::string& path, mode_t* mode) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) {
+    const int err = errno;
+    if (err == ENOENT) {
+      *mode = kNewFileMode;
+      return Status::Ok();
+    }
+    return Error{"cannot write '" + path + "': " + ErrnoText(err)};
+  }
+  if (!S_ISREG(st.st_mode)) {
+    return Error{"cannot write '" + path + "': it is " + KindOf(st.st_mode) +
+                 ", not a regular file (rigcal replaces only regular files)"};
+  }
+  *mode = st.st_mode & 07777;
+  return Status::Ok();
 }
 
 }  // namespace
@@ -66,6 +101,8 @@ AtomicFile& AtomicFile::operator=(AtomicFile&& other) noexcept {
 
 Expected<AtomicFile> AtomicFile::Create(const std::string& path) {
   if (path.empty()) return Error{"cannot write a file with an empty name"};
+  mode_t mode = kNewFileMode;
+  if (Status status = CheckReplaceable(path, &mode); !status.ok()) return status;
   const std::filesystem::path dir = DirectoryOf(path);
   std::string tmp_basename = ".";
   tmp_basename += std::filesystem::path(path).filename().string();
@@ -80,7 +117,7 @@ Expected<AtomicFile> AtomicFile::Create(const std::string& path) {
                  "': " + ErrnoText(errno)};
   }
   AtomicFile file(path, std::string(tmp_name.data()), fd);
-  if (::fchmod(fd, 0644) != 0) return file.Fail("chmod", errno);
+  if (::fchmod(fd, mode) != 0) return file.Fail("chmod", errno);
   return file;
 }
 
@@ -106,6 +143,12 @@ Status AtomicFile::Commit() {
     ::unlink(temp_path_.c_str());
     return Error{"cannot write '" + path_ + "': close: " + ErrnoText(err)};
   }
+  // Checked again: the path may have become something else while the contents were written.
+  mode_t mode = kNewFileMode;
+  if (Status status = CheckReplaceable(path_, &mode); !status.ok()) {
+    ::unlink(temp_path_.c_str());
+    return status;
+  }
   if (::rename(temp_path_.c_str(), path_.c_str()) != 0) {
     const int err = errno;
     ::unlink(temp_path_.c_str());
@@ -125,6 +168,21 @@ Status WriteFileAtomically(const std::string& path, std::string_view contents) {
   if (!file.ok()) return file.status();
   if (Status status = file->Write(contents); !status.ok()) return status;
   return file->Commit();
+}
+
+Expected<std::string> KeepAside(const std::string& path, const std::string& tag) {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  ::gmtime_r(&now, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof(stamp), "%Y%m%dT%H%M%SZ", &utc);
+  const std::string base = path + "." + tag + "-" + stamp;
+  std::string aside = base;
+  for (int n = 2; ::access(aside.c_str(), F_OK) == 0; ++n) aside = base + "-" + std::to_string(n);
+  if (::rename(path.c_str(), aside.c_str()) != 0) {
+    return Error{"cannot keep '" + path + "' as '" + aside + "': " + ErrnoText(errno)};
+  }
+  return aside;
 }
 
 }  // namespace rigcal::tools

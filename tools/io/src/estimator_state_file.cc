@@ -6,6 +6,8 @@
 #include <iterator>
 #include <sstream>
 
+#include "estimator_state_ranges.h"
+
 namespace rigcal::tools {
 namespace {
 
@@ -237,6 +239,7 @@ Expected<RigEstimatorState> ParseEstimatorState(std::string_view view) {
   state.have_master_segment = have != 0;
   const std::string rest((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
   if (const Status read = ReadSlaves(rest, &state); !read.ok()) return read;
+  if (const Status ranges = CheckEstimatorStateRanges(state); !ranges.ok()) return ranges;
   return state;
 }
 

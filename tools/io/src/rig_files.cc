@@ -49,6 +49,12 @@ void EmitRigEntry(YAML::Emitter& out, const Similarity& rig) {
 Expected<Similarity> ReadSlave(const FieldReader& r, const std::string& name,
                                const YAML::Node& node) {
   if (!node.IsMap()) return r.Fail(node, name, "expected a map with q_wxyz, C and scale");
+  // A hand-written rig entry holds only these keys; an entry of a result file (it has `usable`)
+  // holds the statistics ResultToYaml writes as well.
+  const bool rig_entry = !node["usable"];
+  if (rig_entry) {
+    if (auto e = r.CheckKeys(node, name + ".", {"q_wxyz", "C", "scale", "scales"})) return *e;
+  }
   Similarity rig;
   auto q = r.Numbers(node, "q_wxyz", name + ".q_wxyz", 4);
   if (!q) return Error{q.error()};
@@ -79,6 +85,9 @@ Expected<Similarity> ReadSlave(const FieldReader& r, const std::string& name,
       const std::string field = name + ".scales[" + std::to_string(i) + "]";
       const YAML::Node entry = scales[i];
       if (!entry.IsMap()) return r.Fail(entry, field, "expected {segment: id, scale: s}");
+      if (rig_entry) {
+        if (auto e = r.CheckKeys(entry, field + ".", {"segment", "scale"})) return *e;
+      }
       if (!entry["segment"]) return r.Fail(entry, field + ".segment", "missing");
       if (!entry["scale"]) return r.Fail(entry, field + ".scale", "missing");
       auto id = r.Integer(entry["segment"], field + ".segment");

@@ -18,11 +18,49 @@ Expected<std::string> ReadWholeFile(const std::string& path) {
   return contents.str();
 }
 
+namespace {
+
+// "<path>:<line>: " of a node.
+std::string Where(const std::string& path, const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  return mark.is_null() ? path + ": " : path + ":" + std::to_string(mark.line + 1) + ": ";
+}
+
+// The first key that appears twice in a map of `node` (at any depth): yaml-cpp keeps both, and
+// a lookup would silently use one of them.
+std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& node, int depth) {
+  if (depth > 64) return std::nullopt;  // yaml-cpp itself limits the nesting far below
+  if (node.IsMap()) {
+    std::set<std::string> keys;
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      if (it->first.IsScalar() && !keys.insert(it->first.Scalar()).second) {
+        return Error{Where(path, it->first) + it->first.Scalar() +
+                     ": duplicate key (each key may appear once in a map)"};
+      }
+      if (auto e = DuplicateKey(path, it->second, depth + 1)) return e;
+    }
+  } else if (node.IsSequence()) {
+    for (const YAML::Node& child : node) {
+      if (auto e = DuplicateKey(path, child, depth + 1)) return e;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 Expected<YAML::Node> LoadYaml(const std::string& path) {
   auto text = ReadWholeFile(path);
   if (!text) return Error{text.error()};
   try {
-    return YAML::Load(*text);
+    const std::vector<YAML::Node> documents = YAML::LoadAll(*text);
+    if (documents.size() > 1) {
+      return Error{Where(path, documents[1]) +
+                   "a second YAML document (after ---): the file must hold one document"};
+    }
+    const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
+    if (auto e = DuplicateKey(path, root, 0)) return *e;
+    return root;
   } catch (const YAML::ParserException& e) {
     return Error{path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg};
   } catch (const YAML::Exception& e) {
@@ -30,11 +68,7 @@ Expected<YAML::Node> LoadYaml(const std::string& path) {
   }
 }
 
-std::string FieldReader::At(const YAML::Node& node) const {
-  const YAML::Mark mark = node.Mark();
-  if (mark.is_null()) return path_ + ": ";
-  return path_ + ":" + std::to_string(mark.line + 1) + ": ";
-}
+std::string FieldReader::At(const YAML::Node& node) const { return Where(path_, node); }
 
 Error FieldReader::Fail(const YAML::Node& node, const std::string& field,
                         const std::string& what) const {

@@ -104,7 +104,8 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
       // Ring overflow, and this camera's members of sets the full ready queue dropped.
       cam.dropped_overflow += static_cast<int64_t>(s.overflow + s.consumer_overflow);
       cam.dropped_never_matched = static_cast<int64_t>(s.never_matched);
-      cam.dropped_invalid += static_cast<int64_t>(s.invalid);
+      // A clock glitch is a pose with an implausible stamp: reported as invalid.
+      cam.dropped_invalid += static_cast<int64_t>(s.invalid + s.clock_glitch);
     }
     cam.vo_state = input.vo_state;
     cam.last_pose_age_ms = input.last_pose_age_ms;
@@ -113,9 +114,7 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
   }
   msg.sync_sets_emitted = static_cast<int64_t>(sync.sets_emitted);
   const SyncCameraStats& total = sync.total;
-  const int64_t dropped =
-      static_cast<int64_t>(total.invalid + total.late + total.duplicate + total.out_of_order +
-                           total.overflow + total.never_matched + total.stopped);
+  const int64_t dropped = static_cast<int64_t>(total.Dropped());
   const int64_t fill =
       static_cast<int64_t>(total.pushed) - static_cast<int64_t>(total.used) - dropped;
   msg.sync_capacity = std::max<int32_t>(0, sync_capacity);

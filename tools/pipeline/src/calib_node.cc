@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 #include "calib_node_impl.h"
@@ -214,8 +215,14 @@ void CalibNode::Impl::PublishStatus(const RigEstimate& estimate, int64_t utime) 
   Publish(kStatusChannel, msg, &summary.status_published);
 }
 
+bool CalibNode::Impl::CalibratedNothing() {
+  return !summary.resumed && calibrator.sync_stats().sets_emitted == 0;
+}
+
 void CalibNode::Impl::SaveState() {
   if (state_path.empty()) return;
+  // An empty state never replaces the one a previous run saved.
+  if (CalibratedNothing() && std::filesystem::exists(state_path)) return;
   if (const Status status =
           WriteFileAtomically(state_path, FormatEstimatorState(calibrator.SaveState()));
       !status.ok()) {
@@ -253,19 +260,31 @@ void CalibNode::Impl::RestoreState() {
     log->warn("--resume: no state file configured (state.path or --state); starting afresh");
     return;
   }
+  if (!std::filesystem::exists(state_path)) {
+    log->warn("--resume: no state file '{}' yet; starting afresh", state_path);
+    return;
+  }
   auto text = ReadWholeFile(state_path);
-  if (!text) {
-    log->warn("--resume: {}; starting afresh", text.error());
-    return;
-  }
-  const Expected<RigEstimatorState> state = ParseEstimatorState(*text);
+  const Expected<RigEstimatorState> state =
+      text ? ParseEstimatorState(*text) : Expected<RigEstimatorState>(text.status());
   const Status restored = state ? calibrator.RestoreState(*state) : state.status();
-  if (!restored.ok()) {
-    log->warn("--resume: {}: {}; ignored, starting afresh", state_path, restored.message());
+  if (restored.ok()) {
+    summary.resumed = true;
+    log->info("resumed from {}", state_path);
     return;
   }
-  summary.resumed = true;
-  log->info("resumed from {}", state_path);
+  // A rejected state (corrupt, newer version, other rig) is kept for a look, never overwritten.
+  const Expected<std::string> aside = KeepAside(state_path, "rejected");
+  if (!aside) {
+    summary.errors.push_back("--resume: " + state_path + ": " + restored.message() + "; " +
+                             aside.error() + "; the state is not saved in this run");
+    log->error("{}", summary.errors.back());
+    state_path.clear();
+    return;
+  }
+  summary.rejected_state = *aside;
+  log->warn("--resume: {}: {}; kept as {}, starting afresh", state_path, restored.message(),
+            *aside);
 }
 
 void CalibNode::Impl::Finish(int64_t utime) {
@@ -277,10 +296,22 @@ void CalibNode::Impl::Finish(int64_t utime) {
   PublishExtrinsics(estimate, utime);
   PublishStatus(estimate, utime);
   SaveState();
-  if (!options.result_path.empty()) {
+  // A run that calibrated nothing leaves the files of an earlier run as they are.
+  for (const std::string& path : {state_path, options.result_path}) {
+    if (!path.empty() && CalibratedNothing() && std::filesystem::exists(path)) {
+      summary.kept_files.push_back(path);
+    }
+  }
+  for (const std::string& path : summary.kept_files) {
+    log->warn("calibrated nothing (no synchronised pose set): {} left as it was", path);
+  }
+  if (!options.result_path.empty() &&
+      !(CalibratedNothing() && std::filesystem::exists(options.result_path))) {
     if (const Status status = WriteResultYaml(options.result_path, estimate.rig); !status.ok()) {
       summary.errors.push_back(status.message());
       log->error("result not written: {}", status.message());
+    } else {
+      summary.result_written = true;
     }
   }
   ReportLine(estimate);

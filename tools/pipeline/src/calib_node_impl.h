@@ -83,8 +83,12 @@ struct CalibNode::Impl {
   void PublishExtrinsics(const RigEstimate& estimate, int64_t utime);
   void PublishStatus(const RigEstimate& estimate, int64_t utime);
   std::vector<CameraStatusInput> CameraInputs();
+  // No set reached the estimator in this run and no state was resumed.
+  bool CalibratedNothing();
+  // Saves the state, unless that would replace a saved state with an empty one.
   void SaveState();
   void ReportLine(const RigEstimate& estimate);
+  // --resume: a state file that cannot be used is renamed aside (KeepAside), never overwritten.
   void RestoreState();
   // Flush, final refinement, last publication, state and result.
   void Finish(int64_t utime);

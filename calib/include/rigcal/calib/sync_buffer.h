@@ -38,6 +38,14 @@
 // entries that can no longer match any later master (stamp < m.t_ns - tolerance + 1, or in
 // trigger mode sequence <= m's) are dropped as never_matched. Everything is deterministic: the
 // same sequence of Push calls gives the same sets.
+//
+// Clock glitches (stamp mode only). A pose stamped more than the glitch horizon
+// (max(2 s, 10 * max_wait)) ahead of both its camera's newest stamp and the newest stamp of every
+// other camera is not accepted (kClockGlitch, counted clock_glitch, one warning per burst): one
+// future stamp (up to INT64_MAX) would otherwise make every later pose of the camera out of order
+// and time out every master entry. A jump is accepted once the camera confirms its new timeline
+// with 5 consecutive poses within the horizon of each other, or as soon as another camera's
+// clock reaches it.
 
 #include <chrono>
 #include <cstdint>
@@ -102,6 +110,7 @@ enum class PushResult {
                    // (or as its newest entry ever accepted)
   kOutOfOrder,     // older than the newest entry accepted for the camera, but not late (in
                    // trigger mode also: a lower sequence number than the newest)
+  kClockGlitch,    // stamped far ahead of every camera's clock (see "Clock glitches" above)
 };
 const char* ToString(PushResult result);
 
@@ -123,6 +132,7 @@ struct SyncCameraStats {
   uint64_t late = 0;              // rejected: PushResult::kLate
   uint64_t duplicate = 0;         // rejected: PushResult::kDuplicate
   uint64_t out_of_order = 0;      // rejected: PushResult::kOutOfOrder
+  uint64_t clock_glitch = 0;      // rejected: PushResult::kClockGlitch
   uint64_t overflow = 0;          // accepted, then dropped as the oldest entry of a full ring
   uint64_t never_matched = 0;     // accepted, then dropped unused (see the matching rule)
   uint64_t optional_missing = 0;  // emitted sets without this (optional) camera
@@ -132,7 +142,8 @@ struct SyncCameraStats {
   uint64_t fill = 0;  // entries buffered now (<= capacity)
 
   uint64_t Dropped() const {
-    return stopped + invalid + late + duplicate + out_of_order + overflow + never_matched;
+    return stopped + invalid + late + duplicate + out_of_order + clock_glitch + overflow +
+           never_matched;
   }
 };
 

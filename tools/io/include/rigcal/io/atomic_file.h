@@ -11,7 +11,10 @@
 namespace rigcal::tools {
 
 // Writes `contents` to `path` atomically: writes a temporary file in the same directory,
-// fsyncs it, renames it over `path` and fsyncs the directory. The new file gets mode 0644.
+// fsyncs it, renames it over `path` and fsyncs the directory. Only a regular file is replaced:
+// when `path` is a symbolic link, FIFO, device, directory or socket the error says so
+// ("cannot write '<path>': it is a FIFO, not a regular file ...") and nothing is written. The
+// new file keeps the permission bits of the file it replaces (mode 0644 for a new file).
 // On failure the error names `path` and the failing step with its errno text
 // ("cannot write '<path>': <step>: <errno text>"), `path` is unchanged and no temporary file is
 // left behind. Thread-safe for distinct paths.
@@ -21,8 +24,14 @@ namespace rigcal::tools {
 // Returns 0 or the errno value of the failing write. Thread-safe for distinct descriptors.
 int WriteAllBytes(int fd, std::string_view data);
 
+// Renames `path` to "<path>.<tag>-<UTC time, YYYYmmddTHHMMSSZ>" (with "-2", "-3", ... when
+// that exists) so that a file rigcal will not use (e.g. a rejected state file) is kept, not
+// overwritten. The new path, or the error naming `path`.
+Expected<std::string> KeepAside(const std::string& path, const std::string& tag);
+
 // A file that is written by name by someone else (e.g. lcm::LogFile) and replaces `path`
-// atomically: Create() makes an empty temporary file (mode 0644) next to `path`; the caller
+// atomically: Create() makes an empty temporary file next to `path` (the mode and the refusal
+// of anything but a regular file as WriteFileAtomically's; checked again by Commit()); the caller
 // writes temp_path() and closes it; Commit() fsyncs it, renames it over `path` and fsyncs the
 // directory. A temporary file that was not committed is removed by the destructor. Errors as
 // WriteFileAtomically's. One thread at a time.

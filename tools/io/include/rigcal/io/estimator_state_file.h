@@ -28,7 +28,9 @@ inline constexpr int kOldestEstimatorStateVersion = 2;  // oldest read
 std::string FormatEstimatorState(const RigEstimatorState& state);
 
 // The state in the text of a state file. Errors: not a state file, a version this build does
-// not read, a checksum mismatch (corrupt or truncated file), malformed content. Whether the
+// not read, a checksum mismatch (corrupt or truncated file), malformed content, a value out of
+// range even with a valid checksum (a negative count, a sum beyond 1e100, a non-finite number:
+// the error names the slave and the field). Whether the
 // state fits an estimator (its cameras) is RigEstimator::RestoreState's to say.
 Expected<RigEstimatorState> ParseEstimatorState(std::string_view text);
 

@@ -18,7 +18,8 @@ namespace rigcal::tools {
 // The whole file as text; the error names the path and errno text.
 Expected<std::string> ReadWholeFile(const std::string& path);
 
-// Parses a YAML file; syntax errors name the path and line.
+// Parses a YAML file; syntax errors name the path and line. A second document ("---") and a
+// key that appears twice in a map are errors too ("<path>:<line>: <key>: duplicate key").
 Expected<YAML::Node> LoadYaml(const std::string& path);
 
 // Field access with errors of the form `<path>:<line>: <field>: <what>`.

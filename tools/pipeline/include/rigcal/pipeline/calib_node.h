@@ -118,7 +118,11 @@ struct CalibNodeSummary {
   int64_t extrinsics_published = 0;
   int64_t status_published = 0;
   int64_t state_saves = 0;
-  bool resumed = false;             // state restored from the state file
+  bool resumed = false;         // state restored from the state file
+  std::string rejected_state;   // --resume rejected the state file: where it was kept
+  bool result_written = false;  // the result file was written
+  // Calibrated nothing: the existing state / result files left as they were.
+  std::vector<std::string> kept_files;
   bool end_of_log = false;          // replay reached the end of the log
   std::string log_problem;          // e.g. a truncated last event; empty when the log was clean
   std::vector<std::string> errors;  // failed state/result writes, publish failures
