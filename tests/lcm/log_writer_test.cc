@@ -1,6 +1,5 @@
 // LogWriter: the bytes of lcm-logger's format, reading back through LCM's own reader, splitting,
 // atomic parts, and what is left readable after a crash cut the file inside an event.
-#include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/log_writer.h"
 
 #include <gtest/gtest.h>
@@ -13,6 +12,7 @@
 #include <vector>
 
 #include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/pose_log.h"
 #include "rigcal/lcm/pose_message.h"
 #include "support/lcm_log_events.h"

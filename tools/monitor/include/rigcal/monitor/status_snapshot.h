@@ -57,7 +57,8 @@ std::string SlaveStateName(int8_t state);
 //                      "cameras": [{"name", "fps", "frames_received",
 //                                   "dropped": {"late", "duplicate", "out_of_order", "overflow",
 //                                               "never_matched", "invalid"},
-//                                   "vo_state", "vo_segment", "last_pose_age_ms" (null when none)}],
+//                                   "vo_state", "vo_segment", "last_pose_age_ms" (null when
+//                                   none)}],
 //                      "sync": {"sets_emitted", "fill", "capacity"},
 //                      "process": {"cpu_percent", "rss_bytes"}},
 //    "extrinsics": null | {"age_s", "t_ns", "master", "distance_unit": "master_odometry"|"metre",
