@@ -424,28 +424,20 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
       scale_column[s] = column++;
       free.push_back(&scales[s]);
     }
-    // Rotation and position blocks of a covariance of the free parameters.
-    auto blocks_of = [&](const Eigen::MatrixXd& cov, Eigen::Matrix3d* rot,
-                         Eigen::Matrix3d* position, double* axis_std) {
-      *rot = 4.0 * cov.topLeftCorner<3, 3>();  // tangent δ rotates by 2|δ|
-      position->setZero();
+    const Eigen::MatrixXd cov =
+        ClusteredCovariance(problem, free, motion_blocks, motion_of_block, input.blocks);
+    if (cov.size() > 0 && cov.allFinite()) {
+      Eigen::Matrix3d rot = 4.0 * cov.topLeftCorner<3, 3>();  // tangent δ rotates by 2|δ|
+      Eigen::Matrix3d position = Eigen::Matrix3d::Zero();
       if (use_axis) {
         Eigen::Matrix3d ph = Eigen::Matrix3d::Zero();
         ph.block(0, 0, h_free ? 3 : 2, h_free ? 3 : 2) =
             cov.block(3, 3, h_free ? 3 : 2, h_free ? 3 : 2);
-        *position = t * ph * t.transpose();
-        if (h_free) *axis_std = std::sqrt(std::max(0.0, ph(2, 2)));
+        position = t * ph * t.transpose();
+        if (h_free) out.axis_std = std::max(out.axis_std, std::sqrt(std::max(0.0, ph(2, 2))));
       } else if (!input.translational) {
-        *position = cov.block<3, 3>(3, 3);
+        position = cov.block<3, 3>(3, 3);
       }
-    };
-    const Eigen::MatrixXd cov =
-        ClusteredCovariance(problem, free, motion_blocks, motion_of_block, input.blocks);
-    if (cov.size() > 0 && cov.allFinite()) {
-      Eigen::Matrix3d rot, position;
-      double axis_std = 0.0;
-      blocks_of(cov, &rot, &position, &axis_std);
-      out.axis_std = std::max(out.axis_std, axis_std);
       bool larger = false;
       out.cov_rotation = LoewnerMax(out.cov_rotation, rot, &larger);
       out.cov_position = LoewnerMax(out.cov_position, position, &larger);
