@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "rigcal/io/capture_source_yaml.h"
 #include "rigcal/io/config_sections.h"
 #include "rigcal/io/yaml_fields.h"
 
@@ -15,7 +16,7 @@ namespace {
 constexpr double kQuaternionNormTolerance = 1e-3;  // hand-typed quaternions
 
 // Keys of a camera entry read here; the camera section parser reads the others.
-const std::set<std::string> kCameraOwnKeys = {"name", "nominal", "truth", "device"};
+const std::set<std::string> kCameraOwnKeys = {"name", "nominal", "truth", "device", "capture"};
 
 Expected<Similarity> ParseMounting(const FieldReader& r, const YAML::Node& node,
                                    const std::string& field) {
@@ -389,9 +390,42 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
       }
       return config;
     }
+    if (*type == "v4l2") {
+      drivers::V4l2Options defaults;
+      if (auto e = ParseV4l2Keys(r, source, "source", true, &defaults)) return *e;
+      for (size_t i = 0; i < config.cameras.size(); ++i) {
+        const CameraConfig& camera = config.cameras[i];
+        const YAML::Node entry = cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)];
+        if (camera.device.empty()) {
+          return r.Fail(entry, camera.name + ".device",
+                        "missing: a v4l2 camera needs its device (/dev/videoN, "
+                        "/dev/v4l/by-id/..., bus:<bus info> or card:<card name>)");
+        }
+        if (!camera.spec) {
+          return r.Fail(entry, camera.name, "a v4l2 camera needs a model and intrinsics");
+        }
+        drivers::V4l2Options options = defaults;
+        options.device = camera.device;
+        options.width = camera.spec->width;
+        options.height = camera.spec->height;
+        if (const YAML::Node capture = entry["capture"]) {
+          if (auto e = ParseV4l2Keys(r, capture, camera.name + ".capture", false, &options)) {
+            return *e;
+          }
+        }
+        config.v4l2_devices.push_back(std::move(options));
+      }
+      return config;
+    }
+    for (size_t i = 0; i < cameras.size(); ++i) {
+      if (cameras[i].IsMap() && cameras[i]["capture"]) {
+        return r.Fail(cameras[i]["capture"], "cameras[" + std::to_string(i) + "].capture",
+                      "only for a live source (source.type: v4l2)");
+      }
+    }
     if (*type != "simulated") {
       return r.Fail(source["type"], "source.type",
-                    "'" + *type + "' is not supported (supported: simulated, image_folders)");
+                    "'" + *type + "' is not supported (supported: simulated, image_folders, v4l2)");
     }
     auto spec = ParseSimulatedSource(source, path);
     if (!spec) return Error{spec.error()};

@@ -24,8 +24,27 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
              << (sources.realtime ? " (real time)" : " (as fast as possible)") << "\n";
     return sources;
   }
+  if (!config.v4l2_devices.empty()) {
+    sources.realtime = true;  // live cameras: never wait for the VO
+    for (size_t i = 0; i < names.size(); ++i) {
+      auto device =
+          drivers::V4l2Device::Open(names[i], static_cast<int>(i), config.v4l2_devices[i]);
+      if (!device) return Error{config.path + ": " + device.error()};
+      auto model = camera::MakeCameraModel(*config.cameras[i].spec);
+      if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
+      const drivers::V4l2Negotiated& n = (*device)->negotiated();
+      progress << prefix << "camera '" << names[i] << "': " << n.node << " (" << n.card << ", "
+               << n.bus_info << ") " << drivers::FourccText(n.fourcc) << " " << n.layout.width
+               << "x" << n.layout.height << " at " << (*device)->frame_rate_hz() << " Hz\n";
+      sources.v4l2.push_back(device->get());
+      sources.devices.push_back(std::move(*device));
+      sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
+    }
+    return sources;
+  }
   if (config.image_folders.empty()) {
-    return Error{config.path + ": no `source:` section (supported: simulated, image_folders)"};
+    return Error{config.path +
+                 ": no `source:` section (supported: simulated, image_folders, v4l2)"};
   }
   for (size_t i = 0; i < names.size(); ++i) {
     auto device =

@@ -12,6 +12,7 @@
 #include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/drivers/v4l2_options.h"
 
 namespace rigcal::tools {
 
@@ -48,6 +49,9 @@ struct RigConfig {
   // `source: {type: image_folders}`: one EuRoC-format camera folder per camera (its `device`,
   // resolved against the config file's directory), camera index order.
   std::vector<std::string> image_folders;
+  // `source: {type: v4l2}`: one device per camera (camera index order): the source's keys,
+  // the camera's `device`, its resolution and its `capture:` keys.
+  std::vector<drivers::V4l2Options> v4l2_devices;
 
   std::vector<std::string> CameraNames() const;
   const std::string& master() const { return cameras.front().name; }

@@ -14,6 +14,7 @@
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/drivers/v4l2_device.h"
 #include "rigcal/io/rig_config.h"
 
 namespace rigcal::tools {
@@ -23,6 +24,7 @@ struct CaptureSources {
   std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
   std::vector<std::shared_ptr<const camera::CameraModel>> models;
   std::vector<drivers::ImageFolderDevice*> folders;  // not owned: the image-folder devices
+  std::vector<drivers::V4l2Device*> v4l2;            // not owned: the V4L2 devices
   std::optional<drivers::SimulatedRig> rig;          // the simulated source, when it is one
   bool realtime = false;  // the devices pace themselves in real time (a live source)
 };

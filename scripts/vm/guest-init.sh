@@ -1,0 +1,34 @@
+#!/bin/sh
+# /init of the device-test VM (scripts/vm/build-assets.sh puts it in base.cpio.gz): loads the
+# media drivers, makes the device nodes visible to libudev (no udevd here), runs /tests/run (the
+# second initramfs archive, from run-device-tests.sh) and powers off. Markers on the console:
+#   RIGCAL-VM: <problem>     set-up trouble
+#   RIGCAL-VM-READY          drivers loaded
+#   (the lines of /tests/run, which ends with RIGCAL-DEVICE-RESULT rc=<exit code>)
+export PATH=/bin:/sbin
+mount -t proc proc /proc
+mount -t sysfs sysfs /sys
+mount -t devtmpfs devtmpfs /dev
+mount -t tmpfs tmpfs /tmp
+mkdir -p /run/udev/data
+for m in /modules/[0-9]*.ko; do
+  case "$m" in
+    *-vivid.ko) insmod "$m" n_devs=2 node_types=0x1,0x1 input_types=0x81,0x81 ;;
+    *) insmod "$m" ;;
+  esac || echo "RIGCAL-VM: insmod $m failed"
+done
+insmod /modules/v4l2loopback.ko devices=2 video_nr=20,21 exclusive_caps=0,0 \
+  card_label=rigcal-loop-0,rigcal-loop-1 || echo "RIGCAL-VM: insmod v4l2loopback failed"
+insmod /modules/vimc.ko || echo "RIGCAL-VM: insmod vimc failed"
+# libudev reports a device only when udev has "initialised" it: /run/udev/data/c<maj:min>.
+for d in /sys/bus/media/devices/* /sys/class/video4linux/*; do
+  [ -f "$d/dev" ] && echo "I:1" > "/run/udev/data/c$(cat "$d/dev")"
+done
+echo "RIGCAL-VM-READY"
+if [ -x /tests/run ]; then
+  /tests/run
+else
+  echo "RIGCAL-VM: no /tests/run"
+fi
+echo "RIGCAL-VM-DONE"
+poweroff -f

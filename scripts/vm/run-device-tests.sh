@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# Runs the device tests (a GoogleTest binary, tests/device/) inside QEMU on a Debian kernel with
+# real V4L2 drivers: two vivid devices, two v4l2loopback devices, vimc for libcamera.
+#   run-device-tests.sh <test binary> [gtest filter]
+# Builds or reuses the assets (build-assets.sh, under $RIGCAL_VM_DIR, default build/vm), packs
+# the binary with the shared libraries ldd lists into a second initramfs archive, boots
+# qemu-system-x86_64 (software emulation: KVM cannot run guests here) and reads the guest's
+# result line "RIGCAL-DEVICE-RESULT rc=<n>" from the serial console.
+# Exit: 0 passed, 1 failed, 77 skipped ("SKIP: <reason>" first; a failure under CI=true).
+set -uo pipefail
+binary=$(readlink -f "$1")
+filter=${2:-*}
+HERE=$(cd "$(dirname "$0")" && pwd)
+VM_DIR=${RIGCAL_VM_DIR:-$PWD/build/vm}
+TIMEOUT_S=${RIGCAL_VM_TIMEOUT_S:-600}
+
+skip() {
+  echo "SKIP: $*"
+  if [ "${CI:-}" = "true" ]; then echo "CI=true: the device tests may not skip"; exit 1; fi
+  exit 77
+}
+
+command -v qemu-system-x86_64 >/dev/null || skip "qemu-system-x86_64 is not installed"
+assets=$(bash "$HERE/build-assets.sh" "$VM_DIR")
+rc=$?
+if [ $rc -eq 77 ]; then skip "${assets#SKIP: }"; fi
+[ $rc -eq 0 ] || { echo "$assets"; echo "building the VM assets failed"; exit 1; }
+echo "$assets"
+dir=$(echo "$assets" | sed -n 's/^vm assets: \([^ ]*\).*/\1/p')
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+root="$work/root"
+mkdir -p "$root/tests/lib" "$root/lib64"
+cp "$binary" "$root/tests/device_tests"
+# Shared libraries of the test binary and of libcamera's IPA modules (dlopen'ed).
+libs() { ldd "$1" 2>/dev/null | awk '/=> \//{print $3} /^\s*\/lib64\//{print $1}'; }
+{
+  libs "$binary"
+  for ipa in /usr/lib/x86_64-linux-gnu/libcamera/*.so; do [ -f "$ipa" ] && libs "$ipa"; done
+} | sort -u | while read -r lib; do
+  case "$lib" in
+    /lib64/*) cp -L "$lib" "$root/lib64/" ;;
+    *) cp -L "$lib" "$root/tests/lib/" ;;
+  esac
+done
+cat > "$root/tests/run" <<RUN
+#!/bin/sh
+export LD_LIBRARY_PATH=/tests/lib HOME=/tmp RIGCAL_LOG_LEVEL=info
+cd /tmp
+/tests/device_tests --gtest_filter='$filter' --gtest_color=no
+echo "RIGCAL-DEVICE-RESULT rc=\$?"
+RUN
+chmod +x "$root/tests/run"
+(cd "$root" && find . | cpio -o -H newc --quiet) >"$work/tests.cpio"
+# The kernel reads an uncompressed archive after a compressed one only at a 4-byte boundary;
+# zeros between archives are skipped.
+cp "$dir/base.cpio.gz" "$work/initramfs.cpio"
+truncate -s "$(( ($(stat -c %s "$work/initramfs.cpio") + 511) / 512 * 512 ))" "$work/initramfs.cpio"
+cat "$work/tests.cpio" >>"$work/initramfs.cpio"
+
+log="$work/console.log"
+start=$(date +%s)
+timeout "$TIMEOUT_S" qemu-system-x86_64 -accel tcg -cpu max -smp 2 -m 2048 -nic none \
+  -nographic -no-reboot -kernel "$dir/vmlinuz" -initrd "$work/initramfs.cpio" \
+  -append "console=ttyS0 quiet panic=-1 loglevel=4" </dev/null >"$log" 2>&1
+qemu_rc=$?
+tr -d '\r' <"$log" | grep -v '^\s*$' | sed 's/^/guest: /'
+echo "QEMU: exit $qemu_rc after $(( $(date +%s) - start )) s"
+result=$(tr -d '\r' <"$log" | sed -n 's/.*RIGCAL-DEVICE-RESULT rc=\([0-9]*\).*/\1/p' | tail -1)
+if [ -z "$result" ]; then
+  echo "FAILED: no result from the guest (QEMU exit $qemu_rc)"
+  exit 1
+fi
+if grep -q "RIGCAL-VM:" "$log"; then echo "FAILED: guest set-up problems (RIGCAL-VM lines)"; exit 1; fi
+case "$result" in
+  0) echo "PASSED"; exit 0 ;;
+  77) skip "the guest skipped the device tests" ;;
+  *) echo "FAILED: guest tests exit $result"; exit 1 ;;
+esac

@@ -1,0 +1,27 @@
+#pragma once
+// The `source:` sections of live capture devices (config/README.md "Live sources"):
+//   source: {type: v4l2, <defaults for every camera>}   and per camera
+//   cameras[i]: {device: <path | bus:<bus info> | card:<card>>, capture: {<overrides>}}
+// Keys (source level and `capture:`): pixel_formats, frame_rate_hz, buffers, exposure_us, gain,
+// external_trigger, readout_us, controls, reconnect, reconnect_max_backoff_s, frame_timeout_s.
+// Errors read "<path>:<line>: <field>: <what>".
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/status.h"
+#include "rigcal/drivers/v4l2_options.h"
+#include "rigcal/io/yaml_fields.h"
+
+namespace rigcal::tools {
+
+// Reads the keys of `node` (a `source:` map, `type` allowed when `is_source`, or a camera's
+// `capture:` map) into `options`; `field` prefixes the names in errors ("source" or
+// "cam0.capture").
+std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
+                                   const std::string& field, bool is_source,
+                                   drivers::V4l2Options* options);
+
+}  // namespace rigcal::tools

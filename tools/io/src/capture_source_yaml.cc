@@ -1,0 +1,100 @@
+#include "rigcal/io/capture_source_yaml.h"
+
+#include <set>
+
+namespace rigcal::tools {
+namespace {
+
+const std::set<std::string> kV4l2Keys = {
+    "pixel_formats", "frame_rate_hz",           "buffers",        "exposure_us",
+    "gain",          "external_trigger",        "readout_us",     "controls",
+    "reconnect",     "reconnect_max_backoff_s", "frame_timeout_s"};
+
+}  // namespace
+
+std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
+                                   const std::string& field, bool is_source,
+                                   drivers::V4l2Options* options) {
+  if (!node.IsMap()) return r.Fail(node, field, "expected a map");
+  std::set<std::string> known = kV4l2Keys;
+  if (is_source) known.insert("type");
+  if (auto e = r.CheckKeys(node, field + ".", known)) return e;
+  const std::string p = field + ".";
+  if (const YAML::Node n = node["pixel_formats"]) {
+    if (!n.IsSequence() || n.size() == 0) {
+      return r.Fail(n, p + "pixel_formats", "expected a list such as [GREY, YUYV]");
+    }
+    options->formats.clear();
+    for (size_t i = 0; i < n.size(); ++i) {
+      const std::string item = p + "pixel_formats[" + std::to_string(i) + "]";
+      auto name = r.String(n[i], item);
+      if (!name) return Error{name.error()};
+      const auto format = drivers::ParsePixelFormat(*name);
+      if (!format || *format == drivers::PixelFormat::kBgr24 ||
+          *format == drivers::PixelFormat::kRgb24) {
+        return r.Fail(n[i], item,
+                      "'" + *name + "' is not one of GREY, Y10, Y16, YUYV, NV12, MJPEG");
+      }
+      options->formats.push_back(*format);
+    }
+  }
+  auto number = [&](const char* key, double low, double high, bool open_low,
+                    double* out) -> std::optional<Error> {
+    const YAML::Node n = node[key];
+    if (!n) return std::nullopt;
+    auto v = r.Number(n, p + key);
+    if (!v) return Error{v.error()};
+    if (!((open_low ? *v > low : *v >= low) && *v <= high)) {
+      return r.Fail(n, p + key,
+                    "must be in " + std::string(open_low ? "(" : "[") + std::to_string(low) + ", " +
+                        std::to_string(high) + "]");
+    }
+    *out = *v;
+    return std::nullopt;
+  };
+  if (auto e = number("frame_rate_hz", 0, 10000, true, &options->frame_rate_hz)) return e;
+  if (auto e = number("readout_us", 0, 1e6, false, &options->readout_us)) return e;
+  if (auto e =
+          number("reconnect_max_backoff_s", 0, 3600, true, &options->reconnect_max_backoff_s)) {
+    return e;
+  }
+  if (auto e = number("frame_timeout_s", 0, 3600, false, &options->frame_timeout_s)) return e;
+  if (node["exposure_us"]) {
+    double exposure = 0;
+    if (auto e = number("exposure_us", 0, 1e7, true, &exposure)) return e;
+    options->exposure_us = exposure;
+  }
+  if (const YAML::Node n = node["buffers"]) {
+    auto v = r.Integer(n, p + "buffers");
+    if (!v) return Error{v.error()};
+    if (*v < 2 || *v > 32) return r.Fail(n, p + "buffers", "must be in [2, 32]");
+    options->buffers = *v;
+  }
+  if (const YAML::Node n = node["gain"]) {
+    auto v = r.Integer64(n, p + "gain");
+    if (!v) return Error{v.error()};
+    options->gain = *v;
+  }
+  if (const YAML::Node n = node["external_trigger"]) {
+    auto v = r.Bool(n, p + "external_trigger");
+    if (!v) return Error{v.error()};
+    options->external_trigger = *v;
+  }
+  if (const YAML::Node n = node["reconnect"]) {
+    auto v = r.Bool(n, p + "reconnect");
+    if (!v) return Error{v.error()};
+    options->reconnect = *v;
+  }
+  if (const YAML::Node n = node["controls"]) {
+    if (!n.IsMap()) return r.Fail(n, p + "controls", "expected a map of control name: value");
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      const std::string key = it->first.Scalar();
+      auto v = r.Integer64(it->second, p + "controls." + key);
+      if (!v) return Error{v.error()};
+      options->controls[key] = *v;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace rigcal::tools
