@@ -25,6 +25,14 @@ PACKAGES=(
   libglib2.0-dev       # lcm.pc requires glib-2.0 and gthread-2.0
   clang                # ctest architecture/threads: clang's -Wthread-safety on the annotated locks
   chromium             # ctest report/report_browser: renders `rigcal report`'s HTML headless
+  libcamera-dev        # the libcamera capture source (optional at build time: disabled without it)
+  libcamera-ipa        # ctest device/qemu: libcamera's vimc IPA module, copied into the test VM
+  qemu-system-x86      # ctest device/qemu: a Debian kernel with real V4L2 drivers, emulated
+  busybox-static       # ctest device/qemu: the test VM's userland
+  cpio                 # ctest device/qemu: packs the test VM's initramfs
+  linux-headers-amd64  # ctest device/qemu: builds vimc and v4l2loopback for the VM's kernel
+  linux-source-6.1     # ctest device/qemu: vimc's source (Debian's kernel does not enable it)
+  v4l2loopback-dkms    # ctest device/qemu: v4l2loopback's source
 )
 
 missing=()

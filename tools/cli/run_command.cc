@@ -234,6 +234,7 @@ int RunRun(const RunArgs& args) {
     }
   }
   tools::ReportFolderProblems(sources->folders, "rigcal run: ", std::cerr);
+  tools::ReportCaptureStats(sources->v4l2, "rigcal run: ", std::cerr);
   std::fprintf(stderr, "rigcal run: %.1f s, %llu sets; RSS %.0f MB\n", elapsed,
                static_cast<unsigned long long>(final_state.estimate.sets),
                static_cast<double>(tools::ResidentSetBytes()) / (1 << 20));

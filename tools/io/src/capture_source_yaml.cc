@@ -97,4 +97,61 @@ std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
   return std::nullopt;
 }
 
+std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& node,
+                                        const std::string& field, bool is_source,
+                                        drivers::LibcameraOptions* options) {
+  if (!node.IsMap()) return r.Fail(node, field, "expected a map");
+  std::set<std::string> known = {"role", "pixel_formats", "buffers", "reconnect",
+                                 "reconnect_max_backoff_s"};
+  if (is_source) known.insert("type");
+  if (auto e = r.CheckKeys(node, field + ".", known)) return e;
+  const std::string p = field + ".";
+  if (const YAML::Node n = node["role"]) {
+    auto v = r.String(n, p + "role");
+    if (!v) return Error{v.error()};
+    if (*v != "video" && *v != "viewfinder" && *v != "still" && *v != "raw") {
+      return r.Fail(n, p + "role", "'" + *v + "' is not one of video, viewfinder, still, raw");
+    }
+    options->role = *v;
+  }
+  if (const YAML::Node n = node["pixel_formats"]) {
+    if (!n.IsSequence() || n.size() == 0) {
+      return r.Fail(n, p + "pixel_formats", "expected a list such as [GREY, YUYV]");
+    }
+    options->formats.clear();
+    for (size_t i = 0; i < n.size(); ++i) {
+      const std::string item = p + "pixel_formats[" + std::to_string(i) + "]";
+      auto name = r.String(n[i], item);
+      if (!name) return Error{name.error()};
+      const auto format = drivers::ParsePixelFormat(*name);
+      if (!format || *format == drivers::PixelFormat::kY10 ||
+          *format == drivers::PixelFormat::kY16) {
+        return r.Fail(n[i], item,
+                      "'" + *name + "' is not one of GREY, YUYV, NV12, BGR24, RGB24, MJPEG");
+      }
+      options->formats.push_back(*format);
+    }
+  }
+  if (const YAML::Node n = node["buffers"]) {
+    auto v = r.Integer(n, p + "buffers");
+    if (!v) return Error{v.error()};
+    if (*v < 1 || *v > 32) return r.Fail(n, p + "buffers", "must be in [1, 32]");
+    options->buffers = *v;
+  }
+  if (const YAML::Node n = node["reconnect"]) {
+    auto v = r.Bool(n, p + "reconnect");
+    if (!v) return Error{v.error()};
+    options->reconnect = *v;
+  }
+  if (const YAML::Node n = node["reconnect_max_backoff_s"]) {
+    auto v = r.Number(n, p + "reconnect_max_backoff_s");
+    if (!v) return Error{v.error()};
+    if (!(*v > 0.0 && *v <= 3600.0)) {
+      return r.Fail(n, p + "reconnect_max_backoff_s", "must be in (0, 3600]");
+    }
+    options->reconnect_max_backoff_s = *v;
+  }
+  return std::nullopt;
+}
+
 }  // namespace rigcal::tools

@@ -417,15 +417,43 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
       }
       return config;
     }
+    if (*type == "libcamera") {
+      drivers::LibcameraOptions defaults;
+      if (auto e = ParseLibcameraKeys(r, source, "source", true, &defaults)) return *e;
+      for (size_t i = 0; i < config.cameras.size(); ++i) {
+        const CameraConfig& camera = config.cameras[i];
+        const YAML::Node entry = cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)];
+        if (camera.device.empty()) {
+          return r.Fail(entry, camera.name + ".device",
+                        "missing: a libcamera camera needs its camera id or model (cam --list)");
+        }
+        if (!camera.spec) {
+          return r.Fail(entry, camera.name, "a libcamera camera needs a model and intrinsics");
+        }
+        drivers::LibcameraOptions options = defaults;
+        options.camera = camera.device;
+        options.width = camera.spec->width;
+        options.height = camera.spec->height;
+        if (const YAML::Node capture = entry["capture"]) {
+          if (auto e = ParseLibcameraKeys(r, capture, camera.name + ".capture", false, &options)) {
+            return *e;
+          }
+        }
+        config.libcamera_devices.push_back(std::move(options));
+      }
+      return config;
+    }
     for (size_t i = 0; i < cameras.size(); ++i) {
       if (cameras[i].IsMap() && cameras[i]["capture"]) {
         return r.Fail(cameras[i]["capture"], "cameras[" + std::to_string(i) + "].capture",
-                      "only for a live source (source.type: v4l2)");
+                      "only for a live source (source.type: v4l2 or libcamera)");
       }
     }
     if (*type != "simulated") {
       return r.Fail(source["type"], "source.type",
-                    "'" + *type + "' is not supported (supported: simulated, image_folders, v4l2)");
+                    "'" + *type +
+                        "' is not supported (supported: simulated, image_folders, v4l2, "
+                        "libcamera)");
     }
     auto spec = ParseSimulatedSource(source, path);
     if (!spec) return Error{spec.error()};

@@ -42,9 +42,24 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
     }
     return sources;
   }
+  if (!config.libcamera_devices.empty()) {
+    sources.realtime = true;
+    for (size_t i = 0; i < names.size(); ++i) {
+      auto device = drivers::LibcameraDevice::Open(names[i], static_cast<int>(i),
+                                                   config.libcamera_devices[i]);
+      if (!device) return Error{config.path + ": " + device.error()};
+      auto model = camera::MakeCameraModel(*config.cameras[i].spec);
+      if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
+      progress << prefix << "camera '" << names[i] << "': libcamera " << (*device)->camera_id()
+               << " " << (*device)->configuration() << " (" << (*device)->validation() << ")\n";
+      sources.devices.push_back(std::move(*device));
+      sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
+    }
+    return sources;
+  }
   if (config.image_folders.empty()) {
     return Error{config.path +
-                 ": no `source:` section (supported: simulated, image_folders, v4l2)"};
+                 ": no `source:` section (supported: simulated, image_folders, v4l2, libcamera)"};
   }
   for (size_t i = 0; i < names.size(); ++i) {
     auto device =
@@ -73,6 +88,18 @@ void ReportFolderProblems(const std::vector<drivers::ImageFolderDevice*>& folder
       for (const std::string& file : skipped) out << "  " << file << "\n";
     }
     for (const std::string& problem : folder->csv_problems()) out << prefix << problem << "\n";
+  }
+}
+
+void ReportCaptureStats(const std::vector<drivers::V4l2Device*>& devices, const std::string& prefix,
+                        std::ostream& out) {
+  for (const drivers::V4l2Device* device : devices) {
+    const drivers::V4l2Stats s = device->stats();
+    out << prefix << "camera '" << device->name() << "': " << s.frames << " frames, "
+        << s.sequence_drops << " dropped by the driver, " << s.error_buffers
+        << " erroneous buffers, " << s.device_losses << " device losses, " << s.reconnections
+        << " reconnections" << (s.last_loss.empty() ? "" : " (last loss: " + s.last_loss + ")")
+        << "\n";
   }
 }
 

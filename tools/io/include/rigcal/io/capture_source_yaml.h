@@ -1,6 +1,6 @@
 #pragma once
 // The `source:` sections of live capture devices (config/README.md "Live sources"):
-//   source: {type: v4l2, <defaults for every camera>}   and per camera
+//   source: {type: v4l2 | libcamera, <defaults for every camera>}   and per camera
 //   cameras[i]: {device: <path | bus:<bus info> | card:<card>>, capture: {<overrides>}}
 // Keys (source level and `capture:`): pixel_formats, frame_rate_hz, buffers, exposure_us, gain,
 // external_trigger, readout_us, controls, reconnect, reconnect_max_backoff_s, frame_timeout_s.
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rigcal/calib/status.h"
+#include "rigcal/drivers/libcamera_device.h"
 #include "rigcal/drivers/v4l2_options.h"
 #include "rigcal/io/yaml_fields.h"
 
@@ -23,5 +24,12 @@ namespace rigcal::tools {
 std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
                                    const std::string& field, bool is_source,
                                    drivers::V4l2Options* options);
+
+// The same for `source: {type: libcamera}` and a camera's `capture:` (the camera's `device` is
+// the libcamera camera id or model). Keys: role, pixel_formats, buffers, reconnect,
+// reconnect_max_backoff_s.
+std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& node,
+                                        const std::string& field, bool is_source,
+                                        drivers::LibcameraOptions* options);
 
 }  // namespace rigcal::tools

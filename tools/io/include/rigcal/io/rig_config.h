@@ -12,6 +12,7 @@
 #include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/drivers/libcamera_device.h"
 #include "rigcal/drivers/v4l2_options.h"
 
 namespace rigcal::tools {
@@ -52,6 +53,8 @@ struct RigConfig {
   // `source: {type: v4l2}`: one device per camera (camera index order): the source's keys,
   // the camera's `device`, its resolution and its `capture:` keys.
   std::vector<drivers::V4l2Options> v4l2_devices;
+  // `source: {type: libcamera}`: the same with the camera's `device` as the libcamera camera.
+  std::vector<drivers::LibcameraOptions> libcamera_devices;
 
   std::vector<std::string> CameraNames() const;
   const std::string& master() const { return cameras.front().name; }
