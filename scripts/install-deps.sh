@@ -25,6 +25,10 @@ PACKAGES=(
   libglib2.0-dev       # lcm.pc requires glib-2.0 and gthread-2.0
   clang                # ctest architecture/threads: clang's -Wthread-safety on the annotated locks
   chromium             # ctest report/report_browser: renders `rigcal report`'s HTML headless
+  gcc-arm-none-eabi    # cross-builds the trigger firmware (firmware/board/stm32f405)
+  libnewlib-arm-none-eabi          # its C library (nano specs)
+  libstdc++-arm-none-eabi-newlib   # its freestanding C++ headers
+  qemu-system-arm      # ctest label firmware: runs the firmware on an emulated STM32F405
 )
 
 missing=()

@@ -10,7 +10,7 @@ endif()
 # Modules, lowest layer first: name, folders (relative to SOURCE_DIR), target.
 set(modules trigger_protocol trigger_core calib camera drivers vo io lcm pipeline monitor report research cli)
 set(dirs_trigger_protocol firmware/protocol)
-set(dirs_trigger_core firmware/core)
+set(dirs_trigger_core firmware/core firmware/board)
 set(dirs_calib calib/src calib/include)
 set(dirs_camera calib/camera)
 set(dirs_drivers drivers)

@@ -50,7 +50,7 @@ std::vector<Message> AllTypes() {
   all.push_back(Pulse(0xDEADBEEF, 0x0102'0304'0506'0708ull, 0xFF));
   m = Message{};
   m.type = MessageType::kHeartbeat;
-  m.heartbeat = {123'456'789ull, 77, 1, 3, 0xFFFF, 0};
+  m.heartbeat = {123'456'789ull, 77, 1, 3, 0xFFFF, 0, 9};
   all.push_back(m);
   m = Message{};
   m.type = MessageType::kAck;

@@ -149,6 +149,7 @@ void TriggerApp::SendHeartbeat(uint64_t now_us) {
   m.heartbeat.late_edges = Saturate16(scheduler_.late_edges());
   m.heartbeat.rx_errors = Saturate16(rx_errors());
   m.heartbeat.tx_dropped = Saturate16(tx_dropped_);
+  m.heartbeat.skipped_ticks = Saturate16(scheduler_.skipped_ticks());
   Send(m);
 }
 

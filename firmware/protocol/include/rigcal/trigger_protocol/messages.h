@@ -93,12 +93,13 @@ struct PulseReport {
   uint64_t mcu_time_us = 0;  // T_k: exposure centre of the lines with phase offset 0
 };
 struct Heartbeat {
-  uint64_t mcu_time_us = 0;  // when the heartbeat was queued
-  uint32_t next_seq = 0;     // sequence number the next tick will get
-  uint8_t running = 0;       // 1 while the trigger runs
-  uint16_t late_edges = 0;   // edges raised more than the scheduler's tolerance late (saturates)
-  uint16_t rx_errors = 0;    // frames received with a bad CRC / framing / length (saturates)
-  uint16_t tx_dropped = 0;   // outgoing frames dropped because the UART queue was full
+  uint64_t mcu_time_us = 0;    // when the heartbeat was queued
+  uint32_t next_seq = 0;       // sequence number the next tick will get
+  uint8_t running = 0;         // 1 while the trigger runs
+  uint16_t late_edges = 0;     // edges raised more than the scheduler's tolerance late (saturates)
+  uint16_t rx_errors = 0;      // frames received with a bad CRC / framing / length (saturates)
+  uint16_t tx_dropped = 0;     // outgoing frames dropped because the UART queue was full
+  uint16_t skipped_ticks = 0;  // ticks skipped after the MCU fell > 1 period behind (saturates)
 };
 struct Ack {
   uint16_t command_id = 0;
@@ -153,7 +154,7 @@ constexpr int BodySize(uint8_t type) {
     case MessageType::kPulseReport:
       return 13;
     case MessageType::kHeartbeat:
-      return 19;
+      return 21;
     case MessageType::kAck:
       return 3;
     case MessageType::kNack:
@@ -173,7 +174,7 @@ constexpr int BodySize(uint8_t type) {
 }
 
 inline constexpr size_t kHeaderSize = 2;  // version, type
-inline constexpr size_t kMaxBodySize = 19;
+inline constexpr size_t kMaxBodySize = 21;
 inline constexpr size_t kMaxPayloadSize = kHeaderSize + kMaxBodySize;
 
 constexpr bool IsCommand(uint8_t type) { return type >= 0x10 && BodySize(type) >= 0; }
@@ -204,6 +205,7 @@ inline size_t EncodePayload(const Message& m, uint8_t* out, size_t capacity) {
       w.U16(m.heartbeat.late_edges);
       w.U16(m.heartbeat.rx_errors);
       w.U16(m.heartbeat.tx_dropped);
+      w.U16(m.heartbeat.skipped_ticks);
       break;
     case MessageType::kAck:
       w.U16(m.ack.command_id);
@@ -283,6 +285,7 @@ inline ParseStatus ParsePayload(const uint8_t* payload, size_t size, Message* ou
       m.heartbeat.late_edges = r.U16();
       m.heartbeat.rx_errors = r.U16();
       m.heartbeat.tx_dropped = r.U16();
+      m.heartbeat.skipped_ticks = r.U16();
       break;
     case MessageType::kAck:
       m.ack.command_id = r.U16();
