@@ -1,6 +1,7 @@
 #include "rigcal/drivers/trigger_link.h"
 
 #include <cmath>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -124,18 +125,23 @@ Status TriggerLink::Command(Message command, int timeout_ms, std::vector<Trigger
   while (stream_->NowNs() < deadline) {
     std::vector<TriggerEvent> got;
     if (Status s = Poll(20, &got); !s.ok()) return s;
+    // The answer ends the wait; messages after it in the same read are kept too.
+    std::optional<Status> answer;
     for (const TriggerEvent& e : got) {
       const Message& m = e.message;
-      if (m.type == MessageType::kAck && m.ack.command_id == id) return Status::Ok();
-      if (m.type == MessageType::kNack && m.nack.command_id == id) {
-        return Error{"trigger generator refused " + name + ": " +
-                     trigger_proto::NackReasonName(m.nack.reason) +
-                     (m.nack.field != trigger_proto::Field::kNone
-                          ? std::string(" (") + trigger_proto::FieldName(m.nack.field) + ")"
-                          : std::string())};
+      if (!answer && m.type == MessageType::kAck && m.ack.command_id == id) {
+        answer = Status::Ok();
+      } else if (!answer && m.type == MessageType::kNack && m.nack.command_id == id) {
+        answer = Error{"trigger generator refused " + name + ": " +
+                       trigger_proto::NackReasonName(m.nack.reason) +
+                       (m.nack.field != trigger_proto::Field::kNone
+                            ? std::string(" (") + trigger_proto::FieldName(m.nack.field) + ")"
+                            : std::string())};
+      } else {
+        events->push_back(e);
       }
-      events->push_back(e);
     }
+    if (answer) return *answer;
   }
   return Error{"trigger link: no answer to " + name + " within " + std::to_string(timeout_ms) +
                " ms"};
