@@ -33,6 +33,10 @@ PACKAGES=(
   linux-headers-amd64  # ctest device/qemu: builds vimc and v4l2loopback for the VM's kernel
   linux-source-6.1     # ctest device/qemu: vimc's source (Debian's kernel does not enable it)
   v4l2loopback-dkms    # ctest device/qemu: v4l2loopback's source
+  gcc-arm-none-eabi    # cross-builds the trigger firmware (firmware/board/stm32f405)
+  libnewlib-arm-none-eabi          # its C library (nano specs)
+  libstdc++-arm-none-eabi-newlib   # its freestanding C++ headers
+  qemu-system-arm      # ctest label firmware: runs the firmware on an emulated STM32F405
 )
 
 missing=()

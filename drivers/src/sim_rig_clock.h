@@ -30,6 +30,14 @@ struct RigClock {
     }
     return epoch_ns;
   }
+  int64_t StartAt(int64_t t_ns) RIGCAL_EXCLUDES(mutex) {
+    MutexLock lock(mutex);
+    if (!started) {
+      started = true;
+      epoch_ns = t_ns;
+    }
+    return epoch_ns;
+  }
   int64_t Epoch() RIGCAL_EXCLUDES(mutex) {
     MutexLock lock(mutex);
     return epoch_ns;

@@ -34,6 +34,10 @@ void SimulatedRig::Start() const {
   if (data_->spec.realtime) clock_->StartOnce();
 }
 
+void SimulatedRig::StartAt(int64_t epoch_ns) const {
+  if (data_->spec.realtime) clock_->StartAt(epoch_ns);
+}
+
 int64_t SimulatedRig::epoch_ns() const {
   return data_->spec.realtime ? clock_->Epoch() : data_->spec.start_time_ns;
 }

@@ -240,6 +240,22 @@ Status SimulatedRigSpec::Check() const {
       return fail();
     }
   }
+  if (trigger.enabled) {
+    if (names.size() > 8)
+      e << "trigger: at most 8 cameras (trigger lines), not " << names.size();
+    else if (frame_rate_hz > 400)
+      e << "trigger: frame_rate_hz above the generator's 400 Hz";
+    else if (!(std::abs(trigger.drift_ppm) <= 1000))
+      e << "trigger.drift_ppm: outside [-1000, 1000]";
+    else if (!(trigger.link_jitter_ms >= 0 && trigger.link_jitter_ms <= 20)) {
+      e << "trigger.link_jitter_ms: outside [0, 20]";
+    } else if (!(trigger.exposure_ms >= 0 && trigger.exposure_ms * 1e-3 * frame_rate_hz < 1)) {
+      e << "trigger.exposure_ms: must be in [0, frame period)";
+    } else if (!(trigger.corrupt_probability >= 0 && trigger.corrupt_probability <= 0.01)) {
+      e << "trigger.corrupt_probability: outside [0, 0.01]";
+    }
+    if (!e.str().empty()) return fail();
+  }
   if (render_block < 1 || render_block > 32) {
     e << "render_block: " << render_block << " outside [1, 32]";
     return fail();

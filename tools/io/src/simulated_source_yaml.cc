@@ -23,7 +23,7 @@ const std::set<std::string> kSourceKeys = {
     "type",         "frame_rate_hz", "num_frames",       "duration_s",
     "seed",         "realtime",      "trajectory",       "scene",
     "noise_sigma",  "motion_blur",   "drop_probability", "timestamp_jitter_ms",
-    "fail_after_s", "render_block"};
+    "fail_after_s", "render_block",  "trigger"};
 
 // A number as people write it: "20", "9.95", "8.33333".
 std::string Num(double v) { return SignificantText(v, 6); }
@@ -316,6 +316,33 @@ Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& sourc
         ">= 0 with 3 sigma below half a frame period (< " + Num(period_s * 1e3 / 6) + " ms)");
     if (!v) return Error{v.error()};
     spec.timestamp_jitter_s = *v * 1e-3;
+  }
+  if (const YAML::Node n = source["trigger"]) {  // simulated hardware trigger
+    if (auto e =
+            r.CheckKeys(n, "source.trigger.",
+                        {"drift_ppm", "link_jitter_ms", "exposure_ms", "corrupt_probability"})) {
+      return *e;
+    }
+    spec.trigger.enabled = true;
+    struct Field {
+      const char* key;
+      double* value;
+      double lo, hi;
+    };
+    for (const Field& f :
+         {Field{"drift_ppm", &spec.trigger.drift_ppm, -1000, 1000},
+          Field{"link_jitter_ms", &spec.trigger.link_jitter_ms, 0, 20},
+          Field{"exposure_ms", &spec.trigger.exposure_ms, 0, 1000},
+          Field{"corrupt_probability", &spec.trigger.corrupt_probability, 0, 0.01}}) {
+      if (const YAML::Node v = n[f.key]) {
+        auto x = NumberIn(
+            r, v, std::string("source.trigger.") + f.key,
+            [&](double y) { return y >= f.lo && y <= f.hi; },
+            "in [" + Num(f.lo) + ", " + Num(f.hi) + "]");
+        if (!x) return Error{x.error()};
+        *f.value = *x;
+      }
+    }
   }
   if (const YAML::Node n = source["fail_after_s"]) {
     if (!n.IsMap()) return r.Fail(n, "source.fail_after_s", "expected a map camera: seconds");

@@ -1,6 +1,9 @@
 #include "rigcal/pipeline/capture_sources.h"
 
+#include <chrono>
+
 #include "rigcal/camera/camera_spec.h"
+#include "rigcal/drivers/triggered_camera.h"
 
 namespace rigcal::tools {
 
@@ -12,6 +15,19 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
     drivers::SimulatedRigSpec spec = *config.simulated_source;
     if (fast) spec.realtime = false;
     sources.realtime = spec.realtime;
+    // `source.trigger`: a simulated trigger generator whose first pulse is frame 0.
+    std::shared_ptr<drivers::SimulatedTriggerTimeline> trigger;
+    if (spec.trigger.enabled) {
+      const int64_t start_ns = spec.realtime
+                                   ? std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                         std::chrono::steady_clock::now().time_since_epoch())
+                                         .count()
+                                   : spec.start_time_ns;
+      auto made_trigger = drivers::MakeSimulatedRigTrigger(spec, start_ns);
+      if (!made_trigger) return Error{config.path + ": source.trigger: " + made_trigger.error()};
+      trigger = std::move(*made_trigger);
+      if (!spec.realtime) spec.start_time_ns = trigger->first_tick_ns();
+    }
     progress << prefix << "building the simulated rig (" << spec.names.size() << " cameras, "
              << drivers::ToString(spec.scene.type) << " scene)...\n";
     auto made = drivers::MakeSimulatedRig(spec);
@@ -19,6 +35,16 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
     sources.rig = std::move(*made);
     sources.devices = sources.rig->MakeDevices();
     sources.models = spec.cameras;
+    if (trigger) {
+      if (spec.realtime) sources.rig->StartAt(trigger->first_tick_ns());
+      for (size_t i = 0; i < sources.devices.size(); ++i) {
+        sources.devices[i] = std::make_unique<drivers::TriggeredCamera>(
+            std::move(sources.devices[i]), trigger,
+            drivers::CameraTriggerSpec{static_cast<int>(i), 0, 0});
+      }
+      progress << prefix << "simulated hardware trigger: camera i on line i, frames carry the "
+               << "pulse sequence and its mapped exposure centre\n";
+    }
     progress << prefix << sources.rig->num_frames() << " frames per camera at "
              << sources.rig->frame_rate_hz() << " Hz"
              << (sources.realtime ? " (real time)" : " (as fast as possible)") << "\n";

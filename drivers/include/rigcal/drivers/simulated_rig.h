@@ -99,6 +99,10 @@ class SimulatedRig {
 
   // Realtime: starts the rig clock now (the first Grab does it otherwise); no effect later.
   void Start() const;
+  // Realtime: starts the rig clock with frame 0 at `epoch_ns` (CLOCK_MONOTONIC, may lie in the
+  // near future: the first Grab then waits for it), e.g. the first pulse of a trigger generator;
+  // no effect once started.
+  void StartAt(int64_t epoch_ns) const;
   // Stamp of frame 0: spec().start_time_ns, or in realtime the clock's start (0 before).
   int64_t epoch_ns() const;
   // Nominal (jitter-free) stamp of frame k: epoch_ns() + round(k * 1e9 / frame_rate_hz).

@@ -136,6 +136,19 @@ struct SimulatedRigSpec {
   std::map<std::string, double> fail_after_s;  // camera name -> stream time of failure, >= 0
   int render_block = 4;                        // [1, 32]
 
+  // --- Hardware trigger (`source.trigger`, simulated_trigger.h / triggered_camera.h) ----------
+  // Camera i hangs on line i of a simulated trigger generator (the firmware core on a drifting
+  // MCU clock, its reports on a link with one-sided delay jitter); every frame gets the pulse's
+  // sequence number and mapped exposure centre. The cameras still expose on the rig's clock, so
+  // a drift shifts the mapped time from the rendered one by drift x time.
+  struct Trigger {
+    bool enabled = false;
+    double drift_ppm = 0.0;            // [-1000, 1000]
+    double link_jitter_ms = 2.0;       // one-sided delay, uniform [0, x], [0, 20]
+    double exposure_ms = 0.0;          // [0, frame period): rises lead the centre by half
+    double corrupt_probability = 0.0;  // per link byte, [0, 0.01]
+  } trigger;
+
   // Ok when consistent; else the first violated constraint as "<field>: <constraint>".
   // Checks the cameras too (names, models, mountings), so it is meant for a complete spec.
   Status Check() const;
