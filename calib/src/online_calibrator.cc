@@ -11,6 +11,7 @@ namespace {
 // Lossless: the ready queue can take every set one push may complete (SyncBuffer::ReadyBound).
 OnlineOptions Checked(OnlineOptions options, size_t cameras) {
   options.sync.num_cameras = static_cast<int>(cameras);
+  if (options.time_offset.enabled) options.sync.interpolate = true;
   RequireValid(options.Check(), "OnlineOptions");
   if (options.lossless) {
     options.sync.ready_capacity = std::max(options.sync.ready_capacity, options.sync.capacity + 1);
@@ -26,6 +27,9 @@ Status OnlineOptions::Check() const {
   if (const Status s = sync.Check(); !s.ok()) return Error{"sync." + s.message()};
   if (const Status s = estimator.Check(); !s.ok()) return Error{"estimator." + s.message()};
   if (refine_period_s < 0.0) return Error{"refine_period_s: must be >= 0 (0 = no refinement)"};
+  if (time_offset.enabled) {
+    if (const Status s = time_offset.Check(sync.num_cameras - 1); !s.ok()) return s;
+  }
   return Status::Ok();
 }
 
@@ -33,7 +37,14 @@ OnlineCalibrator::OnlineCalibrator(std::vector<std::string> camera_names, Online
     : names_(std::move(camera_names)),
       options_(Checked(std::move(options), names_.size())),
       sync_(options_.sync),
-      estimator_(names_, options_.estimator) {}
+      estimator_(names_, options_.estimator) {
+  if (options_.time_offset.enabled) {
+    clock_ = std::make_unique<ClockOffsetTracker>(names_, options_.time_offset);
+    for (int i = 0; i < clock_->num_slaves(); ++i) {
+      sync_.SetTimeOffset(i + 1, clock_->MatchingOffsetNs(i));
+    }
+  }
+}
 
 OnlineCalibrator::~OnlineCalibrator() { Stop(); }
 
@@ -45,10 +56,32 @@ void OnlineCalibrator::Start() {
 }
 
 PushResult OnlineCalibrator::Push(const CameraPose& pose) {
-  if (!options_.lossless) return sync_.Push(pose);
-  MutexLock serial(push_mutex_);
-  WaitForRoom();
-  return sync_.Push(pose);
+  PushResult result;
+  if (!options_.lossless) {
+    result = sync_.Push(pose);
+  } else {
+    MutexLock serial(push_mutex_);
+    WaitForRoom();
+    result = sync_.Push(pose);
+  }
+  if (result == PushResult::kAccepted && options_.time_offset.enabled) TrackClock(pose);
+  return result;
+}
+
+void OnlineCalibrator::TrackClock(const CameraPose& pose) {
+  MutexLock lock(offset_mutex_);
+  if (!clock_->Add(pose)) return;
+  for (int i = 0; i < clock_->num_slaves(); ++i) {
+    sync_.SetTimeOffset(i + 1, clock_->MatchingOffsetNs(i));
+  }
+}
+
+void OnlineCalibrator::WithholdUnknownClocks(MatchedSet* set) const {
+  MutexLock lock(offset_mutex_);
+  for (int i = 0; i < clock_->num_slaves() && i + 1 < static_cast<int>(set->poses.size()); ++i) {
+    const SlaveClockOffset o = clock_->SlaveOffset(i);
+    if (!o.known || set->t_ns < o.usable_from_ns) set->poses[i + 1].reset();
+  }
 }
 
 void OnlineCalibrator::WaitForRoom() {
@@ -99,8 +132,28 @@ void OnlineCalibrator::Stop() {
 }
 
 RigEstimate OnlineCalibrator::Estimate() const {
-  MutexLock lock(estimator_mutex_);
-  return estimator_.Estimate();
+  RigEstimate estimate;
+  {
+    MutexLock lock(estimator_mutex_);
+    estimate = estimator_.Estimate();
+  }
+  if (!options_.time_offset.enabled) return estimate;
+  MutexLock lock(offset_mutex_);
+  for (int i = 0; i < clock_->num_slaves(); ++i) {
+    const SlaveClockOffset o = clock_->SlaveOffset(i);
+    if (i < static_cast<int>(estimate.rig.slaves.size()) && (o.known || !o.estimated)) {
+      estimate.rig.slaves[i].time_offset_s = o.offset_s;
+      estimate.rig.slaves[i].time_offset_std_s = o.std_s;
+    }
+    if (i < static_cast<int>(estimate.online.size())) {
+      SlaveOnlineState& online = estimate.online[i];
+      online.clock_offset_estimated = o.estimated;
+      online.clock_offset_known = o.known;
+      online.clock_drift_ppm = o.drift_ppm;
+      online.clock_jumps = o.jumps;
+    }
+  }
+  return estimate;
 }
 
 RigEstimatorState OnlineCalibrator::SaveState() const {
@@ -126,6 +179,7 @@ void OnlineCalibrator::EstimatorLoop() {
       next_refine_ns = set.t_ns + refine_period_ns;
     }
     {
+      if (options_.time_offset.enabled) WithholdUnknownClocks(&set);
       MutexLock lock(estimator_mutex_);
       estimator_.AddSet(set.t_ns, set.poses);
     }

@@ -48,6 +48,8 @@ Status SyncOptions::Check() const {
       << required.size();
   else if (!required.empty() && !required[0])
     e << "required[0]: must be true: the master is in every set";
+  else if (interpolate && match_by_trigger_seq)
+    e << "interpolate: not with match_by_trigger_seq (free-running cameras have no trigger)";
   else if (ready_capacity < 1 || ready_capacity > kMaxCapacity)
     e << "ready_capacity: must be in [1, " << kMaxCapacity << "], got " << ready_capacity;
   if (e.str().empty()) return Status::Ok();
@@ -127,5 +129,8 @@ void SyncBuffer::Stop() { impl_->Stop(); }
 bool SyncBuffer::stopped() const { return impl_->stopped(); }
 SyncStats SyncBuffer::stats() const { return impl_->stats(); }
 uint64_t SyncBuffer::ReadyBound() const { return impl_->ReadyBound(); }
+void SyncBuffer::SetTimeOffset(int camera, int64_t offset_ns) {
+  impl_->SetTimeOffset(camera, offset_ns);
+}
 
 }  // namespace rigcal

@@ -18,6 +18,9 @@ SyncBuffer::Impl::Impl(const SyncOptions& options)
       max_wait_ns_(options.EffectiveMaxWaitNs()),
       glitch_horizon_ns_(std::max(kMinGlitchHorizonNs, 10 * options.EffectiveMaxWaitNs())),
       by_seq_(options.match_by_trigger_seq),
+      interpolate_(options.interpolate),
+      max_gap_ns_(3 * options.frame_period_ns),
+      snap_ns_(std::min(options.EffectiveToleranceNs(), options.frame_period_ns / 50)),
       ready_(static_cast<size_t>(options.ready_capacity),
              MatchedSet{0, std::vector<std::optional<CameraPose>>(options.num_cameras)}),
       candidates_(options.num_cameras) {
@@ -87,6 +90,12 @@ SyncStats SyncBuffer::Impl::stats() const {
 uint64_t SyncBuffer::Impl::ReadyBound() const {
   MutexLock lock(mutex_);
   return ready_.size() + cameras_[0].ring.size() + 1;
+}
+
+void SyncBuffer::Impl::SetTimeOffset(int camera, int64_t offset_ns) {
+  MutexLock lock(mutex_);
+  if (!interpolate_ || camera <= 0 || camera >= n_) return;
+  cameras_[camera].offset_ns = offset_ns;
 }
 
 bool SyncBuffer::Impl::TakeReady(MatchedSet* out) {

@@ -42,12 +42,17 @@ class SyncBuffer::Impl {
   bool stopped() const RIGCAL_EXCLUDES(mutex_);
   SyncStats stats() const RIGCAL_EXCLUDES(mutex_);
   uint64_t ReadyBound() const RIGCAL_EXCLUDES(mutex_);
+  void SetTimeOffset(int camera, int64_t offset_ns) RIGCAL_EXCLUDES(mutex_);
 
  private:
   struct CameraState {
-    explicit CameraState(size_t capacity) : ring(capacity, CameraPose{}) {}
+    explicit CameraState(size_t capacity)
+        : ring(capacity, CameraPose{}), contributed(capacity, uint8_t{0}) {}
 
     FixedRing<CameraPose> ring;   // strictly increasing t_ns
+    // Interpolation mode: per entry of `ring` (kept in step with it), whether it served a set.
+    FixedRing<uint8_t> contributed;
+    int64_t offset_ns = 0;  // interpolation mode: stamp - master clock (SetTimeOffset)
     bool any = false;             // an entry was ever accepted
     int64_t newest_t = 0;         // stamp of the newest accepted entry
     int64_t newest_seq = -1;      // highest trigger_seq accepted (-1: none)
@@ -67,6 +72,11 @@ class SyncBuffer::Impl {
     int index = -1;  // in the ring; -1: none
     int64_t distance = 0;
     bool final = false;
+    // Interpolation mode: the entries [first, first + count) of the ring give the pose at
+    // target_ns (count 1: that entry as it is; 2: linear; 4: cubic).
+    int first = -1;
+    int count = 0;
+    int64_t target_ns = 0;
   };
 
   // sync_matching.cc: see the matching rule in sync_buffer.h.
@@ -94,6 +104,20 @@ class SyncBuffer::Impl {
   // `c` (any match at all when c has none).
   bool CloserCanArrive(int j, const CameraPose& m, const Candidate& c) const
       RIGCAL_REQUIRES(mutex_);
+  // sync_interpolation.cc: interpolation mode.
+
+  // The interpolation of slave `j` at master `m`'s instant (see the rule in the header).
+  Candidate FindInterpolation(int j, const CameraPose& m) const RIGCAL_REQUIRES(mutex_);
+  // The pose of candidate `c` of slave `j`; marks the entries it uses as contributed.
+  CameraPose TakeInterpolation(int j, const Candidate& c) RIGCAL_REQUIRES(mutex_);
+  // Drops slave j's entries that no master after `m` can use.
+  void ResolvedInterpolated(int j, const SyncKey& m) RIGCAL_REQUIRES(mutex_);
+  // Removes the oldest entry of camera `c`'s ring, counted `used` when it served a set, else
+  // in `unused` (a SyncCameraStats counter).
+  void PopOldest(int c, uint64_t SyncCameraStats::*unused) RIGCAL_REQUIRES(mutex_);
+  // Newest stamp of camera `c` on the master clock (the stream start when it has none).
+  int64_t NewestOnMasterClock(int c) const RIGCAL_REQUIRES(mutex_);
+
   // An optional slave that fell more than max_wait behind the stream holds no set back.
   bool Stale(int j) const RIGCAL_REQUIRES(mutex_);
   // Resolves master entries from the oldest on (see the rule in the header); returns the
@@ -118,6 +142,9 @@ class SyncBuffer::Impl {
   const int64_t max_wait_ns_;
   const int64_t glitch_horizon_ns_;
   const bool by_seq_;
+  const bool interpolate_;
+  const int64_t max_gap_ns_;  // interpolation: no interpolation across a larger gap
+  const int64_t snap_ns_;     // interpolation: an entry this close to the instant is taken as is
   std::vector<bool> required_;  // per camera; [0] is true
 
   mutable Mutex mutex_;

@@ -1,5 +1,6 @@
 // The producer side of SyncBuffer: Push and Flush, the classification of a pushed pose, and the
 // matching rule stated in rigcal/calib/sync_buffer.h. Runs with the buffer's mutex held.
+#include <algorithm>
 #include <cmath>
 
 #include "rigcal/calib/logging.h"
@@ -105,7 +106,8 @@ PushResult SyncBuffer::Impl::Classify(const CameraPose& pose) const {
   if (cam.any_used && (key.t_ns <= cam.last_used.t_ns ||
                        (SeqPair(key.seq, cam.last_used.seq) && key.seq <= cam.last_used.seq)))
     return PushResult::kLate;
-  if (pose.camera != 0 && has_resolved_master_ && Unmatchable(key, last_resolved_master_))
+  if (pose.camera != 0 && !interpolate_ && has_resolved_master_ &&
+      Unmatchable(key, last_resolved_master_))
     return PushResult::kLate;
   if (cam.any && (key.t_ns == cam.newest_t || (key.seq >= 0 && key.seq == cam.newest_seq)))
     return PushResult::kDuplicate;
@@ -121,11 +123,17 @@ PushResult SyncBuffer::Impl::Classify(const CameraPose& pose) const {
 
 void SyncBuffer::Impl::Accept(const CameraPose& pose) {
   CameraState& cam = cameras_[pose.camera];
-  if (cam.ring.full()) {
-    cam.ring.PopFront();
-    ++cam.stats.overflow;
+  if (interpolate_ && pose.camera != 0) {
+    if (cam.ring.full()) PopOldest(pose.camera, &SyncCameraStats::overflow);
+    cam.ring.PushBack() = pose;
+    cam.contributed.PushBack() = 0;
+  } else {
+    if (cam.ring.full()) {
+      cam.ring.PopFront();
+      ++cam.stats.overflow;
+    }
+    cam.ring.PushBack() = pose;
   }
-  cam.ring.PushBack() = pose;
   cam.any = true;
   cam.newest_t = pose.t_ns;
   cam.newest_has_seq = pose.trigger_seq >= 0;
@@ -138,7 +146,14 @@ void SyncBuffer::Impl::Accept(const CameraPose& pose) {
   if (pose.t_ns > now_ns_) now_ns_ = pose.t_ns;
 }
 
-int64_t SyncBuffer::Impl::WaitClockNs() const { return by_seq_ ? cameras_[0].newest_t : now_ns_; }
+int64_t SyncBuffer::Impl::WaitClockNs() const {
+  if (interpolate_) {
+    int64_t now = NewestOnMasterClock(0);
+    for (int c = 1; c < n_; ++c) now = std::max(now, NewestOnMasterClock(c));
+    return now;
+  }
+  return by_seq_ ? cameras_[0].newest_t : now_ns_;
+}
 
 SyncBuffer::Impl::Candidate SyncBuffer::Impl::FindCandidate(int j, const CameraPose& m) const {
   Candidate best;
@@ -169,6 +184,7 @@ bool SyncBuffer::Impl::CloserCanArrive(int j, const CameraPose& m, const Candida
 
 bool SyncBuffer::Impl::Stale(int j) const {
   if (by_seq_) return false;
+  if (interpolate_) return WaitClockNs() - NewestOnMasterClock(j) > max_wait_ns_;
   const CameraState& cam = cameras_[j];
   const int64_t newest = cam.any ? cam.newest_t : stream_start_ns_;
   return now_ns_ - newest > max_wait_ns_;
@@ -184,8 +200,13 @@ int SyncBuffer::Impl::Process(bool flush) {
     bool required_present = true;
     for (int j = 1; j < n_ && !impossible; ++j) {
       Candidate& c = candidates_[j];
-      c = FindCandidate(j, m);
-      c.final = !CloserCanArrive(j, m, c) || (!required_[j] && Stale(j));
+      if (interpolate_) {
+        c = FindInterpolation(j, m);
+        c.final = c.final || (!required_[j] && Stale(j));
+      } else {
+        c = FindCandidate(j, m);
+        c.final = !CloserCanArrive(j, m, c) || (!required_[j] && Stale(j));
+      }
       all_final = all_final && c.final;
       if (required_[j] && c.index < 0) {
         required_present = false;
@@ -240,6 +261,10 @@ void SyncBuffer::Impl::Emit() {
       ++cam.stats.optional_missing;
       continue;
     }
+    if (interpolate_) {
+      set.poses[j] = TakeInterpolation(j, c);
+      continue;
+    }
     set.poses[j] = cam.ring[c.index];
     for (int i = 0; i < c.index; ++i) {
       cam.ring.PopFront();
@@ -266,6 +291,10 @@ void SyncBuffer::Impl::Resolved(const SyncKey& m) {
   has_resolved_master_ = true;
   last_resolved_master_ = m;
   for (int j = 1; j < n_; ++j) {
+    if (interpolate_) {
+      ResolvedInterpolated(j, m);
+      continue;
+    }
     CameraState& cam = cameras_[j];
     while (!cam.ring.empty() && Unmatchable(KeyOf(cam.ring.front()), m)) {
       cam.ring.PopFront();

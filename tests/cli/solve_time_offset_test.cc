@@ -8,7 +8,7 @@
 #include <string>
 
 #include "cli/command_test.h"
-#include "io/free_running_rig.h"
+#include "calib/free_running_rig.h"
 #include "rigcal/io/rig_files.h"
 
 namespace rigcal::tools {

@@ -84,6 +84,28 @@ struct BadCase {
   std::string expected;  // substring of the error, including the line number
 };
 
+TEST(RigConfig, TimeOffsetAutoSecondsOrPerSlave) {
+  const std::string rig =
+      "rig: {master: front}\ncameras:\n  - name: front\n  - name: left\n  - name: back\n";
+  auto none = LoadRigConfig(Write(rig));
+  ASSERT_TRUE(none) << none.error();
+  EXPECT_FALSE(none->online.time_offset.enabled) << "synchronised stamps unless configured";
+  auto all = LoadRigConfig(Write(rig + "estimator: {time_offset: auto}\n"));
+  ASSERT_TRUE(all) << all.error();
+  EXPECT_TRUE(all->online.time_offset.enabled);
+  EXPECT_EQ(all->online.time_offset.given_s,
+            (std::vector<std::optional<double>>{std::nullopt, std::nullopt}));
+  auto seconds = LoadRigConfig(Write(rig + "estimator: {time_offset: -0.015}\n"));
+  ASSERT_TRUE(seconds) << seconds.error();
+  EXPECT_EQ(seconds->online.time_offset.given_s,
+            (std::vector<std::optional<double>>{-0.015, -0.015}));
+  auto per_slave = LoadRigConfig(Write(rig + "estimator: {time_offset: {back: 0.012}}\n"));
+  ASSERT_TRUE(per_slave) << per_slave.error();
+  // Camera order: front (master), left, back; left not named: estimated.
+  EXPECT_EQ(per_slave->online.time_offset.given_s,
+            (std::vector<std::optional<double>>{std::nullopt, 0.012}));
+}
+
 TEST(RigConfig, ErrorsNameFileLineAndKey) {
   const std::vector<BadCase> cases = {
       {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nestimatr: {}\n",
@@ -131,6 +153,21 @@ TEST(RigConfig, ErrorsNameFileLineAndKey) {
       {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\n    truth: {q_wxyz: "
        "[1,0,0,0], C: [0,0,0], skale: 1}\n",
        ":5: left.truth.skale: unknown key"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nestimator:\n  "
+       "time_offset: soon\n",
+       ":6: estimator.time_offset: must be auto or a number of seconds, got 'soon'"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nestimator:\n  "
+       "time_offset: {roof: auto}\n",
+       ":6: estimator.time_offset.roof: not a camera of the rig"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nestimator:\n  "
+       "time_offset: {front: 0.01}\n",
+       ":6: estimator.time_offset.front: the master's clock is the reference"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nestimator:\n  "
+       "time_offset: {left: [1]}\n",
+       ":6: estimator.time_offset.left: must be auto or a number of seconds"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nestimator:\n  "
+       "time_offset: 1e6\n",
+       ":6: estimator.time_offset: must be in [-86400, 86400] s"},
   };
   for (const BadCase& c : cases) {
     const std::string path = Write(c.text);

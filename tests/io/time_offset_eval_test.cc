@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "free_running_rig.h"
+#include "../calib/free_running_rig.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/time_offset.h"

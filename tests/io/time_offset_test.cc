@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "free_running_rig.h"
+#include "../calib/free_running_rig.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/trajectory_interpolation.h"

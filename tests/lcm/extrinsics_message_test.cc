@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -179,6 +180,46 @@ TEST(ExtrinsicsMessage, AxisOffsetOfPlanarAndNearlyPlanarEstimates) {
   bad = *msg;
   bad.slaves[3].flags |= kFlagAxisFromPrior;
   EXPECT_FALSE(EncodeMessage(kExtrinsicsChannel, names, bad).ok());
+}
+
+TEST(ExtrinsicsMessage, ClockOffsetOfFreeRunningSlaves) {
+  SlaveCalibration estimated = MakeSlave("left");
+  estimated.time_offset_s = 0.0402;
+  estimated.time_offset_std_s = 0.0003;
+  SlaveCalibration given = MakeSlave("back");
+  given.time_offset_s = -0.015;
+  SlaveCalibration synchronised = MakeSlave("right");
+  RigCalibration result;
+  result.master = "front";
+  result.slaves = {estimated, given, synchronised};
+  Expected<rig_extrinsics_t> msg = RigCalibrationToLcm(result, 1, 2);
+  ASSERT_TRUE(msg.ok()) << msg.error();
+  EXPECT_EQ(msg->slaves[0].time_offset_source, slave_extrinsics_t::TIME_OFFSET_ESTIMATED);
+  EXPECT_EQ(msg->slaves[0].time_offset_s, 0.0402);
+  EXPECT_EQ(msg->slaves[0].time_offset_std_s, 0.0003);
+  EXPECT_EQ(msg->slaves[1].time_offset_source, slave_extrinsics_t::TIME_OFFSET_GIVEN);
+  EXPECT_EQ(msg->slaves[1].time_offset_s, -0.015);
+  EXPECT_EQ(msg->slaves[1].time_offset_std_s, -1.0);
+  EXPECT_EQ(msg->slaves[2].time_offset_source, slave_extrinsics_t::TIME_OFFSET_NONE);
+  EXPECT_EQ(msg->slaves[2].time_offset_s, 0.0);
+  EXPECT_EQ(msg->slaves[2].time_offset_std_s, -1.0);
+  const CameraNames names = {"front", "left", "back", "right"};
+  Expected<std::vector<uint8_t>> buffer = EncodeMessage(kExtrinsicsChannel, names, *msg);
+  ASSERT_TRUE(buffer.ok()) << buffer.error();
+  MessageValidator validator(names);
+  auto back =
+      validator.Decode<rig_extrinsics_t>(kExtrinsicsChannel, buffer->data(), buffer->size());
+  ASSERT_TRUE(back.ok()) << back.error();
+  EXPECT_EQ(back->slaves[0].time_offset_s, 0.0402);
+  // An undefined source, a σ below 0 other than -1, or negative jumps are refused.
+  for (const auto& breaks : std::vector<std::function<void(slave_extrinsics_t*)>>{
+           [](slave_extrinsics_t* s) { s->time_offset_source = 4; },
+           [](slave_extrinsics_t* s) { s->time_offset_std_s = -0.5; },
+           [](slave_extrinsics_t* s) { s->clock_jumps = -1; }}) {
+    rig_extrinsics_t bad = *msg;
+    breaks(&bad.slaves[0]);
+    EXPECT_FALSE(EncodeMessage(kExtrinsicsChannel, names, bad).ok());
+  }
 }
 
 TEST(ExtrinsicsMessage, RigCalibrationToLcmRejectsBrokenResults) {

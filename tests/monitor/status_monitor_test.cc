@@ -164,6 +164,17 @@ TEST(StatusMonitor, DashboardShowsEveryFigure) {
         "health: converging (exit code 1)"}) {
     EXPECT_THAT(text, HasSubstr(expected));
   }
+  EXPECT_THAT(text, Not(HasSubstr("clock "))) << "synchronised stamps: no clock line";
+  slave_extrinsics_t& left = s.extrinsics->slaves[0];
+  left.time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATED;
+  left.time_offset_s = 0.040012;
+  left.time_offset_std_s = 0.00021;
+  left.clock_jumps = 1;
+  EXPECT_THAT(FormatDashboard(s),
+              HasSubstr("  clock     offset 40.012 ms  sigma 0.21 ms (estimated), 1 jump"));
+  left.time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATING;
+  EXPECT_THAT(FormatDashboard(s), HasSubstr("offset being estimated"));
+  left = MakeExtrinsics(slave_extrinsics_t::STATE_USABLE, -1).slaves[0];
   // Every camera's segment from its camera_status_t (the master's too); none yet: "-".
   EXPECT_THAT(text, ::testing::ContainsRegex("left +19.5 +1234 +3 .*lost +1 +42 ms"));
   EXPECT_THAT(text, ::testing::ContainsRegex("front +19.5 .*tracking +1 +42 ms"));

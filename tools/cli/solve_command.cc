@@ -1,4 +1,5 @@
 // `rigcal solve`: batch calibration of a rig from per-camera trajectory files.
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <iostream>
@@ -91,12 +92,56 @@ std::string ApplyPairs(const std::string& text, PairOptions* pairs) {
   return "";
 }
 
-// --time-offset value: nullopt for auto, else seconds; returns an error text or "".
+// One --time-offset value: nullopt for auto, else seconds; sets *error on a bad value.
 std::optional<double> ParseTimeOffset(const std::string& text, std::string* error = nullptr) {
   if (text == "auto") return std::nullopt;
   const auto ns = tools::ParseSecondsToNs(text);
   if (!ns && error != nullptr) *error = "expected auto or a number of seconds, got '" + text + "'";
   return ns ? static_cast<double>(*ns) * 1e-9 : 0.0;
+}
+
+// --time-offset: "auto" or SECONDS for every slave, or per slave "NAME=auto|SECONDS,..."
+// (slaves not named: 0). `slaves` empty: the syntax only. Sets *error (naming the entry).
+std::vector<std::optional<double>> ParseTimeOffsets(const std::string& text,
+                                                    const std::vector<std::string>& slaves,
+                                                    std::string* error) {
+  if (text.find('=') == std::string::npos) {
+    return std::vector<std::optional<double>>(slaves.size(), ParseTimeOffset(text, error));
+  }
+  std::vector<std::optional<double>> out(slaves.size(), 0.0);
+  std::vector<bool> named(slaves.size(), false);
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t end = std::min(text.find(',', start), text.size());
+    const std::string entry = text.substr(start, end - start);
+    start = end + 1;
+    const size_t eq = entry.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      *error = "per-slave offsets read NAME=auto|SECONDS, got '" + entry + "'";
+      return out;
+    }
+    const std::string name = entry.substr(0, eq);
+    std::string value_error;
+    const std::optional<double> value = ParseTimeOffset(entry.substr(eq + 1), &value_error);
+    if (!value_error.empty()) {
+      *error = name + ": " + value_error;
+      return out;
+    }
+    if (slaves.empty()) continue;
+    const auto it = std::find(slaves.begin(), slaves.end(), name);
+    if (it == slaves.end()) {
+      *error = "'" + name + "' is not a slave camera";
+      return out;
+    }
+    const auto i = static_cast<size_t>(it - slaves.begin());
+    if (named[i]) {
+      *error = "'" + name + "' is given twice";
+      return out;
+    }
+    named[i] = true;
+    out[i] = value;
+  }
+  return out;
 }
 
 int Fail(const std::string& message) {
@@ -176,8 +221,14 @@ int RunSolve(const SolveArgs& args) {
   const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
   tools::TimeOffsetOptions offset_options;
   offset_options.search_window_s = args.time_offset_window_s;
-  auto matched = tools::MatchWithTimeOffsets(*master, slaves, ParseTimeOffset(args.time_offset),
-                                             tolerance_ns, options, offset_options);
+  std::vector<std::string> slave_names;
+  for (const auto& slave : slaves) slave_names.push_back(slave.name);
+  std::string offset_error;
+  const std::vector<std::optional<double>> given_offsets =
+      ParseTimeOffsets(args.time_offset, slave_names, &offset_error);
+  if (!offset_error.empty()) return Fail("--time-offset: " + offset_error);
+  auto matched = tools::MatchWithTimeOffsets(*master, slaves, given_offsets, tolerance_ns, options,
+                                             offset_options);
   if (!matched) return Fail(matched.error());
   const RigRecording* recording = &matched->recording;
   log->info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
@@ -350,25 +401,27 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       ->type_name("MS")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--time-offset", args->time_offset,
-                  "Clock offset of the slaves: a slave's stamp minus the master clock at the\n"
-                  "same instant, seconds (the same for every slave), or auto: estimated per\n"
-                  "slave, first by cross-correlating the angular speeds of master and slave\n"
-                  "within --time-offset-window, then by minimising the rotation residuals of\n"
-                  "a calibration over the offset; the result gives time_offset_s and its σ\n"
-                  "time_offset_std_s. Slave stamps are moved to the master clock; a slave\n"
-                  "whose stamps then coincide with the master's (90 % within 1/50 frame) is\n"
-                  "matched by stamp, any other (free-running camera) interpolated at the\n"
-                  "master's instants (SLERP, linear position; not across gaps of more than 3\n"
-                  "frame intervals nor across scale segments).")
-      ->type_name("auto|SECONDS")
+  cmd->add_option(
+         "--time-offset", args->time_offset,
+         "Clock offset of the slaves: a slave's stamp minus the master clock at the\n"
+         "same instant, seconds (the same for every slave), or auto: estimated per\n"
+         "slave, first by cross-correlating the angular speeds of master and slave\n"
+         "within --time-offset-window, then by minimising the rotation residuals of\n"
+         "a calibration over the offset; the result gives time_offset_s and its σ\n"
+         "time_offset_std_s. Slave stamps are moved to the master clock; a slave\n"
+         "whose stamps then coincide with the master's (90 % within 1/50 frame) is\n"
+         "matched by stamp, any other (free-running camera) interpolated at the\n"
+         "master's instants (cubic, SLERP/linear at the ends; not across gaps of more than 3\n"
+         "frame intervals nor across scale segments).\n"
+         "Per slave: NAME=auto|SECONDS,... (slaves not named: 0).")
+      ->type_name("auto|SECONDS|NAME=auto|SECONDS,...")
       ->check(CLI::Validator(
           [](std::string& v) {
             std::string error;
-            ParseTimeOffset(v, &error);
+            ParseTimeOffsets(v, {}, &error);
             return error;
           },
-          "auto|SECONDS"))
+          "auto|SECONDS|NAME=auto|SECONDS,..."))
       ->capture_default_str();
   cmd->add_option("--time-offset-window", args->time_offset_window_s,
                   "With --time-offset auto: the offset is searched within ± this many seconds")

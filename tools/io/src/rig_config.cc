@@ -172,9 +172,11 @@ std::optional<Error> ParseEstimator(const FieldReader& r, const YAML::Node& node
                                     OnlineOptions* options) {
   std::set<std::string> known;
   for (const auto& [key, setter] : EstimatorFields()) known.insert(key);
+  known.insert("time_offset");  // needs the cameras: ParseTimeOffsetSection
   if (auto e = r.CheckKeys(node, "estimator.", known)) return e;
   for (auto it = node.begin(); it != node.end(); ++it) {
     const std::string key = it->first.Scalar();
+    if (key == "time_offset") continue;
     if (auto e = EstimatorFields().at(key)(r, it->second, "estimator." + key, options)) return e;
   }
   return std::nullopt;
@@ -323,6 +325,13 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
   online.sync.num_cameras = static_cast<int>(config.cameras.size());
   if (const YAML::Node estimator = (*root)["estimator"]) {
     if (auto e = ParseEstimator(r, estimator, &online)) return *e;
+    if (const YAML::Node offset = estimator["time_offset"]) {
+      std::vector<std::string> slaves;
+      for (size_t i = 1; i < config.cameras.size(); ++i) slaves.push_back(config.cameras[i].name);
+      auto parsed = ParseTimeOffsetSection(offset, slaves, config.master(), path);
+      if (!parsed) return Error{parsed.error()};
+      online.time_offset = *parsed;
+    }
   }
   if (const YAML::Node sync = (*root)["sync"]) {
     if (auto e = ParseSync(r, sync, config.cameras, &online.sync)) return *e;

@@ -70,6 +70,11 @@ void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check)
                 "FLAG_AXIS_FROM_PRIOR without FLAG_PLANAR_UNOBSERVABLE_AXIS");
   }
   check_std("axis_offset_std", s->axis_offset_std);
+  check->InRange<int8_t>("time_offset_source", s->time_offset_source,
+                         slave_extrinsics_t::TIME_OFFSET_NONE,
+                         slave_extrinsics_t::TIME_OFFSET_ESTIMATED);
+  check_std("time_offset_std_s", s->time_offset_std_s);
+  check->AtLeast<int32_t>("clock_jumps", s->clock_jumps, 0);
 }
 
 // The fields of rig_extrinsics_t.lcm up to num_slaves.
@@ -189,6 +194,17 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
               ? std::sqrt(std::max(0.0, axis.dot(slave.pos_std.cwiseAbs2().asDiagonal() * axis)))
               : kUnknownStd;
     }
+  }
+  msg.time_offset_source = slave_extrinsics_t::TIME_OFFSET_NONE;
+  msg.time_offset_s = 0.0;
+  msg.time_offset_std_s = kUnknownStd;
+  msg.clock_jumps = 0;
+  if (std::isfinite(slave.time_offset_s)) {
+    const bool estimated = std::isfinite(slave.time_offset_std_s);
+    msg.time_offset_source = estimated ? slave_extrinsics_t::TIME_OFFSET_ESTIMATED
+                                       : slave_extrinsics_t::TIME_OFFSET_GIVEN;
+    msg.time_offset_s = slave.time_offset_s;
+    msg.time_offset_std_s = std_or_unknown(slave.time_offset_std_s);
   }
   msg.message = ToString(slave.termination);
   if (!slave.message.empty()) msg.message += ": " + slave.message;

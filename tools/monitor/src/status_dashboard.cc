@@ -49,6 +49,26 @@ void AppendCameras(const MonitorSnapshot& snapshot, std::vector<std::string>* li
                                st.sync_fill, st.sync_capacity));
 }
 
+// A free-running slave's clock offset: "offset 40.012 ms sigma 0.21 ms (estimated), 1 jump".
+std::string ClockOffsetText(const slave_extrinsics_t& s) {
+  std::string text;
+  switch (s.time_offset_source) {
+    case slave_extrinsics_t::TIME_OFFSET_ESTIMATING:
+      text = "offset being estimated (the slave waits for it)";
+      break;
+    case slave_extrinsics_t::TIME_OFFSET_GIVEN:
+      text = "offset " + FixedText(s.time_offset_s * 1e3, 3) + " ms (given)";
+      break;
+    default:
+      text = "offset " + FixedText(s.time_offset_s * 1e3, 3) + " ms  sigma " +
+             SigmaText(Known(s.time_offset_std_s) * 1e3, 2) + " ms (estimated)";
+  }
+  if (s.clock_jumps > 0) {
+    text += ", " + std::to_string(s.clock_jumps) + (s.clock_jumps == 1 ? " jump" : " jumps");
+  }
+  return text;
+}
+
 void AppendSlaves(const rig_extrinsics_t& ex, std::vector<std::string>* lines) {
   const char* unit = ex.distance_unit == rig_extrinsics_t::UNIT_METRE ? "m" : "master units";
   for (const slave_extrinsics_t& s : ex.slaves) {
@@ -68,6 +88,9 @@ void AppendSlaves(const rig_extrinsics_t& ex, std::vector<std::string>* lines) {
         SigmaVectorText(
             Eigen::Vector3d(Known(s.pos_std[0]), Known(s.pos_std[1]), Known(s.pos_std[2])), 3),
         SignificantText(s.scale, 6), SigmaText(Known(s.scale_std), 3), s.segment));
+    if (s.time_offset_source != slave_extrinsics_t::TIME_OFFSET_NONE) {
+      lines->push_back("  clock     " + ClockOffsetText(s));
+    }
     if (!s.message.empty()) lines->push_back("  " + s.message);
   }
 }

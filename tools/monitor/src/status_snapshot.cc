@@ -37,6 +37,20 @@ nlohmann::json CameraJson(const camera_status_t& c) {
       {"last_pose_age_ms", c.last_pose_age_ms >= 0 ? nlohmann::json(c.last_pose_age_ms) : nullptr}};
 }
 
+const char* TimeOffsetSourceName(int8_t source) {
+  switch (source) {
+    case slave_extrinsics_t::TIME_OFFSET_NONE:
+      return "none";
+    case slave_extrinsics_t::TIME_OFFSET_GIVEN:
+      return "given";
+    case slave_extrinsics_t::TIME_OFFSET_ESTIMATING:
+      return "estimating";
+    case slave_extrinsics_t::TIME_OFFSET_ESTIMATED:
+      return "estimated";
+  }
+  return "?";
+}
+
 nlohmann::json SlaveJson(const slave_extrinsics_t& s) {
   const SlaveView view = ViewOf(s);
   const AxisAngleDegrees a = AxisAngleDeg(view.q);
@@ -58,6 +72,11 @@ nlohmann::json SlaveJson(const slave_extrinsics_t& s) {
           {"motions_used", s.motions_used},
           {"motions_rejected", s.motions_rejected},
           {"facts", facts},
+          {"time_offset",
+           {{"source", TimeOffsetSourceName(s.time_offset_source)},
+            {"offset_s", s.time_offset_s},
+            {"std_s", Sigma(s.time_offset_std_s)},
+            {"jumps", s.clock_jumps}}},
           {"message", s.message}};
 }
 

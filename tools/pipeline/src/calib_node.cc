@@ -47,6 +47,15 @@ Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t ut
     if (online & rigcal::kFlagPlanar) flags |= tools::kFlagPlanar;
     if (online & rigcal::kFlagTranslationalOnly) flags |= tools::kFlagTranslationalOnly;
     if (online & rigcal::kFlagRefined) flags |= tools::kFlagRefined;
+    // Cameras that run free: an offset still being (re)estimated, and the jumps of it.
+    const SlaveOnlineState& state = estimate.online[i];
+    slave_extrinsics_t& slave = msg->slaves[i];
+    slave.clock_jumps = state.clock_jumps;
+    if (state.clock_offset_estimated && !state.clock_offset_known) {
+      slave.time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATING;
+      slave.time_offset_s = 0.0;
+      slave.time_offset_std_s = -1.0;
+    }
   }
   return msg;
 }

@@ -12,10 +12,12 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/status.h"
 #include "rigcal/calib/sync_buffer.h"
@@ -36,6 +38,12 @@ struct OnlineOptions {
   // instead of on a wall-clock thread, so they see the same sets in every run of the same
   // input: together with `lossless` the same pushes give the same result bit for bit.
   bool refine_on_stream_time = false;
+  // Cameras that run free (time_offset.enabled): the SyncBuffer interpolates slave poses at
+  // the master's instants (sync.interpolate is set) at each slave's clock offset, which a
+  // ClockOffsetTracker estimates from every pushed pose (or holds at a given value). A slave
+  // is left out of the sets given to the estimator until its offset is known (and while a
+  // jump of it is suspected); Estimate() reports the offset and its σ per slave.
+  ClockOffsetOptions time_offset;
   // The first violated constraint as "<field>: <constraint>", nested fields as "sync.<field>" and
   // "estimator.<field>".
   Status Check() const;
@@ -73,7 +81,9 @@ class OnlineCalibrator {
   // are serialised.
   void RefineNow(bool final = false);
 
-  // Consistent snapshot of the estimate (any thread).
+  // Consistent snapshot of the estimate (any thread). With time_offset.enabled, every slave's
+  // time_offset_s / time_offset_std_s (NaN σ: given, or not estimated yet) and its online
+  // clock_* fields.
   RigEstimate Estimate() const;
   SyncStats sync_stats() const { return sync_.stats(); }
   // The estimator's state, to continue after a restart (any thread; serialised with the
@@ -88,6 +98,10 @@ class OnlineCalibrator {
   // lossless: waits until one more push cannot overflow the ready queue (or Stop).
   void WaitForRoom() RIGCAL_EXCLUDES(estimator_mutex_);
   void RefinementLoop() RIGCAL_EXCLUDES(stop_mutex_);
+  // Time offsets: feeds an accepted pose to the tracker and passes changed offsets on to the
+  // SyncBuffer; leaves out of `set` the slaves whose offset is not known.
+  void TrackClock(const CameraPose& pose) RIGCAL_EXCLUDES(offset_mutex_);
+  void WithholdUnknownClocks(MatchedSet* set) const RIGCAL_EXCLUDES(offset_mutex_);
 
   std::vector<std::string> names_;
   OnlineOptions options_;
@@ -104,6 +118,9 @@ class OnlineCalibrator {
   // Incremented with estimator_mutex_ held; an atomic so that refinements_applied() reads it
   // without the lock.
   std::atomic<int> refinements_applied_{0};
+  mutable Mutex offset_mutex_;
+  // Null unless options_.time_offset.enabled.
+  std::unique_ptr<ClockOffsetTracker> clock_ RIGCAL_GUARDED_BY(offset_mutex_);
   std::thread estimator_thread_;
   std::thread refinement_thread_;
 };

@@ -147,6 +147,13 @@ struct SlaveOnlineState {
   int keyframes = 0;
   int gated_scale = 0;  // rejected by the screw-pitch scale gate
   int decalibration_events = 0;
+  // Cameras that run free (OnlineOptions::time_offset; set by OnlineCalibrator::Estimate): the
+  // clock offset is estimated from the data (else given), it is known (usable), the clock drift
+  // dτ/dt in ppm, and the jumps of the offset detected (a camera restarted).
+  bool clock_offset_estimated = false;
+  bool clock_offset_known = false;
+  double clock_drift_ppm = 0.0;
+  int clock_jumps = 0;
 };
 
 struct RigEstimate {

@@ -39,6 +39,22 @@
 // trigger mode sequence <= m's) are dropped as never_matched. Everything is deterministic: the
 // same sequence of Push calls gives the same sets.
 //
+// Interpolation mode (interpolate: cameras that run free, their own instants and clocks).
+// Slave j's stamps read the master clock + its time offset (SetTimeOffset, 0 until set). A
+// slave's partner of m is its pose at the instant m.t_ns + offset_j, interpolated from its
+// entries around that instant (pose_interpolation.h: cubic through two entries on either side,
+// else SLERP/linear between the two around it), never across a gap of more than 3 frame
+// periods or a segment change; an entry within min(tolerance, frame_period / 50) of the instant
+// is taken as it is (synchronised stamps are matched exactly as in stamp mode). The partner is
+// final once the entry after the one following the instant is there (or cannot help: gap,
+// segment), or when no entry precedes the instant (no partner); timeouts and optional slaves
+// as above, with stream time on the master clock (each camera's newest stamp minus its offset).
+// The latency is therefore bounded by two slave frames plus the offset, or max_wait. The
+// interpolated pose carries the instant (slave clock) as t_ns, trigger_seq -1, the segment of
+// the entry before it and the lowest quality of the entries used. Slave entries stay in their
+// ring while a later master may still use them (they are counted `used` when they leave it
+// having served a set, never_matched otherwise); trigger numbers are ignored.
+//
 // Clock glitches (stamp mode only). A pose stamped more than the glitch horizon
 // (max(2 s, 10 * max_wait)) ahead of both its camera's newest stamp and the newest stamp of every
 // other camera is not accepted (kClockGlitch, counted clock_glitch, one warning per burst): one
@@ -83,6 +99,9 @@ struct SyncOptions {
   // are equal, whatever their stamps (cameras on different clocks). Entries without a number
   // still match by stamp. Sequence numbers must increase with t_ns within each camera.
   bool match_by_trigger_seq = false;
+  // Interpolation mode (see above): slave poses interpolated at the master's instants at each
+  // slave's time offset. Not with match_by_trigger_seq.
+  bool interpolate = false;
   // Matched sets held for the consumer (a fixed queue). In [1, 2^20]. When the consumer is too
   // slow the oldest ready set is dropped (counted as consumer_overflow).
   int ready_capacity = 32;
@@ -201,6 +220,10 @@ class SyncBuffer {
 
   // A consistent snapshot of the counters (allocates the per-camera vector). Any thread.
   SyncStats stats() const;
+
+  // Interpolation mode: slave `camera` (>= 1) stamps read master clock + offset_ns from now on
+  // (see the rule above). Any thread. Ignored for the master, an unknown camera or in stamp mode.
+  void SetTimeOffset(int camera, int64_t offset_ns);
 
   // How many sets could be ready once one more Push (or a Flush) has run: the sets ready now
   // plus the master entries buffered plus one (every set takes a master entry). A producer

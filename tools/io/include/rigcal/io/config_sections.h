@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/status.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
@@ -34,5 +35,15 @@ Expected<camera::CameraSpec> ReadEurocSensorYaml(const std::string& path, const 
 // section owns; cameras and their true mounting are filled by the caller from `cameras:`.
 Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
                                                          const std::string& path);
+
+// `estimator.time_offset` (cameras that run free): `auto` (every slave's clock offset
+// estimated), a number of seconds (every slave's, given), or a map from slave names to `auto` or
+// seconds (slaves not named: auto). Given offsets lie in [-86400, 86400] s. Unknown names, the
+// master, other values and types are errors naming the field. `slave_names` in camera index
+// order (the master excluded). Sets options->enabled and options->given_s.
+Expected<ClockOffsetOptions> ParseTimeOffsetSection(const YAML::Node& node,
+                                                    const std::vector<std::string>& slave_names,
+                                                    const std::string& master,
+                                                    const std::string& path);
 
 }  // namespace rigcal::tools

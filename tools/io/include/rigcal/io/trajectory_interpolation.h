@@ -12,6 +12,7 @@
 #include <optional>
 #include <vector>
 
+#include "rigcal/calib/pose_interpolation.h"
 #include "rigcal/calib/status.h"
 #include "rigcal/io/trajectory_io.h"
 
@@ -23,17 +24,10 @@ struct InterpolationOptions {
   double max_gap_intervals = 3.0;
 };
 
-// Median difference of consecutive stamps (0 with fewer than 2 stamps).
-int64_t MedianInterval(const std::vector<int64_t>& t_ns);
-
-// Pose of `trajectory` at `t_ns` (the trajectory's own clock) and its segment; nullopt
-// outside its time range, across a gap or a segment boundary. `max_gap_ns` as above.
-struct InterpolatedPose {
-  Pose pose;
-  int segment = 0;
-};
-std::optional<InterpolatedPose> InterpolatePose(const TimedTrajectory& trajectory, int64_t t_ns,
-                                                int64_t max_gap_ns);
+// MedianInterval, InterpolatedPose and InterpolatePose: calib/pose_interpolation.h.
+using rigcal::InterpolatedPose;
+using rigcal::InterpolatePose;
+using rigcal::MedianInterval;
 
 // The slave's poses at the master's stamps `master_t_ns`, where the slave clock reads
 // t_master + offset_ns (time offset = slave stamp - master clock). Stamps where no pose can be

@@ -32,19 +32,13 @@
 
 #include "rigcal/calib/status.h"
 #include "rigcal/calib/time_format.h"  // FormatNsAsSeconds, used with these files
+#include "rigcal/calib/timed_trajectory.h"
 #include "rigcal/calib/types.h"
 
 namespace rigcal::tools {
 
-// The poses of one camera with their time stamps; entry k of each vector belongs together.
-struct TimedTrajectory {
-  std::string name;           // file stem ("cam1" for /data/cam1.txt)
-  std::vector<int64_t> t_ns;  // strictly increasing, nanoseconds
-  std::vector<Pose> poses;    // world_from_camera, centre in the camera's world frame
-  std::vector<int> segment;   // scale segment id per pose (0 when the file has none)
-
-  size_t size() const { return t_ns.size(); }
-};
+// The poses of one camera with their time stamps (calib/timed_trajectory.h).
+using TimedTrajectory = rigcal::TimedTrajectory;
 
 enum class TrajectoryFormat { kTum, kEurocCsv, kNative };
 std::string ToString(TrajectoryFormat format);  // "TUM", "EuRoC CSV", "rigcal native"

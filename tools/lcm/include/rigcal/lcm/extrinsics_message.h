@@ -56,7 +56,9 @@ int32_t SlaveFlags(const SlaveCalibration& slave);
 // slave_extrinsics_t of one slave. scale/segment/scale_std are those of the current segment
 // (the entry of slave.scales with the largest segment id; estimate.scale and segment 0 when
 // there is none). rotation_eigen_gap = λ2 - λ1 of observability.rotation_eigenvalues.
-// message = ToString(termination) + ": " + slave.message.
+// message = ToString(termination) + ": " + slave.message. Clock offset: ESTIMATED when
+// time_offset_s and its σ are finite, GIVEN when only time_offset_s is, else NONE (offset 0,
+// σ -1); clock_jumps 0 (the online estimator's publisher sets ESTIMATING and the jumps).
 // state = slave.state. Placeholders: a slave whose solve produced no estimate gets identity q, zero
 // C and scale 1 where its estimate is not finite; non-finite standard deviations become -1
 // (unknown: not computed, the covariance failed, or undetermined), never 0; non-finite

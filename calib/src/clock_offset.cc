@@ -1,6 +1,6 @@
 // Clock offset of a free-running camera: angular-speed correlation, then the hand-eye
-// rotation residuals minimised over the offset.
-#include "rigcal/io/time_offset.h"
+// rotation residuals (batch) or the rotation-angle residuals (online) minimised over the offset.
+#include "rigcal/calib/clock_offset.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "rigcal/calib/format.h"
+#include "rigcal/calib/pose_interpolation.h"
 #include "rigcal/calib/quaternion.h"
-#include "rigcal/io/trajectory_interpolation.h"
 
-namespace rigcal::tools {
+namespace rigcal {
 namespace {
 
 constexpr size_t kMinPoses = 10;
@@ -73,6 +73,26 @@ std::optional<double> Correlation(const std::vector<double>& a, const std::vecto
 }
 
 std::string Named(const TimedTrajectory& slave) { return "time offset of '" + slave.name + "': "; }
+
+// Golden-section search of the minimum of `cost` on [lo, hi], to `tolerance`.
+template <typename Cost>
+double GoldenSection(const Cost& cost, double lo, double hi, double tolerance) {
+  constexpr double kInvPhi = 0.6180339887498949;
+  double x1 = hi - kInvPhi * (hi - lo);
+  double x2 = lo + kInvPhi * (hi - lo);
+  double f1 = cost(x1);
+  double f2 = cost(x2);
+  while (hi - lo > tolerance) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1;
+      x1 = hi - kInvPhi * (hi - lo), f1 = cost(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2;
+      x2 = lo + kInvPhi * (hi - lo), f2 = cost(x2);
+    }
+  }
+  return 0.5 * (lo + hi);
+}
 
 }  // namespace
 
@@ -188,25 +208,8 @@ TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTr
     for (const auto& r : residuals(tau)) sum += r ? r->squaredNorm() : 0.0;
     return sum;
   };
-  // Golden-section search on [offset - h, offset + h].
-  constexpr double kInvPhi = 0.6180339887498949;
-  double lo = initial.offset_s - h;
-  double hi = initial.offset_s + h;
-  double x1 = hi - kInvPhi * (hi - lo);
-  double x2 = lo + kInvPhi * (hi - lo);
-  double f1 = cost(x1);
-  double f2 = cost(x2);
-  while (hi - lo > 1e-6) {
-    if (f1 < f2) {
-      hi = x2, x2 = x1, f2 = f1;
-      x1 = hi - kInvPhi * (hi - lo), f1 = cost(x1);
-    } else {
-      lo = x1, x1 = x2, f1 = f2;
-      x2 = lo + kInvPhi * (hi - lo), f2 = cost(x2);
-    }
-  }
   TimeOffsetEstimate out = initial;
-  out.offset_s = 0.5 * (lo + hi);
+  out.offset_s = GoldenSection(cost, initial.offset_s - h, initial.offset_s + h, 1e-6);
   // σ from Gauss-Newton: central differences of the residuals.
   const double e = std::max(1e-4, 0.02 * h);
   const auto r0 = residuals(out.offset_s);
@@ -226,4 +229,83 @@ TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTr
   return out;
 }
 
-}  // namespace rigcal::tools
+std::optional<AngleOffsetMeasurement> MeasureOffsetFromAngles(const TimedTrajectory& master,
+                                                              const TimedTrajectory& slave,
+                                                              int64_t from_ns, int64_t to_ns,
+                                                              double center_s, double half_width_s,
+                                                              double motion_span_s) {
+  const int64_t master_interval = MedianInterval(master.t_ns);
+  const int64_t slave_interval = MedianInterval(slave.t_ns);
+  if (master_interval <= 0 || slave_interval <= 0 || !(half_width_s > 0.0)) return std::nullopt;
+  const auto max_gap_ns =
+      static_cast<int64_t>(kMaxGapIntervals * static_cast<double>(slave_interval));
+  const auto span = static_cast<size_t>(std::max<int64_t>(
+      1, std::llround(motion_span_s * 1e9 / static_cast<double>(master_interval))));
+  auto segment_of = [&](size_t k) { return master.segment.empty() ? 0 : master.segment[k]; };
+  auto slave_at = [&](size_t k, double tau) {
+    return InterpolatePose(slave, master.t_ns[k] + std::llround(tau * 1e9), max_gap_ns);
+  };
+  // Motions (k, k + span) starting in [from_ns, to_ns) whose slave ends can be interpolated
+  // over the whole searched interval, with the master's rotation angle.
+  std::vector<size_t> starts;
+  std::vector<double> master_angle;
+  const auto first = static_cast<size_t>(
+      std::lower_bound(master.t_ns.begin(), master.t_ns.end(), from_ns) - master.t_ns.begin());
+  for (size_t k = first; k + span < master.size() && master.t_ns[k] < to_ns; ++k) {
+    if (segment_of(k) != segment_of(k + span)) continue;
+    bool valid = true;
+    for (const double tau : {center_s - half_width_s, center_s + half_width_s}) {
+      const auto a = slave_at(k, tau);
+      const auto b = slave_at(k + span, tau);
+      valid = valid && a && b && a->segment == b->segment;
+    }
+    if (!valid) continue;
+    starts.push_back(k);
+    master_angle.push_back(RotationAngle(master.poses[k].q.conjugate() * master.poses[k + span].q));
+  }
+  if (starts.size() < 5) return std::nullopt;
+  auto residuals = [&](double tau, std::vector<double>* r) {
+    r->assign(starts.size(), std::numeric_limits<double>::quiet_NaN());
+    for (size_t i = 0; i < starts.size(); ++i) {
+      const auto a = slave_at(starts[i], tau);
+      const auto b = slave_at(starts[i] + span, tau);
+      if (a && b) (*r)[i] = master_angle[i] - RotationAngle(a->pose.q.conjugate() * b->pose.q);
+    }
+  };
+  std::vector<double> scratch;
+  auto cost = [&](double tau) {
+    residuals(tau, &scratch);
+    double sum = 0.0;
+    for (const double v : scratch) sum += std::isfinite(v) ? v * v : 0.0;
+    return sum;
+  };
+  const double lo = center_s - half_width_s;
+  const double hi = center_s + half_width_s;
+  AngleOffsetMeasurement out;
+  out.offset_s = GoldenSection(cost, lo, hi, 1e-7);
+  out.at_bound = out.offset_s - lo < 0.02 * half_width_s || hi - out.offset_s < 0.02 * half_width_s;
+  const double e = std::max(1e-5, 0.01 * static_cast<double>(slave_interval) * 1e-9);
+  std::vector<double> r0, rp, rm;
+  residuals(out.offset_s, &r0);
+  residuals(out.offset_s + e, &rp);
+  residuals(out.offset_s - e, &rm);
+  double jtj = 0.0;
+  double sum = 0.0;
+  int n = 0;
+  for (size_t i = 0; i < r0.size(); ++i) {
+    if (!std::isfinite(r0[i]) || !std::isfinite(rp[i]) || !std::isfinite(rm[i])) continue;
+    const double j = (rp[i] - rm[i]) / (2.0 * e);
+    jtj += j * j;
+    sum += r0[i] * r0[i];
+    ++n;
+  }
+  out.motions = n;
+  if (n < 5) return std::nullopt;
+  out.rms_rad = std::sqrt(sum / n);
+  // Every pose ends one motion and starts another: the residuals of motions k and k + span
+  // share a pose's error, which doubles the variance of the estimate at most.
+  if (jtj > 0.0) out.std_s = std::sqrt(2.0 * sum / (n - 1.0) / jtj);
+  return out;
+}
+
+}  // namespace rigcal

@@ -2,14 +2,16 @@
 // Simulated rigs whose slave cameras run free: each camera captures at its own rate and phase
 // and stamps with its own clock (slave stamp = master clock + time offset). Shared by the time
 // offset tests and figures.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/io/trajectory_io.h"
+#include "rigcal/calib/timed_trajectory.h"
 
 namespace rigcal::tools::free_running {
 
@@ -85,6 +87,36 @@ inline FreeRunningRig MakeFreeRunningRig(const CameraClock& master,
     out.slaves.push_back(
         ToTimed(name, ts, s.recording.slaves.front(), std::llround(clocks[i].offset_s * 1e9)));
   }
+  return out;
+}
+
+// Every pose of `rig` as a live calibrator receives it, in the order of the true capture
+// instants (a camera's pose reaches it when it is taken, whatever its clock): camera 0 the
+// master, i + 1 slave i. The rig's stamps must be the true instants (offsets 0); slave i's pose
+// taken at t is stamped t + offset_ns(i, t) (its clock, which may drift or jump).
+inline std::vector<CameraPose> InCaptureOrder(
+    const FreeRunningRig& rig, const std::function<int64_t(int, int64_t)>& offset_ns) {
+  struct Timed {
+    int64_t t_true;
+    CameraPose pose;
+  };
+  std::vector<Timed> all;
+  auto add = [&](const TimedTrajectory& tr, int camera) {
+    for (size_t k = 0; k < tr.size(); ++k) {
+      CameraPose p;
+      p.camera = camera;
+      p.t_ns = tr.t_ns[k] + (camera == 0 ? 0 : offset_ns(camera - 1, tr.t_ns[k]));
+      p.segment = tr.segment.empty() ? 0 : tr.segment[k];
+      p.pose = tr.poses[k];
+      all.push_back({tr.t_ns[k], p});
+    }
+  };
+  add(rig.master, 0);
+  for (size_t i = 0; i < rig.slaves.size(); ++i) add(rig.slaves[i], static_cast<int>(i) + 1);
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Timed& a, const Timed& b) { return a.t_true < b.t_true; });
+  std::vector<CameraPose> out;
+  for (const Timed& t : all) out.push_back(t.pose);
   return out;
 }
 

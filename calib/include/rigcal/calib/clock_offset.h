@@ -1,0 +1,71 @@
+#pragma once
+// Clock offset of a camera that runs free, from the data (time offset = slave stamp - master
+// clock at the same instant).
+//
+// 1. Scale-free: the angular speed |ω| of master and slave (rotation angle of consecutive
+//    relative motions per second) is the same whatever the extrinsics and scales. Both are
+//    sampled on a common grid and cross-correlated over a search window; the peak is refined
+//    to sub-sample by a parabola through it and its neighbours.
+// 2. Refined with the extrinsic rotation X (slave orientation in the master frame) of a
+//    calibration: the hand-eye rotation residuals angle(A X, X B(τ)) of the motions between
+//    master instants, B(τ) interpolated from the slave at the master instants + τ, are
+//    minimised over τ (golden-section search around the correlation peak); σ from the
+//    curvature of that cost (Gauss-Newton: σ² = s² / Σ |∂r/∂τ|², s² the residual variance).
+
+#include <Eigen/Geometry>
+#include <limits>
+#include <optional>
+
+#include "rigcal/calib/status.h"
+#include "rigcal/calib/timed_trajectory.h"
+
+namespace rigcal {
+
+struct TimeOffsetOptions {
+  double search_window_s = 0.5;  // the offset is searched within ± this
+  double min_overlap_s = 2.0;    // least common time of master and slave at every lag
+  double motion_span_s = 0.5;    // span of the motions of the refinement
+};
+
+struct TimeOffsetEstimate {
+  double offset_s = 0.0;
+  double std_s = std::numeric_limits<double>::quiet_NaN();        // NaN = unknown
+  double correlation = std::numeric_limits<double>::quiet_NaN();  // peak correlation
+  int motions = 0;                                                // motions of the refinement
+};
+
+// Step 1. Errors (naming the slave): too few poses (fewer than 10), no angular speed samples,
+// or the master and slave overlap by less than min_overlap_s at every lag in the window.
+Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master,
+                                                   const TimedTrajectory& slave,
+                                                   const TimeOffsetOptions& options = {});
+
+// Step 2, around `initial` (searched within ± one slave frame interval), with `x` the slave's
+// orientation in the master frame. Returns `initial` unchanged when fewer than 5 motions can
+// be formed.
+TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTrajectory& slave,
+                                    const Eigen::Quaterniond& x, const TimeOffsetEstimate& initial,
+                                    const TimeOffsetOptions& options = {});
+
+// Online refinement (ClockOffsetTracker), needing no extrinsics: the rotation angle of a rig
+// motion is the same for every camera whatever the extrinsics and scales, so the offset is
+// the one that minimises sum_k (angle(A_k) - angle(B_k(τ)))² over the motions (k, k + span)
+// of master poses starting in [from_ns, to_ns) (master clock), B_k(τ) the slave's rotation
+// between the master instants + τ (interpolated, InterpolatePose). Golden-section search in
+// [center_s - half_width_s, center_s + half_width_s]; σ by Gauss-Newton from the curvature,
+// times sqrt(2) as every pose ends one motion and starts the next. nullopt with fewer than 5
+// motions.
+struct AngleOffsetMeasurement {
+  double offset_s = 0.0;
+  double std_s = std::numeric_limits<double>::quiet_NaN();  // NaN: not determined
+  int motions = 0;
+  bool at_bound = false;  // the minimum lies at an end of the searched interval
+  double rms_rad = 0.0;   // RMS angle residual at the minimum
+};
+std::optional<AngleOffsetMeasurement> MeasureOffsetFromAngles(const TimedTrajectory& master,
+                                                              const TimedTrajectory& slave,
+                                                              int64_t from_ns, int64_t to_ns,
+                                                              double center_s, double half_width_s,
+                                                              double motion_span_s);
+
+}  // namespace rigcal

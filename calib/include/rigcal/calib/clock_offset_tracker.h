@@ -1,0 +1,106 @@
+#pragma once
+// ClockOffsetTracker: the online clock offset of every slave camera that runs free (its own
+// capture instants and its own clock), a state of the online estimator with its σ.
+//
+// The offset of slave i is τ_i = slave stamp - master clock at the same instant [s]. It is
+//  1. initialised scale-free, without extrinsics: the angular speeds of master and slave over
+//     the first init_window_s of poses are cross-correlated (CorrelateAngularSpeed,
+//     clock_offset.h);
+//  2. refined and followed by a Kalman filter with state [τ, ρ] (ρ = dτ/dt, the clock drift)
+//     whose measurements are the offsets that minimise the rotation-angle residuals of the
+//     motions of successive non-overlapping windows of measure_window_s
+//     (MeasureOffsetFromAngles): the rotation angle of a rig motion is the same for every
+//     camera, whatever the extrinsics and scales;
+//  3. re-initialised after a jump (a camera restarted): jump_confirmations measurements in a
+//     row that disagree with the prediction by more than jump_sigmas (innovation σ) and
+//     jump_min_s, or that lie at the end of the searched interval, are a jump; it is logged as
+//     a warning and the offset is estimated afresh from the poses after it (step 1).
+// Slaves whose offset is given are held at it (σ unknown).
+//
+// Memory: per camera, the poses of the last history_s seconds (a deque trimmed on every Add).
+// Not thread-safe: OnlineCalibrator serialises the calls.
+
+#include <cstdint>
+#include <deque>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/status.h"
+#include "rigcal/calib/types.h"
+
+namespace rigcal {
+
+struct ClockOffsetOptions {
+  // Cameras run free: slave poses are interpolated at the master's instants (the SyncBuffer's
+  // interpolation) at the offsets below. false (default): stamps are synchronised and matched
+  // as they are; nothing below is used.
+  bool enabled = false;
+  // Per slave (one entry each, or empty = every slave estimated): nullopt = estimated from the
+  // data, a value = the given offset [s], held.
+  std::vector<std::optional<double>> given_s;
+  double init_window_s = 8.0;     // poses correlated for the initial estimate, > 2 s
+  double search_window_s = 0.5;   // the initial offset is searched within ± this, > 0
+  double measure_window_s = 2.0;  // one refinement measurement per this much master time, > 0
+  double motion_span_s = 0.5;     // span of the motions of a measurement, > 0
+  // Kalman filter: prior σ of the drift rate and its random walk, random walk of τ.
+  double drift_ppm = 100.0;                // >= 0
+  double drift_walk_ppm_per_sqrt_s = 0.5;  // >= 0
+  double offset_walk_s_per_sqrt_s = 2e-5;  // >= 0
+  // Jumps: see the header comment.
+  double jump_sigmas = 6.0;    // > 0
+  double jump_min_s = 0.002;   // >= 0
+  int jump_confirmations = 2;  // >= 1
+  double history_s = 20.0;     // poses kept per camera, >= init_window_s + 2 measure windows
+
+  // The first violated constraint as "time_offset.<field>: <constraint>".
+  Status Check(int num_slaves) const;
+};
+
+// The offset of one slave as the tracker knows it.
+struct SlaveClockOffset {
+  bool estimated = false;  // estimated from the data (false: given)
+  bool known = false;      // usable: given, or initialised and not in doubt (no suspected jump)
+  double offset_s = 0.0;   // at the newest master stamp
+  double std_s = std::numeric_limits<double>::quiet_NaN();  // NaN: unknown (given, or not yet)
+  double drift_ppm = 0.0;                                   // dτ/dt, parts per million
+  double drift_std_ppm = std::numeric_limits<double>::quiet_NaN();
+  int measurements = 0;  // refinement measurements accepted since the last (re)initialisation
+  int jumps = 0;         // jumps detected
+  // Master stamp from which sets use this offset (after a (re)initialisation, sets matched
+  // before it used another offset).
+  int64_t usable_from_ns = 0;
+};
+
+class ClockOffsetTracker {
+ public:
+  // camera_names[0] is the master. `options` must be valid (Check). Starts no thread.
+  ClockOffsetTracker(std::vector<std::string> camera_names, ClockOffsetOptions options);
+  ~ClockOffsetTracker();
+
+  // Takes one pose of any camera (stamp on its own clock, increasing per camera; others are
+  // ignored). Returns true when the offset of some slave changed (initialised, refined, or
+  // found to have jumped): SlaveOffset then has the new value.
+  bool Add(const CameraPose& pose);
+
+  int num_slaves() const;
+  // Slave `slave` (0-based: camera slave + 1).
+  SlaveClockOffset SlaveOffset(int slave) const;
+  // The offset to match with [ns]: the estimate, or 0 while not initialised.
+  int64_t MatchingOffsetNs(int slave) const;
+
+ private:
+  struct Slave;
+  void Update(int slave);
+  bool Initialise(int slave);
+  bool Measure(int slave);
+  void Trim(std::deque<CameraPose>* poses) const;
+
+  std::vector<std::string> names_;
+  ClockOffsetOptions options_;
+  std::vector<std::deque<CameraPose>> poses_;  // per camera, own clock
+  std::vector<Slave> slaves_;
+};
+
+}  // namespace rigcal
