@@ -159,12 +159,12 @@ TEST(SyncClockGlitch, PastStampsAreRejectedAndCounted) {
   SyncBuffer buffer(TwoCameras());
   std::vector<PushResult> glitches;
   Feed(&buffer, 200, [&](int k, int c) {
-    if (k == 60 && c == 1) {  // a burst: stamp 0, then 1000 s before the stream
+    if (k == 60 && c == 1) {  // a burst: stamp 0, then 2.5 s back
       glitches.push_back(buffer.Push(Entry(1, 0)));
-      glitches.push_back(buffer.Push(Entry(1, kStart + 60 * kPeriod - 1'000'000'000'000)));
+      glitches.push_back(buffer.Push(Entry(1, kStart + 60 * kPeriod - 2'500'000'000)));
     }
-    if (k == 90 && c == 0) {  // the master, 10 s back
-      glitches.push_back(buffer.Push(Entry(0, kStart + 90 * kPeriod - 10'000'000'000)));
+    if (k == 90 && c == 0) {  // the master, 3 s back
+      glitches.push_back(buffer.Push(Entry(0, kStart + 90 * kPeriod - 3'000'000'000)));
     }
   });
   EXPECT_EQ(glitches, std::vector<PushResult>(3, PushResult::kClockGlitch));
