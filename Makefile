@@ -39,10 +39,10 @@ demo: build
 # suite includes the static thread-contract check (label threads: clang -Wthread-safety over
 # the threaded sources with $(BUILD_DIR)/compile_commands.json, no extra build tree).
 test: build test-asan test-tsan
-	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
+	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
 test-fast: build
-	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE eval $(CTEST_ARGS)
+	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
 test-asan: deps
 	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,-DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)

@@ -1,5 +1,7 @@
 #include "rigcal/calib/online_calibrator.h"
 
+#include <pthread.h>
+
 #include <algorithm>
 
 #include "rigcal/calib/logging.h"
@@ -20,6 +22,15 @@ OnlineOptions Checked(OnlineOptions options, size_t cameras) {
 }
 
 constexpr auto kWaitSlice = std::chrono::milliseconds(50);
+
+// The calling thread's name as `top -H` and /proc/<pid>/task/*/comm show it (at most 15 chars).
+void NameThisThread(const char* name) {
+#ifdef __linux__
+  pthread_setname_np(pthread_self(), name);
+#else
+  (void)name;
+#endif
+}
 
 }  // namespace
 
@@ -163,10 +174,14 @@ RigEstimatorState OnlineCalibrator::SaveState() const {
 
 Status OnlineCalibrator::RestoreState(const RigEstimatorState& state) {
   MutexLock lock(estimator_mutex_);
-  return estimator_.RestoreState(state);
+  const Status restored = estimator_.RestoreState(state);
+  // The poses the estimator took before the restart are not taken twice.
+  if (restored.ok()) sync_.SkipConsumed(state.consumed_t_ns);
+  return restored;
 }
 
 void OnlineCalibrator::EstimatorLoop() {
+  NameThisThread("rigcal-estimate");
   MatchedSet set;
   const bool stream_refinement = options_.refine_on_stream_time && options_.refine_period_s > 0.0;
   const auto refine_period_ns = static_cast<int64_t>(options_.refine_period_s * 1e9);
@@ -199,6 +214,7 @@ void OnlineCalibrator::EstimatorLoop() {
 }
 
 void OnlineCalibrator::RefinementLoop() {
+  NameThisThread("rigcal-refine");
   auto log = ModuleLogger("calib");
   const auto period = std::chrono::ceil<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(options_.refine_period_s));

@@ -5,6 +5,7 @@
 //                online_uncertainty -> convergence_check -> model_explanation
 #include "rigcal/calib/rig_estimator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -124,6 +125,7 @@ RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOp
     : names_(std::move(camera_names)), options_(std::move(options)) {
   RequireValid(options_.Check(), "RigEstimatorOptions");
   glitch_gate_ = std::make_unique<internal::PoseGlitchGate>(static_cast<int>(names_.size()));
+  consumed_t_ns_.assign(names_.size(), -1);
   estimate_.rig.master = names_.empty() ? "" : names_[0];
   for (size_t i = 1; i < names_.size(); ++i) {
     slaves_.push_back(std::make_unique<Slave>(options_));
@@ -151,6 +153,9 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
   }
   estimate_.t_ns = t_ns;
   ++estimate_.sets;
+  for (size_t c = 0; c < poses.size() && c < consumed_t_ns_.size(); ++c) {
+    if (poses[c]) consumed_t_ns_[c] = std::max(consumed_t_ns_[c], poses[c]->t_ns);
+  }
   const CameraPose& master = *poses[0];
   if (have_master_segment_ && master.segment != master_segment_) {
     // New master unit: positions and scales restart; rotations are unit-free and stay.
@@ -425,6 +430,7 @@ RigEstimatorState RigEstimator::SaveState() const {
   state.cameras = names_;
   state.master_segment = master_segment_;
   state.have_master_segment = have_master_segment_;
+  state.consumed_t_ns = consumed_t_ns_;
   for (const auto& slave : slaves_) {
     const Slave& s = *slave;
     SlaveEstimatorState& saved = state.slaves.emplace_back();
@@ -476,6 +482,8 @@ Status RigEstimator::RestoreState(const RigEstimatorState& state) {
   slaves_ = std::move(restored);
   master_segment_ = state.master_segment;
   have_master_segment_ = state.have_master_segment;
+  consumed_t_ns_.assign(names_.size(), -1);
+  if (state.consumed_t_ns.size() == names_.size()) consumed_t_ns_ = state.consumed_t_ns;
   ++generation_;
   for (size_t i = 0; i < slaves_.size(); ++i) Publish(static_cast<int>(i));
   return Status::Ok();

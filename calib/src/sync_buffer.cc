@@ -74,6 +74,8 @@ const char* ToString(PushResult result) {
       return "out_of_order";
     case PushResult::kClockGlitch:
       return "clock_glitch";
+    case PushResult::kConsumed:
+      return "consumed";
   }
   return "?";
 }
@@ -96,6 +98,7 @@ std::string SyncStats::BriefReport() const {
     field("duplicate", k.duplicate);
     field("out_of_order", k.out_of_order);
     field("clock_glitch", k.clock_glitch);
+    field("consumed", k.consumed);
     field("invalid", k.invalid);
     field("stopped", k.stopped);
     field("optional_missing", k.optional_missing);
@@ -120,6 +123,9 @@ SyncBuffer::~SyncBuffer() = default;
 
 const SyncOptions& SyncBuffer::options() const { return impl_->options(); }
 PushResult SyncBuffer::Push(const CameraPose& pose) { return impl_->Push(pose); }
+void SyncBuffer::SkipConsumed(const std::vector<int64_t>& consumed_t_ns) {
+  impl_->SkipConsumed(consumed_t_ns);
+}
 bool SyncBuffer::Pop(MatchedSet* out, std::chrono::milliseconds timeout) {
   return impl_->Pop(out, timeout);
 }

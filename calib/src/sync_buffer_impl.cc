@@ -73,6 +73,7 @@ SyncStats SyncBuffer::Impl::stats() const {
     t.duplicate += k.duplicate;
     t.out_of_order += k.out_of_order;
     t.clock_glitch += k.clock_glitch;
+    t.consumed += k.consumed;
     t.overflow += k.overflow;
     t.never_matched += k.never_matched;
     t.optional_missing += k.optional_missing;

@@ -35,6 +35,7 @@ class SyncBuffer::Impl {
 
   // SyncBuffer's functions of the same name (sync_buffer.h).
   PushResult Push(const CameraPose& pose) RIGCAL_EXCLUDES(mutex_);
+  void SkipConsumed(const std::vector<int64_t>& consumed_t_ns) RIGCAL_EXCLUDES(mutex_);
   void Flush() RIGCAL_EXCLUDES(mutex_);
   bool Pop(MatchedSet* out, std::chrono::milliseconds timeout) RIGCAL_EXCLUDES(mutex_);
   bool TryPop(MatchedSet* out) RIGCAL_EXCLUDES(mutex_);
@@ -65,6 +66,14 @@ class SyncBuffer::Impl {
     int64_t jump_t = 0;
     int jump_run = 0;
     bool in_glitch_burst = false;
+    int accepted_in_row = 0;  // accepted poses since the last rejected stamp
+    // The camera's recent frame intervals (a fixed ring of the last kIntervals, in order of
+    // arrival) and how many of them are measured.
+    static constexpr int kIntervals = 8;
+    int64_t intervals[kIntervals] = {};
+    int interval_count = 0;
+    // Resume: stamps at or before this were consumed before the restart (-1: none).
+    int64_t consumed_t = -1;
   };
 
   // The partner of the current master entry in one slave ring.
@@ -94,6 +103,15 @@ class SyncBuffer::Impl {
   // Whether `pose` (otherwise acceptable) is a clock glitch: see sync_buffer.h. Updates the
   // camera's jump confirmation.
   bool ClockGlitch(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
+  // Whether `pose` lies more than the glitch horizon behind its camera's or the stream's clock.
+  bool PastGlitch(const CameraPose& pose) const RIGCAL_REQUIRES(mutex_);
+  // The median of camera `c`'s recent frame intervals; 0 while fewer than 4 are measured.
+  int64_t RecentInterval(int c) const RIGCAL_REQUIRES(mutex_);
+  // The newest stamp of any camera but `c`; -1 when none has data.
+  int64_t OthersNewest(int c) const RIGCAL_REQUIRES(mutex_);
+  // One warning per burst of rejected stamps of a camera (ended by kQuietPoses accepted poses in
+  // a row).
+  void WarnOncePerBurst(const CameraPose& pose, PushResult why) RIGCAL_REQUIRES(mutex_);
   // Buffers an accepted pose (dropping its ring's oldest entry when full).
   void Accept(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
   // Stream time against which master entries time out.

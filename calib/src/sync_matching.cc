@@ -18,6 +18,8 @@ SyncKey KeyOf(const CameraPose& p) { return {p.t_ns, p.trigger_seq}; }
 
 // Poses in a row on a jumped timeline that make the jump accepted.
 constexpr int kJumpConfirmations = 5;
+// Accepted poses in a row that end a burst of rejected stamps (its one warning).
+constexpr int kQuietPoses = 50;
 
 }  // namespace
 
@@ -29,7 +31,8 @@ PushResult SyncBuffer::Impl::Push(const CameraPose& pose) {
   }
   CameraState& cam = cameras_[pose.camera];
   ++cam.stats.pushed;
-  const PushResult result = Classify(pose);
+  PushResult result = Classify(pose);
+  if (result == PushResult::kAccepted && ClockGlitch(pose)) result = PushResult::kClockGlitch;
   switch (result) {
     case PushResult::kAccepted:
       break;
@@ -44,30 +47,79 @@ PushResult SyncBuffer::Impl::Push(const CameraPose& pose) {
       return result;
     case PushResult::kDuplicate:
       ++cam.stats.duplicate;
+      WarnOncePerBurst(pose, result);
       return result;
     case PushResult::kOutOfOrder:
       ++cam.stats.out_of_order;
+      WarnOncePerBurst(pose, result);
       return result;
     case PushResult::kClockGlitch:
+      ++cam.stats.clock_glitch;
+      WarnOncePerBurst(pose, result);
+      return result;
+    case PushResult::kConsumed:
+      ++cam.stats.consumed;
+      WarnOncePerBurst(pose, result);
       return result;
     case PushResult::kUnknownCamera:
       return result;
   }
-  if (ClockGlitch(pose)) {
-    ++cam.stats.clock_glitch;
-    if (!cam.in_glitch_burst) {
-      cam.in_glitch_burst = true;
-      ModuleLogger("calib")->warn(
-          "sync: camera {} pose stamped {} ns is far ahead of every camera's clock (newest {} "
-          "ns): a clock glitch, not buffered (counted clock_glitch; warned once per burst)",
-          pose.camera, pose.t_ns, now_ns_);
-    }
-    return PushResult::kClockGlitch;
-  }
-  cam.in_glitch_burst = false;
+  if (++cam.accepted_in_row >= kQuietPoses) cam.in_glitch_burst = false;
   Accept(pose);
   if (Process(/*flush=*/false) > 0) ready_cv_.notify_all();
   return PushResult::kAccepted;
+}
+
+void SyncBuffer::Impl::SkipConsumed(const std::vector<int64_t>& consumed_t_ns) {
+  MutexLock lock(mutex_);
+  for (int c = 0; c < n_ && c < static_cast<int>(consumed_t_ns.size()); ++c) {
+    cameras_[c].consumed_t = consumed_t_ns[c];
+  }
+}
+
+void SyncBuffer::Impl::WarnOncePerBurst(const CameraPose& pose, PushResult why) {
+  CameraState& cam = cameras_[pose.camera];
+  cam.accepted_in_row = 0;
+  if (cam.in_glitch_burst) return;
+  cam.in_glitch_burst = true;
+  const char* what = why == PushResult::kClockGlitch
+                         ? "far from the cameras' clocks: a clock glitch"
+                     : why == PushResult::kDuplicate ? "a duplicate"
+                     : why == PushResult::kConsumed
+                         ? "at or before the stamp consumed before the restart (replayed data; a "
+                           "new drive on a clock that restarted needs a fresh state)"
+                         : "out of order";
+  ModuleLogger("calib")->warn(
+      "sync: camera {} pose stamped {} ns is {} (its newest {} ns, newest of any camera {} ns); "
+      "not buffered (counted {}; warned once per burst)",
+      pose.camera, pose.t_ns, what, cam.any ? cam.newest_t : -1, has_stream_ ? now_ns_ : -1,
+      ToString(why));
+}
+
+int64_t SyncBuffer::Impl::RecentInterval(int c) const {
+  const CameraState& cam = cameras_[c];
+  if (cam.interval_count < 4) return 0;
+  const int n = std::min(cam.interval_count, CameraState::kIntervals);
+  int64_t sorted[CameraState::kIntervals];
+  std::copy(cam.intervals, cam.intervals + n, sorted);
+  std::nth_element(sorted, sorted + n / 2, sorted + n);
+  return sorted[n / 2];
+}
+
+int64_t SyncBuffer::Impl::OthersNewest(int c) const {
+  int64_t newest = -1;
+  for (int j = 0; j < n_; ++j) {
+    if (j != c && cameras_[j].any) newest = std::max(newest, cameras_[j].newest_t);
+  }
+  return newest;
+}
+
+bool SyncBuffer::Impl::PastGlitch(const CameraPose& pose) const {
+  if (by_seq_ || !has_stream_) return false;
+  const CameraState& cam = cameras_[pose.camera];
+  const int64_t clock = cam.any ? std::max(cam.newest_t, now_ns_) : now_ns_;
+  // Stamps are >= 0 (IsValid) and clock <= INT64_MAX: no overflow.
+  return clock - pose.t_ns > glitch_horizon_ns_;
 }
 
 bool SyncBuffer::Impl::ClockGlitch(const CameraPose& pose) {
@@ -75,11 +127,21 @@ bool SyncBuffer::Impl::ClockGlitch(const CameraPose& pose) {
   CameraState& cam = cameras_[pose.camera];
   // now_ns_: the newest stamp of any camera, this one included. Stamps are >= 0 (IsValid), so
   // the differences below cannot overflow.
-  if (pose.t_ns - now_ns_ <= glitch_horizon_ns_) {
+  bool ahead = pose.t_ns - now_ns_ > glitch_horizon_ns_;
+  if (!ahead && cam.any) {
+    // Against the camera's own recent rate, confirmed by the other cameras' clocks.
+    const int64_t interval = RecentInterval(pose.camera);
+    const int64_t others = OthersNewest(pose.camera);
+    ahead = interval > 0 && others >= 0 &&
+            pose.t_ns - cam.newest_t > std::max(20 * interval, max_wait_ns_) &&
+            pose.t_ns - others > max_wait_ns_;
+  }
+  if (!ahead) {
     cam.jump_run = 0;
     return false;
   }
-  // Ahead of every clock: a glitch unless the camera keeps to the new timeline.
+  // Ahead of the clocks: a glitch unless the camera keeps to the new timeline while no other
+  // camera delivers on the old one (Accept resets the other cameras' runs).
   if (cam.jump_run > 0 && pose.t_ns > cam.jump_t && pose.t_ns - cam.jump_t <= glitch_horizon_ns_) {
     ++cam.jump_run;
   } else {
@@ -102,6 +164,8 @@ PushResult SyncBuffer::Impl::Classify(const CameraPose& pose) const {
   if (stopped_) return PushResult::kStopped;
   if (!IsValid(pose)) return PushResult::kInvalid;
   const CameraState& cam = cameras_[pose.camera];
+  if (pose.t_ns <= cam.consumed_t) return PushResult::kConsumed;
+  if (PastGlitch(pose)) return PushResult::kClockGlitch;
   const SyncKey key = KeyOf(pose);
   if (cam.any_used && (key.t_ns <= cam.last_used.t_ns ||
                        (SeqPair(key.seq, cam.last_used.seq) && key.seq <= cam.last_used.seq)))
@@ -133,6 +197,16 @@ void SyncBuffer::Impl::Accept(const CameraPose& pose) {
       ++cam.stats.overflow;
     }
     cam.ring.PushBack() = pose;
+  }
+  if (cam.any && pose.t_ns > cam.newest_t) {
+    cam.intervals[cam.interval_count % CameraState::kIntervals] = pose.t_ns - cam.newest_t;
+    ++cam.interval_count;
+    if (cam.interval_count >= 2 * CameraState::kIntervals)
+      cam.interval_count -= CameraState::kIntervals;
+  }
+  // A pose on the current timeline: a jump of another camera is not every camera's.
+  for (int j = 0; j < n_; ++j) {
+    if (j != pose.camera) cameras_[j].jump_run = 0;
   }
   cam.any = true;
   cam.newest_t = pose.t_ns;

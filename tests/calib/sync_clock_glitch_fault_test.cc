@@ -1,12 +1,19 @@
-// Clock glitches in the SyncBuffer: a pose stamped far in the future (up to INT64_MAX) is
-// rejected against the other cameras' clocks and counted, and matching goes on; a real jump of
-// the stream is accepted once confirmed.
+// Clock glitches in the SyncBuffer: a pose stamped far in the future (up to INT64_MAX) or in the
+// past, a clock that alone steps by 10 s or by 1 s (the camera's own rate), duplicates: rejected
+// against the other cameras' clocks and counted, warned about once per burst, and matching goes
+// on; a real jump of the stream is accepted once confirmed; poses consumed before a restart are
+// skipped.
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ringbuffer_sink.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <string>
 #include <vector>
 
+#include "rigcal/calib/logging.h"
 #include "rigcal/calib/sync_buffer.h"
 
 namespace rigcal {
@@ -122,6 +129,128 @@ TEST(SyncClockGlitch, TriggerModeIgnoresStampOffsets) {
     }
   }
   EXPECT_EQ(Sets(&buffer), 50u);
+}
+
+// The calib logger's warnings while in scope.
+class WarningCapture {
+ public:
+  WarningCapture() : sink_(std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(1000)) {
+    sink_->set_level(spdlog::level::warn);
+    ModuleLogger("calib")->sinks().push_back(sink_);
+  }
+  ~WarningCapture() {
+    auto& sinks = ModuleLogger("calib")->sinks();
+    sinks.erase(std::remove(sinks.begin(), sinks.end(), sink_), sinks.end());
+  }
+  // Warnings that contain `text`.
+  int Count(const std::string& text) const {
+    int n = 0;
+    for (const std::string& line : sink_->last_formatted())
+      n += line.find(text) != std::string::npos;
+    return n;
+  }
+
+ private:
+  std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink_;
+};
+
+TEST(SyncClockGlitch, PastStampsAreRejectedAndCounted) {
+  WarningCapture warnings;
+  SyncBuffer buffer(TwoCameras());
+  std::vector<PushResult> glitches;
+  Feed(&buffer, 200, [&](int k, int c) {
+    if (k == 60 && c == 1) {  // a burst: stamp 0, then 2.5 s back
+      glitches.push_back(buffer.Push(Entry(1, 0)));
+      glitches.push_back(buffer.Push(Entry(1, kStart + 60 * kPeriod - 2'500'000'000)));
+    }
+    if (k == 90 && c == 0) {  // the master, 3 s back
+      glitches.push_back(buffer.Push(Entry(0, kStart + 90 * kPeriod - 3'000'000'000)));
+    }
+  });
+  EXPECT_EQ(glitches, std::vector<PushResult>(3, PushResult::kClockGlitch));
+  EXPECT_EQ(Sets(&buffer), 200u);
+  const SyncStats s = buffer.stats();
+  EXPECT_EQ(s.cameras[0].clock_glitch, 1u);
+  EXPECT_EQ(s.cameras[1].clock_glitch, 2u);
+  EXPECT_EQ(s.total.late + s.total.out_of_order, 0u);
+  EXPECT_EQ(warnings.Count("clock glitch"), 2);  // one per burst
+  ExpectCountsAddUp(s);
+}
+
+// One camera's clock steps 10 s ahead for 40 frames while the master keeps its clock: its poses
+// are rejected for as long as the others disagree (the old rule accepted the jump after 5 poses
+// and then lost every later pose of that camera as out of order), and matching goes on when the
+// clock comes back.
+TEST(SyncClockGlitch, AClockThatAloneJumpsIsRejectedUntilTheOthersAgree) {
+  WarningCapture warnings;
+  SyncBuffer buffer(TwoCameras());
+  int glitched = 0;
+  for (int k = 0; k < 200; ++k) {
+    const int64_t t = kStart + k * kPeriod;
+    EXPECT_EQ(buffer.Push(Entry(0, t)), PushResult::kAccepted) << k;
+    const bool stepped = k >= 100 && k < 140;
+    const PushResult r = buffer.Push(Entry(1, t + (stepped ? 10'000'000'000 : 0)));
+    EXPECT_EQ(r, stepped ? PushResult::kClockGlitch : PushResult::kAccepted) << k;
+    glitched += r == PushResult::kClockGlitch;
+  }
+  EXPECT_EQ(glitched, 40);
+  EXPECT_EQ(Sets(&buffer), 160u);  // the 40 masters without a partner are never matched
+  const SyncStats s = buffer.stats();
+  EXPECT_EQ(s.cameras[1].clock_glitch, 40u);
+  EXPECT_EQ(s.cameras[0].never_matched, 40u);
+  EXPECT_EQ(s.total.out_of_order + s.total.late, 0u);
+  EXPECT_EQ(warnings.Count("clock glitch"), 1);
+  ExpectCountsAddUp(s);
+}
+
+// A step of 1 s stays within the 2 s horizon of the other cameras' clocks, but is 20 frame
+// intervals beyond the camera's own rate and ahead of every other camera.
+TEST(SyncClockGlitch, AStepBeyondTheCamerasOwnRateIsRejected) {
+  SyncBuffer buffer(TwoCameras());
+  int glitched = 0;
+  for (int k = 0; k < 200; ++k) {
+    const int64_t t = kStart + k * kPeriod;
+    buffer.Push(Entry(0, t));
+    const bool stepped = k >= 100 && k < 110;
+    glitched +=
+        buffer.Push(Entry(1, t + (stepped ? 1'100'000'000 : 0))) == PushResult::kClockGlitch;
+  }
+  EXPECT_EQ(glitched, 10);
+  EXPECT_EQ(Sets(&buffer), 190u);
+  EXPECT_EQ(buffer.stats().total.out_of_order, 0u);
+  ExpectCountsAddUp(buffer.stats());
+}
+
+TEST(SyncClockGlitch, DuplicatesAreCountedAndWarnedOncePerBurst) {
+  WarningCapture warnings;
+  SyncBuffer buffer(TwoCameras());
+  for (int k = 0; k < 200; ++k) {
+    const int64_t t = kStart + k * kPeriod;
+    // The slave first, then (in two bursts) the same pose again, then the master.
+    EXPECT_EQ(buffer.Push(Entry(1, t)), PushResult::kAccepted);
+    if ((k > 60 && k <= 70) || (k > 150 && k <= 152)) {
+      EXPECT_EQ(buffer.Push(Entry(1, t)), PushResult::kDuplicate);
+      EXPECT_EQ(buffer.Push(Entry(1, t)), PushResult::kDuplicate);
+    }
+    EXPECT_EQ(buffer.Push(Entry(0, t)), PushResult::kAccepted);
+  }
+  EXPECT_EQ(Sets(&buffer), 200u);
+  EXPECT_EQ(buffer.stats().cameras[1].duplicate, 24u);
+  // A burst ends after 50 accepted poses of the camera in a row: two bursts.
+  EXPECT_EQ(warnings.Count("a duplicate"), 2);
+  ExpectCountsAddUp(buffer.stats());
+}
+
+// After a restart the poses the estimator consumed before it are skipped, counted `consumed`.
+TEST(SyncClockGlitch, PosesConsumedBeforeARestartAreSkipped) {
+  SyncBuffer buffer(TwoCameras());
+  buffer.SkipConsumed({kStart + 99 * kPeriod, kStart + 99 * kPeriod});
+  Feed(&buffer, 200, [](int, int) {});
+  EXPECT_EQ(Sets(&buffer), 100u);
+  const SyncStats s = buffer.stats();
+  EXPECT_EQ(s.cameras[0].consumed, 100u);
+  EXPECT_EQ(s.cameras[1].consumed, 100u);
+  ExpectCountsAddUp(s);
 }
 
 }  // namespace

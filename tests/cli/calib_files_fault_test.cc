@@ -1,12 +1,9 @@
 // `rigcal calib` / `replay` and the files they write, under faults: an --out that is not a
 // regular file, a replaced file's permissions, a run that calibrated nothing, a state file that
 // --resume rejects, and SIGTERM / SIGHUP during a paced replay (result and state written).
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -14,11 +11,8 @@
 #include <fstream>
 #include <string>
 #include <thread>
-#include <vector>
 
 #include "cli/command_test.h"
-
-extern char** environ;
 
 namespace {
 
@@ -26,6 +20,8 @@ namespace fs = std::filesystem;
 
 using rigcal::cli_test::RunResult;
 using rigcal::cli_test::Slurp;
+using rigcal::cli_test::Spawn;
+using rigcal::cli_test::WaitExit;
 
 // The rig config and pose log of SynthLogTest.
 class CalibFilesFault : public rigcal::cli_test::SynthLogTest {
@@ -125,41 +121,6 @@ TEST_F(CalibFilesFault, RejectedStateIsKeptAsideNotOverwritten) {
       Run("replay " + Path("poses.lcmlog") + " --config " + Path("other.yaml") +
           " --no-progress --state " + state + " --resume --out " + Path("o.yaml"));
   EXPECT_NE(other.err.find("kept as " + state + ".rejected-"), std::string::npos) << other.err;
-}
-
-// The binary in the background (paced replay: ~40 s of log at --speed 1), its PID.
-pid_t Spawn(const std::string& binary, const std::vector<std::string>& args,
-            const std::string& err_path) {
-  std::vector<std::string> argv_strings = {binary};
-  argv_strings.insert(argv_strings.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& s : argv_strings) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                   0644);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, binary.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  return rc == 0 ? pid : -1;
-}
-
-// Exit code of `pid`, waiting at most `timeout`; -1 when it did not exit normally in time (then
-// it is killed).
-int WaitExit(pid_t pid, std::chrono::seconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  int status = 0;
-  while (std::chrono::steady_clock::now() < end) {
-    const pid_t done = ::waitpid(pid, &status, WNOHANG);
-    if (done == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  ::kill(pid, SIGKILL);
-  ::waitpid(pid, &status, 0);
-  return -1;
 }
 
 TEST_F(CalibFilesFault, SigtermAndSighupWriteResultAndState) {

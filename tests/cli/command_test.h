@@ -2,16 +2,25 @@
 // The harness of the tests that run the built rigcal binary (RIGCAL_BINARY, set by
 // tests/CMakeLists.txt): a fresh temporary directory per test, kept when the test fails, and
 // Run(args) -> exit code, stdout and stderr.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
 #include <stdlib.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
 
 namespace rigcal::cli_test {
 
@@ -46,6 +55,42 @@ inline RunResult RunShell(const std::string& command, const std::filesystem::pat
   r.out = Slurp(out);
   r.err = Slurp(err);
   return r;
+}
+
+// `binary args...` in the background (stdin and stdout /dev/null, stderr into err_path); its PID,
+// -1 when it could not be started.
+inline pid_t Spawn(const std::string& binary, const std::vector<std::string>& args,
+                   const std::string& err_path) {
+  std::vector<std::string> argv_strings = {binary};
+  argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& s : argv_strings) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, binary.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return rc == 0 ? pid : -1;
+}
+
+// Exit code of `pid` (a child), waiting at most `timeout`; -1 when it did not exit normally in
+// time (then it is killed by its PID) or was killed by a signal.
+inline int WaitExit(pid_t pid, std::chrono::milliseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  int status = 0;
+  while (std::chrono::steady_clock::now() < end) {
+    const pid_t done = ::waitpid(pid, &status, WNOHANG);
+    if (done == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+  return -1;
 }
 
 class CommandTest : public ::testing::Test {

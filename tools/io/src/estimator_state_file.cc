@@ -181,6 +181,9 @@ std::string FormatEstimatorState(const RigEstimatorState& state) {
   for (const auto& n : state.cameras) body << ' ' << n;
   body << "\nmaster_segment " << state.master_segment << ' ' << (state.have_master_segment ? 1 : 0)
        << '\n';
+  body << "consumed " << state.consumed_t_ns.size();
+  for (const int64_t t : state.consumed_t_ns) body << ' ' << t;
+  body << '\n';
   for (size_t i = 0; i < state.slaves.size(); ++i) {
     const SlaveEstimatorState& s = state.slaves[i];
     const MotionCounts& c = s.counts;
@@ -237,6 +240,21 @@ Expected<RigEstimatorState> ParseEstimatorState(std::string_view view) {
     return Error{"malformed master_segment"};
   }
   state.have_master_segment = have != 0;
+  if (version >= 4) {
+    // How far each camera's input was consumed: one stamp per camera, -1 for none.
+    size_t n = 0;
+    if (!(b >> word >> n) || word != "consumed" || (n != 0 && n != count)) {
+      return Error{"malformed consumed stamps (one per camera)"};
+    }
+    for (size_t i = 0; i < n; ++i) {
+      int64_t t = 0;
+      if (!(b >> t) || t < -1) {
+        return Error{"consumed stamp of camera '" + state.cameras[i] +
+                     "' is malformed or out of range [-1, 2^63)"};
+      }
+      state.consumed_t_ns.push_back(t);
+    }
+  }
   const std::string rest((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
   if (const Status read = ReadSlaves(rest, &state); !read.ok()) return read;
   if (const Status ranges = CheckEstimatorStateRanges(state); !ranges.ok()) return ranges;

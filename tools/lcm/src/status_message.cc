@@ -98,7 +98,8 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
     cam.dropped_overflow = input.dropped_backlog;
     if (i < sync.cameras.size()) {
       const SyncCameraStats& s = sync.cameras[i];
-      cam.dropped_late = static_cast<int64_t>(s.late);
+      // A pose consumed before a restart (resume) is as late as it gets.
+      cam.dropped_late = static_cast<int64_t>(s.late + s.consumed);
       cam.dropped_duplicate = static_cast<int64_t>(s.duplicate);
       cam.dropped_out_of_order = static_cast<int64_t>(s.out_of_order);
       // Ring overflow, and this camera's members of sets the full ready queue dropped.

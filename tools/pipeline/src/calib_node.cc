@@ -279,7 +279,17 @@ void CalibNode::Impl::RestoreState() {
   const Status restored = state ? calibrator.RestoreState(*state) : state.status();
   if (restored.ok()) {
     summary.resumed = true;
-    log->info("resumed from {}", state_path);
+    std::string consumed;
+    for (size_t i = 0; i < state->consumed_t_ns.size() && i < names.size(); ++i) {
+      if (state->consumed_t_ns[i] >= 0) {
+        consumed += (consumed.empty() ? "" : ", ") + names[i] + " " +
+                    std::to_string(state->consumed_t_ns[i]) + " ns";
+      }
+    }
+    log->info("resumed from {}{}", state_path,
+              consumed.empty() ? std::string()
+                               : "; poses up to the stamps consumed there are skipped (" +
+                                     consumed + ", counted consumed)");
     return;
   }
   // A rejected state (corrupt, newer version, other rig) is kept for a look, never overwritten.

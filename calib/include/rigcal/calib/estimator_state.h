@@ -99,6 +99,10 @@ struct RigEstimatorState {
   int master_segment = 0;                   // the master's current odometry segment
   bool have_master_segment = false;         // false until the first set
   std::vector<SlaveEstimatorState> slaves;  // one per slave, cameras[i + 1]
+  // Per camera, the newest stamp [ns] of its poses in a set the estimator took (-1: none): how
+  // far each input was consumed, so that the same poses after a resume are skipped. Empty when
+  // unknown (state files before version 4).
+  std::vector<int64_t> consumed_t_ns;
 };
 
 // The direction moments d_dir = sum w c_i c_i^T of statistics saved without them (state files of

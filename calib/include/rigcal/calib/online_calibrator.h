@@ -87,7 +87,8 @@ class OnlineCalibrator {
   RigEstimate Estimate() const;
   SyncStats sync_stats() const { return sync_.stats(); }
   // The estimator's state, to continue after a restart (any thread; serialised with the
-  // estimator thread). See RigEstimator::SaveState / RestoreState.
+  // estimator thread). See RigEstimator::SaveState / RestoreState. A restored state makes the
+  // sync buffer skip the poses it consumed (SyncBuffer::SkipConsumed): call before pushing.
   RigEstimatorState SaveState() const;
   Status RestoreState(const RigEstimatorState& state);
   // Number of background refinements applied so far.

@@ -260,6 +260,7 @@ class RigEstimator {
   int master_segment_ = 0;
   bool have_master_segment_ = false;
   uint64_t generation_ = 0;
+  std::vector<int64_t> consumed_t_ns_;  // RigEstimatorState::consumed_t_ns, per camera
 };
 
 // Runs the non-linear refinement (thesis 4.26/4.27 with Ceres) of a job. Pure function:

@@ -55,13 +55,25 @@
 // ring while a later master may still use them (they are counted `used` when they leave it
 // having served a set, never_matched otherwise); trigger numbers are ignored.
 //
-// Clock glitches (stamp mode only). A pose stamped more than the glitch horizon
-// (max(2 s, 10 * max_wait)) ahead of both its camera's newest stamp and the newest stamp of every
-// other camera is not accepted (kClockGlitch, counted clock_glitch, one warning per burst): one
-// future stamp (up to INT64_MAX) would otherwise make every later pose of the camera out of order
-// and time out every master entry. A jump is accepted once the camera confirms its new timeline
-// with 5 consecutive poses within the horizon of each other, or as soon as another camera's
-// clock reaches it.
+// Clock glitches (stamp mode only). A pose is not accepted (kClockGlitch, counted clock_glitch,
+// one warning per burst of a camera; a burst ends after 50 accepted poses in a row) when it is
+// stamped
+//  * more than the glitch horizon (max(2 s, 10 * max_wait)) ahead of the newest stamp of every
+//    camera (up to INT64_MAX), or
+//  * ahead of its camera's own recent rate (more than max(20 of its recent frame intervals,
+//    max_wait) after its newest stamp) while also more than max_wait ahead of every other
+//    camera's newest stamp (a clock that stepped by a second), or
+//  * more than the glitch horizon behind its camera's newest stamp or the newest stamp of any
+//    camera (a stamp from the past).
+// One such stamp would otherwise make every later pose of the camera out of order and time out
+// every master entry. A jump ahead is accepted once the camera confirms its new timeline with 5
+// consecutive poses within the horizon of each other while no other camera delivered a pose on
+// the old timeline (every camera paused), or as soon as another camera's clock reaches it: a
+// camera whose clock alone jumped is rejected until the others agree. Duplicates and poses out
+// of order are warned about once per burst too.
+//
+// Resume: SkipConsumed(t) makes every pose of camera c stamped at or before t[c] kConsumed (the
+// estimator took it before a restart), so replaying the same data after a resume adds nothing.
 
 #include <chrono>
 #include <cstdint>
@@ -129,7 +141,8 @@ enum class PushResult {
                    // (or as its newest entry ever accepted)
   kOutOfOrder,     // older than the newest entry accepted for the camera, but not late (in
                    // trigger mode also: a lower sequence number than the newest)
-  kClockGlitch,    // stamped far ahead of every camera's clock (see "Clock glitches" above)
+  kClockGlitch,    // a stamp far from every camera's clock (see "Clock glitches" above)
+  kConsumed,       // at or before the camera's stamp consumed before a restart (SkipConsumed)
 };
 const char* ToString(PushResult result);
 
@@ -152,6 +165,7 @@ struct SyncCameraStats {
   uint64_t duplicate = 0;         // rejected: PushResult::kDuplicate
   uint64_t out_of_order = 0;      // rejected: PushResult::kOutOfOrder
   uint64_t clock_glitch = 0;      // rejected: PushResult::kClockGlitch
+  uint64_t consumed = 0;          // rejected: PushResult::kConsumed
   uint64_t overflow = 0;          // accepted, then dropped as the oldest entry of a full ring
   uint64_t never_matched = 0;     // accepted, then dropped unused (see the matching rule)
   uint64_t optional_missing = 0;  // emitted sets without this (optional) camera
@@ -161,8 +175,8 @@ struct SyncCameraStats {
   uint64_t fill = 0;  // entries buffered now (<= capacity)
 
   uint64_t Dropped() const {
-    return stopped + invalid + late + duplicate + out_of_order + clock_glitch + overflow +
-           never_matched;
+    return stopped + invalid + late + duplicate + out_of_order + clock_glitch + consumed +
+           overflow + never_matched;
   }
 };
 
@@ -217,6 +231,10 @@ class SyncBuffer {
   // them). Idempotent; any thread.
   void Stop();
   bool stopped() const;
+
+  // Resume: poses of camera c stamped at or before consumed_t_ns[c] are rejected as kConsumed
+  // (-1 or a missing entry: none). Call before the first Push; any thread.
+  void SkipConsumed(const std::vector<int64_t>& consumed_t_ns);
 
   // A consistent snapshot of the counters (allocates the per-camera vector). Any thread.
   SyncStats stats() const;

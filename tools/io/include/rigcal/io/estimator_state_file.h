@@ -5,13 +5,15 @@
 //   rigcal-estimator-state <version>
 //   cameras <count> <name>...
 //   master_segment <segment> <0|1>
+//   consumed <count> <t_ns>...   (version 4: per camera the newest stamp consumed, -1 none)
 //   slave <i>            then its counts, noise levels, segment, model and the long and short
 //   ...                  statistics (every sum, 17 significant digits: exact round trip)
 //   checksum <FNV-1a 64 of the lines between the header and this one, hex>
 //
 // Version 3 holds the translation-direction moments (Ddir, the translational model's σ);
 // version-2 files are read too, with those moments derived from the others
-// (DirectionMomentsFromCrossMoments).
+// (DirectionMomentsFromCrossMoments). Version 4 adds the consumed stamps (how far each input
+// was consumed: a resume skips those poses); older files resume without them.
 
 #include <string>
 #include <string_view>
@@ -21,7 +23,7 @@
 
 namespace rigcal::tools {
 
-inline constexpr int kEstimatorStateVersion = 3;        // written
+inline constexpr int kEstimatorStateVersion = 4;        // written
 inline constexpr int kOldestEstimatorStateVersion = 2;  // oldest read
 
 // The state as the text of a state file (version kEstimatorStateVersion).

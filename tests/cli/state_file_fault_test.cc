@@ -1,0 +1,204 @@
+// The state file of `rigcal replay` / `calib` under faults, through the built binary: kill -9 at
+// random moments while the state is saved over and over (the file is always a complete version
+// and --resume takes it), replaying the same data after a resume (adds nothing), and a camera
+// moved between two runs (the decalibration alarm, then the new mounting).
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli/command_test.h"
+#include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/synthetic.h"
+#include "rigcal/io/estimator_state_file.h"
+#include "rigcal/io/result_file.h"
+#include "rigcal/lcm/pose_log.h"
+
+namespace rigcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+using cli_test::RunResult;
+using cli_test::Slurp;
+using cli_test::Spawn;
+using cli_test::WaitExit;
+
+// The rig of SynthLogTest: front (master) and left.
+const Similarity kLeft{Eigen::Quaterniond(0.9238795, 0, 0.3826834, 0).normalized(),
+                       Eigen::Vector3d(0.3, 0.05, -0.2), 1.0};
+
+class StateFileFault : public cli_test::CommandTest {
+ protected:
+  void SetUp() override {
+    CommandTest::SetUp();
+    if (HasFatalFailure()) return;
+    // The state saved every 0.1 s of log time: a replay saves it hundreds of times.
+    std::ofstream(Path("rig.yaml")) << "rig: {name: test, master: front}\n"
+                                       "cameras:\n"
+                                       "  - name: front\n"
+                                       "  - name: left\n"
+                                       "publish: {extrinsics_rate_hz: 2, status_rate_hz: 1}\n"
+                                       "state: {save_interval_s: 0.1}\n";
+  }
+
+  // A drive of `frames` poses at 20 Hz; from `change_frame` on the slave sits at `moved`.
+  void WriteLog(const std::string& name, int frames, int change_frame = -1,
+                const Similarity& moved = Similarity{}) const {
+    DriveOptions d;
+    d.num_frames = frames;
+    d.rotation_noise_deg = 0.05;
+    d.position_noise = 0.002;
+    d.change_frame = change_frame;
+    if (change_frame >= 0) d.changed_rigs = {moved};
+    const SyntheticDrive drive = GenerateDrive({"front", "left"}, {kLeft}, d);
+    ASSERT_TRUE(tools::WritePoseLog(Path(name), drive.recording).ok());
+  }
+
+  RunResult Replay(const std::string& log, const std::string& extra) const {
+    return Run("replay " + Path(log) + " --config " + Path("rig.yaml") + " --no-progress " + extra);
+  }
+
+  static SlaveCalibration Left(const std::string& result_path) {
+    const Expected<RigCalibration> rig = tools::ReadResultFile(result_path);
+    EXPECT_TRUE(rig.ok()) << (rig.ok() ? "" : rig.error());
+    if (!rig.ok() || rig->slaves.empty()) return {};
+    return rig->slaves[0];
+  }
+};
+
+// kill -9 at 100 random moments of a replay that saves its state every 0.1 s of log time (a few
+// hundred saves per run): the state file is always a complete, checksum-valid version (the one
+// before the run or one the run saved), and `--resume` takes it.
+TEST_F(StateFileFault, KillNineWhileSavingLeavesACompleteState) {
+  WriteLog("poses.lcmlog", 600);
+  WriteLog("short.lcmlog", 40);
+  const std::string state = Path("s.state");
+  const std::vector<std::string> args = {
+      "replay", Path("poses.lcmlog"), "--config", Path("rig.yaml"), "--no-progress", "--state",
+      state};
+  // One whole run: how long a replay takes here, and the first good state.
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t first = Spawn(binary_, args, Path("err_first.txt"));
+  ASSERT_GT(first, 0);
+  const int first_code = WaitExit(first, std::chrono::seconds(120));
+  ASSERT_TRUE(first_code == 0 || first_code == 3) << first_code << Slurp(Path("err_first.txt"));
+  const auto run_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                          std::chrono::steady_clock::now() - start)
+                          .count();
+  ASSERT_TRUE(tools::ParseEstimatorState(Slurp(state)).ok());
+
+  constexpr int kTrials = 100;
+  constexpr unsigned kSeed = 16;
+  std::mt19937 random(kSeed);
+  std::uniform_int_distribution<int64_t> moment(0, run_us);
+  int killed_running = 0, resumed = 0;
+  std::set<std::string> versions;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    const pid_t pid = Spawn(binary_, args, Path("err.txt"));
+    ASSERT_GT(pid, 0);
+    std::this_thread::sleep_for(std::chrono::microseconds(moment(random)));
+    int status = 0;
+    if (::waitpid(pid, &status, WNOHANG) == 0) {
+      ASSERT_EQ(::kill(pid, SIGKILL), 0);
+      ++killed_running;
+    }
+    WaitExit(pid, std::chrono::seconds(60));
+    const std::string after = Slurp(state);
+    const Expected<RigEstimatorState> parsed = tools::ParseEstimatorState(after);
+    ASSERT_TRUE(parsed.ok()) << "trial " << trial << " (seed " << kSeed << "): " << parsed.error();
+    EXPECT_EQ(parsed->cameras, (std::vector<std::string>{"front", "left"}));
+    versions.insert(after);
+    // Every 10th trial: --resume takes the file (and keeps it: nothing renamed aside).
+    if (trial % 10 == 9) {
+      const RunResult r = Replay("short.lcmlog", "--state " + state + " --resume");
+      EXPECT_NE(r.err.find("resumed from " + state), std::string::npos) << r.Explain();
+      EXPECT_EQ(r.err.find("rejected"), std::string::npos) << r.Explain();
+      ++resumed;
+    }
+  }
+  // Left-over temporary files of killed saves are the only other files in the directory.
+  int others = 0;
+  for (const auto& e : fs::directory_iterator(dir_)) {
+    const std::string name = e.path().filename().string();
+    if (name.find(".rejected-") != std::string::npos) ++others;
+  }
+  EXPECT_EQ(others, 0);
+  std::cout << "kill -9 trials: " << kTrials << " (" << killed_running
+            << " killed while running, the others had finished), run " << run_us / 1000 << " ms, "
+            << versions.size() << " distinct complete states seen, " << resumed << " resumed\n";
+  EXPECT_GE(killed_running, kTrials / 2);
+}
+
+// Replaying the same poses after a resume adds nothing (the state remembers how far each camera
+// was consumed): the motions and σ are those of a resume on no new data. Later poses are added.
+TEST_F(StateFileFault, ReplayingTheSameDataAfterAResumeAddsNothing) {
+  WriteLog("poses.lcmlog", 1200);
+  const std::string state = "--state " + Path("s.state");
+  ASSERT_EQ(Replay("poses.lcmlog", "--to 30 --out " + Path("a.yaml") + " " + state).exit_code, 0);
+  const SlaveCalibration a = Left(Path("a.yaml"));
+  ASSERT_GT(a.motions.used, 0);
+  const std::string saved = Slurp(Path("s.state"));
+
+  // The same 30 s again, resumed.
+  const RunResult again =
+      Replay("poses.lcmlog", "--to 30 --resume --out " + Path("b.yaml") + " " + state);
+  ASSERT_EQ(again.exit_code, 0) << again.Explain();
+  EXPECT_NE(again.err.find("are skipped"), std::string::npos) << again.err;
+  const SlaveCalibration b = Left(Path("b.yaml"));
+  // A resume on nothing new: the first half-second only (every pose consumed before).
+  std::ofstream(Path("s2.state")) << saved;
+  ASSERT_EQ(Replay("poses.lcmlog",
+                   "--to 0.5 --resume --state " + Path("s2.state") + " --out " + Path("c.yaml"))
+                .exit_code,
+            0);
+  const SlaveCalibration c = Left(Path("c.yaml"));
+  EXPECT_EQ(b.motions.used, a.motions.used);  // without the consumed stamps: twice as many
+  EXPECT_EQ(b.motions.used, c.motions.used);
+  const auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
+  EXPECT_TRUE(same(b.rot_std_deg, c.rot_std_deg)) << b.rot_std_deg << " vs " << c.rot_std_deg;
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(same(b.pos_std[i], c.pos_std[i])) << i;
+
+  // The whole drive, resumed: the second half is new.
+  ASSERT_EQ(Replay("poses.lcmlog", "--resume --out " + Path("d.yaml") + " " + state).exit_code, 0);
+  const SlaveCalibration d = Left(Path("d.yaml"));
+  EXPECT_GT(d.motions.used, a.motions.used + a.motions.used / 2);
+  EXPECT_LT(d.rot_std_deg, a.rot_std_deg);
+}
+
+// The slave camera is moved (5° about y and 5 cm) between two runs: the resumed run raises the
+// decalibration alarm and ends at the new mounting.
+TEST_F(StateFileFault, ACameraMovedBetweenRunsRaisesTheAlarmAndReconverges) {
+  const Similarity moved{
+      (kLeft.q * Eigen::AngleAxisd(5.0 * M_PI / 180.0, Eigen::Vector3d::UnitY())).normalized(),
+      kLeft.C + Eigen::Vector3d(0.05, 0.0, 0.0), 1.0};
+  WriteLog("poses.lcmlog", 2400, /*change_frame=*/1200, moved);
+  const std::string state = "--state " + Path("s.state");
+  ASSERT_EQ(Replay("poses.lcmlog", "--to 60 --out " + Path("a.yaml") + " " + state).exit_code, 0);
+  const SlaveCalibration a = Left(Path("a.yaml"));
+  ASSERT_TRUE(a.usable()) << a.message;
+  EXPECT_LT(AngleBetween(a.estimate.q, kLeft.q) * 180.0 / M_PI, 0.5);
+
+  const RunResult r = Replay("poses.lcmlog", "--resume --out " + Path("b.yaml") + " " + state);
+  EXPECT_NE(r.err.find("slave 'left' decalibrated"), std::string::npos) << r.Explain();
+  const SlaveCalibration b = Left(Path("b.yaml"));
+  ASSERT_TRUE(b.usable()) << b.message;
+  const double err_deg = AngleBetween(b.estimate.q, moved.q) * 180.0 / M_PI;
+  const double old_deg = AngleBetween(b.estimate.q, kLeft.q) * 180.0 / M_PI;
+  std::cout << "after the move: " << err_deg << " deg from the new mounting, " << old_deg
+            << " deg from the old one\n";
+  EXPECT_LT(err_deg, 0.5);
+  EXPECT_GT(old_deg, 4.0);
+}
+
+}  // namespace
+}  // namespace rigcal
