@@ -8,7 +8,8 @@ CTEST_ARGS ?=
 # ctest, then the number of skipped tests and why (scripts/ctest_with_skips.sh).
 CTEST     = bash scripts/ctest_with_skips.sh
 
-.PHONY: all deps configure build demo test test-fast test-asan test-tsan eval bench format tidy clean
+.PHONY: all deps configure build demo test test-fast asan-build test-asan test-fuzz fuzz test-tsan eval bench \
+	format tidy clean
 
 all: build
 
@@ -34,30 +35,49 @@ build: configure
 demo: build
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
-# Whole suite, then the calib tests once more under ASan+UBSan and the threaded ones under TSan
-# (sanitizer builds compile only the calib library and its own tests: label calib_core). The
-# suite includes the static thread-contract check (label threads: clang -Wthread-safety over
-# the threaded sources with $(BUILD_DIR)/compile_commands.json, no extra build tree).
-test: build test-asan test-tsan
+# Whole suite; then every test but the evaluations once more under ASan+UBSan, each fuzz target
+# for RIGCAL_FUZZ_SECONDS (30 s), and every test that starts threads under TSan. The suite
+# includes the static thread-contract check (label threads: clang -Wthread-safety over the
+# threaded sources with $(BUILD_DIR)/compile_commands.json, no extra build tree).
+test: build test-asan test-fuzz test-tsan
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
 test-fast: build
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
-test-asan: deps
-	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,-DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
-	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_calib_tests
-	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval
+# The sanitizer trees: clang at -O1 with line tables only (cheap to build, readable stacks), no
+# benchmarks, no evaluations. $(ASAN_DIR) is one tree for ASan+UBSan and libFuzzer: the libraries
+# the fuzz targets exercise carry coverage feedback (-fsanitize=fuzzer-no-link), the targets link
+# -fsanitize=fuzzer (cmake/RigcalFuzz.cmake).
+SAN_CMAKE_ARGS = -DCMAKE_CXX_COMPILER=clang++ -DRIGCAL_BUILD_BENCHMARKS=OFF \
+  -DRIGCAL_BUILD_EVAL_TESTS=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG"
+FUZZ_SECONDS ?= 600
 
-# The multi-threaded calib tests (SyncBuffer producers, PoseMerge, OnlineCalibrator threads)
-# under TSan.
+asan-build: deps
+	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_FUZZ_ENABLED=ON)
+	cmake --build $(ASAN_DIR) -j $(JOBS)
+
+# Every test except the evaluations (label eval) and the fuzz runs, under ASan+UBSan.
+test-asan: asan-build
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -LE 'eval|fuzz|soak|device' $(CTEST_ARGS)
+
+# Each fuzz target for the configured time (label fuzz, RIGCAL_FUZZ_SECONDS); `make fuzz` for
+# FUZZ_SECONDS each (default 600), one at a time. Findings: $(ASAN_DIR)/fuzz/<target>/.
+test-fuzz: asan-build
+	$(CTEST) $(ASAN_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L fuzz
+
+fuzz: asan-build
+	RIGCAL_FUZZ_SECONDS=$(FUZZ_SECONDS) $(CTEST) $(ASAN_DIR) --output-on-failure --no-tests=error -V -L fuzz
+
+# Every test that starts threads (label threaded: the Pipeline, the calib node, capture loops, the
+# log recorder, online replay, OnlineCalibrator, SyncBuffer, the research runners) under TSan; the
+# tree builds only those tests (target rigcal_threaded_tests) and what they link.
 test-tsan: deps
-	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,-DRIGCAL_TSAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
-	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test \
-	  calib_pose_merge_test calib_online_calibrator_lossless_test
+	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_TSAN_ENABLED=ON)
+	cmake --build $(TSAN_DIR) -j $(JOBS) --target rigcal_threaded_tests
 	TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
-	  $(CTEST) $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)'
+	  $(CTEST) $(TSAN_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L threaded -LE 'eval|soak|device'
 
 # Long evaluations (not part of make test).
 eval: build

@@ -57,7 +57,7 @@ constexpr double kMaxScalePct = 0.3;
 
 // OpenCV builds all O(K^2) pairs; every 3rd frame (~470 poses, ~110k pairs) takes ~13 s for
 // the five methods and gives its best figures on this data (every frame: worse and ~minutes).
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__) || defined(RIGCAL_ASAN)
 constexpr int kOpenCvStride = 10;
 #else
 constexpr int kOpenCvStride = 3;

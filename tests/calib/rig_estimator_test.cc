@@ -15,7 +15,8 @@
 namespace rigcal {
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(RIGCAL_ASAN) || \
+    defined(RIGCAL_TSAN)
 constexpr bool kSanitized = true;
 #else
 constexpr bool kSanitized = false;

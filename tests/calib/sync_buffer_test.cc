@@ -15,7 +15,8 @@
 
 // Counts heap allocations of this test binary, to show that Push and Pop allocate nothing.
 // Sanitizers bring their own operator new: the count is not available there.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(RIGCAL_ASAN) || \
+    defined(RIGCAL_TSAN)
 #define RIGCAL_COUNT_ALLOCATIONS 0
 #else
 #define RIGCAL_COUNT_ALLOCATIONS 1

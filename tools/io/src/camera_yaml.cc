@@ -186,7 +186,10 @@ Expected<std::vector<CameraSpec>> ReadKalibrIntrinsics(const std::string& path) 
   std::vector<CameraSpec> specs;
   std::set<std::string> names;
   for (const auto& [index, entry] : cameras) {
-    const auto& [key_node, camera] = entry;
+    // Named references, not a structured binding: the lambda below captures key_node, which
+    // clang before 16 does not allow for a binding.
+    const YAML::Node& key_node = entry.first;
+    const YAML::Node& camera = entry.second;
     const std::string cam = "cam" + std::to_string(index);
     if (index != static_cast<int>(specs.size())) {
       return r.Fail(key_node, cam,
