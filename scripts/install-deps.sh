@@ -25,6 +25,14 @@ PACKAGES=(
   libglib2.0-dev       # lcm.pc requires glib-2.0 and gthread-2.0
   clang                # ctest architecture/threads: clang's -Wthread-safety on the annotated locks
   chromium             # ctest report/report_browser: renders `rigcal report`'s HTML headless
+  libsystemd-dev       # sd_notify: READY=1 and the watchdog of rigcal.service (optional at build)
+  default-jdk-headless # javac: rigcal_lcmtypes.jar for lcm-spy (install, deb tests)
+  liblcm-java          # lcm.jar (javac classpath) and lcm-spy
+  libjchart2d-java     # lcm-spy's charts (its start script names the jar; liblcm-java lacks it)
+  lintian              # ctest install/deb_package: lints the rigcal .deb packages
+  crossbuild-essential-arm64  # ctest install/arm64_qemu: the arm64 cross compiler
+  qemu-user            # ctest install/arm64_qemu: qemu-aarch64 runs the arm64 build here
+  mmdebstrap           # scripts/arm64-sysroot.sh: Debian's arm64 -dev packages in a sysroot
 )
 
 missing=()
