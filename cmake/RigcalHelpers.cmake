@@ -1,12 +1,16 @@
 # Helpers that give every module the same shape (one library target per folder,
 # tests registered as <module>/<name>).
+include(GNUInstallDirs)
 
 # rigcal_add_library(NAME <target> SRCS ... PUBLIC_DEPS ... PRIVATE_DEPS ...)
-# Public headers live in <folder>/include/rigcal/<folder>/.
+# Public headers live in <folder>/include/rigcal/<folder>/ (installed to <prefix>/include).
 function(rigcal_add_library)
   cmake_parse_arguments(ARG "" "NAME" "SRCS;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(${ARG_NAME} ${ARG_SRCS})
-  target_include_directories(${ARG_NAME} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  target_include_directories(${ARG_NAME} PUBLIC $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+                                                $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  # The folder whose rigcal/<module>/ headers `cmake --install` copies (cmake/RigcalInstall.cmake).
+  set_property(TARGET ${ARG_NAME} PROPERTY RIGCAL_PUBLIC_HEADER_DIR ${CMAKE_CURRENT_SOURCE_DIR}/include)
   target_link_libraries(${ARG_NAME} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_options(${ARG_NAME} PRIVATE ${RIGCAL_WARNING_FLAGS})
 endfunction()

@@ -38,6 +38,14 @@ PACKAGES=(
   libnewlib-arm-none-eabi          # its C library (nano specs)
   libstdc++-arm-none-eabi-newlib   # its freestanding C++ headers
   qemu-system-arm      # ctest label firmware: runs the firmware on an emulated STM32F405
+  libsystemd-dev       # sd_notify: READY=1 and the watchdog of rigcal.service (optional at build)
+  default-jdk-headless # javac: rigcal_lcmtypes.jar for lcm-spy (install, deb tests)
+  liblcm-java          # lcm.jar (javac classpath) and lcm-spy
+  libjchart2d-java     # lcm-spy's charts (its start script names the jar; liblcm-java lacks it)
+  lintian              # ctest install/deb_package: lints the rigcal .deb packages
+  crossbuild-essential-arm64  # ctest install/arm64_qemu: the arm64 cross compiler
+  qemu-user            # ctest install/arm64_qemu: qemu-aarch64 runs the arm64 build here
+  mmdebstrap           # scripts/arm64-sysroot.sh: Debian's arm64 -dev packages in a sysroot
 )
 
 missing=()

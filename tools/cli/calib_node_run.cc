@@ -9,6 +9,7 @@
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
+#include "service_notifier.h"
 #include "stop_signal.h"
 
 namespace rigcal::cli {
@@ -92,16 +93,23 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
     display = std::make_unique<ReplayProgressDisplay>("rigcal " + args.command);
     options.on_progress = [&display](const tools::ReplayProgress& p) { display->Update(p); };
   }
+  // Under systemd (config/systemd/rigcal.service): READY=1 once listening, the watchdog from
+  // the receive loop.
+  ServiceNotifier service;
+  const bool live = options.log_path.empty();
+  if (live) options.on_tick = [&service] { service.Tick(); };
   tools::CalibNode node(std::move(*config), options);
   if (const Status status = node.Open(); !status.ok()) {
     std::cerr << prefix << status.message() << "\n";
     return kExitError;
   }
   StopSignal stop_signal;
-  if (options.log_path.empty()) {
+  if (live) {
     log->info("listening for RIGCAL_POSE_<camera>; stop with Ctrl-C (SIGINT), SIGTERM or SIGHUP");
+    service.Ready("listening for RIGCAL_POSE_<camera>");
   }
   const tools::CalibNodeSummary summary = node.Run(stop_signal.flag());
+  if (live) service.Stopping();
   if (stop_signal.received() != 0) {
     log->info("signal {} received: stopped cleanly", stop_signal.received());
   }

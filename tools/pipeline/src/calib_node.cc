@@ -409,6 +409,7 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
     int job = 0;
     int64_t deadline = 0;
     while (m.schedule.NextDue(now, &job, &deadline)) m.RunJob(job, now / 1000);
+    if (m.options.on_tick) m.options.on_tick();
     if (m.options.duration_s > 0 &&
         static_cast<double>(now - start) * 1e-9 >= m.options.duration_s) {
       break;

@@ -83,6 +83,9 @@ struct CalibNodeOptions {
   // Replay: called on Run's thread about every progress_every_s of wall time, and once at the end.
   std::function<void(const ReplayProgress&)> on_progress;
   double progress_every_s = 0.2;
+  // Live input: called on Run's thread after every pass of its receive loop (at least every
+  // 50 ms while the loop is healthy): the service watchdog (rigcal calib under systemd).
+  std::function<void()> on_tick;
   std::string result_path;  // result YAML written on exit (atomically); empty = none
   std::string state_path;   // overrides the config's state.path when not empty
   bool resume = false;      // continue from the state file (ignored with a warning if unusable)

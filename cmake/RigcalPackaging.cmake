@@ -1,0 +1,57 @@
+# Debian packages through CPack (`cpack -G DEB` in a build tree, README "Deployment"):
+#   rigcal      bin/rigcal, example configs, systemd units      (component runtime)
+#   rigcal-dev  headers, static libraries, CMake package, LCM    (component dev)
+#               definitions, generated C++/Python/Java types
+# Dependencies: dpkg-shlibdeps on the binary (SHLIBDEPS) for a native build. A cross build
+# (scripts/cross-arm64.sh) has no arm64 dpkg database to ask, so it passes the list the amd64
+# package got as RIGCAL_DEB_DEPENDS: the same sources against the same Debian release need the
+# same sonames, hence the same packages (tests/install/arm64_qemu_test.sh compares the NEEDED
+# entries of both binaries).
+set(CPACK_PACKAGE_NAME rigcal)
+set(CPACK_PACKAGE_VENDOR "rigcal")
+set(CPACK_PACKAGE_CONTACT "rigcal maintainers <rigcal@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "online extrinsic calibration of multi-camera rigs")
+set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_GENERATOR DEB)
+set(CPACK_DEB_COMPONENT_INSTALL ON)
+set(CPACK_COMPONENTS_ALL runtime dev)
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+set(CPACK_STRIP_FILES ON)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_SECTION science)
+set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
+set(CPACK_DEBIAN_PACKAGE_RELEASE 1)
+set(CPACK_DEBIAN_PACKAGE_HOMEPAGE "https://example.invalid/rigcal")
+# Architecture: dpkg --print-architecture, or CPACK_DEBIAN_PACKAGE_ARCHITECTURE from the
+# command line (the cross build passes arm64).
+
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_NAME rigcal)
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_SECTION science)
+set(CPACK_COMPONENT_RUNTIME_DESCRIPTION
+    "online extrinsic calibration of multi-camera rigs\n\
+rigcal estimates, while a vehicle drives, where every camera of a rig sits relative to a\n\
+master camera (rotation, position and odometry scale) from the cameras' monocular visual\n\
+odometry, and publishes the estimate over LCM. This package holds the rigcal command, example\n\
+rig configurations and systemd units for the calibrator and its health check.")
+set(RIGCAL_DEB_DEPENDS "" CACHE STRING
+    "Debian Depends of the rigcal package; empty = dpkg-shlibdeps (native builds)")
+if(RIGCAL_DEB_DEPENDS)
+  set(CPACK_DEBIAN_RUNTIME_PACKAGE_DEPENDS "${RIGCAL_DEB_DEPENDS}")
+else()
+  set(CPACK_DEBIAN_RUNTIME_PACKAGE_SHLIBDEPS ON)
+endif()
+
+set(CPACK_DEBIAN_DEV_PACKAGE_NAME rigcal-dev)
+set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
+set(CPACK_COMPONENT_DEV_DESCRIPTION
+    "online extrinsic calibration of multi-camera rigs - development files\n\
+Headers, static libraries and the CMake package of rigcal (find_package(rigcal) gives\n\
+rigcal::calib, rigcal::drivers, rigcal::vo and the others), the LCM message definitions and\n\
+their generated C++, Python and Java (lcm-spy) types.")
+# The static libraries' own dependencies, as rigcalConfig.cmake finds them.
+set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS
+    "libeigen3-dev, libceres-dev, libspdlog-dev, libyaml-cpp-dev, nlohmann-json3-dev, \
+libopencv-dev, liblcm-dev, libglib2.0-dev, pkg-config")
+set(CPACK_DEBIAN_DEV_PACKAGE_RECOMMENDS "rigcal (= ${PROJECT_VERSION}-1)")
+
+include(CPack)

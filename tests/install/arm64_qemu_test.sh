@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# The arm64 build, proven to run: scripts/cross-arm64.sh cross-builds `rigcal` for arm64 into
+# BUILD_DIR/arm64 (Debian's cross compiler, Debian's arm64 libraries in a sysroot), then
+# qemu-aarch64 runs it here with the sysroot as its library root (-L):
+#   - `rigcal --version` prints what the amd64 build prints;
+#   - `rigcal solve --json` on a small trajectory set (VO poses of a short simulated run of the
+#     amd64 build) gives the same rotations, centres and scales as the amd64 build, to 1e-9;
+#   - `rigcal demo` calibrates; a short `rigcal run` on the simulated rig (NEON renderer, VO,
+#     estimator under emulation) processes frames and stops cleanly.
+# Prints the arm64 binary's size and NEEDED list and compares the list with the amd64 one.
+# Skipped (a failure under CI=true) when the cross tools or the arm64 packages cannot be had.
+# usage: arm64_qemu_test.sh AMD64_RIGCAL SOURCE_DIR BUILD_DIR
+set -euo pipefail
+amd64=$(readlink -f "$1")
+source_dir=$(readlink -f "$2")
+build=$(readlink -f "$3")
+skip() {
+  if [ "${CI:-}" = true ]; then echo "FAILED (CI=true, a skip is a failure): $1"; exit 1; fi
+  echo "SKIP: $1"
+  exit 77
+}
+sysroot=${RIGCAL_ARM64_SYSROOT:-/var/cache/rigcal/arm64-sysroot}
+export RIGCAL_ARM64_SYSROOT="$sysroot"
+if [ "$(id -u)" -ne 0 ] && ! command -v sudo >/dev/null; then
+  for tool in aarch64-linux-gnu-g++ qemu-aarch64; do
+    command -v "$tool" >/dev/null || skip "$tool not found and no root to install it"
+  done
+fi
+work="$build/arm64-test"
+arm_build="$build/arm64"
+rm -rf "$work"
+mkdir -p "$work"
+
+# The arm64 packages: a sysroot that cannot be made (no mirror, no mmdebstrap) is a skip; a
+# build that fails with a sysroot at hand is a failure.
+if ! bash "$source_dir/scripts/arm64-sysroot.sh" > "$work/sysroot.log" 2>&1; then
+  tail -5 "$work/sysroot.log"
+  skip "the arm64 packages could not be installed into $sysroot (see above)"
+fi
+command -v qemu-aarch64 >/dev/null || skip "qemu-aarch64 not found (qemu-user)"
+start=$(date +%s)
+if ! bash "$source_dir/scripts/cross-arm64.sh" --build-dir "$arm_build" > "$work/build.log" 2>&1; then
+  tail -30 "$work/build.log"
+  echo "FAIL: cross build of rigcal for arm64"
+  exit 1
+fi
+echo "arm64 build (rigcal target, ccache): $(( $(date +%s) - start )) s"
+arm="$arm_build/tools/rigcal"
+qemu=(qemu-aarch64 -L "$sysroot")
+
+fail=0
+check() {  # check NAME EXPR
+  if eval "$2"; then echo "ok: $1"; else echo "FAIL: $1"; fail=1; fi
+}
+check "the binary is AArch64" 'readelf -h "$arm" | grep -q "Machine:.*AArch64"'
+echo "arm64 rigcal: $(stat -c %s "$arm") bytes ($(aarch64-linux-gnu-strip -o /dev/stdout "$arm" | wc -c) stripped)"
+needed_arm=$(readelf -d "$arm" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p' | sort)
+needed_amd=$(readelf -d "$amd64" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p' | sort)
+echo "arm64 NEEDED: $(echo $needed_arm)"
+check "same NEEDED sonames as the amd64 build (so the same Debian Depends)" \
+  '[ "$needed_arm" = "$needed_amd" ] || diff <(echo "$needed_amd") <(echo "$needed_arm")'
+
+check "rigcal --version under qemu-aarch64 matches amd64" \
+  '[ "$("${qemu[@]}" "$arm" --version)" = "$("$amd64" --version)" ]'
+check "rigcal demo under qemu-aarch64" '"${qemu[@]}" "$arm" demo > "$work/demo.txt" 2>&1'
+
+# A small trajectory set: the VO poses of 4 s of the simulated rig (amd64, as fast as VO goes).
+cd "$work"
+"$amd64" run --config "$source_dir/config/sim_thesis_virtual.yaml" --fast --duration 4 \
+  --status-every 0 --poses-out "$work/poses" --out "$work/amd64_run.yaml" > /dev/null 2>&1 || true
+[ -f "$work/poses/cam0.txt" ] || { echo "FAIL: no VO poses from the amd64 run"; exit 1; }
+slaves=()
+for f in "$work"/poses/*.txt; do
+  name=$(basename "$f" .txt)
+  [ "$name" = cam0 ] || slaves+=(--slave "$name=$f")
+done
+"$amd64" solve --master "cam0=$work/poses/cam0.txt" "${slaves[@]}" --json > "$work/amd64.json" 2> "$work/amd64.err" || true
+"${qemu[@]}" "$arm" solve --master "cam0=$work/poses/cam0.txt" "${slaves[@]}" --json > "$work/arm64.json" 2> "$work/arm64.err" || true
+check "rigcal solve: arm64 and amd64 agree to 1e-9" 'python3 - "$work/amd64.json" "$work/arm64.json" <<"PY"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+worst = 0.0
+assert len(a["slaves"]) == len(b["slaves"]) > 0, "no slaves"
+for sa, sb in zip(a["slaves"], b["slaves"]):
+    assert sa["name"] == sb["name"] and sa["state"] == sb["state"], (sa["state"], sb["state"])
+    va = sa["q_wxyz"] + sa["C"] + [sa.get("scale") or 0.0]
+    vb = sb["q_wxyz"] + sb["C"] + [sb.get("scale") or 0.0]
+    assert None not in va + vb, "unknown value"
+    worst = max([worst] + [abs(x - y) for x, y in zip(va, vb)])
+    print("%s: %s, q %s, C %s, scale %s" % (sa["name"], sa["state"], sa["q_wxyz"], sa["C"], sa.get("scale")))
+print("largest difference arm64 - amd64 over q, C, scale: %.3g" % worst)
+sys.exit(0 if worst <= 1e-9 else 1)
+PY'
+
+# The live pipeline under emulation: real-time pacing, so frames the emulated VO cannot keep up
+# with are dropped; it must process some and stop cleanly after the duration.
+rc=0
+"${qemu[@]}" "$arm" run --config "$source_dir/config/sim_thesis_virtual.yaml" --duration 6 \
+  --status-every 1 --out "$work/arm64_run.yaml" > "$work/run.txt" 2> "$work/run.err" || rc=$?
+tail -3 "$work/run.err"
+check "rigcal run under qemu-aarch64 stops cleanly (exit 0 or 3, got $rc)" '[ "$rc" -eq 0 ] || [ "$rc" -eq 3 ]'
+check "rigcal run under qemu-aarch64 processed frames" 'grep -Eq "[1-9][0-9]* sets" "$work/run.err"'
+
+if [ "$fail" -ne 0 ]; then echo "arm64_qemu: FAILED"; exit 1; fi
+echo "arm64_qemu: passed"
