@@ -18,5 +18,7 @@ void RegisterReport(CLI::App& app, int* exit_code);
 void RegisterReplay(CLI::App& app, int* exit_code);
 void RegisterRecord(CLI::App& app, int* exit_code);
 void RegisterImport(CLI::App& app, int* exit_code);
+void RegisterIntrinsics(CLI::App& app, int* exit_code);
+void RegisterReferenceCompare(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

@@ -60,6 +60,8 @@ int main(int argc, char** argv) {
   rigcal::cli::RegisterReport(app, &exit_code);
   rigcal::cli::RegisterRecord(app, &exit_code);
   rigcal::cli::RegisterImport(app, &exit_code);
+  rigcal::cli::RegisterIntrinsics(app, &exit_code);
+  rigcal::cli::RegisterReferenceCompare(app, &exit_code);
 
   try {
     app.parse(argc, argv);

@@ -13,12 +13,14 @@
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/rig_calibrator.h"
+#include "rigcal/io/atomic_file.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/time_offset.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/io/truth_alignment.h"
 #include "rigcal/pipeline/online_replay.h"
+#include "solve_target.h"
 
 namespace rigcal::cli {
 namespace {
@@ -47,6 +49,9 @@ struct SolveArgs {
   std::string camchain;
   bool json = false;
   bool online = false;
+  std::string reference = "motion";  // motion | target (solve_target.h)
+  std::string metric_target;         // master target poses: lambda_world
+  bool master_metric = false;        // the master odometry is in metres
   double report_every_s = 10.0;
 };
 
@@ -219,49 +224,74 @@ int RunSolve(const SolveArgs& args) {
   }
 
   const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
-  tools::TimeOffsetOptions offset_options;
-  offset_options.search_window_s = args.time_offset_window_s;
-  std::vector<std::string> slave_names;
-  for (const auto& slave : slaves) slave_names.push_back(slave.name);
-  std::string offset_error;
-  const std::vector<std::optional<double>> given_offsets =
-      ParseTimeOffsets(args.time_offset, slave_names, &offset_error);
-  if (!offset_error.empty()) return Fail("--time-offset: " + offset_error);
-  auto matched = tools::MatchWithTimeOffsets(*master, slaves, given_offsets, tolerance_ns, options,
-                                             offset_options);
-  if (!matched) return Fail(matched.error());
-  const RigRecording* recording = &matched->recording;
-  log->info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
-            slaves.size() + 1, args.tolerance_ms);
-
   RigCalibration result;
-  const std::map<std::string, Similarity>* truth_for_replay = args.truth.empty() ? nullptr : &truth;
   std::vector<tools::ConvergencePoint> history;
-  try {
-    if (args.online) {
-      tools::OnlineReplayOptions replay;
-      replay.report_every_s = args.report_every_s;
-      replay.estimator.nominal_sigma = options.nominal_sigma;
-      for (const auto& slave : recording->slaves) {
-        const auto it = options.nominal.find(slave.name);
-        replay.estimator.nominal.push_back(
-            it == options.nominal.end() ? std::nullopt : std::optional<Similarity>(it->second));
+  std::optional<ResultUnit> unit;
+  if (args.reference == "target") {
+    // The poses are target poses (camera in the target frame): global reference pose model.
+    auto reference = TargetReferenceResult(*master, slaves, tolerance_ns);
+    if (!reference) return Fail(reference.error());
+    result = std::move(*reference);
+    unit = ResultUnit{false, 1.0, 0.0, "target reference",
+                      "target reference: positions in the target's unit (metres for a metric "
+                      "target), scale 1 by definition"};
+  } else {
+    tools::TimeOffsetOptions offset_options;
+    offset_options.search_window_s = args.time_offset_window_s;
+    std::vector<std::string> slave_names;
+    for (const auto& slave : slaves) slave_names.push_back(slave.name);
+    std::string offset_error;
+    const std::vector<std::optional<double>> given_offsets =
+        ParseTimeOffsets(args.time_offset, slave_names, &offset_error);
+    if (!offset_error.empty()) return Fail("--time-offset: " + offset_error);
+    auto matched = tools::MatchWithTimeOffsets(*master, slaves, given_offsets, tolerance_ns,
+                                               options, offset_options);
+    if (!matched) return Fail(matched.error());
+    const RigRecording* recording = &matched->recording;
+    log->info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
+              slaves.size() + 1, args.tolerance_ms);
+
+    const std::map<std::string, Similarity>* truth_for_replay =
+        args.truth.empty() ? nullptr : &truth;
+    try {
+      if (args.online) {
+        tools::OnlineReplayOptions replay;
+        replay.report_every_s = args.report_every_s;
+        replay.estimator.nominal_sigma = options.nominal_sigma;
+        for (const auto& slave : recording->slaves) {
+          const auto it = options.nominal.find(slave.name);
+          replay.estimator.nominal.push_back(
+              it == options.nominal.end() ? std::nullopt : std::optional<Similarity>(it->second));
+        }
+        const tools::OnlineReplayResult online =
+            tools::ReplayOnline(*recording, replay, truth_for_replay);
+        log->info("sync buffer: {}", online.sync.BriefReport());
+        history = online.history;
+        result = online.estimate.rig;
+      } else {
+        result = CalibrateRig(*recording, options);
       }
-      const tools::OnlineReplayResult online =
-          tools::ReplayOnline(*recording, replay, truth_for_replay);
-      log->info("sync buffer: {}", online.sync.BriefReport());
-      history = online.history;
-      result = online.estimate.rig;
-    } else {
-      result = CalibrateRig(*recording, options);
+    } catch (const std::exception& e) {
+      return Fail(std::string("calibration failed: ") + e.what());
     }
-  } catch (const std::exception& e) {
-    return Fail(std::string("calibration failed: ") + e.what());
+    if (result.master.empty()) result.master = master->name;
+    for (size_t i = 0; i < result.slaves.size() && i < matched->offsets.size(); ++i) {
+      result.slaves[i].time_offset_s = matched->offsets[i].offset_s;
+      result.slaves[i].time_offset_std_s = matched->offsets[i].std_s;
+    }
   }
-  if (result.master.empty()) result.master = master->name;
-  for (size_t i = 0; i < result.slaves.size() && i < matched->offsets.size(); ++i) {
-    result.slaves[i].time_offset_s = matched->offsets[i].offset_s;
-    result.slaves[i].time_offset_std_s = matched->offsets[i].std_s;
+  if (!args.metric_target.empty()) {
+    auto applied = ApplyMetricTarget(args.metric_target, *master, tolerance_ns, &result);
+    if (!applied) return Fail(applied.error());
+    unit = *applied;
+  } else if (args.master_metric) {
+    unit = ResultUnit{true, 1.0, 0.0, "master odometry",
+                      "positions in metres: the master odometry is metric (--master-metric), "
+                      "its scale fixed to 1; slave scales map slave units to metres"};
+  }
+  if (unit) {
+    (args.json ? std::cerr : std::cout) << "units: " << unit->message << "\n";
+    if (unit->metric) (args.json ? std::cerr : std::cout) << UnobservableHeightNote(result);
   }
 
   // The truth in the estimate's unit (a metric truth against monocular odometry: the master
@@ -294,14 +324,20 @@ int RunSolve(const SolveArgs& args) {
       args.truth.empty() ? nullptr : &truth_master_units;
   const tools::TruthAlignment* alignment_ptr = alignment ? &*alignment : nullptr;
   if (args.json) {
-    std::cout << tools::ResultToJson(result, truth_ptr, alignment_ptr).dump(2) << "\n";
+    nlohmann::json json = tools::ResultToJson(result, truth_ptr, alignment_ptr);
+    if (unit) json["unit"] = unit->ToJson();
+    std::cout << json.dump(2) << "\n";
   } else {
     std::cout << tools::FormatResultTable(result, truth_ptr, alignment_ptr);
   }
   std::cout.flush();
 
   if (!args.out.empty()) {
-    if (Status s = tools::WriteResultYaml(args.out, result); !s.ok()) return Fail(s.message());
+    const Status s = unit
+                         ? tools::WriteFileAtomically(args.out, "# units: " + unit->message + "\n" +
+                                                                    tools::ResultToYaml(result))
+                         : tools::WriteResultYaml(args.out, result);
+    if (!s.ok()) return Fail(s.message());
     log->info("wrote result to {}", args.out);
   }
   if (!args.camchain.empty()) {
@@ -506,6 +542,29 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       ->default_val(10.0)
       ->check(CLI::PositiveNumber)
       ->needs(online);
+  cmd->add_option("--reference", args->reference,
+                  "motion: calibrate from the cameras' motions (hand-eye with scale). target:\n"
+                  "the trajectories are target poses (each camera's pose in one shared target\n"
+                  "frame at the same instants, e.g. `rigcal intrinsics --poses-out`); the\n"
+                  "slave's pose in the master frame is the mean of the per-instant relative\n"
+                  "poses (global reference pose model, thesis 4.2), with σ of the mean.")
+      ->check(CLI::IsMember({"motion", "target"}))
+      ->excludes(online)
+      ->capture_default_str();
+  auto* metric_target =
+      cmd->add_option("--metric-target", args->metric_target,
+                      "The master camera's target poses (TUM, camera centre in the frame of a\n"
+                      "target of known size, metres; `rigcal intrinsics --poses-out`) in some\n"
+                      "master frames: lambda_world, metres per master unit, is fitted to the\n"
+                      "master odometry at those frames (thesis 5.5) and every position and\n"
+                      "scale of the result is converted to metres; the output says so.");
+  metric_target->type_name("FILE");
+  cmd->add_flag("--master-metric", args->master_metric,
+                "The master odometry is metric (wheel odometry, INS): its scale is 1, every\n"
+                "position is in metres and the output says so. Planar driving leaves the\n"
+                "mounting height (C along the rotation axis) unobservable: it is reported,\n"
+                "and taken from --prior (nominal mounting) when given.")
+      ->excludes(metric_target);
   cmd->add_flag("--json", args->json,
                 "Print only the result, as one JSON object, on stdout (logs stay\n"
                 "on stderr).");

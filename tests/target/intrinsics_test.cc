@@ -1,0 +1,316 @@
+// The target module on synthetic views: a camera of known intrinsics sees a chessboard from
+// random poses; the corners are projected with OpenCV (the same convention the module uses)
+// plus Gaussian pixel noise of sigma 0.1 px.
+//
+// Tolerances from the math: with N views of M corners at noise sigma, the focal length's
+// standard deviation is about sigma / sqrt(N M) * f / (spread of the normalised coordinates)
+// ~ 0.1 / sqrt(20 * 54) * 500 / 0.3 ~ 0.05 px; 1 px (0.2 %) is 20 sigma and still fails for any
+// error in the model or the convention (a half-pixel shift, a swapped axis, a wrong distortion
+// sign move the estimate by several pixels).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#pragma GCC diagnostic pop
+
+#include "rigcal/io/config_sections.h"
+#include "rigcal/io/rig_files.h"
+#include "rigcal/target/intrinsics.h"
+#include "rigcal/target/kalibr_camchain.h"
+#include "rigcal/target/metric_scale.h"
+#include "rigcal/target/reference_calibration.h"
+#include "rigcal/target/target_poses.h"
+#include "rigcal/target/target_views.h"
+#include "support/temp_dir.h"
+
+namespace rigcal::target {
+namespace {
+
+using camera::CameraSpec;
+
+constexpr double kNoisePx = 0.1;
+
+CameraSpec TrueCamera(CameraSpec::Model model) {
+  CameraSpec spec;
+  spec.name = "cam";
+  spec.model = model;
+  spec.width = 752;
+  spec.height = 480;
+  spec.intrinsics = {458.0, 457.0, 367.0, 248.0};
+  spec.distortion = model == CameraSpec::Model::kFisheye
+                        ? std::vector<double>{-0.01, 0.02, -0.005, 0.001}
+                        : std::vector<double>{-0.28, 0.074, 2e-4, -3e-4};
+  return spec;
+}
+
+// The target's pose in the camera for view k: the board (9x6, 0.04 m squares) 0.5..0.9 m in
+// front, tilted up to ~35 degrees, so that it fills a good part of the image.
+Pose CamFromTarget(std::mt19937& rng) {
+  std::uniform_real_distribution<double> tilt(-0.6, 0.6);
+  std::uniform_real_distribution<double> shift(-0.12, 0.12);
+  std::uniform_real_distribution<double> depth(0.5, 0.9);
+  Pose p;
+  p.q = Eigen::AngleAxisd(tilt(rng), Eigen::Vector3d::UnitX()) *
+        Eigen::AngleAxisd(tilt(rng), Eigen::Vector3d::UnitY()) *
+        Eigen::AngleAxisd(0.3 * tilt(rng), Eigen::Vector3d::UnitZ());
+  // Board centre (0.16, 0.1) at (shift, shift, depth).
+  const Eigen::Vector3d centre(shift(rng), shift(rng), depth(rng));
+  p.C = centre - p.q * Eigen::Vector3d(0.16, 0.10, 0.0);
+  return p;  // q, C: cam_from_target rotation and the target origin in the camera
+}
+
+TargetView Project(const CameraSpec& spec, const Pose& cam_from_target, std::mt19937& rng,
+                   double noise_px, int64_t t_ns) {
+  std::vector<cv::Point3d> object;
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 9; ++c) object.emplace_back(0.04 * c, 0.04 * r, 0.0);
+  }
+  const Eigen::Matrix3d R = cam_from_target.q.toRotationMatrix();
+  cv::Matx33d Rcv;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) Rcv(i, j) = R(i, j);
+  }
+  cv::Vec3d rvec;
+  cv::Rodrigues(Rcv, rvec);
+  const cv::Vec3d tvec(cam_from_target.C.x(), cam_from_target.C.y(), cam_from_target.C.z());
+  const cv::Matx33d K(spec.intrinsics[0], 0, spec.intrinsics[2], 0, spec.intrinsics[1],
+                      spec.intrinsics[3], 0, 0, 1);
+  std::vector<cv::Point2d> image;
+  if (spec.model == CameraSpec::Model::kFisheye) {
+    cv::fisheye::projectPoints(object, image, rvec, tvec, K, cv::Vec4d(spec.distortion.data()));
+  } else {
+    cv::projectPoints(object, rvec, tvec, K, spec.distortion, image);
+  }
+  std::normal_distribution<double> noise(0.0, noise_px);
+  TargetView view;
+  view.t_ns = t_ns;
+  view.file = "view" + std::to_string(t_ns / 1000000000) + ".png";
+  for (size_t j = 0; j < object.size(); ++j) {
+    view.pixels.emplace_back(image[j].x + noise(rng), image[j].y + noise(rng));
+    view.target_points.emplace_back(object[j].x, object[j].y, object[j].z);
+  }
+  return view;
+}
+
+CameraViews SyntheticViews(const CameraSpec& spec, int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  CameraViews views;
+  views.camera = spec.name;
+  views.width = spec.width;
+  views.height = spec.height;
+  for (int k = 0; k < n; ++k) {
+    views.views.push_back(Project(spec, CamFromTarget(rng), rng, kNoisePx, (k + 1) * 1000000000LL));
+  }
+  return views;
+}
+
+void ExpectIntrinsicsNear(const CameraSpec& estimate, const CameraSpec& truth) {
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(estimate.intrinsics[i], truth.intrinsics[i], 1.0) << "intrinsics[" << i << "]";
+  }
+  ASSERT_EQ(estimate.distortion.size(), 4u);
+  EXPECT_NEAR(estimate.distortion[0], truth.distortion[0], 5e-3);
+}
+
+TEST(Intrinsics, PinholeRadtanRecoveredAndOutlierViewRejected) {
+  const CameraSpec truth = TrueCamera(CameraSpec::Model::kPinhole);
+  CameraViews views = SyntheticViews(truth, 20, 7);
+  // View 5: every corner 3 px off in a random direction: an outlier.
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<double> angle(0.0, 2 * M_PI);
+  for (Eigen::Vector2d& p : views.views[5].pixels) {
+    const double a = angle(rng);
+    p += 3.0 * Eigen::Vector2d(std::cos(a), std::sin(a));
+  }
+  auto result = CalibrateIntrinsics(views, {});
+  ASSERT_TRUE(result.ok()) << result.error();
+  ExpectIntrinsicsNear(result->spec, truth);
+  EXPECT_EQ(result->views_rejected, 1);
+  ASSERT_EQ(result->views.size(), 20u);
+  EXPECT_TRUE(result->views[5].rejected);
+  EXPECT_FALSE(result->views[5].used);
+  EXPECT_EQ(result->views_used, 19);
+  // RMS of the used views: the noise (2-D RMS of sigma per axis is sqrt(2) sigma).
+  EXPECT_NEAR(result->rms_px, std::sqrt(2.0) * kNoisePx, 0.03);
+  EXPECT_GT(result->views[5].rms_px, 2.0);
+  EXPECT_NE(FormatIntrinsics(*result, true).find("rejected (outlier)"), std::string::npos);
+}
+
+TEST(Intrinsics, EquidistantFisheyeRecovered) {
+  const CameraSpec truth = TrueCamera(CameraSpec::Model::kFisheye);
+  const CameraViews views = SyntheticViews(truth, 20, 11);
+  IntrinsicsOptions options;
+  options.model = CameraSpec::Model::kFisheye;
+  auto result = CalibrateIntrinsics(views, options);
+  ASSERT_TRUE(result.ok()) << result.error();
+  EXPECT_EQ(result->spec.model, CameraSpec::Model::kFisheye);
+  ExpectIntrinsicsNear(result->spec, truth);
+  EXPECT_EQ(result->views_rejected, 0);
+}
+
+TEST(Intrinsics, TooFewViewsIsAnError) {
+  const CameraViews views = SyntheticViews(TrueCamera(CameraSpec::Model::kPinhole), 2, 3);
+  auto result = CalibrateIntrinsics(views, {});
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.error().find("2 views with a target, need at least 4"), std::string::npos)
+      << result.error();
+}
+
+TEST(TargetPoses, PnpRecoversThePosesAndTheGlobalReferenceTheRig) {
+  // A two-camera rig: cam1 0.11 m to the right of cam0, turned 3 degrees about y. Both see the
+  // board at every instant; their target poses give the rig back.
+  const CameraSpec spec = TrueCamera(CameraSpec::Model::kPinhole);
+  Similarity cam0_from_cam1;
+  cam0_from_cam1.q = Eigen::AngleAxisd(3.0 * M_PI / 180, Eigen::Vector3d::UnitY());
+  cam0_from_cam1.C = Eigen::Vector3d(0.11, 0.001, -0.002);
+  std::mt19937 rng(5);
+  CameraViews views0;
+  CameraViews views1;
+  for (CameraViews* v : {&views0, &views1}) {
+    v->width = spec.width;
+    v->height = spec.height;
+  }
+  views0.camera = "cam0";
+  views1.camera = "cam1";
+  for (int k = 0; k < 15; ++k) {
+    const Pose cam0_from_target = CamFromTarget(rng);
+    // cam1_from_target = inv(cam0_from_cam1) * cam0_from_target
+    Pose cam1_from_target;
+    cam1_from_target.q = cam0_from_cam1.q.conjugate() * cam0_from_target.q;
+    cam1_from_target.C = cam0_from_cam1.q.conjugate() * (cam0_from_target.C - cam0_from_cam1.C);
+    views0.views.push_back(Project(spec, cam0_from_target, rng, 0.0, (k + 1) * 1000000000LL));
+    views1.views.push_back(Project(spec, cam1_from_target, rng, 0.0, (k + 1) * 1000000000LL));
+  }
+  auto poses0 = EstimateTargetPoses(views0, spec);
+  auto poses1 = EstimateTargetPoses(views1, spec);
+  ASSERT_TRUE(poses0.ok()) << poses0.error();
+  ASSERT_TRUE(poses1.ok()) << poses1.error();
+  for (const ViewStatistics& v : *poses0) EXPECT_LT(v.rms_px, 1e-6);
+  const tools::TimedTrajectory t0 = PosesAsTrajectory("cam0", *poses0, 2.0);
+  const tools::TimedTrajectory t1 = PosesAsTrajectory("cam1", *poses1, 2.0);
+  ASSERT_EQ(t0.size(), 15u);
+  auto reference = EstimateGlobalReference(t0, t1, 1000);
+  ASSERT_TRUE(reference.ok()) << reference.error();
+  EXPECT_LT(reference->master_from_slave.q.angularDistance(cam0_from_cam1.q), 1e-7);
+  EXPECT_LT((reference->master_from_slave.C - cam0_from_cam1.C).norm(), 1e-7);
+  EXPECT_EQ(reference->instants, 15);
+  double rms = 0.0;
+  auto stereo = EstimateStereoReference(views0, spec, views1, spec, &rms);
+  ASSERT_TRUE(stereo.ok()) << stereo.error();
+  EXPECT_LT(stereo->master_from_slave.q.angularDistance(cam0_from_cam1.q), 1e-6);
+  EXPECT_LT((stereo->master_from_slave.C - cam0_from_cam1.C).norm(), 1e-6);
+
+  // lambda_world: the master's target poses against its odometry in another unit (positions
+  // divided by 0.37 and moved, rotated frame): the fit gives 0.37 metres per unit.
+  tools::TimedTrajectory odometry = CameraLocal(t0);
+  for (Pose& p : odometry.poses) p.C /= 0.37;
+  auto scale = EstimateWorldScale(odometry, t0, 1000);
+  ASSERT_TRUE(scale.ok()) << scale.error();
+  EXPECT_NEAR(scale->metres_per_unit, 0.37, 1e-9);
+  EXPECT_LT(scale->fit_rms_m, 1e-9);
+  EXPECT_NE(scale->message.find("metres"), std::string::npos);
+
+  // Too few shared instants.
+  tools::TimedTrajectory short1 = t1;
+  short1.t_ns.resize(2);
+  short1.poses.resize(2);
+  auto failed = EstimateGlobalReference(t0, short1, 1000);
+  ASSERT_FALSE(failed.ok());
+  EXPECT_NE(failed.error().find("2 instants"), std::string::npos) << failed.error();
+}
+
+TEST(KalibrCamchain, WrittenCompleteAndReadBack) {
+  const auto dir = support::FreshTempDir("target_camchain");
+  CamchainEntry cam0;
+  cam0.spec = TrueCamera(CameraSpec::Model::kPinhole);
+  cam0.spec.name = "left";
+  CamchainEntry cam1;
+  cam1.spec = TrueCamera(CameraSpec::Model::kFisheye);
+  cam1.spec.name = "right";
+  Similarity cam0_from_cam1;
+  cam0_from_cam1.q = Eigen::AngleAxisd(0.2, Eigen::Vector3d(1, 2, 3).normalized());
+  cam0_from_cam1.C = Eigen::Vector3d(0.11, -0.02, 0.03);
+  cam1.cam0_from_cam = cam0_from_cam1;
+  const std::string path = (dir / "camchain.yaml").string();
+  ASSERT_TRUE(WriteKalibrCamchain(path, {cam0, cam1}, "test").ok());
+
+  auto specs = tools::ReadKalibrIntrinsics(path);
+  ASSERT_TRUE(specs.ok()) << specs.error();
+  ASSERT_EQ(specs->size(), 2u);
+  EXPECT_EQ((*specs)[0].name, "left");
+  EXPECT_EQ((*specs)[1].model, CameraSpec::Model::kFisheye);
+  EXPECT_EQ((*specs)[0].width, 752);
+  EXPECT_EQ((*specs)[0].intrinsics, cam0.spec.intrinsics);
+  EXPECT_EQ((*specs)[1].distortion, cam1.spec.distortion);
+  auto chain = tools::ReadCamchain(path);
+  ASSERT_TRUE(chain.ok()) << chain.error();
+  ASSERT_EQ(chain->size(), 2u);
+  // T_cn_cnm1 of cam1 maps cam0 points to cam1: p1 = R^T (p0 - C).
+  const Eigen::Matrix4d T = (*chain)[1].cn_from_cnm1;
+  const Eigen::Vector3d p0(0.3, -0.2, 1.5);
+  const Eigen::Vector3d p1 = cam0_from_cam1.q.conjugate() * (p0 - cam0_from_cam1.C);
+  EXPECT_LT((T.topLeftCorner<3, 3>() * p0 + T.topRightCorner<3, 1>() - p1).norm(), 1e-12);
+
+  CamchainEntry missing = cam1;
+  missing.cam0_from_cam.reset();
+  const Status s = WriteKalibrCamchain(path, {cam0, missing}, "");
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("right: no extrinsics"), std::string::npos) << s.message();
+}
+
+TEST(TargetViews, BadImagesGiveClearErrors) {
+  const auto dir = support::FreshTempDir("target_views");
+  ChessboardSpec board;
+  // Blank images: no chessboard anywhere.
+  std::filesystem::create_directories(dir / "blank");
+  cv::imwrite((dir / "blank" / "a01.png").string(), cv::Mat(120, 160, CV_8UC1, cv::Scalar(128)));
+  cv::imwrite((dir / "blank" / "a02.png").string(), cv::Mat(120, 160, CV_8UC1, cv::Scalar(90)));
+  auto none = DetectChessboardViews("cam", (dir / "blank").string(), board);
+  ASSERT_FALSE(none.ok());
+  EXPECT_NE(none.error().find("no 9x6 chessboard (inner corners) found in any of the 2 images"),
+            std::string::npos)
+      << none.error();
+  // Mixed resolutions.
+  std::filesystem::create_directories(dir / "mixed");
+  cv::imwrite((dir / "mixed" / "a01.png").string(), cv::Mat(120, 160, CV_8UC1, cv::Scalar(0)));
+  cv::imwrite((dir / "mixed" / "a02.png").string(), cv::Mat(100, 160, CV_8UC1, cv::Scalar(0)));
+  auto mixed = DetectChessboardViews("cam", (dir / "mixed").string(), board);
+  ASSERT_FALSE(mixed.ok());
+  EXPECT_NE(mixed.error().find("mixed resolutions: a01.png is 160x120, a02.png is 160x100"),
+            std::string::npos)
+      << mixed.error();
+  // An empty folder, a missing one.
+  std::filesystem::create_directories(dir / "empty");
+  EXPECT_FALSE(DetectChessboardViews("cam", (dir / "empty").string(), board).ok());
+  auto missing = LoadCameraViews("cam", (dir / "nothing").string(), board, 0, 0);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().find("is not a folder"), std::string::npos) << missing.error();
+  // A malformed detection CSV names file and line.
+  std::filesystem::create_directories(dir / "csv");
+  {
+    std::ofstream out(dir / "csv" / "1403709385000000000.csv");
+    out << "#ts,tag_rows,tag_cols,tag_size,tag_spacing,kp_x,kp_y,p_x,p_y,p_z,tag_id,corner_idx\n"
+        << "1403709385000000000,6,6,0.088,0.3,10,20,0,0,0,0,0\n"
+        << "1403709385000000000,6,6,0.088,0.3,10,x,0,0,0,0,1\n";
+  }
+  auto csv = LoadCameraViews("cam", (dir / "csv").string(), board, 752, 480);
+  ASSERT_FALSE(csv.ok());
+  EXPECT_NE(csv.error().find("1403709385000000000.csv:3: expected 12 numbers"), std::string::npos)
+      << csv.error();
+  auto no_resolution = LoadCameraViews("cam", (dir / "csv").string(), board, 0, 0);
+  ASSERT_FALSE(no_resolution.ok());
+  EXPECT_NE(no_resolution.error().find("--resolution"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rigcal::target

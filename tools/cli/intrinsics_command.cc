@@ -1,0 +1,189 @@
+// `rigcal intrinsics`: camera intrinsics from target views, written as a rig config, a complete
+// Kalibr camchain and per-camera target poses.
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "rigcal/calib/logging.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/trajectory_io.h"
+#include "rigcal/target/kalibr_camchain.h"
+#include "rigcal/target/reference_calibration.h"
+#include "rigcal/target/target_poses.h"
+#include "target_args.h"
+
+namespace rigcal::cli {
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitError = 1;
+
+struct IntrinsicsArgs {
+  TargetArgs target;
+  std::string config_out;
+  std::string camchain;
+  std::string poses_out;
+  int64_t tolerance_ns = 1000000;
+  bool per_view = false;
+  bool json = false;
+};
+
+int Fail(const std::string& message) {
+  std::cerr << "rigcal intrinsics: " << message << "\n";
+  return kExitError;
+}
+
+nlohmann::json ToJson(const CameraCalibration& c) {
+  const target::IntrinsicsResult& r = c.intrinsics;
+  nlohmann::json views = nlohmann::json::array();
+  for (const target::ViewStatistics& v : r.views) {
+    views.push_back({{"file", v.file},
+                     {"corners", v.corners},
+                     {"rms_px", v.rms_px},
+                     {"max_px", v.max_px},
+                     {"used", v.used},
+                     {"rejected", v.rejected}});
+  }
+  return {{"name", r.spec.name},
+          {"model", std::string(camera::ModelName(r.spec.model))},
+          {"resolution", {r.spec.width, r.spec.height}},
+          {"intrinsics", r.spec.intrinsics},
+          {"distortion", r.spec.distortion},
+          {"rms_px", r.rms_px},
+          {"rejection_threshold_px", r.rejection_threshold_px},
+          {"views_used", r.views_used},
+          {"views_rejected", r.views_rejected},
+          {"files", c.views.files},
+          {"files_without_target", c.views.none.size()},
+          {"views", views}};
+}
+
+int RunIntrinsics(const IntrinsicsArgs& args) {
+  const auto log = ModuleLogger("tools");
+  auto cameras = CalibrateCameras(args.target);
+  if (!cameras) return Fail(cameras.error());
+
+  // Per camera its kept target poses; cameras after the first get their pose in cam0's frame
+  // from the target reference (needs shared instants).
+  std::vector<tools::TimedTrajectory> poses;
+  for (const CameraCalibration& c : *cameras) {
+    poses.push_back(target::PosesAsTrajectory(c.views.camera, c.intrinsics.views,
+                                              c.intrinsics.rejection_threshold_px));
+  }
+  std::vector<target::CamchainEntry> chain;
+  std::string chain_error;
+  nlohmann::json extrinsics = nlohmann::json::array();
+  for (size_t i = 0; i < cameras->size(); ++i) {
+    target::CamchainEntry entry;
+    entry.spec = (*cameras)[i].intrinsics.spec;
+    if (i > 0) {
+      auto reference = target::EstimateGlobalReference(poses[0], poses[i], args.tolerance_ns);
+      if (reference) {
+        entry.cam0_from_cam = reference->master_from_slave;
+        extrinsics.push_back(
+            {{"camera", reference->slave},
+             {"q_wxyz",
+              {reference->master_from_slave.q.w(), reference->master_from_slave.q.x(),
+               reference->master_from_slave.q.y(), reference->master_from_slave.q.z()}},
+             {"C",
+              {reference->master_from_slave.C.x(), reference->master_from_slave.C.y(),
+               reference->master_from_slave.C.z()}},
+             {"rot_std_deg", reference->rot_std_deg},
+             {"instants", reference->instants}});
+        if (!args.json) std::cout << target::FormatReference(*reference, "units");
+      } else if (chain_error.empty()) {
+        chain_error = reference.error();
+      }
+    }
+    chain.push_back(std::move(entry));
+  }
+
+  if (args.json) {
+    nlohmann::json out = {{"cameras", nlohmann::json::array()}, {"extrinsics", extrinsics}};
+    for (const CameraCalibration& c : *cameras) out["cameras"].push_back(ToJson(c));
+    std::cout << out.dump(2) << "\n";
+  } else {
+    for (const CameraCalibration& c : *cameras) {
+      std::cout << target::FormatIntrinsics(c.intrinsics, args.per_view);
+    }
+  }
+  std::cout.flush();
+
+  if (!args.config_out.empty()) {
+    std::vector<tools::CameraConfig> configs;
+    for (const CameraCalibration& c : *cameras) {
+      tools::CameraConfig config;
+      config.name = c.intrinsics.spec.name;
+      config.spec = c.intrinsics.spec;
+      configs.push_back(std::move(config));
+    }
+    const Status s = tools::WriteRigConfig(
+        args.config_out, "calibrated", configs,
+        "rig config written by rigcal intrinsics: intrinsics calibrated from target views");
+    if (!s.ok()) return Fail(s.message());
+    log->info("wrote the intrinsics into the rig config {}", args.config_out);
+  }
+  if (!args.camchain.empty()) {
+    if (!chain_error.empty()) {
+      return Fail("--camchain: no extrinsics between the cameras: " + chain_error);
+    }
+    const Status s = target::WriteKalibrCamchain(
+        args.camchain, chain,
+        "Kalibr camchain written by rigcal intrinsics: intrinsics from target views (OpenCV);\n"
+        "T_cn_cnm1 from the target poses (global reference model), in the target's unit.");
+    if (!s.ok()) return Fail(s.message());
+    log->info("wrote the Kalibr camchain {}", args.camchain);
+  }
+  if (!args.poses_out.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(args.poses_out, ec);
+    if (ec) return Fail("--poses-out: cannot create '" + args.poses_out + "': " + ec.message());
+    for (const tools::TimedTrajectory& t : poses) {
+      const std::string path = args.poses_out + "/" + t.name + ".tum";
+      if (Status s = tools::WriteTrajectoryTum(path, t); !s.ok()) return Fail(s.message());
+      log->info("{}: {} target poses written to {}", t.name, t.size(), path);
+    }
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void RegisterIntrinsics(CLI::App& app, int* exit_code) {
+  auto args = std::make_shared<IntrinsicsArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "intrinsics",
+      "Calibrate camera intrinsics from views of a chessboard (images) or an AprilGrid\n"
+      "(detection CSVs): per-view reprojection statistics, outlier views rejected.");
+  AddTargetOptions(cmd, &args->target);
+  cmd->add_option("--config-out", args->config_out,
+                  "Write a rig config with every camera's intrinsics (model, resolution,\n"
+                  "intrinsics, distortion) here (atomically)")
+      ->type_name("FILE");
+  cmd->add_option("--camchain", args->camchain,
+                  "Write a complete Kalibr camchain here: camera_model, intrinsics,\n"
+                  "distortion_model, distortion_coeffs, resolution, rostopic and, between\n"
+                  "consecutive cameras, T_cn_cnm1 from the shared target views")
+      ->type_name("FILE");
+  cmd->add_option("--poses-out", args->poses_out,
+                  "Write every camera's target poses (camera in the target frame, the target's\n"
+                  "unit) as DIR/NAME.tum: the input of `rigcal solve --reference target` and\n"
+                  "`--metric-target`")
+      ->type_name("DIR");
+  cmd->add_flag("--per-view", args->per_view, "Print the reprojection error of every view");
+  cmd->add_flag("--json", args->json, "Print the result as one JSON object on stdout");
+  cmd->footer(
+      "Exit status: 0 calibrated; 1 bad input (no target in any image, mixed resolutions,\n"
+      "too few views, unreadable files) or an output error.");
+  cmd->callback([args, exit_code]() {
+    try {
+      *exit_code = RunIntrinsics(*args);
+    } catch (const std::exception& e) {
+      *exit_code = Fail(e.what());
+    }
+  });
+}
+
+}  // namespace rigcal::cli

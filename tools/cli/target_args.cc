@@ -1,0 +1,110 @@
+// Shared options and first step of the target subcommands.
+#include "target_args.h"
+
+#include <set>
+#include <sstream>
+
+#include "rigcal/calib/logging.h"
+#include "rigcal/camera/camera_spec.h"
+
+namespace rigcal::cli {
+namespace {
+
+Status ParseResolution(const std::string& text, int* width, int* height) {
+  if (text.empty()) return {};
+  std::istringstream in(text);
+  char x = 0;
+  if (!(in >> *width >> x >> *height) || (x != 'x' && x != 'X') || !in.eof() || *width <= 0 ||
+      *height <= 0) {
+    return Error{"--resolution: expected WIDTHxHEIGHT (e.g. 752x480), got '" + text + "'"};
+  }
+  return {};
+}
+
+}  // namespace
+
+void AddTargetOptions(CLI::App* cmd, TargetArgs* args) {
+  cmd->add_option("--camera", args->cameras,
+                  "A camera and its target views: NAME=SOURCE, SOURCE a folder of images, a\n"
+                  "folder/pattern ('data/left*.jpg'), or a folder of AprilGrid detection CSVs\n"
+                  "(<t_ns>.csv, EuRoC/yac format: ts,tag_rows,tag_cols,tag_size,tag_spacing,\n"
+                  "kp_x,kp_y,p_x,p_y,p_z,tag_id,corner_idx). Repeat per camera; the first is\n"
+                  "cam0. Views of different cameras are paired by the digits of their file\n"
+                  "names (left07.jpg with right07.jpg; EuRoC stamps).")
+      ->type_name("NAME=SOURCE")
+      ->required();
+  cmd->add_option("--chessboard", args->chessboard,
+                  "Images: the chessboard's inner corners, COLSxROWS")
+      ->type_name("COLSxROWS")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            target::ChessboardSpec b;
+            const Status s = target::ParseChessboardSize(v, &b);
+            return s.ok() ? std::string() : s.message();
+          },
+          "COLSxROWS"))
+      ->capture_default_str();
+  cmd->add_option("--square", args->square,
+                  "Images: edge of one chessboard square; the unit of every position written\n"
+                  "(give metres for metric results). AprilGrid CSVs carry their own 3-D\n"
+                  "corners (metres).")
+      ->type_name("SIZE")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--resolution", args->resolution,
+                  "Image size of AprilGrid detection CSVs (not in the files), WIDTHxHEIGHT")
+      ->type_name("WxH");
+  cmd->add_option("--model", args->model,
+                  "pinhole: radial-tangential k1 k2 p1 p2 (OpenCV calibrateCamera, k3 = 0 as\n"
+                  "Kalibr's radtan); fisheye: equidistant k1..k4 (cv::fisheye::calibrate).")
+      ->check(CLI::IsMember({"pinhole", "fisheye"}))
+      ->capture_default_str();
+  cmd->add_option("--max-views", args->max_views,
+                  "At most this many views go into the solver, spread evenly over the\n"
+                  "recording (statistics cover every view)")
+      ->check(CLI::Range(4, 100000))
+      ->capture_default_str();
+  cmd->add_flag("--no-reject", args->no_reject,
+                "Keep every view (no outlier rejection by per-view RMS)");
+}
+
+Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args) {
+  const auto log = ModuleLogger("tools");
+  target::ChessboardSpec board;
+  board.square_size = args.square;
+  if (Status s = target::ParseChessboardSize(args.chessboard, &board); !s.ok()) {
+    return Error{"--chessboard: " + s.message()};
+  }
+  int width = 0;
+  int height = 0;
+  if (Status s = ParseResolution(args.resolution, &width, &height); !s.ok()) {
+    return Error{s.message()};
+  }
+  target::IntrinsicsOptions options;
+  options.model = *camera::ModelFromName(args.model);
+  options.max_views = args.max_views;
+  options.reject_outliers = !args.no_reject;
+  std::vector<CameraCalibration> out;
+  std::set<std::string> names;
+  for (const std::string& argument : args.cameras) {
+    const size_t eq = argument.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == argument.size()) {
+      return Error{"--camera: expected NAME=SOURCE, got '" + argument + "'"};
+    }
+    const std::string name = argument.substr(0, eq);
+    if (!names.insert(name).second) return Error{"--camera: camera '" + name + "' given twice"};
+    CameraCalibration camera;
+    auto views = target::LoadCameraViews(name, argument.substr(eq + 1), board, width, height);
+    if (!views) return Error{name + ": " + views.error()};
+    camera.views = std::move(*views);
+    log->info("{}: {} files, {} with a target ({}x{})", name, camera.views.files,
+              camera.views.views.size(), camera.views.width, camera.views.height);
+    auto intrinsics = target::CalibrateIntrinsics(camera.views, options);
+    if (!intrinsics) return Error{intrinsics.error()};
+    camera.intrinsics = std::move(*intrinsics);
+    out.push_back(std::move(camera));
+  }
+  return out;
+}
+
+}  // namespace rigcal::cli

@@ -1,0 +1,38 @@
+#pragma once
+// Options shared by the target subcommands (`rigcal intrinsics`, `rigcal reference-compare`):
+// cameras given as NAME=SOURCE, the chessboard, the resolution of AprilGrid detections, the
+// camera model; and the step both run first, every camera's views and intrinsics.
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "rigcal/calib/status.h"
+#include "rigcal/target/intrinsics.h"
+#include "rigcal/target/target_views.h"
+
+namespace rigcal::cli {
+
+struct TargetArgs {
+  std::vector<std::string> cameras;  // NAME=SOURCE
+  std::string chessboard = "9x6";
+  double square = 1.0;
+  std::string resolution;  // WIDTHxHEIGHT, for detection CSVs
+  std::string model = "pinhole";
+  int max_views = target::IntrinsicsOptions{}.max_views;
+  bool no_reject = false;
+};
+
+// Adds --camera, --chessboard, --square, --resolution, --model, --max-views, --no-reject.
+void AddTargetOptions(CLI::App* cmd, TargetArgs* args);
+
+struct CameraCalibration {
+  target::CameraViews views;
+  target::IntrinsicsResult intrinsics;
+};
+
+// For every --camera: its views and intrinsics (logs a line per camera). Errors name the
+// camera and the file.
+Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args);
+
+}  // namespace rigcal::cli
