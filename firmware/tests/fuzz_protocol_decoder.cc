@@ -4,10 +4,8 @@
 //   - the decoder never reads or writes out of bounds (ASan) and accepts only whole messages;
 //   - every accepted message re-encodes to a frame that decodes to the same payload;
 //   - the counters add up: each 0x00 ends at most one frame, messages + errors <= delimiters.
-// Build (not wired into CMake here):
-//   clang++ -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined \
-//     -I firmware/protocol/include firmware/tests/fuzz_protocol_decoder.cc -o fuzz_protocol
-//   ./fuzz_protocol firmware/tests/fuzz_corpus
+// Built as fuzz_trigger_protocol in the ASan tree (tests/fuzz/CMakeLists.txt; ctest
+// fuzz/trigger_protocol, label fuzz), seeds in firmware/tests/fuzz_corpus/.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
