@@ -9,7 +9,9 @@
 # entries of both binaries).
 set(CPACK_PACKAGE_NAME rigcal)
 set(CPACK_PACKAGE_VENDOR "rigcal")
-set(CPACK_PACKAGE_CONTACT "rigcal maintainers <rigcal@localhost>")
+# No project address exists yet: -DCPACK_PACKAGE_CONTACT="Name <address>" when packaging.
+set(CPACK_PACKAGE_CONTACT "rigcal maintainers <rigcal@example.org>" CACHE STRING
+    "Maintainer of the Debian packages")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "online extrinsic calibration of multi-camera rigs")
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
 set(CPACK_GENERATOR DEB)
@@ -27,12 +29,13 @@ set(CPACK_DEBIAN_PACKAGE_HOMEPAGE "https://example.invalid/rigcal")
 
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_NAME rigcal)
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_SECTION science)
-set(CPACK_COMPONENT_RUNTIME_DESCRIPTION
-    "online extrinsic calibration of multi-camera rigs\n\
-rigcal estimates, while a vehicle drives, where every camera of a rig sits relative to a\n\
-master camera (rotation, position and odometry scale) from the cameras' monocular visual\n\
-odometry, and publishes the estimate over LCM. This package holds the rigcal command, example\n\
-rig configurations and systemd units for the calibrator and its health check.")
+# Synopsis: CPACK_PACKAGE_DESCRIPTION_SUMMARY; these are the extended descriptions (lines of at
+# most 80 characters, lintian).
+set(CPACK_COMPONENT_RUNTIME_DESCRIPTION "rigcal estimates, while a vehicle drives, where every camera of a rig sits
+relative to a master camera (rotation, position and odometry scale) from the
+cameras' monocular visual odometry, and publishes the estimate over LCM. This
+package holds the rigcal command, example rig configurations and systemd units
+for the calibrator and its health check.")
 set(RIGCAL_DEB_DEPENDS "" CACHE STRING
     "Debian Depends of the rigcal package; empty = dpkg-shlibdeps (native builds)")
 if(RIGCAL_DEB_DEPENDS)
@@ -43,15 +46,13 @@ endif()
 
 set(CPACK_DEBIAN_DEV_PACKAGE_NAME rigcal-dev)
 set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
-set(CPACK_COMPONENT_DEV_DESCRIPTION
-    "online extrinsic calibration of multi-camera rigs - development files\n\
-Headers, static libraries and the CMake package of rigcal (find_package(rigcal) gives\n\
-rigcal::calib, rigcal::drivers, rigcal::vo and the others), the LCM message definitions and\n\
-their generated C++, Python and Java (lcm-spy) types.")
+set(CPACK_COMPONENT_DEV_DESCRIPTION "Headers, static libraries and the CMake package of rigcal: find_package(rigcal)
+gives rigcal::calib, rigcal::drivers, rigcal::vo and the others. Also the LCM
+message definitions and their generated C++, Python and Java (lcm-spy) types.")
 # The static libraries' own dependencies, as rigcalConfig.cmake finds them.
 set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS
     "libeigen3-dev, libceres-dev, libspdlog-dev, libyaml-cpp-dev, nlohmann-json3-dev, \
-libopencv-dev, liblcm-dev, libglib2.0-dev, pkg-config")
+libopencv-dev, liblcm-dev, libglib2.0-dev, pkg-config, python3")
 set(CPACK_DEBIAN_DEV_PACKAGE_RECOMMENDS "rigcal (= ${PROJECT_VERSION}-1)")
 
 include(CPack)

@@ -43,6 +43,8 @@ PACKAGES=(
   liblcm-java          # lcm.jar (javac classpath) and lcm-spy
   libjchart2d-java     # lcm-spy's charts (its start script names the jar; liblcm-java lacks it)
   lintian              # ctest install/deb_package: lints the rigcal .deb packages
+  systemd              # ctest install/systemd_units: systemd-analyze verify of config/systemd
+  python3              # ctest install/sd_notify: stands in for systemd's notify socket
   crossbuild-essential-arm64  # ctest install/arm64_qemu: the arm64 cross compiler
   qemu-user            # ctest install/arm64_qemu: qemu-aarch64 runs the arm64 build here
   mmdebstrap           # scripts/arm64-sysroot.sh: Debian's arm64 -dev packages in a sysroot

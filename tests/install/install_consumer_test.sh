@@ -31,13 +31,13 @@ check "CMake package" '[ -f "$prefix/lib/cmake/rigcal/rigcalConfig.cmake" ] &&
 check "LCM definitions" '[ -f "$prefix/share/rigcal/lcmtypes/rig_status_t.lcm" ]'
 check "Python LCM types" '[ -f "$prefix/lib/python3/dist-packages/rigcal/rig_status_t.py" ]'
 if [ -f "$build/lcmtypes/rigcal_lcmtypes.jar" ]; then
-  check "Java LCM types jar" '[ -f "$prefix/share/java/rigcal_lcmtypes.jar" ]'
+  check "Java LCM types jar" '[ -f "$prefix/share/java/rigcal-lcmtypes.jar" ]'
   # lcm-spy with the installed jar, as README "Deployment" invokes it (headless: it lists the
   # types it found on the class path, then cannot open its window).
   ntypes=$(ls "$source_dir"/lcmtypes/*.lcm | wc -l)
   if command -v java >/dev/null && [ -f /usr/share/java/lcm.jar ]; then
     java -Djava.awt.headless=true -Djava.net.preferIPv4Stack=true -Xmx128m \
-      -cp "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:$prefix/share/java/rigcal_lcmtypes.jar" \
+      -cp "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:$prefix/share/java/rigcal-lcmtypes.jar" \
       lcm.spy.Spy --lcm-url=memq:// > "$work/lcm-spy.log" 2>&1 || true
     check "lcm-spy finds the $ntypes rigcal types in the installed jar" \
       'grep -q "Found $ntypes LCM types" "$work/lcm-spy.log"'

@@ -14,7 +14,8 @@ skip() {
   exit 77
 }
 command -v python3 >/dev/null || skip "python3 not found"
-if ! ldd "$rigcal" | grep -q libsystemd; then
+needed=$(readelf -d "$rigcal")
+if [[ "$needed" != *libsystemd* ]]; then
   skip "rigcal built without libsystemd (libsystemd-dev): no service notifications"
 fi
 dir=$(mktemp -d)
