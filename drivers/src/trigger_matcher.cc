@@ -83,7 +83,7 @@ void TriggerMatcher::OnMessage(const trigger_protocol::Message& m, int64_t rx_ns
 }
 
 int64_t TriggerMatcher::PulseTimeNs(const Pulse& p) const {
-  if (p.boot == boot_) {
+  if (p.boot == boot_ && !options_.map_at_arrival) {
     if (std::optional<int64_t> t = map_.ToHostNs(p.mcu_us)) return *t;
     return -1;
   }

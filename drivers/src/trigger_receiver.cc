@@ -36,7 +36,7 @@ Status TriggerSession::Deliver(std::vector<TriggerEvent>* events) {
 Status TriggerSession::Start() {
   std::vector<TriggerEvent> events;
   const Status s = link_.Apply(settings_, timeout_ms_, &events);
-  Deliver(&events);  // the boot Hello, if any, is before the start: no re-apply
+  (void)Deliver(&events);  // the boot Hello, if any, is before the start: no re-apply
   if (!s.ok()) return s;
   started_ = true;
   return Status::Ok();
@@ -54,7 +54,7 @@ Status TriggerSession::Stop() {
   started_ = false;
   std::vector<TriggerEvent> events;
   const Status s = link_.Stop(timeout_ms_, &events);
-  Deliver(&events);
+  (void)Deliver(&events);  // re-applies nothing: stopped
   return s;
 }
 

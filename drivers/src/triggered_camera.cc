@@ -65,7 +65,9 @@ Expected<std::unique_ptr<SimulatedTriggerTimeline>> MakeSimulatedRigTrigger(
   link.delay_jitter_ns = static_cast<int64_t>(spec.trigger.link_jitter_ms * 1e6);
   link.corrupt_probability = spec.trigger.corrupt_probability;
   link.seed = spec.seed;
-  return SimulatedTriggerTimeline::Create(settings, link);
+  TriggerMatcherOptions matcher;
+  matcher.map_at_arrival = true;  // capture threads race: keep lossless runs deterministic
+  return SimulatedTriggerTimeline::Create(settings, link, matcher);
 }
 
 TriggeredCamera::TriggeredCamera(std::unique_ptr<CameraDevice> device,

@@ -49,18 +49,28 @@ SimulatedRigSpec TwoCameras(int64_t start_time_ns) {
   return spec;
 }
 
-TEST(TriggeredCamera, SimulatedRigFramesGetTheirPulsesSeqAndMappedTime) {
-  TriggerSettings settings;
-  settings.rate_hz = 20;
-  settings.lines = {{0, 1000, 0, 0}, {1, 1000, 0, 0}};
-  SimulatedTriggerOptions link;
-  link.delay_jitter_ns = 2'000'000;
-  link.drift_ppm = 0.0;  // the rig's frame clock is the host clock: the MCU must follow it
-  auto timeline = SimulatedTriggerTimeline::Create(settings, link);
+// `arrival`: the rig's own trigger (MakeSimulatedRigTrigger: pulses mapped once, on arrival,
+// as `rigcal run` does for determinism); else a timeline mapping with the newest map.
+void RunTriggeredRig(bool arrival) {
+  SimulatedRigSpec spec = TwoCameras(0);
+  spec.trigger.enabled = true;
+  spec.trigger.link_jitter_ms = 2.0;
+  spec.trigger.drift_ppm = 0.0;  // the rig's frame clock is the host clock: the MCU follows it
+  Expected<std::unique_ptr<SimulatedTriggerTimeline>> timeline = Error{""};
+  if (arrival) {
+    timeline = MakeSimulatedRigTrigger(spec, 1'000'000'000);
+  } else {
+    TriggerSettings settings;
+    settings.rate_hz = 20;
+    settings.lines = {{0, 1000, 0, 0}, {1, 1000, 0, 0}};
+    SimulatedTriggerOptions link;
+    link.delay_jitter_ns = 2'000'000;
+    timeline = SimulatedTriggerTimeline::Create(settings, link);
+  }
   ASSERT_TRUE(timeline.ok()) << timeline.error();
-  const int64_t t0 = (*timeline)->first_tick_ns();
+  spec.start_time_ns = (*timeline)->first_tick_ns();
   std::shared_ptr<TriggerTimeline> trigger(std::move(*timeline));
-  auto rig = MakeSimulatedRig(TwoCameras(t0));
+  auto rig = MakeSimulatedRig(spec);
   ASSERT_TRUE(rig.ok()) << rig.error();
   std::vector<std::unique_ptr<TriggeredCamera>> cams;
   for (int i = 0; i < 2; ++i) {
@@ -101,6 +111,10 @@ TEST(TriggeredCamera, SimulatedRigFramesGetTheirPulsesSeqAndMappedTime) {
   EXPECT_LT(max_err_us, 2000.0);
   EXPECT_LT(max_err_late_us, 200.0);
 }
+
+TEST(TriggeredCamera, SimulatedRigFramesGetTheirPulsesSeqAndMappedTime) { RunTriggeredRig(false); }
+
+TEST(TriggeredCamera, RigTriggerMappedOnArrivalAsInRigcalRun) { RunTriggeredRig(true); }
 
 }  // namespace
 }  // namespace rigcal::drivers

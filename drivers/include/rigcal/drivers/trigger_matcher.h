@@ -35,6 +35,10 @@ namespace rigcal::drivers {
 struct TriggerMatcherOptions {
   int capacity = 512;                // pulses kept, [2, 1e6]
   int64_t tolerance_ns = 5'000'000;  // largest |stamp - expected stamp|, (0, 1 s]
+  // true: a pulse's time is mapped once, with the map as it is when the pulse arrives, so a
+  // frame's answer does not depend on how much later data has come in (deterministic runs on a
+  // simulated link). false: with the newest map (more accurate for a live link).
+  bool map_at_arrival = false;
   TriggerClockMapOptions clock;
   Status Check() const;
 };
@@ -62,7 +66,7 @@ enum class MatchOutcome {
 struct TriggerMatcherStats {
   int64_t pulses = 0;
   int64_t heartbeats = 0;
-  int64_t mcu_resets = 0;  // Hellos after the first, and clock / seq going back
+  int64_t mcu_resets = 0;  // MCU reboots: its clock or seq went back
   int64_t seq_gaps = 0;    // pulses missing between consecutive reports
   int64_t matched = 0;
   int64_t unmatched = 0;   // kNoPulse answers
