@@ -77,16 +77,18 @@ class StateFileFault : public cli_test::CommandTest {
   }
 };
 
-// kill -9 at 100 random moments of a replay that saves its state every 0.1 s of log time (80
+// kill -9 at 100 random moments of a replay that saves its state every 0.1 s of log time (50
 // saves per run): the state file is always a complete, checksum-valid version (the one
 // before the run or one the run saved), and `--resume` takes it.
 TEST_F(StateFileFault, KillNineWhileSavingLeavesACompleteState) {
-  WriteLog("poses.lcmlog", 160);
+  WriteLog("poses.lcmlog", 100);
   WriteLog("short.lcmlog", 40);
   const std::string state = Path("s.state");
-  const std::vector<std::string> args = {
-      "replay", Path("poses.lcmlog"), "--config", Path("rig.yaml"), "--no-progress", "--state",
-      state};
+  const std::vector<std::string> args = {"replay",        Path("poses.lcmlog"),
+                                         "--config",      Path("rig.yaml"),
+                                         "--no-progress", "--state",
+                                         state,           "--out",
+                                         Path("r.yaml")};
   // One whole run: how long a replay takes here, and the first good state.
   const auto start = std::chrono::steady_clock::now();
   const pid_t first = Spawn(binary_, args, Path("err_first.txt"));
@@ -121,7 +123,8 @@ TEST_F(StateFileFault, KillNineWhileSavingLeavesACompleteState) {
     versions.insert(after);
     // Every 10th trial: --resume takes the file (and keeps it: nothing renamed aside).
     if (trial % 10 == 9) {
-      const RunResult r = Replay("short.lcmlog", "--state " + state + " --resume");
+      const RunResult r =
+          Replay("short.lcmlog", "--state " + state + " --resume --out " + Path("r_short.yaml"));
       EXPECT_NE(r.err.find("resumed from " + state), std::string::npos) << r.Explain();
       EXPECT_EQ(r.err.find(".rejected-"), std::string::npos) << r.Explain();
       ++resumed;
