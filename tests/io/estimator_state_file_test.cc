@@ -224,3 +224,41 @@ TEST(EstimatorStateFile, ValuesOutOfRangeAreRejectedDespiteTheChecksum) {
 
 }  // namespace
 }  // namespace rigcal::tools
+
+namespace rigcal::tools {
+namespace {
+
+// Version 4: how far each camera was consumed (the newest stamp of a set the estimator took)
+// survives the file; a stamp below -1 or a count other than the cameras' is rejected.
+TEST(EstimatorStateFile, ConsumedStampsRoundTripAndAreChecked) {
+  DriveOptions d;
+  d.num_frames = 300;
+  const SyntheticDrive drive = DemoDrive(d, 2);
+  const auto names = CameraNames(drive.recording);
+  RigEstimator est(names, RigEstimatorOptions{});
+  FeedAll(&est, drive.recording);
+  const RigEstimatorState saved = est.SaveState();
+  const int64_t last = drive.recording.t_ns.back();
+  EXPECT_EQ(saved.consumed_t_ns, std::vector<int64_t>(3, last));
+  const Expected<RigEstimatorState> parsed = ParseEstimatorState(FormatEstimatorState(saved));
+  ASSERT_TRUE(parsed.ok()) << parsed.error();
+  EXPECT_EQ(parsed->consumed_t_ns, saved.consumed_t_ns);
+  RigEstimator restored(names, RigEstimatorOptions{});
+  ASSERT_TRUE(restored.RestoreState(*parsed).ok());
+  EXPECT_EQ(restored.SaveState().consumed_t_ns, saved.consumed_t_ns);
+
+  RigEstimatorState bad = saved;
+  bad.consumed_t_ns[1] = -5;
+  Expected<RigEstimatorState> rejected = ParseEstimatorState(FormatEstimatorState(bad));
+  ASSERT_FALSE(rejected.ok());
+  EXPECT_NE(rejected.error().find("consumed stamp of camera 'left'"), std::string::npos)
+      << rejected.error();
+  bad = saved;
+  bad.consumed_t_ns.pop_back();
+  rejected = ParseEstimatorState(FormatEstimatorState(bad));
+  ASSERT_FALSE(rejected.ok());
+  EXPECT_NE(rejected.error().find("one per camera"), std::string::npos) << rejected.error();
+}
+
+}  // namespace
+}  // namespace rigcal::tools

@@ -82,7 +82,9 @@ TEST(CalibNodeExposure, OnlyConfiguredCamerasOnTheirOwnChannelsReachTheEstimator
   EXPECT_EQ(summary.cameras[1].invalid, n);  // front's pose on left's channel
   EXPECT_EQ(summary.cameras[0].invalid, n);  // roof's pose on front's channel
   EXPECT_EQ(summary.sync.total.pushed, static_cast<uint64_t>(good));
-  EXPECT_EQ(static_cast<int64_t>(summary.estimate.sets), n);
+  // Every set of the rig's own poses is matched (a live node may lose some to a full ready queue
+  // when poses arrive this fast: counted consumer_overflow, not this test's subject).
+  EXPECT_EQ(static_cast<int64_t>(summary.sync.sets_emitted), n);
 }
 
 }  // namespace

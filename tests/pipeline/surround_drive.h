@@ -36,7 +36,7 @@
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
 
-namespace rigcal::surround_drive {
+namespace rigcal::tools::surround_drive {
 
 struct Sample {
   double drive_s = 0.0;  // drive time
@@ -48,7 +48,8 @@ struct Sample {
 struct Report {
   std::vector<Sample> samples;
   CalibNodeSummary summary;
-  rig_status_t last_status{};
+  rig_status_t last_status{};   // the newest (written by the node's thread)
+  rig_status_t drive_status{};  // the newest at the end of the drive
   bool have_status = false;
   std::vector<Similarity> truth;      // per slave
   std::map<std::string, double> cpu;  // CPU seconds per thread name
@@ -153,7 +154,7 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
   sink.report = &report;
   bus.subscribeFunction(kStatusChannel, &OnStatus, &sink);
   CalibNodeOptions options;
-  options.camera_timeout_s = std::max(0.2, 2.0 / speed);  // 2 s of drive time
+  options.camera_timeout_s = std::max(0.5, 5.0 / speed);  // 5 s of drive time
   CalibNode node(*config, options, &bus);
   if (const Status s = node.Open(); !s.ok()) {
     ADD_FAILURE() << s.message();
@@ -203,12 +204,17 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
       report.samples.push_back(s);
     }
   }
+  // The newest RIGCAL_STATUS of the running node at the end of the drive (the dead camera named).
+  std::this_thread::sleep_for(std::chrono::duration<double>(0.3));  // one more status (5 Hz)
+  {
+    std::lock_guard<std::mutex> lock(sink.mutex);
+    report.drive_status = report.last_status;
+    report.have_status = report.have_status && report.last_status.utime > 0;
+  }
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(300);
   while (node.ReceivedPoses() < report.published && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  // The last RIGCAL_STATUS of the running node (the dead camera named), before the stop.
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
   report.cpu = ThreadCpu();
   stop = true;
   runner.join();
@@ -216,4 +222,4 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
   return report;
 }
 
-}  // namespace rigcal::surround_drive
+}  // namespace rigcal::tools::surround_drive
