@@ -2,6 +2,7 @@
 // --metric-target / --master-metric` through the built binary, on OpenCV's 13 real stereo
 // chessboard pairs (../shared/data/opencv_stereo_chessboard).
 
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -54,7 +55,8 @@ TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
   auto chain = tools::ReadCamchain(Path("camchain.yaml"));
   ASSERT_TRUE(chain.ok()) << chain.error();
   // The right camera ~3.34 squares from the left one.
-  EXPECT_NEAR((*chain)[1].cn_from_cnm1.topRightCorner<3, 1>().norm(), 3.34, 0.1);
+  const Eigen::Vector3d t = (*chain)[1].cn_from_cnm1.topRightCorner(3, 1);
+  EXPECT_NEAR(t.norm(), 3.34, 0.1);
   const std::string text = cli_test::Slurp(Path("camchain.yaml"));
   for (const char* key : {"camera_model", "intrinsics", "distortion_model", "distortion_coeffs",
                           "resolution", "T_cn_cnm1", "rostopic"}) {
