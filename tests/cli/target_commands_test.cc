@@ -1,0 +1,138 @@
+// `rigcal intrinsics`, `rigcal reference-compare` and `rigcal solve --reference target /
+// --metric-target / --master-metric` through the built binary, on OpenCV's 13 real stereo
+// chessboard pairs (../shared/data/opencv_stereo_chessboard).
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "command_test.h"
+#include "rigcal/io/config_sections.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/rig_files.h"
+#include "support/skip.h"
+
+namespace rigcal {
+namespace {
+
+std::string DataDir() { return std::string(RIGCAL_SHARED_DATA_DIR) + "/opencv_stereo_chessboard"; }
+
+class TargetCommandsTest : public cli_test::CommandTest {
+ protected:
+  void SetUp() override {
+    CommandTest::SetUp();
+    if (HasFatalFailure()) return;
+    if (!std::filesystem::exists(DataDir() + "/left01.jpg")) {
+      RIGCAL_SKIP_MISSING() << "real chessboard images not found in " << DataDir();
+    }
+  }
+  std::string Cameras() const {
+    return "--camera " + cli_test::Quote("left=" + DataDir() + "/left*.jpg") + " --camera " +
+           cli_test::Quote("right=" + DataDir() + "/right*.jpg");
+  }
+};
+
+TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
+  const cli_test::RunResult r =
+      Run("intrinsics " + Cameras() + " --chessboard 9x6 --square 1 --json --camchain " +
+          Path("camchain.yaml") + " --config-out " + Path("rig.yaml") + " --poses-out " +
+          Path("poses"));
+  ASSERT_EQ(r.exit_code, 0) << r.Explain();
+  const auto json = nlohmann::json::parse(r.out, nullptr, false);
+  ASSERT_FALSE(json.is_discarded()) << r.out;
+  ASSERT_EQ(json["cameras"].size(), 2u);
+  EXPECT_EQ(json["cameras"][0]["views"].size(), 13u);
+  EXPECT_LT(json["cameras"][0]["rms_px"].get<double>(), 0.6);
+  EXPECT_GE(json["cameras"][0]["views_rejected"].get<int>(), 0);
+
+  // The camchain: complete (Kalibr's keys) and read back.
+  auto specs = tools::ReadKalibrIntrinsics(Path("camchain.yaml"));
+  ASSERT_TRUE(specs.ok()) << specs.error();
+  ASSERT_EQ(specs->size(), 2u);
+  EXPECT_EQ((*specs)[1].name, "right");
+  EXPECT_EQ((*specs)[0].width, 640);
+  EXPECT_NEAR((*specs)[0].intrinsics[0], json["cameras"][0]["intrinsics"][0].get<double>(), 1e-9);
+  auto chain = tools::ReadCamchain(Path("camchain.yaml"));
+  ASSERT_TRUE(chain.ok()) << chain.error();
+  // The right camera ~3.34 squares from the left one.
+  const Eigen::Vector3d t = (*chain)[1].cn_from_cnm1.topRightCorner(3, 1);
+  EXPECT_NEAR(t.norm(), 3.34, 0.1);
+  const std::string text = cli_test::Slurp(Path("camchain.yaml"));
+  for (const char* key : {"camera_model", "intrinsics", "distortion_model", "distortion_coeffs",
+                          "resolution", "T_cn_cnm1", "rostopic"}) {
+    EXPECT_NE(text.find(key), std::string::npos) << key << " missing:\n" << text;
+  }
+  // The rig config.
+  auto config = tools::LoadRigConfig(Path("rig.yaml"));
+  ASSERT_TRUE(config.ok()) << config.error();
+  ASSERT_EQ(config->cameras.size(), 2u);
+  ASSERT_TRUE(config->cameras[0].spec.has_value());
+
+  // solve --reference target on the written target poses.
+  const cli_test::RunResult ref =
+      Run("solve --reference target --master left=" + Path("poses/left.tum") +
+          " --slave right=" + Path("poses/right.tum") + " --json");
+  ASSERT_EQ(ref.exit_code, 0) << ref.Explain();
+  const auto ref_json = nlohmann::json::parse(ref.out, nullptr, false);
+  ASSERT_FALSE(ref_json.is_discarded()) << ref.out;
+  EXPECT_EQ(ref_json["unit"]["source"], "target reference");
+  const auto& slave = ref_json["slaves"][0];
+  const double baseline = std::hypot(slave["C"][0].get<double>(), slave["C"][1].get<double>(),
+                                     slave["C"][2].get<double>());
+  EXPECT_NEAR(baseline, 3.34, 0.1) << ref.out;
+  EXPECT_EQ(slave["state"], "converged");
+
+  // The motion-based solve with the master's scale from its target poses: the odometry here
+  // is the target poses themselves, so lambda_world is 1 and the output says metres.
+  const cli_test::RunResult metric =
+      Run("solve --master left=" + Path("poses/left.tum") +
+          " --slave right=" + Path("poses/right.tum") + " --metric-target " +
+          Path("poses/left.tum") + " --json" + " --out " + Path("result.yaml"));
+  ASSERT_TRUE(metric.exit_code == 0 || metric.exit_code == 3) << metric.Explain();
+  const auto metric_json = nlohmann::json::parse(metric.out, nullptr, false);
+  ASSERT_FALSE(metric_json.is_discarded()) << metric.out;
+  EXPECT_TRUE(metric_json["unit"]["metric"].get<bool>());
+  EXPECT_NEAR(metric_json["unit"]["metres_per_master_unit"].get<double>(), 1.0, 1e-9);
+  EXPECT_NE(metric.err.find("positions are in metres"), std::string::npos) << metric.err;
+  EXPECT_NE(cli_test::Slurp(Path("result.yaml")).find("# units: metric scale"), std::string::npos);
+
+  // --master-metric with --metric-target: a usage error.
+  const cli_test::RunResult both =
+      Run("solve --master " + Path("poses/left.tum") + " --slave " + Path("poses/right.tum") +
+          " --master-metric" + " --metric-target " + Path("poses/left.tum"));
+  EXPECT_EQ(both.exit_code, 2) << both.Explain();
+}
+
+TEST_F(TargetCommandsTest, ReferenceCompareTable) {
+  const cli_test::RunResult r = Run("reference-compare " + Cameras() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.Explain();
+  const auto json = nlohmann::json::parse(r.out, nullptr, false);
+  ASSERT_FALSE(json.is_discarded()) << r.out;
+  ASSERT_EQ(json["slaves"].size(), 1u);
+  EXPECT_EQ(json["slaves"][0]["reference"], "stereo");
+  bool saw_nl = false;
+  for (const auto& row : json["slaves"][0]["rows"]) {
+    if (row["method"] != "motion-based NL") continue;
+    saw_nl = true;
+    EXPECT_LE(row["rot_err_deg"].get<double>(), 0.15) << row.dump();
+    EXPECT_LE(row["dir_err_deg"].get<double>(), 0.5) << row.dump();
+    EXPECT_LE(row["length_err_pct"].get<double>(), 0.3) << row.dump();
+  }
+  EXPECT_TRUE(saw_nl) << r.out;
+  const cli_test::RunResult text = Run("reference-compare " + Cameras());
+  ASSERT_EQ(text.exit_code, 0) << text.Explain();
+  EXPECT_NE(text.out.find("rot_deg  dir_deg  len_pct"), std::string::npos) << text.out;
+}
+
+TEST_F(TargetCommandsTest, NoChessboardIsAClearError) {
+  const cli_test::RunResult r =
+      Run("intrinsics --camera " + cli_test::Quote("left=" + DataDir() + "/left*.jpg") +
+          " --chessboard 10x7");
+  EXPECT_EQ(r.exit_code, 1) << r.Explain();
+  EXPECT_NE(r.err.find("no 10x7 chessboard (inner corners) found in any of the 13 images"),
+            std::string::npos)
+      << r.err;
+}
+
+}  // namespace
+}  // namespace rigcal
