@@ -13,7 +13,7 @@ binary=$(readlink -f "$1")
 filter=${2:--VividLongRun.*}
 HERE=$(cd "$(dirname "$0")" && pwd)
 VM_DIR=${RIGCAL_VM_DIR:-$PWD/build/vm}
-TIMEOUT_S=${RIGCAL_VM_TIMEOUT_S:-600}
+TIMEOUT_S=${RIGCAL_VM_TIMEOUT_S:-400}
 
 skip() {
   echo "SKIP: $*"
@@ -35,7 +35,7 @@ root="$work/root"
 mkdir -p "$root/tests/lib" "$root/lib64"
 cp "$binary" "$root/tests/device_tests"
 # Shared libraries of the test binary and of libcamera's IPA modules (dlopen'ed).
-libs() { ldd "$1" 2>/dev/null | awk '/=> \//{print $3} /^\s*\/lib64\//{print $1}'; }
+libs() { ldd "$1" 2>/dev/null | awk '$2 == "=>" && $3 ~ /^\// {print $3} $1 ~ /^\/lib64\// {print $1}'; }
 {
   libs "$binary"
   for ipa in /usr/lib/x86_64-linux-gnu/libcamera/*.so; do [ -f "$ipa" ] && libs "$ipa"; done
