@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the device tests (a GoogleTest binary, tests/device/) inside QEMU on a Debian kernel with
 # real V4L2 drivers: two vivid devices, two v4l2loopback devices, vimc for libcamera.
-#   run-device-tests.sh <test binary> [gtest filter, default: all but VividLongRun.*]
+#   run-device-tests.sh <test binary> [gtest filter, default: all but the long VividLongRun.* and Loopback.*]
 # Environment variables RIGCAL_DEVICE_* are passed on to the guest's tests.
 # Builds or reuses the assets (build-assets.sh, under $RIGCAL_VM_DIR, default build/vm), packs
 # the binary with the shared libraries ldd lists into a second initramfs archive, boots
@@ -10,10 +10,10 @@
 # Exit: 0 passed, 1 failed, 77 skipped ("SKIP: <reason>" first; a failure under CI=true).
 set -uo pipefail
 binary=$(readlink -f "$1")
-filter=${2:--VividLongRun.*}
+filter=${2:--VividLongRun.*:Loopback.*}
 HERE=$(cd "$(dirname "$0")" && pwd)
 VM_DIR=${RIGCAL_VM_DIR:-$PWD/build/vm}
-TIMEOUT_S=${RIGCAL_VM_TIMEOUT_S:-600}
+TIMEOUT_S=${RIGCAL_VM_TIMEOUT_S:-400}
 
 skip() {
   echo "SKIP: $*"
@@ -35,7 +35,7 @@ root="$work/root"
 mkdir -p "$root/tests/lib" "$root/lib64"
 cp "$binary" "$root/tests/device_tests"
 # Shared libraries of the test binary and of libcamera's IPA modules (dlopen'ed).
-libs() { ldd "$1" 2>/dev/null | awk '/=> \//{print $3} /^\s*\/lib64\//{print $1}'; }
+libs() { ldd "$1" 2>/dev/null | awk '$2 == "=>" && $3 ~ /^\// {print $3} $1 ~ /^\/lib64\// {print $1}'; }
 {
   libs "$binary"
   for ipa in /usr/lib/x86_64-linux-gnu/libcamera/*.so; do [ -f "$ipa" ] && libs "$ipa"; done

@@ -34,7 +34,7 @@ namespace {
 
 constexpr int kWidth = 320;
 constexpr int kHeight = 240;
-constexpr int kFrames = 200;
+constexpr int kFrames = 240;
 constexpr int kMinPeriodMs = 60;  // > sync.tolerance (25 ms): consecutive sets stay apart
 
 const char* kRig =
@@ -51,7 +51,7 @@ const char* kRig =
     "source:\n"
     "  type: simulated\n"
     "  frame_rate_hz: 20\n"
-    "  num_frames: 200\n"
+    "  num_frames: 240\n"
     "  seed: 3\n"
     "  realtime: false\n"
     "  scene: {type: room, size: [20, 16, 6], boxes: 10}\n"
