@@ -7,9 +7,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "cli/command_test.h"
 #include "calib/free_running_rig.h"
+#include "cli/command_test.h"
 #include "rigcal/io/rig_files.h"
+#include "rigcal/io/trajectory_io.h"
 
 namespace rigcal::tools {
 namespace {
@@ -80,6 +81,25 @@ TEST_F(SolveTimeOffsetTest, GivenOffsetIsAppliedAndReportedWithoutSigma) {
     EXPECT_DOUBLE_EQ(s["time_offset_s"].get<double>(), 0.05);
     EXPECT_TRUE(s["time_offset_std_s"].is_null());
   }
+}
+
+TEST_F(SolveTimeOffsetTest, PerSlaveOffsetsGivenOrEstimated) {
+  const std::string args = WriteRig({{20.0, 0.0, 0.050}, {20.0, 0.013, -0.030}});
+  RunResult r = Run(args + " --time-offset cam1=0.05,cam2=auto --json");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["slaves"].size(), 2u);
+  EXPECT_DOUBLE_EQ(j["slaves"][0]["time_offset_s"].get<double>(), 0.05);
+  EXPECT_TRUE(j["slaves"][0]["time_offset_std_s"].is_null());
+  const double offset = j["slaves"][1]["time_offset_s"].get<double>();
+  const double std = j["slaves"][1]["time_offset_std_s"].get<double>();
+  EXPECT_LE(std::abs(offset + 0.030), 4.0 * std) << offset;
+  r = Run(args + " --time-offset roof=0.01");
+  EXPECT_EQ(r.exit_code, 1) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("--time-offset: 'roof' is not a slave camera"));
+  r = Run(args + " --time-offset cam1=soon");
+  EXPECT_EQ(r.exit_code, 2) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("cam1: expected auto or a number of seconds, got 'soon'"));
 }
 
 TEST_F(SolveTimeOffsetTest, BadInputIsAClearError) {
