@@ -26,10 +26,19 @@ std::string Where(const std::string& path, const YAML::Node& node) {
   return mark.is_null() ? path + ": " : path + ":" + std::to_string(mark.line + 1) + ": ";
 }
 
+// Most nodes DuplicateKey visits, counting a node each time an alias reaches it: a few hundred
+// bytes of nested aliases ("billion laughs") stand for 10^9 nodes, which no rigcal file has.
+constexpr int64_t kMaxVisitedNodes = 100'000;
+
 // The first key that appears twice in a map of `node` (at any depth): yaml-cpp keeps both, and
-// a lookup would silently use one of them.
-std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& node, int depth) {
+// a lookup would silently use one of them. `*budget`: nodes left to visit.
+std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& node, int depth,
+                                  int64_t* budget) {
   if (depth > 64) return std::nullopt;  // yaml-cpp itself limits the nesting far below
+  if (--*budget < 0) {
+    return Error{path + ": more than " + std::to_string(kMaxVisitedNodes) +
+                 " YAML nodes with every alias expanded (nested aliases?): not a rigcal file"};
+  }
   if (node.IsMap()) {
     std::set<std::string> keys;
     for (auto it = node.begin(); it != node.end(); ++it) {
@@ -37,11 +46,11 @@ std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& nod
         return Error{Where(path, it->first) + it->first.Scalar() +
                      ": duplicate key (each key may appear once in a map)"};
       }
-      if (auto e = DuplicateKey(path, it->second, depth + 1)) return e;
+      if (auto e = DuplicateKey(path, it->second, depth + 1, budget)) return e;
     }
   } else if (node.IsSequence()) {
     for (const YAML::Node& child : node) {
-      if (auto e = DuplicateKey(path, child, depth + 1)) return e;
+      if (auto e = DuplicateKey(path, child, depth + 1, budget)) return e;
     }
   }
   return std::nullopt;
@@ -59,7 +68,8 @@ Expected<YAML::Node> LoadYaml(const std::string& path) {
                    "a second YAML document (after ---): the file must hold one document"};
     }
     const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
-    if (auto e = DuplicateKey(path, root, 0)) return *e;
+    int64_t budget = kMaxVisitedNodes;
+    if (auto e = DuplicateKey(path, root, 0, &budget)) return *e;
     return root;
   } catch (const YAML::ParserException& e) {
     return Error{path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg};
