@@ -1,11 +1,16 @@
 #include "rigcal/io/yaml_fields.h"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
+
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace rigcal::tools {
 
@@ -56,18 +61,48 @@ std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& nod
   return std::nullopt;
 }
 
+// Remembers where each document starts; ignores everything else.
+class DocumentStarts : public YAML::EventHandler {
+ public:
+  std::vector<YAML::Mark> starts;
+  void OnDocumentStart(const YAML::Mark& mark) override { starts.push_back(mark); }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
+// The start of a second document in `text`, if there is one. At most two documents are parsed:
+// YAML::LoadAll loops forever on some malformed input (yaml-cpp 0.7 makes an endless series of
+// empty documents of "," and a broken line; found by the rig_yaml fuzz target).
+std::optional<YAML::Mark> SecondDocument(const std::string& text) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DocumentStarts documents;
+  if (!parser.HandleNextDocument(documents)) return std::nullopt;
+  if (!parser.HandleNextDocument(documents)) return std::nullopt;
+  return documents.starts.size() >= 2 ? documents.starts[1] : YAML::Mark::null_mark();
+}
+
 }  // namespace
 
 Expected<YAML::Node> LoadYaml(const std::string& path) {
   auto text = ReadWholeFile(path);
   if (!text) return Error{text.error()};
   try {
-    const std::vector<YAML::Node> documents = YAML::LoadAll(*text);
-    if (documents.size() > 1) {
-      return Error{Where(path, documents[1]) +
-                   "a second YAML document (after ---): the file must hold one document"};
+    if (const std::optional<YAML::Mark> second = SecondDocument(*text)) {
+      return Error{
+          (second->is_null() ? path + ": " : path + ":" + std::to_string(second->line + 1) + ": ") +
+          "a second YAML document (after ---): the file must hold one document"};
     }
-    const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
+    const YAML::Node root = YAML::Load(*text);
     int64_t budget = kMaxVisitedNodes;
     if (auto e = DuplicateKey(path, root, 0, &budget)) return *e;
     return root;
