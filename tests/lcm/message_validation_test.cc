@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <climits>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -132,6 +133,28 @@ std::vector<uint8_t> WithNulAt(std::vector<uint8_t> buffer, const std::string& t
   EXPECT_NE(it, buffer.end()) << text;
   if (it != buffer.end()) *(it + static_cast<std::ptrdiff_t>(text.find('#'))) = 0;
   return buffer;
+}
+
+// A string length of INT32_MIN in a nested string or after the last array (found by the lcm_log
+// fuzz target: LCM's decode computed length - 1, an overflow) is refused before LCM decodes.
+TEST(LcmValidation, MostNegativeStringLengthIsMalformed) {
+  MessageValidator validator(kNames);
+  const rig_extrinsics_t extrinsics = MakeExtrinsicsMsg();
+  std::vector<uint8_t> buffer = Encode("E", extrinsics);
+  const std::string& text = extrinsics.slaves[0].message;
+  auto it = std::search(buffer.begin(), buffer.end(), text.begin(), text.end());
+  ASSERT_NE(it, buffer.end());
+  PutInt32(&buffer, static_cast<size_t>(it - buffer.begin()) - 4, INT32_MIN);
+  ExpectRejected<rig_extrinsics_t>(&validator, "E", buffer, RejectCause::kMalformed,
+                                   {"slaves[0].message", "string length -2147483648"});
+  const rig_status_t status = MakeStatusMsg();
+  buffer = Encode("S", status);
+  it = std::search(buffer.begin(), buffer.end(), status.estimator_message.begin(),
+                   status.estimator_message.end());
+  ASSERT_NE(it, buffer.end());
+  PutInt32(&buffer, static_cast<size_t>(it - buffer.begin()) - 4, INT32_MIN);
+  ExpectRejected<rig_status_t>(&validator, "S", buffer, RejectCause::kMalformed,
+                               {"estimator_message", "string length -2147483648"});
 }
 
 // A NUL inside any other string (found by the lcm_rig_status fuzz target): LCM decodes the
