@@ -51,8 +51,10 @@ void ParseAndCheck(std::string_view text) {
   RIGCAL_FUZZ_EXPECT(again.ok(), "a formatted state parses: " + formatted);
   RIGCAL_FUZZ_EXPECT(tools::FormatEstimatorState(*again) == formatted,
                      "format and parse round-trip");
-  // Small rigs only: the estimator's buffers grow with the camera count.
-  if (state->cameras.size() >= 2 && state->cameras.size() <= 8) {
+  // Small rigs only: the estimator's buffers grow with the camera count. And only for one state
+  // in four (chosen by its text, so a rerun is the same): building an estimator allocates its
+  // buffers, which under ASan costs more than all the parsing.
+  if (state->cameras.size() >= 2 && state->cameras.size() <= 8 && Fnv1a(text) % 4 == 0) {
     RigEstimator estimator(state->cameras, RigEstimatorOptions{});
     const Status restored = estimator.RestoreState(*state);
     RIGCAL_FUZZ_EXPECT(restored.ok() || !restored.message().empty(), "a refused state says why");

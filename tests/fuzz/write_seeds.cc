@@ -46,6 +46,7 @@ std::vector<uint8_t> Log(const std::vector<std::pair<std::string, std::vector<ui
 }  // namespace rigcal::tools::lcm_test
 
 int main(int argc, char** argv) {
+  using namespace rigcal;
   using namespace rigcal::tools;
   using namespace rigcal::tools::lcm_test;
   if (argc != 2) {

@@ -241,6 +241,28 @@ TEST_F(RigFilesTest, RigYamlStrictKeysAndDocuments) {
               HasSubstr("docs.yaml:3: a second YAML document"));
 }
 
+// yaml-cpp 0.7's LoadAll makes an endless series of documents of these 3 bytes (found by the
+// rig_yaml fuzz target as a hang); the reader parses at most two documents.
+TEST_F(RigFilesTest, RigYamlMalformedInputIsAnErrorNotAHang) {
+  EXPECT_THAT(ReadRigError("comma.yaml", ",\n["), HasSubstr("comma.yaml:"));
+  EXPECT_THAT(ReadRigError("comma2.yaml", ",a: [b\n"), HasSubstr("comma2.yaml:"));
+}
+
+// Nested aliases ("billion laughs", found by the rig_yaml fuzz target): 9 levels of 10 aliases
+// are 10^9 nodes in 0.5 kB. The duplicate-key check visited every one of them (the reader hung
+// for hours); it now stops after 100000 nodes and says why.
+TEST_F(RigFilesTest, RigYamlNestedAliasesAreRefusedNotExpanded) {
+  std::string text = "a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n";
+  for (int level = 1; level <= 8; ++level) {
+    const std::string alias = "*a" + std::to_string(level - 1);
+    text += "a" + std::to_string(level) + ": &a" + std::to_string(level) + " [";
+    for (int k = 0; k < 10; ++k) text += (k ? ", " : "") + alias;
+    text += "]\n";
+  }
+  EXPECT_THAT(ReadRigError("laughs.yaml", text),
+              HasSubstr("laughs.yaml: more than 100000 YAML nodes with every alias expanded"));
+}
+
 TEST_F(RigFilesTest, ResultYamlRoundTripsThroughReadRigYaml) {
   const RigCalibration result = MakeResult();
   ASSERT_TRUE(WriteResultYaml(Path("result.yaml"), result).ok());

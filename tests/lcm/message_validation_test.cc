@@ -5,7 +5,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <climits>
+#include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "lcm/message_fixtures.h"
@@ -121,6 +125,62 @@ TEST(LcmValidation, Malformed) {
   buffer[kPoseCameraLength + 4 + 1] = 0;  // "l\0ft"
   ExpectRejected<camera_pose_t>(&validator, "P", buffer, RejectCause::kMalformed,
                                 {"camera_pose_t.camera", "NUL"});
+}
+
+// `buffer` with the '#' of the string `text` (encoded in it) replaced by a NUL.
+std::vector<uint8_t> WithNulAt(std::vector<uint8_t> buffer, const std::string& text) {
+  const auto it = std::search(buffer.begin(), buffer.end(), text.begin(), text.end());
+  EXPECT_NE(it, buffer.end()) << text;
+  if (it != buffer.end()) *(it + static_cast<std::ptrdiff_t>(text.find('#'))) = 0;
+  return buffer;
+}
+
+// A string length of INT32_MIN in a nested string or after the last array (found by the lcm_log
+// fuzz target: LCM's decode computed length - 1, an overflow) is refused before LCM decodes.
+TEST(LcmValidation, MostNegativeStringLengthIsMalformed) {
+  MessageValidator validator(kNames);
+  const rig_extrinsics_t extrinsics = MakeExtrinsicsMsg();
+  std::vector<uint8_t> buffer = Encode("E", extrinsics);
+  const std::string& text = extrinsics.slaves[0].message;
+  auto it = std::search(buffer.begin(), buffer.end(), text.begin(), text.end());
+  ASSERT_NE(it, buffer.end());
+  PutInt32(&buffer, static_cast<size_t>(it - buffer.begin()) - 4, INT32_MIN);
+  ExpectRejected<rig_extrinsics_t>(&validator, "E", buffer, RejectCause::kMalformed,
+                                   {"slaves[0].message", "string length -2147483648"});
+  const rig_status_t status = MakeStatusMsg();
+  buffer = Encode("S", status);
+  it = std::search(buffer.begin(), buffer.end(), status.estimator_message.begin(),
+                   status.estimator_message.end());
+  ASSERT_NE(it, buffer.end());
+  PutInt32(&buffer, static_cast<size_t>(it - buffer.begin()) - 4, INT32_MIN);
+  ExpectRejected<rig_status_t>(&validator, "S", buffer, RejectCause::kMalformed,
+                               {"estimator_message", "string length -2147483648"});
+}
+
+// A NUL inside any other string (found by the lcm_rig_status fuzz target): LCM decodes the
+// announced length but encodes up to the first NUL, so such a message, once accepted, could not
+// be encoded again (EncodeMessage failed).
+TEST(LcmValidation, NulInsideAStringIsMalformed) {
+  MessageValidator validator(kNames);
+  rig_status_t status = MakeStatusMsg();
+  status.estimator_message = "back: insufficient#motion";
+  ExpectRejected<rig_status_t>(
+      &validator, "S", WithNulAt(Encode("S", status), status.estimator_message),
+      RejectCause::kMalformed, {"rig_status_t.estimator_message", "NUL byte at 18 of 25"});
+  rig_extrinsics_t extrinsics = MakeExtrinsicsMsg();
+  extrinsics.slaves[1].message = "initialising#";
+  ExpectRejected<rig_extrinsics_t>(&validator, "E",
+                                   WithNulAt(Encode("E", extrinsics), "initialising#"),
+                                   RejectCause::kMalformed, {"message", "NUL byte"});
+  image_t image = MakeImageMsg();
+  image.pixel_format = "GR#Y";
+  ExpectRejected<image_t>(&validator, "I", WithNulAt(Encode("I", image), "GR#Y"),
+                          RejectCause::kMalformed, {"image_t.pixel_format", "NUL byte at 2 of 4"});
+  // Without the NUL each is accepted and encodes again.
+  Expected<rig_status_t> accepted =
+      validator.Decode<rig_status_t>("S", Encode("S", status).data(), Encode("S", status).size());
+  ASSERT_TRUE(accepted.ok()) << accepted.error();
+  EXPECT_TRUE(EncodeMessage("S", kNames, *accepted).ok());
 }
 
 TEST(LcmValidation, StatsSummaryCountsByCause) {

@@ -1,11 +1,16 @@
 #include "rigcal/io/yaml_fields.h"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
+
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace rigcal::tools {
 
@@ -26,10 +31,19 @@ std::string Where(const std::string& path, const YAML::Node& node) {
   return mark.is_null() ? path + ": " : path + ":" + std::to_string(mark.line + 1) + ": ";
 }
 
+// Most nodes DuplicateKey visits, counting a node each time an alias reaches it: a few hundred
+// bytes of nested aliases ("billion laughs") stand for 10^9 nodes, which no rigcal file has.
+constexpr int64_t kMaxVisitedNodes = 100'000;
+
 // The first key that appears twice in a map of `node` (at any depth): yaml-cpp keeps both, and
-// a lookup would silently use one of them.
-std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& node, int depth) {
+// a lookup would silently use one of them. `*budget`: nodes left to visit.
+std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& node, int depth,
+                                  int64_t* budget) {
   if (depth > 64) return std::nullopt;  // yaml-cpp itself limits the nesting far below
+  if (--*budget < 0) {
+    return Error{path + ": more than " + std::to_string(kMaxVisitedNodes) +
+                 " YAML nodes with every alias expanded (nested aliases?): not a rigcal file"};
+  }
   if (node.IsMap()) {
     std::set<std::string> keys;
     for (auto it = node.begin(); it != node.end(); ++it) {
@@ -37,14 +51,44 @@ std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& nod
         return Error{Where(path, it->first) + it->first.Scalar() +
                      ": duplicate key (each key may appear once in a map)"};
       }
-      if (auto e = DuplicateKey(path, it->second, depth + 1)) return e;
+      if (auto e = DuplicateKey(path, it->second, depth + 1, budget)) return e;
     }
   } else if (node.IsSequence()) {
     for (const YAML::Node& child : node) {
-      if (auto e = DuplicateKey(path, child, depth + 1)) return e;
+      if (auto e = DuplicateKey(path, child, depth + 1, budget)) return e;
     }
   }
   return std::nullopt;
+}
+
+// Remembers where each document starts; ignores everything else.
+class DocumentStarts : public YAML::EventHandler {
+ public:
+  std::vector<YAML::Mark> starts;
+  void OnDocumentStart(const YAML::Mark& mark) override { starts.push_back(mark); }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
+// The start of a second document in `text`, if there is one. At most two documents are parsed:
+// YAML::LoadAll loops forever on some malformed input (yaml-cpp 0.7 makes an endless series of
+// empty documents of "," and a broken line; found by the rig_yaml fuzz target).
+std::optional<YAML::Mark> SecondDocument(const std::string& text) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DocumentStarts documents;
+  if (!parser.HandleNextDocument(documents)) return std::nullopt;
+  if (!parser.HandleNextDocument(documents)) return std::nullopt;
+  return documents.starts.size() >= 2 ? documents.starts[1] : YAML::Mark::null_mark();
 }
 
 }  // namespace
@@ -53,13 +97,14 @@ Expected<YAML::Node> LoadYaml(const std::string& path) {
   auto text = ReadWholeFile(path);
   if (!text) return Error{text.error()};
   try {
-    const std::vector<YAML::Node> documents = YAML::LoadAll(*text);
-    if (documents.size() > 1) {
-      return Error{Where(path, documents[1]) +
-                   "a second YAML document (after ---): the file must hold one document"};
+    if (const std::optional<YAML::Mark> second = SecondDocument(*text)) {
+      return Error{
+          (second->is_null() ? path + ": " : path + ":" + std::to_string(second->line + 1) + ": ") +
+          "a second YAML document (after ---): the file must hold one document"};
     }
-    const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
-    if (auto e = DuplicateKey(path, root, 0)) return *e;
+    const YAML::Node root = YAML::Load(*text);
+    int64_t budget = kMaxVisitedNodes;
+    if (auto e = DuplicateKey(path, root, 0, &budget)) return *e;
     return root;
   } catch (const YAML::ParserException& e) {
     return Error{path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg};

@@ -26,6 +26,7 @@ constexpr double kUnknownStd = -1.0;
 // The rules of one slave_extrinsics_t (extrinsics_message.h).
 void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check) {
   check->CameraName("name", s->name, names, 1, "the rig's slaves");
+  check->Text("message", s->message);
   check->Quaternion("q", s->q);
   check->Finite("C", s->C, 3);
   check->Finite("scale", s->scale);
@@ -84,7 +85,15 @@ void WalkExtrinsicsLayout(LayoutWalk* walk) {
   walk->Fixed("t_ns", 8);
   walk->String("master");
   walk->Fixed("distance_unit", 1);
-  walk->Count("num_slaves", slave_extrinsics_t()._getEncodedSizeNoHash());
+  const int32_t slaves = walk->Count("num_slaves", slave_extrinsics_t()._getEncodedSizeNoHash());
+  // slave_extrinsics_t: name, fixed-size fields, message (an empty string takes 4 + 1 bytes).
+  const int64_t fixed = slave_extrinsics_t()._getEncodedSizeNoHash() - 2 * 5;
+  for (int32_t i = 0; i < slaves; ++i) {
+    const std::string slave = "slaves[" + std::to_string(i) + "]";
+    walk->String(slave + ".name");
+    walk->Fixed(slave, fixed);
+    walk->String(slave + ".message");
+  }
 }
 
 // The rules of rig_extrinsics_t (extrinsics_message.h) but the version.

@@ -47,6 +47,7 @@ void CheckImage(const CameraNames& names, image_t* msg, Checker* check) {
   check->AtLeast<int32_t>("height", msg->height, 0);
   check->AtLeast<int32_t>("stride", msg->stride, 0);
   check->InRange<int8_t>("encoding", msg->encoding, image_t::ENCODING_RAW, image_t::ENCODING_PNG);
+  check->Text("pixel_format", msg->pixel_format);
   if (check->ok() && msg->pixel_format.size() != 4) {
     check->Fail(RejectCause::kOutOfRange, "pixel_format",
                 "'" + msg->pixel_format + "' is not a 4-character fourcc");

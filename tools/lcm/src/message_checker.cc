@@ -77,6 +77,14 @@ void Checker::Count(std::string_view count_field, int64_t count, size_t vector_s
   }
 }
 
+void Checker::Text(std::string_view field, const std::string& text) {
+  if (ok() && text.find('\0') != std::string::npos) {
+    Fail(RejectCause::kMalformed, field,
+         "contains a NUL byte at " + std::to_string(text.find('\0')) + " of " +
+             std::to_string(text.size()));
+  }
+}
+
 void Checker::CameraName(std::string_view field, const std::string& name, const CameraNames& names,
                          size_t first, std::string_view allowed_what) {
   if (name.empty()) {

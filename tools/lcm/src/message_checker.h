@@ -93,6 +93,11 @@ class Checker {
     }
   }
 
+  // A free-text string (a message, a fourcc): no NUL byte. LCM decodes a string as its announced
+  // length and encodes it up to the first NUL, so a string with a NUL inside would not encode
+  // again (EncodeMessage fails; a relay or a recorder would drop it).
+  void Text(std::string_view field, const std::string& text);
+
   // A camera name: non-empty, no NUL, and one of names[first..] unless `names` is empty (no
   // table: any name). `allowed_what` says which names ("the rig's cameras", "the rig's slaves").
   void CameraName(std::string_view field, const std::string& name, const CameraNames& names,

@@ -71,20 +71,27 @@ class LayoutWalk {
     }
     if (!cursor_.Skip(length)) Truncated(field);
   }
-  // An array length, and the least number of bytes each element takes.
-  void Count(std::string_view field, int64_t min_element_bytes) {
+  // An array length, and the least number of bytes each element takes. Returns the length, or 0
+  // after a failure.
+  int32_t Count(std::string_view field, int64_t min_element_bytes) {
     int32_t count = 0;
-    if (!check_->ok()) return;
-    if (!cursor_.ReadInt32(&count)) return Truncated(field);
+    if (!check_->ok()) return 0;
+    if (!cursor_.ReadInt32(&count)) {
+      Truncated(field);
+      return 0;
+    }
     if (count < 0) {
-      return check_->Fail(RejectCause::kBadSize, field, "negative length " + std::to_string(count));
+      check_->Fail(RejectCause::kBadSize, field, "negative length " + std::to_string(count));
+      return 0;
     }
     if (count * min_element_bytes > cursor_.remaining()) {
       check_->Fail(RejectCause::kTruncated, field,
                    std::to_string(count) + " elements need at least " +
                        std::to_string(count * min_element_bytes) + " bytes, " +
                        std::to_string(cursor_.remaining()) + " left in the buffer");
+      return 0;
     }
+    return count;
   }
 
  private:
@@ -97,10 +104,10 @@ class LayoutWalk {
 
 // What the skeleton needs of one message type; each type's .cc specialises it:
 //   static constexpr char kTypeName[];  the LCM type name, "camera_pose_t"
-//   WalkLayout(LayoutWalk* walk)        steps through the fields of the .lcm file in order up to
-//       (and including) the last top-level array length; nested types have fixed-size arrays
-//       only. Strings after the last length are left to LCM's decode (a bad length there fails or
-//       throws, both caught).
+//   WalkLayout(LayoutWalk* walk)        steps through every field of the .lcm file in order, nested
+//       elements and strings included (nested types have fixed-size arrays only): LCM's decode
+//       computes `length - 1` of a string length unchecked, undefined for INT32_MIN (found by the
+//       lcm_log fuzz target under UBSan), so every string length is checked here first.
 //   CheckContent(const CameraNames& names, Message* msg, Checker* check)
 //                                       the type's own rules (all but the schema version),
 //       normalising quaternions and axes in place.

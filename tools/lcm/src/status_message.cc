@@ -39,7 +39,19 @@ void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* ch
 void WalkStatusLayout(LayoutWalk* walk) {
   walk->Fixed("version", 2);
   walk->Fixed("utime", 8);
-  walk->Count("num_cameras", camera_status_t()._getEncodedSizeNoHash());
+  const int32_t cameras = walk->Count("num_cameras", camera_status_t()._getEncodedSizeNoHash());
+  // camera_status_t: name, then fixed-size fields (an empty string takes 4 + 1 bytes).
+  const int64_t fixed = camera_status_t()._getEncodedSizeNoHash() - 5;
+  for (int32_t i = 0; i < cameras; ++i) {
+    const std::string camera = "cameras[" + std::to_string(i) + "]";
+    walk->String(camera + ".name");
+    walk->Fixed(camera, fixed);
+  }
+  walk->Fixed("sync_sets_emitted", 8);
+  walk->Fixed("sync_fill", 4);
+  walk->Fixed("sync_capacity", 4);
+  walk->Fixed("estimator_state", 1);
+  walk->String("estimator_message");
 }
 
 // The rules of rig_status_t (status_message.h) but the version.
@@ -55,6 +67,7 @@ void CheckStatus(const CameraNames& names, rig_status_t* msg, Checker* check) {
                          rig_status_t::ESTIMATOR_DECALIBRATED);
   check->AtLeast("cpu_percent", msg->cpu_percent, 0.0);
   check->AtLeast<int64_t>("rss_bytes", msg->rss_bytes, 0);
+  check->Text("estimator_message", msg->estimator_message);
   check->NamedElements("cameras", &msg->cameras, {}, [&](camera_status_t* c, Checker* nested) {
     CheckCameraStatus(names, c, nested);
   });

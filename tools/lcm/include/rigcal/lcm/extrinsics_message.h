@@ -35,10 +35,10 @@ static_assert(slave_extrinsics_t::STATE_DECALIBRATED ==
 // The rules of rig_extrinsics_t (beyond message_validation.h), checked by CheckMessage,
 // EncodeMessage and MessageValidator::Decode: num_slaves agrees with slaves, the master is
 // names[0], utime and t_ns >= 0, a defined distance_unit, and per slave: a slave of the rig named
-// once, finite fields, unit q, a defined state, only defined flags, a positive scale when usable
-// or converged, non-negative counters, standard deviations non-negative or -1 (unknown),
-// axis_spread_deg in [0, 180], a unit planar_axis with FLAG_PLANAR_UNOBSERVABLE_AXIS,
-// FLAG_AXIS_FROM_PRIOR only with it.
+// once, a message without NUL bytes, finite fields, unit q, a defined state, only defined flags, a
+// positive scale when usable or converged, non-negative counters, standard deviations non-negative
+// or -1 (unknown), axis_spread_deg in [0, 180], a unit planar_axis with
+// FLAG_PLANAR_UNOBSERVABLE_AXIS, FLAG_AXIS_FROM_PRIOR only with it.
 extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
                                                       rig_extrinsics_t*);
 extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,

@@ -14,9 +14,9 @@ namespace rigcal::tools {
 
 // The rules of image_t (beyond message_validation.h), checked by CheckMessage, EncodeMessage and
 // MessageValidator::Decode: size agrees with data, a known camera, utime and t_ns >= 0, trigger_seq
-// >= -1, width, height and stride >= 0, a defined encoding, a 4-character pixel_format; a raw image
-// has stride >= width x the bytes per pixel of its format (1 when unknown) and size = stride x
-// height, a compressed one is not empty.
+// >= -1, width, height and stride >= 0, a defined encoding, a 4-character pixel_format without NUL;
+// a raw image has stride >= width x the bytes per pixel of its format (1 when unknown) and size =
+// stride x height, a compressed one is not empty.
 extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
                                                       image_t*);
 extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,

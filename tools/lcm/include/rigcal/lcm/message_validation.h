@@ -55,7 +55,7 @@ enum class RejectCause {
   kWrongVersion,       // version != the type's VERSION constant
   kTruncated,          // the buffer ends before the message does (or a length points past it)
   kOversize,           // bytes left over after the message
-  kMalformed,          // a string length < 1, an embedded NUL in a name, a length LCM cannot decode
+  kMalformed,          // a string length < 1, an embedded NUL in a string, a length LCM cannot decode
   kBadSize,            // a negative array length, or one that disagrees with its vector or with
                        // width/height/stride
   kNonFinite,          // NaN or infinity

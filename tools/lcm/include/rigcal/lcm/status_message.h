@@ -20,8 +20,9 @@ namespace rigcal::tools {
 // The rules of rig_status_t (beyond message_validation.h), checked by CheckMessage, EncodeMessage
 // and MessageValidator::Decode: num_cameras agrees with cameras, finite cpu_percent >= 0, utime,
 // sync_sets_emitted, sync_capacity and rss_bytes >= 0, sync_fill in [0, sync_capacity], a defined
-// estimator_state, and per camera: a camera of the rig named once, finite fps >= 0, counters >= 0,
-// a defined vo_state, last_pose_age_ms >= -1, vo_segment >= -1.
+// estimator_state, an estimator_message without NUL bytes, and per camera: a camera of the rig
+// named once, finite fps >= 0, counters >= 0, a defined vo_state, last_pose_age_ms >= -1,
+// vo_segment >= -1.
 extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
                                                       rig_status_t*);
 extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
