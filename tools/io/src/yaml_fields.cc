@@ -61,22 +61,35 @@ std::optional<Error> DuplicateKey(const std::string& path, const YAML::Node& nod
   return std::nullopt;
 }
 
-// Remembers where each document starts; ignores everything else.
+// Remembers where each document's first node is (the start of the document when it has none);
+// ignores everything else.
 class DocumentStarts : public YAML::EventHandler {
  public:
   std::vector<YAML::Mark> starts;
+  std::vector<YAML::Mark> first_nodes;
   void OnDocumentStart(const YAML::Mark& mark) override { starts.push_back(mark); }
   void OnDocumentEnd() override {}
-  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
-                const std::string&) override {}
-  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
-                       YAML::EmitterStyle::value) override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t) override { Node(mark); }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { Node(mark); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                const std::string&) override {
+    Node(mark);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
+    Node(mark);
+  }
   void OnSequenceEnd() override {}
-  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
-                  YAML::EmitterStyle::value) override {}
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
+    Node(mark);
+  }
   void OnMapEnd() override {}
+
+ private:
+  void Node(const YAML::Mark& mark) {
+    if (first_nodes.size() < starts.size()) first_nodes.push_back(mark);
+  }
 };
 
 // The start of a second document in `text`, if there is one. At most two documents are parsed:
@@ -88,6 +101,7 @@ std::optional<YAML::Mark> SecondDocument(const std::string& text) {
   DocumentStarts documents;
   if (!parser.HandleNextDocument(documents)) return std::nullopt;
   if (!parser.HandleNextDocument(documents)) return std::nullopt;
+  if (documents.first_nodes.size() >= 2) return documents.first_nodes[1];
   return documents.starts.size() >= 2 ? documents.starts[1] : YAML::Mark::null_mark();
 }
 

@@ -143,8 +143,14 @@ Expected<cv::Mat> GreyPixels(const image_t& msg, const std::string& who) {
 }  // namespace
 
 Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera) {
-  Expected<cv::Mat> grey =
-      GreyPixels(msg, "camera '" + msg.camera + "' image at t_ns " + std::to_string(msg.t_ns));
+  const std::string who = "camera '" + msg.camera + "' image at t_ns " + std::to_string(msg.t_ns);
+  // A 0-pixel image passes image_t's checks; it gave an empty frame, not width x height (found by
+  // the lcm_image fuzz target).
+  if (msg.width <= 0 || msg.height <= 0) {
+    return Error{who + ": no pixels (" + std::to_string(msg.width) + " x " +
+                 std::to_string(msg.height) + ")"};
+  }
+  Expected<cv::Mat> grey = GreyPixels(msg, who);
   if (!grey) return grey.status();
   drivers::Frame frame;
   frame.camera = camera;
