@@ -8,8 +8,8 @@ CTEST_ARGS ?=
 # ctest, then the number of skipped tests and why (scripts/ctest_with_skips.sh).
 CTEST     = bash scripts/ctest_with_skips.sh
 
-.PHONY: all deps configure build demo test test-fast asan-build test-asan test-fuzz fuzz test-tsan eval bench \
-	format tidy clean
+.PHONY: all deps configure build demo test test-fast asan-configure test-asan test-asan-all test-fuzz \
+	fuzz tsan-configure test-tsan test-tsan-all eval bench format tidy clean
 
 all: build
 
@@ -35,10 +35,12 @@ build: configure
 demo: build
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
-# Whole suite; then every test but the evaluations once more under ASan+UBSan, each fuzz target
-# for RIGCAL_FUZZ_SECONDS (30 s), and every test that starts threads under TSan. The suite
-# includes the static thread-contract check (label threads: clang -Wthread-safety over the
-# threaded sources with $(BUILD_DIR)/compile_commands.json, no extra build tree).
+# Whole suite; then the calib core tests once more under ASan+UBSan, each fuzz target for
+# RIGCAL_FUZZ_SECONDS (30 s), and the threaded calib tests under TSan. The suite includes the
+# static thread-contract check (label threads: clang -Wthread-safety over the threaded sources
+# with $(BUILD_DIR)/compile_commands.json, no extra build tree). The whole suite under the
+# sanitizers (test-asan-all, test-tsan-all) is not yet part of make test: see README "Fuzzing
+# and sanitizers".
 test: build test-asan test-fuzz test-tsan
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
@@ -52,32 +54,48 @@ test-fast: build
 SAN_CMAKE_ARGS = -DCMAKE_CXX_COMPILER=clang++ -DRIGCAL_BUILD_BENCHMARKS=OFF \
   -DRIGCAL_BUILD_EVAL_TESTS=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG"
 FUZZ_SECONDS ?= 600
+SAN_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
-asan-build: deps
+asan-configure: deps
 	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_FUZZ_ENABLED=ON)
-	cmake --build $(ASAN_DIR) -j $(JOBS)
 
-# Every test except the evaluations (label eval) and the fuzz runs, under ASan+UBSan.
-test-asan: asan-build
-	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -LE 'eval|fuzz|soak|device' $(CTEST_ARGS)
+# The calib core tests (label calib_core: they link only the calib library) under ASan+UBSan.
+test-asan: asan-configure
+	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_calib_tests
+	$(SAN_ENV) $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval
+
+# Every test except the evaluations, the fuzz runs, the soak and the VM tests, under ASan+UBSan.
+test-asan-all: asan-configure
+	cmake --build $(ASAN_DIR) -j $(JOBS)
+	$(SAN_ENV) $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -LE 'eval|fuzz|soak|device' $(CTEST_ARGS)
 
 # Each fuzz target for the configured time (label fuzz, RIGCAL_FUZZ_SECONDS); `make fuzz` for
 # FUZZ_SECONDS each (default 600), one at a time. Findings: $(ASAN_DIR)/fuzz/<target>/.
-test-fuzz: asan-build
+test-fuzz: asan-configure
+	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_fuzz_targets
 	$(CTEST) $(ASAN_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L fuzz
 
-fuzz: asan-build
+fuzz: asan-configure
+	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_fuzz_targets
 	RIGCAL_FUZZ_SECONDS=$(FUZZ_SECONDS) $(CTEST) $(ASAN_DIR) --output-on-failure --no-tests=error -V -L fuzz
+
+TSAN_ENV = TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
+tsan-configure: deps
+	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_TSAN_ENABLED=ON)
+
+# The multi-threaded calib tests (SyncBuffer producers, PoseMerge, OnlineCalibrator threads)
+# under TSan.
+test-tsan: tsan-configure
+	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test \
+	  calib_pose_merge_test calib_online_calibrator_lossless_test
+	$(TSAN_ENV) $(CTEST) $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)'
 
 # Every test that starts threads (label threaded: the Pipeline, the calib node, capture loops, the
 # log recorder, online replay, OnlineCalibrator, SyncBuffer, the research runners) under TSan; the
 # tree builds only those tests (target rigcal_threaded_tests) and what they link.
-test-tsan: deps
-	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_TSAN_ENABLED=ON)
+test-tsan-all: tsan-configure
 	cmake --build $(TSAN_DIR) -j $(JOBS) --target rigcal_threaded_tests
-	TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
-	  $(CTEST) $(TSAN_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L threaded -LE 'eval|soak|device'
+	$(TSAN_ENV) $(CTEST) $(TSAN_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L threaded -LE 'eval|soak|device'
 
 # Long evaluations (not part of make test).
 eval: build
