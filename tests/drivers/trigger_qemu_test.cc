@@ -38,10 +38,14 @@ TEST(TriggerQemu, LinkThroughAPtyMapsAndMatchesTheFirmwaresPulses) {
   {
     TriggerLink link(std::move(*port));
     std::vector<TriggerEvent> events;
+    // The firmware is up once it speaks (hello at boot, then heartbeats): on a loaded host QEMU
+    // may take seconds to start it, and bytes sent before its UART listens are lost.
+    for (int i = 0; i < 60 && events.empty(); ++i) ASSERT_TRUE(link.Poll(500, &events).ok());
+    ASSERT_FALSE(events.empty()) << "no message from the firmware within 30 s";
     trigger_protocol::Message m;
     m.type = MessageType::kSetRate;
     m.set_rate.rate_mhz = 1'000'000;
-    const Status refused = link.Command(m, 3000, &events);
+    const Status refused = link.Command(m, 10000, &events);
     ASSERT_FALSE(refused.ok());
     EXPECT_EQ(refused.message(), "trigger generator refused SetRate: value out of range (rate)");
     // Host-side check first: a width beyond the period never reaches the MCU.

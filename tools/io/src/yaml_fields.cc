@@ -105,6 +105,24 @@ std::optional<YAML::Mark> SecondDocument(const std::string& text) {
   return documents.starts.size() >= 2 ? documents.starts[1] : YAML::Mark::null_mark();
 }
 
+// The first line at or after `line` (0-based) that holds content: yaml-cpp marks a document's
+// first node at its `---` line when the content starts on the next one.
+int ContentLine(const std::string& text, int line) {
+  std::istringstream in(text);
+  std::string row;
+  for (int i = 0; std::getline(in, row); ++i) {
+    if (i < line) continue;
+    const size_t begin = row.find_first_not_of(" \t\r");
+    if (begin == std::string::npos || row[begin] == '#') continue;
+    if (row.compare(begin, 3, "---") == 0) {
+      const size_t rest = row.find_first_not_of(" \t\r", begin + 3);
+      if (rest == std::string::npos || row[rest] == '#') continue;
+    }
+    return i;
+  }
+  return line;
+}
+
 }  // namespace
 
 Expected<YAML::Node> LoadYaml(const std::string& path) {
@@ -113,7 +131,9 @@ Expected<YAML::Node> LoadYaml(const std::string& path) {
   try {
     if (const std::optional<YAML::Mark> second = SecondDocument(*text)) {
       return Error{
-          (second->is_null() ? path + ": " : path + ":" + std::to_string(second->line + 1) + ": ") +
+          (second->is_null()
+               ? path + ": "
+               : path + ":" + std::to_string(ContentLine(*text, second->line) + 1) + ": ") +
           "a second YAML document (after ---): the file must hold one document"};
     }
     const YAML::Node root = YAML::Load(*text);
