@@ -50,10 +50,10 @@ class SyncBuffer::Impl {
     explicit CameraState(size_t capacity)
         : ring(capacity, CameraPose{}), contributed(capacity, uint8_t{0}) {}
 
-    FixedRing<CameraPose> ring;   // strictly increasing t_ns
+    FixedRing<CameraPose> ring;  // strictly increasing t_ns
     // Interpolation mode: per entry of `ring` (kept in step with it), whether it served a set.
     FixedRing<uint8_t> contributed;
-    int64_t offset_ns = 0;  // interpolation mode: stamp - master clock (SetTimeOffset)
+    int64_t offset_ns = 0;        // interpolation mode: stamp - master clock (SetTimeOffset)
     bool any = false;             // an entry was ever accepted
     int64_t newest_t = 0;         // stamp of the newest accepted entry
     int64_t newest_seq = -1;      // highest trigger_seq accepted (-1: none)
@@ -161,8 +161,8 @@ class SyncBuffer::Impl {
   const int64_t glitch_horizon_ns_;
   const bool by_seq_;
   const bool interpolate_;
-  const int64_t max_gap_ns_;  // interpolation: no interpolation across a larger gap
-  const int64_t snap_ns_;     // interpolation: an entry this close to the instant is taken as is
+  const int64_t max_gap_ns_;    // interpolation: no interpolation across a larger gap
+  const int64_t snap_ns_;       // interpolation: an entry this close to the instant is taken as is
   std::vector<bool> required_;  // per camera; [0] is true
 
   mutable Mutex mutex_;

@@ -11,8 +11,8 @@
 #include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/drivers/libcamera_device.h"
+#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/drivers/v4l2_options.h"
 
 namespace rigcal::tools {

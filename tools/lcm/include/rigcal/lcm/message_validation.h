@@ -50,15 +50,15 @@ using CameraNames = std::vector<std::string>;
 inline constexpr double kUnitTolerance = 1e-6;
 
 enum class RejectCause {
-  kWrongType,          // the buffer's LCM fingerprint is not the expected type's (another type,
-                       // or a different field layout of it)
-  kWrongVersion,       // version != the type's VERSION constant
-  kTruncated,          // the buffer ends before the message does (or a length points past it)
-  kOversize,           // bytes left over after the message
-  kMalformed,          // a string length < 1, an embedded NUL in a string, a length LCM cannot decode
-  kBadSize,            // a negative array length, or one that disagrees with its vector or with
-                       // width/height/stride
-  kNonFinite,          // NaN or infinity
+  kWrongType,     // the buffer's LCM fingerprint is not the expected type's (another type,
+                  // or a different field layout of it)
+  kWrongVersion,  // version != the type's VERSION constant
+  kTruncated,     // the buffer ends before the message does (or a length points past it)
+  kOversize,      // bytes left over after the message
+  kMalformed,     // a string length < 1, an embedded NUL in a string, a length LCM cannot decode
+  kBadSize,       // a negative array length, or one that disagrees with its vector or with
+                  // width/height/stride
+  kNonFinite,     // NaN or infinity
   kNonUnitQuaternion,  // quaternion norm off 1 by more than kUnitTolerance
   kUnknownCamera,      // empty camera name, or not in the name table
   kOutOfRange,         // any other documented range (negative time, quality > 1, unknown enum

@@ -43,7 +43,7 @@ void ReportFolderProblems(const std::vector<drivers::ImageFolderDevice*>& folder
 
 // The end-of-run report of live V4L2 devices: frames, sequence drops, erroneous buffers, device
 // losses and reconnections, one line per camera starting with `prefix`.
-void ReportCaptureStats(const std::vector<drivers::V4l2Device*>& devices,
-                        const std::string& prefix, std::ostream& out);
+void ReportCaptureStats(const std::vector<drivers::V4l2Device*>& devices, const std::string& prefix,
+                        std::ostream& out);
 
 }  // namespace rigcal::tools
