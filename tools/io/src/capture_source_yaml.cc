@@ -10,6 +10,31 @@ const std::set<std::string> kV4l2Keys = {
     "gain",          "external_trigger",        "readout_us",     "controls",
     "reconnect",     "reconnect_max_backoff_s", "frame_timeout_s"};
 
+// The optional field `key` of `node` (named `prefix` + key in errors) into *out; unchanged
+// when absent.
+std::optional<Error> OptionalBool(const FieldReader& r, const YAML::Node& node,
+                                  const std::string& prefix, const char* key, bool* out) {
+  const YAML::Node n = node[key];
+  if (!n) return std::nullopt;
+  auto v = r.Bool(n, prefix + key);
+  if (!v) return Error{v.error()};
+  *out = *v;
+  return std::nullopt;
+}
+
+std::optional<Error> OptionalBuffers(const FieldReader& r, const YAML::Node& node,
+                                     const std::string& prefix, int lowest, int* out) {
+  const YAML::Node n = node["buffers"];
+  if (!n) return std::nullopt;
+  auto v = r.Integer(n, prefix + "buffers");
+  if (!v) return Error{v.error()};
+  if (*v < lowest || *v > 32) {
+    return r.Fail(n, prefix + "buffers", "must be in [" + std::to_string(lowest) + ", 32]");
+  }
+  *out = *v;
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
@@ -64,27 +89,14 @@ std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
     if (auto e = number("exposure_us", 0, 1e7, true, &exposure)) return e;
     options->exposure_us = exposure;
   }
-  if (const YAML::Node n = node["buffers"]) {
-    auto v = r.Integer(n, p + "buffers");
-    if (!v) return Error{v.error()};
-    if (*v < 2 || *v > 32) return r.Fail(n, p + "buffers", "must be in [2, 32]");
-    options->buffers = *v;
-  }
+  if (auto e = OptionalBuffers(r, node, p, 2, &options->buffers)) return e;
   if (const YAML::Node n = node["gain"]) {
     auto v = r.Integer64(n, p + "gain");
     if (!v) return Error{v.error()};
     options->gain = *v;
   }
-  if (const YAML::Node n = node["external_trigger"]) {
-    auto v = r.Bool(n, p + "external_trigger");
-    if (!v) return Error{v.error()};
-    options->external_trigger = *v;
-  }
-  if (const YAML::Node n = node["reconnect"]) {
-    auto v = r.Bool(n, p + "reconnect");
-    if (!v) return Error{v.error()};
-    options->reconnect = *v;
-  }
+  if (auto e = OptionalBool(r, node, p, "external_trigger", &options->external_trigger)) return e;
+  if (auto e = OptionalBool(r, node, p, "reconnect", &options->reconnect)) return e;
   if (const YAML::Node n = node["controls"]) {
     if (!n.IsMap()) return r.Fail(n, p + "controls", "expected a map of control name: value");
     for (auto it = n.begin(); it != n.end(); ++it) {
@@ -132,17 +144,8 @@ std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& 
       options->formats.push_back(*format);
     }
   }
-  if (const YAML::Node n = node["buffers"]) {
-    auto v = r.Integer(n, p + "buffers");
-    if (!v) return Error{v.error()};
-    if (*v < 1 || *v > 32) return r.Fail(n, p + "buffers", "must be in [1, 32]");
-    options->buffers = *v;
-  }
-  if (const YAML::Node n = node["reconnect"]) {
-    auto v = r.Bool(n, p + "reconnect");
-    if (!v) return Error{v.error()};
-    options->reconnect = *v;
-  }
+  if (auto e = OptionalBuffers(r, node, p, 1, &options->buffers)) return e;
+  if (auto e = OptionalBool(r, node, p, "reconnect", &options->reconnect)) return e;
   if (const YAML::Node n = node["reconnect_max_backoff_s"]) {
     auto v = r.Number(n, p + "reconnect_max_backoff_s");
     if (!v) return Error{v.error()};
