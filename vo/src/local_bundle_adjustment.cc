@@ -113,7 +113,8 @@ LocalBaSummary LocalBundleAdjust(const std::vector<int>& window, const LocalBaOp
 
   // Remove observations that do not fit, and landmarks left without two observations.
   std::vector<int> dead;
-  for (auto& [id, lm] : map->landmarks()) {
+  for (auto& entry : map->landmarks()) {  // no structured binding: the lambda captures `lm`
+    Landmark& lm = entry.second;
     auto& obs = lm.observations;
     const size_t before = obs.size();
     obs.erase(std::remove_if(obs.begin(), obs.end(),
@@ -124,7 +125,7 @@ LocalBaSummary LocalBundleAdjust(const std::vector<int>& window, const LocalBaOp
                              }),
               obs.end());
     summary.removed_observations += static_cast<int>(before - obs.size());
-    if (before >= 2 && obs.size() < 2) dead.push_back(id);
+    if (before >= 2 && obs.size() < 2) dead.push_back(entry.first);
   }
   for (int id : dead) map->RemoveLandmark(id);
   summary.removed_landmarks = static_cast<int>(dead.size());
