@@ -50,7 +50,7 @@ TEST(Expected, ValueAndMove) {
 TEST(Expected, FromStatus) {
   const Expected<double> bad = Status(Error{"scale: not finite"});
   EXPECT_EQ(bad.error(), "scale: not finite");
-  EXPECT_THROW(Expected<double>(Status::Ok()), std::logic_error);
+  EXPECT_THROW((void)Expected<double>(Status::Ok()), std::logic_error);
 }
 
 TEST(RequireValid, ThrowsInvalidOptionsNamingTheType) {
