@@ -2,6 +2,7 @@
 # (scripts/install-deps.sh), configure, build and run.
 BUILD_DIR ?= build
 ASAN_DIR  ?= build-asan
+ASAN_ALL_DIR ?= build-asan-clang
 TSAN_DIR  ?= build-tsan
 JOBS      ?= $(shell nproc)
 CTEST_ARGS ?=
@@ -46,37 +47,40 @@ test: build test-asan test-tsan
 test-fast: build
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
-# The sanitizer trees: clang at -O1 with line tables only (cheap to build, readable stacks), no
-# benchmarks, no evaluations. $(ASAN_DIR) is one tree for ASan+UBSan and libFuzzer: the libraries
-# the fuzz targets exercise carry coverage feedback (-fsanitize=fuzzer-no-link), the targets link
-# -fsanitize=fuzzer (cmake/RigcalFuzz.cmake).
-SAN_CMAKE_ARGS = -DCMAKE_CXX_COMPILER=clang++ -DRIGCAL_BUILD_BENCHMARKS=OFF \
-  -DRIGCAL_BUILD_EVAL_TESTS=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG"
-FUZZ_SECONDS ?= 600
 SAN_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
-asan-configure: deps
-	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_FUZZ_ENABLED=ON)
-
-# The calib core tests (label calib_core: they link only the calib library) under ASan+UBSan.
-test-asan: asan-configure
+# The calib core tests (label calib_core: they link only the calib library) under ASan+UBSan,
+# with GCC, the compiler of the normal build.
+test-asan: deps
+	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,-DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
 	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_calib_tests
 	$(SAN_ENV) $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval
 
+# The clang sanitizer trees: -O1 with line tables only (cheap to build, readable stacks), no
+# benchmarks, no evaluations. $(ASAN_ALL_DIR) is one tree for ASan+UBSan and libFuzzer: the
+# libraries the fuzz targets exercise carry coverage feedback (-fsanitize=fuzzer-no-link), the
+# targets link -fsanitize=fuzzer (cmake/RigcalFuzz.cmake).
+SAN_CMAKE_ARGS = -DCMAKE_CXX_COMPILER=clang++ -DRIGCAL_BUILD_BENCHMARKS=OFF \
+  -DRIGCAL_BUILD_EVAL_TESTS=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG"
+FUZZ_SECONDS ?= 600
+
+asan-configure: deps
+	$(call cmake_configure,$(ASAN_ALL_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_FUZZ_ENABLED=ON)
+
 # Every test except the evaluations, the fuzz runs, the soak and the VM tests, under ASan+UBSan.
 test-asan-all: asan-configure
-	cmake --build $(ASAN_DIR) -j $(JOBS)
-	$(SAN_ENV) $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -LE 'eval|fuzz|soak|device' $(CTEST_ARGS)
+	cmake --build $(ASAN_ALL_DIR) -j $(JOBS)
+	$(SAN_ENV) $(CTEST) $(ASAN_ALL_DIR) --output-on-failure -j $(JOBS) -LE 'eval|fuzz|soak|device' $(CTEST_ARGS)
 
 # Each fuzz target for the configured time (label fuzz, RIGCAL_FUZZ_SECONDS); `make fuzz` for
-# FUZZ_SECONDS each (default 600), one at a time. Findings: $(ASAN_DIR)/fuzz/<target>/.
+# FUZZ_SECONDS each (default 600), one at a time. Findings: $(ASAN_ALL_DIR)/fuzz/<target>/.
 test-fuzz: asan-configure
-	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_fuzz_targets
-	$(CTEST) $(ASAN_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L fuzz
+	cmake --build $(ASAN_ALL_DIR) -j $(JOBS) --target rigcal_fuzz_targets
+	$(CTEST) $(ASAN_ALL_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L fuzz
 
 fuzz: asan-configure
-	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_fuzz_targets
-	RIGCAL_FUZZ_SECONDS=$(FUZZ_SECONDS) $(CTEST) $(ASAN_DIR) --output-on-failure --no-tests=error -V -L fuzz
+	cmake --build $(ASAN_ALL_DIR) -j $(JOBS) --target rigcal_fuzz_targets
+	RIGCAL_FUZZ_SECONDS=$(FUZZ_SECONDS) $(CTEST) $(ASAN_ALL_DIR) --output-on-failure --no-tests=error -V -L fuzz
 
 TSAN_ENV = TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
 tsan-configure: deps
@@ -110,4 +114,4 @@ tidy: build
 	find calib/src calib/camera/src vo/src drivers/src tools/*/src tools/cli -name '*.cc' | xargs clang-tidy -p $(BUILD_DIR) --quiet
 
 clean:
-	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(TSAN_DIR)
+	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(ASAN_ALL_DIR) $(TSAN_DIR)

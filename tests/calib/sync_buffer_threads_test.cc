@@ -59,7 +59,9 @@ int FrameOf(const CameraPose& p) { return static_cast<int>(std::lround(p.pose.C.
 
 // Results of Push per camera, tallied by the producers.
 struct Tally {
-  std::array<std::array<uint64_t, 7>, kCameras> by_result{};
+  // One column per PushResult (kConsumed is the last value).
+  static constexpr int kResults = static_cast<int>(PushResult::kConsumed) + 1;
+  std::array<std::array<uint64_t, kResults>, kCameras> by_result{};
   uint64_t Count(int camera, PushResult r) const { return by_result[camera][static_cast<int>(r)]; }
 };
 
