@@ -1,6 +1,9 @@
 #include "rigcal/io/capture_source_yaml.h"
 
+#include <algorithm>
+#include <initializer_list>
 #include <set>
+#include <vector>
 
 namespace rigcal::tools {
 namespace {
@@ -35,6 +38,33 @@ std::optional<Error> OptionalBuffers(const FieldReader& r, const YAML::Node& nod
   return std::nullopt;
 }
 
+// The optional list `pixel_formats` of `node` into *out (replaced when present); formats in
+// `unsupported` are refused, naming the `supported` ones.
+std::optional<Error> OptionalPixelFormats(const FieldReader& r, const YAML::Node& node,
+                                          const std::string& prefix,
+                                          std::initializer_list<drivers::PixelFormat> unsupported,
+                                          const std::string& supported,
+                                          std::vector<drivers::PixelFormat>* out) {
+  const YAML::Node n = node["pixel_formats"];
+  if (!n) return std::nullopt;
+  if (!n.IsSequence() || n.size() == 0) {
+    return r.Fail(n, prefix + "pixel_formats", "expected a list such as [GREY, YUYV]");
+  }
+  out->clear();
+  for (size_t i = 0; i < n.size(); ++i) {
+    const std::string item = prefix + "pixel_formats[" + std::to_string(i) + "]";
+    auto name = r.String(n[i], item);
+    if (!name) return Error{name.error()};
+    const auto format = drivers::ParsePixelFormat(*name);
+    if (!format ||
+        std::find(unsupported.begin(), unsupported.end(), *format) != unsupported.end()) {
+      return r.Fail(n[i], item, "'" + *name + "' is not one of " + supported);
+    }
+    out->push_back(*format);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
@@ -45,24 +75,10 @@ std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
   if (is_source) known.insert("type");
   if (auto e = r.CheckKeys(node, field + ".", known)) return e;
   const std::string p = field + ".";
-  if (const YAML::Node n = node["pixel_formats"]) {
-    if (!n.IsSequence() || n.size() == 0) {
-      return r.Fail(n, p + "pixel_formats", "expected a list such as [GREY, YUYV]");
-    }
-    options->formats.clear();
-    for (size_t i = 0; i < n.size(); ++i) {
-      const std::string item = p + "pixel_formats[" + std::to_string(i) + "]";
-      auto name = r.String(n[i], item);
-      if (!name) return Error{name.error()};
-      const auto format = drivers::ParsePixelFormat(*name);
-      if (!format || *format == drivers::PixelFormat::kBgr24 ||
-          *format == drivers::PixelFormat::kRgb24) {
-        return r.Fail(n[i], item,
-                      "'" + *name + "' is not one of GREY, Y10, Y16, YUYV, NV12, MJPEG");
-      }
-      options->formats.push_back(*format);
-    }
-  }
+  if (auto e = OptionalPixelFormats(r, node, p,
+                                    {drivers::PixelFormat::kBgr24, drivers::PixelFormat::kRgb24},
+                                    "GREY, Y10, Y16, YUYV, NV12, MJPEG", &options->formats))
+    return e;
   auto number = [&](const char* key, double low, double high, bool open_low,
                     double* out) -> std::optional<Error> {
     const YAML::Node n = node[key];
@@ -126,24 +142,10 @@ std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& 
     }
     options->role = *v;
   }
-  if (const YAML::Node n = node["pixel_formats"]) {
-    if (!n.IsSequence() || n.size() == 0) {
-      return r.Fail(n, p + "pixel_formats", "expected a list such as [GREY, YUYV]");
-    }
-    options->formats.clear();
-    for (size_t i = 0; i < n.size(); ++i) {
-      const std::string item = p + "pixel_formats[" + std::to_string(i) + "]";
-      auto name = r.String(n[i], item);
-      if (!name) return Error{name.error()};
-      const auto format = drivers::ParsePixelFormat(*name);
-      if (!format || *format == drivers::PixelFormat::kY10 ||
-          *format == drivers::PixelFormat::kY16) {
-        return r.Fail(n[i], item,
-                      "'" + *name + "' is not one of GREY, YUYV, NV12, BGR24, RGB24, MJPEG");
-      }
-      options->formats.push_back(*format);
-    }
-  }
+  if (auto e =
+          OptionalPixelFormats(r, node, p, {drivers::PixelFormat::kY10, drivers::PixelFormat::kY16},
+                               "GREY, YUYV, NV12, BGR24, RGB24, MJPEG", &options->formats))
+    return e;
   if (auto e = OptionalBuffers(r, node, p, 1, &options->buffers)) return e;
   if (auto e = OptionalBool(r, node, p, "reconnect", &options->reconnect)) return e;
   if (const YAML::Node n = node["reconnect_max_backoff_s"]) {
