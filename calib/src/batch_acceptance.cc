@@ -236,6 +236,33 @@ TranslationPairing TestTranslationPairing(const std::vector<MotionData>& motions
   return out;
 }
 
+std::optional<std::string> UndeterminedReason(const SlaveCalibration& r) {
+  if (std::isfinite(r.rot_std_deg) && r.rot_std_deg > kMaxRotationStdDeg) {
+    return "the rotation is not determined: sigma " + FixedText(r.rot_std_deg, 1) + " deg > " +
+           FixedText(kMaxRotationStdDeg, 0) + " deg";
+  }
+  const std::string part = r.scales.size() > 1 ? "part " : "segment ";
+  for (const SegmentScale& seg : r.scales) {
+    if (std::isfinite(seg.std) && seg.std > kMaxScaleStdFraction * std::abs(seg.scale)) {
+      return "the scale of " + part + std::to_string(seg.segment) + " is not determined: sigma " +
+             SignificantText(seg.std, 3) + " for " + SignificantText(seg.scale, 4) + " (> " +
+             FixedText(100.0 * kMaxScaleStdFraction, 0) + " %)";
+    }
+    // A scale maps the slave's unit to the master's: positive by definition. A fit with a
+    // negative one has explained the motions with the wrong rotation.
+    if (!(seg.scale > 0.0)) {
+      return "the scale of " + part + std::to_string(seg.segment) + " is " +
+             SignificantText(seg.scale, 4) +
+             " (a scale is positive): the motions do not determine the rotation";
+    }
+  }
+  if (r.scales.empty() && std::isfinite(r.estimate.scale) && !(r.estimate.scale > 0.0)) {
+    return "the scale is " + SignificantText(r.estimate.scale, 4) +
+           " (a scale is positive): the motions do not determine the rotation";
+  }
+  return std::nullopt;
+}
+
 std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
                                              const BatchSetting& setting,
                                              const std::vector<MotionData>& motions,
@@ -283,23 +310,8 @@ std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
   }
   if (contradiction != nullptr) *contradiction = false;
 
-  // 4. Every parameter determined: where the covariance was computed, the rotation σ below
-  // kMaxRotationStdDeg and every scale's σ below kMaxScaleStdFraction of the scale (a larger σ
-  // means the motions do not determine it; a merely large σ of C along a nearly planar
-  // drive's axis is reported, not failed, batch_result.h).
-  if (std::isfinite(r.rot_std_deg) && r.rot_std_deg > kMaxRotationStdDeg) {
-    return "the rotation is not determined: sigma " + FixedText(r.rot_std_deg, 1) + " deg > " +
-           FixedText(kMaxRotationStdDeg, 0) + " deg";
-  }
-  for (const SegmentScale& seg : r.scales) {
-    if (std::isfinite(seg.std) && seg.std > kMaxScaleStdFraction * std::abs(seg.scale)) {
-      return "the scale of " + std::string(r.scales.size() > 1 ? "part " : "segment ") +
-             std::to_string(seg.segment) + " is not determined: sigma " +
-             SignificantText(seg.std, 3) + " for " + SignificantText(seg.scale, 4) + " (> " +
-             FixedText(100.0 * kMaxScaleStdFraction, 0) + " %)";
-    }
-  }
-  return std::nullopt;
+  // 4. Every parameter determined.
+  return UndeterminedReason(r);
 }
 
 std::optional<std::string> OnlineUnsupportedReason(const std::vector<MotionData>& window,

@@ -62,6 +62,10 @@ TranslationPairing TestTranslationPairing(const std::vector<MotionData>& motions
                                           const Eigen::Quaterniond& q,
                                           const std::vector<double>& scales);
 
+// Criterion 3 alone: a parameter of `r` the motions do not determine (rotation σ above 10°, a
+// scale's σ above 50 % of it, a scale that is not positive), or nullopt.
+std::optional<std::string> UndeterminedReason(const SlaveCalibration& r);
+
 // Why the data do not support the solved estimate `r` (fitted to `motions` under `setting`),
 // or nullopt when they do; `contradiction` (nullable) is set when the reason is that the data
 // contradict the model (criterion 2 or the planar model's axes), not merely too few motions or
@@ -73,9 +77,9 @@ std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
                                              bool* contradiction = nullptr);
 
 // The same for the online estimator's published estimate, on the motions of its window
-// (statistics_accumulation.h): at least 4 independent motions, and the rotation tests
-// (rotating rig) or the translation pairing test (translational model). nullopt when
-// supported.
+// (statistics_accumulation.h): at least 4 independent motions, and the rotation tests (rotating
+// rig) or the translation pairing test (translational model). nullopt when supported. (The
+// estimator tests UndeterminedReason on every published estimate besides.)
 std::optional<std::string> OnlineUnsupportedReason(const std::vector<MotionData>& window,
                                                    const SlaveCalibration& published);
 

@@ -354,7 +354,9 @@ void RigEstimator::Publish(int index) {
       s.acceptance_generation = static_cast<int64_t>(generation_);
     }
     ++s.acceptance_age;
-    unsupported = s.unsupported;
+    // The window's tests are kept for a few updates; whether the published parameters are
+    // determined is cheap and tested on every one.
+    unsupported = s.unsupported ? s.unsupported : internal::UndeterminedReason(published);
     if (unsupported) {
       published.state = SlaveState::kInitialising;
       s.convergence.stable = 0;

@@ -99,7 +99,7 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
   const int n = options.num_frames;
   const double amp_rot = options.rotation_amplitude_deg * kRadPerDeg;
   const double amp_pos = options.translation_amplitude;
-  const double period = n / options.frame_rate_hz;
+  const double period = options.period_s > 0.0 ? options.period_s : n / options.frame_rate_hz;
 
   // Master trajectory: incommensurate sinusoids so every axis keeps rotating and moving.
   std::vector<Pose> truth_master(n);

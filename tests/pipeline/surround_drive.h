@@ -1,7 +1,8 @@
 #pragma once
 // A simulated drive of the 4-camera car rig (config/sim_surround4.yaml) at pose level, through
 // the calibration node over memq:// at a multiple of real time, for the load test (2 minutes,
-// in make test) and the soak test (1 hour, label soak): poses of a planar (yaw-only) drive with
+// in make test) and the soak test (1 hour, label soak): poses of a planar (yaw-only) 2-minute
+// loop driven again and again, with
 // VO noise, every slave's VO re-initialising every 20 s (a new scale), the `left` camera losing
 // track for 1 s around each re-initialisation, and the `back` camera dying at 60 % of the drive.
 // Pose level, not images: rendering and VO of 4 cameras run at ~1/4 real time on 2 cores; the
@@ -145,6 +146,10 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
   d.rotation_noise_deg = 0.05;
   d.position_noise = 0.005;
   d.segment_period_s = 20.0;
+  // One loop every 2 minutes, however long the drive: the soak drives the load test's loop 30
+  // times (one loop stretched over an hour would turn by a degree per segment, data that do
+  // not determine the rig, not wear of the node).
+  d.period_s = 120.0;
   const SyntheticDrive drive = GenerateDrive(names, rigs, d);
   const RigRecording& rec = drive.recording;
 

@@ -71,9 +71,12 @@ inline void CheckDrive(const Report& r, double flat_after_s) {
     const SlaveCalibration& slave = sum.estimate.rig.slaves[i];
     EXPECT_TRUE(slave.usable()) << slave.name << ": " << slave.message;
     const CalibrationError e = CompareToTruth(slave.estimate, r.truth[i]);
-    std::printf("%s: %s, rotation error %.4f deg, %d motions used\n", slave.name.c_str(),
-                std::string(ToString(slave.state)).c_str(), e.rot_deg, slave.motions.used);
+    std::printf("%s: %s, rotation error %.4f deg (σ %.4f deg), %d motions used\n",
+                slave.name.c_str(), std::string(ToString(slave.state)).c_str(), e.rot_deg,
+                slave.rot_std_deg, slave.motions.used);
     EXPECT_LT(e.rot_deg, 0.2) << slave.name;
+    // ... and within what its σ says (5 σ of the largest axis for the angle of three).
+    EXPECT_LT(e.rot_deg, 5.0 * slave.rot_std_deg) << slave.name << ": σ " << slave.rot_std_deg;
   }
 
   // The status names the dead camera; the others track.

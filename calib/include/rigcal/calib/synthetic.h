@@ -60,9 +60,12 @@ struct DriveOptions {
   double frame_rate_hz = 20.0;
   double rotation_amplitude_deg = 35.0;
   double translation_amplitude = 2.0;  // master units
-  double rotation_noise_deg = 0.05;    // white noise per pose
-  double position_noise = 0.002;       // white noise per pose, master units
-  double drift_deg_per_frame = 0.0;    // random-walk rotation drift
+  // The trajectory repeats every period_s seconds (0: the whole drive is one period, so a
+  // longer drive moves more slowly). A drive of many periods drives the same loop again.
+  double period_s = 0.0;
+  double rotation_noise_deg = 0.05;  // white noise per pose
+  double position_noise = 0.002;     // white noise per pose, master units
+  double drift_deg_per_frame = 0.0;  // random-walk rotation drift
   uint64_t seed = 1;
   // From frame change_frame on, the slaves sit at changed_rigs (a bumped camera); the odometry
   // of every camera continues undisturbed. -1 = never.
