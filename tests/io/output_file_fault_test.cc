@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -118,6 +120,53 @@ TEST_F(OutputFileFault, PathThatBecomesAFifoBeforeCommitIsNotReplaced) {
   EXPECT_THAT(status.message(), HasSubstr("it is a FIFO"));
   EXPECT_TRUE(fs::is_fifo(fs::symlink_status(path)));
   EXPECT_EQ(Entries(), 1u);  // the temporary file is gone
+}
+
+// A writer killed between Create and Commit (kill -9) leaves its temporary file; the next write
+// of the same path removes it, but not the one of a writer still running.
+TEST_F(OutputFileFault, LeftoverOfAKilledWriterIsRemoved) {
+  const std::string path = Path("state.yaml");
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    auto file = AtomicFile::Create(path);
+    if (!file.ok() || !file->Write("half").ok()) ::_exit(1);
+    ::raise(SIGKILL);  // the destructor never runs
+  }
+  int wstatus = 0;
+  ASSERT_EQ(::waitpid(child, &wstatus, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(wstatus));
+  ASSERT_EQ(Entries(), 1u) << "the killed writer left no temporary file";
+  auto running = AtomicFile::Create(path);  // this process's: alive
+  ASSERT_TRUE(running.ok()) << running.error();
+  EXPECT_EQ(Entries(), 1u);  // the leftover is gone, ours is there
+  EXPECT_TRUE(fs::exists(running->temp_path()));
+  ASSERT_TRUE(WriteFileAtomically(path, "whole\n").ok());
+  EXPECT_TRUE(fs::exists(running->temp_path())) << "a running writer's file was removed";
+  ASSERT_TRUE(running->Write("newer\n").ok());
+  ASSERT_TRUE(running->Commit().ok());
+  EXPECT_EQ(Read(path), "newer\n");
+  EXPECT_EQ(Entries(), 1u);
+}
+
+// CommitAndKeepOpen: the file takes its name and the descriptor writes on at its end.
+TEST_F(OutputFileFault, CommitAndKeepOpenWritesOnUnderTheName) {
+  const std::string path = Path("drive.lcmlog");
+  ASSERT_TRUE(WriteFileAtomically(path, "old\n").ok());
+  ASSERT_EQ(::chmod(path.c_str(), 0600), 0);
+  auto file = AtomicFile::Create(path);
+  ASSERT_TRUE(file.ok()) << file.error();
+  ASSERT_TRUE(file->Write("first\n").ok());
+  EXPECT_EQ(Read(path), "old\n");
+  Expected<int> fd = file->CommitAndKeepOpen();
+  ASSERT_TRUE(fd.ok()) << fd.error();
+  EXPECT_EQ(Read(path), "first\n");
+  ASSERT_EQ(WriteAllBytes(*fd, "second\n"), 0);
+  ASSERT_EQ(::close(*fd), 0);
+  EXPECT_EQ(Read(path), "first\nsecond\n");
+  EXPECT_EQ(fs::status(path).permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write);
+  EXPECT_EQ(Entries(), 1u);
 }
 
 }  // namespace

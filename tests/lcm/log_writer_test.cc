@@ -81,12 +81,24 @@ TEST(LogWriter, RejectsBadChannelsAndExistingFiles) {
   ASSERT_FALSE(again.ok());
   EXPECT_NE(again.error().find(path), std::string::npos) << again.error();
   EXPECT_NE(again.error().find("exists"), std::string::npos) << again.error();
+  // Overwriting: a recording without an event leaves the old log; the first event replaces it.
+  const uintmax_t old_size = fs::file_size(path);
   LogWriterOptions overwrite;
   overwrite.overwrite = true;
+  auto empty = LogWriter::Open(path, overwrite);
+  ASSERT_TRUE(empty.ok()) << empty.error();
+  EXPECT_EQ(fs::file_size(path), old_size);
+  ASSERT_TRUE((*empty)->Close().ok());
+  EXPECT_EQ(fs::file_size(path), old_size);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), {}), 1) << "a temporary file was left";
   auto replaced = LogWriter::Open(path, overwrite);
   ASSERT_TRUE(replaced.ok()) << replaced.error();
+  ASSERT_TRUE((*replaced)->Write("A", 0, &byte, 1).ok());
+  EXPECT_EQ(fs::file_size(path), 28u + 1u + 1u);  // the new log under the name at once
+  ASSERT_TRUE((*replaced)->Write("A", 1, &byte, 1).ok());
   ASSERT_TRUE((*replaced)->Close().ok());
-  EXPECT_EQ(fs::file_size(path), 0u);
+  EXPECT_EQ(fs::file_size(path), 2u * (28u + 1u + 1u));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), {}), 1);
 
   LogWriterOptions bad;
   bad.split_bytes = -1;

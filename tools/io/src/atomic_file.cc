@@ -1,6 +1,7 @@
 #include "rigcal/io/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -57,6 +58,31 @@ Status CheckReplaceable(const std::string& path, mode_t* mode) {
   return Status::Ok();
 }
 
+// The temporary files of `path` are ".<name>.tmp.<pid>.XXXXXX" in its directory: the writer's
+// process id tells a leftover of a killed writer (no such process) from a write in progress.
+std::string TempPrefix(const std::string& path) {
+  return "." + std::filesystem::path(path).filename().string() + ".tmp.";
+}
+
+// Removes the temporary files of `path` whose writer no longer exists (a process killed while it
+// wrote: kill -9, power loss). Best effort: a file that cannot be removed stays.
+void RemoveLeftovers(const std::string& path) {
+  const std::string prefix = TempPrefix(path);
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(DirectoryOf(path), ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string rest = name.substr(prefix.size());
+    const size_t dot = rest.find('.');
+    if (dot == 0 || dot == std::string::npos) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(rest.c_str(), &end, 10);
+    if (end != rest.c_str() + dot || pid <= 0) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours)
+    std::filesystem::remove(entry.path(), ec);
+  }
+}
+
 }  // namespace
 
 int WriteAllBytes(int fd, std::string_view data) {
@@ -104,9 +130,8 @@ Expected<AtomicFile> AtomicFile::Create(const std::string& path) {
   mode_t mode = kNewFileMode;
   if (Status status = CheckReplaceable(path, &mode); !status.ok()) return status;
   const std::filesystem::path dir = DirectoryOf(path);
-  std::string tmp_basename = ".";
-  tmp_basename += std::filesystem::path(path).filename().string();
-  tmp_basename += ".tmp.XXXXXX";
+  RemoveLeftovers(path);
+  const std::string tmp_basename = TempPrefix(path) + std::to_string(::getpid()) + ".XXXXXX";
   const std::string tmp_template = (dir / tmp_basename).string();
   std::vector<char> tmp_name(tmp_template.begin(), tmp_template.end());
   tmp_name.push_back('\0');
@@ -143,6 +168,21 @@ Status AtomicFile::Commit() {
     ::unlink(temp_path_.c_str());
     return Error{"cannot write '" + path_ + "': close: " + ErrnoText(err)};
   }
+  return RenameOverPath();
+}
+
+Expected<int> AtomicFile::CommitAndKeepOpen() {
+  if (fd_ < 0) return Error{"cannot write '" + path_ + "': commit: the file is closed"};
+  if (::fsync(fd_) != 0) return Fail("fsync", errno);
+  const int fd = std::exchange(fd_, -1);
+  if (Status status = RenameOverPath(); !status.ok()) {
+    ::close(fd);
+    return status;
+  }
+  return fd;
+}
+
+Status AtomicFile::RenameOverPath() {
   // Checked again: the path may have become something else while the contents were written.
   mode_t mode = kNewFileMode;
   if (Status status = CheckReplaceable(path_, &mode); !status.ok()) {

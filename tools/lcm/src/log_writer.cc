@@ -46,10 +46,12 @@ std::string LogPartPath(const std::string& path, int part) {
   return path + suffix;
 }
 
-// One open file: an AtomicFile (atomic) or a descriptor written in place.
+// One open file: an AtomicFile (atomic, or the replacement of an existing file until its first
+// event) or a descriptor written in place.
 struct LogWriter::Part {
   std::string path;
   std::optional<AtomicFile> atomic;
+  bool replacing = false;  // `atomic` replaces an existing file at the first event
   int fd = -1;
   int64_t bytes = 0;
   Clock::time_point last_sync = Clock::now();
@@ -83,10 +85,15 @@ Status LogWriter::OpenPart() {
   if (!options_.overwrite && std::filesystem::exists(path, ec)) {
     return Error{"cannot write '" + path + "': the file exists (not overwritten)"};
   }
-  if (options_.atomic) {
+  // Replacing an existing log (overwrite): the new one is written next to it and takes its
+  // name with its first event, so a recording that records nothing leaves the old log intact.
+  const bool replacing =
+      !options_.atomic && options_.overwrite && std::filesystem::exists(path, ec);
+  if (options_.atomic || replacing) {
     Expected<AtomicFile> file = AtomicFile::Create(path);
     if (!file) return file.status();
     part->atomic.emplace(std::move(*file));
+    part->replacing = replacing;
   } else {
     const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (options_.overwrite ? O_TRUNC : O_EXCL);
     part->fd = ::open(path.c_str(), flags, 0644);
@@ -100,7 +107,11 @@ Status LogWriter::OpenPart() {
 Status LogWriter::ClosePart() {
   if (!part_) return Status::Ok();
   std::unique_ptr<Part> part = std::move(part_);
-  if (part->atomic) return part->atomic->Commit();
+  if (part->atomic) {
+    // An unfinished replacement without an event: the old file stays (~AtomicFile removes ours).
+    if (part->replacing) return Status::Ok();
+    return part->atomic->Commit();
+  }
   const int fd = std::exchange(part->fd, -1);
   if (::fdatasync(fd) != 0) {
     const int err = errno;
@@ -146,6 +157,17 @@ Status LogWriter::Write(std::string_view channel, int64_t utime, const void* dat
     if (Status status = part_->atomic->Write(bytes); !status.ok()) {
       failed_ = true;
       return status;
+    }
+    if (part_->replacing) {  // the first event: the new log takes the old one's place
+      Expected<int> fd = part_->atomic->CommitAndKeepOpen();
+      part_->atomic.reset();
+      part_->replacing = false;
+      if (!fd) {
+        failed_ = true;
+        return fd.status();
+      }
+      part_->fd = *fd;
+      part_->last_sync = Clock::now();
     }
   } else {
     if (const int err = WriteAllBytes(part_->fd, bytes); err != 0) {

@@ -35,6 +35,8 @@ Expected<std::string> KeepAside(const std::string& path, const std::string& tag)
 // writes temp_path() and closes it; Commit() fsyncs it, renames it over `path` and fsyncs the
 // directory. A temporary file that was not committed is removed by the destructor. Errors as
 // WriteFileAtomically's. One thread at a time.
+// Temporary files are ".<name>.tmp.<pid>.XXXXXX" next to `path`; Create() removes those of
+// `path` whose process no longer exists (left by a writer killed mid-write).
 class AtomicFile {
  public:
   // The temporary file for `path`, or the error ("cannot write '<path>': ...").
@@ -53,11 +55,17 @@ class AtomicFile {
   // Makes the temporary file `path` (see above). After a failure the temporary file is gone
   // and `path` is unchanged. Call at most once.
   [[nodiscard]] Status Commit();
+  // As Commit(), but the file stays open: the descriptor, now the caller's to close, writes on
+  // at the end of `path` (a recording that replaces an old one once it has its first event).
+  [[nodiscard]] Expected<int> CommitAndKeepOpen();
 
  private:
   AtomicFile(std::string path, std::string temp_path, int fd);
   // "cannot write '<path>': <step>: <errno text>", and the temporary file removed.
   Status Fail(const std::string& step, int err);
+  // The synced, closed or kept temporary file renamed over `path` (checked again), the
+  // directory synced; on failure the temporary file is removed.
+  Status RenameOverPath();
 
   std::string path_;
   std::string temp_path_;

@@ -36,7 +36,10 @@ struct LogWriterOptions {
   int64_t split_bytes = 0;       // >= 0; 0 = one file, never split
   double sync_interval_s = 1.0;  // >= 0; seconds between fdatasync calls (0 = after every event)
   bool atomic = false;           // parts appear complete or not at all (see above)
-  bool overwrite = false;        // replace existing files; otherwise an existing file is an error
+  // Replace existing files (otherwise an existing file is an error): the new file is written
+  // next to the old one and replaces it with its first event (synced), so a recording that
+  // records nothing leaves the old file; only a regular file is replaced (atomic_file.h).
+  bool overwrite = false;
   // Success, or "<field>: <constraint>".
   Status Check() const;
 };
