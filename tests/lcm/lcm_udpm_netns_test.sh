@@ -26,6 +26,31 @@ YAML
 "$rigcal" synth-log --config "$dir/rig.yaml" --out "$dir/poses.lcmlog" --frames 1200 \
   --truth-out "$dir/truth.yaml"
 
+# The bus stays on this host unless --lcm-network: a TTL above 0, or a group routed through a
+# network link (a veth pair in this namespace), is refused with both ways out named.
+refused_rc=0
+"$rigcal" calib --config "$dir/rig.yaml" --lcm "udpm://239.255.76.67:7667?ttl=1" \
+  --duration 1 --out "$dir/refused.yaml" 2> "$dir/refused.txt" || refused_rc=$?
+check "ttl=1 refused with exit 1 (got $refused_rc)" '[ "$refused_rc" -eq 1 ]'
+check "the refusal names ttl=1 and --lcm-network" \
+  'grep -q "ttl=1" "$dir/refused.txt" && grep -q -- "--lcm-network" "$dir/refused.txt"'
+check "nothing written by the refused run" '[ ! -e "$dir/refused.yaml" ]'
+ip link add rigcal-veth0 type veth peer name rigcal-veth1 ||
+  rigcal_netns_skip "cannot create a veth pair in the private namespace"
+ip link set rigcal-veth0 up multicast on
+ip route add 239.255.76.68/32 dev rigcal-veth0
+status_rc=0
+"$rigcal" status --lcm "udpm://239.255.76.68:7667?ttl=0" --once --timeout 1 \
+  2> "$dir/status_refused.txt" || status_rc=$?
+check "status refuses a group routed through a network link (exit $status_rc)" \
+  '[ "$status_rc" -eq 3 ] && grep -q "goes through .rigcal-veth0." "$dir/status_refused.txt"'
+allowed_rc=0
+"$rigcal" status --lcm "udpm://239.255.76.68:7667?ttl=0" --lcm-network --once --timeout 1 \
+  > /dev/null 2> "$dir/status_allowed.txt" || allowed_rc=$?
+check "with --lcm-network it listens (no data: exit 3, no refusal)" \
+  '[ "$allowed_rc" -eq 3 ] && ! grep -q "goes through" "$dir/status_allowed.txt"'
+ip link del rigcal-veth0  # its peer goes with it
+
 lcm-logger --lcm-url="$url" "$dir/bus.lcmlog" >/dev/null 2>&1 &
 logger_pid=$!
 pids+=("$logger_pid")

@@ -30,7 +30,12 @@ void RegisterCalib(CLI::App& app, int* exit_code) {
       "does). Exit 0 every slave usable, 3 some slave not (or nothing received), 1 bad input.");
   AddNodeOptions(cmd, &args->run, &args->node);
   cmd->add_option("--lcm", args->node.lcm_url,
-                  "LCM URL to listen and publish on (default: LCM's default udpm URL)");
+                  "LCM URL to listen and publish on (default: LCM's default udpm URL). It must "
+                  "stay on this host (memq://, or udpm:// with ttl=0 and the group routed to lo) "
+                  "unless --lcm-network is given");
+  cmd->add_flag("--lcm-network", args->node.lcm_network,
+                "Allow an LCM URL that other hosts reach (udpm:// with ttl > 0 or routed through "
+                "a network link, tcpq:// to another host): poses from them are accepted");
   cmd->add_option("--log", args->node.log_path,
                   "Replay an LCM log file (lcm-logger format) instead of listening, losing "
                   "nothing, timers on log time; ends at its end (see `rigcal replay`)")

@@ -275,7 +275,10 @@ void RegisterRecord(CLI::App& app, int* exit_code) {
   cmd->add_flag("--fast", args->fast,
                 "Do not pace a simulated source in real time: record as fast as possible, "
                 "without dropping frames");
-  cmd->add_flag("-f,--force", args->force, "Overwrite existing log files");
+  cmd->add_flag(
+      "-f,--force", args->force,
+      "Replace existing log files (each with the new log's first event, so a recording that "
+      "records nothing leaves the old one)");
   cmd->footer(
       "Exit status: 0 recorded; 1 bad config, the log cannot be written (the message names the "
       "file), 2 usage.");

@@ -21,6 +21,7 @@
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
+#include "rigcal/lcm/bus_exposure.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/process_stats.h"
@@ -41,6 +42,7 @@ constexpr int kExitError = 1;
 struct RunArgs {
   std::string config;
   std::string lcm_url;
+  bool lcm_network = false;
   double duration_s = 0.0;
   bool eval = false;
   bool json = false;
@@ -184,6 +186,12 @@ int RunRun(const RunArgs& args) {
       std::cerr << "rigcal run: " << args.lcm_url << ": cannot open LCM\n";
       return kExitError;
     }
+    if (!args.lcm_network) {
+      if (const Status status = tools::CheckBusStaysOnHost(args.lcm_url); !status.ok()) {
+        std::cerr << "rigcal run: " << status.message() << "\n";
+        return kExitError;
+      }
+    }
   }
   tools::PipelineOptions options;
   options.lossless = !realtime;
@@ -317,7 +325,10 @@ void RegisterRun(CLI::App& app, int* exit_code) {
   cmd->add_option("--config", args->config, "Rig config YAML with a `source:` section")->required();
   cmd->add_option("--lcm", args->lcm_url,
                   "Publish RIGCAL_POSE_<camera>, RIGCAL_EXTRINSICS and RIGCAL_STATUS on this LCM "
-                  "URL (default: no LCM)");
+                  "URL (default: no LCM); it must stay on this host unless --lcm-network");
+  cmd->add_flag("--lcm-network", args->lcm_network,
+                "Allow an --lcm URL that other hosts reach (see `rigcal calib --help`)")
+      ->needs("--lcm");
   cmd->add_option("--duration", args->duration_s, "Stop after this many seconds (0 = source end)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--eval", args->eval,

@@ -37,7 +37,9 @@ void RegisterStatus(CLI::App& app, int* exit_code) {
       "converging, 2 decalibration alarm, 3 no data within --timeout (or LCM cannot be opened).");
   cmd->add_option("--lcm", options->url,
                   "LCM URL to listen on (default: LCM's default udpm URL; file:///log?speed=0 "
-                  "reads a log)");
+                  "reads a log); it must stay on this host unless --lcm-network");
+  cmd->add_flag("--lcm-network", options->lcm_network,
+                "Allow an LCM URL that other hosts reach (see `rigcal calib --help`)");
   cmd->add_flag("--once", options->once,
                 "Wait for one RIGCAL_STATUS and one RIGCAL_EXTRINSICS (at most --timeout), print "
                 "the snapshot and exit with the health code");

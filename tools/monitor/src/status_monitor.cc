@@ -4,6 +4,7 @@
 #include <thread>
 
 #include "rigcal/calib/logging.h"
+#include "rigcal/lcm/bus_exposure.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
@@ -141,7 +142,11 @@ int RunOnce(StatusMonitor& monitor, const StatusRunOptions& options, std::ostrea
 int RunStatusMonitor(const StatusRunOptions& options, std::ostream& out, std::ostream& err,
                      const std::atomic<bool>& stop, lcm::LCM* lcm) {
   StatusMonitor monitor(options.url, lcm);
-  if (Status status = monitor.Open(); !status.ok()) {
+  Status status = monitor.Open();
+  if (status.ok() && lcm == nullptr && !options.lcm_network) {
+    status = CheckBusStaysOnHost(options.url);
+  }
+  if (!status.ok()) {
     err << "rigcal status: " << status.message() << "\n";
     return static_cast<int>(Health::kNoData);
   }

@@ -12,6 +12,7 @@
 #include "rigcal/io/estimator_state_file.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/yaml_fields.h"
+#include "rigcal/lcm/bus_exposure.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/status_message.h"
@@ -367,6 +368,9 @@ Status CalibNode::Open() {
           (m.options.lcm_url.empty() ? std::string("the default LCM URL") : m.options.lcm_url) +
           ": cannot open LCM (udpm:// needs a multicast route, e.g. on lo: "
           "ip route add 224.0.0.0/4 dev lo)"};
+    }
+    if (!m.options.lcm_network) {
+      if (Status status = CheckBusStaysOnHost(m.options.lcm_url); !status.ok()) return status;
     }
     m.bus = m.owned_bus.get();
   }

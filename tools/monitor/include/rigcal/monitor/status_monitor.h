@@ -48,13 +48,14 @@ class StatusMonitor {
 };
 
 struct StatusRunOptions {
-  std::string url;         // see StatusMonitor
-  bool once = false;       // print one snapshot and exit with the health code
-  bool json = false;       // the snapshot as JSON (SnapshotToJson), one object per line
-  double timeout_s = 5.0;  // --once: wait at most this long for the messages (> 0)
-  bool ansi = false;       // refresh a terminal screen in place (AnsiFrame); else plain lines
-  double refresh_s = 1.0;  // seconds between screen refreshes (> 0)
-  int width = 0;           // terminal columns to cut lines at (0 = none)
+  std::string url;           // see StatusMonitor
+  bool lcm_network = false;  // allow a url that reaches other hosts (bus_exposure.h)
+  bool once = false;         // print one snapshot and exit with the health code
+  bool json = false;         // the snapshot as JSON (SnapshotToJson), one object per line
+  double timeout_s = 5.0;    // --once: wait at most this long for the messages (> 0)
+  bool ansi = false;         // refresh a terminal screen in place (AnsiFrame); else plain lines
+  double refresh_s = 1.0;    // seconds between screen refreshes (> 0)
+  int width = 0;             // terminal columns to cut lines at (0 = none)
 };
 
 // Runs `rigcal status`. --once: listens until a RIGCAL_STATUS and a RIGCAL_EXTRINSICS arrived

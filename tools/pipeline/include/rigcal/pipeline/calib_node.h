@@ -72,6 +72,8 @@ struct CalibNodeOptions {
   // Live input: an LCM URL ("" = LCM's default, udpm://239.255.76.67:7667). Poses are received
   // and the node's messages published on it.
   std::string lcm_url;
+  // Allow an lcm_url that reaches other hosts (bus_exposure.h); otherwise Open() refuses it.
+  bool lcm_network = false;
   // Replay input instead of a live bus: an LCM log file (lcm-logger format), read as fast as
   // possible; the run ends at the end of the log. A truncated last event ends the replay with a
   // warning. Empty = live.
