@@ -44,6 +44,28 @@ void AddTargetOptions(CLI::App* cmd, TargetArgs* args) {
           },
           "COLSxROWS"))
       ->capture_default_str();
+  cmd->add_option("--charuco", args->charuco,
+                  "Images: a ChArUco board (OpenCV aruco) instead of a chessboard, its squares\n"
+                  "along x and y; views may show part of it")
+      ->type_name("SQUARESxSQUARES")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            target::CharucoSpec b;
+            const Status s = target::ParseCharucoSquares(v, &b);
+            return s.ok() ? std::string() : s.message();
+          },
+          "SQUARESxSQUARES"))
+      ->excludes("--chessboard");
+  cmd->add_option("--marker", args->marker,
+                  "ChArUco: edge of one marker, in the unit of --square (default 0.7 of it)")
+      ->type_name("SIZE")
+      ->check(CLI::PositiveNumber)
+      ->needs("--charuco");
+  cmd->add_option("--dictionary", args->dictionary,
+                  "ChArUco: OpenCV's marker dictionary (DICT_4X4_50 ... DICT_7X7_1000,\n"
+                  "DICT_ARUCO_ORIGINAL, DICT_APRILTAG_16h5/25h9/36h10/36h11)")
+      ->capture_default_str()
+      ->needs("--charuco");
   cmd->add_option("--square", args->square,
                   "Images: edge of one chessboard square; the unit of every position written\n"
                   "(give metres for metric results). AprilGrid CSVs carry their own 3-D\n"
@@ -75,6 +97,16 @@ Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args
   if (Status s = target::ParseChessboardSize(args.chessboard, &board); !s.ok()) {
     return Error{"--chessboard: " + s.message()};
   }
+  target::CharucoSpec charuco;
+  if (!args.charuco.empty()) {
+    if (Status s = target::ParseCharucoSquares(args.charuco, &charuco); !s.ok()) {
+      return Error{"--charuco: " + s.message()};
+    }
+    charuco.square_size = args.square;
+    charuco.marker_size = args.marker > 0.0 ? args.marker : 0.7 * args.square;
+    charuco.dictionary = args.dictionary;
+    if (Status s = charuco.Check(); !s.ok()) return Error{"--charuco: " + s.message()};
+  }
   int width = 0;
   int height = 0;
   if (Status s = ParseResolution(args.resolution, &width, &height); !s.ok()) {
@@ -94,7 +126,10 @@ Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args
     const std::string name = argument.substr(0, eq);
     if (!names.insert(name).second) return Error{"--camera: camera '" + name + "' given twice"};
     CameraCalibration camera;
-    auto views = target::LoadCameraViews(name, argument.substr(eq + 1), board, width, height);
+    const std::string source = argument.substr(eq + 1);
+    auto views = args.charuco.empty() || target::IsDetectionFolder(source)
+                     ? target::LoadCameraViews(name, source, board, width, height)
+                     : target::DetectCharucoViews(name, source, charuco);
     if (!views) return Error{name + ": " + views.error()};
     camera.views = std::move(*views);
     log->info("{}: {} files, {} with a target ({}x{})", name, camera.views.files,

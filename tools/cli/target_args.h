@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "rigcal/calib/status.h"
+#include "rigcal/target/charuco.h"
 #include "rigcal/target/intrinsics.h"
 #include "rigcal/target/target_views.h"
 
@@ -16,6 +17,9 @@ namespace rigcal::cli {
 struct TargetArgs {
   std::vector<std::string> cameras;  // NAME=SOURCE
   std::string chessboard = "9x6";
+  std::string charuco;  // SQUARESxSQUARES: images hold a ChArUco board instead of a chessboard
+  double marker = 0.0;  // ChArUco marker edge (0: 0.7 of --square)
+  std::string dictionary = target::CharucoSpec{}.dictionary;
   double square = 1.0;
   std::string resolution;  // WIDTHxHEIGHT, for detection CSVs
   std::string model = "pinhole";
@@ -23,7 +27,8 @@ struct TargetArgs {
   bool no_reject = false;
 };
 
-// Adds --camera, --chessboard, --square, --resolution, --model, --max-views, --no-reject.
+// Adds --camera, --chessboard, --charuco, --marker, --dictionary, --square, --resolution,
+// --model, --max-views, --no-reject.
 void AddTargetOptions(CLI::App* cmd, TargetArgs* args);
 
 struct CameraCalibration {

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "image_views.h"
 #include "opencv.h"
 #include "rigcal/calib/logging.h"
 
@@ -115,9 +116,10 @@ bool IsDetectionFolder(const std::string& source) {
   return csv.ok() && !csv->empty();
 }
 
-Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std::string& source,
-                                            const ChessboardSpec& board) {
-  if (Status s = board.Check(); !s.ok()) return Error{s.message()};
+Expected<CameraViews> internal::DetectImageViews(
+    const std::string& camera, const std::string& source,
+    const std::function<std::optional<TargetView>(const cv::Mat& grey)>& detect,
+    const std::string& target_name, const std::string& hint) {
   auto files = ListFiles(source, IsImageFile);
   if (!files) return Error{files.error()};
   if (files->empty()) return Error{source + ": no images (png, jpg, bmp, pgm, ppm, tif)"};
@@ -125,7 +127,6 @@ Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std
   CameraViews out;
   out.camera = camera;
   std::string first_file;
-  const cv::Size pattern(board.cols, board.rows);
   for (const fs::path& path : *files) {
     const cv::Mat image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
     if (image.empty()) return Error{path.string() + ": cannot read the image"};
@@ -140,19 +141,38 @@ Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std
                    path.filename().string() + " is " + std::to_string(image.cols) + "x" +
                    std::to_string(image.rows) + " (one camera, one image size)"};
     }
+    std::optional<TargetView> view = detect(image);
+    if (!view) {
+      out.none.push_back(path.filename().string());
+      log->debug("{}: no {}", path.string(), target_name);
+      continue;
+    }
+    view->file = path.filename().string();
+    view->t_ns = KeyOf(path);
+    out.views.push_back(std::move(*view));
+  }
+  if (out.views.empty()) {
+    return Error{source + ": no " + target_name + " found in any of the " +
+                 std::to_string(out.files) + " images; " + hint};
+  }
+  SortByKey(&out);
+  return out;
+}
+
+Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std::string& source,
+                                            const ChessboardSpec& board) {
+  if (Status s = board.Check(); !s.ok()) return Error{s.message()};
+  const cv::Size pattern(board.cols, board.rows);
+  auto detect = [&](const cv::Mat& image) -> std::optional<TargetView> {
     std::vector<cv::Point2f> corners;
     const bool found = cv::findChessboardCorners(
         image, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
     if (!found || corners.size() != static_cast<size_t>(board.cols * board.rows)) {
-      out.none.push_back(path.filename().string());
-      log->debug("{}: no {}x{} chessboard", path.string(), board.cols, board.rows);
-      continue;
+      return std::nullopt;
     }
     cv::cornerSubPix(image, corners, cv::Size(11, 11), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01));
     TargetView view;
-    view.file = path.filename().string();
-    view.t_ns = KeyOf(path);
     for (int r = 0; r < board.rows; ++r) {
       for (int c = 0; c < board.cols; ++c) {
         const cv::Point2f& p = corners[static_cast<size_t>(r * board.cols + c)];
@@ -160,15 +180,12 @@ Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std
         view.target_points.emplace_back(c * board.square_size, r * board.square_size, 0.0);
       }
     }
-    out.views.push_back(std::move(view));
-  }
-  if (out.views.empty()) {
-    return Error{source + ": no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-                 " chessboard (inner corners) found in any of the " + std::to_string(out.files) +
-                 " images; check --chessboard COLSxROWS"};
-  }
-  SortByKey(&out);
-  return out;
+    return view;
+  };
+  return internal::DetectImageViews(
+      camera, source, detect,
+      std::to_string(board.cols) + "x" + std::to_string(board.rows) + " chessboard (inner corners)",
+      "check --chessboard COLSxROWS");
 }
 
 Expected<CameraViews> ReadAprilGridViews(const std::string& camera, const std::string& folder,

@@ -1,0 +1,22 @@
+#pragma once
+// The image half of the target readers (target_views.cc): every image of a source through one
+// detector, with the checks every image target shares (readable, one size, some target).
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "opencv.h"
+#include "rigcal/target/target_views.h"
+
+namespace rigcal::target::internal {
+
+// The views `detect` finds in the images at `source` (a folder or folder/pattern, see
+// target_views.h); `detect` fills pixels and target_points (file and t_ns are set here) or
+// returns nullopt (the file is listed in `none`). Errors name the path: no images, an unreadable
+// image, mixed resolutions, or no `target_name` in any image (followed by `hint`).
+Expected<CameraViews> DetectImageViews(
+    const std::string& camera, const std::string& source,
+    const std::function<std::optional<TargetView>(const cv::Mat& grey)>& detect,
+    const std::string& target_name, const std::string& hint);
+
+}  // namespace rigcal::target::internal
