@@ -39,8 +39,8 @@ TEST(LiveTriggerQemu, FramesCarryTheFirmwaresConsecutivePulses) {
     for (int i = 0; i < 60 && events.empty(); ++i) ASSERT_TRUE(link.Poll(500, &events).ok());
     ASSERT_FALSE(events.empty()) << "no message from the firmware within 30 s";
   }
-  auto config = LoadRigConfig(
-      WriteRig(support::FreshTempDir("live_trigger_qemu"), qemu.pty_path(), "uart_wire: false"));
+  auto config = LoadRigConfig(testing::WriteRig(support::FreshTempDir("live_trigger_qemu"),
+                                                qemu.pty_path(), "uart_wire: false"));
   ASSERT_TRUE(config.ok()) << config.error();
   std::ostringstream progress;
   auto sources = OpenCaptureSources(*config, false, "", progress);
