@@ -29,14 +29,14 @@ class FakeTriggerGenerator {
 
   // Opens the pty pair; the host opens slave_path().
   bool Open(std::string* error) {
-    master_ = posix_openpt(O_RDWR | O_NOCTTY);
+    master_ = posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);  // not inherited by a child rigcal
     if (master_ < 0 || grantpt(master_) != 0 || unlockpt(master_) != 0) {
       *error = "posix_openpt failed";
       return false;
     }
     slave_path_ = ptsname(master_);
     // Keep a slave open so the master never sees a hang-up while the host reopens it.
-    slave_ = open(slave_path_.c_str(), O_RDWR | O_NOCTTY);
+    slave_ = open(slave_path_.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC);
     termios tio{};
     if (slave_ < 0 || tcgetattr(slave_, &tio) != 0) {
       *error = "cannot open " + slave_path_;
