@@ -6,6 +6,7 @@
 #include "paced_replay_device.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/triggered_camera.h"
+#include "rigcal/drivers/v4l2_timestamp.h"
 
 namespace rigcal::tools {
 namespace {
