@@ -143,6 +143,34 @@ TEST(TriggerYaml, TheShippedStereoExampleReads) {
   EXPECT_TRUE(config->online.sync.match_by_trigger_seq);
 }
 
+TEST(TriggerYaml, ASimulatedRigTakesTheGeneratorAtItsFrameRate) {
+  const std::string source =
+      "source:\n"
+      "  type: simulated\n"
+      "  frame_rate_hz: 25\n"
+      "  trajectory:\n"
+      "    waypoints:\n"
+      "      - {p: [0, 0, 3], ypr_deg: [0, 0, 0]}\n"
+      "      - {p: [1, 0, 3], ypr_deg: [10, 0, 0]}\n";
+  const std::string truth = "    truth: {q_wxyz: [1, 0, 0, 0], C: [1, 0, 0]}\n";
+  auto good = Load(Config(source, "trigger: {port: /dev/pts/9, rate_hz: 25}\n",
+                          "    trigger: {line: 0}\n", truth + "    trigger: {line: 1}\n"));
+  ASSERT_TRUE(good.ok()) << good.error();
+  EXPECT_EQ(good->camera_triggers[1]->stamp_offset_ns, 0);  // rendered at the exposure centre
+  EXPECT_TRUE(good->online.sync.match_by_trigger_seq);
+  auto rate = Load(Config(source, "trigger: {port: /dev/pts/9, rate_hz: 20}\n",
+                          "    trigger: {line: 0}\n", truth));
+  ASSERT_FALSE(rate.ok());
+  EXPECT_NE(rate.error().find("trigger.rate_hz: must be the simulated source's frame_rate_hz"),
+            std::string::npos)
+      << rate.error();
+  auto both = Load(Config(source + "  trigger: {}\n", "trigger: {port: /dev/pts/9, rate_hz: 25}\n",
+                          "    trigger: {line: 0}\n", truth));
+  ASSERT_FALSE(both.ok());
+  EXPECT_NE(both.error().find("trigger: not with source.trigger"), std::string::npos)
+      << both.error();
+}
+
 // Each bad input: the expected "field: what" and the line the error must name.
 struct Bad {
   std::string trigger, cam0, cam1, expected;

@@ -146,6 +146,11 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
     return r.Fail(section, "trigger",
                   "not with source.trigger (the simulated generator): give one of them");
   }
+  if (config->simulated_source &&
+      std::abs(config->simulated_source->frame_rate_hz - options.settings.rate_hz) > 1e-9) {
+    return r.Fail(section["rate_hz"] ? section["rate_hz"] : section, "trigger.rate_hz",
+                  "must be the simulated source's frame_rate_hz (the rig's frame k is pulse k)");
+  }
   const auto period_us = static_cast<int64_t>(1e6 / options.settings.rate_hz);
   const bool v4l2 = source_type == "v4l2";
   const bool start_of_exposure = v4l2 || source_type == "libcamera";

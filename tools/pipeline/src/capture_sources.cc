@@ -45,15 +45,7 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
     }
     progress << prefix << "building the simulated rig (" << spec.names.size() << " cameras, "
              << drivers::ToString(spec.scene.type) << " scene)...\n";
-    if (live) {
-      if (fast) return Error{config.path + ": trigger: a live generator paces the run: no --fast"};
-      if (std::abs(spec.frame_rate_hz - live->options().settings.rate_hz) > 1e-9) {
-        return Error{config.path + ": source.frame_rate_hz (" + std::to_string(spec.frame_rate_hz) +
-                     ") must be the trigger's rate_hz (" +
-                     std::to_string(live->options().settings.rate_hz) + ")"};
-      }
-      spec.realtime = sources.realtime = true;
-    }
+    if (live) spec.realtime = sources.realtime = true;  // paced by the generator's pulses
     auto made = drivers::MakeSimulatedRig(spec);
     if (!made) return Error{config.path + ": " + made.error()};
     sources.rig = std::move(*made);
@@ -136,6 +128,12 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
     if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
     progress << prefix << "camera '" << names[i] << "': " << (*device)->size()
              << " images listed in " << config.image_folders[i] << "\n";
+    const double rate = (*device)->frame_rate_hz();
+    if (live && std::abs(rate - live->options().settings.rate_hz) > 0.01 * rate) {
+      return Error{config.path + ": camera '" + names[i] + "': its images come at " +
+                   std::to_string(rate) + " Hz, not at the trigger's rate_hz " +
+                   std::to_string(live->options().settings.rate_hz)};
+    }
     sources.folders.push_back(device->get());
     if (replay_clock) {
       sources.devices.push_back(
@@ -153,6 +151,10 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
 Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
                                             const std::string& prefix, std::ostream& progress) {
   std::shared_ptr<drivers::LiveTriggerTimeline> live;
+  if (config.trigger && config.simulated_source && fast) {
+    return Error{config.path +
+                 ": trigger: a live generator paces the simulated rig: not with --fast"};
+  }
   if (config.trigger) {
     // Started before the cameras: an externally triggered camera sees no frame without it.
     auto started = drivers::LiveTriggerTimeline::Start(*config.trigger);
