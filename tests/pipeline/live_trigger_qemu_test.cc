@@ -65,7 +65,9 @@ TEST(LiveTriggerQemu, FramesCarryTheFirmwaresConsecutivePulses) {
   int64_t worst = 0;
   for (int k = 0; k < testing::kFrames; ++k) {
     EXPECT_EQ(seqs[0][k], seqs[1][k]) << "frame " << k;
-    if (k > 0) EXPECT_EQ(seqs[0][k], seqs[0][k - 1] + 1) << "frame " << k;
+    if (k > 0) {
+      EXPECT_EQ(seqs[0][k], seqs[0][k - 1] + 1) << "frame " << k;
+    }
     const int64_t off = times[k] - (times[0] + k * period_ns);
     sum2 += static_cast<double>(off) * static_cast<double>(off);
     worst = std::max(worst, std::abs(off));

@@ -63,7 +63,9 @@ TEST(LiveTrigger, ImageFolderFramesCarryConsecutivePulsesAndTheirMappedTimes) {
   EXPECT_EQ(sources->trigger->problem(), "");
   for (int k = 0; k < kFrames; ++k) {
     EXPECT_EQ(seqs[0][k], seqs[1][k]) << "frame " << k;
-    if (k > 0) EXPECT_EQ(seqs[0][k], seqs[0][k - 1] + 1) << "frame " << k;
+    if (k > 0) {
+      EXPECT_EQ(seqs[0][k], seqs[0][k - 1] + 1) << "frame " << k;
+    }
   }
   const double rms_us = std::sqrt(sum2 / (2.0 * kFrames)) * 1e-3;
   std::printf(
