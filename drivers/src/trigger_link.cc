@@ -90,12 +90,16 @@ Status TriggerLink::Poll(int timeout_ms, std::vector<TriggerEvent>* events) {
   if (!n) return Error{n.error()};
   const int64_t rx_ns = stream_->NowNs();
   for (size_t i = 0; i < *n; ++i) {
+    ++frame_bytes_;
     const trigger_proto::DecodeEvent e = decoder_.Push(buffer[i]);
     if (e == trigger_proto::DecodeEvent::kMessage) {
-      events->push_back({decoder_.message(), rx_ns});
+      // The frame's bytes and those read after it crossed the wire after the MCU stamped it.
+      const double wire_ns = uart_byte_ns_ * static_cast<double>(frame_bytes_ + (*n - 1 - i));
+      events->push_back({decoder_.message(), rx_ns - std::llround(wire_ns)});
     } else if (e != trigger_proto::DecodeEvent::kNone) {
       ModuleLogger("drivers")->debug("trigger link: dropped a frame ({})", static_cast<int>(e));
     }
+    if (buffer[i] == 0) frame_bytes_ = 0;  // the frame delimiter
   }
   return Status::Ok();
 }

@@ -209,6 +209,7 @@ int RunRecord(const RecordArgs& args) {
     record_extrinsics();
   }
   if (capture) capture->Stop();
+  if (sources->trigger) sources->trigger->Stop();  // after the cameras it exposes
   const Status stopped = recorder.Stop();
   const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
   const double cpu_percent = 100.0 * (tools::ProcessCpuSeconds() - cpu_start_s) / elapsed;
@@ -226,6 +227,7 @@ int RunRecord(const RecordArgs& args) {
     }
   }
   tools::ReportFolderProblems(sources->folders, kPrefix, std::cerr);
+  tools::ReportTrigger(*sources, kPrefix, std::cerr);
   if (!stopped.ok()) {
     std::cerr << kPrefix << stopped.message() << "\n";
     return kExitError;

@@ -208,8 +208,16 @@ int RunRun(const RunArgs& args) {
   auto last_status = start;
   tools::CpuMeter cpu;
   const int32_t capacity = config->online.sync.capacity * static_cast<int32_t>(names.size());
+  bool trigger_failure_told = false;
   while (!pipeline.Finished() && !stop_signal.flag().load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (sources->trigger && !trigger_failure_told) {
+      if (const std::string problem = sources->trigger->problem(); !problem.empty()) {
+        std::cerr << "rigcal run: trigger link failed: " << problem
+                  << " (frames now come without trigger pulses)\n";
+        trigger_failure_told = true;
+      }
+    }
     const auto now = std::chrono::steady_clock::now();
     const double elapsed = std::chrono::duration<double>(now - start).count();
     if (args.duration_s > 0 && elapsed >= args.duration_s) break;
@@ -226,6 +234,7 @@ int RunRun(const RunArgs& args) {
     }
   }
   pipeline.Stop();
+  if (sources->trigger) sources->trigger->Stop();  // after the cameras it exposes
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const tools::PipelineSnapshot final_state = pipeline.Snapshot();
@@ -243,6 +252,7 @@ int RunRun(const RunArgs& args) {
   }
   tools::ReportFolderProblems(sources->folders, "rigcal run: ", std::cerr);
   tools::ReportCaptureStats(sources->v4l2, "rigcal run: ", std::cerr);
+  tools::ReportTrigger(*sources, "rigcal run: ", std::cerr);
   std::fprintf(stderr, "rigcal run: %.1f s, %llu sets; RSS %.0f MB\n", elapsed,
                static_cast<unsigned long long>(final_state.estimate.sets),
                static_cast<double>(tools::ResidentSetBytes()) / (1 << 20));

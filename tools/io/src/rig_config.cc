@@ -8,6 +8,7 @@
 
 #include "rigcal/io/capture_source_yaml.h"
 #include "rigcal/io/config_sections.h"
+#include "rigcal/io/trigger_yaml.h"
 #include "rigcal/io/yaml_fields.h"
 
 namespace rigcal::tools {
@@ -16,7 +17,8 @@ namespace {
 constexpr double kQuaternionNormTolerance = 1e-3;  // hand-typed quaternions
 
 // Keys of a camera entry read here; the camera section parser reads the others.
-const std::set<std::string> kCameraOwnKeys = {"name", "nominal", "truth", "device", "capture"};
+const std::set<std::string> kCameraOwnKeys = {"name",   "nominal", "truth",
+                                              "device", "capture", "trigger"};
 
 Expected<Similarity> ParseMounting(const FieldReader& r, const YAML::Node& node,
                                    const std::string& field) {
@@ -271,8 +273,9 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
   if (!root) return Error{root.error()};
   const FieldReader r(path);
   if (!root->IsMap()) return r.Fail(*root, "(top level)", "expected a map with rig and cameras");
-  if (auto e = r.CheckKeys(*root, "",
-                           {"rig", "cameras", "estimator", "sync", "publish", "state", "source"})) {
+  if (auto e = r.CheckKeys(
+          *root, "",
+          {"rig", "cameras", "estimator", "sync", "publish", "state", "source", "trigger"})) {
     return *e;
   }
   RigConfig config;
@@ -375,10 +378,21 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
     }
   }
 
+  // The hardware trigger, once the source is known (its stamps and exposures).
+  std::vector<YAML::Node> entries;
+  for (size_t i = 0; i < config.cameras.size(); ++i) {
+    entries.push_back(cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)]);
+  }
+  std::string source_type;
+  auto finish = [&]() -> Expected<RigConfig> {
+    if (auto e = ReadRigTrigger(r, *root, entries, source_type, &config)) return *e;
+    return std::move(config);
+  };
   if (const YAML::Node source = (*root)["source"]) {
     if (!source.IsMap() || !source["type"]) return r.Fail(source, "source.type", "missing");
     auto type = r.String(source["type"], "source.type");
     if (!type) return Error{type.error()};
+    source_type = *type;
     if (*type == "image_folders") {
       if (auto e = r.CheckKeys(source, "source.", {"type"})) return *e;
       const std::filesystem::path base = std::filesystem::path(path).parent_path();
@@ -397,7 +411,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
         config.image_folders.push_back(folder.is_absolute() ? folder.string()
                                                             : (base / folder).string());
       }
-      return config;
+      return finish();
     }
     if (*type == "v4l2") {
       drivers::V4l2Options defaults;
@@ -424,7 +438,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
         }
         config.v4l2_devices.push_back(std::move(options));
       }
-      return config;
+      return finish();
     }
     if (*type == "libcamera") {
       drivers::LibcameraOptions defaults;
@@ -450,7 +464,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
         }
         config.libcamera_devices.push_back(std::move(options));
       }
-      return config;
+      return finish();
     }
     for (size_t i = 0; i < cameras.size(); ++i) {
       if (cameras[i].IsMap() && cameras[i]["capture"]) {
@@ -494,7 +508,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
     }
     config.simulated_source = std::move(*spec);
   }
-  return config;
+  return finish();
 }
 
 }  // namespace rigcal::tools

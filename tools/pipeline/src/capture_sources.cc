@@ -1,14 +1,29 @@
 #include "rigcal/pipeline/capture_sources.h"
 
 #include <chrono>
+#include <cmath>
 
+#include "paced_replay_device.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/triggered_camera.h"
+#include "rigcal/drivers/v4l2_timestamp.h"
 
 namespace rigcal::tools {
+namespace {
 
-Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
-                                            const std::string& prefix, std::ostream& progress) {
+// Frame 0 of a source paced from a live trigger (a simulated rig, an image-folder replay): the
+// first pulse at least this far ahead, so the cameras are ready for it.
+constexpr int64_t kPacedStartLeadNs = 300'000'000;
+constexpr int64_t kTriggerSyncTimeoutNs = 5'000'000'000;
+
+Expected<int64_t> PacedStart(const drivers::LiveTriggerTimeline& trigger) {
+  return trigger.NextTickAt(drivers::MonotonicNowNs() + kPacedStartLeadNs, kTriggerSyncTimeoutNs);
+}
+
+// The devices of the source; `live` is the started trigger generator (may be null).
+Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const std::string& prefix,
+                                     std::ostream& progress,
+                                     const drivers::LiveTriggerTimeline* live) {
   CaptureSources sources;
   const std::vector<std::string> names = config.CameraNames();
   if (config.simulated_source) {
@@ -30,11 +45,18 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
     }
     progress << prefix << "building the simulated rig (" << spec.names.size() << " cameras, "
              << drivers::ToString(spec.scene.type) << " scene)...\n";
+    if (live) spec.realtime = sources.realtime = true;  // paced by the generator's pulses
     auto made = drivers::MakeSimulatedRig(spec);
     if (!made) return Error{config.path + ": " + made.error()};
     sources.rig = std::move(*made);
     sources.devices = sources.rig->MakeDevices();
     sources.models = spec.cameras;
+    if (live) {
+      auto start = PacedStart(*live);
+      if (!start) return Error{config.path + ": " + start.error()};
+      sources.rig->StartAt(*start);
+      progress << prefix << "simulated rig paced by the trigger generator: frame 0 at its pulse\n";
+    }
     if (trigger) {
       if (spec.realtime) sources.rig->StartAt(trigger->first_tick_ns());
       for (size_t i = 0; i < sources.devices.size(); ++i) {
@@ -87,6 +109,15 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
     return Error{config.path +
                  ": no `source:` section (supported: simulated, image_folders, v4l2, libcamera)"};
   }
+  // With a live trigger the folders are replayed in real time from its next pulse.
+  std::shared_ptr<ReplayClock> replay_clock;
+  if (live) {
+    auto start = PacedStart(*live);
+    if (!start) return Error{config.path + ": " + start.error()};
+    replay_clock = std::make_shared<ReplayClock>(*start);
+    sources.realtime = true;
+    progress << prefix << "image folders replayed in real time from the trigger's next pulse\n";
+  }
   for (size_t i = 0; i < names.size(); ++i) {
     auto device =
         drivers::ImageFolderDevice::Open(config.image_folders[i], names[i], static_cast<int>(i));
@@ -97,11 +128,73 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
     if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
     progress << prefix << "camera '" << names[i] << "': " << (*device)->size()
              << " images listed in " << config.image_folders[i] << "\n";
+    const double rate = (*device)->frame_rate_hz();
+    if (live && std::abs(rate - live->options().settings.rate_hz) > 0.01 * rate) {
+      return Error{config.path + ": camera '" + names[i] + "': its images come at " +
+                   std::to_string(rate) + " Hz, not at the trigger's rate_hz " +
+                   std::to_string(live->options().settings.rate_hz)};
+    }
     sources.folders.push_back(device->get());
-    sources.devices.push_back(std::move(*device));
+    if (replay_clock) {
+      sources.devices.push_back(
+          std::make_unique<PacedReplayDevice>(std::move(*device), replay_clock));
+    } else {
+      sources.devices.push_back(std::move(*device));
+    }
     sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
   }
   return sources;
+}
+
+}  // namespace
+
+Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
+                                            const std::string& prefix, std::ostream& progress) {
+  std::shared_ptr<drivers::LiveTriggerTimeline> live;
+  if (config.trigger && config.simulated_source && fast) {
+    return Error{config.path +
+                 ": trigger: a live generator paces the simulated rig: not with --fast"};
+  }
+  if (config.trigger) {
+    // Started before the cameras: an externally triggered camera sees no frame without it.
+    auto started = drivers::LiveTriggerTimeline::Start(*config.trigger);
+    if (!started) return Error{config.path + ": trigger: " + started.error()};
+    live = std::move(*started);
+    progress << prefix << "trigger generator on " << live->port() << ": "
+             << config.trigger->settings.rate_hz << " Hz, " << config.trigger->settings.lines.size()
+             << " line(s)\n";
+  }
+  auto sources = OpenDevices(config, fast, prefix, progress, live.get());
+  if (!sources) return sources;
+  if (live) {
+    const std::vector<std::string> names = config.CameraNames();
+    for (size_t i = 0; i < sources->devices.size(); ++i) {
+      if (!config.camera_triggers[i]) continue;
+      auto camera = std::make_unique<drivers::TriggeredCamera>(std::move(sources->devices[i]), live,
+                                                               *config.camera_triggers[i]);
+      sources->triggered.push_back(camera.get());
+      sources->devices[i] = std::move(camera);
+      progress << prefix << "camera '" << names[i] << "': trigger line "
+               << config.camera_triggers[i]->line << "\n";
+    }
+    sources->trigger = std::move(live);
+  }
+  return sources;
+}
+
+void ReportTrigger(const CaptureSources& sources, const std::string& prefix, std::ostream& out) {
+  if (!sources.trigger) return;
+  const drivers::TriggerMatcherStats s = sources.trigger->matcher().stats();
+  out << prefix << "trigger generator on " << sources.trigger->port() << ": " << s.pulses
+      << " pulses, " << s.heartbeats << " heartbeats, " << s.seq_gaps << " missing pulses, "
+      << s.mcu_resets << " MCU resets, clock drift " << s.drift_ppm << " ppm\n";
+  if (const std::string problem = sources.trigger->problem(); !problem.empty()) {
+    out << prefix << "trigger link failed: " << problem << "\n";
+  }
+  for (const drivers::TriggeredCamera* camera : sources.triggered) {
+    out << prefix << "camera '" << camera->name() << "': " << camera->matched()
+        << " frames with their trigger pulse, " << camera->unmatched() << " without\n";
+  }
 }
 
 void ReportFolderProblems(const std::vector<drivers::ImageFolderDevice*>& folders,

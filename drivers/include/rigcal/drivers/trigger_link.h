@@ -20,7 +20,7 @@ namespace rigcal::drivers {
 namespace trigger_proto = ::rigcal::trigger_protocol;
 
 // One received message and when the read that completed it returned (ByteStream::NowNs, host
-// CLOCK_MONOTONIC ns).
+// CLOCK_MONOTONIC ns), less its UART wire time when the link has one (set_uart_byte_ns).
 struct TriggerEvent {
   trigger_proto::Message message;
   int64_t rx_ns = 0;
@@ -59,6 +59,14 @@ class TriggerLink {
   Status Apply(const TriggerSettings& settings, int timeout_ms, std::vector<TriggerEvent>* events);
   Status Stop(int timeout_ms, std::vector<TriggerEvent>* events);
 
+  // The reports cross a UART whose bytes take `byte_ns` each (10 bits: 1e10 / baud; 0 = no
+  // UART, the default). The MCU stamps a message before its first byte leaves, and the bytes
+  // of a read crossed the wire one after another before the read returned, so a message
+  // completed at byte i of an n-byte read, whose frame is L bytes long, is stamped
+  // rx - (L + n - 1 - i) * byte_ns: still never before its MCU time, and without the wire time
+  // (1.6 ms for a pulse report at 115200 baud) that would otherwise bias the clock map late.
+  void set_uart_byte_ns(double byte_ns) { uart_byte_ns_ = byte_ns; }
+
   const trigger_proto::DecoderStats& stats() const { return decoder_.stats(); }
   ByteStream& stream() { return *stream_; }
 
@@ -66,6 +74,8 @@ class TriggerLink {
   std::unique_ptr<ByteStream> stream_;
   trigger_proto::MessageDecoder decoder_;
   uint16_t next_command_id_ = 1;
+  double uart_byte_ns_ = 0.0;
+  size_t frame_bytes_ = 0;  // bytes of the frame being received (since the last delimiter)
 };
 
 // "SetLine", "Start", ...; "type 0x7f" for unknown ones.

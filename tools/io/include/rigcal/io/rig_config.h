@@ -12,6 +12,7 @@
 #include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/libcamera_device.h"
+#include "rigcal/drivers/live_trigger_timeline.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/drivers/v4l2_options.h"
 
@@ -55,6 +56,13 @@ struct RigConfig {
   std::vector<drivers::V4l2Options> v4l2_devices;
   // `source: {type: libcamera}`: the same with the camera's `device` as the libcamera camera.
   std::vector<drivers::LibcameraOptions> libcamera_devices;
+  // `trigger:`: a trigger generator on a serial port, with one line per line named by the
+  // cameras' `trigger:` entries (config/README.md "Hardware trigger"); unset without one.
+  std::optional<drivers::LiveTriggerOptions> trigger;
+  // With `trigger:`, camera index order: how each camera hangs on the generator (its line, that
+  // line's phase offset, where its source stamps a frame relative to the exposure centre);
+  // nullopt for a camera without a `trigger:` entry (free-running).
+  std::vector<std::optional<drivers::CameraTriggerSpec>> camera_triggers;
 
   std::vector<std::string> CameraNames() const;
   const std::string& master() const { return cameras.front().name; }

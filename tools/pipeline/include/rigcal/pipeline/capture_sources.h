@@ -13,7 +13,9 @@
 #include "rigcal/camera/camera_model.h"
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/drivers/image_folder_device.h"
+#include "rigcal/drivers/live_trigger_timeline.h"
 #include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/drivers/triggered_camera.h"
 #include "rigcal/drivers/v4l2_device.h"
 #include "rigcal/io/rig_config.h"
 
@@ -27,9 +29,17 @@ struct CaptureSources {
   std::vector<drivers::V4l2Device*> v4l2;            // not owned: the V4L2 devices
   std::optional<drivers::SimulatedRig> rig;          // the simulated source, when it is one
   bool realtime = false;  // the devices pace themselves in real time (a live source)
+  // The config's `trigger:` generator, started before the devices were opened; the caller stops
+  // it after the devices (Stop), and reports its problem() (ReportTrigger).
+  std::shared_ptr<drivers::LiveTriggerTimeline> trigger;
+  std::vector<drivers::TriggeredCamera*> triggered;  // not owned: the triggered cameras
 };
 
 // Opens the devices of `config`'s source. `fast`: do not pace a simulated rig in real time.
+// With a `trigger:` section the generator is started first (an error names its port) and every
+// camera with a `trigger:` entry is wrapped in a TriggeredCamera (frames carry the pulse's
+// sequence and mapped exposure centre); a simulated rig then runs in real time with frame 0 at
+// the next pulse (not with `fast`; its frame rate must be the trigger's).
 // What is opened goes to `progress` as lines starting with `prefix` ("rigcal run: camera 'cam0':
 // 95 images listed in ..."). Errors name the config file and the camera; a config without a
 // source says which sources exist.
@@ -40,6 +50,11 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
 // starting with `prefix`.
 void ReportFolderProblems(const std::vector<drivers::ImageFolderDevice*>& folders,
                           const std::string& prefix, std::ostream& out);
+
+// The end-of-run report of the trigger generator: pulses, MCU resets, sequence gaps and the
+// drift of its clock, the link's problem if it failed, and per triggered camera the frames that
+// got their pulse and those that did not; lines starting with `prefix`. Nothing without one.
+void ReportTrigger(const CaptureSources& sources, const std::string& prefix, std::ostream& out);
 
 // The end-of-run report of live V4L2 devices: frames, sequence drops, erroneous buffers, device
 // losses and reconnections, one line per camera starting with `prefix`.

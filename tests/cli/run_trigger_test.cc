@@ -1,0 +1,129 @@
+// `rigcal run` with a live trigger generator: the built binary on a simulated rig whose
+// `trigger.port` is a pseudo-terminal with a generator speaking the firmware's protocol at the
+// other end (pipeline/fake_trigger_generator.h). The rig runs in real time from the next pulse,
+// every frame gets its pulse, the poses are stamped at the pulses' true times, and the summary
+// reports the generator; when the generator dies mid-run the run says so and still ends.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "cli/command_test.h"
+#include "pipeline/fake_trigger_generator.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using RunTriggerTest = rigcal::cli_test::CommandTest;
+using rigcal::cli_test::RunResult;
+
+constexpr int64_t kPeriodNs = 50'000'000;
+
+std::string RigConfig(const std::string& port) {
+  const std::string camera =
+      "    model: pinhole\n    resolution: [320, 240]\n    intrinsics: [200, 200, 159.5, 119.5]\n";
+  return "rig: {name: triggered, master: cam0}\n"
+         "trigger: {port: " +
+         port +
+         ", rate_hz: 20, heartbeat_ms: 50, uart_wire: false}\n"
+         "cameras:\n"
+         "  - name: cam0\n" +
+         camera +
+         "    trigger: {line: 0}\n"
+         "  - name: cam1\n" +
+         camera +
+         "    truth: {q_wxyz: [0.70710678118654752, 0, 0.70710678118654752, 0], C: [0.5, 0, 0]}\n"
+         "    trigger: {line: 1}\n"
+         "source:\n"
+         "  type: simulated\n"
+         "  realtime: true\n"
+         "  frame_rate_hz: 20\n"
+         "  num_frames: 100\n"
+         "  scene: {type: room, size: [20, 16, 6], boxes: 10}\n"
+         "  trajectory:\n"
+         "    waypoint_interval_s: 2\n"
+         "    waypoints:\n"
+         "      - {p: [-3.0, 0.0, 3.0], ypr_deg: [0, 0, 0]}\n"
+         "      - {p: [-2.3, 0.8, 3.2], ypr_deg: [20, -10, 8]}\n"
+         "      - {p: [-1.4, 1.5, 3.0], ypr_deg: [38, 5, -6]}\n"
+         "      - {p: [-0.4, 1.2, 2.8], ypr_deg: [15, 15, -15]}\n";
+}
+
+TEST_F(RunTriggerTest, FramesOfASimulatedRigCarryTheGeneratorsPulses) {
+  rigcal::testing::FakeTriggerGenerator generator;
+  std::string error;
+  ASSERT_TRUE(generator.Open(&error)) << error;
+  generator.Start();
+  const std::string config = Path("rig.yaml");
+  std::ofstream(config) << RigConfig(generator.slave_path());
+  const RunResult r = Run("run --config '" + config + "' --status-every 0 --poses-out '" +
+                          Path("poses") + "' --out '" + Path("result.yaml") + "'");
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.err;
+  EXPECT_NE(r.err.find("trigger generator on " + generator.slave_path() + ": 20 Hz, 2 line(s)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("simulated rig paced by the trigger generator"), std::string::npos) << r.err;
+  for (const char* camera : {"cam0", "cam1"}) {
+    const std::string line = std::string("camera '") + camera + "': ";
+    const size_t at = r.err.find(line, r.err.find(" MCU resets, clock drift "));
+    ASSERT_NE(at, std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("frames with their trigger pulse, 0 without", at), std::string::npos)
+        << r.err;
+  }
+  EXPECT_EQ(r.err.find("trigger link failed"), std::string::npos) << r.err;
+  // Every pose is stamped at a pulse's true time (within the matcher's 5 ms; in fact < 1 ms).
+  const int64_t pulse0 = generator.TrueHostNs(0);
+  int poses = 0;
+  double worst_us = 0;
+  for (const char* camera : {"cam0", "cam1"}) {
+    std::ifstream in(fs::path(Path("poses")) / (std::string(camera) + ".txt"));
+    std::string row;
+    while (std::getline(in, row)) {
+      if (row.empty() || row[0] == '#') continue;
+      const int64_t t_ns = std::stoll(row.substr(0, row.find(' ')));
+      const int64_t off = ((t_ns - pulse0) % kPeriodNs + kPeriodNs) % kPeriodNs;
+      worst_us = std::max(worst_us, std::min(off, kPeriodNs - off) * 1e-3);
+      ++poses;
+    }
+  }
+  std::printf("rigcal run with a live trigger: %d poses, worst |stamp - true pulse| %.0f us\n",
+              poses, worst_us);
+  EXPECT_GT(poses, 20);
+  EXPECT_LT(worst_us, 1000.0);
+}
+
+TEST_F(RunTriggerTest, AGeneratorThatDiesMidRunIsReported) {
+  rigcal::testing::FakeTriggerGenerator generator;
+  std::string error;
+  ASSERT_TRUE(generator.Open(&error)) << error;
+  generator.Start();
+  const std::string port = generator.slave_path();
+  const std::string config = Path("rig.yaml");
+  std::ofstream(config) << RigConfig(port);
+  std::thread killer([&generator] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+    generator.Stop();  // closes the pty: the host's reads fail
+  });
+  const RunResult r =
+      Run("run --config '" + config + "' --status-every 0 --out '" + Path("result.yaml") + "'");
+  killer.join();
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.err;
+  EXPECT_NE(r.err.find("trigger link failed: " + port), std::string::npos) << r.err;
+}
+
+TEST_F(RunTriggerTest, ADeadPortStopsTheRunNamingIt) {
+  const std::string config = Path("rig.yaml");
+  std::ofstream(config) << RigConfig("/dev/rigcal-no-such-tty");
+  const RunResult r = Run("run --config '" + config + "' --status-every 0");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("trigger: trigger generator: /dev/rigcal-no-such-tty: open"),
+            std::string::npos)
+      << r.err;
+}
+
+}  // namespace
