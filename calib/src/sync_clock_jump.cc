@@ -12,7 +12,7 @@ namespace rigcal {
 namespace {
 
 // Poses in a row at a steady rate on a new timeline that make it followed.
-constexpr int kNewClockPoses = 20;
+constexpr int kNewClockPoses = 10;
 // Weight of a new sample in the camera's smoothed lead over the master.
 constexpr double kLeadGain = 1.0 / 8.0;
 

@@ -18,6 +18,9 @@ SyncKey KeyOf(const CameraPose& p) { return {p.t_ns, p.trigger_seq}; }
 
 // Poses in a row on a jumped timeline that make the jump accepted.
 constexpr int kJumpConfirmations = 5;
+// Frame intervals ahead of its own rate (and of the other cameras) that make a stamp of a camera
+// that follows clock jumps a step of its clock.
+constexpr int64_t kFollowedGapIntervals = 6;
 // Accepted poses in a row that end a burst of rejected stamps (its one warning).
 constexpr int kQuietPoses = 50;
 
@@ -148,8 +151,11 @@ bool SyncBuffer::Impl::ClockGlitch(const CameraPose& pose) {
     // Against the camera's own recent rate, confirmed by the other cameras' clocks.
     const int64_t interval = RecentInterval(pose.camera);
     const int64_t others = OthersNewest(pose.camera);
+    // A camera that follows clock jumps: a step of its clock beyond a few of its frame
+    // intervals is one (sync_clock_jump.cc); others: a second at 20 Hz.
+    const int64_t own_gap = (follows_[pose.camera] ? kFollowedGapIntervals : 20) * interval;
     ahead = interval > 0 && others != kNoStamp &&
-            pose.t_ns - cam.newest_t > std::max(20 * interval, max_wait_ns_) &&
+            pose.t_ns - cam.newest_t > std::max(own_gap, max_wait_ns_) &&
             SaturatedSub(t, others) > max_wait_ns_;
   }
   if (!ahead) {

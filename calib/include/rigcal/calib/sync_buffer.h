@@ -61,8 +61,9 @@
 //  * more than the glitch horizon (max(2 s, 10 * max_wait)) ahead of the newest stamp of every
 //    camera (up to INT64_MAX), or
 //  * ahead of its camera's own recent rate (more than max(20 of its recent frame intervals,
-//    max_wait) after its newest stamp) while also more than max_wait ahead of every other
-//    camera's newest stamp (a clock that stepped by a second), or
+//    max_wait) after its newest stamp; 6 intervals for a slave that follows clock jumps) while
+//    also more than max_wait ahead of every other camera's newest stamp (a clock that stepped
+//    by a second), or
 //  * more than the glitch horizon behind its camera's newest stamp or the newest stamp of any
 //    camera (a stamp from the past).
 // One such stamp would otherwise make every later pose of the camera out of order and time out
@@ -79,7 +80,7 @@
 // (clock glitch, out of order, duplicate, or consumed before a resume) start a run on a NEW
 // timeline of the camera: each next rejected pose continues the run when it lies after the
 // previous one by between half and three of the camera's recent frame intervals (a steady
-// rate). When the run holds kNewClockPoses (20)
+// rate). When the run holds kNewClockPoses (10)
 // poses and the master advanced by at least half the run's span meanwhile (the new clock runs
 // with the master's: not a replay of old data, which the master would share), the new timeline
 // is followed: the camera's ring is emptied (its entries counted used or never_matched), its
@@ -87,8 +88,9 @@
 // the camera's lead over the master before the step), the jump is counted (clock_jumps, a
 // ClockJump record) and warned about once, and the run's last pose is accepted. An accepted pose
 // on the old timeline ends a run: isolated glitches, bursts of them at no steady rate, and old
-// data replayed by every camera stay rejected. Jumps within 20 frame intervals ahead or fewer
-// than 20 frames back stay on the old timeline here: the ClockOffsetTracker finds those.
+// data replayed by every camera stay rejected. Steps of at most 6 frame intervals ahead or
+// fewer than 10 frames back stay on the old timeline here: the ClockOffsetTracker finds those
+// (it searches ± its search window, 0.5 s, around the last offset).
 //
 // Resume: SkipConsumed(t) makes every pose of camera c stamped at or before t[c] kConsumed (the
 // estimator took it before a restart), so replaying the same data after a resume adds nothing.
