@@ -15,10 +15,11 @@
 //     row that disagree with the prediction by more than jump_sigmas (innovation σ) and
 //     jump_min_s, or that lie at the end of the searched interval, or windows whose slave poses
 //     end before the predicted instants although the master is a window further and the slave
-//     kept delivering (its clock stepped back), are a jump; it is logged as
-//     a warning and the offset is estimated afresh from the poses after it (step 1, searched
-//     within ± search_window_s around the last offset; larger steps are the SyncBuffer's:
-//     4.);
+//     kept delivering (its clock stepped back), are a jump (counted when a measurement had
+//     confirmed the offset, not when a (re)initialisation failed); it is logged as a warning
+//     and the offset is estimated afresh from the poses after the first disagreeing window
+//     (step 1, searched within ± search_window_s around the last offset; larger steps are the
+//     SyncBuffer's: 4.);
 //  4. re-acquired after a restart of the slave's clock that the SyncBuffer followed (a step
 //     beyond what step 3 can search, e.g. stamps that restart near 0; FollowClockJump): the
 //     slave's poses on the old clock are forgotten and step 1 runs on the new ones, searched
@@ -49,8 +50,10 @@ struct ClockOffsetOptions {
   // Per slave (one entry each, or empty = every slave estimated): nullopt = estimated from the
   // data, a value = the given offset [s], held.
   std::vector<std::optional<double>> given_s;
-  double init_window_s = 8.0;     // poses correlated for the initial estimate, > 2 s
-  double search_window_s = 0.5;   // the initial offset is searched within ± this, > 0
+  double init_window_s = 8.0;  // poses correlated for the initial estimate, > 2 s
+  // The offset is searched within ± this (around 0 at the start, around the last offset after
+  // a jump, around the step after a followed clock restart), > 0.
+  double search_window_s = 0.5;
   double measure_window_s = 2.0;  // one refinement measurement per this much master time, > 0
   double motion_span_s = 0.5;     // span of the motions of a measurement, > 0
   // Kalman filter: prior σ of the drift rate and its random walk, random walk of τ.
