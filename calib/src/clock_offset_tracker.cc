@@ -250,9 +250,9 @@ bool ClockOffsetTracker::Outlier(int i, int64_t from_ns, double measured_s, doub
                                  double sigma_s) {
   Slave& s = slaves_[i];
   const auto log = ModuleLogger("calib");
-  // The jump lies before the end of the first window that disagrees: the poses after that end
-  // are on the new clock.
-  if (s.outliers++ == 0) s.first_outlier_ns = from_ns + Ns(options_.measure_window_s);
+  // The re-initialisation starts at the first window that disagrees: its poses before the jump
+  // are few, and the jump's spike in the angular speed is capped (clock_offset.cc).
+  if (s.outliers++ == 0) s.first_outlier_ns = from_ns;
   log->debug("time offset of '{}': measured {:.6f} s, predicted {:.6f} ± {:.2g} s ({} in a row)",
              names_[i + 1], measured_s, predicted_s, sigma_s, s.outliers);
   if (s.outliers < options_.jump_confirmations) return true;

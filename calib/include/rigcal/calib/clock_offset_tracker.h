@@ -17,7 +17,7 @@
 //     end before the predicted instants although the master is a window further and the slave
 //     kept delivering (its clock stepped back), are a jump (counted when a measurement had
 //     confirmed the offset, not when a (re)initialisation failed); it is logged as a warning
-//     and the offset is estimated afresh from the poses after the first disagreeing window
+//     and the offset is estimated afresh from the poses since the first disagreeing window
 //     (step 1, searched within ± search_window_s around the last offset; larger steps are the
 //     SyncBuffer's: 4.);
 //  4. re-acquired after a restart of the slave's clock that the SyncBuffer followed (a step
