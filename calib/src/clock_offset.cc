@@ -41,6 +41,24 @@ struct AngularSpeed {
   }
 };
 
+// Caps the samples beyond kSpikeMads robust σ (1.4826 MAD) above the median: a pose glitch, or a
+// jump of the clock between two poses (the rotation of a second attributed to one frame
+// interval), would otherwise dominate the correlation.
+constexpr double kSpikeMads = 6.0;
+void ClipSpikes(std::vector<double>* w) {
+  if (w->size() < 5) return;
+  std::vector<double> sorted = *w;
+  const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), mid, sorted.end());
+  const double median = *mid;
+  for (double& v : sorted) v = std::abs(v - median);
+  std::nth_element(sorted.begin(), mid, sorted.end());
+  const double mad = *mid;
+  if (!(mad > 0.0)) return;
+  const double cap = median + kSpikeMads * 1.4826 * mad;
+  for (double& v : *w) v = std::min(v, cap);
+}
+
 AngularSpeed AngularSpeedOf(const TimedTrajectory& tr, int64_t origin_ns) {
   AngularSpeed out;
   const double interval = static_cast<double>(MedianInterval(tr.t_ns)) * 1e-9;
@@ -52,6 +70,7 @@ AngularSpeed AngularSpeedOf(const TimedTrajectory& tr, int64_t origin_ns) {
     out.t.push_back(0.5 * (Seconds(tr.t_ns[i], origin_ns) + Seconds(tr.t_ns[i + 1], origin_ns)));
     out.w.push_back(RotationAngle(tr.poses[i].q.conjugate() * tr.poses[i + 1].q) / dt);
   }
+  ClipSpikes(&out.w);
   return out;
 }
 
@@ -122,7 +141,7 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
   std::vector<std::optional<double>> c(2 * static_cast<size_t>(lags) + 1);
   std::vector<double> a, b;
   for (int i = -lags; i <= lags; ++i) {
-    const double tau = i * h;
+    const double tau = options.center_s + i * h;
     a.clear(), b.clear();
     for (size_t g = 0; g < grid_t.size(); ++g) {
       if (const auto w = ws.At(grid_t[g] + tau)) a.push_back(grid_w[g]), b.push_back(*w);
@@ -136,7 +155,8 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
   }
   if (!best) {
     return Error{Named(slave) + "master and slave overlap by less than " +
-                 SignificantText(options.min_overlap_s, 6) + " s at every offset within ±" +
+                 SignificantText(options.min_overlap_s, 6) + " s at every offset within " +
+                 (options.center_s == 0.0 ? "" : SignificantText(options.center_s, 9) + " ") + "±" +
                  SignificantText(options.search_window_s, 6) + " s (master " +
                  SignificantText(Seconds(master.t_ns.front(), 0), 12) + ".." +
                  SignificantText(Seconds(master.t_ns.back(), 0), 12) + " s, slave " +
@@ -151,7 +171,7 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
     const double denominator = lo - 2.0 * mid + hi;
     if (denominator < 0.0) delta = std::clamp(0.5 * (lo - hi) / denominator, -0.5, 0.5);
   }
-  out.offset_s = (static_cast<double>(*best) - lags + delta) * h;
+  out.offset_s = options.center_s + (static_cast<double>(*best) - lags + delta) * h;
   return out;
 }
 

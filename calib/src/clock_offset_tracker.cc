@@ -80,6 +80,13 @@ struct ClockOffsetTracker::Slave {
   int measurements = 0;
   int jumps = 0;
   int64_t usable_from_ns = 0;
+  bool ever_initialised = false;
+  // The (re)initialisation searches within ± search_s around prior_s.
+  double prior_s = 0.0;
+  double search_s = 0.0;
+  // The slave's newest stamp when its poses were first seen to end before the predicted
+  // instants of a window the master had passed (-1: not lagging).
+  int64_t lag_slave_ns = -1;
 };
 
 ClockOffsetTracker::ClockOffsetTracker(std::vector<std::string> camera_names,
@@ -89,6 +96,7 @@ ClockOffsetTracker::ClockOffsetTracker(std::vector<std::string> camera_names,
   const size_t n = names_.empty() ? 0 : names_.size() - 1;
   slaves_.resize(n);
   for (size_t i = 0; i < n; ++i) {
+    slaves_[i].search_s = options_.search_window_s;
     if (i < options_.given_s.size() && options_.given_s[i]) {
       slaves_[i].estimated = false;
       slaves_[i].initialised = true;
@@ -143,12 +151,13 @@ bool ClockOffsetTracker::Initialise(int i) {
   const int64_t from = std::max(s.since_ns, master.front().t_ns);
   const int64_t newest = master.back().t_ns;
   if (newest - from < Ns(options_.init_window_s)) return false;
-  const int64_t margin = Ns(options_.search_window_s);
+  const int64_t margin = Ns(s.search_s);
   const TimedTrajectory m = Window(master, names_[0], from, newest);
-  const TimedTrajectory sl =
-      Window(slave, names_[i + 1], from - margin, std::numeric_limits<int64_t>::max());
+  const TimedTrajectory sl = Window(slave, names_[i + 1], from + Ns(s.prior_s) - margin,
+                                    std::numeric_limits<int64_t>::max());
   TimeOffsetOptions o;
-  o.search_window_s = options_.search_window_s;
+  o.search_window_s = s.search_s;
+  o.center_s = s.prior_s;
   o.min_overlap_s = std::min(2.0, 0.5 * options_.init_window_s);
   const auto correlated = CorrelateAngularSpeed(m, sl, o);
   if (!correlated) {
@@ -159,6 +168,7 @@ bool ClockOffsetTracker::Initialise(int i) {
   // The correlation's grid is half a frame interval: its error is within a quarter of one.
   const double h = 0.5 * S(std::min(MedianInterval(m.t_ns), MedianInterval(sl.t_ns)));
   s.initialised = true;
+  s.ever_initialised = true;
   s.x << correlated->offset_s, 0.0;
   s.P.setZero();
   s.P(0, 0) = std::pow(0.5 * h, 2);
@@ -196,36 +206,35 @@ bool ClockOffsetTracker::Measure(int i) {
   Q << qr * adt * adt * adt / 3.0 + qt * adt, qr * adt * adt / 2.0, qr * adt * adt / 2.0, qr * adt;
   const Eigen::Matrix2d P = F * s.P * F.transpose() + Q;
   const double half_width = std::max(S(frame), 5.0 * std::sqrt(P(0, 0)));
-  if (master.back().t_ns < needed || slave.back().t_ns - Ns(x(0) + half_width) < needed)
-    return false;
+  if (master.back().t_ns < needed) return false;
+  if (slave.back().t_ns - Ns(x(0) + half_width) < needed) {
+    // The slave's poses end before the predicted instants: wait for them, unless the master is
+    // a whole window further and the slave delivered half a window of poses meanwhile (its
+    // clock stepped back: an outlier window; a camera that stopped is only waited for).
+    if (master.back().t_ns < needed + Ns(options_.measure_window_s)) return false;
+    if (s.lag_slave_ns < 0) s.lag_slave_ns = slave.back().t_ns;
+    if (slave.back().t_ns - s.lag_slave_ns < Ns(options_.measure_window_s) / 2) return false;
+    s.lag_slave_ns = -1;
+    s.next_from_ns = to;
+    const double behind = S(needed - slave.back().t_ns) + x(0);
+    return Outlier(i, from, -behind, x(0), std::sqrt(P(0, 0)));
+  }
+  s.lag_slave_ns = -1;
   s.next_from_ns = to;
   const TimedTrajectory m = Window(master, names_[0], from - frame, needed);
   const TimedTrajectory sl = Window(slave, names_[i + 1], from + Ns(x(0) - half_width) - 3 * frame,
                                     needed + Ns(x(0) + half_width) + 3 * frame);
   const auto z = MeasureOffsetFromAngles(m, sl, from, to, x(0), half_width, options_.motion_span_s);
+  // The minimum at an end of the searched interval: the offset lies beyond it, however poorly
+  // the window determines where.
+  if (z && z->at_bound) return Outlier(i, from, z->offset_s, x(0), std::sqrt(P(0, 0)));
   // No information in this window (too few motions, too little angular acceleration).
   if (!z || !std::isfinite(z->std_s) || z->std_s > half_width / 3.0) return true;
   const double r = z->std_s * z->std_s;
   const double nu = z->offset_s - x(0);
   const double sigma = std::sqrt(P(0, 0) + r);
-  const auto log = ModuleLogger("calib");
-  if (z->at_bound ||
-      (std::abs(nu) > options_.jump_sigmas * sigma && std::abs(nu) > options_.jump_min_s)) {
-    if (s.outliers++ == 0) s.first_outlier_ns = from;
-    log->debug("time offset of '{}': measured {:.6f} s, predicted {:.6f} ± {:.2g} s ({} in a row)",
-               names_[i + 1], z->offset_s, x(0), sigma, s.outliers);
-    if (s.outliers >= options_.jump_confirmations) {
-      ++s.jumps;
-      log->warn(
-          "time offset of '{}' jumped: measured {:.6f} s where {:.6f} ± {:.2g} s was predicted "
-          "({} windows in a row; camera restarted?): re-estimating it from the poses since then",
-          names_[i + 1], z->offset_s, x(0), sigma, s.outliers);
-      s.initialised = false;
-      s.since_ns = s.first_outlier_ns;
-      s.outliers = 0;
-      return false;
-    }
-    return true;
+  if (std::abs(nu) > options_.jump_sigmas * sigma && std::abs(nu) > options_.jump_min_s) {
+    return Outlier(i, from, z->offset_s, x(0), sigma);
   }
   s.outliers = 0;
   // Kalman update with H = [1 0].
@@ -235,6 +244,31 @@ bool ClockOffsetTracker::Measure(int i) {
   s.t_ns = from + (to - from) / 2;
   if (s.measurements++ == 0) s.usable_from_ns = master.back().t_ns;
   return true;
+}
+
+bool ClockOffsetTracker::Outlier(int i, int64_t from_ns, double measured_s, double predicted_s,
+                                 double sigma_s) {
+  Slave& s = slaves_[i];
+  const auto log = ModuleLogger("calib");
+  // The re-initialisation starts at the first window that disagrees: its poses before the jump
+  // are few, and the jump's spike in the angular speed is capped (clock_offset.cc).
+  if (s.outliers++ == 0) s.first_outlier_ns = from_ns;
+  log->debug("time offset of '{}': measured {:.6f} s, predicted {:.6f} ± {:.2g} s ({} in a row)",
+             names_[i + 1], measured_s, predicted_s, sigma_s, s.outliers);
+  if (s.outliers < options_.jump_confirmations) return true;
+  // A jump of an offset the measurements confirmed (not a failed (re)initialisation).
+  if (s.measurements > 0) ++s.jumps;
+  log->warn(
+      "time offset of '{}' jumped: measured {:.6f} s where {:.6f} ± {:.2g} s was predicted ({} "
+      "windows in a row; camera restarted?): re-estimating it from the poses since then",
+      names_[i + 1], measured_s, predicted_s, sigma_s, s.outliers);
+  s.initialised = false;
+  s.since_ns = s.first_outlier_ns;
+  s.outliers = 0;
+  s.lag_slave_ns = -1;
+  s.prior_s = predicted_s;
+  s.search_s = options_.search_window_s;
+  return false;
 }
 
 SlaveClockOffset ClockOffsetTracker::SlaveOffset(int i) const {
@@ -268,8 +302,74 @@ SlaveClockOffset ClockOffsetTracker::SlaveOffset(int i) const {
 
 int64_t ClockOffsetTracker::MatchingOffsetNs(int i) const {
   const Slave& s = slaves_[i];
-  if (!s.initialised) return 0;
+  if (!s.initialised) return Ns(s.prior_s);
   return Ns(SlaveOffset(i).offset_s);
+}
+
+std::vector<ClockOffsetState> ClockOffsetTracker::SaveState() const {
+  std::vector<ClockOffsetState> out(slaves_.size());
+  for (size_t i = 0; i < slaves_.size(); ++i) {
+    const Slave& s = slaves_[i];
+    if (!s.estimated) continue;
+    ClockOffsetState& o = out[i];
+    o.initialised = s.initialised;
+    o.jumps = s.jumps;
+    if (!s.initialised) continue;
+    o.offset_s = s.x(0);
+    o.drift = s.x(1);
+    o.covariance = s.P;
+    o.t_ns = s.t_ns;
+    o.measurements = s.measurements;
+  }
+  return out;
+}
+
+Status ClockOffsetTracker::RestoreState(const std::vector<ClockOffsetState>& states) {
+  if (states.size() != slaves_.size()) {
+    return Error{"clock offsets: " + std::to_string(states.size()) + " saved, the rig has " +
+                 std::to_string(slaves_.size()) + " slaves"};
+  }
+  for (size_t i = 0; i < states.size(); ++i) {
+    const ClockOffsetState& o = states[i];
+    if (!std::isfinite(o.offset_s) || !std::isfinite(o.drift) || !o.covariance.allFinite() ||
+        o.covariance(0, 0) < 0.0 || o.covariance(1, 1) < 0.0 || o.measurements < 0 || o.jumps < 0) {
+      return Error{"clock offset of '" + names_[i + 1] + "': a non-finite or negative value"};
+    }
+  }
+  for (size_t i = 0; i < states.size(); ++i) {
+    Slave& s = slaves_[i];
+    const ClockOffsetState& o = states[i];
+    if (!s.estimated) continue;
+    s.jumps = o.jumps;
+    s.ever_initialised = o.initialised || o.jumps > 0;
+    if (!o.initialised) continue;
+    s.initialised = true;
+    s.x << o.offset_s, o.drift;
+    s.P = o.covariance;
+    s.t_ns = o.t_ns;
+    s.measurements = o.measurements;
+    s.next_from_ns = 0;  // measurements go on from the first master pose after the restart
+    s.usable_from_ns = 0;
+    s.prior_s = o.offset_s;
+  }
+  return Status::Ok();
+}
+
+void ClockOffsetTracker::FollowClockJump(int i, double prior_s) {
+  if (i < 0 || i >= num_slaves()) return;
+  Slave& s = slaves_[i];
+  if (!s.estimated) return;
+  if (s.ever_initialised) ++s.jumps;
+  poses_[i + 1].clear();
+  s.initialised = false;
+  s.since_ns = poses_[0].empty() ? 0 : poses_[0].back().t_ns;
+  s.outliers = 0;
+  s.measurements = 0;
+  s.prior_s = prior_s;
+  s.search_s = options_.search_window_s;
+  ModuleLogger("calib")->info(
+      "time offset of '{}': its clock restarted; re-acquiring the offset within ±{} s of {:.6f} s",
+      names_[i + 1], options_.search_window_s, prior_s);
 }
 
 }  // namespace rigcal

@@ -13,7 +13,15 @@ namespace {
 // Lossless: the ready queue can take every set one push may complete (SyncBuffer::ReadyBound).
 OnlineOptions Checked(OnlineOptions options, size_t cameras) {
   options.sync.num_cameras = static_cast<int>(cameras);
-  if (options.time_offset.enabled) options.sync.interpolate = true;
+  if (options.time_offset.enabled) {
+    options.sync.interpolate = true;
+    // Slaves whose offset is estimated follow a restart of their clock (a given one is held).
+    const std::vector<std::optional<double>>& given = options.time_offset.given_s;
+    options.sync.follow_clock_jumps.assign(cameras, false);
+    for (size_t c = 1; c < cameras; ++c) {
+      options.sync.follow_clock_jumps[c] = given.size() < c || !given[c - 1].has_value();
+    }
+  }
   RequireValid(options.Check(), "OnlineOptions");
   if (options.lossless) {
     options.sync.ready_capacity = std::max(options.sync.ready_capacity, options.sync.capacity + 1);
@@ -51,6 +59,7 @@ OnlineCalibrator::OnlineCalibrator(std::vector<std::string> camera_names, Online
       estimator_(names_, options_.estimator) {
   if (options_.time_offset.enabled) {
     clock_ = std::make_unique<ClockOffsetTracker>(names_, options_.time_offset);
+    clock_jumps_seen_.assign(clock_->num_slaves(), 0);
     for (int i = 0; i < clock_->num_slaves(); ++i) {
       sync_.SetTimeOffset(i + 1, clock_->MatchingOffsetNs(i));
     }
@@ -81,9 +90,16 @@ PushResult OnlineCalibrator::Push(const CameraPose& pose) {
 
 void OnlineCalibrator::TrackClock(const CameraPose& pose) {
   MutexLock lock(offset_mutex_);
+  // Restarts of slave clocks that the SyncBuffer followed: re-acquired around their step.
+  for (int i = 0; i < clock_->num_slaves(); ++i) {
+    const ClockJump jump = sync_.ClockJumps(i + 1);
+    if (jump.count == clock_jumps_seen_[i]) continue;
+    clock_jumps_seen_[i] = jump.count;
+    clock_->FollowClockJump(i, static_cast<double>(jump.offset_ns) * 1e-9);
+  }
   if (!clock_->Add(pose)) return;
   for (int i = 0; i < clock_->num_slaves(); ++i) {
-    sync_.SetTimeOffset(i + 1, clock_->MatchingOffsetNs(i));
+    sync_.SetTimeOffset(i + 1, clock_->MatchingOffsetNs(i), clock_jumps_seen_[i]);
   }
 }
 
@@ -161,6 +177,7 @@ RigEstimate OnlineCalibrator::Estimate() const {
       online.clock_offset_estimated = o.estimated;
       online.clock_offset_known = o.known;
       online.clock_drift_ppm = o.drift_ppm;
+      online.clock_drift_std_ppm = o.drift_std_ppm;
       online.clock_jumps = o.jumps;
     }
   }
@@ -168,15 +185,51 @@ RigEstimate OnlineCalibrator::Estimate() const {
 }
 
 RigEstimatorState OnlineCalibrator::SaveState() const {
-  MutexLock lock(estimator_mutex_);
-  return estimator_.SaveState();
+  RigEstimatorState state;
+  {
+    MutexLock lock(estimator_mutex_);
+    state = estimator_.SaveState();
+  }
+  if (options_.time_offset.enabled) {
+    MutexLock lock(offset_mutex_);
+    state.clock_offsets = clock_->SaveState();
+  }
+  return state;
 }
 
 Status OnlineCalibrator::RestoreState(const RigEstimatorState& state) {
-  MutexLock lock(estimator_mutex_);
-  const Status restored = estimator_.RestoreState(state);
-  // The poses the estimator took before the restart are not taken twice.
-  if (restored.ok()) sync_.SkipConsumed(state.consumed_t_ns);
+  if (options_.time_offset.enabled && !state.clock_offsets.empty()) {
+    // Checked before the estimator takes anything: a state is restored whole or not at all.
+    MutexLock lock(offset_mutex_);
+    ClockOffsetTracker check(names_, options_.time_offset);
+    if (const Status s = check.RestoreState(state.clock_offsets); !s.ok()) return s;
+  }
+  {
+    MutexLock lock(estimator_mutex_);
+    const Status restored = estimator_.RestoreState(state);
+    if (!restored.ok()) return restored;
+    // The poses the estimator took before the restart are not taken twice.
+    sync_.SkipConsumed(state.consumed_t_ns);
+  }
+  if (!options_.time_offset.enabled) {
+    if (!state.clock_offsets.empty()) {
+      ModuleLogger("calib")->info(
+          "the state holds clock offsets of free-running cameras; stamps are matched as they "
+          "are now (no estimator.time_offset): not used");
+    }
+    return Status::Ok();
+  }
+  MutexLock lock(offset_mutex_);
+  if (state.clock_offsets.empty()) {
+    ModuleLogger("calib")->info(
+        "the state has no clock offsets (cameras synchronised then, or an older state file): "
+        "estimating them afresh");
+    return Status::Ok();
+  }
+  const Status restored = clock_->RestoreState(state.clock_offsets);
+  for (int i = 0; i < clock_->num_slaves(); ++i) {
+    sync_.SetTimeOffset(i + 1, clock_->MatchingOffsetNs(i));
+  }
   return restored;
 }
 

@@ -2,6 +2,7 @@
 // forwarding to SyncBuffer::Impl (sync_buffer_impl.h), where the state and its mutex live.
 #include "rigcal/calib/sync_buffer.h"
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -50,6 +51,15 @@ Status SyncOptions::Check() const {
     e << "required[0]: must be true: the master is in every set";
   else if (interpolate && match_by_trigger_seq)
     e << "interpolate: not with match_by_trigger_seq (free-running cameras have no trigger)";
+  else if (!follow_clock_jumps.empty() &&
+           static_cast<int>(follow_clock_jumps.size()) != num_cameras)
+    e << "follow_clock_jumps: must be empty or have num_cameras (" << num_cameras << ") flags, got "
+      << follow_clock_jumps.size();
+  else if (!follow_clock_jumps.empty() && follow_clock_jumps[0])
+    e << "follow_clock_jumps[0]: must be false: the master's clock is the reference";
+  else if (!interpolate && std::find(follow_clock_jumps.begin(), follow_clock_jumps.end(), true) !=
+                               follow_clock_jumps.end())
+    e << "follow_clock_jumps: only with interpolate (cameras that run free)";
   else if (ready_capacity < 1 || ready_capacity > kMaxCapacity)
     e << "ready_capacity: must be in [1, " << kMaxCapacity << "], got " << ready_capacity;
   if (e.str().empty()) return Status::Ok();
@@ -103,6 +113,7 @@ std::string SyncStats::BriefReport() const {
     field("stopped", k.stopped);
     field("optional_missing", k.optional_missing);
     field("consumer_overflow", k.consumer_overflow);
+    field("clock_jumps", k.clock_jumps);
   }
   return s.str();
 }
@@ -134,9 +145,10 @@ void SyncBuffer::Flush() { impl_->Flush(); }
 void SyncBuffer::Stop() { impl_->Stop(); }
 bool SyncBuffer::stopped() const { return impl_->stopped(); }
 SyncStats SyncBuffer::stats() const { return impl_->stats(); }
+ClockJump SyncBuffer::ClockJumps(int camera) const { return impl_->ClockJumps(camera); }
 uint64_t SyncBuffer::ReadyBound() const { return impl_->ReadyBound(); }
-void SyncBuffer::SetTimeOffset(int camera, int64_t offset_ns) {
-  impl_->SetTimeOffset(camera, offset_ns);
+void SyncBuffer::SetTimeOffset(int camera, int64_t offset_ns, std::optional<uint64_t> after_jumps) {
+  impl_->SetTimeOffset(camera, offset_ns, after_jumps);
 }
 
 }  // namespace rigcal

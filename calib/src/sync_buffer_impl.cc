@@ -24,7 +24,11 @@ SyncBuffer::Impl::Impl(const SyncOptions& options)
       ready_(static_cast<size_t>(options.ready_capacity),
              MatchedSet{0, std::vector<std::optional<CameraPose>>(options.num_cameras)}),
       candidates_(options.num_cameras) {
-  for (int c = 0; c < n_; ++c) required_.push_back(options.IsRequired(c));
+  for (int c = 0; c < n_; ++c) {
+    required_.push_back(options.IsRequired(c));
+    follows_.push_back(interpolate_ && c < static_cast<int>(options.follow_clock_jumps.size()) &&
+                       options.follow_clock_jumps[c]);
+  }
   cameras_.reserve(n_);
   for (int c = 0; c < n_; ++c) cameras_.emplace_back(static_cast<size_t>(options.capacity));
 }
@@ -79,6 +83,7 @@ SyncStats SyncBuffer::Impl::stats() const {
     t.optional_missing += k.optional_missing;
     t.consumer_overflow += k.consumer_overflow;
     t.fill += k.fill;
+    t.clock_jumps += k.clock_jumps;
   }
   s.unknown_camera = unknown_camera_;
   s.sets_emitted = sets_emitted_;
@@ -93,10 +98,18 @@ uint64_t SyncBuffer::Impl::ReadyBound() const {
   return ready_.size() + cameras_[0].ring.size() + 1;
 }
 
-void SyncBuffer::Impl::SetTimeOffset(int camera, int64_t offset_ns) {
+void SyncBuffer::Impl::SetTimeOffset(int camera, int64_t offset_ns,
+                                     std::optional<uint64_t> after_jumps) {
   MutexLock lock(mutex_);
   if (!interpolate_ || camera <= 0 || camera >= n_) return;
+  if (after_jumps && *after_jumps != cameras_[camera].jump.count) return;
   cameras_[camera].offset_ns = offset_ns;
+}
+
+ClockJump SyncBuffer::Impl::ClockJumps(int camera) const {
+  MutexLock lock(mutex_);
+  if (camera < 0 || camera >= n_) return {};
+  return cameras_[camera].jump;
 }
 
 bool SyncBuffer::Impl::TakeReady(MatchedSet* out) {

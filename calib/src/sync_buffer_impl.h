@@ -12,6 +12,8 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <vector>
 
 #include "fixed_ring.h"
@@ -19,6 +21,23 @@
 #include "rigcal/calib/thread_annotations.h"
 
 namespace rigcal {
+
+// No stamp (on the master clock a stamp may be negative).
+inline constexpr int64_t kNoStamp = std::numeric_limits<int64_t>::min();
+
+// a - b, saturated to the int64_t range (stamps moved to the master clock by an offset).
+inline int64_t SaturatedSub(int64_t a, int64_t b) {
+  int64_t out = 0;
+  if (!__builtin_sub_overflow(a, b, &out)) return out;
+  return b < 0 ? std::numeric_limits<int64_t>::max() : std::numeric_limits<int64_t>::min();
+}
+
+// a + b, saturated likewise.
+inline int64_t SaturatedAdd(int64_t a, int64_t b) {
+  int64_t out = 0;
+  if (!__builtin_add_overflow(a, b, &out)) return out;
+  return b > 0 ? std::numeric_limits<int64_t>::max() : std::numeric_limits<int64_t>::min();
+}
 
 // What identifies an entry in time: its stamp and trigger sequence number.
 struct SyncKey {
@@ -43,7 +62,9 @@ class SyncBuffer::Impl {
   bool stopped() const RIGCAL_EXCLUDES(mutex_);
   SyncStats stats() const RIGCAL_EXCLUDES(mutex_);
   uint64_t ReadyBound() const RIGCAL_EXCLUDES(mutex_);
-  void SetTimeOffset(int camera, int64_t offset_ns) RIGCAL_EXCLUDES(mutex_);
+  void SetTimeOffset(int camera, int64_t offset_ns, std::optional<uint64_t> after_jumps)
+      RIGCAL_EXCLUDES(mutex_);
+  ClockJump ClockJumps(int camera) const RIGCAL_EXCLUDES(mutex_);
 
  private:
   struct CameraState {
@@ -74,6 +95,19 @@ class SyncBuffer::Impl {
     int interval_count = 0;
     // Resume: stamps at or before this were consumed before the restart (-1: none).
     int64_t consumed_t = -1;
+    // Clock jumps (sync_clock_jump.cc): the camera's lead over the master's newest stamp at its
+    // accepted poses (stamp on the master clock - master's newest, smoothed), and the run of
+    // rejected poses on a new timeline: its length, first and last stamp, the master's newest
+    // stamp at its first pose, and the sum of (stamp - master's newest - run_y0) over it.
+    double lead_ns = 0.0;
+    bool has_lead = false;
+    int run = 0;
+    int64_t run_first_t = 0;
+    int64_t run_last_t = 0;
+    int64_t run_first_master = 0;
+    int64_t run_y0 = 0;
+    double run_dy_sum = 0.0;
+    ClockJump jump;  // the jumps followed
   };
 
   // The partner of the current master entry in one slave ring.
@@ -107,8 +141,22 @@ class SyncBuffer::Impl {
   bool PastGlitch(const CameraPose& pose) const RIGCAL_REQUIRES(mutex_);
   // The median of camera `c`'s recent frame intervals; 0 while fewer than 4 are measured.
   int64_t RecentInterval(int c) const RIGCAL_REQUIRES(mutex_);
-  // The newest stamp of any camera but `c`; -1 when none has data.
+  // The newest stamp of any camera but `c` on the master clock; kNoStamp when none has data.
   int64_t OthersNewest(int c) const RIGCAL_REQUIRES(mutex_);
+  // A stamp of camera `c` on the master clock (interpolation mode: minus the camera's offset,
+  // saturated), the stamp itself otherwise.
+  int64_t OnMasterClock(int c, int64_t t_ns) const RIGCAL_REQUIRES(mutex_);
+  // sync_clock_jump.cc: the clock jumps of following slaves (see sync_buffer.h).
+
+  // Whether a pose of a following camera rejected as `why` continues a run on a new timeline
+  // that is now to be followed.
+  bool NewClock(const CameraPose& pose, PushResult why) RIGCAL_REQUIRES(mutex_);
+  // Follows the camera's new timeline (the run ending with `pose`): empties its ring, sets the
+  // offset prior, counts and warns.
+  void FollowNewClock(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
+  // After an accepted pose of camera `c`: its lead over the master, and the end of any run.
+  void OnTimeline(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
+
   // One warning per burst of rejected stamps of a camera (ended by kQuietPoses accepted poses in
   // a row).
   void WarnOncePerBurst(const CameraPose& pose, PushResult why) RIGCAL_REQUIRES(mutex_);
@@ -164,6 +212,7 @@ class SyncBuffer::Impl {
   const int64_t max_gap_ns_;    // interpolation: no interpolation across a larger gap
   const int64_t snap_ns_;       // interpolation: an entry this close to the instant is taken as is
   std::vector<bool> required_;  // per camera; [0] is true
+  std::vector<bool> follows_;   // per camera: follow_clock_jumps (interpolation mode only)
 
   mutable Mutex mutex_;
   std::condition_variable ready_cv_;  // signalled when a set is emitted and on Stop

@@ -10,14 +10,14 @@ namespace rigcal {
 
 int64_t SyncBuffer::Impl::NewestOnMasterClock(int c) const {
   const CameraState& cam = cameras_[c];
-  return cam.any ? cam.newest_t - cam.offset_ns : stream_start_ns_;
+  return cam.any ? OnMasterClock(c, cam.newest_t) : stream_start_ns_;
 }
 
 SyncBuffer::Impl::Candidate SyncBuffer::Impl::FindInterpolation(int j, const CameraPose& m) const {
   const CameraState& cam = cameras_[j];
   const FixedRing<CameraPose>& ring = cam.ring;
   Candidate c;
-  const int64_t ts = m.t_ns + cam.offset_ns;
+  const int64_t ts = SaturatedAdd(m.t_ns, cam.offset_ns);
   c.target_ns = ts;
   const int n = static_cast<int>(ring.size());
   int hi = 0;  // first entry at or after the instant
@@ -94,7 +94,7 @@ void SyncBuffer::Impl::ResolvedInterpolated(int j, const SyncKey& m) {
   CameraState& cam = cameras_[j];
   // A later master's instant is later: it needs at most the entry before the last one at or
   // before this instant (the cubic's first), so the entries before that one go.
-  const int64_t ts = m.t_ns + cam.offset_ns;
+  const int64_t ts = SaturatedAdd(m.t_ns, cam.offset_ns);
   while (cam.ring.size() >= 3 && cam.ring[2].t_ns <= ts) {
     PopOldest(j, &SyncCameraStats::never_matched);
   }

@@ -18,6 +18,9 @@ SyncKey KeyOf(const CameraPose& p) { return {p.t_ns, p.trigger_seq}; }
 
 // Poses in a row on a jumped timeline that make the jump accepted.
 constexpr int kJumpConfirmations = 5;
+// Frame intervals ahead of its own rate (and of the other cameras) that make a stamp of a camera
+// that follows clock jumps a step of its clock.
+constexpr int64_t kFollowedGapIntervals = 6;
 // Accepted poses in a row that end a burst of rejected stamps (its one warning).
 constexpr int kQuietPoses = 50;
 
@@ -33,6 +36,10 @@ PushResult SyncBuffer::Impl::Push(const CameraPose& pose) {
   ++cam.stats.pushed;
   PushResult result = Classify(pose);
   if (result == PushResult::kAccepted && ClockGlitch(pose)) result = PushResult::kClockGlitch;
+  if (result != PushResult::kAccepted && NewClock(pose, result)) {
+    FollowNewClock(pose);
+    result = PushResult::kAccepted;
+  }
   switch (result) {
     case PushResult::kAccepted:
       break;
@@ -66,6 +73,7 @@ PushResult SyncBuffer::Impl::Push(const CameraPose& pose) {
   }
   if (++cam.accepted_in_row >= kQuietPoses) cam.in_glitch_burst = false;
   Accept(pose);
+  OnTimeline(pose);
   if (Process(/*flush=*/false) > 0) ready_cv_.notify_all();
   return PushResult::kAccepted;
 }
@@ -106,10 +114,17 @@ int64_t SyncBuffer::Impl::RecentInterval(int c) const {
   return sorted[n / 2];
 }
 
+int64_t SyncBuffer::Impl::OnMasterClock(int c, int64_t t_ns) const {
+  if (!interpolate_ || c == 0) return t_ns;
+  return SaturatedSub(t_ns, cameras_[c].offset_ns);
+}
+
 int64_t SyncBuffer::Impl::OthersNewest(int c) const {
-  int64_t newest = -1;
+  int64_t newest = kNoStamp;
   for (int j = 0; j < n_; ++j) {
-    if (j != c && cameras_[j].any) newest = std::max(newest, cameras_[j].newest_t);
+    if (j != c && cameras_[j].any) {
+      newest = std::max(newest, OnMasterClock(j, cameras_[j].newest_t));
+    }
   }
   return newest;
 }
@@ -117,24 +132,31 @@ int64_t SyncBuffer::Impl::OthersNewest(int c) const {
 bool SyncBuffer::Impl::PastGlitch(const CameraPose& pose) const {
   if (by_seq_ || !has_stream_) return false;
   const CameraState& cam = cameras_[pose.camera];
-  const int64_t clock = cam.any ? std::max(cam.newest_t, now_ns_) : now_ns_;
-  // Stamps are >= 0 (IsValid) and clock <= INT64_MAX: no overflow.
-  return clock - pose.t_ns > glitch_horizon_ns_;
+  const int64_t clock =
+      cam.any ? std::max(OnMasterClock(pose.camera, cam.newest_t), now_ns_) : now_ns_;
+  // Stamp mode: stamps are >= 0 (IsValid) and clock <= INT64_MAX, no overflow; on the master
+  // clock (interpolation mode) the difference saturates.
+  return SaturatedSub(clock, OnMasterClock(pose.camera, pose.t_ns)) > glitch_horizon_ns_;
 }
 
 bool SyncBuffer::Impl::ClockGlitch(const CameraPose& pose) {
   if (by_seq_ || !has_stream_) return false;  // trigger mode: clocks may be offset
   CameraState& cam = cameras_[pose.camera];
-  // now_ns_: the newest stamp of any camera, this one included. Stamps are >= 0 (IsValid), so
-  // the differences below cannot overflow.
-  bool ahead = pose.t_ns - now_ns_ > glitch_horizon_ns_;
+  // now_ns_: the newest stamp of any camera, this one included, on the master clock. Own-clock
+  // stamps are >= 0 (IsValid), so their differences cannot overflow; the master-clock ones
+  // saturate.
+  const int64_t t = OnMasterClock(pose.camera, pose.t_ns);
+  bool ahead = SaturatedSub(t, now_ns_) > glitch_horizon_ns_;
   if (!ahead && cam.any) {
     // Against the camera's own recent rate, confirmed by the other cameras' clocks.
     const int64_t interval = RecentInterval(pose.camera);
     const int64_t others = OthersNewest(pose.camera);
-    ahead = interval > 0 && others >= 0 &&
-            pose.t_ns - cam.newest_t > std::max(20 * interval, max_wait_ns_) &&
-            pose.t_ns - others > max_wait_ns_;
+    // A camera that follows clock jumps: a step of its clock beyond a few of its frame
+    // intervals is one (sync_clock_jump.cc); others: a second at 20 Hz.
+    const int64_t own_gap = (follows_[pose.camera] ? kFollowedGapIntervals : 20) * interval;
+    ahead = interval > 0 && others != kNoStamp &&
+            pose.t_ns - cam.newest_t > std::max(own_gap, max_wait_ns_) &&
+            SaturatedSub(t, others) > max_wait_ns_;
   }
   if (!ahead) {
     cam.jump_run = 0;
@@ -212,12 +234,13 @@ void SyncBuffer::Impl::Accept(const CameraPose& pose) {
   cam.newest_t = pose.t_ns;
   cam.newest_has_seq = pose.trigger_seq >= 0;
   if (pose.trigger_seq >= 0) cam.newest_seq = pose.trigger_seq;
+  const int64_t t = OnMasterClock(pose.camera, pose.t_ns);
   if (!has_stream_) {
     has_stream_ = true;
-    stream_start_ns_ = pose.t_ns;
-    now_ns_ = pose.t_ns;
+    stream_start_ns_ = t;
+    now_ns_ = t;
   }
-  if (pose.t_ns > now_ns_) now_ns_ = pose.t_ns;
+  if (t > now_ns_) now_ns_ = t;
 }
 
 int64_t SyncBuffer::Impl::WaitClockNs() const {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -100,6 +101,53 @@ TEST_F(SolveTimeOffsetTest, PerSlaveOffsetsGivenOrEstimated) {
   r = Run(args + " --time-offset cam1=soon");
   EXPECT_EQ(r.exit_code, 2) << Explain(r);
   EXPECT_THAT(r.err, HasSubstr("cam1: expected auto or a number of seconds, got 'soon'"));
+}
+
+// With --config, estimator.time_offset of the rig config gives the offsets; --time-offset
+// overrides it; a slave that is not in the config is an error naming it.
+TEST_F(SolveTimeOffsetTest, RigConfigTimeOffsetIsReadAndTheFlagOverridesIt) {
+  const std::string args = WriteRig({{20.0, 0.0, 0.050}, {20.0, 0.013, -0.030}});
+  const std::string rig =
+      "rig: {master: master}\ncameras:\n  - name: master\n  - name: cam1\n"
+      "  - name: cam2\n";
+  std::ofstream(Path("rig.yaml")) << (rig + "estimator: {time_offset: {cam1: 0.05}}\n");
+  RunResult r = Run(args + " --config " + Quote(Path("rig.yaml")) + " --json");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["slaves"].size(), 2u);
+  EXPECT_DOUBLE_EQ(j["slaves"][0]["time_offset_s"].get<double>(), 0.05);
+  EXPECT_TRUE(j["slaves"][0]["time_offset_std_s"].is_null());
+  // cam2 not named in the config's map: estimated.
+  const double offset = j["slaves"][1]["time_offset_s"].get<double>();
+  const double std = j["slaves"][1]["time_offset_std_s"].get<double>();
+  EXPECT_LE(std::abs(offset + 0.030), kSigmas * std) << offset;
+  EXPECT_THAT(r.err, HasSubstr("time offsets from"));
+
+  // The flag overrides the config.
+  r = Run(args + " --config " + Quote(Path("rig.yaml")) + " --time-offset 0.02 --json");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_DOUBLE_EQ(j["slaves"][0]["time_offset_s"].get<double>(), 0.02);
+  EXPECT_DOUBLE_EQ(j["slaves"][1]["time_offset_s"].get<double>(), 0.02);
+
+  // A config without time_offset: synchronised stamps (offset 0), as without --config.
+  std::ofstream(Path("plain.yaml")) << (rig);
+  r = Run(args + " --config " + Quote(Path("plain.yaml")) + " --json");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  EXPECT_DOUBLE_EQ(nlohmann::json::parse(r.out)["slaves"][0]["time_offset_s"].get<double>(), 0.0);
+
+  // A slave the config does not have; a broken config.
+  std::ofstream(Path("other.yaml"))
+      << ("rig: {master: master}\ncameras:\n  - name: master\n  - name: cam1\n");
+  r = Run(args + " --config " + Quote(Path("other.yaml")));
+  EXPECT_EQ(r.exit_code, 1) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("slave 'cam2' is not a slave camera of the rig config"));
+  std::ofstream(Path("bad.yaml")) << (rig + "estimator: {time_offset: soon}\n");
+  r = Run(args + " --config " + Quote(Path("bad.yaml")));
+  EXPECT_EQ(r.exit_code, 1) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("estimator.time_offset: must be auto or a number of seconds"));
+  r = Run("solve --help");
+  EXPECT_THAT(r.out, HasSubstr("overrides the config"));
 }
 
 TEST_F(SolveTimeOffsetTest, BadInputIsAClearError) {

@@ -16,6 +16,7 @@
 #include <thread>
 #include <vector>
 
+#include "calib/free_running_rig.h"
 #include "cli/command_test.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/slave_state.h"
@@ -176,6 +177,48 @@ TEST_F(StateFileFault, ReplayingTheSameDataAfterAResumeAddsNothing) {
   ASSERT_EQ(Replay("poses.lcmlog", "--resume --out " + Path("d.yaml") + " " + state).exit_code, 0);
   const SlaveCalibration d = Left(Path("d.yaml"));
   EXPECT_GT(d.motions.used, a.motions.used + a.motions.used / 2);
+}
+
+// Cameras that run free (estimator.time_offset: auto): the slave's clock offset, its drift, σ
+// and jump count are in the state file (version 5) and --resume goes on from them (no new
+// initial search; the measurements accumulate).
+TEST_F(StateFileFault, ClockOffsetsOfFreeRunningCamerasSurviveAResume) {
+  std::ofstream(Path("rig.yaml"), std::ios::app) << "estimator: {time_offset: auto}\n";
+  DriveOptions d;
+  d.seed = 5;
+  const tools::free_running::FreeRunningRig rig =
+      tools::free_running::MakeFreeRunningRig({}, {{20.0, 0.019, 0.0}}, {kLeft}, 60.0, d);
+  const std::vector<CameraPose> poses =
+      tools::free_running::InCaptureOrder(rig, [](int, int64_t) -> int64_t { return 40'000'000; });
+  ASSERT_TRUE(tools::WritePoseEvents(Path("free.lcmlog"), {"front", "left"}, poses).ok());
+  const std::string state = "--state " + Path("s.state");
+  const RunResult first = Replay("free.lcmlog", "--to 30 --out " + Path("a.yaml") + " " + state);
+  ASSERT_EQ(first.exit_code, 0) << first.Explain();
+  EXPECT_NE(first.err.find("time offset of 'left': initialised at"), std::string::npos)
+      << first.Explain();
+  const Expected<RigEstimatorState> saved = tools::ParseEstimatorState(Slurp(Path("s.state")));
+  ASSERT_TRUE(saved.ok()) << saved.error();
+  ASSERT_EQ(saved->clock_offsets.size(), 1u);
+  const ClockOffsetState& a = saved->clock_offsets[0];
+  ASSERT_TRUE(a.initialised);
+  EXPECT_NEAR(a.offset_s, 0.040, 0.001);
+  EXPECT_GT(a.measurements, 0);
+  EXPECT_GT(a.covariance(0, 0), 0.0);
+
+  const RunResult resumed = Replay("free.lcmlog", "--resume --out " + Path("b.yaml") + " " + state);
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.Explain();
+  EXPECT_NE(resumed.err.find("resumed from"), std::string::npos) << resumed.Explain();
+  EXPECT_EQ(resumed.err.find("initialised at"), std::string::npos)
+      << "the offset was searched afresh:\n"
+      << resumed.Explain();
+  const Expected<RigEstimatorState> after = tools::ParseEstimatorState(Slurp(Path("s.state")));
+  ASSERT_TRUE(after.ok()) << after.error();
+  ASSERT_EQ(after->clock_offsets.size(), 1u);
+  EXPECT_GT(after->clock_offsets[0].measurements, a.measurements);
+  EXPECT_EQ(after->clock_offsets[0].jumps, 0);
+  const SlaveCalibration b = Left(Path("b.yaml"));
+  ASSERT_TRUE(std::isfinite(b.time_offset_std_s)) << b.message;
+  EXPECT_LE(std::abs(b.time_offset_s - 0.040), 4.0 * b.time_offset_std_s) << b.time_offset_s;
 }
 
 // The slave camera is moved (5° about y and 5 cm) between two runs: the resumed run raises the

@@ -119,6 +119,7 @@ TEST(EstimatorStateFile, ReadsVersionTwoStates) {
   while (std::getline(in, line)) {
     if (line.rfind("checksum ", 0) == 0) break;
     if (line.rfind("consumed ", 0) == 0) continue;  // version 4
+    if (line.rfind("clocks ", 0) == 0) continue;    // version 5
     if (line.rfind("Ddir ", 0) == 0) {
       ++removed;
       continue;
@@ -141,25 +142,31 @@ TEST(EstimatorStateFile, ReadsVersionTwoStates) {
   EXPECT_NE(error.find("version 1"), std::string::npos) << error;
 }
 
-// A version-3 text as version 4 writes it: header 4, `consumed_line` after master_segment, its
-// checksum.
-std::string AsVersionFour(const std::string& v3, const std::string& consumed_line) {
+// A version-3 text as version `version` (4 or 5) writes it: that header, `consumed_line` after
+// master_segment (and for version 5 `clocks_line` after it), its checksum.
+std::string AsVersion(int version, const std::string& v3, const std::string& consumed_line,
+                      const std::string& clocks_line = "clocks 0") {
   std::istringstream in(v3);
   std::string line, body;
   std::getline(in, line);
   while (std::getline(in, line)) {
     if (line.rfind("checksum ", 0) == 0) break;
     body += line + '\n';
-    if (line.rfind("master_segment ", 0) == 0) body += consumed_line + '\n';
+    if (line.rfind("master_segment ", 0) == 0) {
+      body += consumed_line + '\n';
+      if (version >= 5) body += clocks_line + '\n';
+    }
   }
-  std::ostringstream v4;
-  v4 << "rigcal-estimator-state 4\n" << body << "checksum " << std::hex << Fnv1a(body) << '\n';
-  return v4.str();
+  std::ostringstream out;
+  out << "rigcal-estimator-state " << version << '\n'
+      << body << "checksum " << std::hex << Fnv1a(body) << '\n';
+  return out.str();
 }
 
 // A state file written by the estimator before its state became a plain struct (a drive with
 // scale segments, two of them closed): read, restored, and written again byte for byte (as
-// version 4: consumed stamps unknown in the file, none in a restored estimator).
+// the current version: consumed stamps unknown in the file, none in a restored estimator; no
+// clock offsets).
 TEST(EstimatorStateFile, ReadsAndRewritesEarlierFilesExactly) {
   std::ifstream in(std::string(RIGCAL_SOURCE_DIR) + "/tests/io/fixtures/estimator_state_v3.txt",
                    std::ios::binary);
@@ -169,7 +176,8 @@ TEST(EstimatorStateFile, ReadsAndRewritesEarlierFilesExactly) {
   const Expected<RigEstimatorState> state = ParseEstimatorState(text.str());
   ASSERT_TRUE(state.ok()) << state.error();
   EXPECT_TRUE(state->consumed_t_ns.empty());
-  EXPECT_EQ(FormatEstimatorState(*state), AsVersionFour(text.str(), "consumed 0"));
+  EXPECT_EQ(FormatEstimatorState(*state),
+            AsVersion(kEstimatorStateVersion, text.str(), "consumed 0"));
   ASSERT_EQ(state->cameras, (std::vector<std::string>{"front", "left"}));
   ASSERT_EQ(state->slaves.size(), 1u);
   EXPECT_EQ(state->slaves[0].long_stats.closed_scales.size(), 2u);
@@ -183,7 +191,7 @@ TEST(EstimatorStateFile, ReadsAndRewritesEarlierFilesExactly) {
   const SlaveCalibration& r = est.Estimate().rig.slaves[0];
   ASSERT_TRUE(r.usable()) << r.message;
   EXPECT_EQ(r.motions.used, 537);
-  EXPECT_EQ(StateFile(est), AsVersionFour(text.str(), "consumed 2 -1 -1"));
+  EXPECT_EQ(StateFile(est), AsVersion(kEstimatorStateVersion, text.str(), "consumed 2 -1 -1"));
 }
 
 // A hand-edited file with a valid checksum: values no estimator can have are rejected, and the
@@ -258,6 +266,65 @@ TEST(EstimatorStateFile, ConsumedStampsRoundTripAndAreChecked) {
   rejected = ParseEstimatorState(FormatEstimatorState(bad));
   ASSERT_FALSE(rejected.ok());
   EXPECT_NE(rejected.error().find("one per camera"), std::string::npos) << rejected.error();
+}
+
+// Version 5: the clock offsets of free-running slaves survive the file exactly; a version-4
+// file (none) is read with none; malformed or out-of-range clock lines are rejected, naming the
+// slave and the field.
+TEST(EstimatorStateFile, ClockOffsetsRoundTripAndVersionFourFilesHaveNone) {
+  std::ifstream in(std::string(RIGCAL_SOURCE_DIR) + "/tests/io/fixtures/estimator_state_v3.txt",
+                   std::ios::binary);
+  std::ostringstream v3;
+  v3 << in.rdbuf();
+  const Expected<RigEstimatorState> v4 =
+      ParseEstimatorState(AsVersion(4, v3.str(), "consumed 2 -1 -1"));
+  ASSERT_TRUE(v4.ok()) << v4.error();
+  EXPECT_TRUE(v4->clock_offsets.empty());
+  EXPECT_EQ(v4->consumed_t_ns, (std::vector<int64_t>{-1, -1}));
+
+  RigEstimatorState state = *v4;
+  ClockOffsetState c;
+  c.initialised = true;
+  c.offset_s = -39.950123456789012;
+  c.drift = 4.9e-5;
+  c.covariance << 2.5e-8, -1.25e-11, -1.25e-11, 4e-12;
+  c.t_ns = 70'000'000'123;
+  c.measurements = 17;
+  c.jumps = 2;
+  state.clock_offsets = {c};
+  const std::string text = FormatEstimatorState(state);
+  EXPECT_NE(text.find("\nclocks 1\nclock 0 1 -39.950123456789"), std::string::npos)
+      << text.substr(0, 400);
+  const Expected<RigEstimatorState> parsed = ParseEstimatorState(text);
+  ASSERT_TRUE(parsed.ok()) << parsed.error();
+  ASSERT_EQ(parsed->clock_offsets.size(), 1u);
+  const ClockOffsetState& r = parsed->clock_offsets[0];
+  EXPECT_TRUE(r.initialised);
+  EXPECT_EQ(r.offset_s, c.offset_s);
+  EXPECT_EQ(r.drift, c.drift);
+  EXPECT_EQ(r.covariance, c.covariance);
+  EXPECT_EQ(r.t_ns, c.t_ns);
+  EXPECT_EQ(r.measurements, 17);
+  EXPECT_EQ(r.jumps, 2);
+  EXPECT_EQ(FormatEstimatorState(*parsed), text);
+
+  const auto error_of = [&](const std::function<void(ClockOffsetState*)>& edit) {
+    RigEstimatorState bad = state;
+    edit(&bad.clock_offsets[0]);
+    const Expected<RigEstimatorState> p = ParseEstimatorState(FormatEstimatorState(bad));
+    return p.ok() ? std::string("accepted") : p.error();
+  };
+  EXPECT_EQ(error_of([](ClockOffsetState* s) { s->covariance(0, 0) = -1.0; }),
+            "slave left: clock P00 = -1 is out of range [0, 1e+100]");
+  EXPECT_EQ(error_of([](ClockOffsetState* s) { s->offset_s = 1e6; }),
+            "slave left: clock offset_s = 1e+06 is out of range [-86400, 86400]");
+  EXPECT_EQ(error_of([](ClockOffsetState* s) { s->jumps = -1; }),
+            "slave left: clock jumps = -1 is out of range [0, 1e+100]");
+  // Two clock lines for one slave.
+  std::string two = AsVersion(5, v3.str(), "consumed 2 -1 -1", "clocks 2");
+  const Expected<RigEstimatorState> rejected = ParseEstimatorState(two);
+  ASSERT_FALSE(rejected.ok());
+  EXPECT_EQ(rejected.error(), "malformed clock offsets (none, or one per slave)");
 }
 
 }  // namespace

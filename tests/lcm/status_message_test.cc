@@ -102,5 +102,88 @@ TEST(StatusMessage, ConsumerOverflowIsAnOverflowDrop) {
   EXPECT_EQ(msg.cameras[1].vo_segment, 3);
 }
 
+// Version 4: every camera's clock (offset, σ, drift, jumps) survives the wire; undefined sources,
+// σ below -1, non-finite values and negative jump counts are rejected.
+TEST(StatusMessage, ClockFieldsRoundTripAndAreChecked) {
+  rig_status_t status = MakeStatusMsg();
+  camera_status_t& left = status.cameras[1];
+  left.time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATED;
+  left.time_offset_s = -39.95;
+  left.time_offset_std_s = 2.1e-4;
+  left.clock_drift_ppm = 48.5;
+  left.clock_drift_std_ppm = 1.5;
+  left.clock_jumps = 2;
+  const rig_status_t back = ExpectRoundTrip(kStatusChannel, status);
+  EXPECT_EQ(back.version, 4);
+  EXPECT_EQ(back.cameras[1].time_offset_source, slave_extrinsics_t::TIME_OFFSET_ESTIMATED);
+  EXPECT_EQ(back.cameras[1].time_offset_s, -39.95);
+  EXPECT_EQ(back.cameras[1].time_offset_std_s, 2.1e-4);
+  EXPECT_EQ(back.cameras[1].clock_drift_ppm, 48.5);
+  EXPECT_EQ(back.cameras[1].clock_drift_std_ppm, 1.5);
+  EXPECT_EQ(back.cameras[1].clock_jumps, 2);
+
+  MessageValidator validator(kNames);
+  rig_status_t bad = status;
+  bad.cameras[1].time_offset_source = 4;
+  ExpectRejected<rig_status_t>(&validator, "S", RawEncode(bad), RejectCause::kOutOfRange,
+                               {"rig_status_t.cameras[1].time_offset_source", "outside [0, 3]"});
+  bad = status;
+  bad.cameras[1].time_offset_std_s = -2.0;
+  ExpectRejected<rig_status_t>(&validator, "S", RawEncode(bad), RejectCause::kOutOfRange,
+                               {"rig_status_t.cameras[1].time_offset_std_s"});
+  bad = status;
+  bad.cameras[1].clock_drift_ppm = kNaN;
+  ExpectRejected<rig_status_t>(&validator, "S", RawEncode(bad), RejectCause::kNonFinite,
+                               {"rig_status_t.cameras[1].clock_drift_ppm"});
+  bad = status;
+  bad.cameras[1].clock_jumps = -1;
+  ExpectRejected<rig_status_t>(&validator, "S", RawEncode(bad), RejectCause::kOutOfRange,
+                               {"rig_status_t.cameras[1].clock_jumps"});
+}
+
+// The clock fields come from the estimate: the master is the reference, an estimated offset
+// carries its σ, drift and jumps, one still being estimated is 0 with σ unknown, a given one
+// has no σ, synchronised stamps none.
+TEST(StatusMessage, ClockFieldsFromTheEstimate) {
+  RigEstimate estimate;
+  estimate.rig.slaves.resize(3);
+  estimate.online.resize(3);
+  estimate.rig.slaves[0].time_offset_s = 0.040012;
+  estimate.rig.slaves[0].time_offset_std_s = 2.1e-4;
+  estimate.online[0].clock_offset_estimated = true;
+  estimate.online[0].clock_offset_known = true;
+  estimate.online[0].clock_drift_ppm = 50.2;
+  estimate.online[0].clock_drift_std_ppm = 0.7;
+  estimate.online[0].clock_jumps = 1;
+  estimate.rig.slaves[1].time_offset_s = 0.5;  // stale: the offset is being re-estimated
+  estimate.online[1].clock_offset_estimated = true;
+  estimate.online[1].clock_jumps = 2;
+  estimate.rig.slaves[2].time_offset_s = -0.025;  // given
+  std::vector<CameraStatusInput> cameras(4);
+  const rig_status_t msg = MakeRigStatus(cameras, SyncStats{}, 64, estimate, 0.0, 1);
+  ASSERT_EQ(msg.cameras.size(), 4u);
+  EXPECT_EQ(msg.cameras[0].time_offset_source, slave_extrinsics_t::TIME_OFFSET_NONE);
+  EXPECT_EQ(msg.cameras[0].time_offset_std_s, -1.0);
+  const camera_status_t& a = msg.cameras[1];
+  EXPECT_EQ(a.time_offset_source, slave_extrinsics_t::TIME_OFFSET_ESTIMATED);
+  EXPECT_EQ(a.time_offset_s, 0.040012);
+  EXPECT_EQ(a.time_offset_std_s, 2.1e-4);
+  EXPECT_EQ(a.clock_drift_ppm, 50.2);
+  EXPECT_EQ(a.clock_drift_std_ppm, 0.7);
+  EXPECT_EQ(a.clock_jumps, 1);
+  const camera_status_t& b = msg.cameras[2];
+  EXPECT_EQ(b.time_offset_source, slave_extrinsics_t::TIME_OFFSET_ESTIMATING);
+  EXPECT_EQ(b.time_offset_s, 0.0);
+  EXPECT_EQ(b.time_offset_std_s, -1.0);
+  EXPECT_EQ(b.clock_jumps, 2);
+  const camera_status_t& c = msg.cameras[3];
+  EXPECT_EQ(c.time_offset_source, slave_extrinsics_t::TIME_OFFSET_GIVEN);
+  EXPECT_EQ(c.time_offset_s, -0.025);
+  EXPECT_EQ(c.time_offset_std_s, -1.0);
+  EXPECT_EQ(
+      MakeRigStatus(cameras, SyncStats{}, 64, RigEstimate{}, 0.0, 1).cameras[1].time_offset_source,
+      slave_extrinsics_t::TIME_OFFSET_NONE);
+}
+
 }  // namespace
 }  // namespace rigcal::tools::lcm_test

@@ -175,6 +175,24 @@ TEST(StatusMonitor, DashboardShowsEveryFigure) {
   left.time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATING;
   EXPECT_THAT(FormatDashboard(s), HasSubstr("offset being estimated"));
   left = MakeExtrinsics(slave_extrinsics_t::STATE_USABLE, -1).slaves[0];
+  // The clock of a free-running camera from RIGCAL_STATUS (version 4).
+  camera_status_t& left_status = s.status->cameras[1];
+  left_status.time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATED;
+  left_status.time_offset_s = -39.950012;
+  left_status.time_offset_std_s = 0.00021;
+  left_status.clock_drift_ppm = 50.2;
+  left_status.clock_drift_std_ppm = 0.75;
+  left_status.clock_jumps = 2;
+  EXPECT_THAT(FormatDashboard(s),
+              HasSubstr("clock left         offset -39950.012 ms sigma 0.21 ms, drift 50.2 ppm "
+                        "sigma 0.75 ppm (estimated), 2 jumps"));
+  const nlohmann::json clock = SnapshotToJson(s)["status"]["cameras"][1]["clock"];
+  EXPECT_EQ(clock["source"], "estimated");
+  EXPECT_EQ(clock["offset_s"], -39.950012);
+  EXPECT_EQ(clock["drift_std_ppm"], 0.75);
+  EXPECT_EQ(clock["jumps"], 2);
+  EXPECT_TRUE(SnapshotToJson(s)["status"]["cameras"][0]["clock"]["std_s"].is_null());
+  left_status = MakeStatus(rig_status_t::ESTIMATOR_DEGRADED).cameras[1];
   // Every camera's segment from its camera_status_t (the master's too); none yet: "-".
   EXPECT_THAT(text, ::testing::ContainsRegex("left +19.5 +1234 +3 .*lost +1 +42 ms"));
   EXPECT_THAT(text, ::testing::ContainsRegex("front +19.5 .*tracking +1 +42 ms"));

@@ -111,8 +111,16 @@ inline HistoryFiles MakeHistory(const std::string& tag, int frames = 600, bool p
       c.last_pose_age_ms = lost ? 400 : 20;
       cameras.push_back(c);
     }
-    const rig_status_t status =
-        MakeRigStatus(cameras, SyncStats{}, 64, estimator.Estimate(), 42.0, utime);
+    // cam1 runs free: its clock offset, 40 ms until its clock restarts at frame 400 (a jump),
+    // being re-estimated for 100 frames, then -2.5 s.
+    RigEstimate estimate = estimator.Estimate();
+    SlaveOnlineState& clock = estimate.online[0];
+    clock.clock_offset_estimated = true;
+    clock.clock_offset_known = k < 400 || k >= 500;
+    clock.clock_jumps = k < 400 ? 0 : 1;
+    estimate.rig.slaves[0].time_offset_s = k < 400 ? 0.040 : -2.5;
+    estimate.rig.slaves[0].time_offset_std_s = 1e-4;
+    const rig_status_t status = MakeRigStatus(cameras, SyncStats{}, 64, estimate, 42.0, utime);
     if (WriteEvent(&log, kStatusChannel, status, utime, &event_number)) ++files.status;
   }
   return files;

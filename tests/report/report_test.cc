@@ -50,6 +50,18 @@ TEST_F(ReportTest, HistoryLogGivesEveryMessageAsHistory) {
   for (const CameraHealthSample& h : data->health.at("cam1")) lost += h.vo_state == 2;
   EXPECT_EQ(lost, 4);
   EXPECT_EQ(data->health.at("cam2").back().dropped, 5);
+  // cam1 runs free (RIGCAL_STATUS version 4): its clock offset, unknown while re-estimated
+  // after the restart at frame 400, and the jump.
+  EXPECT_TRUE(data->free_running);
+  const auto& cam1 = data->health.at("cam1");
+  EXPECT_DOUBLE_EQ(cam1.front().time_offset_ms, 40.0);
+  EXPECT_EQ(cam1.front().clock_jumps, 0);
+  EXPECT_DOUBLE_EQ(cam1.back().time_offset_ms, -2500.0);
+  EXPECT_EQ(cam1.back().clock_jumps, 1);
+  int unknown = 0;
+  for (const CameraHealthSample& h : cam1) unknown += std::isnan(h.time_offset_ms);
+  EXPECT_EQ(unknown, 10);
+  EXPECT_TRUE(std::isnan(data->health.at("cam0").front().time_offset_ms)) << "the reference";
   // The last message is the final table; without poses no per-motion analysis, and a note
   // says why.
   ASSERT_EQ(data->final_result.slaves.size(), 2u);
@@ -93,6 +105,9 @@ TEST_F(ReportTest, PageHasEveryPlotWithData) {
   // rig view, 2 histories, 2 x (scales, residua), health: 8 plots, none missing.
   EXPECT_EQ(CountOf(html, "<figure class=\"plot\""), 8);
   EXPECT_EQ(CountOf(html, "<figure class=\"plot missing\""), 0);
+  // The health figure shows the clock of the free-running cam1.
+  EXPECT_GE(CountOf(html, "clock offset to the master"), 1);
+  EXPECT_GE(CountOf(html, "clock jumps (cumulative)"), 1);
   // Self-contained: no external references.
   EXPECT_EQ(CountOf(html, "src="), 0);
   EXPECT_EQ(CountOf(html, "href="), 0);

@@ -15,6 +15,7 @@
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/result_json.h"
+#include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/time_offset.h"
 #include "rigcal/io/trajectory_io.h"
@@ -38,6 +39,8 @@ struct SolveArgs {
   std::string pairs = "auto";
   double tolerance_ms = 5.0;
   std::string time_offset = "0";
+  bool time_offset_given = false;  // --time-offset on the command line (overrides --config)
+  std::string config;              // rig config: estimator.time_offset
   double time_offset_window_s = tools::TimeOffsetOptions{}.search_window_s;
   double max_quaternion_norm_error = 1e-6;
   std::string truth;
@@ -154,6 +157,27 @@ int Fail(const std::string& message) {
   return kExitError;
 }
 
+// The offsets of `slaves` from the rig config's estimator.time_offset (nullopt: auto): 0 for
+// every slave when the config has none (synchronised stamps). Errors: the config's, or a slave
+// that is not a camera of the rig.
+Expected<std::vector<std::optional<double>>> TimeOffsetsFromConfig(
+    const std::string& path, const std::vector<std::string>& slaves) {
+  auto config = tools::LoadRigConfig(path);
+  if (!config) return Error{config.error()};
+  const std::vector<std::string> names = config->CameraNames();
+  const ClockOffsetOptions& clock = config->online.time_offset;
+  std::vector<std::optional<double>> out(slaves.size(), 0.0);
+  for (size_t i = 0; i < slaves.size(); ++i) {
+    const auto it = std::find(names.begin() + 1, names.end(), slaves[i]);
+    if (it == names.end()) {
+      return Error{path + ": slave '" + slaves[i] + "' is not a slave camera of the rig config"};
+    }
+    const auto j = static_cast<size_t>(it - names.begin()) - 1;
+    if (clock.enabled) out[i] = j < clock.given_s.size() ? clock.given_s[j] : std::nullopt;
+  }
+  return out;
+}
+
 int RunSolve(const SolveArgs& args) {
   const auto log = ModuleLogger("tools");
 
@@ -240,10 +264,17 @@ int RunSolve(const SolveArgs& args) {
     offset_options.search_window_s = args.time_offset_window_s;
     std::vector<std::string> slave_names;
     for (const auto& slave : slaves) slave_names.push_back(slave.name);
-    std::string offset_error;
-    const std::vector<std::optional<double>> given_offsets =
-        ParseTimeOffsets(args.time_offset, slave_names, &offset_error);
-    if (!offset_error.empty()) return Fail("--time-offset: " + offset_error);
+    std::vector<std::optional<double>> given_offsets;
+    if (!args.config.empty() && !args.time_offset_given) {
+      auto from_config = TimeOffsetsFromConfig(args.config, slave_names);
+      if (!from_config) return Fail(from_config.error());
+      given_offsets = std::move(*from_config);
+      log->info("time offsets from {} (estimator.time_offset)", args.config);
+    } else {
+      std::string offset_error;
+      given_offsets = ParseTimeOffsets(args.time_offset, slave_names, &offset_error);
+      if (!offset_error.empty()) return Fail("--time-offset: " + offset_error);
+    }
     auto matched = tools::MatchWithTimeOffsets(*master, slaves, given_offsets, tolerance_ns,
                                                options, offset_options);
     if (!matched) return Fail(matched.error());
@@ -449,7 +480,8 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
          "matched by stamp, any other (free-running camera) interpolated at the\n"
          "master's instants (cubic, SLERP/linear at the ends; not across gaps of more than 3\n"
          "frame intervals nor across scale segments).\n"
-         "Per slave: NAME=auto|SECONDS,... (slaves not named: 0).")
+         "Per slave: NAME=auto|SECONDS,... (slaves not named: 0).\n"
+         "Given, it overrides --config's estimator.time_offset.")
       ->type_name("auto|SECONDS|NAME=auto|SECONDS,...")
       ->check(CLI::Validator(
           [](std::string& v) {
@@ -459,6 +491,12 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
           },
           "auto|SECONDS|NAME=auto|SECONDS,..."))
       ->capture_default_str();
+  cmd->add_option("--config", args->config,
+                  "Rig config YAML (as for rigcal calib): its estimator.time_offset\n"
+                  "(auto, SECONDS, or per slave NAME: auto|SECONDS; absent: 0) gives the\n"
+                  "slaves' clock offsets, unless --time-offset is given (the flag\n"
+                  "overrides the config). Every --slave must be a camera of the rig.")
+      ->type_name("FILE");
   cmd->add_option("--time-offset-window", args->time_offset_window_s,
                   "With --time-offset auto: the offset is searched within ± this many seconds")
       ->type_name("S")
@@ -588,8 +626,9 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       "slave has no usable estimate (too little motion, degenerate motion); the result is\n"
       "still printed and written.");
 
-  cmd->callback([args, exit_code]() {
+  cmd->callback([args, exit_code, cmd]() {
     try {
+      args->time_offset_given = cmd->count("--time-offset") > 0;
       *exit_code = RunSolve(*args);
     } catch (const std::exception& e) {
       *exit_code = Fail(e.what());

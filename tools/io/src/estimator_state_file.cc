@@ -172,6 +172,31 @@ Status ReadSlaves(std::string rest, RigEstimatorState* state) {
   return Status::Ok();
 }
 
+// Version 5: "clocks <n>" and n "clock" lines, n 0 or one per slave.
+Status ReadClockOffsets(std::istream& b, RigEstimatorState* state) {
+  std::string word;
+  size_t n = 0;
+  const size_t slaves = state->cameras.empty() ? 0 : state->cameras.size() - 1;
+  if (!(b >> word >> n) || word != "clocks" || (n != 0 && n != slaves)) {
+    return Error{"malformed clock offsets (none, or one per slave)"};
+  }
+  for (size_t i = 0; i < n; ++i) {
+    ClockOffsetState c;
+    size_t index = 0;
+    int initialised = 0;
+    double p01 = 0.0;
+    if (!(b >> word >> index >> initialised >> c.offset_s >> c.drift >> c.covariance(0, 0) >> p01 >>
+          c.covariance(1, 1) >> c.t_ns >> c.measurements >> c.jumps) ||
+        word != "clock" || index != i || (initialised != 0 && initialised != 1)) {
+      return Error{"malformed clock offset of slave " + std::to_string(i)};
+    }
+    c.initialised = initialised == 1;
+    c.covariance(0, 1) = c.covariance(1, 0) = p01;
+    state->clock_offsets.push_back(c);
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 std::string FormatEstimatorState(const RigEstimatorState& state) {
@@ -183,7 +208,13 @@ std::string FormatEstimatorState(const RigEstimatorState& state) {
        << '\n';
   body << "consumed " << state.consumed_t_ns.size();
   for (const int64_t t : state.consumed_t_ns) body << ' ' << t;
-  body << '\n';
+  body << "\nclocks " << state.clock_offsets.size() << '\n';
+  for (size_t i = 0; i < state.clock_offsets.size(); ++i) {
+    const ClockOffsetState& c = state.clock_offsets[i];
+    body << "clock " << i << ' ' << (c.initialised ? 1 : 0) << ' ' << c.offset_s << ' ' << c.drift
+         << ' ' << c.covariance(0, 0) << ' ' << c.covariance(0, 1) << ' ' << c.covariance(1, 1)
+         << ' ' << c.t_ns << ' ' << c.measurements << ' ' << c.jumps << '\n';
+  }
   for (size_t i = 0; i < state.slaves.size(); ++i) {
     const SlaveEstimatorState& s = state.slaves[i];
     const MotionCounts& c = s.counts;
@@ -254,6 +285,9 @@ Expected<RigEstimatorState> ParseEstimatorState(std::string_view view) {
       }
       state.consumed_t_ns.push_back(t);
     }
+  }
+  if (version >= 5) {
+    if (const Status read = ReadClockOffsets(b, &state); !read.ok()) return read;
   }
   const std::string rest((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
   if (const Status read = ReadSlaves(rest, &state); !read.ok()) return read;

@@ -116,6 +116,22 @@ Status CheckEstimatorStateRanges(const RigEstimatorState& state) {
     if (Status st = CheckSums(where + "long: ", s.long_stats); !st.ok()) return st;
     if (Status st = CheckSums(where + "short: ", s.short_stats); !st.ok()) return st;
   }
+  // Clock offsets: |τ| within a day (the config's limit), |ρ| below 1 % (a clock, not a
+  // counter), variances not negative, counts not negative.
+  for (size_t i = 0; i < state.clock_offsets.size(); ++i) {
+    const ClockOffsetState& c = state.clock_offsets[i];
+    const std::string name = i + 1 < state.cameras.size() ? state.cameras[i + 1] : "?";
+    const std::string where = "slave " + name + ": clock ";
+    for (const Status& st : {CheckValue(where, "offset_s", c.offset_s, -86400.0, 86400.0),
+                             CheckValue(where, "drift", c.drift, -0.01, 0.01),
+                             CheckNonNegative(where, "P00", c.covariance(0, 0)),
+                             CheckAny(where, "P01", c.covariance(0, 1)),
+                             CheckNonNegative(where, "P11", c.covariance(1, 1)),
+                             CheckNonNegative(where, "measurements", c.measurements),
+                             CheckNonNegative(where, "jumps", c.jumps)}) {
+      if (!st.ok()) return st;
+    }
+  }
   return Status::Ok();
 }
 

@@ -1,6 +1,7 @@
 #include "rigcal/lcm/status_message.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <sstream>
 #include <utility>
@@ -8,6 +9,7 @@
 #include "message_checker.h"
 #include "message_codec.h"
 #include "rigcal/lcm/process_stats.h"
+#include "rigcal/slave_extrinsics_t.hpp"
 
 namespace rigcal::tools {
 namespace {
@@ -33,6 +35,48 @@ void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* ch
                          camera_status_t::VO_DEAD);
   check->AtLeast<int64_t>("last_pose_age_ms", c->last_pose_age_ms, -1);
   check->AtLeast<int32_t>("vo_segment", c->vo_segment, -1);
+  check->InRange<int8_t>("time_offset_source", c->time_offset_source,
+                         slave_extrinsics_t::TIME_OFFSET_NONE,
+                         slave_extrinsics_t::TIME_OFFSET_ESTIMATED);
+  for (const auto& [field, value] :
+       {std::pair<const char*, double>{"time_offset_s", c->time_offset_s},
+        {"time_offset_std_s", c->time_offset_std_s},
+        {"clock_drift_ppm", c->clock_drift_ppm},
+        {"clock_drift_std_ppm", c->clock_drift_std_ppm}}) {
+    check->Finite(field, value);
+  }
+  check->AtLeast("time_offset_std_s", c->time_offset_std_s, -1.0);
+  check->AtLeast("clock_drift_std_ppm", c->clock_drift_std_ppm, -1.0);
+  check->AtLeast<int32_t>("clock_jumps", c->clock_jumps, 0);
+}
+
+// σ on LCM: -1 when unknown (NaN).
+double LcmSigma(double sigma) { return std::isfinite(sigma) && sigma >= 0.0 ? sigma : -1.0; }
+
+// The clock fields of camera `camera` (0: the master, the reference) from the estimate.
+void FillClock(const RigEstimate& estimate, size_t camera, camera_status_t* c) {
+  c->time_offset_source = slave_extrinsics_t::TIME_OFFSET_NONE;
+  c->time_offset_std_s = -1.0;
+  c->clock_drift_std_ppm = -1.0;
+  if (camera == 0 || camera > estimate.rig.slaves.size()) return;
+  const SlaveCalibration& s = estimate.rig.slaves[camera - 1];
+  const SlaveOnlineState* online =
+      camera <= estimate.online.size() ? &estimate.online[camera - 1] : nullptr;
+  if (online != nullptr) c->clock_jumps = online->clock_jumps;
+  if (online != nullptr && online->clock_offset_estimated) {
+    if (!online->clock_offset_known) {
+      c->time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATING;
+      return;
+    }
+    c->time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATED;
+    c->time_offset_s = std::isfinite(s.time_offset_s) ? s.time_offset_s : 0.0;
+    c->time_offset_std_s = LcmSigma(s.time_offset_std_s);
+    c->clock_drift_ppm = std::isfinite(online->clock_drift_ppm) ? online->clock_drift_ppm : 0.0;
+    c->clock_drift_std_ppm = LcmSigma(online->clock_drift_std_ppm);
+  } else if (std::isfinite(s.time_offset_s)) {
+    c->time_offset_source = slave_extrinsics_t::TIME_OFFSET_GIVEN;
+    c->time_offset_s = s.time_offset_s;
+  }
 }
 
 // The fields of rig_status_t.lcm up to num_cameras.
@@ -124,6 +168,7 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
     cam.vo_state = input.vo_state;
     cam.last_pose_age_ms = input.last_pose_age_ms;
     cam.vo_segment = input.vo_segment;
+    FillClock(estimate, i, &cam);
     msg.cameras.push_back(cam);
   }
   msg.sync_sets_emitted = static_cast<int64_t>(sync.sets_emitted);

@@ -28,6 +28,31 @@ std::string Bytes(int64_t bytes) {
   return FixedText(bytes / double(1 << 20), 1) + " MiB";
 }
 
+std::string JumpsText(int32_t jumps) {
+  if (jumps <= 0) return "";
+  return ", " + std::to_string(jumps) + (jumps == 1 ? " jump" : " jumps");
+}
+
+// A free-running camera's clock from RIGCAL_STATUS: "offset 40.012 ms sigma 0.21 ms, drift
+// 50.1 ppm sigma 0.3 ppm (estimated), 1 jump".
+std::string CameraClockText(const camera_status_t& c) {
+  std::string text;
+  switch (c.time_offset_source) {
+    case slave_extrinsics_t::TIME_OFFSET_ESTIMATING:
+      text = "offset being estimated";
+      break;
+    case slave_extrinsics_t::TIME_OFFSET_GIVEN:
+      text = "offset " + FixedText(c.time_offset_s * 1e3, 3) + " ms (given)";
+      break;
+    default:
+      text = "offset " + FixedText(c.time_offset_s * 1e3, 3) + " ms sigma " +
+             SigmaText(Known(c.time_offset_std_s) * 1e3, 2) + " ms, drift " +
+             FixedText(c.clock_drift_ppm, 1) + " ppm sigma " +
+             SigmaText(Known(c.clock_drift_std_ppm), 2) + " ppm (estimated)";
+  }
+  return text + JumpsText(c.clock_jumps);
+}
+
 void AppendCameras(const MonitorSnapshot& snapshot, std::vector<std::string>* lines) {
   const rig_status_t& st = *snapshot.status;
   lines->push_back(
@@ -44,6 +69,11 @@ void AppendCameras(const MonitorSnapshot& snapshot, std::vector<std::string>* li
         FixedText(c.fps, 1), c.frames_received, c.dropped_late, c.dropped_duplicate,
         c.dropped_out_of_order, c.dropped_overflow, c.dropped_never_matched, c.dropped_invalid,
         VoStateName(c.vo_state), segment, age));
+  }
+  for (const camera_status_t& c : st.cameras) {
+    if (c.time_offset_source != slave_extrinsics_t::TIME_OFFSET_NONE) {
+      lines->push_back(fmt::format("clock {:<12} {}", c.name, CameraClockText(c)));
+    }
   }
   lines->push_back(fmt::format("sync: {} sets emitted, buffer {} / {}", st.sync_sets_emitted,
                                st.sync_fill, st.sync_capacity));

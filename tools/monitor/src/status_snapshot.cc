@@ -20,6 +20,8 @@ nlohmann::json Sigma(double v) {
 
 nlohmann::json Vec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
+const char* TimeOffsetSourceName(int8_t source);
+
 nlohmann::json CameraJson(const camera_status_t& c) {
   return {
       {"name", c.name},
@@ -34,7 +36,14 @@ nlohmann::json CameraJson(const camera_status_t& c) {
         {"invalid", c.dropped_invalid}}},
       {"vo_state", VoStateName(c.vo_state)},
       {"vo_segment", c.vo_segment >= 0 ? nlohmann::json(c.vo_segment) : nullptr},
-      {"last_pose_age_ms", c.last_pose_age_ms >= 0 ? nlohmann::json(c.last_pose_age_ms) : nullptr}};
+      {"last_pose_age_ms", c.last_pose_age_ms >= 0 ? nlohmann::json(c.last_pose_age_ms) : nullptr},
+      {"clock",
+       {{"source", TimeOffsetSourceName(c.time_offset_source)},
+        {"offset_s", c.time_offset_s},
+        {"std_s", Sigma(c.time_offset_std_s)},
+        {"drift_ppm", c.clock_drift_ppm},
+        {"drift_std_ppm", Sigma(c.clock_drift_std_ppm)},
+        {"jumps", c.clock_jumps}}}};
 }
 
 const char* TimeOffsetSourceName(int8_t source) {

@@ -9,6 +9,7 @@
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/truth_alignment.h"
 #include "rigcal/monitor/slave_view.h"
+#include "rigcal/slave_extrinsics_t.hpp"
 
 namespace rigcal::tools {
 namespace {
@@ -103,6 +104,13 @@ Status FillFromLog(const LogContents& log, ReportData* data) {
                          c.dropped_overflow + c.dropped_never_matched + c.dropped_invalid;
         sample.vo_state = c.vo_state;
         sample.last_pose_age_ms = c.last_pose_age_ms;
+        if (c.time_offset_source == slave_extrinsics_t::TIME_OFFSET_GIVEN ||
+            c.time_offset_source == slave_extrinsics_t::TIME_OFFSET_ESTIMATED) {
+          sample.time_offset_ms = c.time_offset_s * 1e3;
+        }
+        sample.clock_jumps = c.clock_jumps;
+        data->free_running =
+            data->free_running || c.time_offset_source != slave_extrinsics_t::TIME_OFFSET_NONE;
         data->health[c.name].push_back(sample);
       }
     }

@@ -337,14 +337,23 @@ ReportFigure HealthFigure(const ReportData& data) {
   const std::string title = "camera VO health (RIGCAL_STATUS)";
   if (!data.from_log) return Missing(name, title, "no history in a result file");
   if (data.health.empty()) return Missing(name, title, "no RIGCAL_STATUS message in the log");
+  // The cameras whose clock runs free (an offset in some message).
+  std::vector<std::string> free_running;
+  for (const std::string& camera : data.cameras) {
+    const std::vector<CameraHealthSample>& samples = data.health.at(camera);
+    if (std::any_of(samples.begin(), samples.end(),
+                    [](const CameraHealthSample& h) { return std::isfinite(h.time_offset_ms); })) {
+      free_running.push_back(camera);
+    }
+  }
   auto panel = [&](const std::string& t, const std::string& y_label,
-                   double (*value)(const CameraHealthSample&)) {
+                   double (*value)(const CameraHealthSample&), bool clocks = false) {
     PlotPanel p;
     p.title = t;
     p.x_label = "time [s]";
     p.y_label = y_label;
     p.legend = LegendPosition::kOutsideRight;
-    for (const std::string& camera : data.cameras) {
+    for (const std::string& camera : clocks ? free_running : data.cameras) {
       PlotSeries s;
       s.label = camera;
       s.markers = false;
@@ -373,6 +382,16 @@ ReportFigure HealthFigure(const ReportData& data) {
       vo_state, panel("age of the newest pose", "ms", [](const CameraHealthSample& h) {
         return h.last_pose_age_ms >= 0 ? static_cast<double>(h.last_pose_age_ms) : kUnknown;
       })};
+  if (data.free_running && !free_running.empty()) {
+    // Cameras that run free: each slave's clock offset (gaps while it is being estimated) and
+    // the restarts of its clock.
+    figure.panels.push_back(panel(
+        "clock offset to the master", "ms",
+        [](const CameraHealthSample& h) { return h.time_offset_ms; }, true));
+    figure.panels.push_back(panel(
+        "clock jumps (cumulative)", "jumps",
+        [](const CameraHealthSample& h) { return static_cast<double>(h.clock_jumps); }, true));
+  }
   return Drawn(name, title, figure,
                std::to_string(data.status_messages) +
                    " RIGCAL_STATUS messages; time since the "

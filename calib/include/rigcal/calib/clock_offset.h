@@ -22,7 +22,8 @@
 namespace rigcal {
 
 struct TimeOffsetOptions {
-  double search_window_s = 0.5;  // the offset is searched within ± this
+  double search_window_s = 0.5;  // the offset is searched within ± this around center_s
+  double center_s = 0.0;         // the prior offset (e.g. the step of a clock that restarted)
   double min_overlap_s = 2.0;    // least common time of master and slave at every lag
   double motion_span_s = 0.5;    // span of the motions of the refinement
 };

@@ -13,8 +13,17 @@
 //     camera, whatever the extrinsics and scales;
 //  3. re-initialised after a jump (a camera restarted): jump_confirmations measurements in a
 //     row that disagree with the prediction by more than jump_sigmas (innovation σ) and
-//     jump_min_s, or that lie at the end of the searched interval, are a jump; it is logged as
-//     a warning and the offset is estimated afresh from the poses after it (step 1).
+//     jump_min_s, or that lie at the end of the searched interval, or windows whose slave poses
+//     end before the predicted instants although the master is a window further and the slave
+//     kept delivering (its clock stepped back), are a jump (counted when a measurement had
+//     confirmed the offset, not when a (re)initialisation failed); it is logged as a warning
+//     and the offset is estimated afresh from the poses since the first disagreeing window
+//     (step 1, searched within ± search_window_s around the last offset; larger steps are the
+//     SyncBuffer's: 4.);
+//  4. re-acquired after a restart of the slave's clock that the SyncBuffer followed (a step
+//     beyond what step 3 can search, e.g. stamps that restart near 0; FollowClockJump): the
+//     slave's poses on the old clock are forgotten and step 1 runs on the new ones, searched
+//     within ± search_window_s around the step's prior offset.
 // Slaves whose offset is given are held at it (σ unknown).
 //
 // Memory: per camera, the poses of the last history_s seconds (a deque trimmed on every Add).
@@ -27,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/estimator_state.h"
 #include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 
@@ -40,8 +50,10 @@ struct ClockOffsetOptions {
   // Per slave (one entry each, or empty = every slave estimated): nullopt = estimated from the
   // data, a value = the given offset [s], held.
   std::vector<std::optional<double>> given_s;
-  double init_window_s = 8.0;     // poses correlated for the initial estimate, > 2 s
-  double search_window_s = 0.5;   // the initial offset is searched within ± this, > 0
+  double init_window_s = 8.0;  // poses correlated for the initial estimate, > 2 s
+  // The offset is searched within ± this (around 0 at the start, around the last offset after
+  // a jump, around the step after a followed clock restart), > 0.
+  double search_window_s = 0.5;
   double measure_window_s = 2.0;  // one refinement measurement per this much master time, > 0
   double motion_span_s = 0.5;     // span of the motions of a measurement, > 0
   // Kalman filter: prior σ of the drift rate and its random walk, random walk of τ.
@@ -87,14 +99,33 @@ class ClockOffsetTracker {
   int num_slaves() const;
   // Slave `slave` (0-based: camera slave + 1).
   SlaveClockOffset SlaveOffset(int slave) const;
-  // The offset to match with [ns]: the estimate, or 0 while not initialised.
+  // The offset to match with [ns]: the estimate; while (re)initialising the prior of a followed
+  // clock jump, else 0 before the first initialisation and the last estimate after a jump.
   int64_t MatchingOffsetNs(int slave) const;
+
+  // The offset state of every slave (given ones: not initialised, their jumps 0), to continue
+  // after a restart.
+  std::vector<ClockOffsetState> SaveState() const;
+  // Continues from `states` (one per slave, SaveState's): estimated slaves take their offset,
+  // drift, covariance and counts and are usable at once when they had a measurement; given
+  // slaves keep their value. Errors: a count other than num_slaves(), a non-finite value or a
+  // covariance with a negative variance (naming the slave). Call before the first Add.
+  Status RestoreState(const std::vector<ClockOffsetState>& states);
+
+  // The SyncBuffer followed a restart of slave `slave`'s clock (SyncBuffer::ClockJumps) and
+  // set its offset to `prior_s` (the step): the offset is re-acquired around it from the poses
+  // added from now on (step 4). Counted as a jump when the slave had an offset before. Logged.
+  void FollowClockJump(int slave, double prior_s);
 
  private:
   struct Slave;
   void Update(int slave);
   bool Initialise(int slave);
   bool Measure(int slave);
+  // A measurement window of `slave` from `from_ns` disagrees with the prediction: counted, and
+  // after jump_confirmations in a row a jump (re-initialised around `predicted_s`). Returns
+  // whether measuring goes on.
+  bool Outlier(int slave, int64_t from_ns, double measured_s, double predicted_s, double sigma_s);
   void Trim(std::deque<CameraPose>* poses) const;
 
   std::vector<std::string> names_;

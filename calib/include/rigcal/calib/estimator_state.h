@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -94,6 +95,19 @@ struct SlaveEstimatorState {
   MotionSums short_stats;      // the short-window twin (decalibration detection)
 };
 
+// One free-running slave's clock offset as the online tracker knows it
+// (ClockOffsetTracker::SaveState): the Kalman state [τ, ρ] and its covariance.
+struct ClockOffsetState {
+  bool initialised = false;  // an offset was estimated; false: still searching (only the
+                             // counts below hold)
+  double offset_s = 0.0;     // τ = slave stamp - master clock at t_ns [s]
+  double drift = 0.0;        // ρ = dτ/dt [s/s]
+  Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  // of [τ, ρ]
+  int64_t t_ns = 0;                                      // master time of offset_s
+  int measurements = 0;  // refinement measurements since the last (re)initialisation
+  int jumps = 0;         // jumps detected so far
+};
+
 struct RigEstimatorState {
   std::vector<std::string> cameras;         // camera names, [0] the master
   int master_segment = 0;                   // the master's current odometry segment
@@ -103,6 +117,9 @@ struct RigEstimatorState {
   // far each input was consumed, so that the same poses after a resume are skipped. Empty when
   // unknown (state files before version 4).
   std::vector<int64_t> consumed_t_ns;
+  // Per slave, the online clock offset when the cameras run free (OnlineOptions::time_offset);
+  // empty when they do not, and in state files before version 5.
+  std::vector<ClockOffsetState> clock_offsets;
 };
 
 // The direction moments d_dir = sum w c_i c_i^T of statistics saved without them (state files of

@@ -42,7 +42,9 @@ struct OnlineOptions {
   // the master's instants (sync.interpolate is set) at each slave's clock offset, which a
   // ClockOffsetTracker estimates from every pushed pose (or holds at a given value). A slave
   // is left out of the sets given to the estimator until its offset is known (and while a
-  // jump of it is suspected); Estimate() reports the offset and its σ per slave.
+  // jump of it is suspected); Estimate() reports the offset and its σ per slave. A restart of
+  // an estimated slave's clock is followed (sync.follow_clock_jumps is set for those slaves)
+  // and its offset re-acquired around the step (ClockOffsetTracker::FollowClockJump).
   ClockOffsetOptions time_offset;
   // The first violated constraint as "<field>: <constraint>", nested fields as "sync.<field>" and
   // "estimator.<field>".
@@ -89,6 +91,8 @@ class OnlineCalibrator {
   // The estimator's state, to continue after a restart (any thread; serialised with the
   // estimator thread). See RigEstimator::SaveState / RestoreState. A restored state makes the
   // sync buffer skip the poses it consumed (SyncBuffer::SkipConsumed): call before pushing.
+  // With time_offset.enabled the state carries every slave's clock offset (drift, σ, jumps;
+  // ClockOffsetTracker::SaveState), restored with it: matching starts at the saved offsets.
   RigEstimatorState SaveState() const;
   Status RestoreState(const RigEstimatorState& state);
   // Number of background refinements applied so far.
@@ -122,6 +126,8 @@ class OnlineCalibrator {
   mutable Mutex offset_mutex_;
   // Null unless options_.time_offset.enabled.
   std::unique_ptr<ClockOffsetTracker> clock_ RIGCAL_GUARDED_BY(offset_mutex_);
+  // Per slave, the SyncBuffer's clock jumps the tracker was told of (FollowClockJump).
+  std::vector<uint64_t> clock_jumps_seen_ RIGCAL_GUARDED_BY(offset_mutex_);
   std::thread estimator_thread_;
   std::thread refinement_thread_;
 };

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -153,6 +154,7 @@ struct SlaveOnlineState {
   bool clock_offset_estimated = false;
   bool clock_offset_known = false;
   double clock_drift_ppm = 0.0;
+  double clock_drift_std_ppm = std::numeric_limits<double>::quiet_NaN();  // NaN: unknown
   int clock_jumps = 0;
 };
 

@@ -61,8 +61,9 @@
 //  * more than the glitch horizon (max(2 s, 10 * max_wait)) ahead of the newest stamp of every
 //    camera (up to INT64_MAX), or
 //  * ahead of its camera's own recent rate (more than max(20 of its recent frame intervals,
-//    max_wait) after its newest stamp) while also more than max_wait ahead of every other
-//    camera's newest stamp (a clock that stepped by a second), or
+//    max_wait) after its newest stamp; 6 intervals for a slave that follows clock jumps) while
+//    also more than max_wait ahead of every other camera's newest stamp (a clock that stepped
+//    by a second), or
 //  * more than the glitch horizon behind its camera's newest stamp or the newest stamp of any
 //    camera (a stamp from the past).
 // One such stamp would otherwise make every later pose of the camera out of order and time out
@@ -71,6 +72,25 @@
 // the old timeline (every camera paused), or as soon as another camera's clock reaches it: a
 // camera whose clock alone jumped is rejected until the others agree. Duplicates and poses out
 // of order are warned about once per burst too.
+//
+// Clock jumps of free-running slaves (interpolation mode, slaves with follow_clock_jumps). In
+// interpolation mode the rules above compare stamps on the master clock (a slave's stamp minus
+// its offset). A slave whose clock restarted (its stamps step by seconds, or restart near 0)
+// would be rejected by them forever; instead, poses of a following slave that the rules reject
+// (clock glitch, out of order, duplicate, or consumed before a resume) start a run on a NEW
+// timeline of the camera: each next rejected pose continues the run when it lies after the
+// previous one by between half and three of the camera's recent frame intervals (a steady
+// rate). When the run holds kNewClockPoses (10)
+// poses and the master advanced by at least half the run's span meanwhile (the new clock runs
+// with the master's: not a replay of old data, which the master would share), the new timeline
+// is followed: the camera's ring is emptied (its entries counted used or never_matched), its
+// offset becomes the step's prior (the mean of stamp - master's newest stamp over the run, less
+// the camera's lead over the master before the step), the jump is counted (clock_jumps, a
+// ClockJump record) and warned about once, and the run's last pose is accepted. An accepted pose
+// on the old timeline ends a run: isolated glitches, bursts of them at no steady rate, and old
+// data replayed by every camera stay rejected. Steps of at most 6 frame intervals ahead or
+// fewer than 10 frames back stay on the old timeline here: the ClockOffsetTracker finds those
+// (it searches ± its search window, 0.5 s, around the last offset).
 //
 // Resume: SkipConsumed(t) makes every pose of camera c stamped at or before t[c] kConsumed (the
 // estimator took it before a restart), so replaying the same data after a resume adds nothing.
@@ -114,6 +134,10 @@ struct SyncOptions {
   // Interpolation mode (see above): slave poses interpolated at the master's instants at each
   // slave's time offset. Not with match_by_trigger_seq.
   bool interpolate = false;
+  // Interpolation mode: per camera (empty = none), whether a restart of its clock is followed
+  // (see "Clock jumps" above): for slaves whose offset is estimated. [0] (the master) must be
+  // false; not without interpolate.
+  std::vector<bool> follow_clock_jumps;
   // Matched sets held for the consumer (a fixed queue). In [1, 2^20]. When the consumer is too
   // slow the oldest ready set is dropped (counted as consumer_overflow).
   int ready_capacity = 32;
@@ -173,6 +197,8 @@ struct SyncCameraStats {
   // lost with it when the full ready queue dropped it (SyncStats::consumer_overflow).
   uint64_t consumer_overflow = 0;
   uint64_t fill = 0;  // entries buffered now (<= capacity)
+  // Restarts of the camera's clock followed (an event count, not a drop; see "Clock jumps").
+  uint64_t clock_jumps = 0;
 
   uint64_t Dropped() const {
     return stopped + invalid + late + duplicate + out_of_order + clock_glitch + consumed +
@@ -193,6 +219,14 @@ struct SyncStats {
 
   // One line for logs: sets, fills and the non-zero drop counters.
   std::string BriefReport() const;
+};
+
+// The clock jumps of one camera followed so far (see "Clock jumps" above).
+struct ClockJump {
+  uint64_t count = 0;     // jumps followed
+  int64_t offset_ns = 0;  // at the last one: the offset prior set (stamp - master clock)
+  int64_t step_ns = 0;    // at the last one: the prior minus the offset before it
+  int64_t t_ns = 0;       // at the last one: the stamp of the first pose accepted after it
 };
 
 class SyncBuffer {
@@ -240,8 +274,14 @@ class SyncBuffer {
   SyncStats stats() const;
 
   // Interpolation mode: slave `camera` (>= 1) stamps read master clock + offset_ns from now on
-  // (see the rule above). Any thread. Ignored for the master, an unknown camera or in stamp mode.
-  void SetTimeOffset(int camera, int64_t offset_ns);
+  // (see the rule above). Any thread. Ignored for the master, an unknown camera or in stamp mode,
+  // and when `after_jumps` is given and differs from the camera's ClockJumps().count (the offset
+  // was estimated before a clock jump the caller has not seen yet).
+  void SetTimeOffset(int camera, int64_t offset_ns,
+                     std::optional<uint64_t> after_jumps = std::nullopt);
+
+  // The clock jumps of `camera` followed so far (all zero for an unknown camera). Any thread.
+  ClockJump ClockJumps(int camera) const;
 
   // How many sets could be ready once one more Push (or a Flush) has run: the sets ready now
   // plus the master entries buffered plus one (every set takes a master entry). A producer

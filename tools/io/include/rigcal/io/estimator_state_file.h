@@ -6,6 +6,8 @@
 //   cameras <count> <name>...
 //   master_segment <segment> <0|1>
 //   consumed <count> <t_ns>...   (version 4: per camera the newest stamp consumed, -1 none)
+//   clocks <count>               (version 5: 0, or one line per slave when the cameras run free)
+//   clock <i> <initialised 0|1> <offset_s> <drift> <P00> <P01> <P11> <t_ns> <measurements> <jumps>
 //   slave <i>            then its counts, noise levels, segment, model and the long and short
 //   ...                  statistics (every sum, 17 significant digits: exact round trip)
 //   checksum <FNV-1a 64 of the lines between the header and this one, hex>
@@ -13,7 +15,9 @@
 // Version 3 holds the translation-direction moments (Ddir, the translational model's σ);
 // version-2 files are read too, with those moments derived from the others
 // (DirectionMomentsFromCrossMoments). Version 4 adds the consumed stamps (how far each input
-// was consumed: a resume skips those poses); older files resume without them.
+// was consumed: a resume skips those poses); older files resume without them. Version 5 adds
+// the clock offsets of free-running slaves (ClockOffsetState); a version-4 file resumes with
+// them estimated afresh.
 
 #include <string>
 #include <string_view>
@@ -23,7 +27,7 @@
 
 namespace rigcal::tools {
 
-inline constexpr int kEstimatorStateVersion = 4;        // written
+inline constexpr int kEstimatorStateVersion = 5;        // written
 inline constexpr int kOldestEstimatorStateVersion = 2;  // oldest read
 
 // The state as the text of a state file (version kEstimatorStateVersion).

@@ -22,7 +22,7 @@ namespace rigcal::tools {
 // sync_sets_emitted, sync_capacity and rss_bytes >= 0, sync_fill in [0, sync_capacity], a defined
 // estimator_state, an estimator_message without NUL bytes, and per camera: a camera of the rig
 // named once, finite fps >= 0, counters >= 0, a defined vo_state, last_pose_age_ms >= -1,
-// vo_segment >= -1.
+// vo_segment >= -1, a defined time_offset_source, finite clock values, σ >= -1, clock_jumps >= 0.
 extern template std::optional<Rejection> CheckMessage(std::string_view, const CameraNames&,
                                                       rig_status_t*);
 extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const CameraNames&,
@@ -55,7 +55,8 @@ struct StampRate {
 };
 
 // rig_status_t from the caller's per-camera view, the sync buffer's counters (drops by cause,
-// fill), the estimate (estimator state and message) and the process's CPU and RSS.
+// fill), the estimate (estimator state and message; per slave its clock offset, drift, σ and
+// jumps when the cameras run free) and the process's CPU and RSS.
 rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const SyncStats& sync,
                            int32_t sync_capacity, const RigEstimate& estimate, double cpu_percent,
                            int64_t utime);

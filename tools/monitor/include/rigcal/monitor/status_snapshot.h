@@ -58,7 +58,9 @@ std::string SlaveStateName(int8_t state);
 //                                   "dropped": {"late", "duplicate", "out_of_order", "overflow",
 //                                               "never_matched", "invalid"},
 //                                   "vo_state", "vo_segment", "last_pose_age_ms" (null when
-//                                   none)}],
+//                                   none), "clock": {"source": "none"|"given"|"estimating"|
+//                                   "estimated", "offset_s", "std_s", "drift_ppm",
+//                                   "drift_std_ppm", "jumps"}}],
 //                      "sync": {"sets_emitted", "fill", "capacity"},
 //                      "process": {"cpu_percent", "rss_bytes"}},
 //    "extrinsics": null | {"age_s", "t_ns", "master", "distance_unit": "master_odometry"|"metre",
@@ -74,9 +76,10 @@ nlohmann::json SnapshotToJson(const MonitorSnapshot& snapshot);
 
 // The dashboard as text lines (no terminal control codes): a header with the source and the
 // age of the newest messages, the rig's state and message, the calibrator's CPU and RSS, a table
-// of the cameras (fps, frames, drops by cause, VO state, segment of a slave, pose age), the sync
-// buffer, and per slave the estimate (axis/angle, roll/pitch/yaw, C, scale), its σ ("unknown"
-// when unknown), motions used/rejected, state and facts. `width` caps the line length (0 = none).
+// of the cameras (fps, frames, drops by cause, VO state, segment of a slave, pose age), the
+// clock of every free-running slave (offset, σ, drift, jumps), the sync buffer, and per slave the
+// estimate (axis/angle, roll/pitch/yaw, C, scale), its σ ("unknown" when unknown), motions
+// used/rejected, state and facts. `width` caps the line length (0 = none).
 std::string FormatDashboard(const MonitorSnapshot& snapshot, int width = 0);
 
 // `text` as one refresh of a terminal screen: cursor home, every line followed by "clear to the

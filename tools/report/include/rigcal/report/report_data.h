@@ -39,6 +39,11 @@ struct CameraHealthSample {
   int64_t dropped = 0;  // every cause, cumulative
   int8_t vo_state = 0;  // camera_status_t::VO_*
   int64_t last_pose_age_ms = -1;
+  // The camera's clock (rig_status_t version 4): its offset to the master clock when given or
+  // estimated (kUnknown otherwise: the master, synchronised stamps, still being estimated), and
+  // the restarts of it detected so far.
+  double time_offset_ms = kUnknown;
+  int32_t clock_jumps = 0;
 };
 
 // One motion of one slave (thesis fig. 5.11 and 5.12), against the final estimate.
@@ -80,6 +85,8 @@ struct ReportData {
   std::vector<std::string> cameras;
   std::map<std::string, std::vector<CameraHealthSample>> health;
   int64_t status_messages = 0;
+  // Some camera runs free (a clock offset in RIGCAL_STATUS): the health figure shows the clocks.
+  bool free_running = false;
 
   // The final table: the result file, or the last RIGCAL_EXTRINSICS.
   RigCalibration final_result;
