@@ -88,11 +88,13 @@ std::string ApplyPairs(const std::string& text, PairOptions* pairs) {
     pairs->policy = PairOptions::Policy::kSinceStart;
   } else if (text == "walk") {
     pairs->policy = PairOptions::Policy::kWalk;
+  } else if (text == "gls") {
+    pairs->policy = PairOptions::Policy::kGls;
   } else if (const int step = CountAfter(text, "relative:"); step > 0) {
     pairs->policy = PairOptions::Policy::kRelative;
     pairs->step = step;
   } else {
-    return "expected auto, start, walk or relative:STEP with STEP >= 1, got '" + text + "'";
+    return "expected auto, gls, start, walk or relative:STEP with STEP >= 1, got '" + text + "'";
   }
   return "";
 }

@@ -18,6 +18,7 @@ struct PairOptions {
     kRelative,    // (k, k + step) for every k
     kAuto,        // per slave, the span whose estimate is most certain (default, see below)
     kWalk,        // anchors walk to a target motion (see below; the earlier default)
+    kGls,         // per slave, auto's result refined by GLS on every consecutive motion
   };
   Policy policy = Policy::kAuto;
 

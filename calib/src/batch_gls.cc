@@ -1,0 +1,128 @@
+// The gls pair policy (batch_gls.h).
+#include "batch_gls.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "batch_motions.h"
+#include "gls_refinement.h"
+#include "rigcal/calib/format.h"
+#include "rigcal/calib/logging.h"
+#include "rigcal/calib/pair_selection.h"
+#include "rigcal/calib/quaternion.h"
+
+namespace rigcal::internal {
+namespace {
+
+// The consecutive motions of the slave with the scale variables of `r` (its scale keys: the
+// segment ids, or one scale); motions of a segment without a scale are left out.
+std::vector<MotionData> ConsecutiveMotions(const RigRecording& recording, int slave,
+                                           const SlaveCalibration& r) {
+  MotionCounts counts;
+  std::vector<MotionData> data =
+      FormMotions(MotionsForSlave(recording, slave, RelativePairs(recording, 1)), &counts);
+  std::vector<MotionData> out;
+  out.reserve(data.size());
+  for (MotionData& m : data) {
+    int index = r.scale_model == ScaleModel::kSegments ? -1 : 0;
+    for (size_t s = 0; index < 0 && s < r.scales.size(); ++s) {
+      if (r.scales[s].segment == m.segment) index = static_cast<int>(s);
+    }
+    if (index < 0) continue;
+    m.scale_index = index;
+    out.push_back(m);
+  }
+  return out;
+}
+
+GlsInput StartOf(const SlaveCalibration& r, const CalibrationOptions& options) {
+  GlsInput in;
+  in.q = r.estimate.q;
+  in.C = r.estimate.C;
+  for (const SegmentScale& s : r.scales) in.scales.push_back(s.scale);
+  if (in.scales.empty()) in.scales.push_back(r.estimate.scale);
+  in.translational = r.motion_model == MotionModel::kTranslational;
+  const Eigen::Vector3d& axis = r.observability.planar_axis;
+  const auto nominal = options.nominal.find(r.name);
+  if (!in.translational && axis.norm() > 0.5) {
+    if (r.motion_model == MotionModel::kPlanar) {
+      in.axis = axis.normalized();
+      in.axis_offset_fixed = true;  // at the auto result's offset: the prior's or 0
+    } else if (nominal != options.nominal.end() && options.nominal_sigma > 0.0) {
+      in.axis = axis.normalized();
+      in.axis_prior = in.axis.dot(nominal->second.C);
+      in.axis_prior_sigma = options.nominal_sigma;
+    }
+  }
+  in.time_blocks = options.covariance_time_blocks;
+  return in;
+}
+
+// The GLS estimate and its σ in `r` (as the refinement's in batch_result.cc).
+void TakeGls(const GlsResult& g, const GlsInput& in, const CalibrationOptions& options,
+             SlaveCalibration* out) {
+  SlaveCalibration& r = *out;
+  r.estimate.q = g.q;
+  if (!in.translational) r.estimate.C = g.C;
+  r.estimate.scale = g.scales[0];
+  for (size_t s = 0; s < r.scales.size() && s < g.scales.size(); ++s) {
+    r.scales[s].scale = g.scales[s];
+    r.scales[s].std = g.scale_std[s];
+  }
+  if (std::isfinite(r.rot_std_deg)) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(g.cov_rotation);
+    r.rot_std_deg = std::sqrt(std::max(0.0, eig.eigenvalues()(2))) * kDegPerRad;
+  }
+  if (in.translational) return;
+  Eigen::Matrix3d cov = g.cov_position;
+  const auto nominal = options.nominal.find(r.name);
+  const bool prior = nominal != options.nominal.end() && options.nominal_sigma > 0.0;
+  const Eigen::Vector3d axis = r.observability.planar_axis;
+  if (r.motion_model == MotionModel::kPlanar) {
+    if (prior) {
+      cov += options.nominal_sigma * options.nominal_sigma * axis * axis.transpose();
+      r.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+    } else {
+      r.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+    }
+    return;
+  }
+  r.pos_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+  if (axis.norm() > 0.5) {
+    r.axis_offset_std =
+        in.axis_prior_sigma > 0.0 ? g.axis_std : std::sqrt(std::max(0.0, axis.dot(cov * axis)));
+  }
+}
+
+}  // namespace
+
+SlaveCalibration CalibrateSlaveGls(const RigRecording& recording,
+                                   const AutoPairCandidates& candidates, int slave,
+                                   const CalibrationOptions& options) {
+  SlaveCalibration r = CalibrateSlaveAutoPairs(recording, candidates, slave, options);
+  if (!r.solved()) return r;
+  const std::string start = r.pairs;
+  auto keep = [&](const std::string& why) {
+    r.message += "; gls not applied (" + why + "): the auto result";
+    ModuleLogger("calib")->debug("slave '{}': gls not applied: {}", r.name, why);
+    return r;
+  };
+  if (r.scale_model == ScaleModel::kPartitions) return keep("time-partitioned scales");
+  const std::vector<MotionData> motions = ConsecutiveMotions(recording, slave, r);
+  const GlsInput in = StartOf(r, options);
+  const GlsResult g = RefineGls(motions, in);
+  if (!g.ok) return keep(g.message);
+  TakeGls(g, in, options, &r);
+  r.pairs = "gls";
+  r.message += "; pairs gls: generalised least squares on " + std::to_string(g.increments) +
+               " consecutive motions (" + std::to_string(g.runs) +
+               " runs) whitened by the pose noise fitted per component, chi2 " +
+               FixedText(g.chi2, 2) + ", from auto's " + start;
+  if (g.clustered_larger) r.message += "; gls sigma raised to the cluster-robust one";
+  return r;
+}
+
+}  // namespace rigcal::internal
