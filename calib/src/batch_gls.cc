@@ -13,17 +13,34 @@
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/pair_selection.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/robust_statistics.h"
+#include "time_blocks.h"
 
 namespace rigcal::internal {
 namespace {
 
-// The consecutive motions of the slave with the scale variables of `r` (its scale keys: the
-// segment ids, or one scale); motions of a segment without a scale are left out.
-std::vector<MotionData> ConsecutiveMotions(const RigRecording& recording, int slave,
-                                           const SlaveCalibration& r) {
+// The span of the chains: auto's span, or for the walk the median span of its pairs.
+int ChainSpan(const RigRecording& recording, const SlaveCalibration& r,
+              const CalibrationOptions& options) {
+  const std::string prefix = "relative:";
+  if (r.pairs.rfind(prefix, 0) == 0) return std::max(1, std::stoi(r.pairs.substr(prefix.size())));
+  PairOptions walk = options.pairs;
+  walk.policy = PairOptions::Policy::kWalk;
+  std::vector<double> spans;
+  for (const IndexPair& p : SelectPairs(recording, walk)) spans.push_back(p.b - p.a);
+  return spans.empty() ? 1 : std::max(1, static_cast<int>(std::lround(Median(spans))));
+}
+
+// The motions (k, k + span) of the slave as `span` chains of consecutive motions (k ≡ j mod
+// span, in time order), with the scale variables of `r` (its scale keys: the segment ids, or
+// one scale); motions of a segment without a scale are left out.
+std::vector<MotionData> ChainMotions(const RigRecording& recording, int slave, int span,
+                                     const SlaveCalibration& r) {
+  std::vector<IndexPair> pairs = RelativePairs(recording, span);
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [&](const IndexPair& x, const IndexPair& y) { return x.a % span < y.a % span; });
   MotionCounts counts;
-  std::vector<MotionData> data =
-      FormMotions(MotionsForSlave(recording, slave, RelativePairs(recording, 1)), &counts);
+  std::vector<MotionData> data = FormMotions(MotionsForSlave(recording, slave, pairs), &counts);
   std::vector<MotionData> out;
   out.reserve(data.size());
   for (MotionData& m : data) {
@@ -111,15 +128,19 @@ SlaveCalibration CalibrateSlaveGls(const RigRecording& recording,
     return r;
   };
   if (r.scale_model == ScaleModel::kPartitions) return keep("time-partitioned scales");
-  const std::vector<MotionData> motions = ConsecutiveMotions(recording, slave, r);
-  const GlsInput in = StartOf(r, options);
+  const int span = ChainSpan(recording, r, options);
+  const std::vector<MotionData> motions = ChainMotions(recording, slave, span, r);
+  GlsInput in = StartOf(r, options);
+  in.time_blocks = BlocksForDurations(motions, options.covariance_time_blocks);
   const GlsResult g = RefineGls(motions, in);
   if (!g.ok) return keep(g.message);
   TakeGls(g, in, options, &r);
   r.pairs = "gls";
   r.message += "; pairs gls: generalised least squares on " + std::to_string(g.increments) +
-               " consecutive motions (" + std::to_string(g.runs) +
-               " runs) whitened by the pose noise fitted per component, chi2 " +
+               " motions of span " + std::to_string(span) + " in " + std::to_string(g.runs) +
+               " chains (" + std::to_string(g.outliers) +
+               " dropped by their whitened residual), whitened by the pose noise fitted per "
+               "component, chi2 " +
                FixedText(g.chi2, 2) + ", from auto's " + start;
   if (g.clustered_larger) r.message += "; gls sigma raised to the cluster-robust one";
   return r;

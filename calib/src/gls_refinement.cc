@@ -8,6 +8,7 @@
 
 #include "planar_solver.h"
 #include "rigcal/calib/quaternion.h"
+#include "rigcal/calib/robust_statistics.h"
 #include "time_blocks.h"
 
 namespace rigcal::internal {
@@ -237,7 +238,6 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
     out.message = "too few consecutive motions";
     return out;
   }
-  const Frames frames = RunFrames(motions);
   Point p;
   p.dR = input.q.normalized().toRotationMatrix();
   p.z = layout.t.transpose() * (input.translational ? Eigen::Vector3d::Zero() : input.C);
@@ -245,10 +245,32 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
 
   std::vector<LevelNoise> noise;
   System sys;
+  std::vector<MotionData> kept = motions;
+  Frames frames = RunFrames(kept);
   for (int round = 0; round < std::max(1, input.noise_rounds); ++round) {
-    noise = FitNoise(Increments(motions, frames, layout, p), frames);
+    if (round > 0 && input.outlier_factor > 0.0) {
+      // Motions whose whitened residual lies beyond outlier_factor robust σ (a glitched pose,
+      // a PnP flip) are dropped; their chains restart after them.
+      std::vector<double> magnitude(kept.size(), 0.0);
+      for (Eigen::Index row = 0; row < sys.b.size(); ++row) {
+        if (sys.motion[row] >= 0) {
+          magnitude[sys.motion[row]] = std::max(magnitude[sys.motion[row]], std::abs(sys.b(row)));
+        }
+      }
+      std::vector<double> all(sys.b.data(), sys.b.data() + sys.b.size());
+      for (double& v : all) v = std::abs(v);
+      const double limit = input.outlier_factor * 1.4826 * Median(all);
+      std::vector<MotionData> inliers;
+      for (size_t k = 0; k < kept.size(); ++k) {
+        if (magnitude[k] <= limit) inliers.push_back(kept[k]);
+      }
+      out.outliers += static_cast<int>(kept.size() - inliers.size());
+      kept.swap(inliers);
+      frames = RunFrames(kept);
+    }
+    noise = FitNoise(Increments(kept, frames, layout, p), frames);
     for (int iteration = 0; iteration < 20; ++iteration) {
-      sys = Whitened(motions, frames, layout, p, noise);
+      sys = Whitened(kept, frames, layout, p, noise);
       AddAxisPrior(input, layout, p, &sys);
       const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
       const Eigen::VectorXd step = -h.ldlt().solve(sys.a.transpose() * sys.b);
@@ -265,7 +287,7 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
       if (size < 1e-10) break;
     }
   }
-  sys = Whitened(motions, frames, layout, p, noise);
+  sys = Whitened(kept, frames, layout, p, noise);
   AddAxisPrior(input, layout, p, &sys);
   const Eigen::MatrixXd h_inv = Inverse(sys.a.transpose() * sys.a);
   if (h_inv.size() == 0) {
@@ -280,7 +302,7 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
   out.C = layout.t * p.z;
   out.scales = p.scales;
   out.noise = noise;
-  out.increments = static_cast<int>(motions.size());
+  out.increments = static_cast<int>(kept.size());
   out.runs = static_cast<int>(frames.run_start.size()) - 1;
   auto position_of = [&](const Eigen::MatrixXd& c) -> Eigen::Matrix3d {
     if (layout.c_free == 0) return Eigen::Matrix3d::Zero();
@@ -296,7 +318,7 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
   if (use_axis && layout.c_free == 3) out.axis_std = std::sqrt(std::max(0.0, cov(5, 5)));
   if (input.time_blocks >= 2) {
     const Eigen::MatrixXd robust =
-        Clustered(sys, h_inv, TimeBlocks(motions, input.time_blocks), input.time_blocks);
+        Clustered(sys, h_inv, TimeBlocks(kept, input.time_blocks), input.time_blocks);
     if (robust.allFinite()) {
       bool larger = false;
       out.cov_rotation = LoewnerMax(out.cov_rotation, robust.topLeftCorner<3, 3>(), &larger);

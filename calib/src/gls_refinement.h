@@ -30,6 +30,9 @@ struct GlsInput {
   double axis_prior_sigma = 0.0;
   int noise_rounds = 2;  // fit the noise, solve; repeated on the new residuals
   int time_blocks = 0;   // blocks of the cluster-robust check on the whitened residuals
+  // After the first round, motions with a whitened residual beyond this many robust σ are
+  // dropped (0: none).
+  double outlier_factor = 6.0;
 };
 
 struct GlsResult {
@@ -47,6 +50,7 @@ struct GlsResult {
   double chi2 = 0.0;              // mean square of the whitened residuals (about 1)
   int increments = 0;             // motions used
   int runs = 0;                   // stretches of consecutive motions (restarts of the filter)
+  int outliers = 0;               // motions dropped by their whitened residual
   std::vector<LevelNoise> noise;  // per residual component (rotation x y z, position x y z)
 };
 
