@@ -134,7 +134,19 @@ SlaveCalibration CalibrateSlaveGls(const RigRecording& recording,
   in.time_blocks = BlocksForDurations(motions, options.covariance_time_blocks);
   const GlsResult g = RefineGls(motions, in);
   if (!g.ok) return keep(g.message);
-  TakeGls(g, in, options, &r);
+  SlaveCalibration refined = r;
+  TakeGls(g, in, options, &refined);
+  // The data's own yardstick: when the GLS σ of rotation and of C are both larger than auto's
+  // (cluster-robust, both honest), the chains carry less than auto's pairs (hand-held PnP
+  // poses whose errors depend on the view: the walk's large rotations), and auto's is kept.
+  const bool rot_larger = std::isfinite(r.rot_std_deg) && refined.rot_std_deg > r.rot_std_deg;
+  const bool pos_larger =
+      in.translational || (r.pos_std.allFinite() && refined.pos_std.norm() > r.pos_std.norm());
+  if (rot_larger && pos_larger) {
+    return keep("its sigma " + FixedText(refined.rot_std_deg, 4) + " deg, |C| " +
+                SignificantText(refined.pos_std.norm(), 2) + " are larger than auto's");
+  }
+  r = std::move(refined);
   r.pairs = "gls";
   r.message += "; pairs gls: generalised least squares on " + std::to_string(g.increments) +
                " motions of span " + std::to_string(span) + " in " + std::to_string(g.runs) +
