@@ -142,7 +142,7 @@ SlaveCalibration CalibrateSlaveGls(const RigRecording& recording,
   const bool rot_larger = std::isfinite(r.rot_std_deg) && refined.rot_std_deg > r.rot_std_deg;
   const bool pos_larger =
       in.translational || (r.pos_std.allFinite() && refined.pos_std.norm() > r.pos_std.norm());
-  if (rot_larger && pos_larger) {
+  if (options.pairs.gls_keep_more_certain && rot_larger && pos_larger) {
     return keep("its sigma " + FixedText(refined.rot_std_deg, 4) + " deg, |C| " +
                 SignificantText(refined.pos_std.norm(), 2) + " are larger than auto's");
   }

@@ -28,6 +28,7 @@ TEST(GlsPairs, NamedInTheResult) {
   const SyntheticDrive d = WhiteNoiseDrive(1);
   CalibrationOptions options;
   options.pairs.policy = PairOptions::Policy::kGls;
+  options.pairs.gls_keep_more_certain = false;
   const RigCalibration r = CalibrateRig(d.recording, options);
   ASSERT_EQ(r.slaves.size(), 2u);
   for (const SlaveCalibration& s : r.slaves) {
@@ -45,12 +46,22 @@ TEST(GlsPairs, NamedInTheResult) {
 // 3 σ_max² in expectation. Bounds at ~3 standard errors.
 TEST(GlsPairs, SigmaMatchesTheSpreadOnWhiteNoise) {
   double pos_z = 0.0, rot_z = 0.0;
+  double rot_gls = 0.0, rot_auto = 0.0, pos_gls = 0.0, pos_auto = 0.0;
   int n = 0;
   for (uint64_t seed = 1; seed <= 8; ++seed) {
     const SyntheticDrive d = WhiteNoiseDrive(seed);
     CalibrationOptions options;
     options.pairs.policy = PairOptions::Policy::kGls;
+    options.pairs.gls_keep_more_certain = false;  // the GLS estimate and σ themselves
     const RigCalibration r = CalibrateRig(d.recording, options);
+    options.pairs.policy = PairOptions::Policy::kAuto;
+    const RigCalibration a = CalibrateRig(d.recording, options);
+    for (size_t i = 0; i < d.truth.size(); ++i) {
+      rot_gls += std::pow(CompareToTruth(r.slaves[i].estimate, d.truth[i]).rot_deg, 2);
+      rot_auto += std::pow(CompareToTruth(a.slaves[i].estimate, d.truth[i]).rot_deg, 2);
+      pos_gls += (r.slaves[i].estimate.C - d.truth[i].C).squaredNorm();
+      pos_auto += (a.slaves[i].estimate.C - d.truth[i].C).squaredNorm();
+    }
     for (size_t i = 0; i < d.truth.size(); ++i) {
       const SlaveCalibration& s = r.slaves[i];
       ASSERT_TRUE(s.solved()) << s.message;
@@ -65,6 +76,9 @@ TEST(GlsPairs, SigmaMatchesTheSpreadOnWhiteNoise) {
   rot_z /= n;
   std::printf("mean |dC|^2/|sigma_C|^2 %.2f, angle^2/(3 sigma_max^2) %.2f over %d results\n", pos_z,
               rot_z, n);
+  std::printf("RMS error gls / auto: rotation %.4f / %.4f deg, C %.5f / %.5f\n",
+              std::sqrt(rot_gls / n), std::sqrt(rot_auto / n), std::sqrt(pos_gls / n),
+              std::sqrt(pos_auto / n));
   EXPECT_GT(pos_z, 0.4);
   EXPECT_LT(pos_z, 1.8);
   EXPECT_LT(rot_z, 1.8);
