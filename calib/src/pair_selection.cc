@@ -198,6 +198,7 @@ std::vector<IndexPair> SelectPairs(const RigRecording& recording, const PairOpti
     case PairOptions::Policy::kRelative:
       return RelativePairs(recording, options.step);
     case PairOptions::Policy::kAuto:  // chosen per slave by CalibrateRig; here kWalk's
+    case PairOptions::Policy::kGls:
     case PairOptions::Policy::kWalk: {
       // Walk to the target angle, but not beyond the spans whose motions are still better
       // than noise (twice the best span).
@@ -249,6 +250,8 @@ std::string ToString(PairOptions::Policy policy) {
       return "auto";
     case PairOptions::Policy::kWalk:
       return "walk";
+    case PairOptions::Policy::kGls:
+      return "gls";
   }
   return "?";
 }

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "batch_acceptance.h"
+#include "batch_gls.h"
 #include "batch_linear_solution.h"
 #include "batch_model_selection.h"
 #include "batch_motions.h"
@@ -124,7 +125,8 @@ RigCalibration CalibrateRig(const RigRecording& input, const CalibrationOptions&
   const std::string invalid = recording.Check().message();
   const bool options_ok = options.Check().ok();
   const bool solvable = invalid.empty() && options_ok;
-  const bool auto_pairs = options.pairs.policy == PairOptions::Policy::kAuto;
+  const bool gls = options.pairs.policy == PairOptions::Policy::kGls;
+  const bool auto_pairs = options.pairs.policy == PairOptions::Policy::kAuto || gls;
   std::vector<IndexPair> pairs;
   internal::AutoPairCandidates candidates;
   if (solvable && auto_pairs) {
@@ -140,7 +142,8 @@ RigCalibration CalibrateRig(const RigRecording& input, const CalibrationOptions&
     if (!invalid.empty()) {
       r = internal::Failed(r, Termination::kInvalidInput, "invalid recording: " + invalid);
     } else if (solvable && auto_pairs) {
-      r = internal::CalibrateSlaveAutoPairs(recording, candidates, slave, options);
+      r = gls ? internal::CalibrateSlaveGls(recording, candidates, slave, options)
+              : internal::CalibrateSlaveAutoPairs(recording, candidates, slave, options);
       out.pairs_selected = std::max(out.pairs_selected, r.motions.total);
     } else {
       r = CalibrateSlave(MotionsForSlave(recording, slave, pairs), options, r.name);

@@ -83,6 +83,7 @@ TEST(AutoPairs, SpanFollowsTheNoiseOfTheRecording) {
   options.repeats = 1;
   options.spans = {};
   options.online = false;
+  options.gls = false;
   options.threads = 1;
   options.only = "sim-30Hz-fast-";
   const auto results = RunPairEvaluation(scenarios, options);

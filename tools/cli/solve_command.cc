@@ -91,11 +91,13 @@ std::string ApplyPairs(const std::string& text, PairOptions* pairs) {
     pairs->policy = PairOptions::Policy::kSinceStart;
   } else if (text == "walk") {
     pairs->policy = PairOptions::Policy::kWalk;
+  } else if (text == "gls") {
+    pairs->policy = PairOptions::Policy::kGls;
   } else if (const int step = CountAfter(text, "relative:"); step > 0) {
     pairs->policy = PairOptions::Policy::kRelative;
     pairs->step = step;
   } else {
-    return "expected auto, start, walk or relative:STEP with STEP >= 1, got '" + text + "'";
+    return "expected auto, gls, start, walk or relative:STEP with STEP >= 1, got '" + text + "'";
   }
   return "";
 }
@@ -453,13 +455,15 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
                   "span N of (k, k + N) whose estimate has the smallest σ (spans\n"
                   "1, 2, 3, 5, 8, ... up to 1/8 of the recording are solved);\n"
                   "start: (first pose, k) for every k; relative:STEP: (k, k + STEP)\n"
-                  "for every k; walk: from spread anchors to a target rotation.")
+                  "for every k; walk: from spread anchors to a target rotation;\n"
+                  "gls: auto's result refined by GLS on chains of auto's span,\n"
+                  "whitened by the pose noise fitted to them (README).")
       ->check(ValueCheck(
           [](const std::string& v) {
             PairOptions p;
             return ApplyPairs(v, &p);
           },
-          "auto|start|walk|relative:STEP"))
+          "auto|gls|start|walk|relative:STEP"))
       ->capture_default_str();
   cmd->add_option("--tolerance-ms", args->tolerance_ms,
                   "Largest time difference in milliseconds between a master pose\n"

@@ -22,6 +22,8 @@ struct Sums {
   int results = 0, failed = 0;
   double rot = 0, pos = 0, scale = 0, rot_sigma = 0, pos_sigma = 0;
   int pos_count = 0, rot_sigma_count = 0, pos_sigma_count = 0;
+  double rot_z = 0, pos_z = 0;  // squared errors over their σ
+  int rot_z_count = 0, pos_z_count = 0;
   std::string chosen;
 };
 
@@ -58,6 +60,16 @@ void Accumulate(const SlaveCalibration& s, const Similarity& truth, bool planar,
     sums->pos_sigma += s.pos_std.squaredNorm();
     ++sums->pos_sigma_count;
   }
+  // Normalised errors: the rotation angle over √3 times the largest axis σ (1 for an isotropic
+  // honest σ, less otherwise), |ΔC| over |σ_C| (1 for an honest σ).
+  if (std::isfinite(s.rot_std_deg) && s.rot_std_deg > 0.0) {
+    sums->rot_z += std::pow(e.rot_deg / (std::sqrt(3.0) * s.rot_std_deg), 2);
+    ++sums->rot_z_count;
+  }
+  if (std::isfinite(pos) && s.pos_std.allFinite() && s.pos_std.norm() > 0.0) {
+    sums->pos_z += std::pow(pos / s.pos_std.norm(), 2);
+    ++sums->pos_z_count;
+  }
 }
 
 PolicyFigures Figures(const std::string& policy, int span, const Sums& s) {
@@ -75,6 +87,8 @@ PolicyFigures Figures(const std::string& policy, int span, const Sums& s) {
   }
   if (s.rot_sigma_count > 0) f.rot_sigma_rms_deg = std::sqrt(s.rot_sigma / s.rot_sigma_count);
   if (s.pos_sigma_count > 0) f.pos_sigma_rms = std::sqrt(s.pos_sigma / s.pos_sigma_count);
+  if (s.rot_z_count > 0) f.rot_z_rms = std::sqrt(s.rot_z / s.rot_z_count);
+  if (s.pos_z_count > 0) f.pos_z_rms = std::sqrt(s.pos_z / s.pos_z_count);
   return f;
 }
 
@@ -109,6 +123,10 @@ void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOp
     calib.pairs.step = span;
     results.push_back(CalibrateRig(rec, calib));
   }
+  if (options.gls) {
+    calib.pairs.policy = PairOptions::Policy::kGls;
+    results.push_back(CalibrateRig(rec, calib));
+  }
   if (options.online) {
     std::map<std::string, Similarity> truth;
     for (size_t i = 0; i < scenario.rig.size(); ++i) truth[scenario.names[i + 1]] = scenario.rig[i];
@@ -122,7 +140,7 @@ void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOp
       const SlaveCalibration& s = results[p].slaves[i];
       Accumulate(s, scenario.rig[i], scenario.planar, &(*sums)[p]);
       Accumulate(s, scenario.rig[i], scenario.planar, &(*half)[p]);
-      if (p == 0 && (*sums)[p].chosen.size() < 120) {
+      if (p == 0 && (*sums)[p].chosen.size() < 60) {
         if (!(*sums)[p].chosen.empty()) (*sums)[p].chosen += " ";
         (*sums)[p].chosen += s.pairs.empty() ? "?" : s.pairs;
       }
@@ -192,7 +210,7 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
     for (int span : options.spans) {
       if (span < n / 2) spans[c].push_back(span);
     }
-    sums[c].resize(1 + spans[c].size() + (options.online ? 1 : 0));
+    sums[c].resize(1 + spans[c].size() + (options.gls ? 1 : 0) + (options.online ? 1 : 0));
     for (auto& half : halves[c]) half.resize(sums[c].size());
   }
   const int64_t total = static_cast<int64_t>(chosen.size()) * options.repeats;
@@ -233,6 +251,7 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
       r.policies.push_back(
           Figures("relative:" + std::to_string(spans[c][k]), spans[c][k], sums[c][1 + k]));
     }
+    if (options.gls) r.policies.push_back(Figures("gls", 0, sums[c][1 + spans[c].size()]));
     if (options.online) r.policies.push_back(Figures("online", 0, sums[c].back()));
     for (size_t p = 1; p <= spans[c].size(); ++p) {
       const PolicyFigures& f = r.policies[p];
@@ -253,62 +272,118 @@ std::vector<PairScenarioResult> RunPairEvaluation(const std::vector<PairScenario
   return out;
 }
 
-std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
-  std::ostringstream s;
-  char line[512];
-  std::snprintf(line, sizeof(line),
-                "%-30s %6s %5s | %-14s %-14s | %9s %5s %9s %5s | %5s %5s | %-6s %-6s %-6s | %s\n",
-                "scenario", "poses", "Hz", "best rot span", "best pos span", "auto rot", "x",
-                "auto pos", "x", "x cv", "x cv", "onl/b", "onl/b", "onl/b",
-                "auto pairs (per slave, draw)");
-  s << line;
-  std::snprintf(line, sizeof(line),
-                "%-30s %6s %5s | %-14s %-14s | %9s %5s %9s %5s | %5s %5s | %-6s %-6s %-6s |\n", "",
-                "", "", "(RMS deg)", "(RMS units)", "RMS deg", "best", "RMS", "best", "rot", "pos",
-                "rot", "pos", "scale");
-  s << line;
-  int within_12 = 0, within_15 = 0, online_13 = 0, scored = 0, online_scored = 0;
+namespace {
+
+// How many scenarios a policy meets the requirement on: its worse ratio (rotation, position)
+// to the best fixed span (or the cross-validated one) within 1.2x and 1.5x.
+struct Counts {
+  int within_12 = 0, within_15 = 0, scored = 0;
   int cv_12 = 0, cv_15 = 0, cv_scored = 0;
-  for (const auto& r : results) {
-    const PolicyFigures* a = r.Find("auto");
-    const PolicyFigures* o = r.Find("online");
+  double rot_z = 0, pos_z = 0;  // sums of squared RMS normalised errors
+  int rot_z_n = 0, pos_z_n = 0;
+  void Add(const PairScenarioResult& r, const PolicyFigures* f) {
     const PolicyFigures* br = r.best_rot >= 0 ? &r.policies[r.best_rot] : nullptr;
     const PolicyFigures* bp = r.best_pos >= 0 ? &r.policies[r.best_pos] : nullptr;
-    auto best = [](const PolicyFigures* f, double v) {
-      return f ? std::to_string(f->span) + " " + SignificantText(v, 2) : std::string("-");
-    };
-    const double xr = br && a ? a->rot_rms_deg / br->rot_rms_deg : kNotAvailable;
-    const double xp = bp && a ? a->pos_rms / bp->pos_rms : kNotAvailable;
-    std::snprintf(
-        line, sizeof(line),
-        "%-30s %6d %5.0f | %-14s %-14s | %9s %5s %9s %5s | %5s %5s | %-6s %-6s %-6s | %s%s\n",
-        r.name.c_str(), r.poses, r.rate_hz, best(br, br ? br->rot_rms_deg : 0).c_str(),
-        best(bp, bp ? bp->pos_rms : 0).c_str(),
-        a ? SignificantText(a->rot_rms_deg, 2).c_str() : "-",
-        Ratio(a ? a->rot_rms_deg : kNotAvailable, br ? br->rot_rms_deg : kNotAvailable).c_str(),
-        a ? SignificantText(a->pos_rms, 2).c_str() : "-",
-        Ratio(a ? a->pos_rms : kNotAvailable, bp ? bp->pos_rms : kNotAvailable).c_str(),
-        Ratio(a ? a->rot_rms_deg : kNotAvailable, r.cv_rot_rms_deg).c_str(),
-        Ratio(a ? a->pos_rms : kNotAvailable, r.cv_pos_rms).c_str(),
-        o && a ? Ratio(o->rot_rms_deg, a->rot_rms_deg).c_str() : "-",
-        o && a ? Ratio(o->pos_rms, a->pos_rms).c_str() : "-",
-        o && a ? Ratio(o->scale_rms_pct, a->scale_rms_pct).c_str() : "-",
-        a && a->failed > 0 ? ("FAILED " + std::to_string(a->failed) + " ").c_str() : "",
-        a ? a->chosen.c_str() : "");
-    s << line;
+    if (f == nullptr) return;
+    if (std::isfinite(f->rot_z_rms)) {
+      rot_z += f->rot_z_rms * f->rot_z_rms;
+      ++rot_z_n;
+    }
+    if (std::isfinite(f->pos_z_rms)) {
+      pos_z += f->pos_z_rms * f->pos_z_rms;
+      ++pos_z_n;
+    }
+    const double xr = br ? f->rot_rms_deg / br->rot_rms_deg : kNotAvailable;
+    const double xp = bp ? f->pos_rms / bp->pos_rms : kNotAvailable;
     if (std::isfinite(xr)) {
       ++scored;
       const double worst = std::isfinite(xp) ? std::max(xr, xp) : xr;
       if (worst <= 1.2) ++within_12;
       if (worst <= 1.5) ++within_15;
     }
-    if (a && std::isfinite(r.cv_rot_rms_deg)) {
+    if (std::isfinite(r.cv_rot_rms_deg)) {
       ++cv_scored;
-      const double cr = a->rot_rms_deg / r.cv_rot_rms_deg;
-      const double cp = std::isfinite(r.cv_pos_rms) ? a->pos_rms / r.cv_pos_rms : 0.0;
+      const double cr = f->rot_rms_deg / r.cv_rot_rms_deg;
+      const double cp = std::isfinite(r.cv_pos_rms) ? f->pos_rms / r.cv_pos_rms : 0.0;
       if (std::max(cr, cp) <= 1.2) ++cv_12;
       if (std::max(cr, cp) <= 1.5) ++cv_15;
     }
+  }
+  std::string Text(const std::string& name) const {
+    std::ostringstream s;
+    s << name << " within 1.2x of the best fixed span (rotation and position): " << within_12 << "/"
+      << scored << "; within 1.5x: " << within_15 << "/" << scored << "\n";
+    if (cv_scored > 0) {
+      s << name
+        << " within 1.2x of the cross-validated best fixed span (best on half the draws, judged "
+           "on the other half): "
+        << cv_12 << "/" << cv_scored << "; within 1.5x: " << cv_15 << "/" << cv_scored << "\n";
+    }
+    s << name << " normalised errors, RMS over scenarios: rotation angle/(sqrt(3) sigma_max) "
+      << (rot_z_n > 0 ? FixedText(std::sqrt(rot_z / rot_z_n), 2) : "-") << ", |dC|/|sigma_C| "
+      << (pos_z_n > 0 ? FixedText(std::sqrt(pos_z / pos_z_n), 2) : "-") << " (1 = honest)\n";
+    return s.str();
+  }
+};
+
+std::string Z(const PolicyFigures* f) {
+  if (f == nullptr) return "-";
+  return (std::isfinite(f->rot_z_rms) ? FixedText(f->rot_z_rms, 1) : std::string("-")) + "/" +
+         (std::isfinite(f->pos_z_rms) ? FixedText(f->pos_z_rms, 1) : std::string("-"));
+}
+
+}  // namespace
+
+std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
+  std::ostringstream s;
+  char line[640];
+  std::snprintf(line, sizeof(line),
+                "%-28s %5s %4s | %-12s %-12s | %5s %5s %5s %5s | %5s %5s %5s %5s | %-7s %-7s | "
+                "%-5s %-5s %-5s | %s\n",
+                "scenario", "poses", "Hz", "best rot", "best pos", "auto", "auto", "auto", "auto",
+                "gls", "gls", "gls", "gls", "z auto", "z gls", "onl/b", "onl/b", "onl/b",
+                "auto pairs (per slave, draw)");
+  s << line;
+  std::snprintf(line, sizeof(line),
+                "%-28s %5s %4s | %-12s %-12s | %5s %5s %5s %5s | %5s %5s %5s %5s | %-7s %-7s | "
+                "%-5s %-5s %-5s |\n",
+                "", "", "", "span RMSdeg", "span RMS", "x rot", "x pos", "cv r", "cv p", "x rot",
+                "x pos", "cv r", "cv p", "rot/pos", "rot/pos", "rot", "pos", "scale");
+  s << line;
+  Counts auto_counts, gls_counts;
+  int online_13 = 0, online_scored = 0;
+  for (const auto& r : results) {
+    const PolicyFigures* a = r.Find("auto");
+    const PolicyFigures* g = r.Find("gls");
+    const PolicyFigures* o = r.Find("online");
+    const PolicyFigures* br = r.best_rot >= 0 ? &r.policies[r.best_rot] : nullptr;
+    const PolicyFigures* bp = r.best_pos >= 0 ? &r.policies[r.best_pos] : nullptr;
+    auto best = [](const PolicyFigures* f, double v) {
+      return f ? std::to_string(f->span) + " " + SignificantText(v, 2) : std::string("-");
+    };
+    auto x = [&](const PolicyFigures* f, double PolicyFigures::*m, const PolicyFigures* b) {
+      return Ratio(f ? f->*m : kNotAvailable, b ? b->*m : kNotAvailable);
+    };
+    std::snprintf(
+        line, sizeof(line),
+        "%-28s %5d %4.0f | %-12s %-12s | %5s %5s %5s %5s | %5s %5s %5s %5s | %-7s %-7s | %-5s "
+        "%-5s %-5s | %s%s\n",
+        r.name.c_str(), r.poses, r.rate_hz, best(br, br ? br->rot_rms_deg : 0).c_str(),
+        best(bp, bp ? bp->pos_rms : 0).c_str(), x(a, &PolicyFigures::rot_rms_deg, br).c_str(),
+        x(a, &PolicyFigures::pos_rms, bp).c_str(),
+        Ratio(a ? a->rot_rms_deg : kNotAvailable, r.cv_rot_rms_deg).c_str(),
+        Ratio(a ? a->pos_rms : kNotAvailable, r.cv_pos_rms).c_str(),
+        x(g, &PolicyFigures::rot_rms_deg, br).c_str(), x(g, &PolicyFigures::pos_rms, bp).c_str(),
+        Ratio(g ? g->rot_rms_deg : kNotAvailable, r.cv_rot_rms_deg).c_str(),
+        Ratio(g ? g->pos_rms : kNotAvailable, r.cv_pos_rms).c_str(), Z(a).c_str(), Z(g).c_str(),
+        o && a ? Ratio(o->rot_rms_deg, a->rot_rms_deg).c_str() : "-",
+        o && a ? Ratio(o->pos_rms, a->pos_rms).c_str() : "-",
+        o && a ? Ratio(o->scale_rms_pct, a->scale_rms_pct).c_str() : "-",
+        a && a->failed > 0 ? ("FAILED " + std::to_string(a->failed) + " ").c_str() : "",
+        a ? a->chosen.c_str() : "");
+    s << line;
+    auto_counts.Add(r, a);
+    gls_counts.Add(r, g);
     if (o && a && std::isfinite(o->rot_rms_deg)) {
       ++online_scored;
       const double worst = std::max({o->rot_rms_deg / a->rot_rms_deg,
@@ -317,13 +392,8 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
       if (worst <= 1.3) ++online_13;
     }
   }
-  s << "\nauto within 1.2x of the best fixed span (rotation and position): " << within_12 << "/"
-    << scored << "; within 1.5x: " << within_15 << "/" << scored << "\n";
-  if (cv_scored > 0) {
-    s << "auto within 1.2x of the cross-validated best fixed span (best on half the draws, judged "
-         "on the other half): "
-      << cv_12 << "/" << cv_scored << "; within 1.5x: " << cv_15 << "/" << cv_scored << "\n";
-  }
+  s << "\n" << auto_counts.Text("auto");
+  if (gls_counts.scored > 0) s << gls_counts.Text("gls");
   if (online_scored > 0) {
     s << "online within 1.3x of the batch auto (rotation, position, scale): " << online_13 << "/"
       << online_scored << "\n";

@@ -18,6 +18,7 @@ struct PairOptions {
     kRelative,    // (k, k + step) for every k
     kAuto,        // per slave, the span whose estimate is most certain (default, see below)
     kWalk,        // anchors walk to a target motion (see below; the earlier default)
+    kGls,         // per slave, auto's result refined by GLS on every consecutive motion
   };
   Policy policy = Policy::kAuto;
 
@@ -34,6 +35,8 @@ struct PairOptions {
   // drift and shared pose errors it accumulates, as measured on this recording. Candidate solves
   // use at most max_pairs pairs (every k-th anchor); the chosen span is solved with all.
   double auto_max_span_fraction = 0.125;
+  // kGls: keep auto's result when the GLS σ of rotation and of C are both larger than auto's.
+  bool gls_keep_more_certain = true;
 
   // kWalk. For anchors a spread evenly over the recording, b walks forward from a until the
   // master motion a->b is "large enough": its rotation angle reaches target_angle_deg or its

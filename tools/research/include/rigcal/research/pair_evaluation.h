@@ -58,6 +58,7 @@ struct PairEvaluationOptions {
   int threads = 2;  // 0 = all cores; results do not depend on it
   std::vector<int> spans = {1, 2, 5, 10, 20, 50, 100, 200, 400};  // fixed spans compared
   bool online = true;              // also replay through the online estimator
+  bool gls = true;                 // also the gls pair policy
   std::string only;                // run the scenarios whose name contains this
   CalibrationOptions calibration;  // everything but the pairs
   ExperimentProgress progress;     // optional, one unit = one scenario draw
@@ -74,6 +75,9 @@ struct PolicyFigures {
   double scale_rms_pct = kNotAvailable;
   double rot_sigma_rms_deg = kNotAvailable;  // RMS of the reported rotation σ
   double pos_sigma_rms = kNotAvailable;      // RMS of |σ_C|
+  // RMS of the normalised errors: rotation angle / (√3 largest-axis σ), |ΔC| / |σ_C|.
+  double rot_z_rms = kNotAvailable;
+  double pos_z_rms = kNotAvailable;
   std::string chosen;  // auto: the pairs it chose, per slave and draw (first few)
 };
 
