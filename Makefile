@@ -9,8 +9,9 @@ CTEST_ARGS ?=
 # ctest, then the number of skipped tests and why (scripts/ctest_with_skips.sh).
 CTEST     = bash scripts/ctest_with_skips.sh
 
-.PHONY: all deps configure build demo test test-fast asan-configure test-asan test-asan-all test-fuzz \
-	fuzz tsan-configure test-tsan test-tsan-all eval bench format tidy clean
+.PHONY: all deps configure build demo test test-fast test-core test-asan-core test-tsan-core \
+	asan-configure test-asan test-asan-clang \
+	test-fuzz fuzz tsan-configure test-tsan eval bench format tidy clean
 
 all: build
 
@@ -36,30 +37,50 @@ build: configure
 demo: build
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
-# Whole suite; then the calib core tests once more under ASan+UBSan and the threaded calib tests
-# under TSan. The suite includes the static thread-contract check (label threads: clang
-# -Wthread-safety over the threaded sources with $(BUILD_DIR)/compile_commands.json, no extra
-# build tree). The fuzz runs and the whole suite under the sanitizers (test-fuzz,
-# test-asan-all, test-tsan-all) are not yet part of make test: README "Sanitizers and fuzzing".
-test: build test-asan test-tsan
+# Whole suite in the Release tree; then the calib core tests once more under ASan+UBSan
+# (test-asan-core) and the threaded calib tests under TSan (test-tsan-core). The suite includes
+# the static thread-contract check (label threads: clang -Wthread-safety over the threaded
+# sources with the tree's compile_commands.json, no extra tree). The whole suite under ASan+UBSan
+# (test-asan), every threaded test under TSan (test-tsan) and the fuzz runs (test-fuzz) are not
+# yet part of make test: their cost on a clean 2-core CI machine (estimated 55-65 min for the
+# sanitizer suite) is beyond its budget; README "Sanitizers and fuzzing".
+test: build test-asan-core test-tsan-core
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
+# The whole suite in the Release tree (the quick loop while working; no sanitizer).
 test-fast: build
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
+# The calib core tests (label calib_core: they link only the calib library) in the Release tree;
+# builds only them (target rigcal_calib_tests), `make demo` builds the rest of the tree.
+test-core: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal_calib_tests
+	$(CTEST) $(BUILD_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L calib_core -LE eval $(CTEST_ARGS)
+
 SAN_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+# The sanitizer trees: -O1 with line tables (cheap to build, readable stacks), NDEBUG as in
+# Release.
+SAN_FLAGS = "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
 
 # The calib core tests (label calib_core: they link only the calib library) under ASan+UBSan,
-# with GCC, the compiler of the normal build.
-test-asan: deps
+# with GCC, in the tree of test-asan (of which it builds only rigcal_calib_tests; configured
+# -O2 -g when it comes first, as make test has run it on CI).
+test-asan-core: deps
 	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,-DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_BUILD_BENCHMARKS=OFF)
 	cmake --build $(ASAN_DIR) -j $(JOBS) --target rigcal_calib_tests
-	$(SAN_ENV) $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval
+	$(SAN_ENV) $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -L calib_core -LE eval $(CTEST_ARGS)
 
-# The clang sanitizer trees: -O1 with line tables only (cheap to build, readable stacks), no
-# benchmarks, no evaluations. $(ASAN_ALL_DIR) is one tree for ASan+UBSan and libFuzzer: the
-# libraries the fuzz targets exercise carry coverage feedback (-fsanitize=fuzzer-no-link), the
-# targets link -fsanitize=fuzzer (cmake/RigcalFuzz.cmake).
+# Every test except the evaluations and the soak under ASan+UBSan (any UBSan finding is an
+# error), with GCC, the compiler of the Release build. The tree builds everything, benchmarks
+# and evaluations included (they are compiled, not run).
+test-asan: deps
+	$(call cmake_configure,$(ASAN_DIR),RelWithDebInfo,-DRIGCAL_ASAN_ENABLED=ON $(SAN_FLAGS))
+	cmake --build $(ASAN_DIR) -j $(JOBS)
+	$(SAN_ENV) $(CTEST) $(ASAN_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
+
+# The clang tree of the fuzz targets: ASan+UBSan and libFuzzer; the libraries the fuzz targets
+# exercise carry coverage feedback (-fsanitize=fuzzer-no-link), the targets link
+# -fsanitize=fuzzer (cmake/RigcalFuzz.cmake). No benchmarks, no evaluations.
 SAN_CMAKE_ARGS = -DCMAKE_CXX_COMPILER=clang++ -DRIGCAL_BUILD_BENCHMARKS=OFF \
   -DRIGCAL_BUILD_EVAL_TESTS=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG"
 FUZZ_SECONDS ?= 600
@@ -67,8 +88,8 @@ FUZZ_SECONDS ?= 600
 asan-configure: deps
 	$(call cmake_configure,$(ASAN_ALL_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_ASAN_ENABLED=ON -DRIGCAL_FUZZ_ENABLED=ON)
 
-# Every test except the evaluations, the fuzz runs, the soak and the VM tests, under ASan+UBSan.
-test-asan-all: asan-configure
+# The suite of test-asan built with clang (the fuzz tree), for a second compiler's view.
+test-asan-clang: asan-configure
 	cmake --build $(ASAN_ALL_DIR) -j $(JOBS)
 	$(SAN_ENV) $(CTEST) $(ASAN_ALL_DIR) --output-on-failure -j $(JOBS) -LE 'eval|fuzz|soak|device' $(CTEST_ARGS)
 
@@ -86,19 +107,19 @@ TSAN_ENV = TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
 tsan-configure: deps
 	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_TSAN_ENABLED=ON)
 
-# The multi-threaded calib tests (SyncBuffer producers, PoseMerge, OnlineCalibrator threads)
-# under TSan.
-test-tsan: tsan-configure
-	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test \
-	  calib_pose_merge_test calib_online_calibrator_lossless_test
-	$(TSAN_ENV) $(CTEST) $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)'
-
 # Every test that starts threads (label threaded: the Pipeline, the calib node, capture loops, the
 # log recorder, online replay, OnlineCalibrator, SyncBuffer, the research runners) under TSan; the
 # tree builds only those tests (target rigcal_threaded_tests) and what they link.
-test-tsan-all: tsan-configure
+test-tsan: tsan-configure
 	cmake --build $(TSAN_DIR) -j $(JOBS) --target rigcal_threaded_tests
-	$(TSAN_ENV) $(CTEST) $(TSAN_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L threaded -LE 'eval|soak|device'
+	$(TSAN_ENV) $(CTEST) $(TSAN_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L threaded -LE 'eval|soak|device' $(CTEST_ARGS)
+
+# The multi-threaded calib tests (SyncBuffer producers, PoseMerge, OnlineCalibrator threads)
+# under TSan, in the tree of test-tsan.
+test-tsan-core: tsan-configure
+	cmake --build $(TSAN_DIR) -j $(JOBS) --target calib_sync_buffer_threads_test calib_online_calibrator_test \
+	  calib_pose_merge_test calib_online_calibrator_lossless_test
+	$(TSAN_ENV) $(CTEST) $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)' $(CTEST_ARGS)
 
 # Long evaluations (not part of make test).
 eval: build

@@ -36,3 +36,28 @@ function(rigcal_add_test)
   set_tests_properties(${ARG_MODULE}/${ARG_NAME} PROPERTIES LABELS "${labels}" TIMEOUT ${ARG_TIMEOUT}
                        SKIP_RETURN_CODE 77)
 endfunction()
+
+# Sanitized code runs several times slower (ASan at -O1: up to ~10x on the Eigen-heavy
+# estimators): the ctest TIMEOUT of every test, a guard against hangs and no check of speed, is
+# multiplied by RIGCAL_TEST_TIMEOUT_SCALE (default 3 in a sanitizer tree, 1 otherwise).
+if(RIGCAL_ASAN_ENABLED OR RIGCAL_TSAN_ENABLED)
+  set(RIGCAL_TEST_TIMEOUT_SCALE 3 CACHE STRING "Factor on every test's ctest TIMEOUT")
+else()
+  set(RIGCAL_TEST_TIMEOUT_SCALE 1 CACHE STRING "Factor on every test's ctest TIMEOUT")
+endif()
+
+# rigcal_scale_test_timeouts(): applies RIGCAL_TEST_TIMEOUT_SCALE to the tests of the current
+# directory; called at the end of each CMakeLists.txt that adds tests.
+function(rigcal_scale_test_timeouts)
+  if(RIGCAL_TEST_TIMEOUT_SCALE EQUAL 1)
+    return()
+  endif()
+  get_property(tests DIRECTORY PROPERTY TESTS)
+  foreach(test ${tests})
+    get_test_property(${test} TIMEOUT timeout)
+    if(timeout)
+      math(EXPR timeout "${timeout} * ${RIGCAL_TEST_TIMEOUT_SCALE}")
+      set_tests_properties(${test} PROPERTIES TIMEOUT ${timeout})
+    endif()
+  endforeach()
+endfunction()

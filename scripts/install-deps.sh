@@ -24,7 +24,7 @@ PACKAGES=(
   liblcm-bin           # lcm-gen (build-time message generation), lcm-logger, lcm-logplayer
   libglib2.0-dev       # lcm.pc requires glib-2.0 and gthread-2.0
   clang                # ctest architecture/threads: clang's -Wthread-safety on the annotated locks
-  libclang-rt-14-dev   # make test-asan/test-fuzz/test-tsan: the sanitizer and libFuzzer runtimes of clang
+  libclang-rt-14-dev   # make test-tsan/test-asan-clang/test-fuzz: the sanitizer and libFuzzer runtimes of clang
   chromium             # ctest report/report_browser: renders `rigcal report`'s HTML headless
   libcamera-dev        # the libcamera capture source (optional at build time: disabled without it)
   libcamera-ipa        # ctest device/qemu: libcamera's vimc IPA module, copied into the test VM

@@ -53,8 +53,20 @@ generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# The static libraries of a sanitizer tree call the sanitizer's runtime: the consumer links it,
+# with the tree's compiler.
+sanitizer=()
+if grep -q '^RIGCAL_ASAN_ENABLED:BOOL=ON$' "$build/CMakeCache.txt"; then
+  sanitizer=(-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined)
+elif grep -q '^RIGCAL_TSAN_ENABLED:BOOL=ON$' "$build/CMakeCache.txt"; then
+  sanitizer=(-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=thread)
+fi
+if [ ${#sanitizer[@]} -gt 0 ]; then
+  sanitizer+=("-DCMAKE_CXX_COMPILER=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$build/CMakeCache.txt")")
+fi
 cmake -S "$source_dir/tests/install/consumer" -B "$work/consumer" "${generator[@]}" "${launcher[@]}" \
-  -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" > "$work/consumer-configure.log" 2>&1 ||
+  "${sanitizer[@]}" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" \
+  > "$work/consumer-configure.log" 2>&1 ||
   { cat "$work/consumer-configure.log"; echo "FAIL: consumer configure (find_package(rigcal))"; exit 1; }
 cmake --build "$work/consumer" > "$work/consumer-build.log" 2>&1 ||
   { cat "$work/consumer-build.log"; echo "FAIL: consumer build against the installed tree"; exit 1; }
