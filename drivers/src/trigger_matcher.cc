@@ -64,8 +64,8 @@ void TriggerMatcher::OnMessage(const trigger_protocol::Message& m, int64_t rx_ns
     if (went_back) Restart();  // a Hello after a reboot always goes back in MCU time
     last_mcu_us_ = mcu_us;
     if (map_.Add(mcu_us, rx_ns) == TriggerClockMap::SampleResult::kRestarted && !went_back) {
-      ++boot_;  // the map saw the MCU clock jump: later pulses belong to a new epoch
-      ++stats_.mcu_resets;
+      ++boot_;  // the map started over: later pulses belong to a new epoch
+      ++stats_.map_restarts;
     }
     if (m.type == MessageType::kPulseReport) {
       if (last_mcu_seq_ >= 0 && m.pulse.seq > last_mcu_seq_ + 1) {

@@ -70,7 +70,7 @@ TEST_F(RunTriggerTest, FramesOfASimulatedRigCarryTheGeneratorsPulses) {
   EXPECT_NE(r.err.find("simulated rig paced by the trigger generator"), std::string::npos) << r.err;
   for (const char* camera : {"cam0", "cam1"}) {
     const std::string line = std::string("camera '") + camera + "': ";
-    const size_t at = r.err.find(line, r.err.find(" MCU resets, clock drift "));
+    const size_t at = r.err.find(line, r.err.find(" clock-map restarts, clock drift "));
     ASSERT_NE(at, std::string::npos) << r.err;
     EXPECT_NE(r.err.find("frames with their trigger pulse, 0 without", at), std::string::npos)
         << r.err;

@@ -99,12 +99,14 @@ TEST(TriggerQemu, LinkThroughAPtyMapsAndMatchesTheFirmwaresPulses) {
   std::printf(
       "trigger link over a pty to the firmware under QEMU: %zu pulses, %lld heartbeats; MCU drift "
       "vs host %+.1f ppm (emulated clock); arrival - mapped time: min %.0f us, median %.0f us, "
-      "max %.0f us; %lld seq gaps (skipped ticks)\n",
+      "max %.0f us; %lld seq gaps (skipped ticks); %lld clock-map restarts\n",
       pulses.size(), static_cast<long long>(stats.heartbeats), stats.drift_ppm, min_delay * 1e-3,
       delays[delays.size() / 2] * 1e-3, delays.back() * 1e-3,
-      static_cast<long long>(stats.seq_gaps));
+      static_cast<long long>(stats.seq_gaps), static_cast<long long>(stats.map_restarts));
   EXPECT_EQ(below, 0);
   EXPECT_GT(min_delay, -1'000'000);
+  // The firmware never reboots here. (A map restarted on late first arrivals, a loaded host, is
+  // counted apart, in map_restarts, and allowed.)
   EXPECT_EQ(stats.mcu_resets, 0);
   // Frames of a camera on line 3 stamped 300 us after their exposure centre get their pulse.
   const CameraTriggerSpec cam{3, 0, 300'000};

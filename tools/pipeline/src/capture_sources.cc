@@ -187,7 +187,8 @@ void ReportTrigger(const CaptureSources& sources, const std::string& prefix, std
   const drivers::TriggerMatcherStats s = sources.trigger->matcher().stats();
   out << prefix << "trigger generator on " << sources.trigger->port() << ": " << s.pulses
       << " pulses, " << s.heartbeats << " heartbeats, " << s.seq_gaps << " missing pulses, "
-      << s.mcu_resets << " MCU resets, clock drift " << s.drift_ppm << " ppm\n";
+      << s.mcu_resets << " MCU resets, " << s.map_restarts << " clock-map restarts, clock drift "
+      << s.drift_ppm << " ppm\n";
   if (const std::string problem = sources.trigger->problem(); !problem.empty()) {
     out << prefix << "trigger link failed: " << problem << "\n";
   }

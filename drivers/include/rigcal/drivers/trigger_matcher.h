@@ -67,7 +67,10 @@ struct TriggerMatcherStats {
   int64_t pulses = 0;
   int64_t heartbeats = 0;
   int64_t mcu_resets = 0;  // MCU reboots: its clock or seq went back
-  int64_t seq_gaps = 0;    // pulses missing between consecutive reports
+  // The clock map started over on a run of samples earlier than it allows: a map fitted on
+  // arrivals that were all late (a loaded host at the start), or an MCU clock that jumped ahead.
+  int64_t map_restarts = 0;
+  int64_t seq_gaps = 0;  // pulses missing between consecutive reports
   int64_t matched = 0;
   int64_t unmatched = 0;   // kNoPulse answers
   double drift_ppm = 0.0;  // current clock-map estimate
