@@ -381,10 +381,9 @@ void ClockOffsetTracker::FollowMasterClockJump(double step_s) {
   const std::deque<CameraPose>& master = poses_[0];
   // The step is known to within about a frame of the master: the offsets are searched within a
   // few of its σ by the next measurement (a quarter of a frame; no new correlation).
-  const int64_t frame =
-      master.size() < 2 ? Ns(0.05)
-                        : (master.back().t_ns - master.front().t_ns) /
-                              static_cast<int64_t>(master.size() - 1);
+  const int64_t frame = master.size() < 2 ? Ns(0.05)
+                                          : (master.back().t_ns - master.front().t_ns) /
+                                                static_cast<int64_t>(master.size() - 1);
   const double step_var = std::pow(0.25 * S(frame), 2);
   for (int i = 0; i < num_slaves(); ++i) {
     Slave& s = slaves_[i];

@@ -108,8 +108,8 @@ void SyncBuffer::Impl::FollowNewMasterClock(const CameraPose& pose) {
     CameraState& cam = cameras_[j];
     cam.offset_ns = SaturatedSub(cam.offset_ns, step);
     cam.jump.offset_ns = SaturatedSub(cam.jump.offset_ns, step);
-    cam.run = 0;            // a run measured against the old master clock
-    cam.has_lead = false;   // its lead grew while the master was away
+    cam.run = 0;           // a run measured against the old master clock
+    cam.has_lead = false;  // its lead grew while the master was away
   }
   now_ns_ = SaturatedAdd(now_ns_, step);
   stream_start_ns_ = SaturatedAdd(stream_start_ns_, step);

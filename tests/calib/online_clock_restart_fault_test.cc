@@ -97,7 +97,6 @@ INSTANTIATE_TEST_SUITE_P(Restarts, OnlineClockRestart,
                            return std::string(info.param.name);
                          });
 
-
 struct MasterRestartCase {
   const char* name;
   double step_s;  // the master's new clock - its old one
@@ -116,8 +115,8 @@ TEST_P(OnlineMasterClockRestart, EveryOffsetMovesByTheStepAndTheEstimateGoesOn) 
                                                 {demo[0], demo[1]}, 70.0, drive);
   const int64_t restart = rig.master.t_ns.front() + 30'000'000'000;
   const double offsets[2] = {0.030, -0.020};
-  std::vector<CameraPose> poses = InCaptureOrder(
-      rig, [&](int slave, int64_t) { return std::llround(offsets[slave] * 1e9); });
+  std::vector<CameraPose> poses =
+      InCaptureOrder(rig, [&](int slave, int64_t) { return std::llround(offsets[slave] * 1e9); });
   for (CameraPose& p : poses) {
     if (p.camera == 0 && p.t_ns >= restart) p.t_ns += std::llround(c.step_s * 1e9);
   }
@@ -149,8 +148,7 @@ TEST_P(OnlineMasterClockRestart, EveryOffsetMovesByTheStepAndTheEstimateGoesOn) 
     ASSERT_TRUE(std::isfinite(s.time_offset_std_s)) << s.name;
     const double truth = offsets[i] - c.step_s;
     EXPECT_LE(std::abs(s.time_offset_s - truth), kSigmas * s.time_offset_std_s)
-        << s.name << ": " << s.time_offset_s << " ± " << s.time_offset_std_s << ", truth "
-        << truth;
+        << s.name << ": " << s.time_offset_s << " ± " << s.time_offset_std_s << ", truth " << truth;
     EXPECT_LT(s.time_offset_std_s, 0.002) << s.name;
     ASSERT_TRUE(s.usable()) << s.name << ": " << s.message;
     const CalibrationError err = CompareToTruth(s.estimate, rig.truth[i]);
@@ -159,15 +157,15 @@ TEST_P(OnlineMasterClockRestart, EveryOffsetMovesByTheStepAndTheEstimateGoesOn) 
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Restarts, OnlineMasterClockRestart,
-                         ::testing::Values(MasterRestartCase{"StampsRestartNearZero", -39.99, false},
-                                           MasterRestartCase{"AheadOneHour", 3600.0, false},
-                                           MasterRestartCase{"BackOneAndAHalfSeconds", -1.5, false},
-                                           MasterRestartCase{"BackOneAndAHalfSecondsCam2Given",
-                                                             -1.5, true}),
-                         [](const ::testing::TestParamInfo<MasterRestartCase>& info) {
-                           return std::string(info.param.name);
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Restarts, OnlineMasterClockRestart,
+    ::testing::Values(MasterRestartCase{"StampsRestartNearZero", -39.99, false},
+                      MasterRestartCase{"AheadOneHour", 3600.0, false},
+                      MasterRestartCase{"BackOneAndAHalfSeconds", -1.5, false},
+                      MasterRestartCase{"BackOneAndAHalfSecondsCam2Given", -1.5, true}),
+    [](const ::testing::TestParamInfo<MasterRestartCase>& info) {
+      return std::string(info.param.name);
+    });
 
 }  // namespace
 }  // namespace rigcal

@@ -9,8 +9,8 @@
 #include <spdlog/sinks/ringbuffer_sink.h>
 
 #include <cctype>
-#include <cstdlib>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <memory>
 #include <string>
@@ -234,9 +234,8 @@ TEST_P(SyncMasterClockJump, ARestartedMasterClockIsFollowedByMovingTheSlavesOffs
   const auto log = ModuleLogger("calib");
   log->sinks().push_back(sink);
   SyncBuffer buffer(FreeRunningWithMaster());
-  const MasterOutcome out = FeedMaster(&buffer, 600, 200, [&](int k, int64_t t) {
-    return t + (k < 200 ? 0 : c.new_offset_ns);
-  });
+  const MasterOutcome out = FeedMaster(
+      &buffer, 600, 200, [&](int k, int64_t t) { return t + (k < 200 ? 0 : c.new_offset_ns); });
   log->sinks().pop_back();
   const ClockJump jump = buffer.ClockJumps(0);
   EXPECT_EQ(jump.count, 1u);
@@ -278,7 +277,7 @@ INSTANTIATE_TEST_SUITE_P(Steps, SyncMasterClockJump,
 TEST(SyncMasterClockJumpRule, IsolatedMasterGlitchesStayRejected) {
   SyncBuffer buffer(FreeRunningWithMaster());
   const MasterOutcome out = FeedMaster(&buffer, 600, 0, [&](int k, int64_t t) {
-    if (k % 10 == 5) return t + 10'000'000'000;  // one in ten, 10 s ahead
+    if (k % 10 == 5) return t + 10'000'000'000;            // one in ten, 10 s ahead
     if (k % 10 == 7 && k > 100) return t - 3'000'000'000;  // one in ten, 3 s back
     return t;
   });

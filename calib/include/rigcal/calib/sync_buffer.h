@@ -61,7 +61,7 @@
 //  * more than the glitch horizon (max(2 s, 10 * max_wait)) ahead of the newest stamp of every
 //    camera (up to INT64_MAX), or
 //  * ahead of its camera's own recent rate (more than max(20 of its recent frame intervals,
-//    max_wait) after its newest stamp; 6 intervals for a slave that follows clock jumps) while
+//    max_wait) after its newest stamp; 6 intervals for a camera that follows clock jumps) while
 //    also more than max_wait ahead of every other camera's newest stamp (a clock that stepped
 //    by a second), or
 //  * more than the glitch horizon behind its camera's newest stamp or the newest stamp of any
@@ -244,12 +244,12 @@ struct SyncStats {
 
 // The clock jumps of one camera followed so far (see "Clock jumps" above).
 struct ClockJump {
-  uint64_t count = 0;     // jumps followed
+  uint64_t count = 0;  // jumps followed
   // A slave: the offset prior set at its last jump (stamp - master clock; stepped too by the
   // master's jumps since). The master: the sum of its steps (stamp - its clock at the start).
   int64_t offset_ns = 0;
   int64_t step_ns = 0;  // at the last one: the prior minus the offset before it (master: the step)
-  int64_t t_ns = 0;       // at the last one: the stamp of the first pose accepted after it
+  int64_t t_ns = 0;     // at the last one: the stamp of the first pose accepted after it
 };
 
 class SyncBuffer {
