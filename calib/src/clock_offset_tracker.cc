@@ -16,6 +16,9 @@ namespace {
 
 constexpr double kPpm = 1e-6;
 constexpr int64_t kNsPerS = 1'000'000'000;
+// Slave::t_ns of a state that starts at its first measurement window (a given offset that the
+// master's clock restart made estimated).
+constexpr int64_t kStateTimeUnset = std::numeric_limits<int64_t>::min();
 
 int64_t Ns(double s) { return std::llround(s * 1e9); }
 double S(int64_t ns) { return static_cast<double>(ns) * 1e-9; }
@@ -190,6 +193,7 @@ bool ClockOffsetTracker::Measure(int i) {
   if (master.empty() || slave.empty()) return false;
   const int64_t from = std::max(s.next_from_ns, master.front().t_ns);
   const int64_t to = from + Ns(options_.measure_window_s);
+  if (s.t_ns == kStateTimeUnset) s.t_ns = from;
   // The motions end a span after the window; the slave must cover them at any offset searched.
   const int64_t frame = std::max<int64_t>(
       1, (slave.back().t_ns - slave.front().t_ns) / std::max<int64_t>(1, slave.size() - 1));
@@ -370,6 +374,56 @@ void ClockOffsetTracker::FollowClockJump(int i, double prior_s) {
   ModuleLogger("calib")->info(
       "time offset of '{}': its clock restarted; re-acquiring the offset within ±{} s of {:.6f} s",
       names_[i + 1], options_.search_window_s, prior_s);
+}
+
+void ClockOffsetTracker::FollowMasterClockJump(double step_s) {
+  const auto log = ModuleLogger("calib");
+  const std::deque<CameraPose>& master = poses_[0];
+  // The step is known to within about a frame of the master: the offsets are searched within a
+  // few of its σ by the next measurement (a quarter of a frame; no new correlation).
+  const int64_t frame = master.size() < 2 ? Ns(0.05)
+                                          : (master.back().t_ns - master.front().t_ns) /
+                                                static_cast<int64_t>(master.size() - 1);
+  const double step_var = std::pow(0.25 * S(frame), 2);
+  for (int i = 0; i < num_slaves(); ++i) {
+    Slave& s = slaves_[i];
+    s.prior_s -= step_s;
+    s.outliers = 0;
+    s.lag_slave_ns = -1;
+    s.since_ns = 0;
+    s.next_from_ns = 0;  // measurements go on from the master's first pose on its new clock
+    if (!s.estimated) {
+      // Given relative to the master's old clock: it no longer holds; estimated from now on,
+      // starting at the given value moved by the step.
+      const double given = s.x(0);
+      s.estimated = true;
+      s.x << given - step_s, 0.0;
+      s.P.setZero();
+      s.P(0, 0) = step_var;
+      s.P(1, 1) = std::pow(options_.drift_ppm * kPpm, 2);
+      s.t_ns = kStateTimeUnset;  // the start of the first window on the new clock
+      s.measurements = 0;
+      s.usable_from_ns = 0;
+      s.ever_initialised = true;
+      s.prior_s = given - step_s;
+      log->warn(
+          "time offset of '{}': given as {:.6f} s on the master's clock, which restarted; "
+          "estimating it from now on, around {:.6f} s",
+          names_[i + 1], given, given - step_s);
+      continue;
+    }
+    if (!s.initialised) continue;  // (re)initialising around prior_s, moved above
+    s.x(0) -= step_s;
+    s.t_ns += Ns(step_s);
+    s.P(0, 0) += step_var;
+    s.measurements = 0;  // usable again once a measurement confirms the moved offset
+    s.usable_from_ns = 0;
+  }
+  poses_[0].clear();
+  log->info(
+      "time offsets: the master's clock restarted (step {:.6f} s); every slave's offset moved by "
+      "{:.6f} s, to be confirmed by its next measurement",
+      step_s, -step_s);
 }
 
 }  // namespace rigcal

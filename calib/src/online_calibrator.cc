@@ -15,9 +15,11 @@ OnlineOptions Checked(OnlineOptions options, size_t cameras) {
   options.sync.num_cameras = static_cast<int>(cameras);
   if (options.time_offset.enabled) {
     options.sync.interpolate = true;
-    // Slaves whose offset is estimated follow a restart of their clock (a given one is held).
+    // Slaves whose offset is estimated follow a restart of their clock (a given one is held);
+    // a restart of the master's clock is followed by moving every slave's offset.
     const std::vector<std::optional<double>>& given = options.time_offset.given_s;
     options.sync.follow_clock_jumps.assign(cameras, false);
+    if (cameras > 0) options.sync.follow_clock_jumps[0] = true;
     for (size_t c = 1; c < cameras; ++c) {
       options.sync.follow_clock_jumps[c] = given.size() < c || !given[c - 1].has_value();
     }
@@ -90,6 +92,17 @@ PushResult OnlineCalibrator::Push(const CameraPose& pose) {
 
 void OnlineCalibrator::TrackClock(const CameraPose& pose) {
   MutexLock lock(offset_mutex_);
+  // A restart of the master's clock that the SyncBuffer followed: every offset moves by its
+  // step (first: a slave's jump prior below is on the master's current clock).
+  bool changed = false;
+  const ClockJump master = sync_.ClockJumps(0);
+  if (master.count != master_jumps_seen_) {
+    clock_->FollowMasterClockJump(static_cast<double>(master.offset_ns - master_step_seen_ns_) *
+                                  1e-9);
+    master_jumps_seen_ = master.count;
+    master_step_seen_ns_ = master.offset_ns;
+    changed = true;
+  }
   // Restarts of slave clocks that the SyncBuffer followed: re-acquired around their step.
   for (int i = 0; i < clock_->num_slaves(); ++i) {
     const ClockJump jump = sync_.ClockJumps(i + 1);
@@ -97,9 +110,11 @@ void OnlineCalibrator::TrackClock(const CameraPose& pose) {
     clock_jumps_seen_[i] = jump.count;
     clock_->FollowClockJump(i, static_cast<double>(jump.offset_ns) * 1e-9);
   }
-  if (!clock_->Add(pose)) return;
+  changed = clock_->Add(pose) || changed;
+  if (!changed) return;
   for (int i = 0; i < clock_->num_slaves(); ++i) {
-    sync_.SetTimeOffset(i + 1, clock_->MatchingOffsetNs(i), clock_jumps_seen_[i]);
+    sync_.SetTimeOffset(i + 1, clock_->MatchingOffsetNs(i), clock_jumps_seen_[i],
+                        master_jumps_seen_);
   }
 }
 
@@ -165,6 +180,7 @@ RigEstimate OnlineCalibrator::Estimate() const {
     estimate = estimator_.Estimate();
   }
   if (!options_.time_offset.enabled) return estimate;
+  estimate.master_clock_jumps = static_cast<int>(sync_.ClockJumps(0).count);
   MutexLock lock(offset_mutex_);
   for (int i = 0; i < clock_->num_slaves(); ++i) {
     const SlaveClockOffset o = clock_->SlaveOffset(i);
@@ -249,7 +265,8 @@ void OnlineCalibrator::EstimatorLoop() {
     {
       if (options_.time_offset.enabled) WithholdUnknownClocks(&set);
       MutexLock lock(estimator_mutex_);
-      estimator_.AddSet(set.t_ns, set.poses);
+      // On the master's clock as it ran at the start: the estimator's time never jumps back.
+      estimator_.AddSet(set.t_ns - set.master_clock_step_ns, set.poses);
     }
     // Before the set counts as consumed, so that Drain also waits for a refinement it is due.
     if (stream_refinement && set.t_ns >= next_refine_ns) {

@@ -55,8 +55,6 @@ Status SyncOptions::Check() const {
            static_cast<int>(follow_clock_jumps.size()) != num_cameras)
     e << "follow_clock_jumps: must be empty or have num_cameras (" << num_cameras << ") flags, got "
       << follow_clock_jumps.size();
-  else if (!follow_clock_jumps.empty() && follow_clock_jumps[0])
-    e << "follow_clock_jumps[0]: must be false: the master's clock is the reference";
   else if (!interpolate && std::find(follow_clock_jumps.begin(), follow_clock_jumps.end(), true) !=
                                follow_clock_jumps.end())
     e << "follow_clock_jumps: only with interpolate (cameras that run free)";
@@ -147,8 +145,9 @@ bool SyncBuffer::stopped() const { return impl_->stopped(); }
 SyncStats SyncBuffer::stats() const { return impl_->stats(); }
 ClockJump SyncBuffer::ClockJumps(int camera) const { return impl_->ClockJumps(camera); }
 uint64_t SyncBuffer::ReadyBound() const { return impl_->ReadyBound(); }
-void SyncBuffer::SetTimeOffset(int camera, int64_t offset_ns, std::optional<uint64_t> after_jumps) {
-  impl_->SetTimeOffset(camera, offset_ns, after_jumps);
+void SyncBuffer::SetTimeOffset(int camera, int64_t offset_ns, std::optional<uint64_t> after_jumps,
+                               std::optional<uint64_t> after_master_jumps) {
+  impl_->SetTimeOffset(camera, offset_ns, after_jumps, after_master_jumps);
 }
 
 }  // namespace rigcal

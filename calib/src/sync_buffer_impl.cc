@@ -99,10 +99,12 @@ uint64_t SyncBuffer::Impl::ReadyBound() const {
 }
 
 void SyncBuffer::Impl::SetTimeOffset(int camera, int64_t offset_ns,
-                                     std::optional<uint64_t> after_jumps) {
+                                     std::optional<uint64_t> after_jumps,
+                                     std::optional<uint64_t> after_master_jumps) {
   MutexLock lock(mutex_);
   if (!interpolate_ || camera <= 0 || camera >= n_) return;
   if (after_jumps && *after_jumps != cameras_[camera].jump.count) return;
+  if (after_master_jumps && *after_master_jumps != cameras_[0].jump.count) return;
   cameras_[camera].offset_ns = offset_ns;
 }
 
@@ -116,6 +118,7 @@ bool SyncBuffer::Impl::TakeReady(MatchedSet* out) {
   if (ready_.empty()) return false;
   const MatchedSet& set = ready_.front();
   out->t_ns = set.t_ns;
+  out->master_clock_step_ns = set.master_clock_step_ns;
   out->poses = set.poses;  // reuses out's storage once it has num_cameras slots
   ready_.PopFront();
   ++sets_popped_;

@@ -62,8 +62,8 @@ class SyncBuffer::Impl {
   bool stopped() const RIGCAL_EXCLUDES(mutex_);
   SyncStats stats() const RIGCAL_EXCLUDES(mutex_);
   uint64_t ReadyBound() const RIGCAL_EXCLUDES(mutex_);
-  void SetTimeOffset(int camera, int64_t offset_ns, std::optional<uint64_t> after_jumps)
-      RIGCAL_EXCLUDES(mutex_);
+  void SetTimeOffset(int camera, int64_t offset_ns, std::optional<uint64_t> after_jumps,
+                     std::optional<uint64_t> after_master_jumps) RIGCAL_EXCLUDES(mutex_);
   ClockJump ClockJumps(int camera) const RIGCAL_EXCLUDES(mutex_);
 
  private:
@@ -95,16 +95,16 @@ class SyncBuffer::Impl {
     int interval_count = 0;
     // Resume: stamps at or before this were consumed before the restart (-1: none).
     int64_t consumed_t = -1;
-    // Clock jumps (sync_clock_jump.cc): the camera's lead over the master's newest stamp at its
-    // accepted poses (stamp on the master clock - master's newest, smoothed), and the run of
-    // rejected poses on a new timeline: its length, first and last stamp, the master's newest
-    // stamp at its first pose, and the sum of (stamp - master's newest - run_y0) over it.
+    // Clock jumps (sync_clock_jump.cc): the camera's lead over its reference (ClockReference) at
+    // its accepted poses (stamp on the master clock - reference, smoothed), and the run of
+    // rejected poses on a new timeline: its length, first and last stamp, the reference at its
+    // first pose, and the sum of (stamp - reference - run_y0) over it.
     double lead_ns = 0.0;
     bool has_lead = false;
     int run = 0;
     int64_t run_first_t = 0;
     int64_t run_last_t = 0;
-    int64_t run_first_master = 0;
+    int64_t run_first_reference = 0;
     int64_t run_y0 = 0;
     double run_dy_sum = 0.0;
     ClockJump jump;  // the jumps followed
@@ -154,6 +154,12 @@ class SyncBuffer::Impl {
   // Follows the camera's new timeline (the run ending with `pose`): empties its ring, sets the
   // offset prior, counts and warns.
   void FollowNewClock(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
+  // The master's: resolves its old entries, steps every slave's offset and the stream's clocks
+  // by the master's step, counts and warns.
+  void FollowNewMasterClock(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
+  // What camera `c`'s clock is compared with: for a slave the master's newest stamp, for the
+  // master the newest stamp of any slave on the master clock; kNoStamp when there is none.
+  int64_t ClockReference(int c) const RIGCAL_REQUIRES(mutex_);
   // After an accepted pose of camera `c`: its lead over the master, and the end of any run.
   void OnTimeline(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
 

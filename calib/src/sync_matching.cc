@@ -345,6 +345,7 @@ void SyncBuffer::Impl::Emit() {
   CameraState& master = cameras_[0];
   const SyncKey m = KeyOf(master.ring.front());
   set.t_ns = m.t_ns;
+  set.master_clock_step_ns = master.jump.offset_ns;
   set.poses[0] = master.ring.front();
   master.ring.PopFront();
   ++master.stats.used;

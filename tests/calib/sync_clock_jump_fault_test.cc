@@ -2,12 +2,15 @@
 // restarted (stamps restart near 0, or step by seconds) is followed once its new timeline is
 // persistent and self-consistent, with the step as the offset prior, counted and warned about
 // once; isolated glitches, bursts without a steady rate and old data replayed by every camera
-// stay rejected; a slave that does not follow jumps (a given offset) stays rejected.
+// stay rejected; a slave that does not follow jumps (a given offset) stays rejected. The same for
+// the master's clock: followed by stepping the slave's offset the other way, the slave matched on
+// without a new search; isolated master glitches stay rejected.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/ringbuffer_sink.h>
 
 #include <cctype>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <memory>
 #include <string>
@@ -184,11 +187,137 @@ TEST(SyncClockJumpRule, ASlaveThatDoesNotFollowJumpsStaysRejected) {
   EXPECT_EQ(out.sets_with_slave_after, 0u);
 }
 
-TEST(SyncClockJumpRule, OptionsNameTheField) {
+// The master's stamp of frame k (true instant t) is master_clock(k, t), the slave's t + kPhase +
+// kOffset (its clock runs on). Counts the sets after `jump_frame` with the slave, and whether
+// their interpolated slave instant is the true one (kOffset from the master's true instant).
+struct MasterOutcome {
+  std::vector<PushResult> master;
+  uint64_t sets_with_slave_after = 0;
+  uint64_t sets_matched_right_after = 0;
+};
+
+MasterOutcome FeedMaster(SyncBuffer* buffer, int frames, int jump_frame,
+                         const std::function<int64_t(int, int64_t)>& master_clock) {
+  buffer->SetTimeOffset(1, kOffset);
+  MasterOutcome out;
+  MatchedSet set;
+  int64_t step = 0;  // the master's clock step in effect for a set (its master_clock_step_ns)
+  for (int k = 0; k < frames; ++k) {
+    const int64_t t = kStart + k * kPeriod;
+    out.master.push_back(buffer->Push(Entry(0, master_clock(k, t), t)));
+    buffer->Push(Entry(1, t + kPhase + kOffset, t + kPhase));
+    while (buffer->TryPop(&set)) {
+      step = set.master_clock_step_ns;
+      const int64_t true_t = set.t_ns - step;  // the master's clock at the start
+      if (true_t <= kStart + jump_frame * kPeriod || !set.poses[1]) continue;
+      ++out.sets_with_slave_after;
+      // The slave's instant on its clock is the master's true instant + kOffset (to within
+      // the error of the measured step, below a frame).
+      const int64_t error = set.poses[1]->t_ns - (true_t + kOffset);
+      out.sets_matched_right_after += std::abs(error) < kPeriod / 2;
+    }
+  }
+  return out;
+}
+
+class SyncMasterClockJump : public ::testing::TestWithParam<StepCase> {};
+
+SyncOptions FreeRunningWithMaster() {
   SyncOptions o = FreeRunning(true);
   o.follow_clock_jumps = {true, true};
-  EXPECT_EQ(o.Check().message(),
-            "follow_clock_jumps[0]: must be false: the master's clock is the reference");
+  return o;
+}
+
+TEST_P(SyncMasterClockJump, ARestartedMasterClockIsFollowedByMovingTheSlavesOffsets) {
+  const StepCase& c = GetParam();  // new_offset_ns: the master's clock step
+  auto sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(256);
+  const auto log = ModuleLogger("calib");
+  log->sinks().push_back(sink);
+  SyncBuffer buffer(FreeRunningWithMaster());
+  const MasterOutcome out = FeedMaster(
+      &buffer, 600, 200, [&](int k, int64_t t) { return t + (k < 200 ? 0 : c.new_offset_ns); });
+  log->sinks().pop_back();
+  const ClockJump jump = buffer.ClockJumps(0);
+  EXPECT_EQ(jump.count, 1u);
+  EXPECT_NEAR(static_cast<double>(jump.step_ns), static_cast<double>(c.new_offset_ns),
+              static_cast<double>(kPeriod) / 4);
+  EXPECT_EQ(jump.offset_ns, jump.step_ns);
+  EXPECT_EQ(buffer.ClockJumps(1).count, 0u) << "the slave's clock did not restart";
+  EXPECT_EQ(Rejected(out.master), 9);
+  for (int k = 0; k < 200; ++k) EXPECT_EQ(out.master[k], PushResult::kAccepted) << k;
+  EXPECT_EQ(out.master[209], PushResult::kAccepted);
+  // The slave is matched on at once, at the offset moved by the step (no new search).
+  EXPECT_GE(out.sets_with_slave_after, 600u - 200u - 20u);
+  EXPECT_EQ(out.sets_matched_right_after, out.sets_with_slave_after);
+  buffer.Flush();
+  const SyncStats s = buffer.stats();
+  EXPECT_EQ(s.cameras[0].clock_jumps, 1u);
+  EXPECT_EQ(s.cameras[1].clock_jumps, 0u);
+  ExpectCountsAddUp(s);
+  int warnings = 0;
+  for (const auto& m : sink->last_raw()) {
+    const std::string text(m.payload.data(), m.payload.size());
+    warnings += m.level == spdlog::level::warn &&
+                text.find("master's clock (camera 0) restarted") != std::string::npos;
+  }
+  EXPECT_EQ(warnings, 1) << "one warning per jump";
+}
+
+INSTANTIATE_TEST_SUITE_P(Steps, SyncMasterClockJump,
+                         ::testing::Values(StepCase{"stamps restart near 0", -kStart + 5'000'000},
+                                           StepCase{"back 1.5 s", -1'500'000'000},
+                                           StepCase{"ahead 1 h", 3'600'000'000'000}),
+                         [](const ::testing::TestParamInfo<StepCase>& info) {
+                           std::string name = info.param.name;
+                           for (char& ch : name)
+                             ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+                           return name;
+                         });
+
+TEST(SyncMasterClockJumpRule, IsolatedMasterGlitchesStayRejected) {
+  SyncBuffer buffer(FreeRunningWithMaster());
+  const MasterOutcome out = FeedMaster(&buffer, 600, 0, [&](int k, int64_t t) {
+    if (k % 10 == 5) return t + 10'000'000'000;            // one in ten, 10 s ahead
+    if (k % 10 == 7 && k > 100) return t - 3'000'000'000;  // one in ten, 3 s back
+    return t;
+  });
+  EXPECT_EQ(buffer.ClockJumps(0).count, 0u);
+  EXPECT_EQ(Rejected(out.master), 60 + 50);
+  EXPECT_EQ(out.sets_matched_right_after, out.sets_with_slave_after);
+  buffer.Flush();
+  ExpectCountsAddUp(buffer.stats());
+}
+
+TEST(SyncMasterClockJumpRule, OldDataReplayedByEveryCameraIsNotANewMasterClock) {
+  SyncBuffer buffer(FreeRunningWithMaster());
+  buffer.SetTimeOffset(1, kOffset);
+  auto push_frames = [&](int from, int to) {
+    std::vector<PushResult> master;
+    for (int k = from; k < to; ++k) {
+      const int64_t t = kStart + k * kPeriod;
+      master.push_back(buffer.Push(Entry(0, t, t)));
+      buffer.Push(Entry(1, t + kPhase + kOffset, t + kPhase));
+    }
+    return master;
+  };
+  push_frames(0, 300);
+  const std::vector<PushResult> replayed = push_frames(200, 300);
+  EXPECT_EQ(Rejected(replayed), 100);
+  EXPECT_EQ(buffer.ClockJumps(0).count, 0u);
+  EXPECT_EQ(Rejected(push_frames(300, 400)), 0);
+}
+
+TEST(SyncMasterClockJumpRule, AMasterThatDoesNotFollowJumpsStaysRejected) {
+  SyncBuffer buffer(FreeRunning(true));
+  const MasterOutcome out =
+      FeedMaster(&buffer, 400, 200, [&](int k, int64_t t) { return k < 200 ? t : t - kStart; });
+  EXPECT_EQ(buffer.ClockJumps(0).count, 0u);
+  EXPECT_EQ(Rejected(out.master), 200);
+  EXPECT_EQ(out.sets_with_slave_after, 0u);
+}
+
+TEST(SyncClockJumpRule, OptionsNameTheField) {
+  SyncOptions o = FreeRunning(true);
   o.follow_clock_jumps = {false};
   EXPECT_EQ(o.Check().message(),
             "follow_clock_jumps: must be empty or have num_cameras (2) flags, got 1");

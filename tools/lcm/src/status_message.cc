@@ -58,6 +58,8 @@ void FillClock(const RigEstimate& estimate, size_t camera, camera_status_t* c) {
   c->time_offset_source = slave_extrinsics_t::TIME_OFFSET_NONE;
   c->time_offset_std_s = -1.0;
   c->clock_drift_std_ppm = -1.0;
+  // The master: restarts of its clock followed (cameras that run free).
+  if (camera == 0) c->clock_jumps = estimate.master_clock_jumps;
   if (camera == 0 || camera > estimate.rig.slaves.size()) return;
   const SlaveCalibration& s = estimate.rig.slaves[camera - 1];
   const SlaveOnlineState* online =

@@ -44,6 +44,9 @@ std::string CameraClockText(const camera_status_t& c) {
     case slave_extrinsics_t::TIME_OFFSET_GIVEN:
       text = "offset " + FixedText(c.time_offset_s * 1e3, 3) + " ms (given)";
       break;
+    case slave_extrinsics_t::TIME_OFFSET_NONE:  // the master: its restarts followed
+      text = "the reference";
+      break;
     default:
       text = "offset " + FixedText(c.time_offset_s * 1e3, 3) + " ms sigma " +
              SigmaText(Known(c.time_offset_std_s) * 1e3, 2) + " ms, drift " +
@@ -71,7 +74,7 @@ void AppendCameras(const MonitorSnapshot& snapshot, std::vector<std::string>* li
         VoStateName(c.vo_state), segment, age));
   }
   for (const camera_status_t& c : st.cameras) {
-    if (c.time_offset_source != slave_extrinsics_t::TIME_OFFSET_NONE) {
+    if (c.time_offset_source != slave_extrinsics_t::TIME_OFFSET_NONE || c.clock_jumps > 0) {
       lines->push_back(fmt::format("clock {:<12} {}", c.name, CameraClockText(c)));
     }
   }

@@ -24,7 +24,10 @@
 //     beyond what step 3 can search, e.g. stamps that restart near 0; FollowClockJump): the
 //     slave's poses on the old clock are forgotten and step 1 runs on the new ones, searched
 //     within ± search_window_s around the step's prior offset.
-// Slaves whose offset is given are held at it (σ unknown).
+//  5. moved by a restart of the master's clock that the SyncBuffer followed
+//     (FollowMasterClockJump): every offset steps by minus the master's step, confirmed by the
+//     next measurement.
+// Slaves whose offset is given are held at it (σ unknown) until the master's clock restarts.
 //
 // Memory: per camera, the poses of the last history_s seconds (a deque trimmed on every Add).
 // Not thread-safe: OnlineCalibrator serialises the calls.
@@ -116,6 +119,14 @@ class ClockOffsetTracker {
   // set its offset to `prior_s` (the step): the offset is re-acquired around it from the poses
   // added from now on (step 4). Counted as a jump when the slave had an offset before. Logged.
   void FollowClockJump(int slave, double prior_s);
+  // The SyncBuffer followed a restart of the MASTER's clock (SyncBuffer::ClockJumps(0)) by
+  // `step_s` (new master clock - old): the master's poses on the old clock are forgotten and
+  // every slave's offset moves by -step_s (state, prior), its σ grows by a quarter of a master
+  // frame, and it is usable again once the next measurement window confirms it (no new
+  // correlation; a measurement at the end of its interval re-initialises it as in step 3). A
+  // slave whose offset was given is estimated from then on, starting at the given value moved by
+  // the step. Not counted in any slave's jumps (their clocks did not restart). Logged.
+  void FollowMasterClockJump(double step_s);
 
  private:
   struct Slave;

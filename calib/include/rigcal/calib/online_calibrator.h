@@ -128,6 +128,10 @@ class OnlineCalibrator {
   std::unique_ptr<ClockOffsetTracker> clock_ RIGCAL_GUARDED_BY(offset_mutex_);
   // Per slave, the SyncBuffer's clock jumps the tracker was told of (FollowClockJump).
   std::vector<uint64_t> clock_jumps_seen_ RIGCAL_GUARDED_BY(offset_mutex_);
+  // The master's clock jumps the tracker was told of (FollowMasterClockJump), and their steps'
+  // sum then.
+  uint64_t master_jumps_seen_ RIGCAL_GUARDED_BY(offset_mutex_) = 0;
+  int64_t master_step_seen_ns_ RIGCAL_GUARDED_BY(offset_mutex_) = 0;
   std::thread estimator_thread_;
   std::thread refinement_thread_;
 };

@@ -164,6 +164,9 @@ struct RigEstimate {
   uint64_t rejected_sets = 0;  // sets ignored: time not increasing, no or non-finite master
   RigCalibration rig;          // per slave: the result in the batch schema
   std::vector<SlaveOnlineState> online;  // per slave
+  // Cameras that run free: restarts of the master's clock followed (SyncBuffer::ClockJumps(0);
+  // OnlineCalibrator). A slave's online.clock_jumps counts its own clock's.
+  int master_clock_jumps = 0;
 };
 
 // Everything the statistics know about the motions that are NOT in the refinement window,

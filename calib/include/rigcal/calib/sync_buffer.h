@@ -61,7 +61,7 @@
 //  * more than the glitch horizon (max(2 s, 10 * max_wait)) ahead of the newest stamp of every
 //    camera (up to INT64_MAX), or
 //  * ahead of its camera's own recent rate (more than max(20 of its recent frame intervals,
-//    max_wait) after its newest stamp; 6 intervals for a slave that follows clock jumps) while
+//    max_wait) after its newest stamp; 6 intervals for a camera that follows clock jumps) while
 //    also more than max_wait ahead of every other camera's newest stamp (a clock that stepped
 //    by a second), or
 //  * more than the glitch horizon behind its camera's newest stamp or the newest stamp of any
@@ -91,6 +91,23 @@
 // data replayed by every camera stay rejected. Steps of at most 6 frame intervals ahead or
 // fewer than 10 frames back stay on the old timeline here: the ClockOffsetTracker finds those
 // (it searches ± its search window, 0.5 s, around the last offset).
+//
+// Clock jumps of the master (interpolation mode, follow_clock_jumps[0]). The same rule with
+// the roles swapped: master poses that the rules reject (as above, or kLate: at or before its
+// last emitted stamp) start a run on a new timeline of the master, continued by each next one
+// between half and three of its recent frame intervals after the previous; after
+// kNewClockPoses (10) of them, while the slaves' clocks advanced by at least half the run's span
+// (their newest stamp on the master clock; a replay by every camera does not), the master's new
+// timeline is followed: its buffered entries of the old timeline are resolved first (as by
+// Flush), the step S of its clock is the run's mean of (stamp - the slaves' newest stamp on the
+// old master clock) less the master's usual lead over them, and every stamp on the master clock
+// moves with it: every slave's offset (and its ClockJump offset_ns) by -S (the slaves' rings and
+// own stamps stay, so matching goes on without a new search), the stream's clocks by +S. It is
+// counted on the master (stats clock_jumps of camera 0; ClockJumps(0): offset_ns the sum of the
+// steps followed, step_ns the last one) and warned about once; sets carry the sum
+// (MatchedSet::master_clock_step_ns). Isolated master glitches stay rejected; steps of at most 6
+// frame intervals ahead or fewer than 10 frames back are accepted on the old timeline (every
+// slave's ClockOffsetTracker sees its offset step).
 //
 // Resume: SkipConsumed(t) makes every pose of camera c stamped at or before t[c] kConsumed (the
 // estimator took it before a restart), so replaying the same data after a resume adds nothing.
@@ -135,8 +152,8 @@ struct SyncOptions {
   // slave's time offset. Not with match_by_trigger_seq.
   bool interpolate = false;
   // Interpolation mode: per camera (empty = none), whether a restart of its clock is followed
-  // (see "Clock jumps" above): for slaves whose offset is estimated. [0] (the master) must be
-  // false; not without interpolate.
+  // (see "Clock jumps" above): for slaves whose offset is estimated, and [0] for the master
+  // (every slave's offset then steps with it). Not without interpolate.
   std::vector<bool> follow_clock_jumps;
   // Matched sets held for the consumer (a fixed queue). In [1, 2^20]. When the consumer is too
   // slow the oldest ready set is dropped (counted as consumer_overflow).
@@ -176,6 +193,10 @@ struct MatchedSet {
   // Indexed by camera; poses[0] (the master) and every required camera are always set, an
   // optional camera without a partner is empty. Sized num_cameras by Pop.
   std::vector<std::optional<CameraPose>> poses;
+  // The sum of the master's clock steps followed before the set (ClockJumps(0).offset_ns then;
+  // see "Clock jumps"): t_ns - master_clock_step_ns is the set's instant on the master's clock
+  // as it ran before its first restart, a timeline that does not jump.
+  int64_t master_clock_step_ns = 0;
 };
 
 // Counters of one camera since construction. For every camera:
@@ -223,10 +244,12 @@ struct SyncStats {
 
 // The clock jumps of one camera followed so far (see "Clock jumps" above).
 struct ClockJump {
-  uint64_t count = 0;     // jumps followed
-  int64_t offset_ns = 0;  // at the last one: the offset prior set (stamp - master clock)
-  int64_t step_ns = 0;    // at the last one: the prior minus the offset before it
-  int64_t t_ns = 0;       // at the last one: the stamp of the first pose accepted after it
+  uint64_t count = 0;  // jumps followed
+  // A slave: the offset prior set at its last jump (stamp - master clock; stepped too by the
+  // master's jumps since). The master: the sum of its steps (stamp - its clock at the start).
+  int64_t offset_ns = 0;
+  int64_t step_ns = 0;  // at the last one: the prior minus the offset before it (master: the step)
+  int64_t t_ns = 0;     // at the last one: the stamp of the first pose accepted after it
 };
 
 class SyncBuffer {
@@ -275,10 +298,12 @@ class SyncBuffer {
 
   // Interpolation mode: slave `camera` (>= 1) stamps read master clock + offset_ns from now on
   // (see the rule above). Any thread. Ignored for the master, an unknown camera or in stamp mode,
-  // and when `after_jumps` is given and differs from the camera's ClockJumps().count (the offset
-  // was estimated before a clock jump the caller has not seen yet).
+  // and when `after_jumps` is given and differs from the camera's ClockJumps().count, or
+  // `after_master_jumps` from the master's (the offset was estimated before a clock jump the
+  // caller has not seen yet).
   void SetTimeOffset(int camera, int64_t offset_ns,
-                     std::optional<uint64_t> after_jumps = std::nullopt);
+                     std::optional<uint64_t> after_jumps = std::nullopt,
+                     std::optional<uint64_t> after_master_jumps = std::nullopt);
 
   // The clock jumps of `camera` followed so far (all zero for an unknown camera). Any thread.
   ClockJump ClockJumps(int camera) const;
