@@ -1,5 +1,7 @@
 // CheckBusStaysOnHost: which LCM URLs keep rigcal's bus on this host, against routing tables in
-// the format of /proc/net/route (the kernel's hex words of network-order addresses).
+// the format of /proc/net/route (the kernel's hex words of network-order addresses). The URLs
+// are only parsed: no LCM bus is opened and no socket is made, so no namespace is needed (the
+// live refusals run in lcm/lcm_udpm_netns, inside a private network namespace).
 #include "rigcal/lcm/bus_exposure.h"
 
 #include <gmock/gmock.h>

@@ -1,4 +1,7 @@
 // `rigcal solve`: batch calibration of a rig from per-camera trajectory files.
+// Over 600 lines: the option table (about half the file, each option with its help text) and the
+// one flow that reads, matches, solves and prints; the target and metric parts already live in
+// solve_target.cc. The next split is the option table into its own file.
 #include <algorithm>
 #include <cmath>
 #include <exception>
