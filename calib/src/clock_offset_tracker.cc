@@ -289,8 +289,9 @@ SlaveClockOffset ClockOffsetTracker::SlaveOffset(int i) const {
   }
   if (!s.initialised) return out;
   // Predicted to the newest master stamp.
+  // (No state time yet, a given offset re-estimated after a master restart: nothing to predict.)
   const int64_t now = poses_[0].empty() ? s.t_ns : std::max(s.t_ns, poses_[0].back().t_ns);
-  const double dt = S(now - s.t_ns);
+  const double dt = s.t_ns == kStateTimeUnset ? 0.0 : S(now - s.t_ns);
   out.offset_s = s.x(0) + s.x(1) * dt;
   const double qr = std::pow(options_.drift_walk_ppm_per_sqrt_s * kPpm, 2);
   const double qt = std::pow(options_.offset_walk_s_per_sqrt_s, 2);
