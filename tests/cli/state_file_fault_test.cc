@@ -112,11 +112,13 @@ TEST_F(StateFileFault, KillNineWhileSavingLeavesACompleteState) {
     ASSERT_GT(pid, 0);
     std::this_thread::sleep_for(std::chrono::microseconds(moment(random)));
     int status = 0;
+    // Still running: killed, then reaped. Finished: this waitpid has reaped it already (waiting
+    // again would wait for a child that no longer exists).
     if (::waitpid(pid, &status, WNOHANG) == 0) {
       ASSERT_EQ(::kill(pid, SIGKILL), 0);
       ++killed_running;
+      WaitExit(pid, std::chrono::seconds(60));
     }
-    WaitExit(pid, std::chrono::seconds(60));
     const std::string after = Slurp(state);
     const Expected<RigEstimatorState> parsed = tools::ParseEstimatorState(after);
     ASSERT_TRUE(parsed.ok()) << "trial " << trial << " (seed " << kSeed << "): " << parsed.error();
