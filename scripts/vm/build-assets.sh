@@ -4,11 +4,13 @@
 #   OUT/<V>/vmlinuz           the Debian kernel (apt-get download linux-image-<V>, unpacked)
 #   OUT/<V>/base.cpio.gz      busybox, the media modules (vivid, videobuf2, ...), vimc built out
 #                             of tree from linux-source-6.1, v4l2loopback built from the dkms
-#                             source, libcamera's IPA modules and the guest's /init
+#                             source, libcamera's IPA modules, systemd-udevd (unpacked from
+#                             Debian's udev package, with its shared libraries) and the guest's /init
 # <V> is the kernel of the installed linux-headers-amd64 (the headers the modules are built
 # against). Needs the packages of scripts/install-deps.sh: linux-headers-amd64,
 # linux-source-6.1, v4l2loopback-dkms, busybox-static, libcamera-ipa, cpio, qemu-system-x86.
-# Prints "SKIP: <reason>" and exits 77 when something it needs is missing.
+# Prints "SKIP: <reason>" and exits 77 when something it needs is missing. Without the udev
+# package (apt-get download udev fails) the guest runs without udevd (the tests that need it skip).
 set -euo pipefail
 OUT=$(realpath -m "${1:-build/vm}")
 HERE=$(cd "$(dirname "$0")" && pwd)
@@ -48,6 +50,13 @@ fi
 dpkg-deb -x "$DIR/linux-image.deb" "$WORK/image"
 cp "$WORK/image/boot/vmlinuz-$V" "$WORK/vmlinuz"
 MODS="$WORK/image/lib/modules/$V/kernel"
+
+# Debian's udev, unpacked (not installed): udevd tells libcamera about removed devices.
+if [ ! -f "$DIR/udev.deb" ]; then
+  (cd "$WORK" && apt-get download udev >/dev/null 2>&1 && mv udev_*.deb "$DIR/udev.deb") ||
+    echo "apt-get download udev failed: the guest runs without udevd" >&2
+fi
+[ -f "$DIR/udev.deb" ] && dpkg-deb -x "$DIR/udev.deb" "$WORK/udev"
 
 # vimc, out of tree (Debian's config does not enable it).
 tar -xf "$SRC_TAR" -C "$WORK" --wildcards '*/drivers/media/test-drivers/vimc/*'
@@ -90,9 +99,23 @@ if [ -d "$IPA_DIR" ]; then
   mkdir -p "$ROOT$IPA_DIR" && cp -r "$IPA_DIR/." "$ROOT$IPA_DIR/"
   [ -d /usr/share/libcamera ] && mkdir -p "$ROOT/usr/share" && cp -r /usr/share/libcamera "$ROOT/usr/share/"
 fi
+# udevd (udevadm is both) with the libraries it links, without rules: it records every device in
+# /run/udev/data and forwards the kernel's add/remove events to libudev's monitors.
+if [ -x "$WORK/udev/bin/udevadm" ]; then
+  mkdir -p "$ROOT/lib/systemd" "$ROOT/lib/x86_64-linux-gnu"
+  cp "$WORK/udev/bin/udevadm" "$ROOT/bin/udevadm"
+  ln -sf /bin/udevadm "$ROOT/lib/systemd/systemd-udevd"
+  ldd "$WORK/udev/bin/udevadm" | awk '$2 == "=>" && $3 ~ /^\// {print $3} $1 ~ /^\/lib64\// {print $1}' |
+    while read -r lib; do
+      case "$lib" in
+        /lib64/*) cp -L "$lib" "$ROOT/lib64/" ;;
+        *) cp -L "$lib" "$ROOT/lib/x86_64-linux-gnu/" ;;
+      esac
+    done
+fi
 cp "$HERE/guest-init.sh" "$ROOT/init"
 chmod +x "$ROOT/init"
 (cd "$ROOT" && find . | cpio -o -H newc --quiet | gzip -1) >"$WORK/base.cpio.gz"
 mv "$WORK/vmlinuz" "$DIR/vmlinuz"
 mv "$WORK/base.cpio.gz" "$DIR/base.cpio.gz"
-echo "vm assets: $DIR (built: kernel $V, vivid, vimc, v4l2loopback)"
+echo "vm assets: $DIR (built: kernel $V, vivid, vimc, v4l2loopback$([ -x "$WORK/udev/bin/udevadm" ] && echo ", udevd"))"

@@ -1,6 +1,8 @@
 #!/bin/sh
 # /init of the device-test VM (scripts/vm/build-assets.sh puts it in base.cpio.gz): loads the
-# media drivers, makes the device nodes visible to libudev (no udevd here), runs /tests/run (the
+# media drivers, starts udevd (Debian's, without rules: it records the devices for libudev and
+# forwards add/remove events, so libcamera sees cameras come and go; without it the devices are
+# marked initialised by hand and hot-unplug goes unseen), runs /tests/run (the
 # second initramfs archive, from run-device-tests.sh) and powers off. Markers on the console:
 #   RIGCAL-VM: <problem>     set-up trouble
 #   RIGCAL-VM-READY          drivers loaded
@@ -21,9 +23,15 @@ insmod /modules/v4l2loopback.ko devices=2 video_nr=20,21 exclusive_caps=0,0 \
   card_label=rigcal-loop-0,rigcal-loop-1 || echo "RIGCAL-VM: insmod v4l2loopback failed"
 insmod /modules/vimc.ko || echo "RIGCAL-VM: insmod vimc failed"
 # libudev reports a device only when udev has "initialised" it: /run/udev/data/c<maj:min>.
-for d in /sys/bus/media/devices/* /sys/class/video4linux/*; do
-  [ -f "$d/dev" ] && echo "I:1" > "/run/udev/data/c$(cat "$d/dev")"
-done
+if [ -x /lib/systemd/systemd-udevd ]; then
+  /lib/systemd/systemd-udevd --daemon --resolve-names=never 2>/dev/null &&
+    udevadm trigger --action=add && udevadm settle --timeout=60 ||
+    echo "RIGCAL-VM: udevd did not start"
+else
+  for d in /sys/bus/media/devices/* /sys/class/video4linux/*; do
+    [ -f "$d/dev" ] && echo "I:1" > "/run/udev/data/c$(cat "$d/dev")"
+  done
+fi
 echo "RIGCAL-VM-READY"
 if [ -x /tests/run ]; then
   /tests/run

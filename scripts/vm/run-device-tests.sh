@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Runs the device tests (a GoogleTest binary, tests/device/) inside QEMU on a Debian kernel with
 # real V4L2 drivers: two vivid devices, two v4l2loopback devices, vimc for libcamera.
-#   run-device-tests.sh <test binary> [gtest filter, default: all but the long VividLongRun.* and Loopback.*]
-# Environment variables RIGCAL_DEVICE_* are passed on to the guest's tests.
+#   run-device-tests.sh <test binary> [gtest filter, default: all but the long VividLongRun.* and
+#                       LoopbackRun.*]
+# Environment variables RIGCAL_DEVICE_* are passed on to the guest's tests. RIGCAL_VM_BINARIES:
+# further programs (paths, space-separated) packed into the guest's /tests/bin, each named to the
+# tests by RIGCAL_DEVICE_<NAME> (rigcal: RIGCAL_DEVICE_RIGCAL=/tests/bin/rigcal).
 # Builds or reuses the assets (build-assets.sh, under $RIGCAL_VM_DIR, default build/vm), packs
 # the binary with the shared libraries ldd lists into a second initramfs archive, boots
 # qemu-system-x86_64 (software emulation: KVM cannot run guests here) and reads the guest's
@@ -10,7 +13,7 @@
 # Exit: 0 passed, 1 failed, 77 skipped ("SKIP: <reason>" first; a failure under CI=true).
 set -uo pipefail
 binary=$(readlink -f "$1")
-filter=${2:--VividLongRun.*:Loopback.*}
+filter=${2:--VividLongRun.*:LoopbackRun.*}
 HERE=$(cd "$(dirname "$0")" && pwd)
 VM_DIR=${RIGCAL_VM_DIR:-$PWD/build/vm}
 TIMEOUT_S=${RIGCAL_VM_TIMEOUT_S:-400}
@@ -32,12 +35,21 @@ dir=$(echo "$assets" | sed -n 's/^vm assets: \([^ ]*\).*/\1/p')
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 root="$work/root"
-mkdir -p "$root/tests/lib" "$root/lib64"
+mkdir -p "$root/tests/lib" "$root/tests/bin" "$root/lib64"
 cp "$binary" "$root/tests/device_tests"
-# Shared libraries of the test binary and of libcamera's IPA modules (dlopen'ed).
+extra_env=""
+for program in ${RIGCAL_VM_BINARIES:-}; do
+  [ -x "$program" ] || { echo "RIGCAL_VM_BINARIES: $program is not an executable"; exit 1; }
+  name=$(basename "$program")
+  cp "$program" "$root/tests/bin/$name"
+  extra_env="$extra_env
+export RIGCAL_DEVICE_$(echo "$name" | tr 'a-z-' 'A-Z_')=/tests/bin/$name"
+done
+# Shared libraries of the programs and of libcamera's IPA modules (dlopen'ed).
 libs() { ldd "$1" 2>/dev/null | awk '$2 == "=>" && $3 ~ /^\// {print $3} $1 ~ /^\/lib64\// {print $1}'; }
 {
   libs "$binary"
+  for program in ${RIGCAL_VM_BINARIES:-}; do libs "$program"; done
   for ipa in /usr/lib/x86_64-linux-gnu/libcamera/*.so; do [ -f "$ipa" ] && libs "$ipa"; done
 } | sort -u | while read -r lib; do
   case "$lib" in
@@ -47,7 +59,7 @@ libs() { ldd "$1" 2>/dev/null | awk '$2 == "=>" && $3 ~ /^\// {print $3} $1 ~ /^
 done
 cat > "$root/tests/run" <<RUN
 #!/bin/sh
-export LD_LIBRARY_PATH=/tests/lib HOME=/tmp RIGCAL_LOG_LEVEL=info
+export LD_LIBRARY_PATH=/tests/lib HOME=/tmp RIGCAL_LOG_LEVEL=info PATH=/tests/bin:\$PATH$extra_env
 $(env | grep '^RIGCAL_DEVICE_[A-Z_]*=' | sed "s/^\([^=]*\)=\(.*\)/export \1='\2'/")
 cd /tmp
 /tests/device_tests --gtest_filter='$filter' --gtest_color=no

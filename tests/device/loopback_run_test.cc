@@ -1,0 +1,336 @@
+// The customer's whole path through the real V4L2 API, driven by `rigcal run`: a simulated
+// two-camera rig renders its frames, a writer feeds them to two v4l2loopback devices (GREY and
+// YUYV), and `rigcal run` with `source.type: v4l2` captures them (mmap streaming, kernel stamps),
+// runs VO per camera and the online calibrator, and writes its result and VO poses. The result
+// must converge, and its errors against the simulated truth must lie within the estimator's own
+// uncertainty (checks below); they are printed as RIGCAL-FIGURE lines.
+//
+// Pacing: under software emulation VO takes hundreds of ms per frame. The writer paces itself
+// by what the guest processes: after each frame it waits 1.5 times the slower camera's VO median
+// of rigcal's last status line (plus 50 ms for capture and the estimator), so frames are not
+// dropped for a VO backlog. v4l2loopback stamps a frame at its write; the test maps every pose
+// stamp back to the frame written then, to score the run against the simulated truth.
+//
+// Size of the run (environment, set by the ctest entries in tests/device/CMakeLists.txt):
+// RIGCAL_DEVICE_LOOPBACK_FRAMES (frames per camera), RIGCAL_DEVICE_LOOPBACK_WIDTH (pixels;
+// height = 3/4 of it, 60-degree pinhole cameras). The simulated drive is the same 12 s
+// trajectory whatever the frame count (the rate is frames / 12 s), so fewer frames mean more
+// motion between frames.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <regex>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "guest_skip.h"
+#include "loopback_writer.h"
+#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/io/result_file.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/trajectory_io.h"
+#include "rigcal/pipeline/run_evaluation.h"
+
+extern char** environ;
+
+namespace rigcal::tools {
+namespace {
+
+constexpr double kDriveS = 12.0;  // the trajectory below: 7 waypoints, 2 s apart
+// sqrt of the 99.9 % quantile of chi-square with 3 degrees of freedom: a 3-vector error with the
+// given per-axis sigma stays within this many sigma (Mahalanobis) but once in a thousand runs.
+constexpr double kChi3Sigma999 = 4.03;
+
+int EnvInt(const char* name, int fallback) {
+  const char* v = std::getenv(name);
+  return v ? std::atoi(v) : fallback;
+}
+
+std::string SimulatedRigYaml(int width, int height, int frames) {
+  const double f = (width / 2.0) / std::tan(30.0 * M_PI / 180.0);
+  std::ostringstream camera;
+  camera << "model: pinhole, resolution: [" << width << ", " << height << "], intrinsics: [" << f
+         << ", " << f << ", " << (width - 1) / 2.0 << ", " << (height - 1) / 2.0 << "]";
+  std::ostringstream yaml;
+  yaml << "rig: {name: loopback, master: cam0}\n"
+       << "cameras:\n"
+       << "  - {name: cam0, " << camera.str() << "}\n"
+       << "  - {name: cam1, " << camera.str()
+       << ",\n     truth: {q_wxyz: [0.70710678118654752, 0, 0.70710678118654752, 0], "
+          "C: [-1, 1, 3]}}\n"
+       << "source:\n"
+       << "  type: simulated\n"
+       << "  frame_rate_hz: " << frames / kDriveS << "\n"
+       << "  num_frames: " << frames << "\n"
+       << "  seed: 3\n"
+       << "  realtime: false\n"
+       << "  noise_sigma: 1.5\n"
+       << "  scene: {type: room, size: [20, 16, 6], boxes: 10}\n"
+       << "  trajectory:\n"
+       << "    waypoint_interval_s: 2\n"
+       << "    waypoints:\n"
+       << "      - {p: [-3.0, 0.0, 3.0], ypr_deg: [0, 0, 0]}\n"
+       << "      - {p: [-2.3, 0.8, 3.2], ypr_deg: [20, -10, 8]}\n"
+       << "      - {p: [-1.4, 1.5, 3.0], ypr_deg: [38, 5, -6]}\n"
+       << "      - {p: [-0.4, 1.2, 2.8], ypr_deg: [15, 15, -15]}\n"
+       << "      - {p: [0.5, 0.4, 3.1], ypr_deg: [-10, 0, 5]}\n"
+       << "      - {p: [1.2, -0.6, 3.4], ypr_deg: [-35, -15, 12]}\n"
+       << "      - {p: [0.8, -1.6, 3.1], ypr_deg: [-20, 8, 18]}\n";
+  return yaml.str();
+}
+
+// The same cameras, captured from the loopback devices.
+std::string V4l2RigYaml(const std::string& simulated) {
+  std::string yaml = simulated.substr(0, simulated.find("source:"));
+  yaml = std::regex_replace(yaml, std::regex("name: cam0, "), "name: cam0, device: /dev/video20, ");
+  yaml = std::regex_replace(
+      yaml, std::regex("name: cam1, "),
+      "name: cam1, device: /dev/video21, capture: {pixel_formats: [YUYV]},\n     ");
+  // Sets are the writer's frames, written back to back and at least 150 ms apart.
+  yaml += "sync: {frame_rate_hz: 5}\n";
+  yaml += "source: {type: v4l2, pixel_formats: [GREY], buffers: 4}\n";
+  return yaml;
+}
+
+// What rigcal run's status lines say (one a second): VO median per camera, backlog drops.
+class StatusReader {
+ public:
+  void Parse(const std::string& line) {
+    static const std::regex camera(R"(\| (cam\d) +[0-9.]+fps (\w+) s\d+ ([0-9.]+)ms( drop(\d+))?)");
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (auto it = std::sregex_iterator(line.begin(), line.end(), camera);
+         it != std::sregex_iterator(); ++it) {
+      const int i = (*it)[1].str() == "cam0" ? 0 : 1;
+      vo_ms_[i] = std::stod((*it)[3].str());
+      if ((*it)[5].matched) drops_[i] = std::stoll((*it)[5].str());
+      ++lines_;
+    }
+  }
+  double SlowerVoMs() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return std::max(vo_ms_[0], vo_ms_[1]);
+  }
+  int64_t lines() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return lines_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  double vo_ms_[2] = {0.0, 0.0};
+  int64_t drops_[2] = {0, 0};
+  int64_t lines_ = 0;
+};
+
+// `rigcal run` as a child process, its stderr read line by line (printed, and parsed).
+class RigcalRun {
+ public:
+  RigcalRun(const std::string& rigcal, const std::vector<std::string>& args, StatusReader* status)
+      : status_(status) {
+    int fds[2];
+    if (pipe(fds) != 0) return;
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], STDERR_FILENO);
+    posix_spawn_file_actions_addclose(&actions, fds[0]);
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(rigcal.c_str()));
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    if (posix_spawn(&pid_, rigcal.c_str(), &actions, nullptr, argv.data(), environ) != 0) {
+      pid_ = -1;
+    }
+    posix_spawn_file_actions_destroy(&actions);
+    close(fds[1]);
+    reader_ = std::thread([this, fd = fds[0]] {
+      FILE* in = fdopen(fd, "r");
+      char buf[1024];
+      while (in && std::fgets(buf, sizeof(buf), in)) {
+        std::string line(buf);
+        std::cout << "  rigcal: " << line << std::flush;
+        status_->Parse(line);
+      }
+      if (in) fclose(in);
+    });
+  }
+  ~RigcalRun() {
+    if (pid_ > 0 && !exited_) {
+      kill(pid_, SIGKILL);
+      Wait();
+    }
+    if (reader_.joinable()) reader_.join();
+  }
+  bool started() const { return pid_ > 0; }
+  bool Running() {
+    if (exited_) return false;
+    int status = 0;
+    if (waitpid(pid_, &status, WNOHANG) == pid_) {
+      exited_ = true;
+      exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    }
+    return !exited_;
+  }
+  // SIGINT (rigcal run's clean stop), then the exit code.
+  int Stop() {
+    if (Running()) kill(pid_, SIGINT);
+    return Wait();
+  }
+  int Wait() {
+    if (!exited_) {
+      int status = 0;
+      waitpid(pid_, &status, 0);
+      exited_ = true;
+      exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    }
+    if (reader_.joinable()) reader_.join();
+    return exit_code_;
+  }
+
+ private:
+  StatusReader* status_;
+  pid_t pid_ = -1;
+  bool exited_ = false;
+  int exit_code_ = -1;
+  std::thread reader_;
+};
+
+TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
+  RIGCAL_REQUIRE_NODE("/dev/video20");
+  RIGCAL_REQUIRE_NODE("/dev/video21");
+  const char* rigcal = std::getenv("RIGCAL_DEVICE_RIGCAL");
+  if (rigcal == nullptr || access(rigcal, X_OK) != 0) {
+    RIGCAL_SKIP_MISSING() << "no rigcal binary in the guest (RIGCAL_DEVICE_RIGCAL; "
+                          << "scripts/vm/run-device-tests.sh packs RIGCAL_VM_BINARIES)";
+  }
+  const int frames = EnvInt("RIGCAL_DEVICE_LOOPBACK_FRAMES", 72);
+  const int width = EnvInt("RIGCAL_DEVICE_LOOPBACK_WIDTH", 160) / 4 * 4;
+  const int height = width * 3 / 4;
+  ASSERT_GE(frames, 12);
+  ASSERT_GE(width, 64);
+  const std::string dir = "/tmp/loopback_run";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string simulated = SimulatedRigYaml(width, height, frames);
+  std::ofstream(dir + "/simulated.yaml") << simulated;
+  std::ofstream(dir + "/v4l2.yaml") << V4l2RigYaml(simulated);
+  auto config = LoadRigConfig(dir + "/simulated.yaml");
+  ASSERT_TRUE(config.ok()) << config.error();
+  auto rig = drivers::MakeSimulatedRig(*config->simulated_source);
+  ASSERT_TRUE(rig.ok()) << rig.error();
+
+  drivers::LoopbackWriter writer0("/dev/video20", drivers::PixelFormat::kGrey, width, height);
+  drivers::LoopbackWriter writer1("/dev/video21", drivers::PixelFormat::kYuyv, width, height);
+  ASSERT_EQ(writer0.error(), "");
+  ASSERT_EQ(writer1.error(), "");
+  // Rendered before the run, so that the writes cost the guest nothing but the copy.
+  const auto render_start = std::chrono::steady_clock::now();
+  std::vector<std::vector<uint8_t>> packed0, packed1;
+  for (int k = 0; k < frames; ++k) {
+    packed0.push_back(writer0.Pack(rig->RenderFrame(0, k)));
+    packed1.push_back(writer1.Pack(rig->RenderFrame(1, k)));
+  }
+  const double render_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - render_start).count();
+  std::cout << "  " << frames << " frames of " << width << "x" << height
+            << " per camera rendered in " << render_s << " s\n";
+  // A loopback device offers its format to readers once its writer has written.
+  ASSERT_TRUE(writer0.Write(packed0[0])) << writer0.error();
+  ASSERT_TRUE(writer1.Write(packed1[0])) << writer1.error();
+
+  StatusReader status;
+  RigcalRun run(rigcal,
+                {"run", "--config", dir + "/v4l2.yaml", "--out", dir + "/result.yaml",
+                 "--poses-out", dir + "/poses", "--status-every", "1"},
+                &status);
+  ASSERT_TRUE(run.started()) << "cannot start " << rigcal;
+  // Streaming once the first status line is there (the devices are open by then).
+  const auto start_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (status.lines() == 0 && run.Running() &&
+         std::chrono::steady_clock::now() < start_deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(run.Running()) << "rigcal run ended before the first frame";
+  ASSERT_GT(status.lines(), 0) << "rigcal run printed no status within 60 s";
+
+  const auto started = std::chrono::steady_clock::now();
+  std::vector<int64_t> write_ns(frames, 0);  // CLOCK_MONOTONIC just before frame k was written
+  std::vector<double> periods_ms;
+  for (int k = 0; k < frames && run.Running(); ++k) {
+    write_ns[k] = drivers::MonotonicNowNs();
+    ASSERT_TRUE(writer0.Write(packed0[k])) << writer0.error();
+    ASSERT_TRUE(writer1.Write(packed1[k])) << writer1.error();
+    const double vo_ms = status.SlowerVoMs();
+    const double period_ms = vo_ms > 0.0 ? std::max(150.0, 1.5 * vo_ms + 50.0) : 1000.0;
+    periods_ms.push_back(period_ms);
+    std::this_thread::sleep_for(std::chrono::microseconds(static_cast<int64_t>(period_ms * 1e3)));
+  }
+  const double feed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  std::sort(periods_ms.begin(), periods_ms.end());
+  std::cout << "  " << frames << " frames written in " << feed_s << " s, period ms median "
+            << periods_ms[periods_ms.size() / 2] << " max " << periods_ms.back() << "\n";
+  std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int64_t>(periods_ms.back())));
+  const int exit_code = run.Stop();
+  EXPECT_TRUE(exit_code == 0 || exit_code == 3) << "rigcal run exit " << exit_code;
+
+  // The VO poses back on the simulation's clock: the frame written last before the kernel stamp.
+  std::vector<std::vector<CameraPose>> poses(2);
+  for (int i = 0; i < 2; ++i) {
+    auto trajectory = ReadTrajectory(dir + "/poses/cam" + std::to_string(i) + ".txt");
+    ASSERT_TRUE(trajectory.ok()) << trajectory.error();
+    for (size_t j = 0; j < trajectory->size(); ++j) {
+      const auto after = std::upper_bound(write_ns.begin(), write_ns.end(), trajectory->t_ns[j]);
+      if (after == write_ns.begin()) continue;
+      CameraPose pose;
+      pose.camera = i;
+      pose.t_ns = rig->FrameTimeNs(after - write_ns.begin() - 1);
+      pose.segment = trajectory->segment[j];
+      pose.pose = trajectory->poses[j];
+      poses[i].push_back(pose);
+    }
+    std::cout << "  cam" << i << ": " << poses[i].size() << " VO poses of " << frames
+              << " frames\n";
+    EXPECT_GE(poses[i].size(), static_cast<size_t>(frames * 3 / 4)) << "cam" << i;
+  }
+  auto result = ReadResultFile(dir + "/result.yaml");
+  ASSERT_TRUE(result.ok()) << result.error();
+  ASSERT_EQ(result->slaves.size(), 1u);
+  auto evaluation = EvaluateRun(*rig, poses, *result);
+  ASSERT_TRUE(evaluation.ok()) << evaluation.error();
+  std::cout << FormatEvaluation(*evaluation);
+  const SlaveCalibration& slave = result->slaves[0];
+  ASSERT_TRUE(slave.usable()) << "the calibration did not converge: " << slave.message;
+  const SlaveEvaluation& e = evaluation->slaves[0];
+  const Eigen::Vector3d c_err = slave.estimate.C - e.truth_master_units.C;
+  const double c_mahalanobis = c_err.cwiseQuotient(slave.pos_std).norm();
+  std::cout << "RIGCAL-FIGURE loopback_run " << width << "x" << height << " " << frames
+            << " frames in " << feed_s << " s: rot_deg=" << e.error.rot_deg << " (sigma "
+            << slave.rot_std_deg << ") dir_deg=" << e.error.dir_deg
+            << " dist_pct=" << e.error.dist_pct << " scale_pct=" << e.error.scale_pct << " C error "
+            << c_err.transpose() << " (sigma " << slave.pos_std.transpose() << ", " << c_mahalanobis
+            << " sigma)\n";
+  // The errors within the estimator's own uncertainty: the rotation within 4.03 sigma of its
+  // largest axis, the position in the Mahalanobis sense with the per-axis sigma.
+  ASSERT_TRUE(std::isfinite(slave.rot_std_deg));
+  EXPECT_LE(e.error.rot_deg, kChi3Sigma999 * slave.rot_std_deg);
+  if (e.position_observable && slave.pos_std.allFinite()) {
+    EXPECT_LE(c_mahalanobis, kChi3Sigma999);
+  }
+}
+
+}  // namespace
+}  // namespace rigcal::tools
