@@ -51,7 +51,8 @@ dpkg-deb -x "$DIR/linux-image.deb" "$WORK/image"
 cp "$WORK/image/boot/vmlinuz-$V" "$WORK/vmlinuz"
 MODS="$WORK/image/lib/modules/$V/kernel"
 
-# Debian's udev, unpacked (not installed): udevd tells libcamera about removed devices.
+# Debian's udev, unpacked (not installed): udevd keeps the device database libcamera reads
+# (libudev) and forwards add/remove events.
 if [ ! -f "$DIR/udev.deb" ]; then
   (cd "$WORK" && apt-get download udev >/dev/null 2>&1 && mv udev_*.deb "$DIR/udev.deb") ||
     echo "apt-get download udev failed: the guest runs without udevd" >&2
@@ -86,6 +87,24 @@ for m in media/mc/mc.ko media/v4l2-core/videodev.ko media/v4l2-core/v4l2-dv-timi
   [ -n "$f" ] || { echo "module $m missing in linux-image-$V" >&2; exit 1; }
   n=$((n + 1))
   dest="$ROOT/modules/$(printf %02d $n)-$(basename "$m")"
+  case "$f" in
+    *.xz) xz -dc "$f" >"$dest" ;;
+    *.zst) zstd -qdc "$f" >"$dest" ;;
+    *) cp "$f" "$dest" ;;
+  esac
+done
+# The read-only library disk of run-device-tests.sh: virtio-blk and ext4 (mounts ext2), in order.
+mkdir -p "$ROOT/modules/disk"
+n=0
+for m in drivers/virtio/virtio_ring.ko drivers/virtio/virtio.ko \
+         drivers/virtio/virtio_pci_modern_dev.ko drivers/virtio/virtio_pci_legacy_dev.ko \
+         drivers/virtio/virtio_pci.ko drivers/block/virtio_blk.ko crypto/crc32c_generic.ko \
+         lib/crc16.ko fs/mbcache.ko \
+         fs/jbd2/jbd2.ko fs/ext4/ext4.ko; do
+  f=$(ls "$MODS/$m"* 2>/dev/null | head -1 || true)
+  [ -n "$f" ] || { echo "module $m missing in linux-image-$V" >&2; exit 1; }
+  n=$((n + 1))
+  dest="$ROOT/modules/disk/$(printf %02d $n)-$(basename "$m")"
   case "$f" in
     *.xz) xz -dc "$f" >"$dest" ;;
     *.zst) zstd -qdc "$f" >"$dest" ;;

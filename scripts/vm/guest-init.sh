@@ -1,8 +1,8 @@
 #!/bin/sh
 # /init of the device-test VM (scripts/vm/build-assets.sh puts it in base.cpio.gz): loads the
 # media drivers, starts udevd (Debian's, without rules: it records the devices for libudev and
-# forwards add/remove events, so libcamera sees cameras come and go; without it the devices are
-# marked initialised by hand and hot-unplug goes unseen), runs /tests/run (the
+# forwards add/remove events to libudev's monitors; without it the devices are marked
+# initialised by hand), runs /tests/run (the
 # second initramfs archive, from run-device-tests.sh) and powers off. Markers on the console:
 #   RIGCAL-VM: <problem>     set-up trouble
 #   RIGCAL-VM-READY          drivers loaded
@@ -13,6 +13,13 @@ mount -t sysfs sysfs /sys
 mount -t devtmpfs devtmpfs /dev
 mount -t tmpfs tmpfs /tmp
 mkdir -p /run/udev/data
+# The library disk of run-device-tests.sh (read-only ext2 on virtio), mounted on /tests/lib.
+for m in /modules/disk/*.ko; do insmod "$m" || echo "RIGCAL-VM: insmod $m failed"; done
+if [ -d /sys/bus/pci/drivers/virtio-pci ] && grep -q 0x1af4 /sys/bus/pci/devices/*/vendor; then
+  for i in $(seq 50); do [ -b /dev/vda ] && break; sleep 0.1; done
+  mkdir -p /tests/lib
+  mount -t ext4 -o ro /dev/vda /tests/lib || echo "RIGCAL-VM: mounting the library disk failed"
+fi
 for m in /modules/[0-9]*.ko; do
   case "$m" in
     *-vivid.ko) insmod "$m" n_devs=2 node_types=0x1,0x1 input_types=0x81,0x81 ;;
@@ -32,7 +39,8 @@ else
     [ -f "$d/dev" ] && echo "I:1" > "/run/udev/data/c$(cat "$d/dev")"
   done
 fi
-echo "RIGCAL-VM-READY"
+read -r uptime_s _ </proc/uptime
+echo "RIGCAL-VM-READY after $uptime_s s of uptime"
 if [ -x /tests/run ]; then
   /tests/run
 else
