@@ -86,9 +86,11 @@ TEST(VividLongRun, DropsLatencyAndCpuPerCamera) {
               << FourccText(devices[i]->negotiated().fourcc) << " 640x480@"
               << devices[i]->frame_rate_hz() << "Hz: " << f.wall_s << " s, " << f.frames
               << " frames (" << expected << " nominal), " << s.sequence_drops
-              << " dropped by the driver, latency ms median " << Quantile(f.latency_ms, 0.5)
-              << " p99 " << Quantile(f.latency_ms, 0.99) << " max " << Quantile(f.latency_ms, 1.0)
-              << ", capture thread CPU " << 100.0 * f.cpu_s / f.wall_s << "% of a core, "
+              << " dropped by the driver (sequence gaps), " << s.error_buffers
+              << " erroneous buffers, " << s.device_losses << " device losses, latency ms median "
+              << Quantile(f.latency_ms, 0.5) << " p99 " << Quantile(f.latency_ms, 0.99) << " max "
+              << Quantile(f.latency_ms, 1.0) << ", capture thread CPU "
+              << 100.0 * f.cpu_s / f.wall_s << "% of a core, "
               << 1e6 * f.cpu_s / std::max<int64_t>(1, f.frames) << " us per frame\n";
     EXPECT_GT(f.frames, 0);
     EXPECT_EQ(s.device_losses, 0);
