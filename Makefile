@@ -38,7 +38,8 @@ demo: build
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
 # Whole suite in the Release tree; then the calib core tests once more under ASan+UBSan
-# (test-asan-core) and the threaded calib tests under TSan (test-tsan-core). The suite includes
+# (test-asan-core) and the threaded calib tests under TSan (test-tsan-core), and the arm64 build
+# under qemu-aarch64 (test-arm64, below; excluded from the suite run). The suite includes
 # the static thread-contract check (label threads: clang -Wthread-safety over the threaded
 # sources with the tree's compile_commands.json, no extra tree). The whole suite under ASan+UBSan
 # (test-asan), every threaded test under TSan (test-tsan) and the fuzz runs (test-fuzz) are not
