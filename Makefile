@@ -126,7 +126,8 @@ test-tsan-core: tsan-configure
 # -DRIGCAL_TEST_ARM64=ON) cross-builds `rigcal` into $(BUILD_DIR)/arm64 against an arm64 sysroot
 # of Debian's -dev packages (kept in $(ARM64_SYSROOT) across builds) and runs it under
 # qemu-aarch64. Skipped with its reason when the arm64 packages cannot be had (a failure under
-# CI=true). Cold: sysroot ~2 min of downloads, cross build ~20 min of CPU; ccache makes it cheap.
+# CI=true). Cold: sysroot 1.5-2 min of downloads, cross build 86 min on the loaded 2-core
+# machine; with a warm ccache a fresh cross tree builds in ~1 min, the test then runs ~70 s.
 ARM64_SYSROOT ?= /var/cache/rigcal/arm64-sysroot
 test-arm64: build
 	cmake -S . -B $(BUILD_DIR) -DRIGCAL_TEST_ARM64=ON > /dev/null
