@@ -20,7 +20,7 @@ if [ $# -gt 0 ] && [ "$1" != --fix-only ]; then SYSROOT=$1; fi
 PACKAGES=(
   libc6-dev libstdc++-12-dev
   libeigen3-dev libceres-dev libspdlog-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
-  liblcm-dev libglib2.0-dev libopencv-dev libsystemd-dev
+  liblcm-dev libglib2.0-dev libopencv-dev libsystemd-dev libcamera-dev
 )
 wanted="${PACKAGES[*]}"
 

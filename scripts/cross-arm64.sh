@@ -8,26 +8,29 @@
 #      `rigcal` target only (no tests, no benchmarks), through ccache when present;
 #   4. with --package: `cpack` of the rigcal and rigcal-dev packages for arm64, with the
 #      Debian dependencies dpkg-shlibdeps found for the amd64 package (--depends-from DEB).
-# usage: scripts/cross-arm64.sh [--build-dir DIR] [--package] [--depends-from AMD64.deb]
+# --setup: steps 1 and 2 only (exit 0 when the tools and the sysroot are there).
+# usage: scripts/cross-arm64.sh [--setup] [--build-dir DIR] [--package] [--depends-from AMD64.deb]
 # Environment: RIGCAL_ARM64_SYSROOT (default /var/cache/rigcal/arm64-sysroot), JOBS (2),
-# NICE (10). Exit 0 when bin/rigcal was built (and packaged).
+# NICE (5). Exit 0 when bin/rigcal was built (and packaged).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build_dir="$here/build-arm64"
 package=0
+setup_only=0
 depends_from=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --build-dir) build_dir=$(readlink -f "$2"); shift 2 ;;
     --package) package=1; shift ;;
+    --setup) setup_only=1; shift ;;
     --depends-from) depends_from=$(readlink -f "$2"); shift 2 ;;
-    -h | --help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h | --help) awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "$0"; exit 0 ;;
     *) echo "cross-arm64: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
 sysroot=${RIGCAL_ARM64_SYSROOT:-/var/cache/rigcal/arm64-sysroot}
 jobs=${JOBS:-2}
-niceness=${NICE:-10}
+niceness=${NICE:-5}
 
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
@@ -40,7 +43,11 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
+for tool in aarch64-linux-gnu-g++ qemu-aarch64; do
+  command -v "$tool" >/dev/null || { echo "cross-arm64: $tool missing" >&2; exit 1; }
+done
 RIGCAL_ARM64_SYSROOT="$sysroot" bash "$here/scripts/arm64-sysroot.sh"
+if [ "$setup_only" = 1 ]; then exit 0; fi
 
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
