@@ -82,6 +82,34 @@ TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
   EXPECT_NEAR(baseline, 3.34, 0.1) << ref.out;
   EXPECT_EQ(slave["state"], "converged");
 
+  // The individual reference pose model on the same poses: it does not know that both cameras
+  // see one board (it fits the boards' relative pose W too), so it must agree with the global
+  // model within their σ (5 σ of the difference per axis).
+  const cli_test::RunResult ind = Run(
+      "solve --reference target --pose-model individual --master left=" + Path("poses/left.tum") +
+      " --slave right=" + Path("poses/right.tum") + " --json");
+  ASSERT_EQ(ind.exit_code, 0) << ind.Explain();
+  const auto ind_json = nlohmann::json::parse(ind.out, nullptr, false);
+  ASSERT_FALSE(ind_json.is_discarded()) << ind.out;
+  const auto& ind_slave = ind_json["slaves"][0];
+  for (int a = 0; a < 3; ++a) {
+    const double diff = ind_slave["C"][a].get<double>() - slave["C"][a].get<double>();
+    const double sigma =
+        std::hypot(ind_slave["std"]["pos"][a].get<double>(), slave["std"]["pos"][a].get<double>());
+    EXPECT_GT(ind_slave["std"]["pos"][a].get<double>(), 0.0) << ind.out;
+    EXPECT_LT(std::abs(diff), 5.0 * sigma) << "axis " << a << "\n" << ind.out << "\n" << ref.out;
+  }
+  EXPECT_NE(ind_slave["message"].get<std::string>().find("individual reference pose model"),
+            std::string::npos)
+      << ind.out;
+  // Without --reference target: a usage error.
+  const cli_test::RunResult misuse =
+      Run("solve --pose-model individual --master " + Path("poses/left.tum") + " --slave " +
+          Path("poses/right.tum"));
+  EXPECT_NE(misuse.exit_code, 0) << misuse.Explain();
+  EXPECT_NE(misuse.err.find("--pose-model individual needs --reference target"), std::string::npos)
+      << misuse.err;
+
   // The motion-based solve with the master's scale from its target poses: the odometry here
   // is the target poses themselves, so lambda_world is 1 and the output says metres.
   const cli_test::RunResult metric =

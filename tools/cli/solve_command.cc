@@ -196,6 +196,9 @@ int RunSolve(const SolveArgs& args) {
   options.nominal_sigma = args.prior_sigma;
   options.covariance_time_blocks = args.time_blocks;
   if (std::string e = ApplyScale(args.scale, &options); !e.empty()) return Fail("--scale: " + e);
+  if (args.pose_model != "global" && args.reference != "target") {
+    return Fail("--pose-model " + args.pose_model + " needs --reference target");
+  }
   if (std::string e = ApplyPairs(args.pairs, &options.pairs); !e.empty()) {
     return Fail("--pairs: " + e);
   }
