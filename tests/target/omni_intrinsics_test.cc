@@ -5,7 +5,8 @@
 // Tolerances from the math: xi and the focal lengths are strongly correlated (near the centre
 // only f / (1 + xi) is seen), so the test scores what a user gets, the projection: the
 // estimated model projects bearings over the whole image within 0.5 px of the true one. With
-// 24 x 54 corners at 0.1 px the projection's error is a few hundredths of a pixel; a wrong
+// 24 x 54 corners at 0.1 px the projection's error is about 0.1 px where the board was seen and
+// a few tenths at the far edge of the image (measured 0.26 px); a wrong
 // convention (swapped axes, a distortion sign, the model's xi) moves it by pixels. The fit's
 // RMS is the noise's (0.1 px, < 0.15 tested).
 
@@ -89,42 +90,40 @@ TEST(OmniIntrinsics, RecoversTheProjectionAndWritesKalibrOmni) {
   std::cout << FormatOmni(*omni);
   EXPECT_LT(omni->rms_px, 0.15);
   EXPECT_GE(omni->views_used, 20);
-  // Bearings over the image: unproject a pixel grid through the true model, project through
-  // both.
+  // Bearings over the image: field angles 0..80 deg at 16 azimuths, those the true model
+  // projects into the image, projected through both models.
   TrueOmni estimate;
   estimate.K = cv::Matx33d(omni->intrinsics[0], 0.0, omni->intrinsics[2], 0.0, omni->intrinsics[1],
                            omni->intrinsics[3], 0.0, 0.0, 1.0);
   estimate.xi = omni->xi;
   estimate.D =
       cv::Vec4d(omni->distortion[0], omni->distortion[1], omni->distortion[2], omni->distortion[3]);
-  std::vector<cv::Point2d> grid;
-  for (int v = 20; v < 480; v += 40) {
-    for (int u = 20; u < 752; u += 40) grid.emplace_back(u, v);
+  std::vector<cv::Point3d> all;
+  for (int a = 0; a <= 80; a += 5) {
+    for (int k = 0; k < 16; ++k) {
+      const double theta = a * M_PI / 180.0;
+      const double phi = k * M_PI / 8.0;
+      all.emplace_back(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                       std::cos(theta));
+    }
   }
-  // The grid's bearings through the true model: cv::omnidir::undistortPoints (R = I) gives
-  // the undistorted points of the unified model's plane, (x, y) / (z + xi) of the unit
-  // bearing; lifted back onto the sphere.
-  std::vector<cv::Point2d> plane;
-  cv::omnidir::undistortPoints(grid, plane, truth.K, truth.D, cv::Mat(cv::Vec<double, 1>(truth.xi)),
-                               cv::Matx33d::eye());
+  const std::vector<cv::Point2d> all_true = Project(truth, all, {0, 0, 0}, {0, 0, 0});
   std::vector<cv::Point3d> bearings;
-  for (const cv::Point2d& m : plane) {
-    const double r2 = m.x * m.x + m.y * m.y;
-    const double zs =
-        (-truth.xi * r2 + std::sqrt(1.0 + (1.0 - truth.xi * truth.xi) * r2)) / (r2 + 1.0);
-    bearings.emplace_back(m.x * (zs + truth.xi), m.y * (zs + truth.xi), zs);
+  std::vector<cv::Point2d> back;
+  for (size_t i = 0; i < all.size(); ++i) {
+    const cv::Point2d& p = all_true[i];
+    if (p.x < 0 || p.y < 0 || p.x > 751 || p.y > 479) continue;
+    bearings.push_back(all[i]);
+    back.push_back(p);
   }
-  const std::vector<cv::Point2d> back = Project(truth, bearings, {0, 0, 0}, {0, 0, 0});
+  ASSERT_GT(bearings.size(), 100u);
   const std::vector<cv::Point2d> fitted = Project(estimate, bearings, {0, 0, 0}, {0, 0, 0});
   double worst = 0.0;
-  double worst_roundtrip = 0.0;
-  for (size_t i = 0; i < grid.size(); ++i) {
-    worst_roundtrip =
-        std::max(worst_roundtrip, std::hypot(back[i].x - grid[i].x, back[i].y - grid[i].y));
+  for (size_t i = 0; i < bearings.size(); ++i) {
     worst = std::max(worst, std::hypot(fitted[i].x - back[i].x, fitted[i].y - back[i].y));
   }
-  std::printf("projection over the image: worst %.3f px from the true model\n", worst);
-  ASSERT_LT(worst_roundtrip, 0.01);  // the grid's bearings are the true model's
+  std::printf("projection of %zu bearings over the image: worst %.3f px from the true model\n",
+              bearings.size(), worst);
   EXPECT_LT(worst, 0.5);
   EXPECT_NEAR(omni->intrinsics[2], 376.0, 2.0);
   EXPECT_NEAR(omni->intrinsics[3], 240.0, 2.0);
