@@ -157,7 +157,14 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
     if (poses[c]) consumed_t_ns_[c] = std::max(consumed_t_ns_[c], poses[c]->t_ns);
   }
   const CameraPose& master = *poses[0];
-  if (have_master_segment_ && master.segment != master_segment_) {
+  if (have_master_segment_ && master.segment != master_segment_ && options_.master_metric) {
+    // A metric master keeps its unit: only pairs across the two master frames are impossible.
+    ModuleLogger("calib")->info(
+        "metric master odometry re-initialised (segment {} -> {}): keyframes restart, "
+        "positions and scales (metres) are kept",
+        master_segment_, master.segment);
+    for (auto& s : slaves_) s->keyframes.clear();
+  } else if (have_master_segment_ && master.segment != master_segment_) {
     // New master unit: positions and scales restart; rotations are unit-free and stay.
     ModuleLogger("calib")->info(
         "master odometry re-initialised (segment {} -> {}): position "

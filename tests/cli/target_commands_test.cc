@@ -6,10 +6,18 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
+#include <opencv2/imgcodecs.hpp>
+#pragma GCC diagnostic pop
+
 #include "command_test.h"
 #include "rigcal/io/config_sections.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
+#include "rigcal/lcm/channels.h"
+#include "rigcal/lcm/log_writer.h"
+#include "rigcal/pipeline/image_codec.h"
 #include "support/skip.h"
 
 namespace rigcal {
@@ -82,6 +90,34 @@ TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
   EXPECT_NEAR(baseline, 3.34, 0.1) << ref.out;
   EXPECT_EQ(slave["state"], "converged");
 
+  // The individual reference pose model on the same poses: it does not know that both cameras
+  // see one board (it fits the boards' relative pose W too), so it must agree with the global
+  // model within their σ (5 σ of the difference per axis).
+  const cli_test::RunResult ind = Run(
+      "solve --reference target --pose-model individual --master left=" + Path("poses/left.tum") +
+      " --slave right=" + Path("poses/right.tum") + " --json");
+  ASSERT_EQ(ind.exit_code, 0) << ind.Explain();
+  const auto ind_json = nlohmann::json::parse(ind.out, nullptr, false);
+  ASSERT_FALSE(ind_json.is_discarded()) << ind.out;
+  const auto& ind_slave = ind_json["slaves"][0];
+  for (int a = 0; a < 3; ++a) {
+    const double diff = ind_slave["C"][a].get<double>() - slave["C"][a].get<double>();
+    const double sigma =
+        std::hypot(ind_slave["std"]["pos"][a].get<double>(), slave["std"]["pos"][a].get<double>());
+    EXPECT_GT(ind_slave["std"]["pos"][a].get<double>(), 0.0) << ind.out;
+    EXPECT_LT(std::abs(diff), 5.0 * sigma) << "axis " << a << "\n" << ind.out << "\n" << ref.out;
+  }
+  EXPECT_NE(ind_slave["message"].get<std::string>().find("individual reference pose model"),
+            std::string::npos)
+      << ind.out;
+  // Without --reference target: a usage error.
+  const cli_test::RunResult misuse =
+      Run("solve --pose-model individual --master " + Path("poses/left.tum") + " --slave " +
+          Path("poses/right.tum"));
+  EXPECT_NE(misuse.exit_code, 0) << misuse.Explain();
+  EXPECT_NE(misuse.err.find("--pose-model individual needs --reference target"), std::string::npos)
+      << misuse.err;
+
   // The motion-based solve with the master's scale from its target poses: the odometry here
   // is the target poses themselves, so lambda_world is 1 and the output says metres.
   const cli_test::RunResult metric =
@@ -101,6 +137,73 @@ TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
       Run("solve --master " + Path("poses/left.tum") + " --slave " + Path("poses/right.tum") +
           " --master-metric" + " --metric-target " + Path("poses/left.tum"));
   EXPECT_EQ(both.exit_code, 2) << both.Explain();
+}
+
+// The same 13 pairs as RIGCAL_IMAGE_left / RIGCAL_IMAGE_right events of an LCM log (raw image_t,
+// pixel-exact, stamped 1 s apart as the file numbers): the images reach the same detector, so
+// the intrinsics, view counts and the stereo extrinsics equal those from the image files.
+TEST_F(TargetCommandsTest, IntrinsicsFromAnLcmImageLog) {
+  const std::string log_path = Path("stereo.lcmlog");
+  {
+    auto writer = tools::LogWriter::Open(log_path);
+    ASSERT_TRUE(writer.ok()) << writer.error();
+    const tools::CameraNames names = {"left", "right"};
+    tools::ImageEncodeOptions raw;
+    raw.encoding = tools::ImageEncoding::kRaw;
+    for (int k = 1; k <= 14; ++k) {
+      for (int c = 0; c < 2; ++c) {
+        char file[64];
+        std::snprintf(file, sizeof(file), "/%s%02d.jpg", c == 0 ? "left" : "right", k);
+        if (!std::filesystem::exists(DataDir() + file)) continue;  // there is no pair 10
+        drivers::Frame frame;
+        frame.camera = c;
+        frame.t_ns = k * 1000000000LL;
+        frame.image = cv::imread(DataDir() + file, cv::IMREAD_GRAYSCALE);
+        ASSERT_FALSE(frame.image.empty()) << file;
+        auto data = tools::EncodeImageEvent(frame, names, c, raw);
+        ASSERT_TRUE(data.ok()) << data.error();
+        ASSERT_TRUE((*writer)
+                        ->Write(tools::ImageChannel(names[static_cast<size_t>(c)]),
+                                frame.t_ns / 1000, data->data(), data->size())
+                        .ok());
+      }
+    }
+    ASSERT_TRUE((*writer)->Close().ok());
+  }
+  const cli_test::RunResult from_log =
+      Run("intrinsics --camera left=" + log_path + " --camera right=" + log_path +
+          " --chessboard 9x6 --square 1 --json");
+  ASSERT_EQ(from_log.exit_code, 0) << from_log.Explain();
+  const cli_test::RunResult from_files =
+      Run("intrinsics " + Cameras() + " --chessboard 9x6 --square 1 --json");
+  ASSERT_EQ(from_files.exit_code, 0) << from_files.Explain();
+  const auto log_json = nlohmann::json::parse(from_log.out, nullptr, false);
+  const auto file_json = nlohmann::json::parse(from_files.out, nullptr, false);
+  ASSERT_FALSE(log_json.is_discarded()) << from_log.out;
+  ASSERT_FALSE(file_json.is_discarded()) << from_files.out;
+  for (size_t c = 0; c < 2; ++c) {
+    const auto& a = log_json["cameras"][c];
+    const auto& b = file_json["cameras"][c];
+    EXPECT_EQ(a["files"], 13);
+    EXPECT_EQ(a["views"].size(), b["views"].size());
+    EXPECT_EQ(a["views_used"], b["views_used"]);
+    for (size_t i = 0; i < 4; ++i) {
+      // Identical pixels and detector: equal up to the summation order, far below 1e-9 px.
+      EXPECT_NEAR(a["intrinsics"][i].get<double>(), b["intrinsics"][i].get<double>(), 1e-9)
+          << "camera " << c << " intrinsics[" << i << "]";
+    }
+  }
+  ASSERT_EQ(log_json["extrinsics"].size(), 1u) << from_log.out;
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_NEAR(log_json["extrinsics"][0]["C"][i].get<double>(),
+                file_json["extrinsics"][0]["C"][i].get<double>(), 1e-9);
+  }
+  // A camera the log has no images of: a clear error listing what the log has.
+  const cli_test::RunResult missing = Run("intrinsics --camera top=" + log_path);
+  EXPECT_EQ(missing.exit_code, 1) << missing.Explain();
+  EXPECT_NE(missing.err.find("no RIGCAL_IMAGE_top events (camera 'top')"), std::string::npos)
+      << missing.err;
+  EXPECT_NE(missing.err.find("RIGCAL_IMAGE_left (13)"), std::string::npos) << missing.err;
 }
 
 TEST_F(TargetCommandsTest, ReferenceCompareTable) {

@@ -43,6 +43,19 @@ TEST(RigConfig, MasterFirstNominalAndDefaults) {
   EXPECT_FALSE(config->simulated_source.has_value());
 }
 
+// `metric: true` on the master: its pose channel is metric, the estimator keeps positions over
+// master re-initialisations (tests/calib/metric_master).
+TEST(RigConfig, MetricMaster) {
+  auto plain = LoadRigConfig(Write(kMinimal));
+  ASSERT_TRUE(plain) << plain.error();
+  EXPECT_FALSE(plain->online.estimator.master_metric);
+  auto config = LoadRigConfig(Write(std::string(kMinimal) + "    metric: true\n"));
+  ASSERT_TRUE(config) << config.error();
+  EXPECT_TRUE(config->cameras[0].metric);
+  EXPECT_FALSE(config->cameras[0].spec.has_value());  // not an intrinsics key
+  EXPECT_TRUE(config->online.estimator.master_metric);
+}
+
 TEST(RigConfig, OptionSections) {
   auto config =
       LoadRigConfig(Write(std::string(kMinimal) +
@@ -140,6 +153,11 @@ TEST(RigConfig, ErrorsNameFileLineAndKey) {
        ":5: source.type: 'v4l3' is not supported"},
       {"rig: {master: front}\ncameras:\n  - name: front\n",
        "cameras: expected a list of at least two"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\n    metric: true\n",
+       ":5: left.metric: only the master's odometry can be metric"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n    metric: yes please\n  - name: "
+       "left\n",
+       ":4: front.metric: expected true or false"},
       {"rig: [\n", "YAML syntax error"},
       // Strict inputs: duplicate keys (at any depth) and a second document are errors.
       {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nrig: {master: left}\n",

@@ -55,9 +55,10 @@ struct SolveArgs {
   std::string camchain;
   bool json = false;
   bool online = false;
-  std::string reference = "motion";  // motion | target (solve_target.h)
-  std::string metric_target;         // master target poses: lambda_world
-  bool master_metric = false;        // the master odometry is in metres
+  std::string reference = "motion";   // motion | target (solve_target.h)
+  std::string pose_model = "global";  // with --reference target: global | individual
+  std::string metric_target;          // master target poses: lambda_world
+  bool master_metric = false;         // the master odometry is in metres
   double report_every_s = 10.0;
 };
 
@@ -195,6 +196,9 @@ int RunSolve(const SolveArgs& args) {
   options.nominal_sigma = args.prior_sigma;
   options.covariance_time_blocks = args.time_blocks;
   if (std::string e = ApplyScale(args.scale, &options); !e.empty()) return Fail("--scale: " + e);
+  if (args.pose_model != "global" && args.reference != "target") {
+    return Fail("--pose-model " + args.pose_model + " needs --reference target");
+  }
   if (std::string e = ApplyPairs(args.pairs, &options.pairs); !e.empty()) {
     return Fail("--pairs: " + e);
   }
@@ -258,7 +262,8 @@ int RunSolve(const SolveArgs& args) {
   std::optional<ResultUnit> unit;
   if (args.reference == "target") {
     // The poses are target poses (camera in the target frame): global reference pose model.
-    auto reference = TargetReferenceResult(*master, slaves, tolerance_ns);
+    auto reference =
+        TargetReferenceResult(*master, slaves, tolerance_ns, args.pose_model == "individual");
     if (!reference) return Fail(reference.error());
     result = std::move(*reference);
     unit = ResultUnit{false, 1.0, 0.0, "target reference",
@@ -595,6 +600,15 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
                   "poses (global reference pose model, thesis 4.2), with σ of the mean.")
       ->check(CLI::IsMember({"motion", "target"}))
       ->excludes(online)
+      ->capture_default_str();
+  cmd->add_option("--pose-model", args->pose_model,
+                  "With --reference target. global: one target shared by the cameras (above).\n"
+                  "individual: each camera sees its own fixed target (two-pattern setup), the\n"
+                  "poses are each camera's pose in its own target's frame; the slave's pose and\n"
+                  "the targets' relative pose are fitted to T_0^k dT = W T_i^k over the instants\n"
+                  "(individual reference pose model, thesis 4.2), with σ. The rig must rotate\n"
+                  "about two different axes.")
+      ->check(CLI::IsMember({"global", "individual"}))
       ->capture_default_str();
   auto* metric_target =
       cmd->add_option("--metric-target", args->metric_target,

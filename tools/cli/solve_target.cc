@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "rigcal/target/individual_reference.h"
 #include "rigcal/target/metric_scale.h"
 #include "rigcal/target/reference_calibration.h"
 
@@ -10,11 +11,20 @@ namespace rigcal::cli {
 
 Expected<RigCalibration> TargetReferenceResult(const tools::TimedTrajectory& master,
                                                const std::vector<tools::TimedTrajectory>& slaves,
-                                               int64_t tolerance_ns) {
+                                               int64_t tolerance_ns, bool individual) {
   RigCalibration result;
   result.master = master.name;
   for (const tools::TimedTrajectory& slave : slaves) {
-    auto reference = target::EstimateGlobalReference(master, slave, tolerance_ns);
+    Expected<target::ReferenceEstimate> reference = Error{""};
+    std::string model = "global reference pose model, thesis 4.2): mean of";
+    if (individual) {
+      auto fitted = target::EstimateIndividualReference(master, slave, tolerance_ns);
+      if (!fitted) return Error{fitted.error()};
+      reference = fitted->estimate;
+      model = "individual reference pose model, thesis 4.2): T_0 dT = W T_i fitted to";
+    } else {
+      reference = target::EstimateGlobalReference(master, slave, tolerance_ns);
+    }
     if (!reference) return Error{reference.error()};
     SlaveCalibration s;
     s.name = slave.name;
@@ -28,12 +38,12 @@ Expected<RigCalibration> TargetReferenceResult(const tools::TimedTrajectory& mas
     s.motions.residual_outlier = reference->rejected;
     s.termination = Termination::kSolved;
     s.state = SlaveState::kConverged;
-    char message[256];
+    char message[400];
     std::snprintf(message, sizeof(message),
-                  "target reference (global reference pose model, thesis 4.2): mean of %d "
-                  "instants (%d rejected), spread %.3f deg / %.3g per instant",
-                  reference->instants, reference->rejected, reference->rot_spread_deg,
-                  reference->pos_spread);
+                  "target reference (%s %d instants (%d rejected), spread %.3f deg / %.3g per "
+                  "instant",
+                  model.c_str(), reference->instants, reference->rejected,
+                  reference->rot_spread_deg, reference->pos_spread);
     s.message = message;
     result.slaves.push_back(std::move(s));
   }

@@ -15,12 +15,14 @@
 
 namespace rigcal::cli {
 
-// Every slave's target reference as a result: estimate (scale 1), σ of the mean, state
-// converged (usable when σ could not be computed), message with the instants used. Errors: a
-// slave sharing fewer than 3 instants with the master (within tolerance_ns).
+// Every slave's target reference as a result: estimate (scale 1), σ, state converged, message
+// with the instants used. `individual`: each camera's poses are in its own target's frame
+// (individual reference pose model, individual_reference.h), else in one shared target's frame
+// (global model, σ of the mean). Errors: a slave sharing too few instants with the master
+// (within tolerance_ns); for the individual model, motion that does not determine the pose.
 Expected<RigCalibration> TargetReferenceResult(const tools::TimedTrajectory& master,
                                                const std::vector<tools::TimedTrajectory>& slaves,
-                                               int64_t tolerance_ns);
+                                               int64_t tolerance_ns, bool individual = false);
 
 // What the result's positions are in, for the output (a line above the table, `unit` in the
 // JSON, a comment in the result file).

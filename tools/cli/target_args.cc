@@ -4,6 +4,7 @@
 #include <set>
 #include <sstream>
 
+#include "lcm_image_stream.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/camera/camera_spec.h"
 
@@ -30,7 +31,9 @@ void AddTargetOptions(CLI::App* cmd, TargetArgs* args) {
                   "(<t_ns>.csv, EuRoC/yac format: ts,tag_rows,tag_cols,tag_size,tag_spacing,\n"
                   "kp_x,kp_y,p_x,p_y,p_z,tag_id,corner_idx). Repeat per camera; the first is\n"
                   "cam0. Views of different cameras are paired by the digits of their file\n"
-                  "names (left07.jpg with right07.jpg; EuRoC stamps).")
+                  "names (left07.jpg with right07.jpg; EuRoC stamps). SOURCE may also be an\n"
+                  "LCM log (`rigcal record`, `rigcal import euroc`): the camera's images on\n"
+                  "RIGCAL_IMAGE_<NAME>, paired by their capture stamps.")
       ->type_name("NAME=SOURCE")
       ->required();
   cmd->add_option("--chessboard", args->chessboard,
@@ -127,9 +130,14 @@ Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args
     if (!names.insert(name).second) return Error{"--camera: camera '" + name + "' given twice"};
     CameraCalibration camera;
     const std::string source = argument.substr(eq + 1);
-    auto views = args.charuco.empty() || target::IsDetectionFolder(source)
-                     ? target::LoadCameraViews(name, source, board, width, height)
-                     : target::DetectCharucoViews(name, source, charuco);
+    // An LCM image log: the camera's RIGCAL_IMAGE_<name> images through the same detectors.
+    const bool from_log = IsLcmImageLog(source);
+    const target::ImageStream images =
+        from_log ? LcmImageStream(source, name) : target::ImageStream{};
+    auto views = !args.charuco.empty() && (from_log || !target::IsDetectionFolder(source))
+                     ? target::DetectCharucoViews(name, source, charuco, images)
+                 : from_log ? target::DetectChessboardViews(name, source, board, images)
+                            : target::LoadCameraViews(name, source, board, width, height);
     if (!views) return Error{name + ": " + views.error()};
     camera.views = std::move(*views);
     log->info("{}: {} files, {} with a target ({}x{})", name, camera.views.files,

@@ -17,11 +17,13 @@ namespace {
 
 using camera::CameraSpec;
 
-// Keys of a camera entry: read here, or owned by the rig config parser (nominal, truth, device).
+// Keys of a camera entry: read here, or owned by the rig config parser (nominal, truth, device,
+// metric).
 const std::set<std::string> kCameraKeys = {
     "name",    "model",        "resolution", "intrinsics", "distortion",
     "poly",    "inverse_poly", "center",     "affine",     "max_field_angle_deg",
-    "nominal", "truth",        "device",     "capture",    "trigger"};
+    "nominal", "truth",        "device",     "capture",    "trigger",
+    "metric"};
 // Keys that only some models use.
 const std::set<std::string> kProjectiveKeys = {"intrinsics", "distortion"};  // pinhole, fisheye
 const std::set<std::string> kScaramuzzaKeys = {"poly", "inverse_poly", "center", "affine"};

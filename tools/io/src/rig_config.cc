@@ -17,8 +17,8 @@ namespace {
 constexpr double kQuaternionNormTolerance = 1e-3;  // hand-typed quaternions
 
 // Keys of a camera entry read here; the camera section parser reads the others.
-const std::set<std::string> kCameraOwnKeys = {"name",   "nominal", "truth",
-                                              "device", "capture", "trigger"};
+const std::set<std::string> kCameraOwnKeys = {"name",    "nominal", "truth", "device",
+                                              "capture", "trigger", "metric"};
 
 Expected<Similarity> ParseMounting(const FieldReader& r, const YAML::Node& node,
                                    const std::string& field) {
@@ -77,6 +77,12 @@ Expected<CameraConfig> ParseCamera(const FieldReader& r, const YAML::Node& node,
     auto text = r.String(device, camera.name + ".device");
     if (!text) return Error{text.error()};
     camera.device = *text;
+  }
+  if (const YAML::Node metric = node["metric"]) {
+    if (!metric.IsScalar() || (metric.Scalar() != "true" && metric.Scalar() != "false")) {
+      return r.Fail(metric, camera.name + ".metric", "expected true or false");
+    }
+    camera.metric = metric.Scalar() == "true";
   }
   return camera;
 }
@@ -319,6 +325,13 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
     return r.Fail(cameras[master_index]["nominal"], *master + ".nominal",
                   "the master defines the rig frame; a nominal mounting is only for slaves");
   }
+  for (size_t i = 0; i < listed.size(); ++i) {
+    if (i != master_index && listed[i].metric) {
+      return r.Fail(cameras[i]["metric"], listed[i].name + ".metric",
+                    "only the master's odometry can be metric (its scale is fixed to 1); a "
+                    "slave's scale is estimated");
+    }
+  }
   config.cameras.push_back(listed[master_index]);
   for (size_t i = 0; i < listed.size(); ++i) {
     if (i != master_index) config.cameras.push_back(std::move(listed[i]));
@@ -339,6 +352,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
   if (const YAML::Node sync = (*root)["sync"]) {
     if (auto e = ParseSync(r, sync, config.cameras, &online.sync)) return *e;
   }
+  online.estimator.master_metric = config.cameras.front().metric;
   online.estimator.nominal.assign(config.cameras.size() - 1, std::nullopt);
   for (size_t i = 1; i < config.cameras.size(); ++i) {
     online.estimator.nominal[i - 1] = config.cameras[i].nominal;

@@ -99,7 +99,7 @@ Status ParseCharucoSquares(const std::string& text, CharucoSpec* spec) {
 }
 
 Expected<CameraViews> DetectCharucoViews(const std::string& camera, const std::string& source,
-                                         const CharucoSpec& spec) {
+                                         const CharucoSpec& spec, const ImageStream& images) {
   if (Status s = spec.Check(); !s.ok()) return Error{"ChArUco board: " + s.message()};
   const cv::Ptr<cv::aruco::CharucoBoard> board = MakeBoard(spec);
   const cv::Ptr<cv::aruco::DetectorParameters> params = cv::aruco::DetectorParameters::create();
@@ -125,7 +125,7 @@ Expected<CameraViews> DetectCharucoViews(const std::string& camera, const std::s
       camera, source, detect,
       std::to_string(spec.squares_x) + "x" + std::to_string(spec.squares_y) + " ChArUco board (" +
           spec.dictionary + ", at least " + std::to_string(spec.min_corners) + " corners)",
-      "check --charuco SQUARESxSQUARES, --marker and --dictionary");
+      "check --charuco SQUARESxSQUARES, --marker and --dictionary", images);
 }
 
 Status DrawCharucoBoard(const CharucoSpec& spec, int pixels_per_square, const std::string& path) {

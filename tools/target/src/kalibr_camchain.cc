@@ -63,9 +63,16 @@ Status WriteKalibrCamchain(const std::string& path, const std::vector<CamchainEn
       out << YAML::EndSeq;
       previous_from_cam0 = cam_from_cam0;
     }
-    out << YAML::Key << "camera_model" << YAML::Value << "pinhole";
+    const std::optional<double>& xi = cameras[n].omni_xi;
+    out << YAML::Key << "camera_model" << YAML::Value << (xi ? "omni" : "pinhole");
     out << YAML::Key << "intrinsics" << YAML::Value;
-    EmitNumbers(out, spec.intrinsics.data(), 4);
+    if (xi) {
+      const double omni[5] = {*xi, spec.intrinsics[0], spec.intrinsics[1], spec.intrinsics[2],
+                              spec.intrinsics[3]};
+      EmitNumbers(out, omni, 5);
+    } else {
+      EmitNumbers(out, spec.intrinsics.data(), 4);
+    }
     out << YAML::Key << "distortion_model" << YAML::Value
         << (spec.model == CameraSpec::Model::kFisheye ? "equidistant"
             : spec.distortion.empty()                 ? "none"

@@ -119,38 +119,68 @@ bool IsDetectionFolder(const std::string& source) {
 Expected<CameraViews> internal::DetectImageViews(
     const std::string& camera, const std::string& source,
     const std::function<std::optional<TargetView>(const cv::Mat& grey)>& detect,
-    const std::string& target_name, const std::string& hint) {
-  auto files = ListFiles(source, IsImageFile);
-  if (!files) return Error{files.error()};
-  if (files->empty()) return Error{source + ": no images (png, jpg, bmp, pgm, ppm, tif)"};
+    const std::string& target_name, const std::string& hint, const ImageStream& images) {
+  ImageStream stream = images;
+  if (!stream) {
+    // The folder's image files, one after the other.
+    auto files = ListFiles(source, IsImageFile);
+    if (!files) return Error{files.error()};
+    if (files->empty()) return Error{source + ": no images (png, jpg, bmp, pgm, ppm, tif)"};
+    stream = [files = std::move(*files),
+              next = size_t{0}](GreyImage* out) mutable -> Expected<bool> {
+      if (next == files.size()) return false;
+      const fs::path& path = files[next++];
+      const cv::Mat image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
+      if (image.empty()) return Error{path.string() + ": cannot read the image"};
+      out->name = path.filename().string();
+      out->t_ns = KeyOf(path);
+      out->width = image.cols;
+      out->height = image.rows;
+      out->pixels.resize(static_cast<size_t>(image.cols) * static_cast<size_t>(image.rows));
+      for (int r = 0; r < image.rows; ++r) {
+        std::copy(image.ptr<uint8_t>(r), image.ptr<uint8_t>(r) + image.cols,
+                  out->pixels.begin() + static_cast<long>(r) * image.cols);
+      }
+      return true;
+    };
+  }
   const auto log = ModuleLogger("target");
   CameraViews out;
   out.camera = camera;
   std::string first_file;
-  for (const fs::path& path : *files) {
-    const cv::Mat image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
-    if (image.empty()) return Error{path.string() + ": cannot read the image"};
+  GreyImage grey;
+  while (true) {
+    Expected<bool> more = stream(&grey);
+    if (!more) return Error{more.error()};
+    if (!*more) break;
+    if (grey.width <= 0 || grey.height <= 0 ||
+        grey.pixels.size() != static_cast<size_t>(grey.width) * static_cast<size_t>(grey.height)) {
+      return Error{source + ": " + grey.name + ": not a " + std::to_string(grey.width) + "x" +
+                   std::to_string(grey.height) + " grey image"};
+    }
+    const cv::Mat image(grey.height, grey.width, CV_8UC1, grey.pixels.data());
     ++out.files;
     if (out.width == 0) {
       out.width = image.cols;
       out.height = image.rows;
-      first_file = path.filename().string();
+      first_file = grey.name;
     } else if (image.cols != out.width || image.rows != out.height) {
       return Error{source + ": mixed resolutions: " + first_file + " is " +
-                   std::to_string(out.width) + "x" + std::to_string(out.height) + ", " +
-                   path.filename().string() + " is " + std::to_string(image.cols) + "x" +
-                   std::to_string(image.rows) + " (one camera, one image size)"};
+                   std::to_string(out.width) + "x" + std::to_string(out.height) + ", " + grey.name +
+                   " is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                   " (one camera, one image size)"};
     }
     std::optional<TargetView> view = detect(image);
     if (!view) {
-      out.none.push_back(path.filename().string());
-      log->debug("{}: no {}", path.string(), target_name);
+      out.none.push_back(grey.name);
+      log->debug("{}: {}: no {}", source, grey.name, target_name);
       continue;
     }
-    view->file = path.filename().string();
-    view->t_ns = KeyOf(path);
+    view->file = grey.name;
+    view->t_ns = grey.t_ns;
     out.views.push_back(std::move(*view));
   }
+  if (out.files == 0) return Error{source + ": no images"};
   if (out.views.empty()) {
     return Error{source + ": no " + target_name + " found in any of the " +
                  std::to_string(out.files) + " images; " + hint};
@@ -160,7 +190,8 @@ Expected<CameraViews> internal::DetectImageViews(
 }
 
 Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std::string& source,
-                                            const ChessboardSpec& board) {
+                                            const ChessboardSpec& board,
+                                            const ImageStream& images) {
   if (Status s = board.Check(); !s.ok()) return Error{s.message()};
   const cv::Size pattern(board.cols, board.rows);
   auto detect = [&](const cv::Mat& image) -> std::optional<TargetView> {
@@ -185,7 +216,7 @@ Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std
   return internal::DetectImageViews(
       camera, source, detect,
       std::to_string(board.cols) + "x" + std::to_string(board.rows) + " chessboard (inner corners)",
-      "check --chessboard COLSxROWS");
+      "check --chessboard COLSxROWS", images);
 }
 
 Expected<CameraViews> ReadAprilGridViews(const std::string& camera, const std::string& folder,

@@ -69,6 +69,13 @@ struct RigEstimatorOptions {
   // Odometry segments kept open (their scale is a variable); older ones are marginalised.
   int max_open_segments = 2;
 
+  // The master odometry is metric (wheel odometry, INS; a rig config camera's `metric: true`):
+  // its unit is the metre in every segment, its scale fixed to 1. A master segment change then
+  // only breaks the keyframe pairs (no motion spans two master frames); the slaves' position
+  // statistics and scales, in metres, are kept. Otherwise a new master segment is a new unit
+  // and positions and scales restart.
+  bool master_metric = false;
+
   // Models.
   // Purely translational (rotation + scale) while no motion rotates by the equal-error
   // boundary of thesis 5.2, as CalibrationOptions: alpha_maxrot_deg at an orientation noise of

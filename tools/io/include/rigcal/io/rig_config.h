@@ -36,6 +36,9 @@ struct CameraConfig {
   std::optional<Similarity> nominal;  // mounting from CAD, master frame (slaves only)
   std::optional<Similarity> truth;    // simulated sources: true mounting, master frame
   std::string device;                 // capture device path (real sources), may be empty
+  // `metric: true`: this camera's poses (RIGCAL_POSE_<name>) are metric (wheel odometry, INS as
+  // the master); master only. Sets online.estimator.master_metric.
+  bool metric = false;
 };
 
 struct RigConfig {

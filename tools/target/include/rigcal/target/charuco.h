@@ -27,10 +27,11 @@ struct CharucoSpec {
 // Parses "5x7" (squares along x and y) into squares_x, squares_y. Error text names the value.
 Status ParseCharucoSquares(const std::string& text, CharucoSpec* spec);
 
-// The ChArUco views of the images at `source` (a folder or folder/pattern). Errors as
+// The ChArUco views of the images at `source` (a folder or folder/pattern), or of `images`
+// when given (`source` then names them in messages). Errors as
 // DetectChessboardViews': no images, unreadable, mixed resolutions, no board in any image.
 Expected<CameraViews> DetectCharucoViews(const std::string& camera, const std::string& source,
-                                         const CharucoSpec& board);
+                                         const CharucoSpec& board, const ImageStream& images = {});
 
 // The board as an image to print (or to render test views from): `pixels_per_square` pixels per
 // square, a white margin of one square. Error: an invalid spec.

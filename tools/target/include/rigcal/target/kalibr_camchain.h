@@ -22,6 +22,10 @@ struct CamchainEntry {
   // The camera's pose in the first camera's frame (q, C; scale ignored). Needed for every
   // camera but the first; T_cn_cnm1 is computed from consecutive entries.
   std::optional<Similarity> cam0_from_cam;
+  // Kalibr's omni model (Mei's unified model, cv::omnidir): camera_model omni, intrinsics
+  // [xi, fu, fv, pu, pv] with fu..pv from spec.intrinsics, distortion radtan from
+  // spec.distortion (k1, k2, p1, p2). Unset: the model of spec.
+  std::optional<double> omni_xi;
 };
 
 // Writes `cameras` atomically to `path`, `comment` first as "# " lines. Errors: no camera, a

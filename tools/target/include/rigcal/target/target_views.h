@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -52,15 +53,32 @@ struct ChessboardSpec {
   Status Check() const;
 };
 
+// One 8-bit grey image of a stream of images (an LCM image log, ...): width x height bytes,
+// row-major without padding; `name` labels it in messages and per-view statistics, `t_ns` is
+// its pairing key (see above).
+struct GreyImage {
+  std::string name;
+  int64_t t_ns = 0;
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> pixels;
+};
+
+// Fills *image and returns true, returns false at the end of the stream, or an error (which
+// stops the detection and is passed on).
+using ImageStream = std::function<Expected<bool>(GreyImage* image)>;
+
 // Parses "9x6" into cols = 9, rows = 6 (keeps square_size). Error text names the value.
 Status ParseChessboardSize(const std::string& text, ChessboardSpec* spec);
 
-// The chessboard views of the images at `source` (a folder or a folder/pattern, see above).
+// The chessboard views of the images at `source` (a folder or a folder/pattern, see above), or
+// of `images` when given (then `source` only names them in messages, e.g. the log file).
 // Errors name the path: no images, an unreadable image, images of different sizes ("mixed
 // resolutions: a.png is 640x480, b.png is 752x480"), or no chessboard found in any image.
 // A view with fewer corners than the board has is not a view (listed in `none`).
 Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std::string& source,
-                                            const ChessboardSpec& board);
+                                            const ChessboardSpec& board,
+                                            const ImageStream& images = {});
 
 // The AprilGrid views of the <t_ns>.csv files in `folder`, for an image of width x height.
 // Errors name the file and line (a malformed row, a corner outside the image) or say that no
