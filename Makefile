@@ -41,9 +41,11 @@ demo: build
 # the whole suite (test-asan) and every fuzz target for RIGCAL_FUZZ_SECONDS, two at a time
 # (test-fuzz); and the threaded calib tests under TSan (test-tsan-core). The suite includes the
 # static thread-contract check (label threads: clang -Wthread-safety over the threaded sources
-# with the tree's compile_commands.json, no extra tree). Every test under TSan (test-tsan) is not
-# yet part of make test (a second sanitizer tree of nearly the whole project); README
-# "Sanitizers and fuzzing".
+# with the tree's compile_commands.json, no extra tree). Every threaded test under TSan
+# (test-tsan) is not part of make test: its tree compiles 237 of the project's 329 sources
+# (test-tsan-core: 62), a second sanitizer tree of most of the project; README "Sanitizers and
+# fuzzing". Run make's prerequisites one after the other (no make -j): test-asan and test-fuzz
+# build the same tree.
 test: build test-asan test-fuzz test-tsan-core
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
