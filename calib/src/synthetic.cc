@@ -26,15 +26,17 @@ Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   Eigen::Vector3d v;
   do {
-    v = Eigen::Vector3d(n(rng), n(rng), n(rng));
+    v = RandomVector3(n, rng);
   } while (v.norm() < 1e-9);
   return v.normalized();
 }
 
 Similarity RandomRigParameters(std::mt19937_64& rng) {
   Similarity s;
-  s.C = Eigen::Vector3d(Uniform(rng, -10, 10), Uniform(rng, -10, 10), Uniform(rng, -10, 10));
-  s.q = AxisAngle(RandomUnitVector(rng), Uniform(rng, -kPi, kPi));
+  std::uniform_real_distribution<double> position(-10, 10);
+  s.C = RandomVector3(position, rng);
+  const double angle = Uniform(rng, -kPi, kPi);  // before the axis (RandomVector3)
+  s.q = AxisAngle(RandomUnitVector(rng), angle);
   s.scale = Uniform(rng, 0.01, 1.0);
   return s;
 }
@@ -68,7 +70,8 @@ RigRecording ThesisSample(const ThesisSampleOptions& options, std::mt19937_64& r
                              : Uniform(rng, 0.0, options.max_rotation_deg * kRadPerDeg);
     master[k].q = AxisAngle(RandomUnitVector(rng), angle);
     const double e = options.translation_extent;
-    master[k].C = Eigen::Vector3d(Uniform(rng, -e, e), Uniform(rng, -e, e), Uniform(rng, -e, e));
+    std::uniform_real_distribution<double> position(-e, e);
+    master[k].C = RandomVector3(position, rng);
   }
 
   RigRecording rec;
@@ -183,12 +186,9 @@ SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
         p.C *= unit_change;  // the segment's odometry unit is 1/unit_change of the first's
       }
       if (k > 0) {
-        walk = (ExpMap(drift * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) * walk)
-                   .normalized();
-        p.q = (walk * ExpMap(sigma_rot * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng))) * p.q)
-                  .normalized();
-        p.C += options.position_noise / unit * unit_change *
-               Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+        walk = (ExpMap(drift * RandomVector3(gauss, rng)) * walk).normalized();
+        p.q = (walk * ExpMap(sigma_rot * RandomVector3(gauss, rng)) * p.q).normalized();
+        p.C += options.position_noise / unit * unit_change * RandomVector3(gauss, rng);
       }
       track.poses.push_back(p);
       track.segment.push_back(segment);

@@ -188,8 +188,8 @@ TEST(OnlineAcceptance, StationaryRigNeverBecomesUsable) {
         CameraPose p;
         p.camera = c;
         p.t_ns = static_cast<int64_t>(k) * 50'000'000;
-        p.pose.q = ExpMap(sigma * Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
-        p.pose.C = sigma * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+        p.pose.q = ExpMap(sigma * RandomVector3(noise, rng));
+        p.pose.C = sigma * RandomVector3(noise, rng);
         set[c] = p;
       }
       est.AddSet(static_cast<int64_t>(k) * 50'000'000, set);

@@ -32,9 +32,11 @@ inline std::vector<int> GlitchOnePercent(RigRecording* rec, std::mt19937_64& rng
       hi = hi.cwiseMax(p.C);
     }
     if (kind(rng) == 0) {
-      t.poses[k].C += fraction(rng) * (hi - lo).norm() * RandomUnitVector(rng);
+      const Eigen::Vector3d direction = RandomUnitVector(rng);  // drawn first (RandomVector3)
+      t.poses[k].C += fraction(rng) * (hi - lo).norm() * direction;
     } else {
-      t.poses[k].q = t.poses[k].q * AxisAngle(RandomUnitVector(rng), angle(rng) * kRadPerDeg);
+      const double angle_rad = angle(rng) * kRadPerDeg;  // drawn first (RandomVector3)
+      t.poses[k].q = t.poses[k].q * AxisAngle(RandomUnitVector(rng), angle_rad);
     }
     where.push_back(k);
   }

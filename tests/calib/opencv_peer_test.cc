@@ -69,8 +69,9 @@ Sample MetricSample(int num_poses, double eps_deg, std::mt19937_64& rng) {
   s.slave.push_back(Pose{});
   for (int k = 1; k <= num_poses; ++k) {
     Pose m;
-    m.q = AxisAngle(RandomUnitVector(rng), angle(rng));
-    m.C = Eigen::Vector3d(pos(rng), pos(rng), pos(rng));
+    const double angle_rad = angle(rng);  // drawn first (RandomVector3)
+    m.q = AxisAngle(RandomUnitVector(rng), angle_rad);
+    m.C = RandomVector3(pos, rng);
     const Pose slave = SlavePoseFromMaster(m, s.truth);
     s.master.push_back(PerturbPose(m, s.eps_rad, rng));
     s.slave.push_back(PerturbPose(slave, s.eps_rad, rng));
@@ -228,12 +229,16 @@ TEST(OpenCvPeerTest, MappingRecoversMasterFromSlaveOnExactData) {
       std::uniform_real_distribution<double> pos(-10.0, 10.0);
       Similarity truth = RandomRigParameters(rng);
       truth.scale = 1.0;
-      if (max_deg < 100.0) truth.q = AxisAngle(RandomUnitVector(rng), angle(rng));
+      if (max_deg < 100.0) {
+        const double angle_rad = angle(rng);  // drawn first (RandomVector3)
+        truth.q = AxisAngle(RandomUnitVector(rng), angle_rad);
+      }
       std::vector<Pose> master(1), slave(1);
       for (int k = 1; k <= 12; ++k) {
         Pose m;
-        m.q = AxisAngle(RandomUnitVector(rng), angle(rng));
-        m.C = Eigen::Vector3d(pos(rng), pos(rng), pos(rng));
+        const double angle_rad = angle(rng);  // drawn first (RandomVector3)
+        m.q = AxisAngle(RandomUnitVector(rng), angle_rad);
+        m.C = RandomVector3(pos, rng);
         master.push_back(m);
         slave.push_back(SlavePoseFromMaster(m, truth));
       }

@@ -38,7 +38,7 @@ RigRecording TranslatingSample(int slaves, int poses, uint64_t seed,
   for (int k = 0; k <= poses; ++k) {
     rec.t_ns.push_back(k * 1000);
     Pose m;
-    if (k > 0) m.C = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    if (k > 0) m.C = RandomVector3(u, rng);
     rec.master.poses.push_back(m);
     rec.master.segment.push_back(0);
   }

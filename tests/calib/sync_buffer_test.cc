@@ -654,8 +654,8 @@ TEST(SyncBuffer, RandomStreamsKeepTheInvariants) {
     for (int k = 0; k < 2000; ++k) {
       for (int c = 0; c < o.num_cameras; ++c) {
         if (u(rng) < 0.05) continue;
-        CameraPose p =
-            Entry(c, kStart + k * o.frame_period_ns + jitter(rng), k, u(rng) < 0.9 ? k : -1);
+        const int seq = u(rng) < 0.9 ? k : -1;  // drawn before the jitter (RandomVector3)
+        CameraPose p = Entry(c, kStart + k * o.frame_period_ns + jitter(rng), k, seq);
         pending.push_back(p);
         if (u(rng) < 0.03) pending.push_back(p);  // duplicate
       }

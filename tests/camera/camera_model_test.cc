@@ -186,8 +186,12 @@ TEST_P(CameraModelTest, ProjectionJacobianMatchesCentralDifferences) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> distance(0.2, 50.0);
   std::vector<Eigen::Vector3d> points;
-  for (int i = 0; i < 2000; ++i)
-    points.push_back(RandomBearing(rng, max_angle * 0.999) * distance(rng));
+  // Each draw in its own statement: the order of a call's (or an operator's) operands is
+  // unspecified, and this order keeps the samples the test had with GCC.
+  for (int i = 0; i < 2000; ++i) {
+    const double d = distance(rng);
+    points.push_back(RandomBearing(rng, max_angle * 0.999) * d);
+  }
   points.push_back(Eigen::Vector3d(0.0, 0.0, 2.0));     // on the axis
   points.push_back(Eigen::Vector3d(1e-9, -2e-9, 1.5));  // next to it
   for (const Eigen::Vector3d& point : points) {
@@ -219,7 +223,10 @@ TEST_P(CameraModelTest, UnprojectionJacobianMatchesCentralDifferences) {
   std::uniform_real_distribution<double> u(0.0, spec.width - 1.0);
   std::uniform_real_distribution<double> v(0.0, spec.height - 1.0);
   std::vector<Eigen::Vector2d> pixels;
-  for (int i = 0; i < 4000; ++i) pixels.emplace_back(u(rng), v(rng));
+  for (int i = 0; i < 4000; ++i) {
+    const double y = v(rng);  // y first: the samples the test had with GCC (see above)
+    pixels.emplace_back(u(rng), y);
+  }
   // The principal point / centre and a pixel next to it.
   pixels.push_back(*model->Project(Eigen::Vector3d(0.0, 0.0, 1.0)));
   pixels.push_back(pixels.back() + Eigen::Vector2d(1e-7, -3e-7));
@@ -418,7 +425,8 @@ TEST(CameraModel, ScaramuzzaFollowsOcamCalibConventions) {
   std::uniform_real_distribution<double> coordinate(0.0, 899.0);
   int checked = 0;
   for (int i = 0; i < 2000; ++i) {
-    const Eigen::Vector2d pixel(coordinate(rng), coordinate(rng));
+    const double y = coordinate(rng);  // y first: the samples the test had with GCC (see above)
+    const Eigen::Vector2d pixel(coordinate(rng), y);
     const auto bearing = model->Unproject(pixel);
     if (!bearing) continue;
     ++checked;

@@ -28,10 +28,21 @@ uint64_t Fnv1a(std::string_view s) {
   return h;
 }
 
+// Where the last "checksum " in `text` starts (as rfind, which under ASan makes one intercepted
+// memcmp per byte of the input: a third of the target's time on long inputs), npos when nowhere.
+size_t LastChecksumWord(std::string_view text) {
+  constexpr std::string_view kWord = "checksum ";
+  for (size_t pos = text.rfind('c'); pos != std::string_view::npos;
+       pos = pos == 0 ? std::string_view::npos : text.rfind('c', pos - 1)) {
+    if (text.substr(pos, kWord.size()) == kWord) return pos;
+  }
+  return std::string_view::npos;
+}
+
 // `text` with its checksum line (the last "checksum ", or one appended) right for its body.
 std::string WithRightChecksum(std::string_view text) {
   const size_t body_start = std::min(text.size(), text.find('\n') + 1);
-  size_t sum_pos = text.rfind("checksum ");
+  size_t sum_pos = LastChecksumWord(text);
   if (sum_pos == std::string_view::npos || sum_pos < body_start) sum_pos = text.size();
   const std::string_view body = text.substr(body_start, sum_pos - body_start);
   char hex[32];

@@ -79,8 +79,7 @@ TEST(EurocV102Drive, OnlineEstimateConverges) {
     const double t_s = 1e-9 * static_cast<double>(t - body->t_ns[0]);
     rec.t_ns.push_back(t);
     Pose noisy_master = PerturbPose(master, kNoiseDeg * kRadPerDeg, rng);
-    noisy_master.C =
-        master.C + kPositionNoise * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    noisy_master.C = master.C + kPositionNoise * RandomVector3(normal, rng);
     rec.master.poses.push_back(noisy_master);
     for (size_t i = 0; i < rig.truth.size(); ++i) {
       // The slave's true pose in its own first frame, metric; then its odometry: a new frame
@@ -101,8 +100,7 @@ TEST(EurocV102Drive, OnlineEstimateConverges) {
       Pose odometry = anchor[i].Inverse() * slave;
       odometry.C *= segment_scale[i] * drift;
       Pose noisy = PerturbPose(odometry, kNoiseDeg * kRadPerDeg, rng);
-      noisy.C = odometry.C + kPositionNoise * segment_scale[i] *
-                                 Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+      noisy.C = odometry.C + kPositionNoise * segment_scale[i] * RandomVector3(normal, rng);
       rec.slaves[i].poses.push_back(noisy);
       rec.slaves[i].segment.push_back(seg);
     }

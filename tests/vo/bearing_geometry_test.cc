@@ -11,6 +11,7 @@
 #include "../../vo/src/absolute_pose.h"
 #include "../../vo/src/relative_pose.h"
 #include "../../vo/src/triangulation.h"
+#include "rigcal/calib/synthetic.h"
 
 namespace rigcal::vo {
 namespace {
@@ -20,7 +21,7 @@ constexpr double kDeg = M_PI / 180.0;
 Eigen::Matrix3d RandomRotation(std::mt19937* rng, double max_angle_rad) {
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  const Eigen::Vector3d axis = Eigen::Vector3d(n(*rng), n(*rng), n(*rng)).normalized();
+  const Eigen::Vector3d axis = RandomVector3(n, *rng).normalized();
   return Eigen::AngleAxisd(max_angle_rad * u(*rng), axis).toRotationMatrix();
 }
 
@@ -47,7 +48,8 @@ Eigen::Vector3d Perturb(const Eigen::Vector3d& f, double sigma_rad, std::mt19937
   if (sigma_rad <= 0.0) return f;
   std::normal_distribution<double> n(0.0, sigma_rad);
   const Eigen::Matrix<double, 3, 2> b = TangentBasis(f);
-  return (f + b * Eigen::Vector2d(n(*rng), n(*rng))).normalized();
+  const double y = n(*rng);  // y first, as RandomVector3 draws z first
+  return (f + b * Eigen::Vector2d(n(*rng), y)).normalized();
 }
 
 struct TwoViews {
@@ -60,7 +62,7 @@ TwoViews MakeTwoViews(std::mt19937* rng, int n, double half_fov_rad, double sigm
   TwoViews v;
   v.truth.R_1_from_2 = RandomRotation(rng, 20 * kDeg);
   std::normal_distribution<double> g(0.0, 1.0);
-  v.truth.C2_in_1 = Eigen::Vector3d(g(*rng), g(*rng), g(*rng)).normalized() * 0.5;
+  v.truth.C2_in_1 = RandomVector3(g, *rng).normalized() * 0.5;
   while (static_cast<int>(v.points.size()) < n) {
     const Eigen::Vector3d p1 = RandomPoint(rng, half_fov_rad);
     const Eigen::Vector3d p2 = v.truth.R_1_from_2.transpose() * (p1 - v.truth.C2_in_1);
@@ -118,7 +120,7 @@ TEST(FivePoint, RansacWithNoiseAndOutliers) {
     TwoViews v = MakeTwoViews(&rng, 300, half_fov, 0.5 * pixel);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     for (int i = 0; i < 60; ++i) {  // 20 % gross outliers
-      v.f2[i] = Eigen::Vector3d(u(rng), u(rng), u(rng) + 1.5).normalized();
+      v.f2[i] = (RandomVector3(u, rng) + Eigen::Vector3d(0.0, 0.0, 1.5)).normalized();
     }
     RelativePoseRansacOptions options;
     options.max_epipolar_angle_rad = 2.0 * pixel;
@@ -166,7 +168,7 @@ PnpData MakePnp(std::mt19937* rng, int n, double half_fov_rad, double sigma_rad)
   PnpData d;
   d.truth.R_world_from_cam = RandomRotation(rng, M_PI);
   std::normal_distribution<double> g(0.0, 1.0);
-  d.truth.C = Eigen::Vector3d(g(*rng), g(*rng), g(*rng));
+  d.truth.C = RandomVector3(g, *rng);
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d p_cam = RandomPoint(rng, half_fov_rad);
     d.X.push_back(d.truth.R_world_from_cam * p_cam + d.truth.C);
@@ -199,7 +201,7 @@ TEST(Pnp, RansacAndRefinementWithNoiseAndOutliers) {
     const double pixel = half_fov / 376.0;
     PnpData d = MakePnp(&rng, 200, half_fov, 0.5 * pixel);
     std::normal_distribution<double> g(0.0, 1.0);
-    for (int i = 0; i < 50; ++i) d.X[i] += Eigen::Vector3d(g(rng), g(rng), g(rng));
+    for (int i = 0; i < 50; ++i) d.X[i] += RandomVector3(g, rng);
     PnpRansacOptions options;
     options.max_angle_rad = 2.5 * pixel;
     PnpRansacResult r = EstimateAbsolutePose(d.f, d.X, options, nullptr, &rng);

@@ -7,6 +7,8 @@
 
 #include <random>
 
+#include "rigcal/calib/synthetic.h"
+
 namespace rigcal::vo {
 namespace {
 
@@ -26,7 +28,7 @@ Truth MakeScene(int keyframes, int points, std::mt19937* rng) {
   }
   t.C[1] = t.C[1].normalized();  // unit first baseline (keyframe 0 at the origin)
   while (static_cast<int>(t.points.size()) < points) {
-    const Eigen::Vector3d p(g(*rng), g(*rng), g(*rng));
+    const Eigen::Vector3d p = RandomVector3(g, *rng);
     t.points.push_back(p.normalized() * (3.0 + 2.0 * std::abs(g(*rng))));
   }
   return t;
@@ -41,14 +43,14 @@ VoMap MakeMap(const Truth& t, double pose_noise, double point_noise, std::mt1993
     Eigen::Quaterniond q = t.q[k];
     Eigen::Vector3d c = t.C[k];
     if (!fixed) {
-      q = q * Eigen::Quaterniond(Eigen::AngleAxisd(
-                  pose_noise, Eigen::Vector3d(g(*rng), g(*rng), g(*rng)).normalized()));
-      c += pose_noise * Eigen::Vector3d(g(*rng), g(*rng), g(*rng));
+      q = q *
+          Eigen::Quaterniond(Eigen::AngleAxisd(pose_noise, RandomVector3(g, *rng).normalized()));
+      c += pose_noise * RandomVector3(g, *rng);
     }
     keyframe_ids->push_back(map.AddKeyframe(static_cast<int64_t>(k), q, c));
   }
   for (const Eigen::Vector3d& p : t.points) {
-    const int id = map.AddLandmark(p + point_noise * Eigen::Vector3d(g(*rng), g(*rng), g(*rng)));
+    const int id = map.AddLandmark(p + point_noise * RandomVector3(g, *rng));
     for (size_t k = 0; k < t.q.size(); ++k) {
       map.AddObservation(id, (*keyframe_ids)[k], (t.q[k].conjugate() * (p - t.C[k])).normalized());
     }

@@ -277,18 +277,22 @@ std::vector<std::string> RigConfig::CameraNames() const {
 Expected<RigConfig> LoadRigConfig(const std::string& path) {
   auto root = LoadYaml(path);
   if (!root) return Error{root.error()};
+  return RigConfigFromYaml(*root, path);
+}
+
+Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string& path) {
   const FieldReader r(path);
-  if (!root->IsMap()) return r.Fail(*root, "(top level)", "expected a map with rig and cameras");
+  if (!root.IsMap()) return r.Fail(root, "(top level)", "expected a map with rig and cameras");
   if (auto e = r.CheckKeys(
-          *root, "",
+          root, "",
           {"rig", "cameras", "estimator", "sync", "publish", "state", "source", "trigger"})) {
     return *e;
   }
   RigConfig config;
   config.path = path;
 
-  const YAML::Node rig = (*root)["rig"];
-  if (!rig) return r.Fail(*root, "rig", "missing (needs at least `master`)");
+  const YAML::Node rig = root["rig"];
+  if (!rig) return r.Fail(root, "rig", "missing (needs at least `master`)");
   if (auto e = r.CheckKeys(rig, "rig.", {"name", "master"})) return *e;
   if (const YAML::Node name = rig["name"]) {
     auto text = r.String(name, "rig.name");
@@ -299,8 +303,8 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
   auto master = r.String(rig["master"], "rig.master");
   if (!master) return Error{master.error()};
 
-  const YAML::Node cameras = (*root)["cameras"];
-  if (!cameras) return r.Fail(*root, "cameras", "missing");
+  const YAML::Node cameras = root["cameras"];
+  if (!cameras) return r.Fail(root, "cameras", "missing");
   if (!cameras.IsSequence() || cameras.size() < 2) {
     return r.Fail(cameras, "cameras", "expected a list of at least two cameras");
   }
@@ -339,7 +343,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
 
   OnlineOptions& online = config.online;
   online.sync.num_cameras = static_cast<int>(config.cameras.size());
-  if (const YAML::Node estimator = (*root)["estimator"]) {
+  if (const YAML::Node estimator = root["estimator"]) {
     if (auto e = ParseEstimator(r, estimator, &online)) return *e;
     if (const YAML::Node offset = estimator["time_offset"]) {
       std::vector<std::string> slaves;
@@ -349,7 +353,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
       online.time_offset = *parsed;
     }
   }
-  if (const YAML::Node sync = (*root)["sync"]) {
+  if (const YAML::Node sync = root["sync"]) {
     if (auto e = ParseSync(r, sync, config.cameras, &online.sync)) return *e;
   }
   online.estimator.master_metric = config.cameras.front().metric;
@@ -361,7 +365,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
     return Error{path + ": estimator/sync options: " + checked.message()};
   }
 
-  if (const YAML::Node publish = (*root)["publish"]) {
+  if (const YAML::Node publish = root["publish"]) {
     if (auto e = r.CheckKeys(publish, "publish.", {"extrinsics_rate_hz", "status_rate_hz"})) {
       return *e;
     }
@@ -377,7 +381,7 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
       }
     }
   }
-  if (const YAML::Node state = (*root)["state"]) {
+  if (const YAML::Node state = root["state"]) {
     if (auto e = r.CheckKeys(state, "state.", {"path", "save_interval_s"})) return *e;
     if (const YAML::Node n = state["path"]) {
       auto text = r.String(n, "state.path");
@@ -399,10 +403,10 @@ Expected<RigConfig> LoadRigConfig(const std::string& path) {
   }
   std::string source_type;
   auto finish = [&]() -> Expected<RigConfig> {
-    if (auto e = ReadRigTrigger(r, *root, entries, source_type, &config)) return *e;
+    if (auto e = ReadRigTrigger(r, root, entries, source_type, &config)) return *e;
     return std::move(config);
   };
-  if (const YAML::Node source = (*root)["source"]) {
+  if (const YAML::Node source = root["source"]) {
     if (!source.IsMap() || !source["type"]) return r.Fail(source, "source.type", "missing");
     auto type = r.String(source["type"], "source.type");
     if (!type) return Error{type.error()};

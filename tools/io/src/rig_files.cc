@@ -115,17 +115,15 @@ Eigen::Matrix4d InverseRigid(const Eigen::Matrix4d& m) {
   return inv;
 }
 
-}  // namespace
-
-Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path) {
-  auto root = LoadYaml(path);
-  if (!root) return Error{root.error()};
+// ReadRigYaml of a loaded file.
+Expected<std::map<std::string, Similarity>> RigFromYaml(const YAML::Node& root,
+                                                        const std::string& path) {
   const FieldReader r(path);
-  if (!root->IsMap()) {
-    return Error{r.At(*root) + "expected a map from slave name to {q_wxyz, C, scale}"};
+  if (!root.IsMap()) {
+    return Error{r.At(root) + "expected a map from slave name to {q_wxyz, C, scale}"};
   }
   std::map<std::string, Similarity> rig;
-  for (auto it = root->begin(); it != root->end(); ++it) {
+  for (auto it = root.begin(); it != root.end(); ++it) {
     if (!it->first.IsScalar()) return Error{r.At(it->first) + "slave names must be scalars"};
     const std::string name = it->first.Scalar();
     if (kMetadataKeys.count(name) && it->second.IsScalar()) continue;
@@ -138,15 +136,25 @@ Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path)
   return rig;
 }
 
+}  // namespace
+
+Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path) {
+  auto root = LoadYaml(path);
+  if (!root) return Error{root.error()};
+  return RigFromYaml(*root, path);
+}
+
 namespace {
 
-// A rig YAML, or the mountings `field` (named `key`) of a rig config's cameras.
+// A rig YAML, or the mountings `field` (named `key`) of a rig config's cameras; the file is read
+// and parsed once.
 Expected<std::map<std::string, Similarity>> ReadMountings(
     const std::string& path, std::optional<Similarity> CameraConfig::*field, const char* key) {
   auto root = LoadYaml(path);
   if (!root) return Error{root.error()};
-  if (!root->IsMap() || !(*root)["cameras"]) return ReadRigYaml(path);
-  auto config = LoadRigConfig(path);
+  const YAML::Node& loaded = *root;
+  if (!loaded.IsMap() || !loaded["cameras"]) return RigFromYaml(loaded, path);
+  auto config = RigConfigFromYaml(loaded, path);
   if (!config) return Error{config.error()};
   std::map<std::string, Similarity> mountings;
   for (const CameraConfig& camera : config->cameras) {

@@ -14,6 +14,10 @@
 #include "rigcal/drivers/libcamera_device.h"
 #include "rigcal/drivers/live_trigger_timeline.h"
 #include "rigcal/drivers/simulated_rig.h"
+
+namespace YAML {
+class Node;
+}  // namespace YAML
 #include "rigcal/drivers/v4l2_options.h"
 
 namespace rigcal::tools {
@@ -75,6 +79,8 @@ struct RigConfig {
 // wrong types, out-of-range values, unknown master, duplicate camera names, a nominal on the
 // master, a simulated source with cameras lacking intrinsics or truth, ...).
 Expected<RigConfig> LoadRigConfig(const std::string& path);
+// The same for a file already loaded (LoadYaml, yaml_fields.h), `path` naming it in errors.
+Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string& path);
 
 // Writes a rig config that LoadRigConfig reads back: `rig: {name, master: cameras[0].name}` and
 // per camera its name and, when it has a pinhole or fisheye spec, model, resolution, intrinsics
