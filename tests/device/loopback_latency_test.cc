@@ -31,6 +31,7 @@
 #include "loopback_writer.h"
 #include "rigcal/drivers/v4l2_device.h"
 #include "rigcal/drivers/v4l2_timestamp.h"
+#include "sample_quantile.h"
 
 namespace rigcal::drivers {
 namespace {
@@ -71,13 +72,6 @@ CameraRun Capture(V4l2Device* device) {
   }
   out.cpu_s = ThreadCpuSeconds() - cpu_before;
   return out;
-}
-
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[k];
 }
 
 TEST(LoopbackLatency, StampedAtTheWriteLatencyAndCpuPerCamera) {
@@ -167,11 +161,12 @@ TEST(LoopbackLatency, StampedAtTheWriteLatencyAndCpuPerCamera) {
               << FourccText(devices[i]->negotiated().fourcc) << " " << kWidth << "x" << kHeight
               << "@" << kRateHz << "Hz: " << write_ns[i].size() << " written, "
               << run.stamp_ns.size() << " captured, " << stats.sequence_drops
-              << " dropped by the driver; write to VO queue ms median " << Quantile(write_ms, 0.5)
-              << " p99 " << Quantile(write_ms, 0.99) << " max " << Quantile(write_ms, 1.0)
-              << "; DQBUF stamp to VO queue ms median " << Quantile(dequeue_ms, 0.5) << " p99 "
-              << Quantile(dequeue_ms, 0.99) << " max " << Quantile(dequeue_ms, 1.0)
-              << "; capture thread CPU " << 100.0 * run.cpu_s / wall_s << "% of a core, "
+              << " dropped by the driver; write to VO queue ms median "
+              << SampleQuantile(write_ms, 0.5) << " p99 " << SampleQuantile(write_ms, 0.99)
+              << " max " << SampleQuantile(write_ms, 1.0) << "; DQBUF stamp to VO queue ms median "
+              << SampleQuantile(dequeue_ms, 0.5) << " p99 " << SampleQuantile(dequeue_ms, 0.99)
+              << " max " << SampleQuantile(dequeue_ms, 1.0) << "; capture thread CPU "
+              << 100.0 * run.cpu_s / wall_s << "% of a core, "
               << 1e6 * run.cpu_s / std::max<size_t>(1, run.stamp_ns.size()) << " us per frame\n";
   }
 }

@@ -18,6 +18,7 @@
 #include "guest_skip.h"
 #include "rigcal/drivers/v4l2_device.h"
 #include "rigcal/drivers/v4l2_timestamp.h"
+#include "sample_quantile.h"
 
 namespace rigcal::drivers {
 namespace {
@@ -48,13 +49,6 @@ RunFigures Capture(V4l2Device* device, double seconds) {
       secs(after.ru_utime) - secs(before.ru_utime) + secs(after.ru_stime) - secs(before.ru_stime);
   out.wall_s = (MonotonicNowNs() - start) / 1e9;
   return out;
-}
-
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[k];
 }
 
 TEST(VividLongRun, DropsLatencyAndCpuPerCamera) {
@@ -88,8 +82,8 @@ TEST(VividLongRun, DropsLatencyAndCpuPerCamera) {
               << " frames (" << expected << " nominal), " << s.sequence_drops
               << " dropped by the driver (sequence gaps), " << s.error_buffers
               << " erroneous buffers, " << s.device_losses << " device losses, latency ms median "
-              << Quantile(f.latency_ms, 0.5) << " p99 " << Quantile(f.latency_ms, 0.99) << " max "
-              << Quantile(f.latency_ms, 1.0) << ", capture thread CPU "
+              << SampleQuantile(f.latency_ms, 0.5) << " p99 " << SampleQuantile(f.latency_ms, 0.99)
+              << " max " << SampleQuantile(f.latency_ms, 1.0) << ", capture thread CPU "
               << 100.0 * f.cpu_s / f.wall_s << "% of a core, "
               << 1e6 * f.cpu_s / std::max<int64_t>(1, f.frames) << " us per frame\n";
     EXPECT_GT(f.frames, 0);
