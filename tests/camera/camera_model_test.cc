@@ -1,6 +1,7 @@
 // Camera models: round trips over the image and over random bearings, Jacobians against central
 // differences, field-of-view limits (beyond 90 degrees for fisheye and scaramuzza), the OCamCalib
 // conventions of the scaramuzza model, and spec validation naming the field.
+// Over 600 lines: every model through the same round-trip and Jacobian checks, side by side.
 #include "rigcal/camera/camera_model.h"
 
 #include <gtest/gtest.h>
