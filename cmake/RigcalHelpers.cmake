@@ -13,6 +13,7 @@ function(rigcal_add_library)
   set_property(TARGET ${ARG_NAME} PROPERTY RIGCAL_PUBLIC_HEADER_DIR ${CMAKE_CURRENT_SOURCE_DIR}/include)
   target_link_libraries(${ARG_NAME} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_options(${ARG_NAME} PRIVATE ${RIGCAL_WARNING_FLAGS})
+  set_target_properties(${ARG_NAME} PROPERTIES UNITY_BUILD ${RIGCAL_UNITY_BUILD})
 endfunction()
 
 # rigcal_add_test(MODULE <module> NAME <name> SRCS ... DEPS ... [LABELS ...] [TIMEOUT s])
@@ -25,6 +26,10 @@ function(rigcal_add_test)
   add_executable(${target} ${ARG_SRCS})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} rigcal_gtest_main GTest::gtest GTest::gmock)
   target_compile_options(${target} PRIVATE ${RIGCAL_WARNING_FLAGS})
+  if(TARGET rigcal_test_pch)  # tests/CMakeLists.txt, RIGCAL_TEST_PCH
+    target_precompile_headers(${target} REUSE_FROM rigcal_test_pch)
+    target_compile_options(${target} PRIVATE -pthread -Winvalid-pch)
+  endif()
   target_compile_definitions(${target} PRIVATE
     RIGCAL_SHARED_DATA_DIR="${RIGCAL_SHARED_DATA_DIR}"
     RIGCAL_SOURCE_DIR="${PROJECT_SOURCE_DIR}")

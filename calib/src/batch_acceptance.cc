@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "model_explanation.h"
+#include "non_finite.h"
 #include "rigcal/calib/format.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/robust_statistics.h"
@@ -23,7 +24,6 @@ constexpr double kChi2Quantile3 = 16.27;
 constexpr double kNoiseFloorDeg = 1e-6;
 // The pairing tests' least ratio of the shifted to the actual residual scale.
 constexpr double kPairingLimit = 3.0;
-constexpr double kInf = std::numeric_limits<double>::infinity();
 // Least number of independent motions: two determine a rotating rig exactly; the residual test
 // needs redundancy and the pairing tests four motions.
 constexpr int kMinIndependent = 4;

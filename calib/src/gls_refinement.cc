@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "loewner.h"
 #include "planar_solver.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/robust_statistics.h"
@@ -36,14 +37,14 @@ struct Layout {
   int ScaleColumn(int s) const { return 3 + c_free + s; }
 };
 
-struct Point {
+struct GlsPoint {
   Eigen::Matrix3d dR = Eigen::Matrix3d::Identity();
   Eigen::Vector3d z = Eigen::Vector3d::Zero();  // C = t z
   std::vector<double> scales;
 };
 
-Point Moved(const Point& p, const Layout& layout, const Eigen::VectorXd& step) {
-  Point out = p;
+GlsPoint Moved(const GlsPoint& p, const Layout& layout, const Eigen::VectorXd& step) {
+  GlsPoint out = p;
   out.dR = Eigen::Quaterniond(Exp(step.head<3>()) * p.dR).normalized().toRotationMatrix();
   for (int i = 0; i < layout.c_free; ++i) out.z(i) += step(3 + i);
   for (int s = 0; s < layout.scales; ++s) out.scales[s] += step(layout.ScaleColumn(s));
@@ -80,7 +81,7 @@ Frames RunFrames(const std::vector<MotionData>& motions) {
 // The residual increments (rows: motions; columns: rotation then position, or position only)
 // in the run frames: rotation log(R0 dR Ri^T dR^T), position (I - R0) C + λ dR Ci - C0.
 Eigen::MatrixXd Increments(const std::vector<MotionData>& motions, const Frames& frames,
-                           const Layout& layout, const Point& p) {
+                           const Layout& layout, const GlsPoint& p) {
   const int dims = layout.translational ? 3 : 6;
   Eigen::MatrixXd out(motions.size(), dims);
   const Eigen::Vector3d c = layout.t * p.z;
@@ -109,7 +110,7 @@ struct System {
 };
 
 System Whitened(const std::vector<MotionData>& motions, const Frames& frames, const Layout& layout,
-                const Point& p, const std::vector<LevelNoise>& noise) {
+                const GlsPoint& p, const std::vector<LevelNoise>& noise) {
   System sys;
   sys.residuals = Increments(motions, frames, layout, p);
   const int dims = static_cast<int>(sys.residuals.cols());
@@ -166,7 +167,7 @@ bool HasAxisPrior(const GlsInput& input, const Layout& layout) {
          std::isfinite(input.axis_prior_sigma);
 }
 
-void AddAxisPrior(const GlsInput& input, const Layout& layout, const Point& p, System* sys) {
+void AddAxisPrior(const GlsInput& input, const Layout& layout, const GlsPoint& p, System* sys) {
   if (!HasAxisPrior(input, layout)) return;
   const Eigen::Index rows = sys->a.rows();
   sys->a.conservativeResize(rows + 1, Eigen::NoChange);
@@ -203,13 +204,6 @@ Eigen::MatrixXd Clustered(const System& sys, const Eigen::MatrixXd& h_inv,
   return h_inv * meat * h_inv;
 }
 
-Eigen::Matrix3d LoewnerMax(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b, bool* larger) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(b - a);
-  const Eigen::Vector3d positive = eig.eigenvalues().cwiseMax(0.0);
-  if (positive.maxCoeff() > 1e-6 * std::max(a.trace(), 1e-300)) *larger = true;
-  return a + eig.eigenvectors() * positive.asDiagonal() * eig.eigenvectors().transpose();
-}
-
 }  // namespace
 
 GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& input) {
@@ -238,7 +232,7 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
     out.message = "too few consecutive motions";
     return out;
   }
-  Point p;
+  GlsPoint p;
   p.dR = input.q.normalized().toRotationMatrix();
   p.z = layout.t.transpose() * (input.translational ? Eigen::Vector3d::Zero() : input.C);
   p.scales = input.scales;

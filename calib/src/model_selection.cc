@@ -7,14 +7,12 @@
 #include <cmath>
 #include <limits>
 
+#include "non_finite.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::internal {
 namespace {
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Residual variance per unknown-corrected degree of freedom.
 double Variance(double residual_ss, double equations, int unknowns) {

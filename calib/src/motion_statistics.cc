@@ -6,24 +6,11 @@
 #include <limits>
 #include <unsupported/Eigen/KroneckerProduct>
 
+#include "kronecker.h"
 #include "linear_solvers.h"
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal::internal {
-namespace {
-
-// vec(dR) column-major, so that dR C = (C^T ⊗ I3) vec(dR).
-Eigen::Matrix<double, 9, 1> Vec(const Eigen::Matrix3d& r) {
-  return Eigen::Map<const Eigen::Matrix<double, 9, 1>>(r.data());
-}
-
-Eigen::Matrix<double, 3, 9> KronTransposeIdentity(const Eigen::Vector3d& c) {
-  Eigen::Matrix<double, 3, 9> k = Eigen::Matrix<double, 3, 9>::Zero();
-  for (int j = 0; j < 3; ++j) k.block<3, 3>(0, 3 * j) = c(j) * Eigen::Matrix3d::Identity();
-  return k;
-}
-
-}  // namespace
 
 void MotionStatistics::Add(const MotionData& m, int segment, double w) {
   const Eigen::Matrix4d a = RotationConstraintMatrix(m);

@@ -11,7 +11,7 @@ namespace {
 
 // The options with sync.num_cameras set from the camera count, checked (InvalidOptions).
 // Lossless: the ready queue can take every set one push may complete (SyncBuffer::ReadyBound).
-OnlineOptions Checked(OnlineOptions options, size_t cameras) {
+OnlineOptions CheckedOnlineOptions(OnlineOptions options, size_t cameras) {
   options.sync.num_cameras = static_cast<int>(cameras);
   if (options.time_offset.enabled) {
     options.sync.interpolate = true;
@@ -56,7 +56,7 @@ Status OnlineOptions::Check() const {
 
 OnlineCalibrator::OnlineCalibrator(std::vector<std::string> camera_names, OnlineOptions options)
     : names_(std::move(camera_names)),
-      options_(Checked(std::move(options), names_.size())),
+      options_(CheckedOnlineOptions(std::move(options), names_.size())),
       sync_(options_.sync),
       estimator_(names_, options_.estimator) {
   if (options_.time_offset.enabled) {

@@ -10,10 +10,6 @@
 namespace rigcal {
 namespace {
 
-int SegmentOf(const CameraTrack& track, size_t k) {
-  return track.segment.empty() ? 0 : track.segment[k];
-}
-
 double TrajectoryExtent(const std::vector<Pose>& poses) {
   if (poses.empty()) return 0.0;
   Eigen::Vector3d lo = poses.front().C, hi = poses.front().C;
@@ -28,7 +24,7 @@ std::vector<IndexPair> SinceStartPairs(const RigRecording& rec) {
   std::vector<IndexPair> pairs;
   const int n = static_cast<int>(rec.size());
   for (int b = 1; b < n; ++b) {
-    if (SegmentOf(rec.master, b) == SegmentOf(rec.master, 0)) pairs.push_back({0, b});
+    if (rec.master.SegmentAt(b) == rec.master.SegmentAt(0)) pairs.push_back({0, b});
   }
   return pairs;
 }
@@ -36,9 +32,9 @@ std::vector<IndexPair> SinceStartPairs(const RigRecording& rec) {
 // Whether poses a and b lie in the same segment of the master and of every slave (a pair
 // across a slave's re-initialisation would be lost for that slave).
 bool SameSegments(const RigRecording& rec, int a, int b) {
-  if (SegmentOf(rec.master, a) != SegmentOf(rec.master, b)) return false;
+  if (rec.master.SegmentAt(a) != rec.master.SegmentAt(b)) return false;
   for (const auto& slave : rec.slaves) {
-    if (SegmentOf(slave, a) != SegmentOf(slave, b)) return false;
+    if (slave.SegmentAt(a) != slave.SegmentAt(b)) return false;
   }
   return true;
 }
@@ -113,11 +109,11 @@ SpanFigures MeasureSpan(const RigRecording& rec, int span, int samples) {
   const int stride = std::max(1, (n - span) / samples);
   std::vector<double> angles, diffs;
   for (int a = 0; a + span < n; a += stride) {
-    if (SegmentOf(rec.master, a) != SegmentOf(rec.master, a + span)) continue;
+    if (rec.master.SegmentAt(a) != rec.master.SegmentAt(a + span)) continue;
     const double angle = AngleBetween(rec.master.poses[a].q, rec.master.poses[a + span].q);
     angles.push_back(angle);
     for (const auto& slave : rec.slaves) {
-      if (SegmentOf(slave, a) != SegmentOf(slave, a + span)) continue;
+      if (slave.SegmentAt(a) != slave.SegmentAt(a + span)) continue;
       diffs.push_back(angle - AngleBetween(slave.poses[a].q, slave.poses[a + span].q));
     }
   }
@@ -134,7 +130,7 @@ std::vector<IndexPair> RelativePairs(const RigRecording& rec, int span, int stri
   std::vector<IndexPair> pairs;
   const int n = static_cast<int>(rec.size());
   for (int a = 0; a + span < n; a += std::max(stride, 1)) {
-    if (SegmentOf(rec.master, a) == SegmentOf(rec.master, a + span)) pairs.push_back({a, a + span});
+    if (rec.master.SegmentAt(a) == rec.master.SegmentAt(a + span)) pairs.push_back({a, a + span});
   }
   return pairs;
 }
@@ -220,8 +216,8 @@ std::vector<RigMotion> MotionsForSlave(const RigRecording& recording, int slave_
   const CameraTrack& slave = recording.slaves.at(slave_index);
   motions.reserve(pairs.size());
   for (const auto& p : pairs) {
-    const int seg = SegmentOf(slave, p.a);
-    if (SegmentOf(slave, p.b) != seg) continue;
+    const int seg = slave.SegmentAt(p.a);
+    if (slave.SegmentAt(p.b) != seg) continue;
     RigMotion m;
     m.master = recording.master.poses[p.a].Between(recording.master.poses[p.b]);
     m.slave = slave.poses[p.a].Between(slave.poses[p.b]);

@@ -6,25 +6,16 @@
 #include <complex>
 #include <limits>
 
+#include "kronecker.h"
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal::internal {
 namespace {
 
-Eigen::Matrix<double, 9, 1> Vec(const Eigen::Matrix3d& m) {
-  return Eigen::Map<const Eigen::Matrix<double, 9, 1>>(m.data());
-}
-
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d s;
   s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
   return s;
-}
-
-Eigen::Matrix<double, 3, 9> KronTransposeIdentity(const Eigen::Vector3d& c) {
-  Eigen::Matrix<double, 3, 9> k = Eigen::Matrix<double, 3, 9>::Zero();
-  for (int j = 0; j < 3; ++j) k.block<3, 3>(0, 3 * j) = c(j) * Eigen::Matrix3d::Identity();
-  return k;
 }
 
 // Spread (RMS angle about the principal axis) of a scatter matrix of rotation vectors, from

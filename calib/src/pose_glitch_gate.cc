@@ -10,8 +10,6 @@
 namespace rigcal::internal {
 namespace {
 
-constexpr double kResolution = 1e-9;  // as pose_glitches.cc
-
 void Push(FixedRing<double>* ring, double value) {
   if (ring->full()) ring->PopFront();
   ring->PushBack() = value;
@@ -62,10 +60,11 @@ PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
     turn[c] = AngleBetween(cam.pose.q, p.pose.q) / dt;
     if (static_cast<int>(cam.speeds.size()) < test_.min_steps) continue;
     const RobustStats s = StatsOf(cam.speeds), w = StatsOf(cam.turns);
-    const double speed_limit = OutlierSpeed(test_, std::max(s.median, cam.last_speed), s.median,
-                                            s.sigma, kResolution * (1.0 + cam.pose.C.norm()) / dt);
-    const double turn_limit =
-        OutlierSpeed(test_, std::max(w.median, cam.last_turn), w.median, w.sigma, kResolution / dt);
+    const double speed_limit =
+        OutlierSpeed(test_, std::max(s.median, cam.last_speed), s.median, s.sigma,
+                     kGlitchResolution * (1.0 + cam.pose.C.norm()) / dt);
+    const double turn_limit = OutlierSpeed(test_, std::max(w.median, cam.last_turn), w.median,
+                                           w.sigma, kGlitchResolution / dt);
     turn_ratio[c] = turn[c] / turn_limit;
     if (speed[c] > speed_limit) {
       verdict[c] = GlitchCause::kPositionJump;
@@ -89,7 +88,7 @@ PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
     if (verdict[0] != GlitchCause::kNone || verdict[c] != GlitchCause::kNone) continue;
     if (!pair.diffs.full()) continue;  // σ from fewer steps is too uncertain for 8 σ
     const RobustStats d = StatsOf(pair.diffs);
-    if (std::abs(diff[c] - d.median) > test_.outlier_sigmas * d.sigma + kResolution) {
+    if (std::abs(diff[c] - d.median) > test_.outlier_sigmas * d.sigma + kGlitchResolution) {
       verdict[turn_ratio[0] > turn_ratio[c] ? 0 : c] = GlitchCause::kAngleMismatch;
     }
   }

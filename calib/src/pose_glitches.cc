@@ -8,6 +8,7 @@
 #include <map>
 #include <utility>
 
+#include "non_finite.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/robust_statistics.h"
@@ -15,16 +16,7 @@
 namespace rigcal::internal {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// Relative resolution below which two doubles are the same number for these tests (positions
-// and angles computed from unit quaternions carry ~1e-16 relative rounding).
-constexpr double kResolution = 1e-9;
-
-int SegmentOf(const CameraTrack& track, size_t k) {
-  return track.segment.empty() ? 0 : track.segment[k];
-}
-
-double Seconds(const RigRecording& rec, int a, int b) {
+double StepSeconds(const RigRecording& rec, int a, int b) {
   return std::max(1e-9 * static_cast<double>(rec.t_ns[b] - rec.t_ns[a]), 1e-12);
 }
 
@@ -42,8 +34,8 @@ std::vector<std::pair<int, int>> Runs(int n, const std::function<bool(int, int)>
 }
 
 // The values of steps j - window .. j + window inside the segment (steps first + 1 .. last - 1).
-std::vector<double> Window(const std::vector<double>& values, int j, int first, int last,
-                           int window) {
+std::vector<double> LocalWindow(const std::vector<double>& values, int j, int first, int last,
+                                int window) {
   std::vector<double> w;
   for (int i = std::max(first + 1, j - window); i <= std::min(last - 1, j + window); ++i) {
     if (std::isfinite(values[i])) w.push_back(values[i]);
@@ -105,7 +97,7 @@ std::vector<double> SpeedLimits(const std::vector<double>& speed, int first, int
                                 double overall_median, double floor, const GlitchTest& test) {
   std::vector<double> limit(speed.size(), kNaN);
   for (int j = first + 1; j < last; ++j) {
-    const RobustStats local = MedianAndSigma(Window(speed, j, first, last, test.window));
+    const RobustStats local = MedianAndSigma(LocalWindow(speed, j, first, last, test.window));
     limit[j] = OutlierSpeed(test, std::max(local.median, overall_median), local.median, local.sigma,
                             floor);
   }
@@ -120,11 +112,10 @@ void FindJumps(const RigRecording& rec, const CameraTrack& track, const GlitchTe
   double largest = 0.0;
   for (int k = 0; k < n; ++k) largest = std::max(largest, track.poses[k].C.norm());
   std::vector<double> dts;
-  const auto runs =
-      Runs(n, [&](int a, int b) { return SegmentOf(track, a) == SegmentOf(track, b); });
+  const auto runs = Runs(n, [&](int a, int b) { return track.SegmentAt(a) == track.SegmentAt(b); });
   for (const auto& [first, last] : runs) {
     for (int j = first + 1; j < last; ++j) {
-      const double dt = Seconds(rec, j - 1, j);
+      const double dt = StepSeconds(rec, j - 1, j);
       dts.push_back(dt);
       speed[j] = (track.poses[j].C - track.poses[j - 1].C).norm() / dt;
       turn[j] = AngleBetween(track.poses[j - 1].q, track.poses[j].q) / dt;
@@ -139,20 +130,20 @@ void FindJumps(const RigRecording& rec, const CameraTrack& track, const GlitchTe
   const double overall_speed = Median(speeds), overall_turn = Median(turns);
   for (const auto& [first, last] : runs) {
     if (last - first - 1 < test.min_steps) continue;
-    const std::vector<double> speed_limit =
-        SpeedLimits(speed, first, last, overall_speed, kResolution * (1.0 + largest) / dt, test);
+    const std::vector<double> speed_limit = SpeedLimits(
+        speed, first, last, overall_speed, kGlitchResolution * (1.0 + largest) / dt, test);
     MarkRuns(
         first, last, speed, speed_limit, test,
         [&](int a, int b) {
-          return (track.poses[b].C - track.poses[a].C).norm() / Seconds(rec, a, b);
+          return (track.poses[b].C - track.poses[a].C).norm() / StepSeconds(rec, a, b);
         },
         position);
     const std::vector<double> turn_limit =
-        SpeedLimits(turn, first, last, overall_turn, kResolution / dt, test);
+        SpeedLimits(turn, first, last, overall_turn, kGlitchResolution / dt, test);
     MarkRuns(
         first, last, turn, turn_limit, test,
         [&](int a, int b) {
-          return AngleBetween(track.poses[a].q, track.poses[b].q) / Seconds(rec, a, b);
+          return AngleBetween(track.poses[a].q, track.poses[b].q) / StepSeconds(rec, a, b);
         },
         rotation);
   }
@@ -169,7 +160,7 @@ void FindAngleMismatches(const RigRecording& rec, int slave, const GlitchTest& t
     return AngleBetween(m.poses[a].q, m.poses[b].q) - AngleBetween(s.poses[a].q, s.poses[b].q);
   };
   const auto runs = Runs(n, [&](int a, int b) {
-    return SegmentOf(m, a) == SegmentOf(m, b) && SegmentOf(s, a) == SegmentOf(s, b);
+    return m.SegmentAt(a) == m.SegmentAt(b) && s.SegmentAt(a) == s.SegmentAt(b);
   });
   std::vector<double> diff(n, kNaN), all;
   for (const auto& [first, last] : runs) {
@@ -183,8 +174,8 @@ void FindAngleMismatches(const RigRecording& rec, int slave, const GlitchTest& t
   for (const auto& [first, last] : runs) {
     if (last - first - 1 < test.min_steps) continue;
     for (int j = first + 1; j < last; ++j) {
-      const RobustStats local = MedianAndSigma(Window(diff, j, first, last, test.window));
-      limit[j] = test.outlier_sigmas * std::max(overall.sigma, local.sigma) + kResolution;
+      const RobustStats local = MedianAndSigma(LocalWindow(diff, j, first, last, test.window));
+      limit[j] = test.outlier_sigmas * std::max(overall.sigma, local.sigma) + kGlitchResolution;
     }
     std::vector<bool> glitched(n, false);
     MarkRuns(

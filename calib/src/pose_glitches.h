@@ -32,6 +32,10 @@ namespace rigcal::internal {
 
 enum class GlitchCause { kNone, kPositionJump, kRotationJump, kAngleMismatch };
 
+// Relative resolution below which two doubles are the same number for the glitch tests
+// (positions and angles computed from unit quaternions carry ~1e-16 relative rounding).
+inline constexpr double kGlitchResolution = 1e-9;
+
 // The thresholds are relative to the data's own robust spread; these are only how far out.
 struct GlitchTest {
   double jump_factor = 5.0;     // an outlier step is this many times the typical speed ...

@@ -46,6 +46,11 @@ Eigen::Vector3d RotationAxis(const Eigen::Quaterniond& q) {
   return c.vec() / v;
 }
 
+Eigen::Vector3d RotationVector(const Eigen::Quaterniond& q) {
+  const Eigen::AngleAxisd aa(Canonical(q));
+  return aa.angle() * aa.axis();
+}
+
 double AngleBetween(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
   return RotationAngle(a.conjugate() * b);
 }

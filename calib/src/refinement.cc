@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "linear_solvers.h"
+#include "loewner.h"
 #include "planar_solver.h"
 #include "rigcal/calib/quaternion.h"
 #include "statistics_prior.h"
@@ -110,15 +111,6 @@ struct ScalePriorCost {
   }
   double v, inv_sigma;
 };
-
-// The smallest covariance (Loewner order) above both a and b: a + (b - a)₊, the positive part
-// of the difference. Sets *larger when b exceeds a in some direction.
-Eigen::Matrix3d LoewnerMax(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b, bool* larger) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(b - a);
-  const Eigen::Vector3d positive = eig.eigenvalues().cwiseMax(0.0);
-  if (positive.maxCoeff() > 1e-6 * std::max(a.trace(), 1e-300)) *larger = true;
-  return a + eig.eigenvectors() * positive.asDiagonal() * eig.eigenvectors().transpose();
-}
 
 // Cluster-robust (sandwich) covariance of the free parameters at the current point, tangent
 // coordinates: H⁻¹ M H⁻¹ with H = JᵀJ over every residual, M = sum over clusters of g gᵀ,

@@ -118,7 +118,7 @@ std::string SyncStats::BriefReport() const {
 
 namespace {
 
-const SyncOptions& Checked(const SyncOptions& options) {
+const SyncOptions& CheckedSyncOptions(const SyncOptions& options) {
   RequireValid(options.Check(), "SyncOptions");
   return options;
 }
@@ -126,7 +126,7 @@ const SyncOptions& Checked(const SyncOptions& options) {
 }  // namespace
 
 SyncBuffer::SyncBuffer(const SyncOptions& options)
-    : impl_(std::make_unique<Impl>(Checked(options))) {}
+    : impl_(std::make_unique<Impl>(CheckedSyncOptions(options))) {}
 
 SyncBuffer::~SyncBuffer() = default;
 

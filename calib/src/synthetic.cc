@@ -3,14 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <utility>
 
 #include "rigcal/calib/quaternion.h"
 
 namespace rigcal {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 double Uniform(std::mt19937_64& rng, double lo, double hi) {
   return std::uniform_real_distribution<double>(lo, hi)(rng);
@@ -35,7 +34,8 @@ Similarity RandomRigParameters(std::mt19937_64& rng) {
   Similarity s;
   std::uniform_real_distribution<double> position(-10, 10);
   s.C = RandomVector3(position, rng);
-  const double angle = Uniform(rng, -kPi, kPi);  // before the axis (RandomVector3)
+  const double angle =
+      Uniform(rng, -std::numbers::pi, std::numbers::pi);  // before the axis (RandomVector3)
   s.q = AxisAngle(RandomUnitVector(rng), angle);
   s.scale = Uniform(rng, 0.01, 1.0);
   return s;
@@ -107,7 +107,7 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
   // Master trajectory: incommensurate sinusoids so every axis keeps rotating and moving.
   std::vector<Pose> truth_master(n);
   for (int k = 0; k < n; ++k) {
-    const double t = 2.0 * kPi * k / options.frame_rate_hz / period;
+    const double t = 2.0 * std::numbers::pi * k / options.frame_rate_hz / period;
     Eigen::Vector3d rv(amp_rot * std::sin(3.0 * t), amp_rot * std::sin(5.0 * t + 1.0),
                        amp_rot * 0.8 * std::sin(2.0 * t + 2.0));
     Eigen::Vector3d pos(amp_pos * std::sin(2.0 * t), amp_pos * std::sin(3.0 * t + 0.5),

@@ -12,7 +12,7 @@
 namespace rigcal::drivers {
 namespace {
 
-std::string Errno(const std::string& what) { return what + ": " + std::strerror(errno); }
+std::string SerialErrno(const std::string& what) { return what + ": " + std::strerror(errno); }
 
 bool BaudConstant(int baud, speed_t* out) {
   switch (baud) {
@@ -67,10 +67,10 @@ Expected<std::unique_ptr<SerialPort>> SerialPort::Open(const std::string& path, 
     return Error{path + ": unsupported baud rate " + std::to_string(baud)};
   }
   const int fd = open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) return Error{Errno(path + ": open")};
+  if (fd < 0) return Error{SerialErrno(path + ": open")};
   termios tio{};
   if (tcgetattr(fd, &tio) != 0) {
-    const std::string error = Errno(path + ": tcgetattr (not a terminal?)");
+    const std::string error = SerialErrno(path + ": tcgetattr (not a terminal?)");
     close(fd);
     return Error{error};
   }
@@ -82,7 +82,7 @@ Expected<std::unique_ptr<SerialPort>> SerialPort::Open(const std::string& path, 
   cfsetispeed(&tio, speed);
   cfsetospeed(&tio, speed);
   if (tcsetattr(fd, TCSANOW, &tio) != 0) {
-    const std::string error = Errno(path + ": tcsetattr");
+    const std::string error = SerialErrno(path + ": tcsetattr");
     close(fd);
     return Error{error};
   }
@@ -99,14 +99,14 @@ Expected<size_t> SerialPort::Read(uint8_t* data, size_t size, int timeout_ms) {
   const int ready = poll(&p, 1, timeout_ms);
   if (ready < 0) {
     if (errno == EINTR) return size_t{0};
-    return Error{Errno(path_ + ": poll")};
+    return Error{SerialErrno(path_ + ": poll")};
   }
   if (ready == 0) return size_t{0};
   if (p.revents & (POLLERR | POLLNVAL)) return Error{path_ + ": device error"};
   const ssize_t n = read(fd_, data, size);
   if (n < 0) {
     if (errno == EAGAIN || errno == EINTR) return size_t{0};
-    return Error{Errno(path_ + ": read")};
+    return Error{SerialErrno(path_ + ": read")};
   }
   if (n == 0 && (p.revents & POLLHUP)) return Error{path_ + ": hung up"};
   return static_cast<size_t>(n);
@@ -122,7 +122,7 @@ Status SerialPort::Write(const uint8_t* data, size_t size) {
         poll(&p, 1, 100);
         continue;
       }
-      return Error{Errno(path_ + ": write")};
+      return Error{SerialErrno(path_ + ": write")};
     }
     done += static_cast<size_t>(n);
   }

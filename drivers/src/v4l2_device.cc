@@ -24,7 +24,7 @@ namespace {
 constexpr int kPollTimeoutMs = 100;  // bounds how late a frame timeout is noticed
 constexpr int64_t kFirstBackoffNs = 100'000'000;
 
-std::string Errno(const char* what) { return std::string(what) + ": " + std::strerror(errno); }
+std::string V4l2Errno(const char* what) { return std::string(what) + ": " + std::strerror(errno); }
 
 }  // namespace
 
@@ -60,7 +60,7 @@ Expected<std::unique_ptr<V4l2Device>> V4l2Device::Open(std::string name, int cam
   device->camera_index_ = camera_index;
   device->options_ = std::move(options);
   device->wake_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-  if (device->wake_fd_ < 0) return Error{"camera " + device->name_ + ": " + Errno("eventfd")};
+  if (device->wake_fd_ < 0) return Error{"camera " + device->name_ + ": " + V4l2Errno("eventfd")};
   if (Status s = device->Connect(); !s.ok()) {
     return Error{"camera " + device->name_ + ": " + device->options_.device + ": " + s.message()};
   }
@@ -100,7 +100,7 @@ Status V4l2Device::Connect() {
   if (!node) return Error{node.error()};
   auto stream = std::make_unique<Stream>();
   stream->fd = open(node->c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-  if (stream->fd < 0) return Error{*node + ": " + Errno("open")};
+  if (stream->fd < 0) return Error{*node + ": " + V4l2Errno("open")};
   auto info = v4l2::QueryNode(stream->fd);
   if (!info) return Error{*node + ": " + info.error()};
   if (!v4l2::CanCapture(*info)) {
@@ -144,7 +144,7 @@ Status V4l2Device::Connect() {
   format.fmt.pix.pixelformat = V4l2Fourcc(*chosen);
   format.fmt.pix.field = V4L2_FIELD_NONE;
   if (v4l2::Ioctl(stream->fd, VIDIOC_S_FMT, &format) != 0) {
-    return Error{*node + ": " + Errno("VIDIOC_S_FMT")};
+    return Error{*node + ": " + V4l2Errno("VIDIOC_S_FMT")};
   }
   if (format.fmt.pix.pixelformat != V4l2Fourcc(*chosen)) {
     return Error{*node + ": asked for " + ToString(*chosen) + ", the driver set " +
@@ -193,7 +193,7 @@ Status V4l2Device::Connect() {
   request.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   request.memory = V4L2_MEMORY_MMAP;
   if (v4l2::Ioctl(stream->fd, VIDIOC_REQBUFS, &request) != 0) {
-    return Error{*node + ": " + Errno("VIDIOC_REQBUFS (mmap)")};
+    return Error{*node + ": " + V4l2Errno("VIDIOC_REQBUFS (mmap)")};
   }
   if (request.count < 2) {
     return Error{*node + ": the driver grants " + std::to_string(request.count) + " buffer(s)"};
@@ -204,20 +204,20 @@ Status V4l2Device::Connect() {
     buffer.memory = V4L2_MEMORY_MMAP;
     buffer.index = i;
     if (v4l2::Ioctl(stream->fd, VIDIOC_QUERYBUF, &buffer) != 0) {
-      return Error{*node + ": " + Errno("VIDIOC_QUERYBUF")};
+      return Error{*node + ": " + V4l2Errno("VIDIOC_QUERYBUF")};
     }
     void* start = mmap(nullptr, buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, stream->fd,
                        buffer.m.offset);
-    if (start == MAP_FAILED) return Error{*node + ": " + Errno("mmap")};
+    if (start == MAP_FAILED) return Error{*node + ": " + V4l2Errno("mmap")};
     stream->buffers.emplace_back(start, buffer.length);
     if (v4l2::Ioctl(stream->fd, VIDIOC_QBUF, &buffer) != 0) {
-      return Error{*node + ": " + Errno("VIDIOC_QBUF")};
+      return Error{*node + ": " + V4l2Errno("VIDIOC_QBUF")};
     }
   }
   n.buffers = static_cast<int>(request.count);
   v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   if (v4l2::Ioctl(stream->fd, VIDIOC_STREAMON, &type) != 0) {
-    return Error{*node + ": " + Errno("VIDIOC_STREAMON")};
+    return Error{*node + ": " + V4l2Errno("VIDIOC_STREAMON")};
   }
   stream->streaming = true;
   stream_ = std::move(stream);
@@ -290,7 +290,7 @@ Expected<std::optional<Frame>> V4l2Device::Grab() {
     if (interrupted_) break;
     if (ready < 0) {
       if (errno == EINTR) continue;
-      if (Status s = Lost(Errno("poll")); !s.ok()) return Error{s.message()};
+      if (Status s = Lost(V4l2Errno("poll")); !s.ok()) return Error{s.message()};
       continue;
     }
     if (ready == 0 || (fds[0].revents & (POLLIN | POLLERR | POLLHUP | POLLNVAL)) == 0) {
@@ -310,7 +310,7 @@ Expected<std::optional<Frame>> V4l2Device::Grab() {
     if (v4l2::Ioctl(stream_->fd, VIDIOC_DQBUF, &buffer) != 0) {
       if (errno == EAGAIN && (fds[0].revents & (POLLERR | POLLHUP | POLLNVAL)) == 0) continue;
       const std::string why =
-          errno == EAGAIN ? std::string("poll reports an error") : Errno("VIDIOC_DQBUF");
+          errno == EAGAIN ? std::string("poll reports an error") : V4l2Errno("VIDIOC_DQBUF");
       if (Status s = Lost(why); !s.ok()) return Error{s.message()};
       continue;
     }
@@ -344,7 +344,7 @@ Expected<std::optional<Frame>> V4l2Device::Grab() {
           name_, negotiated_.node);
     }
     if (v4l2::Ioctl(stream_->fd, VIDIOC_QBUF, &buffer) != 0) {
-      const std::string why = Errno("VIDIOC_QBUF");
+      const std::string why = V4l2Errno("VIDIOC_QBUF");
       if (Status s = Lost(why); !s.ok()) return Error{s.message()};
     }
     if (!image) {

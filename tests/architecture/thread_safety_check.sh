@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Clang's thread-safety analysis (-Wthread-safety, rigcal/calib/thread_annotations.h) over every
 # source file of rigcal that uses threads or locks, with the flags of the normal (GCC) build
-# tree from its compile_commands.json, syntax-only (no objects, no second build tree).
+# tree from its compile_commands.json, syntax-only (no objects, no second build tree); the
+# sources of a unity batch (RIGCAL_UNITY_BUILD) each on its own, with the batch's flags.
 #
 #   thread_safety_check.sh <build>/compile_commands.json <source dir>
 #       checks calib/, drivers/, vo/ and tools/: every source that itself mentions a thread,
@@ -71,9 +72,19 @@ while IFS= read -r line; do
     cmd=$REPLY
   elif [[ $line =~ ^[[:space:]]*\"file\":[[:space:]]*\"(.*)\",?$ ]]; then
     unescape "${BASH_REMATCH[1]}"
-    files+=("$REPLY")
-    dirs+=("$dir")
-    cmds+=("$cmd")
+    if [[ $REPLY == */Unity/unity_*.cxx ]]; then
+      # A unity batch (RIGCAL_UNITY_BUILD): each source it includes, with the batch's flags,
+      # checked on its own.
+      while IFS= read -r member; do
+        files+=("$member")
+        dirs+=("$dir")
+        cmds+=("${cmd//"$REPLY"/$member}")
+      done < <(sed -n 's/^#include "\(.*\)"$/\1/p' "$REPLY")
+    else
+      files+=("$REPLY")
+      dirs+=("$dir")
+      cmds+=("$cmd")
+    fi
   fi
 done <"$db"
 if [ ${#files[@]} -eq 0 ]; then

@@ -26,7 +26,7 @@ TEST(ExtrinsicsMessage, RoundTrip) {
   EXPECT_EQ(back.slaves[1].name, "back");
   EXPECT_EQ(back.slaves[0].state, slave_extrinsics_t::STATE_CONVERGED);
   EXPECT_EQ(back.slaves[1].state, slave_extrinsics_t::STATE_INITIALISING);
-  EXPECT_EQ(back.slaves[1].flags, kFlagPlanar);
+  EXPECT_EQ(back.slaves[1].flags, kWireFlagPlanar);
   EXPECT_EQ(back.slaves[1].planar_axis[2], 1.0);
 }
 
@@ -63,8 +63,8 @@ TEST(ExtrinsicsMessage, RigCalibrationToLcmSetsFlagsAndFields) {
   result.slaves = {general, translational, planar, waiting};
 
   EXPECT_EQ(SlaveFlags(general), 0);
-  EXPECT_EQ(SlaveFlags(translational), kFlagTranslationalOnly);
-  EXPECT_EQ(SlaveFlags(planar), kFlagPlanar);
+  EXPECT_EQ(SlaveFlags(translational), kWireFlagTranslationalOnly);
+  EXPECT_EQ(SlaveFlags(planar), kWireFlagPlanar);
   EXPECT_EQ(SlaveFlags(waiting), 0);
   SlaveCalibration no_convergence = general;
   no_convergence.termination = Termination::kNoConvergence;  // usable: linear estimate kept
@@ -100,11 +100,11 @@ TEST(ExtrinsicsMessage, RigCalibrationToLcmSetsFlagsAndFields) {
   EXPECT_EQ(left.planar_axis[1], 0.0);
   EXPECT_EQ(left.message, "solved: after 5 iterations");
 
-  EXPECT_EQ(msg->slaves[1].flags, kFlagTranslationalOnly);
+  EXPECT_EQ(msg->slaves[1].flags, kWireFlagTranslationalOnly);
 
   const slave_extrinsics_t& right = msg->slaves[2];
   EXPECT_EQ(right.state, slave_extrinsics_t::STATE_INITIALISING);
-  EXPECT_EQ(right.flags, kFlagPlanar);
+  EXPECT_EQ(right.flags, kWireFlagPlanar);
   EXPECT_EQ(right.planar_axis[0], 0.0);
   EXPECT_EQ(right.planar_axis[1], -1.0);  // normalised
   EXPECT_EQ(right.planar_axis[2], 0.0);
@@ -157,9 +157,9 @@ TEST(ExtrinsicsMessage, AxisOffsetOfPlanarAndNearlyPlanarEstimates) {
   result.slaves = {unknown, from_prior, held, nearly};
   Expected<rig_extrinsics_t> msg = RigCalibrationToLcm(result, 1, 2);
   ASSERT_TRUE(msg.ok()) << msg.error();
-  EXPECT_EQ(msg->slaves[0].flags, kFlagPlanar);
+  EXPECT_EQ(msg->slaves[0].flags, kWireFlagPlanar);
   EXPECT_EQ(msg->slaves[0].axis_offset_std, -1.0);
-  EXPECT_EQ(msg->slaves[1].flags, kFlagPlanar | kFlagAxisFromPrior);
+  EXPECT_EQ(msg->slaves[1].flags, kWireFlagPlanar | kWireFlagAxisFromPrior);
   EXPECT_EQ(msg->slaves[1].axis_offset_std, 0.03);
   EXPECT_EQ(msg->slaves[2].axis_offset_std, 0.0);
   EXPECT_EQ(msg->slaves[3].flags, 0);
@@ -178,7 +178,7 @@ TEST(ExtrinsicsMessage, AxisOffsetOfPlanarAndNearlyPlanarEstimates) {
   Expected<std::vector<uint8_t>> bad_bytes = EncodeMessage(kExtrinsicsChannel, names, bad);
   EXPECT_FALSE(bad_bytes.ok());
   bad = *msg;
-  bad.slaves[3].flags |= kFlagAxisFromPrior;
+  bad.slaves[3].flags |= kWireFlagAxisFromPrior;
   EXPECT_FALSE(EncodeMessage(kExtrinsicsChannel, names, bad).ok());
 }
 

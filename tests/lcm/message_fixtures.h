@@ -93,7 +93,7 @@ inline rig_extrinsics_t MakeExtrinsicsMsg() {
   m.distance_unit = rig_extrinsics_t::UNIT_MASTER_ODOMETRY;
   m.slaves = {MakeSlaveMsg("left", -89.5), MakeSlaveMsg("back", 179.0)};
   m.slaves[1].state = slave_extrinsics_t::STATE_INITIALISING;
-  m.slaves[1].flags = kFlagPlanar;
+  m.slaves[1].flags = kWireFlagPlanar;
   m.slaves[1].planar_axis[2] = 1.0;
   m.num_slaves = 2;
   return m;

@@ -69,7 +69,7 @@ inline rig_extrinsics_t MakeExtrinsics(int8_t state, double rot_std_deg) {
   s.motions_used = 321;
   s.motions_rejected = 9;
   s.state = state;
-  s.flags = kFlagRefined;
+  s.flags = kWireFlagRefined;
   s.axis_offset_std = -1;
   s.message = "solved: fine";
   e.slaves.push_back(s);

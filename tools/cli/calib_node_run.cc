@@ -4,6 +4,7 @@
 #include <map>
 #include <sstream>
 
+#include "exit_codes.h"
 #include "replay_progress.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/result_json.h"
@@ -14,8 +15,6 @@
 
 namespace rigcal::cli {
 namespace {
-
-constexpr int kExitError = 1;
 
 // "a (12), b (3)" of the channels a replay skipped.
 std::string ChannelList(const std::map<std::string, int64_t>& channels) {

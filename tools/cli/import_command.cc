@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "exit_codes.h"
 #include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/io/config_sections.h"
 #include "rigcal/io/rig_config.h"
@@ -28,9 +29,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kExitOk = 0;
-constexpr int kExitError = 1;
-
 struct ImportArgs {
   std::string out;
   std::string config_out;
@@ -43,11 +41,6 @@ struct ImportArgs {
   // tum
   std::vector<std::string> trajectories;
 };
-
-int Fail(const std::string& message) {
-  std::cerr << "rigcal import: " << message << "\n";
-  return kExitError;
-}
 
 // The rig config written beside the log: --config-out, else "<log>.yaml".
 std::string ConfigPath(const ImportArgs& args) {
@@ -97,10 +90,10 @@ Expected<std::vector<fs::path>> EurocCameraFolders(const std::string& dir) {
 
 int RunImportEuroc(const ImportArgs& args) {
   auto folders = EurocCameraFolders(args.dir);
-  if (!folders) return Fail(folders.error());
+  if (!folders) return PrintCommandError("import", folders.error());
   const std::string config_path = ConfigPath(args);
   for (const std::string& path : {args.out, config_path}) {
-    if (auto problem = ExistingOutput(args, path)) return Fail(*problem);
+    if (auto problem = ExistingOutput(args, path)) return PrintCommandError("import", *problem);
   }
   tools::CameraNames names;
   std::vector<tools::CameraConfig> cameras;
@@ -109,14 +102,14 @@ int RunImportEuroc(const ImportArgs& args) {
     const std::string name = folder.filename().string();
     auto device =
         drivers::ImageFolderDevice::Open(folder.string(), name, static_cast<int>(names.size()));
-    if (!device) return Fail(folder.string() + ": " + device.error());
+    if (!device) return PrintCommandError("import", folder.string() + ": " + device.error());
     tools::CameraConfig camera;
     camera.name = name;
     const fs::path sensor = folder / "sensor.yaml";
     std::error_code ec;
     if (fs::exists(sensor, ec)) {
       auto spec = tools::ReadEurocSensorYaml(sensor.string(), name);
-      if (!spec) return Fail(spec.error());
+      if (!spec) return PrintCommandError("import", spec.error());
       camera.spec = *spec;
     } else {
       std::cerr << "rigcal import: " << sensor.string()
@@ -137,7 +130,7 @@ int RunImportEuroc(const ImportArgs& args) {
   log_options.overwrite = true;  // existing files were checked above
   log_options.split_bytes = static_cast<int64_t>(std::llround(args.split_mb * 1e6));
   auto log = tools::LogWriter::Open(args.out, log_options);
-  if (!log) return Fail(log.error());
+  if (!log) return PrintCommandError("import", log.error());
 
   // Merge the cameras by time: always write the earliest pending frame (lower index on ties).
   std::vector<std::optional<drivers::Frame>> pending(devices.size());
@@ -148,7 +141,7 @@ int RunImportEuroc(const ImportArgs& args) {
     return Status::Ok();
   };
   for (size_t i = 0; i < devices.size(); ++i) {
-    if (Status status = grab(i); !status.ok()) return Fail(status.message());
+    if (Status status = grab(i); !status.ok()) return PrintCommandError("import", status.message());
   }
   std::vector<int64_t> frames(devices.size(), 0);
   while (true) {
@@ -159,16 +152,18 @@ int RunImportEuroc(const ImportArgs& args) {
     if (!next) break;
     const auto camera = static_cast<int>(*next);
     auto bytes = tools::EncodeImageEvent(*pending[*next], names, camera, encode);
-    if (!bytes) return Fail(bytes.error());
+    if (!bytes) return PrintCommandError("import", bytes.error());
     if (Status status = (*log)->Write(tools::ImageChannel(names[*next]),
                                       pending[*next]->t_ns / 1000, bytes->data(), bytes->size());
         !status.ok()) {
-      return Fail(status.message());
+      return PrintCommandError("import", status.message());
     }
     ++frames[*next];
-    if (Status status = grab(*next); !status.ok()) return Fail(status.message());
+    if (Status status = grab(*next); !status.ok())
+      return PrintCommandError("import", status.message());
   }
-  if (Status status = (*log)->Close(); !status.ok()) return Fail(status.message());
+  if (Status status = (*log)->Close(); !status.ok())
+    return PrintCommandError("import", status.message());
 
   std::vector<drivers::ImageFolderDevice*> folder_devices;
   for (const auto& device : devices) folder_devices.push_back(device.get());
@@ -180,7 +175,7 @@ int RunImportEuroc(const ImportArgs& args) {
   if (Status status = tools::WriteRigConfig(config_path, fs::path(args.dir).filename().string(),
                                             cameras, comment);
       !status.ok()) {
-    return Fail(status.message());
+    return PrintCommandError("import", status.message());
   }
   std::cout << "imported";
   for (size_t i = 0; i < names.size(); ++i) {
@@ -196,7 +191,7 @@ int RunImportEuroc(const ImportArgs& args) {
 int RunImportTum(const ImportArgs& args) {
   const std::string config_path = ConfigPath(args);
   for (const std::string& path : {args.out, config_path}) {
-    if (auto problem = ExistingOutput(args, path)) return Fail(*problem);
+    if (auto problem = ExistingOutput(args, path)) return PrintCommandError("import", *problem);
   }
   tools::CameraNames names;
   std::vector<tools::CameraConfig> cameras;
@@ -204,14 +199,15 @@ int RunImportTum(const ImportArgs& args) {
   for (const std::string& argument : args.trajectories) {
     tools::TrajectoryFormat format = tools::TrajectoryFormat::kTum;
     auto trajectory = tools::ReadNamedTrajectory(argument, {}, &format);
-    if (!trajectory) return Fail(trajectory.error());
+    if (!trajectory) return PrintCommandError("import", trajectory.error());
     if (!ValidCameraName(trajectory->name)) {
-      return Fail(argument + ": camera name '" + trajectory->name +
-                  "' (use NAME=FILE with letters, digits, '_', '-', '.')");
+      return PrintCommandError("import",
+                               argument + ": camera name '" + trajectory->name +
+                                   "' (use NAME=FILE with letters, digits, '_', '-', '.')");
     }
     if (std::find(names.begin(), names.end(), trajectory->name) != names.end()) {
-      return Fail(argument + ": a second camera named '" + trajectory->name +
-                  "' (name them with NAME=FILE)");
+      return PrintCommandError("import", argument + ": a second camera named '" + trajectory->name +
+                                             "' (name them with NAME=FILE)");
     }
     std::cerr << "rigcal import: " << argument << ": " << trajectory->size() << " poses ("
               << tools::ToString(format) << "), camera '" << trajectory->name << "'"
@@ -231,13 +227,13 @@ int RunImportTum(const ImportArgs& args) {
   }
   const size_t count = poses.size();
   if (Status status = tools::WritePoseEvents(args.out, names, std::move(poses)); !status.ok()) {
-    return Fail(status.message());
+    return PrintCommandError("import", status.message());
   }
   if (Status status = tools::WriteRigConfig(
           config_path, fs::path(args.out).stem().string(), cameras,
           "Cameras of the pose log " + args.out + " (master first), written by rigcal import tum");
       !status.ok()) {
-    return Fail(status.message());
+    return PrintCommandError("import", status.message());
   }
   std::cout << "imported " << count << " poses of " << names.size() << " cameras into " << args.out
             << "\nrig config: " << config_path << "\n";

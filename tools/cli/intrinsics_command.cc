@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "exit_codes.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
@@ -17,9 +18,6 @@
 namespace rigcal::cli {
 namespace {
 
-constexpr int kExitOk = 0;
-constexpr int kExitError = 1;
-
 struct IntrinsicsArgs {
   TargetArgs target;
   std::string config_out;
@@ -29,11 +27,6 @@ struct IntrinsicsArgs {
   bool per_view = false;
   bool json = false;
 };
-
-int Fail(const std::string& message) {
-  std::cerr << "rigcal intrinsics: " << message << "\n";
-  return kExitError;
-}
 
 nlohmann::json ToJson(const CameraCalibration& c) {
   const target::IntrinsicsResult& r = c.intrinsics;
@@ -63,7 +56,7 @@ nlohmann::json ToJson(const CameraCalibration& c) {
 int RunIntrinsics(const IntrinsicsArgs& args) {
   const auto log = ModuleLogger("tools");
   auto cameras = CalibrateCameras(args.target);
-  if (!cameras) return Fail(cameras.error());
+  if (!cameras) return PrintCommandError("intrinsics", cameras.error());
 
   // Per camera its kept target poses; cameras after the first get their pose in cam0's frame
   // from the target reference (needs shared instants).
@@ -122,27 +115,31 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
     const Status s = tools::WriteRigConfig(
         args.config_out, "calibrated", configs,
         "rig config written by rigcal intrinsics: intrinsics calibrated from target views");
-    if (!s.ok()) return Fail(s.message());
+    if (!s.ok()) return PrintCommandError("intrinsics", s.message());
     log->info("wrote the intrinsics into the rig config {}", args.config_out);
   }
   if (!args.camchain.empty()) {
     if (!chain_error.empty()) {
-      return Fail("--camchain: no extrinsics between the cameras: " + chain_error);
+      return PrintCommandError("intrinsics",
+                               "--camchain: no extrinsics between the cameras: " + chain_error);
     }
     const Status s = target::WriteKalibrCamchain(
         args.camchain, chain,
         "Kalibr camchain written by rigcal intrinsics: intrinsics from target views (OpenCV);\n"
         "T_cn_cnm1 from the target poses (global reference model), in the target's unit.");
-    if (!s.ok()) return Fail(s.message());
+    if (!s.ok()) return PrintCommandError("intrinsics", s.message());
     log->info("wrote the Kalibr camchain {}", args.camchain);
   }
   if (!args.poses_out.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(args.poses_out, ec);
-    if (ec) return Fail("--poses-out: cannot create '" + args.poses_out + "': " + ec.message());
+    if (ec)
+      return PrintCommandError(
+          "intrinsics", "--poses-out: cannot create '" + args.poses_out + "': " + ec.message());
     for (const tools::TimedTrajectory& t : poses) {
       const std::string path = args.poses_out + "/" + t.name + ".tum";
-      if (Status s = tools::WriteTrajectoryTum(path, t); !s.ok()) return Fail(s.message());
+      if (Status s = tools::WriteTrajectoryTum(path, t); !s.ok())
+        return PrintCommandError("intrinsics", s.message());
       log->info("{}: {} target poses written to {}", t.name, t.size(), path);
     }
   }
@@ -181,7 +178,7 @@ void RegisterIntrinsics(CLI::App& app, int* exit_code) {
     try {
       *exit_code = RunIntrinsics(*args);
     } catch (const std::exception& e) {
-      *exit_code = Fail(e.what());
+      *exit_code = PrintCommandError("intrinsics", e.what());
     }
   });
 }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "exit_codes.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/channels.h"
@@ -33,8 +34,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-constexpr int kExitOk = 0;
-constexpr int kExitError = 1;
 constexpr char kPrefix[] = "rigcal record: ";
 
 struct RecordArgs {

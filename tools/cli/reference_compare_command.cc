@@ -7,14 +7,13 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "exit_codes.h"
 #include "rigcal/target/reference_compare.h"
 #include "target_args.h"
 
 namespace rigcal::cli {
 namespace {
 
-constexpr int kExitOk = 0;
-constexpr int kExitError = 1;
 constexpr int kExitUnusable = 3;
 
 struct CompareArgs {
@@ -24,17 +23,13 @@ struct CompareArgs {
   bool json = false;
 };
 
-int Fail(const std::string& message) {
-  std::cerr << "rigcal reference-compare: " << message << "\n";
-  return kExitError;
-}
-
 int RunCompare(const CompareArgs& args) {
   if (args.target.cameras.size() < 2) {
-    return Fail("--camera: give the master and at least one slave");
+    return PrintCommandError("reference-compare",
+                             "--camera: give the master and at least one slave");
   }
   auto cameras = CalibrateCameras(args.target);
-  if (!cameras) return Fail(cameras.error());
+  if (!cameras) return PrintCommandError("reference-compare", cameras.error());
   std::vector<target::CameraInput> inputs;
   for (CameraCalibration& c : *cameras) inputs.push_back({c.views, c.intrinsics});
   const target::ReferenceKind kind = args.reference == "stereo"   ? target::ReferenceKind::kStereo
@@ -42,7 +37,7 @@ int RunCompare(const CompareArgs& args) {
                                                                   : target::ReferenceKind::kAuto;
   const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
   auto comparisons = target::CompareWithReference(inputs, kind, tolerance_ns);
-  if (!comparisons) return Fail(comparisons.error());
+  if (!comparisons) return PrintCommandError("reference-compare", comparisons.error());
 
   const std::string& master = inputs.front().views.camera;
   bool all_usable = true;
@@ -120,7 +115,7 @@ void RegisterReferenceCompare(CLI::App& app, int* exit_code) {
     try {
       *exit_code = RunCompare(*args);
     } catch (const std::exception& e) {
-      *exit_code = Fail(e.what());
+      *exit_code = PrintCommandError("reference-compare", e.what());
     }
   });
 }

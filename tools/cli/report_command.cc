@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands.h"
+#include "exit_codes.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/report/report_html.h"
 #include "rigcal/report/report_input.h"
@@ -12,7 +13,6 @@
 namespace rigcal::cli {
 namespace {
 
-constexpr int kExitOk = 0;
 constexpr int kExitBadInput = 1;
 
 struct ReportArgs {

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "commands.h"
+#include "exit_codes.h"
 #include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/drivers/simulated_rig.h"
@@ -35,9 +36,6 @@
 
 namespace rigcal::cli {
 namespace {
-
-constexpr int kExitOk = 0;
-constexpr int kExitError = 1;
 
 struct RunArgs {
   std::string config;

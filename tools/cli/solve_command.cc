@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "exit_codes.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/rig_calibrator.h"
@@ -30,8 +31,6 @@ namespace rigcal::cli {
 namespace {
 
 // Exit codes of `rigcal solve` (0 and 1 as for every subcommand).
-constexpr int kExitOk = 0;
-constexpr int kExitError = 1;
 
 struct SolveArgs {
   std::string master;
@@ -158,11 +157,6 @@ std::vector<std::optional<double>> ParseTimeOffsets(const std::string& text,
   return out;
 }
 
-int Fail(const std::string& message) {
-  std::cerr << "rigcal solve: " << message << "\n";
-  return kExitError;
-}
-
 // The offsets of `slaves` from the rig config's estimator.time_offset (nullopt: auto): 0 for
 // every slave when the config has none (synchronised stamps). Errors: the config's, or a slave
 // that is not a camera of the rig.
@@ -195,15 +189,17 @@ int RunSolve(const SolveArgs& args) {
                                                           : MotionModel::kAuto;
   options.nominal_sigma = args.prior_sigma;
   options.covariance_time_blocks = args.time_blocks;
-  if (std::string e = ApplyScale(args.scale, &options); !e.empty()) return Fail("--scale: " + e);
+  if (std::string e = ApplyScale(args.scale, &options); !e.empty())
+    return PrintCommandError("solve", "--scale: " + e);
   if (args.pose_model != "global" && args.reference != "target") {
-    return Fail("--pose-model " + args.pose_model + " needs --reference target");
+    return PrintCommandError("solve",
+                             "--pose-model " + args.pose_model + " needs --reference target");
   }
   if (std::string e = ApplyPairs(args.pairs, &options.pairs); !e.empty()) {
-    return Fail("--pairs: " + e);
+    return PrintCommandError("solve", "--pairs: " + e);
   }
   if (const Status checked = options.Check(); !checked.ok()) {
-    return Fail("invalid options: " + checked.message());
+    return PrintCommandError("solve", "invalid options: " + checked.message());
   }
 
   tools::TrajectoryReadOptions read_options;
@@ -219,32 +215,32 @@ int RunSolve(const SolveArgs& args) {
     return trajectory;
   };
   auto master = read(args.master);
-  if (!master) return Fail(master.error());
+  if (!master) return PrintCommandError("solve", master.error());
   std::vector<tools::TimedTrajectory> slaves;
   for (const std::string& path : args.slaves) {
     auto slave = read(path);
-    if (!slave) return Fail(slave.error());
+    if (!slave) return PrintCommandError("solve", slave.error());
     slaves.push_back(std::move(*slave));
   }
 
   std::map<std::string, Similarity> truth;
   if (!args.truth.empty()) {
     auto loaded = tools::ReadRigYaml(args.truth);
-    if (!loaded) return Fail(loaded.error());
+    if (!loaded) return PrintCommandError("solve", loaded.error());
     truth = std::move(*loaded);
     for (const auto& slave : slaves) {
       if (truth.count(slave.name) == 0) {
         std::string known;
         for (const auto& [name, rig] : truth) known += (known.empty() ? "" : ", ") + name;
-        return Fail(args.truth + ": no entry for slave '" + slave.name +
-                    "' (the file has: " + known + ")");
+        return PrintCommandError("solve", args.truth + ": no entry for slave '" + slave.name +
+                                              "' (the file has: " + known + ")");
       }
     }
   }
 
   if (!args.prior.empty()) {
     auto nominal = tools::ReadNominalMountings(args.prior);
-    if (!nominal) return Fail(nominal.error());
+    if (!nominal) return PrintCommandError("solve", nominal.error());
     for (const auto& slave : slaves) {
       if (nominal->count(slave.name) == 0) {
         log->warn(
@@ -264,7 +260,7 @@ int RunSolve(const SolveArgs& args) {
     // The poses are target poses (camera in the target frame): global reference pose model.
     auto reference =
         TargetReferenceResult(*master, slaves, tolerance_ns, args.pose_model == "individual");
-    if (!reference) return Fail(reference.error());
+    if (!reference) return PrintCommandError("solve", reference.error());
     result = std::move(*reference);
     unit = ResultUnit{false, 1.0, 0.0, "target reference",
                       "target reference: positions in the target's unit (metres for a metric "
@@ -277,17 +273,18 @@ int RunSolve(const SolveArgs& args) {
     std::vector<std::optional<double>> given_offsets;
     if (!args.config.empty() && !args.time_offset_given) {
       auto from_config = TimeOffsetsFromConfig(args.config, slave_names);
-      if (!from_config) return Fail(from_config.error());
+      if (!from_config) return PrintCommandError("solve", from_config.error());
       given_offsets = std::move(*from_config);
       log->info("time offsets from {} (estimator.time_offset)", args.config);
     } else {
       std::string offset_error;
       given_offsets = ParseTimeOffsets(args.time_offset, slave_names, &offset_error);
-      if (!offset_error.empty()) return Fail("--time-offset: " + offset_error);
+      if (!offset_error.empty())
+        return PrintCommandError("solve", "--time-offset: " + offset_error);
     }
     auto matched = tools::MatchWithTimeOffsets(*master, slaves, given_offsets, tolerance_ns,
                                                options, offset_options);
-    if (!matched) return Fail(matched.error());
+    if (!matched) return PrintCommandError("solve", matched.error());
     const RigRecording* recording = &matched->recording;
     log->info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
               slaves.size() + 1, args.tolerance_ms);
@@ -313,7 +310,7 @@ int RunSolve(const SolveArgs& args) {
         result = CalibrateRig(*recording, options);
       }
     } catch (const std::exception& e) {
-      return Fail(std::string("calibration failed: ") + e.what());
+      return PrintCommandError("solve", std::string("calibration failed: ") + e.what());
     }
     if (result.master.empty()) result.master = master->name;
     for (size_t i = 0; i < result.slaves.size() && i < matched->offsets.size(); ++i) {
@@ -323,7 +320,7 @@ int RunSolve(const SolveArgs& args) {
   }
   if (!args.metric_target.empty()) {
     auto applied = ApplyMetricTarget(args.metric_target, *master, tolerance_ns, &result);
-    if (!applied) return Fail(applied.error());
+    if (!applied) return PrintCommandError("solve", applied.error());
     unit = *applied;
   } else if (args.master_metric) {
     unit = ResultUnit{true, 1.0, 0.0, "master odometry",
@@ -378,11 +375,12 @@ int RunSolve(const SolveArgs& args) {
                          ? tools::WriteFileAtomically(args.out, "# units: " + unit->message + "\n" +
                                                                     tools::ResultToYaml(result))
                          : tools::WriteResultYaml(args.out, result);
-    if (!s.ok()) return Fail(s.message());
+    if (!s.ok()) return PrintCommandError("solve", s.message());
     log->info("wrote result to {}", args.out);
   }
   if (!args.camchain.empty()) {
-    if (Status s = tools::WriteCamchain(args.camchain, result); !s.ok()) return Fail(s.message());
+    if (Status s = tools::WriteCamchain(args.camchain, result); !s.ok())
+      return PrintCommandError("solve", s.message());
     log->info("wrote camera chain to {}", args.camchain);
   }
 
@@ -652,7 +650,7 @@ void RegisterSolve(CLI::App& app, int* exit_code) {
       args->time_offset_given = cmd->count("--time-offset") > 0;
       *exit_code = RunSolve(*args);
     } catch (const std::exception& e) {
-      *exit_code = Fail(e.what());
+      *exit_code = PrintCommandError("solve", e.what());
     }
   });
 }

@@ -10,7 +10,7 @@
 namespace rigcal::camera::internal {
 namespace {
 
-constexpr double kMaxAutomaticFieldAngleDeg = 179.0;
+constexpr double kFisheyeMaxAutomaticFieldAngleDeg = 179.0;
 // Below this field angle (radians) the projection uses its first-order limit (error ~1e-20).
 constexpr double kSmallAngle = 1e-10;
 // Newton on theta (radians) stops after a step below this: the error left is ~1e-18 rad.
@@ -139,7 +139,7 @@ class FisheyeCamera final : public CameraModel {
 Status FisheyeCamera::Initialise(double max_field_angle_deg) {
   const bool automatic = max_field_angle_deg == 0.0;
   const double theta_cap =
-      (automatic ? kMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad;
+      (automatic ? kFisheyeMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad;
   // First angle where theta_d stops increasing.
   double theta_fold = theta_cap;
   bool folds = false;

@@ -10,7 +10,7 @@ namespace rigcal::camera::internal {
 namespace {
 
 // Largest automatic field angle; keeps x/z finite and well away from the pole at 90 degrees.
-constexpr double kMaxAutomaticFieldAngleDeg = 89.0;
+constexpr double kPinholeMaxAutomaticFieldAngleDeg = 89.0;
 // Directions sampled when scanning the distortion for a fold.
 constexpr int kFoldDirections = 64;
 
@@ -168,7 +168,7 @@ class PinholeCamera final : public CameraModel {
 Status PinholeCamera::Initialise(double max_field_angle_deg) {
   const bool automatic = max_field_angle_deg == 0.0;
   const double r_cap =
-      std::tan((automatic ? kMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad);
+      std::tan((automatic ? kPinholeMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad);
 
   // Scan outwards for the first radius where the distortion stops being one-to-one: the
   // Jacobian determinant or the radial growth of |distorted| is not positive.

@@ -12,7 +12,7 @@
 namespace rigcal::camera::internal {
 namespace {
 
-constexpr double kMaxAutomaticFieldAngleDeg = 179.0;
+constexpr double kScaramuzzaMaxAutomaticFieldAngleDeg = 179.0;
 constexpr double kScanStepPx = 0.25;             // radius step when scanning the polynomial
 constexpr double kInversePolyTolerancePx = 1.0;  // a given inverse_poly must be this close
 constexpr double kFitTolerancePx = 0.01;         // a fitted inverse_poly aims at this
@@ -207,7 +207,7 @@ std::vector<double> ScaramuzzaCamera::FitInversePoly() const {
 Status ScaramuzzaCamera::Initialise(double max_field_angle_deg) {
   const bool automatic = max_field_angle_deg == 0.0;
   const double theta_cap =
-      (automatic ? kMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad;
+      (automatic ? kScaramuzzaMaxAutomaticFieldAngleDeg : max_field_angle_deg) * kDegToRad;
   // The farthest image corner in the sensor plane (|m| is convex in the pixel).
   double rho_corner = 0.0;
   for (const double u : {-0.5, width() - 0.5}) {

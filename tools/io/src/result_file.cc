@@ -14,7 +14,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Quaternions are written in shortest round-trip form; hand-edited files may carry 4 decimals.
-constexpr double kQuaternionNormTolerance = 1e-3;
 const std::set<std::string> kYamlMetadataKeys = {"master", "pairs_selected"};
 
 // parent[key], or an error naming `field` at the parent when it is missing.
@@ -67,16 +66,9 @@ constexpr ScaleModel kScaleModels[] = {ScaleModel::kFixed, ScaleModel::kSegments
 
 Status ReadEstimate(const FieldReader& r, const YAML::Node& node, const std::string& name,
                     SlaveCalibration* slave) {
-  auto q = r.Numbers(node, "q_wxyz", name + ".q_wxyz", 4);
+  auto q = r.UnitQuaternion(node, "q_wxyz", name + ".q_wxyz");
   if (!q) return Error{q.error()};
-  const Eigen::Vector4d q_wxyz((*q)[0], (*q)[1], (*q)[2], (*q)[3]);
-  const double norm = q_wxyz.norm();
-  if (!(std::abs(norm - 1.0) <= kQuaternionNormTolerance)) {
-    return r.Fail(node["q_wxyz"], name + ".q_wxyz",
-                  "norm " + SignificantText(norm, 6) + " is not 1 within " +
-                      SignificantText(kQuaternionNormTolerance, 6));
-  }
-  slave->estimate.q = Eigen::Quaterniond(q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3]).normalized();
+  slave->estimate.q = *q;
   auto c = r.Numbers(node, "C", name + ".C", 3);
   if (!c) return Error{c.error()};
   slave->estimate.C = Eigen::Vector3d((*c)[0], (*c)[1], (*c)[2]);
@@ -151,8 +143,8 @@ Status ReadUncertainty(const FieldReader& r, const YAML::Node& node, const std::
 }
 
 // One slave entry; the YAML and JSON schemas differ only in where the motion counts are.
-Expected<SlaveCalibration> ReadSlave(const FieldReader& r, const YAML::Node& node,
-                                     const std::string& name, bool json) {
+Expected<SlaveCalibration> ReadResultSlave(const FieldReader& r, const YAML::Node& node,
+                                           const std::string& name, bool json) {
   if (!node.IsMap()) return r.Fail(node, name, "expected a map (a slave's result)");
   SlaveCalibration slave;
   slave.name = name;
@@ -234,7 +226,7 @@ Expected<RigCalibration> ReadResultFile(const std::string& path) {
       if (!name_node) return Error{name_node.error()};
       auto name = r.String(*name_node, "slaves[" + std::to_string(i) + "].name");
       if (!name) return Error{name.error()};
-      auto slave = ReadSlave(r, slaves[i], *name, true);
+      auto slave = ReadResultSlave(r, slaves[i], *name, true);
       if (!slave) return Error{slave.error()};
       result.slaves.push_back(std::move(*slave));
     }
@@ -247,7 +239,7 @@ Expected<RigCalibration> ReadResultFile(const std::string& path) {
     for (auto it = root->begin(); it != root->end(); ++it) {
       const std::string key = it->first.Scalar();
       if (kYamlMetadataKeys.count(key) && it->second.IsScalar()) continue;
-      auto slave = ReadSlave(r, it->second, key, false);
+      auto slave = ReadResultSlave(r, it->second, key, false);
       if (!slave) return Error{slave.error()};
       result.slaves.push_back(std::move(*slave));
     }

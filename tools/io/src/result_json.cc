@@ -14,10 +14,12 @@ namespace rigcal::tools {
 namespace {
 
 // A number, or null when it is not finite (JSON has no NaN or infinity).
-nlohmann::json Num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+nlohmann::json JsonNumber(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
 
 nlohmann::json Vec(const Eigen::Vector3d& v) {
-  return nlohmann::json::array({Num(v.x()), Num(v.y()), Num(v.z())});
+  return nlohmann::json::array({JsonNumber(v.x()), JsonNumber(v.y()), JsonNumber(v.z())});
 }
 
 const Similarity* TruthOf(const std::map<std::string, Similarity>* truth, const std::string& name) {
@@ -61,7 +63,7 @@ bool NearGimbalLock(const Eigen::Quaterniond& q) { return std::abs(RollPitchYawD
 
 nlohmann::json AxisAngleJson(const Eigen::Quaterniond& q) {
   const AxisAngleDegrees a = AxisAngleDeg(q);
-  return {{"axis", Vec(a.axis)}, {"angle_deg", Num(a.angle_deg)}};
+  return {{"axis", Vec(a.axis)}, {"angle_deg", JsonNumber(a.angle_deg)}};
 }
 
 std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
@@ -189,31 +191,33 @@ nlohmann::json ResultToJson(const RigCalibration& result,
     nlohmann::json j;
     j["name"] = s.name;
     const Eigen::Quaterniond& q = s.estimate.q;
-    j["q_wxyz"] = {Num(q.w()), Num(q.x()), Num(q.y()), Num(q.z())};
+    j["q_wxyz"] = {JsonNumber(q.w()), JsonNumber(q.x()), JsonNumber(q.y()), JsonNumber(q.z())};
     j["roll_pitch_yaw_deg"] = Vec(RollPitchYawDeg(q));
     j["axis_angle"] = AxisAngleJson(q);
     j["C"] = Vec(s.estimate.C);
     if (s.scales.size() > 1) {
       nlohmann::json scales = nlohmann::json::array();
       for (const SegmentScale& seg : s.scales) {
-        scales.push_back(
-            {{"segment", seg.segment}, {"scale", Num(seg.scale)}, {"std", Num(seg.std)}});
+        scales.push_back({{"segment", seg.segment},
+                          {"scale", JsonNumber(seg.scale)},
+                          {"std", JsonNumber(seg.std)}});
       }
       j["scales"] = scales;
     } else {
-      j["scale"] = Num(s.estimate.scale);
+      j["scale"] = JsonNumber(s.estimate.scale);
     }
     // σ: null when unknown (the covariance was not computed or failed), never 0; the scale's
     // here when there is one (else in "scales").
-    j["std"] = {
-        {"rot_deg", Num(s.rot_std_deg)}, {"pos", Vec(s.pos_std)}, {"axis", Num(s.axis_offset_std)}};
+    j["std"] = {{"rot_deg", JsonNumber(s.rot_std_deg)},
+                {"pos", Vec(s.pos_std)},
+                {"axis", JsonNumber(s.axis_offset_std)}};
     if (s.scales.size() <= 1) {
-      j["std"]["scale"] =
-          Num(s.scales.empty() ? std::numeric_limits<double>::quiet_NaN() : s.scales.front().std);
+      j["std"]["scale"] = JsonNumber(s.scales.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                                      : s.scales.front().std);
     }
     if (std::isfinite(s.time_offset_s)) {
-      j["time_offset_s"] = Num(s.time_offset_s);
-      j["time_offset_std_s"] = Num(s.time_offset_std_s);
+      j["time_offset_s"] = JsonNumber(s.time_offset_s);
+      j["time_offset_std_s"] = JsonNumber(s.time_offset_std_s);
     }
     j["motions_used"] = s.motions.used;
     j["motions_rejected"] = s.motions.rejected();
@@ -232,24 +236,25 @@ nlohmann::json ResultToJson(const RigCalibration& result,
     const Observability& o = s.observability;
     const Eigen::Vector4d& ev = o.rotation_eigenvalues;
     j["observability"] = {
-        {"rotation_eigenvalues", {Num(ev[0]), Num(ev[1]), Num(ev[2]), Num(ev[3])}},
-        {"rotation_weak_std_deg", Num(o.rotation_weak_std_deg)},
-        {"position_min_eigenvalue", Num(o.position_min_eigenvalue)},
-        {"axis_spread_deg", Num(o.axis_spread_deg)},
-        {"slave_axis_spread_deg", Num(o.slave_axis_spread_deg)},
-        {"tilt_snr", Num(o.tilt_snr)},
-        {"axis_std_ratio", Num(o.axis_std_ratio)},
-        {"max_rotation_deg", Num(o.max_rotation_deg)},
+        {"rotation_eigenvalues",
+         {JsonNumber(ev[0]), JsonNumber(ev[1]), JsonNumber(ev[2]), JsonNumber(ev[3])}},
+        {"rotation_weak_std_deg", JsonNumber(o.rotation_weak_std_deg)},
+        {"position_min_eigenvalue", JsonNumber(o.position_min_eigenvalue)},
+        {"axis_spread_deg", JsonNumber(o.axis_spread_deg)},
+        {"slave_axis_spread_deg", JsonNumber(o.slave_axis_spread_deg)},
+        {"tilt_snr", JsonNumber(o.tilt_snr)},
+        {"axis_std_ratio", JsonNumber(o.axis_std_ratio)},
+        {"max_rotation_deg", JsonNumber(o.max_rotation_deg)},
         {"planar", o.planar},
         {"mean_axis", Vec(o.planar_axis)}};
     if (const Similarity* t = TruthOf(truth, s.name); t != nullptr && s.usable()) {
       const CalibrationError e = CompareToTruth(s.estimate, *t, o.planar_axis);
-      j["errors"] = {{"rot_deg", Num(e.rot_deg)},     {"dir_deg", Num(e.dir_deg)},
-                     {"dist_pct", Num(e.dist_pct)},   {"trans_err", Num(e.trans_err)},
-                     {"scale_pct", Num(e.scale_pct)}, {"plane_err", Num(e.plane_err)},
-                     {"axis_err", Num(e.axis_err)}};
+      j["errors"] = {{"rot_deg", JsonNumber(e.rot_deg)},     {"dir_deg", JsonNumber(e.dir_deg)},
+                     {"dist_pct", JsonNumber(e.dist_pct)},   {"trans_err", JsonNumber(e.trans_err)},
+                     {"scale_pct", JsonNumber(e.scale_pct)}, {"plane_err", JsonNumber(e.plane_err)},
+                     {"axis_err", JsonNumber(e.axis_err)}};
       if (alignment != nullptr && alignment->applied) {
-        j["errors"]["trans_err_m"] = Num(e.trans_err * alignment->metres_per_unit);
+        j["errors"]["trans_err_m"] = JsonNumber(e.trans_err * alignment->metres_per_unit);
       }
     }
     slaves.push_back(std::move(j));
@@ -260,9 +265,9 @@ nlohmann::json ResultToJson(const RigCalibration& result,
     out["truth_alignment"] = {
         {"mode", ToString(a.mode)},
         {"applied", a.applied},
-        {"metres_per_master_unit", Num(a.metres_per_unit)},
-        {"std", Num(a.std)},
-        {"fit_rms_m", Num(a.fit_rms_m)},
+        {"metres_per_master_unit", JsonNumber(a.metres_per_unit)},
+        {"std", JsonNumber(a.std)},
+        {"fit_rms_m", JsonNumber(a.fit_rms_m)},
         {"slaves_used", a.slaves_used},
         {"slave_excluded",
          a.slave_excluded.empty() ? nlohmann::json() : nlohmann::json(a.slave_excluded)},

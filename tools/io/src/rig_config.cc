@@ -14,8 +14,6 @@
 namespace rigcal::tools {
 namespace {
 
-constexpr double kQuaternionNormTolerance = 1e-3;  // hand-typed quaternions
-
 // Keys of a camera entry read here; the camera section parser reads the others.
 const std::set<std::string> kCameraOwnKeys = {"name",    "nominal", "truth", "device",
                                               "capture", "trigger", "metric"};
@@ -24,15 +22,9 @@ Expected<Similarity> ParseMounting(const FieldReader& r, const YAML::Node& node,
                                    const std::string& field) {
   if (auto e = r.CheckKeys(node, field + ".", {"q_wxyz", "C", "scale"})) return *e;
   Similarity mounting;
-  auto q = r.Numbers(node, "q_wxyz", field + ".q_wxyz", 4);
+  auto q = r.UnitQuaternion(node, "q_wxyz", field + ".q_wxyz");
   if (!q) return Error{q.error()};
-  const Eigen::Vector4d q_wxyz((*q)[0], (*q)[1], (*q)[2], (*q)[3]);
-  const double norm = q_wxyz.norm();
-  if (!(std::abs(norm - 1.0) <= kQuaternionNormTolerance)) {
-    return r.Fail(node["q_wxyz"], field + ".q_wxyz",
-                  "norm " + std::to_string(norm) + " is not 1 within 1e-3");
-  }
-  mounting.q = Eigen::Quaterniond(q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3]).normalized();
+  mounting.q = *q;
   auto c = r.Numbers(node, "C", field + ".C", 3);
   if (!c) return Error{c.error()};
   mounting.C = Eigen::Vector3d((*c)[0], (*c)[1], (*c)[2]);

@@ -20,12 +20,11 @@ namespace rigcal::tools {
 namespace {
 
 // Quaternions typed by hand with 4 decimals are off by up to ~1e-4.
-constexpr double kRigQuaternionNormTolerance = 1e-3;
 constexpr double kRotationOrthonormalTolerance = 1e-6;
 const std::set<std::string> kMetadataKeys = {"master", "pairs_selected"};
 
 // Shortest round-trip text of a double; YAML spellings for non-finite values.
-std::string Num(double v) {
+std::string YamlNumber(double v) {
   if (std::isnan(v)) return ".nan";
   if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
   return ShortestText(v);
@@ -33,7 +32,7 @@ std::string Num(double v) {
 
 void EmitVector(YAML::Emitter& out, const double* v, int n) {
   out << YAML::Flow << YAML::BeginSeq;
-  for (int i = 0; i < n; ++i) out << Num(v[i]);
+  for (int i = 0; i < n; ++i) out << YamlNumber(v[i]);
   out << YAML::EndSeq;
 }
 
@@ -43,11 +42,11 @@ void EmitRigEntry(YAML::Emitter& out, const Similarity& rig) {
   EmitVector(out, q.data(), 4);
   out << YAML::Key << "C" << YAML::Value;
   EmitVector(out, rig.C.data(), 3);
-  out << YAML::Key << "scale" << YAML::Value << Num(rig.scale);
+  out << YAML::Key << "scale" << YAML::Value << YamlNumber(rig.scale);
 }
 
-Expected<Similarity> ReadSlave(const FieldReader& r, const std::string& name,
-                               const YAML::Node& node) {
+Expected<Similarity> ReadRigSlave(const FieldReader& r, const std::string& name,
+                                  const YAML::Node& node) {
   if (!node.IsMap()) return r.Fail(node, name, "expected a map with q_wxyz, C and scale");
   // A hand-written rig entry holds only these keys; an entry of a result file (it has `usable`)
   // holds the statistics ResultToYaml writes as well.
@@ -56,17 +55,9 @@ Expected<Similarity> ReadSlave(const FieldReader& r, const std::string& name,
     if (auto e = r.CheckKeys(node, name + ".", {"q_wxyz", "C", "scale", "scales"})) return *e;
   }
   Similarity rig;
-  auto q = r.Numbers(node, "q_wxyz", name + ".q_wxyz", 4);
+  auto q = r.UnitQuaternion(node, "q_wxyz", name + ".q_wxyz");
   if (!q) return Error{q.error()};
-  const Eigen::Vector4d q_wxyz((*q)[0], (*q)[1], (*q)[2], (*q)[3]);
-  const double norm = q_wxyz.norm();
-  if (!(std::abs(norm - 1.0) <= kRigQuaternionNormTolerance)) {
-    return r.Fail(node["q_wxyz"], name + ".q_wxyz",
-                  "norm " + SignificantText(norm, 6) + " is not 1 within " +
-                      SignificantText(kRigQuaternionNormTolerance, 6));
-  }
-  rig.q =
-      Eigen::Quaterniond(q_wxyz[0] / norm, q_wxyz[1] / norm, q_wxyz[2] / norm, q_wxyz[3] / norm);
+  rig.q = *q;
   auto c = r.Numbers(node, "C", name + ".C", 3);
   if (!c) return Error{c.error()};
   rig.C = Eigen::Vector3d((*c)[0], (*c)[1], (*c)[2]);
@@ -128,7 +119,7 @@ Expected<std::map<std::string, Similarity>> RigFromYaml(const YAML::Node& root,
     const std::string name = it->first.Scalar();
     if (kMetadataKeys.count(name) && it->second.IsScalar()) continue;
     if (rig.count(name)) return r.Fail(it->first, name, "appears twice");
-    auto slave = ReadSlave(r, name, it->second);
+    auto slave = ReadRigSlave(r, name, it->second);
     if (!slave) return Error{slave.error()};
     rig.emplace(name, *slave);
   }
@@ -209,23 +200,23 @@ std::string ResultToYaml(const RigCalibration& result) {
       out << YAML::Key << "scales" << YAML::Value << YAML::BeginSeq;
       for (const SegmentScale& s : slave.scales) {
         out << YAML::Flow << YAML::BeginMap << YAML::Key << "segment" << YAML::Value << s.segment
-            << YAML::Key << "scale" << YAML::Value << Num(s.scale) << YAML::Key << "std"
-            << YAML::Value << Num(s.std) << YAML::EndMap;
+            << YAML::Key << "scale" << YAML::Value << YamlNumber(s.scale) << YAML::Key << "std"
+            << YAML::Value << YamlNumber(s.std) << YAML::EndMap;
       }
       out << YAML::EndSeq;
     }
     out << YAML::Key << "std" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "rot_deg" << YAML::Value << Num(slave.rot_std_deg);
+    out << YAML::Key << "rot_deg" << YAML::Value << YamlNumber(slave.rot_std_deg);
     out << YAML::Key << "pos" << YAML::Value;
     EmitVector(out, slave.pos_std.data(), 3);
-    out << YAML::Key << "axis" << YAML::Value << Num(slave.axis_offset_std);
+    out << YAML::Key << "axis" << YAML::Value << YamlNumber(slave.axis_offset_std);
     if (slave.scales.size() == 1) {
-      out << YAML::Key << "scale" << YAML::Value << Num(slave.scales.front().std);
+      out << YAML::Key << "scale" << YAML::Value << YamlNumber(slave.scales.front().std);
     }
     out << YAML::EndMap;
     if (std::isfinite(slave.time_offset_s)) {
-      out << YAML::Key << "time_offset_s" << YAML::Value << Num(slave.time_offset_s);
-      out << YAML::Key << "time_offset_std_s" << YAML::Value << Num(slave.time_offset_std_s);
+      out << YAML::Key << "time_offset_s" << YAML::Value << YamlNumber(slave.time_offset_s);
+      out << YAML::Key << "time_offset_std_s" << YAML::Value << YamlNumber(slave.time_offset_std_s);
     }
     const MotionCounts& m = slave.motions;
     out << YAML::Key << "motions" << YAML::Value << YAML::Flow << YAML::BeginMap;
@@ -266,7 +257,7 @@ std::string ResultToYaml(const RigCalibration& result) {
           {"tilt_snr", o.tilt_snr},
           {"axis_std_ratio", o.axis_std_ratio},
           {"max_rotation_deg", o.max_rotation_deg}}) {
-      out << YAML::Key << key << YAML::Value << Num(value);
+      out << YAML::Key << key << YAML::Value << YamlNumber(value);
     }
     out << YAML::Key << "planar" << YAML::Value << o.planar;
     out << YAML::Key << "mean_axis" << YAML::Value;

@@ -26,7 +26,7 @@ const std::set<std::string> kSourceKeys = {
     "fail_after_s", "render_block",  "trigger"};
 
 // A number as people write it: "20", "9.95", "8.33333".
-std::string Num(double v) { return SignificantText(v, 6); }
+std::string PlainNumber(double v) { return SignificantText(v, 6); }
 
 // The key node of `key` in map `map` (its line is the line of "key:"), or `map` itself.
 YAML::Node KeyOf(const YAML::Node& map, const std::string& key) {
@@ -54,7 +54,7 @@ Expected<Eigen::Quaterniond> Quaternion(const FieldReader& r, const YAML::Node& 
   Eigen::Quaterniond quaternion((*q)[0], (*q)[1], (*q)[2], (*q)[3]);
   const double norm = quaternion.norm();
   if (std::abs(norm - 1.0) > 1e-3) {
-    return r.Fail(node, field, "norm " + Num(norm) + " is not 1 (within 1e-3)");
+    return r.Fail(node, field, "norm " + PlainNumber(norm) + " is not 1 (within 1e-3)");
   }
   return quaternion.normalized();
 }
@@ -290,7 +290,7 @@ Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& sourc
       auto exposure = NumberIn(
           r, n["exposure_ms"], "source.motion_blur.exposure_ms",
           [&](double x) { return x > 0 && x * 1e-3 < period_s; },
-          "in (0, " + Num(period_s * 1e3) + ") ms (shorter than a frame period)");
+          "in (0, " + PlainNumber(period_s * 1e3) + ") ms (shorter than a frame period)");
       if (!exposure) return Error{exposure.error()};
       spec.blur_exposure_s = *exposure * 1e-3;
       if (const YAML::Node s = n["samples"]) {
@@ -313,7 +313,8 @@ Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& sourc
     auto v = NumberIn(
         r, n, "source.timestamp_jitter_ms",
         [&](double x) { return x >= 0 && 3 * x * 1e-3 < 0.5 * period_s; },
-        ">= 0 with 3 sigma below half a frame period (< " + Num(period_s * 1e3 / 6) + " ms)");
+        ">= 0 with 3 sigma below half a frame period (< " + PlainNumber(period_s * 1e3 / 6) +
+            " ms)");
     if (!v) return Error{v.error()};
     spec.timestamp_jitter_s = *v * 1e-3;
   }
@@ -338,7 +339,7 @@ Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& sourc
         auto x = NumberIn(
             r, v, std::string("source.trigger.") + f.key,
             [&](double y) { return y >= f.lo && y <= f.hi; },
-            "in [" + Num(f.lo) + ", " + Num(f.hi) + "]");
+            "in [" + PlainNumber(f.lo) + ", " + PlainNumber(f.hi) + "]");
         if (!x) return Error{x.error()};
         *f.value = *x;
       }
@@ -375,9 +376,9 @@ Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& sourc
   if (frames > 0 && static_cast<double>(frames - 1) * period_s > duration + 1e-6) {
     const std::string key = spec.num_frames > 0 ? "num_frames" : "duration_s";
     return r.Fail(source[key], "source." + key,
-                  std::to_string(frames) + " frames at " + Num(spec.frame_rate_hz) + " Hz last " +
-                      Num(static_cast<double>(frames - 1) * period_s) +
-                      " s, longer than the trajectory (" + Num(duration) + " s)");
+                  std::to_string(frames) + " frames at " + PlainNumber(spec.frame_rate_hz) +
+                      " Hz last " + PlainNumber(static_cast<double>(frames - 1) * period_s) +
+                      " s, longer than the trajectory (" + PlainNumber(duration) + " s)");
   }
   return spec;
 }

@@ -8,8 +8,6 @@
 namespace rigcal::tools {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 // One slave's contribution: its true and estimated C, both restricted to the estimated
 // components (the plane of a planar slave without a nominal mounting), and the σ per master
 // axis of the estimate.
@@ -148,7 +146,7 @@ TruthAlignment AlignTruthUnit(const RigCalibration& result,
     const double scatter = components > 1 ? std::sqrt(fit.fit_rms_m * fit.fit_rms_m *
                                                       static_cast<double>(used.size()) /
                                                       static_cast<double>(components - 1) / den)
-                                          : kNaN;
+                                          : std::numeric_limits<double>::quiet_NaN();
     a.std = std::isfinite(propagated) ? std::max(propagated, std::isfinite(scatter) ? scatter : 0.0)
                                       : scatter;
     // "<k> (± <σ>, how)"; the unit ("m") goes after <k> where it applies.

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/format.h"
+
 namespace rigcal::tools {
 
 Expected<std::string> ReadWholeFile(const std::string& path) {
@@ -221,6 +223,22 @@ Expected<std::vector<double>> FieldReader::NumbersOf(const YAML::Node& node,
                 "expected " + std::to_string(n) + " numbers, got " + std::to_string(node.size()));
   }
   return NumberList(node, field, n);
+}
+
+Expected<Eigen::Quaterniond> FieldReader::UnitQuaternion(const YAML::Node& parent,
+                                                         const std::string& key,
+                                                         const std::string& field) const {
+  constexpr double kNormTolerance = 1e-3;
+  auto q = Numbers(parent, key, field, 4);
+  if (!q) return Error{q.error()};
+  const Eigen::Vector4d wxyz((*q)[0], (*q)[1], (*q)[2], (*q)[3]);
+  const double norm = wxyz.norm();
+  if (!(std::abs(norm - 1.0) <= kNormTolerance)) {
+    return Fail(parent[key], field,
+                "norm " + SignificantText(norm, 6) + " is not 1 within " +
+                    SignificantText(kNormTolerance, 6));
+  }
+  return Eigen::Quaterniond(wxyz[0] / norm, wxyz[1] / norm, wxyz[2] / norm, wxyz[3] / norm);
 }
 
 Expected<std::vector<double>> FieldReader::NumberList(const YAML::Node& node,

@@ -63,10 +63,10 @@ void CheckSlave(const CameraNames& names, slave_extrinsics_t* s, Checker* check)
   check->AtLeast<int32_t>("motions_rejected", s->motions_rejected, 0);
   check->AtLeast("rotation_eigen_gap", s->rotation_eigen_gap, 0.0);
   check->InRange("axis_spread_deg", s->axis_spread_deg, 0.0, 180.0);
-  if (s->flags & kFlagPlanar) {
+  if (s->flags & kWireFlagPlanar) {
     check->Unit("planar_axis", s->planar_axis, 3, RejectCause::kOutOfRange, "planar_axis");
   }
-  if ((s->flags & kFlagAxisFromPrior) && !(s->flags & kFlagPlanar)) {
+  if ((s->flags & kWireFlagAxisFromPrior) && !(s->flags & kWireFlagPlanar)) {
     check->Fail(RejectCause::kOutOfRange, "flags",
                 "FLAG_AXIS_FROM_PRIOR without FLAG_PLANAR_UNOBSERVABLE_AXIS");
   }
@@ -126,11 +126,11 @@ struct lcm_internal::MessageTraits<rig_extrinsics_t> {
 int32_t SlaveFlags(const SlaveCalibration& slave) {
   int32_t flags = 0;
   if (slave.motion_model == MotionModel::kTranslational || !slave.position_observable) {
-    flags |= kFlagTranslationalOnly;
+    flags |= kWireFlagTranslationalOnly;
   }
   if (slave.observability.planar) {
-    flags |= kFlagPlanar;
-    if (slave.unobservable_from_prior) flags |= kFlagAxisFromPrior;
+    flags |= kWireFlagPlanar;
+    if (slave.unobservable_from_prior) flags |= kWireFlagAxisFromPrior;
   }
   return flags;
 }

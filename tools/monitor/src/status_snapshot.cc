@@ -101,14 +101,14 @@ SlaveView ViewOf(const slave_extrinsics_t& s) {
   // StateText (the state's name, then the facts) takes the estimator's flags: the inverse of
   // EstimateToLcm's mapping.
   uint32_t facts = 0;
-  if (s.flags & kFlagPlanar) facts |= rigcal::kFlagPlanar;
-  if (s.flags & kFlagTranslationalOnly) facts |= rigcal::kFlagTranslationalOnly;
-  if (s.flags & kFlagRefined) facts |= rigcal::kFlagRefined;
+  if (s.flags & kWireFlagPlanar) facts |= rigcal::kFlagPlanar;
+  if (s.flags & kWireFlagTranslationalOnly) facts |= rigcal::kFlagTranslationalOnly;
+  if (s.flags & kWireFlagRefined) facts |= rigcal::kFlagRefined;
   std::istringstream words(StateText(view.state, facts));
   std::string word;
   words >> word;
   while (words >> word) view.facts.push_back(word);
-  if (s.flags & kFlagAxisFromPrior) view.facts.push_back("axis-from-prior");
+  if (s.flags & kWireFlagAxisFromPrior) view.facts.push_back("axis-from-prior");
   return view;
 }
 

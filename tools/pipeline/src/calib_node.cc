@@ -45,9 +45,9 @@ Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t ut
   for (size_t i = 0; i < msg->slaves.size() && i < estimate.online.size(); ++i) {
     const uint32_t online = estimate.online[i].flags;
     int32_t& flags = msg->slaves[i].flags;
-    if (online & rigcal::kFlagPlanar) flags |= tools::kFlagPlanar;
-    if (online & rigcal::kFlagTranslationalOnly) flags |= tools::kFlagTranslationalOnly;
-    if (online & rigcal::kFlagRefined) flags |= tools::kFlagRefined;
+    if (online & rigcal::kFlagPlanar) flags |= tools::kWireFlagPlanar;
+    if (online & rigcal::kFlagTranslationalOnly) flags |= tools::kWireFlagTranslationalOnly;
+    if (online & rigcal::kFlagRefined) flags |= tools::kWireFlagRefined;
     // Cameras that run free: an offset still being (re)estimated, and the jumps of it.
     const SlaveOnlineState& state = estimate.online[i];
     slave_extrinsics_t& slave = msg->slaves[i];

@@ -10,17 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::target {
 namespace {
-
-constexpr double kRadToDeg = 180.0 / M_PI;
-
-Eigen::Vector3d RotationLog(const Eigen::Quaterniond& q) {
-  const Eigen::AngleAxisd aa(q.w() < 0 ? Eigen::Quaterniond(-q.coeffs()) : q);
-  return aa.angle() * aa.axis();
-}
 
 Eigen::Quaterniond RotationExp(const Eigen::Vector3d& v) {
   const double angle = v.norm();
@@ -135,8 +129,8 @@ Expected<IndividualReference> EstimateIndividualReference(const tools::TimedTraj
   for (size_t k = 1; k < n; ++k) {
     a[k - 1] = pairs[0].master.Between(pairs[k].master);
     b[k - 1] = pairs[0].slave.Between(pairs[k].slave);
-    alpha.col(static_cast<Eigen::Index>(k - 1)) = RotationLog(a[k - 1].q);
-    beta.col(static_cast<Eigen::Index>(k - 1)) = RotationLog(b[k - 1].q);
+    alpha.col(static_cast<Eigen::Index>(k - 1)) = RotationVector(a[k - 1].q);
+    beta.col(static_cast<Eigen::Index>(k - 1)) = RotationVector(b[k - 1].q);
   }
   // alpha = dR beta: Kabsch (Park & Martin's rotation of AX = XB).
   const Eigen::Matrix3d H = beta * alpha.transpose();
@@ -150,8 +144,8 @@ Expected<IndividualReference> EstimateIndividualReference(const tools::TimedTraj
   const double axis_noise = std::sqrt((alpha - dR * beta).squaredNorm() / (3.0 * double(n - 1)));
   if (!(second_spread > 10.0 * axis_noise) || second_spread < 1e-6) {
     return Error{who + ": the cameras rotated about one axis only (second rotation spread " +
-                 std::to_string(second_spread * kRadToDeg) + " deg against " +
-                 std::to_string(axis_noise * kRadToDeg) +
+                 std::to_string(second_spread * kDegPerRad) + " deg against " +
+                 std::to_string(axis_noise * kDegPerRad) +
                  " deg noise): the slave's position along it is not determined; tilt the rig "
                  "about a second axis"};
   }
@@ -258,9 +252,9 @@ Expected<IndividualReference> EstimateIndividualReference(const tools::TimedTraj
   e.rejected = static_cast<int>(n) - used;
   // The rotation's covariance is that of a right perturbation: its largest axis in degrees.
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot_eig(cov.topLeftCorner<3, 3>());
-  e.rot_std_deg = std::sqrt(std::max(0.0, rot_eig.eigenvalues()[2])) * kRadToDeg;
+  e.rot_std_deg = std::sqrt(std::max(0.0, rot_eig.eigenvalues()[2])) * kDegPerRad;
   e.pos_std = cov.bottomRightCorner<3, 3>().diagonal().cwiseMax(0.0).cwiseSqrt();
-  e.rot_spread_deg = rot_rms * std::sqrt(3.0) * kRadToDeg;
+  e.rot_spread_deg = rot_rms * std::sqrt(3.0) * kDegPerRad;
   e.pos_spread = pos_rms * std::sqrt(3.0);
   out.master_target_from_slave_target = w;
   return out;

@@ -5,12 +5,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/robust_statistics.h"
 
 namespace rigcal::target {
 namespace {
-
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 // Chordal L2 mean of unit quaternions: the eigenvector of the largest eigenvalue of sum q q^T.
 Eigen::Quaterniond MeanRotation(const std::vector<Eigen::Quaterniond>& qs,
@@ -25,11 +24,6 @@ Eigen::Quaterniond MeanRotation(const std::vector<Eigen::Quaterniond>& qs,
   const Eigen::Vector4d v = eig.eigenvectors().col(3);
   const double sign = v[3] < 0.0 ? -1.0 : 1.0;  // w >= 0
   return Eigen::Quaterniond(sign * v[3], sign * v[0], sign * v[1], sign * v[2]).normalized();
-}
-
-Eigen::Vector3d RotationLog(const Eigen::Quaterniond& q) {
-  const Eigen::AngleAxisd aa(q.w() < 0 ? Eigen::Quaterniond(-q.coeffs()) : q);
-  return aa.angle() * aa.axis();
 }
 
 }  // namespace
@@ -100,7 +94,7 @@ Expected<ReferenceEstimate> EstimateGlobalReference(const tools::TimedTrajectory
   double pos_sq = 0.0;
   for (size_t k = 0; k < n; ++k) {
     if (!keep[k]) continue;
-    const Eigen::Vector3d r = RotationLog(q_mean.conjugate() * qs[k]);
+    const Eigen::Vector3d r = RotationVector(q_mean.conjugate() * qs[k]);
     const Eigen::Vector3d p = cs[k] - c_mean;
     rot_var += r.cwiseAbs2();
     pos_var += p.cwiseAbs2();
@@ -112,9 +106,9 @@ Expected<ReferenceEstimate> EstimateGlobalReference(const tools::TimedTrajectory
   out.master_from_slave.C = c_mean;
   out.master_from_slave.scale = 1.0;
   out.instants = used;
-  out.rot_std_deg = std::sqrt(rot_var.maxCoeff() / dof / used) * kRadToDeg;
+  out.rot_std_deg = std::sqrt(rot_var.maxCoeff() / dof / used) * kDegPerRad;
   out.pos_std = (pos_var / dof / used).cwiseSqrt();
-  out.rot_spread_deg = std::sqrt(rot_sq / used) * kRadToDeg;
+  out.rot_spread_deg = std::sqrt(rot_sq / used) * kDegPerRad;
   out.pos_spread = std::sqrt(pos_sq / used);
   return out;
 }

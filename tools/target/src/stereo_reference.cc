@@ -11,7 +11,7 @@ namespace {
 using Key = std::tuple<long long, long long, long long>;
 
 // Target coordinates rounded to 1e-6 of their unit, to match corners across cameras.
-Key KeyOf(const Eigen::Vector3d& p) {
+Key PointKey(const Eigen::Vector3d& p) {
   return {std::llround(p.x() * 1e6), std::llround(p.y() * 1e6), std::llround(p.z() * 1e6)};
 }
 
@@ -50,12 +50,12 @@ Expected<ReferenceEstimate> EstimateStereoReference(const CameraViews& master,
     const TargetView& v1 = *it->second;
     std::map<Key, size_t> index1;
     for (size_t j = 0; j < v1.target_points.size(); ++j)
-      index1.emplace(KeyOf(v1.target_points[j]), j);
+      index1.emplace(PointKey(v1.target_points[j]), j);
     std::vector<cv::Point3f> obj;
     std::vector<cv::Point2f> p0;
     std::vector<cv::Point2f> p1;
     for (size_t j = 0; j < v0.target_points.size(); ++j) {
-      const auto m = index1.find(KeyOf(v0.target_points[j]));
+      const auto m = index1.find(PointKey(v0.target_points[j]));
       if (m == index1.end()) continue;
       const Eigen::Vector3d& X = v0.target_points[j];
       obj.emplace_back(float(X.x()), float(X.y()), float(X.z()));

@@ -42,7 +42,7 @@ bool Matches(const char* pattern, const char* text) {
 }
 
 // The digits of the stem as the pairing key (see the header); -1 when it has none.
-int64_t KeyOf(const fs::path& path) {
+int64_t FileKey(const fs::path& path) {
   std::string digits;
   for (char c : path.stem().string()) {
     if (std::isdigit(static_cast<unsigned char>(c)) != 0) digits += c;
@@ -133,7 +133,7 @@ Expected<CameraViews> internal::DetectImageViews(
       const cv::Mat image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
       if (image.empty()) return Error{path.string() + ": cannot read the image"};
       out->name = path.filename().string();
-      out->t_ns = KeyOf(path);
+      out->t_ns = FileKey(path);
       out->width = image.cols;
       out->height = image.rows;
       out->pixels.resize(static_cast<size_t>(image.cols) * static_cast<size_t>(image.rows));
@@ -237,7 +237,7 @@ Expected<CameraViews> ReadAprilGridViews(const std::string& camera, const std::s
     ++out.files;
     TargetView view;
     view.file = path.filename().string();
-    view.t_ns = KeyOf(path);
+    view.t_ns = FileKey(path);
     if (view.t_ns < 0) return Error{path.string() + ": file name is not <t_ns>.csv"};
     std::string line;
     int line_no = 0;

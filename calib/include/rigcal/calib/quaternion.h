@@ -20,6 +20,8 @@ Eigen::Matrix4d RightMultiplicationMatrix(const Vector4& q);
 double RotationAngle(const Eigen::Quaterniond& q);
 // Unit rotation axis; for angles below 1e-12 returns (0, 0, 1).
 Eigen::Vector3d RotationAxis(const Eigen::Quaterniond& q);
+// Rotation vector (angle in [0, pi] times the unit axis) of a unit quaternion: the log map.
+Eigen::Vector3d RotationVector(const Eigen::Quaterniond& q);
 // Angle between two rotations: 2 acos |<a, b>| (thesis 5.1.1, rotation orientation error).
 double AngleBetween(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b);
 // The representative of q with non-negative scalar part.

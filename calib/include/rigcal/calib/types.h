@@ -54,6 +54,9 @@ struct CameraTrack {
   std::string name;
   std::vector<Pose> poses;
   std::vector<int> segment;
+
+  // The segment of pose k (0 when the track has no segment ids).
+  int SegmentAt(size_t k) const { return segment.empty() ? 0 : segment[k]; }
 };
 
 struct RigRecording {

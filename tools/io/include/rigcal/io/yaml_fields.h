@@ -5,6 +5,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
 #include <set>
@@ -44,6 +45,10 @@ class FieldReader {
                                         const std::string& field, size_t n) const;
   Expected<std::vector<double>> NumbersOf(const YAML::Node& node, const std::string& field,
                                           size_t n) const;
+  // A rotation at parent[key] as [w, x, y, z] whose norm is 1 within 1e-3 (hand-typed digits),
+  // normalised; a missing key is an error at the parent.
+  Expected<Eigen::Quaterniond> UnitQuaternion(const YAML::Node& parent, const std::string& key,
+                                              const std::string& field) const;
   // A sequence of any length >= min_n.
   Expected<std::vector<double>> NumberList(const YAML::Node& node, const std::string& field,
                                            size_t min_n = 0) const;

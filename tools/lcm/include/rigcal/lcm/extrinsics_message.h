@@ -16,13 +16,14 @@ namespace rigcal::tools {
 
 // slave_extrinsics_t::FLAG_* as int32_t: lcm-gen emits every constant as its own anonymous enum,
 // and C++20 deprecates `|` between different enums. Combine these instead. The flags are facts
-// about what the motions determine; the state is slave_extrinsics_t::state.
-inline constexpr int32_t kFlagTranslationalOnly = slave_extrinsics_t::FLAG_TRANSLATIONAL_ONLY;
-inline constexpr int32_t kFlagPlanar = slave_extrinsics_t::FLAG_PLANAR_UNOBSERVABLE_AXIS;
-inline constexpr int32_t kFlagAxisFromPrior = slave_extrinsics_t::FLAG_AXIS_FROM_PRIOR;
-inline constexpr int32_t kFlagRefined = slave_extrinsics_t::FLAG_REFINED;
+// about what the motions determine; the state is slave_extrinsics_t::state. The bits differ from
+// the estimator's rigcal::kFlag* (rig_estimator.h), hence their own names.
+inline constexpr int32_t kWireFlagTranslationalOnly = slave_extrinsics_t::FLAG_TRANSLATIONAL_ONLY;
+inline constexpr int32_t kWireFlagPlanar = slave_extrinsics_t::FLAG_PLANAR_UNOBSERVABLE_AXIS;
+inline constexpr int32_t kWireFlagAxisFromPrior = slave_extrinsics_t::FLAG_AXIS_FROM_PRIOR;
+inline constexpr int32_t kWireFlagRefined = slave_extrinsics_t::FLAG_REFINED;
 inline constexpr int32_t kKnownFlags =
-    kFlagTranslationalOnly | kFlagPlanar | kFlagAxisFromPrior | kFlagRefined;
+    kWireFlagTranslationalOnly | kWireFlagPlanar | kWireFlagAxisFromPrior | kWireFlagRefined;
 
 // slave_extrinsics_t::STATE_* is rigcal::SlaveState (slave_state.h), number for number.
 static_assert(slave_extrinsics_t::STATE_INITIALISING ==
