@@ -2,6 +2,7 @@
 // imported logs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -66,6 +67,25 @@ TEST(WriteRigConfig, RoundTripsThroughTheLoader) {
   EXPECT_EQ(config->cameras[0].spec->intrinsics, spec.intrinsics);
   EXPECT_EQ(config->cameras[0].spec->distortion, spec.distortion);
   EXPECT_FALSE(config->cameras[1].spec.has_value());
+
+  // The polynomial omnidirectional model, with a given field of view.
+  auto omni = camera::ScaramuzzaSpecForEquidistant("omni", 800, 600, 180.0, 411.5, 287.5, 100.0);
+  ASSERT_TRUE(omni.ok()) << omni.error();
+  omni->affine = {1.004, 0.003, -0.001};
+  omni->inverse_poly = {180.0 * M_PI / 2.0, 180.0};  // rho = f theta, theta = phi + 90 deg
+  cameras[1].spec = *omni;
+  ASSERT_TRUE(WriteRigConfig(path, "imported", cameras, "").ok());
+  auto with_omni = LoadRigConfig(path);
+  ASSERT_TRUE(with_omni.ok()) << with_omni.error();
+  ASSERT_TRUE(with_omni->cameras[1].spec.has_value());
+  const camera::CameraSpec& read = *with_omni->cameras[1].spec;
+  EXPECT_EQ(read.model, camera::CameraSpec::Model::kScaramuzza);
+  EXPECT_EQ(read.width, 800);
+  EXPECT_EQ(read.poly, omni->poly);
+  EXPECT_EQ(read.inverse_poly, omni->inverse_poly);
+  EXPECT_EQ(read.center, omni->center);
+  EXPECT_EQ(read.affine, omni->affine);
+  EXPECT_EQ(read.max_field_angle_deg, 100.0);
 
   const Status none = WriteRigConfig(path, "x", {}, "");
   ASSERT_FALSE(none.ok());

@@ -11,6 +11,7 @@
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/target/kalibr_camchain.h"
+#include "rigcal/target/omni_intrinsics.h"
 #include "rigcal/target/reference_calibration.h"
 #include "rigcal/target/target_poses.h"
 #include "target_args.h"
@@ -39,22 +40,35 @@ nlohmann::json ToJson(const CameraCalibration& c) {
                      {"used", v.used},
                      {"rejected", v.rejected}});
   }
-  return {{"name", r.spec.name},
-          {"model", std::string(camera::ModelName(r.spec.model))},
-          {"resolution", {r.spec.width, r.spec.height}},
-          {"intrinsics", r.spec.intrinsics},
-          {"distortion", r.spec.distortion},
-          {"rms_px", r.rms_px},
-          {"rejection_threshold_px", r.rejection_threshold_px},
-          {"views_used", r.views_used},
-          {"views_rejected", r.views_rejected},
-          {"files", c.views.files},
-          {"files_without_target", c.views.none.size()},
-          {"views", views}};
+  nlohmann::json out = {{"name", r.spec.name},
+                        {"model", std::string(camera::ModelName(r.spec.model))},
+                        {"resolution", {r.spec.width, r.spec.height}}};
+  if (r.spec.model == camera::CameraSpec::Model::kScaramuzza) {
+    out["poly"] = r.spec.poly;
+    out["center"] = r.spec.center;
+    out["affine"] = r.spec.affine;
+  } else {
+    out["intrinsics"] = r.spec.intrinsics;
+    out["distortion"] = r.spec.distortion;
+  }
+  out.update({{"rms_px", r.rms_px},
+              {"rejection_threshold_px", r.rejection_threshold_px},
+              {"views_used", r.views_used},
+              {"views_rejected", r.views_rejected},
+              {"files", c.views.files},
+              {"files_without_target", c.views.none.size()},
+              {"views", views}});
+  return out;
 }
 
 int RunIntrinsics(const IntrinsicsArgs& args) {
   const auto log = ModuleLogger("tools");
+  if (!args.config_out.empty() && args.target.cameras.size() < 2) {
+    return PrintCommandError("intrinsics",
+                             "--config-out: a rig config has at least two cameras; give every "
+                             "camera of the rig with --camera (--json and --camchain hold one "
+                             "camera's intrinsics)");
+  }
   auto cameras = CalibrateCameras(args.target);
   if (!cameras) return PrintCommandError("intrinsics", cameras.error());
 
@@ -71,6 +85,16 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
   for (size_t i = 0; i < cameras->size(); ++i) {
     target::CamchainEntry entry;
     entry.spec = (*cameras)[i].intrinsics.spec;
+    if (entry.spec.model == camera::CameraSpec::Model::kScaramuzza && !args.camchain.empty()) {
+      // Kalibr has no polynomial model: its omni (unified) model from the same views.
+      auto omni = target::CalibrateOmni((*cameras)[i].views, args.target.max_views);
+      if (!omni) {
+        return PrintCommandError("intrinsics", "--camchain: Kalibr's omni model for " +
+                                                   entry.spec.name + ": " + omni.error());
+      }
+      if (!args.json) std::cout << target::FormatOmni(*omni);
+      entry = omni->ToCamchainEntry();
+    }
     if (i > 0) {
       auto reference = target::EstimateGlobalReference(poses[0], poses[i], args.tolerance_ns);
       if (reference) {
@@ -133,13 +157,15 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
   if (!args.poses_out.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(args.poses_out, ec);
-    if (ec)
+    if (ec) {
       return PrintCommandError(
           "intrinsics", "--poses-out: cannot create '" + args.poses_out + "': " + ec.message());
+    }
     for (const tools::TimedTrajectory& t : poses) {
       const std::string path = args.poses_out + "/" + t.name + ".tum";
-      if (Status s = tools::WriteTrajectoryTum(path, t); !s.ok())
+      if (Status s = tools::WriteTrajectoryTum(path, t); !s.ok()) {
         return PrintCommandError("intrinsics", s.message());
+      }
       log->info("{}: {} target poses written to {}", t.name, t.size(), path);
     }
   }
@@ -162,7 +188,8 @@ void RegisterIntrinsics(CLI::App& app, int* exit_code) {
   cmd->add_option("--camchain", args->camchain,
                   "Write a complete Kalibr camchain here: camera_model, intrinsics,\n"
                   "distortion_model, distortion_coeffs, resolution, rostopic and, between\n"
-                  "consecutive cameras, T_cn_cnm1 from the shared target views")
+                  "consecutive cameras, T_cn_cnm1 from the shared target views. A scaramuzza\n"
+                  "camera is written as Kalibr's omni (unified) model fitted by cv::omnidir")
       ->type_name("FILE");
   cmd->add_option("--poses-out", args->poses_out,
                   "Write every camera's target poses (camera in the target frame, the target's\n"

@@ -81,8 +81,12 @@ void AddTargetOptions(CLI::App* cmd, TargetArgs* args) {
       ->type_name("WxH");
   cmd->add_option("--model", args->model,
                   "pinhole: radial-tangential k1 k2 p1 p2 (OpenCV calibrateCamera, k3 = 0 as\n"
-                  "Kalibr's radtan); fisheye: equidistant k1..k4 (cv::fisheye::calibrate).")
-      ->check(CLI::IsMember({"pinhole", "fisheye"}))
+                  "Kalibr's radtan); fisheye: equidistant k1..k4 (cv::fisheye::calibrate);\n"
+                  "scaramuzza: omnidirectional polynomial model (OCamCalib: linear start, then\n"
+                  "Ceres over centre, affine part, degree-4 polynomial), for lenses beyond 180\n"
+                  "degrees. Kalibr has no polynomial model: --camchain then holds Kalibr's omni\n"
+                  "(unified) model fitted to the same views by cv::omnidir.")
+      ->check(CLI::IsMember({"pinhole", "fisheye", "scaramuzza"}))
       ->capture_default_str();
   cmd->add_option("--max-views", args->max_views,
                   "At most this many views go into the solver, spread evenly over the\n"

@@ -1,7 +1,8 @@
 // WriteRigConfig (rig_config.h): the camera part of a rig config, for configs made by tools
-// (`rigcal import`).
+// (`rigcal import`, `rigcal intrinsics`): every camera model, numbers with 17 digits.
 #include <iomanip>
 #include <sstream>
+#include <vector>
 
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/rig_config.h"
@@ -36,15 +37,23 @@ Status WriteRigConfig(const std::string& path, const std::string& rig_name,
     out << "  - name: \"" << camera.name << "\"\n";
     if (!camera.spec) continue;
     const camera::CameraSpec& spec = *camera.spec;
+    out << "    model: " << camera::ModelName(spec.model) << "\n"
+        << "    resolution: [" << spec.width << ", " << spec.height << "]\n";
     if (spec.model == camera::CameraSpec::Model::kScaramuzza) {
-      return Error{"cannot write '" + path + "': camera '" + camera.name +
-                   "': writing a scaramuzza model is not supported"};
+      out << "    poly: " << List(spec.poly) << "\n";
+      if (!spec.inverse_poly.empty())
+        out << "    inverse_poly: " << List(spec.inverse_poly) << "\n";
+      out << "    center: " << List(spec.center) << "\n"
+          << "    affine: " << List(spec.affine) << "\n";
+    } else {
+      out << "    intrinsics: " << List(spec.intrinsics) << "\n";
+      if (!spec.distortion.empty()) out << "    distortion: " << List(spec.distortion) << "\n";
     }
-    out << "    model: "
-        << (spec.model == camera::CameraSpec::Model::kFisheye ? "fisheye" : "pinhole") << "\n"
-        << "    resolution: [" << spec.width << ", " << spec.height << "]\n"
-        << "    intrinsics: " << List(spec.intrinsics) << "\n";
-    if (!spec.distortion.empty()) out << "    distortion: " << List(spec.distortion) << "\n";
+    if (spec.max_field_angle_deg != 0.0) {
+      std::ostringstream angle;
+      angle << std::setprecision(17) << spec.max_field_angle_deg;
+      out << "    max_field_angle_deg: " << angle.str() << "\n";
+    }
   }
   return WriteFileAtomically(path, out.str());
 }

@@ -1,5 +1,6 @@
-// Intrinsic calibration with OpenCV (calibrateCamera, cv::fisheye::calibrate), outlier views
-// rejected by their RMS reprojection error.
+// Intrinsic calibration with OpenCV (calibrateCamera, cv::fisheye::calibrate) or the polynomial
+// omnidirectional model (polynomial_calibration.h), outlier views rejected by their RMS
+// reprojection error.
 #include "rigcal/target/intrinsics.h"
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <sstream>
 
 #include "opencv.h"
+#include "polynomial_calibration.h"
 #include "rigcal/calib/logging.h"
 #include "rigcal/calib/robust_statistics.h"
 #include "rigcal/target/target_poses.h"
@@ -22,6 +24,9 @@ using camera::CameraSpec;
 Status Solve(const CameraViews& views, const std::vector<size_t>& indices, CameraSpec* spec,
              double* rms) {
   const cv::Size size(views.width, views.height);
+  if (spec->model == CameraSpec::Model::kScaramuzza) {
+    return internal::CalibratePolynomial(views, indices, spec, rms);
+  }
   try {
     if (spec->model == CameraSpec::Model::kFisheye) {
       std::vector<std::vector<cv::Point3d>> object(indices.size());
@@ -71,11 +76,6 @@ Status Solve(const CameraViews& views, const std::vector<size_t>& indices, Camer
 }  // namespace
 
 Status IntrinsicsOptions::Check() const {
-  if (model == CameraSpec::Model::kScaramuzza) {
-    return Error{
-        "model: scaramuzza (omnidirectional) intrinsics are not calibrated here; use "
-        "pinhole or fisheye"};
-  }
   if (min_views < 3) return Error{"min_views: must be >= 3"};
   if (max_views < min_views) return Error{"max_views: must be >= min_views"};
   return {};
@@ -187,18 +187,31 @@ std::string FormatIntrinsics(const IntrinsicsResult& result, bool per_view) {
       out << line;
     }
   }
-  std::string dist;
-  for (double d : s.distortion) {
-    char buf[32];
-    std::snprintf(buf, sizeof(buf), "%s%.6g", dist.empty() ? "" : ", ", d);
-    dist += buf;
+  const auto list = [](const double* values, size_t n) {
+    std::string text;
+    for (size_t i = 0; i < n; ++i) {
+      char buf[32];
+      std::snprintf(buf, sizeof(buf), "%s%.6g", i == 0 ? "" : ", ", values[i]);
+      text += buf;
+    }
+    return text;
+  };
+  if (s.model == CameraSpec::Model::kScaramuzza) {
+    std::snprintf(line, sizeof(line),
+                  "%s: scaramuzza %dx%d  center %.3f %.3f  affine [%.6g, %.6g, %.6g]  poly [%s]\n",
+                  s.name.c_str(), s.width, s.height, s.center[0], s.center[1], s.affine[0],
+                  s.affine[1], s.affine[2], list(s.poly.data(), s.poly.size()).c_str());
+  } else {
+    std::snprintf(line, sizeof(line),
+                  "%s: %s %dx%d  fx %.3f fy %.3f cx %.3f cy %.3f  distortion [%s]\n",
+                  s.name.c_str(), std::string(camera::ModelName(s.model)).c_str(), s.width,
+                  s.height, s.intrinsics[0], s.intrinsics[1], s.intrinsics[2], s.intrinsics[3],
+                  list(s.distortion.data(), s.distortion.size()).c_str());
   }
+  out << line;
   std::snprintf(line, sizeof(line),
-                "%s: %s %dx%d  fx %.3f fy %.3f cx %.3f cy %.3f  distortion [%s]\n"
                 "%s: RMS %.3f px over %d views (%d rejected, threshold %.3f px, %zu views in "
                 "all)\n",
-                s.name.c_str(), std::string(camera::ModelName(s.model)).c_str(), s.width, s.height,
-                s.intrinsics[0], s.intrinsics[1], s.intrinsics[2], s.intrinsics[3], dist.c_str(),
                 s.name.c_str(), result.rms_px, result.views_used, result.views_rejected,
                 result.rejection_threshold_px, result.views.size());
   out << line;

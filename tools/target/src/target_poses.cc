@@ -5,22 +5,55 @@
 #include <limits>
 
 #include "opencv.h"
+#include "planar_pose.h"
 
 namespace rigcal::target {
 
 using camera::CameraSpec;
 
+namespace {
+
+ViewStatistics StatisticsOf(const TargetView& view) {
+  ViewStatistics stats;
+  stats.file = view.file;
+  stats.t_ns = view.t_ns;
+  stats.corners = static_cast<int>(view.pixels.size());
+  return stats;
+}
+
+// Any camera model (used for scaramuzza, which OpenCV's PnP cannot take): internal::
+// EstimatePlanarPose per view.
+Expected<std::vector<ViewStatistics>> PlanarPoses(const CameraViews& views, const CameraSpec& spec,
+                                                  double max_rms_px) {
+  auto model = camera::MakeCameraModel(spec);
+  if (!model) return Error{views.camera + ": " + model.error()};
+  std::vector<ViewStatistics> out;
+  out.reserve(views.views.size());
+  for (const TargetView& view : views.views) {
+    ViewStatistics stats = StatisticsOf(view);
+    if (auto pose = internal::EstimatePlanarPose(**model, view); pose) {
+      stats.rms_px = pose->rms_px;
+      stats.max_px = pose->max_px;
+      stats.target_from_cam.q = Eigen::Quaterniond(pose->R_cam_target.transpose()).normalized();
+      stats.target_from_cam.C = -pose->R_cam_target.transpose() * pose->t;
+      stats.used = std::isfinite(stats.rms_px) && stats.rms_px <= max_rms_px;
+    }
+    out.push_back(stats);
+  }
+  return out;
+}
+
+}  // namespace
+
 Expected<std::vector<ViewStatistics>> EstimateTargetPoses(const CameraViews& views,
                                                           const CameraSpec& spec,
                                                           double max_rms_px) {
-  if (spec.model == CameraSpec::Model::kScaramuzza) {
-    return Error{spec.name + ": target poses need a pinhole or fisheye camera"};
-  }
   if (spec.width != views.width || spec.height != views.height) {
     return Error{views.camera + ": the views are " + std::to_string(views.width) + "x" +
                  std::to_string(views.height) + " but the camera's intrinsics are for " +
                  std::to_string(spec.width) + "x" + std::to_string(spec.height)};
   }
+  if (spec.model == CameraSpec::Model::kScaramuzza) return PlanarPoses(views, spec, max_rms_px);
   const cv::Matx33d K(spec.intrinsics[0], 0.0, spec.intrinsics[2], 0.0, spec.intrinsics[1],
                       spec.intrinsics[3], 0.0, 0.0, 1.0);
   const bool fisheye = spec.model == CameraSpec::Model::kFisheye;
@@ -31,10 +64,7 @@ Expected<std::vector<ViewStatistics>> EstimateTargetPoses(const CameraViews& vie
   std::vector<ViewStatistics> out;
   out.reserve(views.views.size());
   for (const TargetView& view : views.views) {
-    ViewStatistics stats;
-    stats.file = view.file;
-    stats.t_ns = view.t_ns;
-    stats.corners = static_cast<int>(view.pixels.size());
+    ViewStatistics stats = StatisticsOf(view);
     std::vector<cv::Point3d> object;
     std::vector<cv::Point2d> image;
     for (size_t j = 0; j < view.pixels.size(); ++j) {

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "image_views.h"
@@ -51,7 +52,9 @@ int64_t FileKey(const fs::path& path) {
   errno = 0;
   const long long value = std::strtoll(digits.c_str(), nullptr, 10);
   if (errno == ERANGE) return -1;
-  return value >= 1000000000000LL ? value : value * 1000000000LL;  // < 1e12: frame number
+  if (value >= 1000000000000LL) return value;  // nanoseconds
+  // A frame number (< 1e12) counts seconds; beyond what nanoseconds can hold it is no key.
+  return value <= std::numeric_limits<int64_t>::max() / 1000000000LL ? value * 1000000000LL : -1;
 }
 
 // The files of `source`: a folder, or folder/pattern.

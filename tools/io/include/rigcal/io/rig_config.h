@@ -83,10 +83,11 @@ Expected<RigConfig> LoadRigConfig(const std::string& path);
 Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string& path);
 
 // Writes a rig config that LoadRigConfig reads back: `rig: {name, master: cameras[0].name}` and
-// per camera its name and, when it has a pinhole or fisheye spec, model, resolution, intrinsics
-// and distortion (17 significant digits). `comment` (may be empty, may have several lines) goes
-// first as "# " lines. Nominal, truth, device and the other sections are not written. Atomic.
-// Errors: no camera, a scaramuzza spec, or the write failing (naming the path).
+// per camera its name and, when it has a spec, model, resolution, the model's parameters
+// (intrinsics and distortion; scaramuzza: poly, inverse_poly when given, center, affine) and
+// max_field_angle_deg when not automatic, with 17 significant digits. `comment` (may be empty,
+// may have several lines) goes first as "# " lines. Nominal, truth, device and the other
+// sections are not written. Atomic. Errors: no camera, or the write failing (naming the path).
 [[nodiscard]] Status WriteRigConfig(const std::string& path, const std::string& rig_name,
                                     const std::vector<CameraConfig>& cameras,
                                     const std::string& comment);

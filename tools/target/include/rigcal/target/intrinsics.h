@@ -1,7 +1,10 @@
 #pragma once
 // Intrinsic calibration of one camera from its target views (thesis 3.4): pinhole with
 // radial-tangential distortion through OpenCV calibrateCamera (k1, k2, p1, p2; k3 fixed at 0,
-// as Kalibr's radtan), or equidistant fisheye through cv::fisheye::calibrate (k1..k4).
+// as Kalibr's radtan), equidistant fisheye through cv::fisheye::calibrate (k1..k4), or the
+// polynomial omnidirectional model (scaramuzza: OCamCalib's linear initialisation, then Ceres
+// over centre, affine part, the degree-4 polynomial and the view poses; src/
+// polynomial_calibration.h).
 //
 // Outlier views are rejected by their RMS reprojection error: after a first calibration, a view
 // whose RMS exceeds max(median + 5 * 1.4826 * MAD, 2 * median) of the views' RMS (the threshold
@@ -23,9 +26,10 @@
 namespace rigcal::target {
 
 struct IntrinsicsOptions {
-  camera::CameraSpec::Model model = camera::CameraSpec::Model::kPinhole;  // pinhole or fisheye
-  int max_views = 80;  // views given to the solver, >= 4
-  int min_views = 4;   // fewer usable views is an error, >= 3
+  camera::CameraSpec::Model model =
+      camera::CameraSpec::Model::kPinhole;  // pinhole, fisheye or scaramuzza
+  int max_views = 80;                       // views given to the solver, >= 4
+  int min_views = 4;                        // fewer usable views is an error, >= 3
   bool reject_outliers = true;
   // "<field>: <what>" for a bad option, else success.
   Status Check() const;

@@ -16,10 +16,12 @@
 
 namespace rigcal::target {
 
-// PnP (OpenCV IPPE for the planar target, refined by Levenberg-Marquardt on the reprojection
-// error, distortion of `spec` applied) for every view; statistics as CalibrateIntrinsics' views
-// (used = the pose is kept: its RMS is at most `max_rms_px`). Errors: a scaramuzza spec, or a
-// spec whose resolution differs from the views'.
+// PnP for every view: OpenCV IPPE for the planar target, refined by Levenberg-Marquardt on the
+// reprojection error, distortion of `spec` applied (pinhole, fisheye); for scaramuzza a direct
+// linear transform on the corners' bearings refined on the reprojection error through the model.
+// Statistics as CalibrateIntrinsics' views (used = the pose is kept: its RMS is at most
+// `max_rms_px`). Errors: a spec whose resolution differs from the views', or one that is not a
+// valid camera.
 Expected<std::vector<ViewStatistics>> EstimateTargetPoses(const CameraViews& views,
                                                           const camera::CameraSpec& spec,
                                                           double max_rms_px = 2.0);
