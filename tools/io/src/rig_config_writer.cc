@@ -41,8 +41,9 @@ Status WriteRigConfig(const std::string& path, const std::string& rig_name,
         << "    resolution: [" << spec.width << ", " << spec.height << "]\n";
     if (spec.model == camera::CameraSpec::Model::kScaramuzza) {
       out << "    poly: " << List(spec.poly) << "\n";
-      if (!spec.inverse_poly.empty())
+      if (!spec.inverse_poly.empty()) {
         out << "    inverse_poly: " << List(spec.inverse_poly) << "\n";
+      }
       out << "    center: " << List(spec.center) << "\n"
           << "    affine: " << List(spec.affine) << "\n";
     } else {
