@@ -88,15 +88,6 @@ TEST(EstimatorStateFile, RoundTripAndCorruptFiles) {
   EXPECT_EQ(fresh.Estimate().rig.slaves[0].motions.used, 0);  // unchanged
 }
 
-uint64_t Fnv1a(const std::string& s) {  // the state files' checksum (FNV-1a, 64 bit)
-  uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
 // A version-2 state (no translation-direction moments) is read: the moments are derived from
 // the others, so the translational model's estimate is the same and its σ close.
 TEST(EstimatorStateFile, ReadsVersionTwoStates) {
@@ -127,12 +118,11 @@ TEST(EstimatorStateFile, ReadsVersionTwoStates) {
     body += line + '\n';
   }
   ASSERT_EQ(removed, 2);  // long and short statistics
-  std::ostringstream v2;
-  v2 << "rigcal-estimator-state 2\n" << body << "checksum " << std::hex << Fnv1a(body) << '\n';
+  const std::string v2 = WithEstimatorStateChecksum("rigcal-estimator-state 2\n" + body);
 
   RigEstimator restored(names, RigEstimatorOptions{});
   std::string error;
-  ASSERT_TRUE(Restore(&restored, v2.str(), &error)) << error;
+  ASSERT_TRUE(Restore(&restored, v2, &error)) << error;
   const auto& a = est.Estimate().rig.slaves[0];
   const auto& b = restored.Estimate().rig.slaves[0];
   ASSERT_EQ(b.motion_model, MotionModel::kTranslational);
@@ -157,10 +147,9 @@ std::string AsVersion(int version, const std::string& v3, const std::string& con
       if (version >= 5) body += clocks_line + '\n';
     }
   }
-  std::ostringstream out;
-  out << "rigcal-estimator-state " << version << '\n'
-      << body << "checksum " << std::hex << Fnv1a(body) << '\n';
-  return out.str();
+  // The checksum line appended as the writer writes it (compared byte for byte below).
+  return WithEstimatorStateChecksum("rigcal-estimator-state " + std::to_string(version) + "\n" +
+                                    body);
 }
 
 // A state file written by the estimator before its state became a plain struct (a drive with
@@ -210,6 +199,12 @@ TEST(EstimatorStateFile, ValuesOutOfRangeAreRejectedDespiteTheChecksum) {
     return parsed.ok() ? std::string("accepted") : parsed.error();
   };
   EXPECT_EQ(error_of([](SlaveEstimatorState*) {}), "accepted");
+  // A wrong checksum line is replaced by the writer's.
+  const std::string formatted = FormatEstimatorState(*good);
+  const size_t sum = formatted.rfind("checksum ");
+  ASSERT_NE(sum, std::string::npos);
+  EXPECT_EQ(WithEstimatorStateChecksum(formatted.substr(0, sum) + "checksum 123\n"), formatted);
+  EXPECT_EQ(WithEstimatorStateChecksum(formatted), formatted);
   EXPECT_EQ(error_of([](SlaveEstimatorState* s) { s->counts.total = -3; }),
             "slave left: counts total = -3 is out of range [0, 1e+100]");
   EXPECT_EQ(error_of([](SlaveEstimatorState* s) { s->counts.used = s->counts.total + 1; }),

@@ -1,6 +1,7 @@
 // Reading and writing the estimator state file (estimator_state_file.h).
 #include "rigcal/io/estimator_state_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <iterator>
@@ -245,6 +246,16 @@ std::string FormatEstimatorState(const RigEstimatorState& state) {
   std::ostringstream out;
   out << kMagic << ' ' << kEstimatorStateVersion << '\n'
       << text << "checksum " << std::hex << Fnv1a(text) << '\n';
+  return out.str();
+}
+
+std::string WithEstimatorStateChecksum(std::string_view text) {
+  const size_t body_start = std::min(text.size(), text.find('\n') + 1);
+  size_t sum_pos = LastChecksumWord(text);
+  if (sum_pos == std::string_view::npos || sum_pos < body_start) sum_pos = text.size();
+  std::ostringstream out;
+  out << text.substr(0, sum_pos) << "checksum " << std::hex
+      << Fnv1a(text.substr(body_start, sum_pos - body_start)) << '\n';
   return out.str();
 }
 

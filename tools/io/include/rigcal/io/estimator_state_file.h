@@ -40,4 +40,10 @@ std::string FormatEstimatorState(const RigEstimatorState& state);
 // state fits an estimator (its cameras) is RigEstimator::RestoreState's to say.
 Expected<RigEstimatorState> ParseEstimatorState(std::string_view text);
 
+// `text` (a state file, or any text) with its checksum line, the last "checksum " and what
+// follows, made right for the lines between the first line and it (appended when there is
+// none): what ParseEstimatorState checks first. For tools that edit a state file by hand, and
+// for the fuzz target, which reaches the parser behind the checksum with it.
+std::string WithEstimatorStateChecksum(std::string_view text);
+
 }  // namespace rigcal::tools
