@@ -6,7 +6,9 @@
 // then distorted (k1, k2, p1, p2, as pinhole radtan) and mapped by fu, fv, pu, pv (no skew).
 // Kalibr's camchain writes it as camera_model omni, intrinsics [xi, fu, fv, pu, pv]
 // (kalibr_camchain.h, CamchainEntry::omni_xi). rigcal's own camera models (camera_spec.h) have
-// no unified model: the result is the camchain entry and the statistics below.
+// no unified model: the result is the camchain entry and the statistics below. `rigcal
+// intrinsics --model scaramuzza` puts rigcal's polynomial model into the rig config and this one
+// into the camchain (Kalibr has no polynomial model).
 
 #include <array>
 #include <string>
