@@ -41,7 +41,15 @@ inline void CheckDrive(const Report& r, double flat_after_s) {
       Slope(x, fill), *std::max_element(fill.begin(), fill.end()));
   // A leak of one pose per camera and set (4 x 20 Hz x 60 s x sizeof(CameraPose)) per minute.
   const double one_pose_per_set_mb = 4.0 * 20.0 * 60.0 * sizeof(CameraPose) / 1048576.0;
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(RIGCAL_ASAN) || \
+    defined(RIGCAL_TSAN)
+  // A sanitizer's runtime keeps freed memory in quarantine: RSS grows by design (151 MB/min
+  // measured under ASan); the other checks hold.
+  std::printf("RSS slope not checked under a sanitizer (%.1f MB/min; limit %.2f)\n", rss_slope,
+              one_pose_per_set_mb);
+#else
   EXPECT_LT(rss_slope, one_pose_per_set_mb) << "RSS grows by " << rss_slope << " MB/min";
+#endif
   // The node keeps up: never more than 10 s of wall time of poses (at 10x) waiting in LCM (the
   // figure printed above is the one to watch; this bound only catches a node that stalls).
   EXPECT_LT(*std::max_element(backlog.begin(), backlog.end()), 4 * 20 * 10 * 10);

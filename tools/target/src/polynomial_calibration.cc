@@ -374,6 +374,8 @@ Status CalibratePolynomial(const CameraViews& views, const std::vector<size_t>& 
     }
   }
   if (!std::isfinite(best_bic)) return first_error;
+  log->info("{}: polynomial of degree {} (chosen by BIC from {} to {}), RMS {:.3f} px", name,
+            spec->poly.size() - 1, kMinTerms, kMaxTerms, *rms_px);
   return {};
 }
 
