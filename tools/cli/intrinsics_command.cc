@@ -81,19 +81,21 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
   }
   std::vector<target::CamchainEntry> chain;
   std::string chain_error;
+  std::string model_error;
   nlohmann::json extrinsics = nlohmann::json::array();
   for (size_t i = 0; i < cameras->size(); ++i) {
     target::CamchainEntry entry;
     entry.spec = (*cameras)[i].intrinsics.spec;
     if (entry.spec.model == camera::CameraSpec::Model::kScaramuzza && !args.camchain.empty()) {
       // Kalibr has no polynomial model: its omni (unified) model from the same views.
+      // A failure is reported when the camchain is written, after the other outputs.
       auto omni = target::CalibrateOmni((*cameras)[i].views, args.target.max_views);
-      if (!omni) {
-        return PrintCommandError("intrinsics", "--camchain: Kalibr's omni model for " +
-                                                   entry.spec.name + ": " + omni.error());
+      if (omni) {
+        if (!args.json) std::cout << target::FormatOmni(*omni);
+        entry = omni->ToCamchainEntry();
+      } else if (model_error.empty()) {
+        model_error = "Kalibr's omni model for " + entry.spec.name + ": " + omni.error();
       }
-      if (!args.json) std::cout << target::FormatOmni(*omni);
-      entry = omni->ToCamchainEntry();
     }
     if (i > 0) {
       auto reference = target::EstimateGlobalReference(poses[0], poses[i], args.tolerance_ns);
@@ -142,18 +144,6 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
     if (!s.ok()) return PrintCommandError("intrinsics", s.message());
     log->info("wrote the intrinsics into the rig config {}", args.config_out);
   }
-  if (!args.camchain.empty()) {
-    if (!chain_error.empty()) {
-      return PrintCommandError("intrinsics",
-                               "--camchain: no extrinsics between the cameras: " + chain_error);
-    }
-    const Status s = target::WriteKalibrCamchain(
-        args.camchain, chain,
-        "Kalibr camchain written by rigcal intrinsics: intrinsics from target views (OpenCV);\n"
-        "T_cn_cnm1 from the target poses (global reference model), in the target's unit.");
-    if (!s.ok()) return PrintCommandError("intrinsics", s.message());
-    log->info("wrote the Kalibr camchain {}", args.camchain);
-  }
   if (!args.poses_out.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(args.poses_out, ec);
@@ -168,6 +158,19 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
       }
       log->info("{}: {} target poses written to {}", t.name, t.size(), path);
     }
+  }
+  if (!args.camchain.empty()) {  // last: its errors leave the other outputs written
+    if (!model_error.empty()) return PrintCommandError("intrinsics", "--camchain: " + model_error);
+    if (!chain_error.empty()) {
+      return PrintCommandError("intrinsics",
+                               "--camchain: no extrinsics between the cameras: " + chain_error);
+    }
+    const Status s = target::WriteKalibrCamchain(
+        args.camchain, chain,
+        "Kalibr camchain written by rigcal intrinsics: intrinsics from target views (OpenCV);\n"
+        "T_cn_cnm1 from the target poses (global reference model), in the target's unit.");
+    if (!s.ok()) return PrintCommandError("intrinsics", s.message());
+    log->info("wrote the Kalibr camchain {}", args.camchain);
   }
   return kExitOk;
 }

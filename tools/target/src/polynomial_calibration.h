@@ -4,15 +4,18 @@
 //
 // 1. Linear initialisation (Scaramuzza et al. 2006), centre at the image centre, no affine
 //    distortion: per view, the corners' pixels m and target points (X, Y) give the first two
-//    rows of [r1 r2 t] up to scale from m_x P_y - m_y P_x = 0; orthonormality gives r31, r32
-//    (two signs, the one that fits the view better is kept); then one linear least-squares
-//    system over all views for the polynomial F(rho) = a0 + a2 rho^2 + a3 rho^3 + a4 rho^4
-//    (a1 = 0, OCamCalib's degree 4) and every view's t3.
+//    rows of [r1 r2 t] up to scale from m_x P_y - m_y P_x = 0, their sign chosen so that the
+//    view alone gives F(0) < 0; orthonormality gives r31, r32 (two signs, the one that fits the
+//    view better is kept); then one linear least-squares system over all views for the
+//    polynomial F(rho) = a0 + a2 rho^2 + ... + aN rho^N (a1 = 0, as OCamCalib) and every view's
+//    t3, each view then turned to face the camera.
 // 2. Ceres (Levenberg-Marquardt) on the reprojection error over the centre, the affine part
 //    [c, d] (e = 0: a rotation about the optical axis is the views' gauge), the polynomial and
 //    every view's pose. Projection solves rho z + F(rho) sqrt(x^2 + y^2) = 0 for the smallest
 //    positive rho in doubles, then takes one Newton step in Ceres' Jets, whose derivative part
 //    is then the implicit-function derivative of the root.
+// 3. The degree N (3 to 7) is chosen by the data: each degree from its own linear start, the
+//    smallest BIC (2 n ln(RSS / 2n) + N ln(2n) over n corners) among the valid cameras.
 // The polynomial is estimated in rho / s (s = half the larger image side) so that its
 // coefficients are of one magnitude, and written back in pixels.
 
