@@ -456,7 +456,9 @@ TEST_F(SolveCommandTest, PlanarCarDriveReportsTheVerticalAsUnobservable) {
 
   const RunResult with_prior = Run(args + " --prior " + Quote(Path("nominal.yaml")));
   ASSERT_EQ(with_prior.exit_code, 0) << Explain(with_prior);
-  for (const auto& s : ParseJson(with_prior)["slaves"]) {
+  // The parsed document outlives the loop (a range-for over a member of a temporary does not).
+  const nlohmann::json prior_json = ParseJson(with_prior);
+  for (const auto& s : prior_json["slaves"]) {
     SCOPED_TRACE(s.value("name", ""));
     EXPECT_EQ(s.value("unobservable_from_prior", false), true) << s.dump(2);
     const std::vector<double> axis = s["unobservable"][0].get<std::vector<double>>();
@@ -470,7 +472,8 @@ TEST_F(SolveCommandTest, PlanarCarDriveReportsTheVerticalAsUnobservable) {
   const RunResult with_sigma =
       Run(args + " --prior " + Quote(Path("nominal.yaml")) + " --prior-sigma 0.1");
   ASSERT_EQ(with_sigma.exit_code, 0) << Explain(with_sigma);
-  for (const auto& s : ParseJson(with_sigma)["slaves"]) {
+  const nlohmann::json sigma_json = ParseJson(with_sigma);
+  for (const auto& s : sigma_json["slaves"]) {
     EXPECT_EQ(s["std"]["axis"].get<double>(), 0.1) << s.dump(2);
   }
   // The thesis's general model cannot do this: degenerate, exit 3, and it says why.
