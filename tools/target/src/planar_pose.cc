@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -40,6 +41,13 @@ bool Residuals(const camera::CameraModel& model, const TargetView& view, const E
 
 }  // namespace
 
+bool OnTargetPlane(const TargetView& view) {
+  return std::all_of(view.target_points.begin(), view.target_points.end(),
+                     [](const Eigen::Vector3d& p) {
+                       return std::abs(p.z()) <= 1e-9 * (1.0 + p.head<2>().norm());
+                     });
+}
+
 Expected<PlanarPose> EstimatePlanarPose(const camera::CameraModel& model, const TargetView& view) {
   const size_t n = view.pixels.size();
   if (n < 4 || view.target_points.size() != n) {
@@ -47,12 +55,10 @@ Expected<PlanarPose> EstimatePlanarPose(const camera::CameraModel& model, const 
   }
   // Normalised target coordinates (Hartley): centroid at 0, mean distance sqrt(2).
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-  for (const Eigen::Vector3d& p : view.target_points) {
-    if (std::abs(p.z()) > 1e-9 * (1.0 + p.head<2>().norm())) {
-      return Error{view.file + ": the target's corners are not on its z = 0 plane"};
-    }
-    centroid += p.head<2>();
+  if (!OnTargetPlane(view)) {
+    return Error{view.file + ": the target's corners are not on its z = 0 plane"};
   }
+  for (const Eigen::Vector3d& p : view.target_points) centroid += p.head<2>();
   centroid /= static_cast<double>(n);
   double spread = 0.0;
   for (const Eigen::Vector3d& p : view.target_points) spread += (p.head<2>() - centroid).norm();

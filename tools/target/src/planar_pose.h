@@ -13,6 +13,9 @@
 
 namespace rigcal::target::internal {
 
+// True when every corner of `view` lies on the target's z = 0 plane (to 1e-9 relative).
+bool OnTargetPlane(const TargetView& view);
+
 struct PlanarPose {
   Eigen::Matrix3d R_cam_target = Eigen::Matrix3d::Identity();  // x_cam = R x_target + t
   Eigen::Vector3d t = Eigen::Vector3d::Zero();

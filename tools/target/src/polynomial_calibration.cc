@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "planar_pose.h"
 #include "rigcal/calib/logging.h"
 
 namespace rigcal::target::internal {
@@ -295,10 +296,8 @@ Status CalibratePolynomial(const CameraViews& views, const std::vector<size_t>& 
     if (view.pixels.size() < 6) {
       return Error{name + ": view " + view.file + " has fewer than 6 corners"};
     }
-    for (const Eigen::Vector3d& p : view.target_points) {
-      if (std::abs(p.z()) > 1e-9 * (1.0 + p.head<2>().norm())) {
-        return Error{name + ": view " + view.file + ": the target is not on its z = 0 plane"};
-      }
+    if (!OnTargetPlane(view)) {
+      return Error{name + ": view " + view.file + ": the target is not on its z = 0 plane"};
     }
   }
   const double scale = 0.5 * std::max(views.width, views.height);
