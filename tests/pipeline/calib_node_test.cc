@@ -174,9 +174,16 @@ TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
       bus.publish(PoseChannel("roof"), bytes->data(), static_cast<unsigned int>(bytes->size()));
     }
   }
-  // Wait until the node has received everything, then stop it as a signal would.
+  // Wait until the node has received everything and has published on its periods at least
+  // once while running (a fast machine takes the whole burst in less than a status period),
+  // then stop it as a signal would.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (node.ReceivedPoses() < sent && std::chrono::steady_clock::now() < deadline) {
+  const auto published_while_running = [&sink] {
+    std::lock_guard<std::mutex> lock(sink.mutex);
+    return !sink.extrinsics.empty() && !sink.status.empty();
+  };
+  while ((node.ReceivedPoses() < sent || !published_while_running()) &&
+         std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   stop = true;
