@@ -106,7 +106,13 @@ TEST_F(RunTriggerTest, AGeneratorThatDiesMidRunIsReported) {
   const std::string config = Path("rig.yaml");
   std::ofstream(config) << RigConfig(port);
   std::thread killer([&generator] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+    // Mid-run: a second after the host started the ticks (start-up takes longer than any fixed
+    // delay under a sanitizer), or when the host never starts them.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (generator.TrueHostNs(0) < 0 && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::this_thread::sleep_for(std::chrono::seconds(1));
     generator.Stop();  // closes the pty: the host's reads fail
   });
   const RunResult r =
