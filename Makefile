@@ -127,7 +127,7 @@ fuzz: asan-configure
 	cmake --build $(ASAN_ALL_DIR) -j $(JOBS) --target rigcal_fuzz_targets
 	RIGCAL_FUZZ_SECONDS=$(FUZZ_SECONDS) $(CTEST) $(ASAN_ALL_DIR) --output-on-failure --no-tests=error -V -L fuzz
 
-TSAN_ENV = TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
+TSAN_ENV = TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/sanitizers/tsan.supp
 tsan-configure: deps
 	$(call cmake_configure,$(TSAN_DIR),RelWithDebInfo,$(SAN_CMAKE_ARGS) -DRIGCAL_TSAN_ENABLED=ON)
 

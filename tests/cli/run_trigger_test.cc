@@ -105,11 +105,14 @@ TEST_F(RunTriggerTest, AGeneratorThatDiesMidRunIsReported) {
   const std::string port = generator.slave_path();
   const std::string config = Path("rig.yaml");
   std::ofstream(config) << RigConfig(port);
-  std::thread killer([&generator] {
-    // Mid-run: a second after the host started the ticks (start-up takes longer than any fixed
-    // delay under a sanitizer), or when the host never starts them.
+  const std::string stderr_path = Path("stderr.txt");  // where Run puts rigcal's stderr
+  std::thread killer([&generator, &stderr_path] {
+    // Mid-run: a second after rigcal says its first frame waits for a pulse (building the
+    // simulated rig takes seconds under a sanitizer, longer than any fixed delay).
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-    while (generator.TrueHostNs(0) < 0 && std::chrono::steady_clock::now() < deadline) {
+    while (rigcal::cli_test::Slurp(stderr_path).find("simulated rig paced by the trigger") ==
+               std::string::npos &&
+           std::chrono::steady_clock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     std::this_thread::sleep_for(std::chrono::seconds(1));
