@@ -47,7 +47,8 @@ inline target::CameraViews SimulatedOmniViews(const camera::CameraSpec& spec, in
   std::uniform_real_distribution<double> azimuth(-M_PI, M_PI);
   std::uniform_real_distribution<double> tilt(-0.6, 0.6);
   std::uniform_real_distribution<double> depth(0.2, 0.4);
-  std::normal_distribution<double> noise(0.0, noise_px);
+  std::normal_distribution<double> gauss(0.0, noise_px > 0 ? noise_px : 1.0);  // needs sigma > 0
+  const auto noise = [&](std::mt19937& r) { return noise_px > 0 ? gauss(r) : 0.0; };
   const Eigen::Vector3d board_centre(0.16, 0.10, 0.0);
   while (static_cast<int>(views.views.size()) < n) {
     const double a = off_axis(rng);

@@ -57,7 +57,8 @@ TargetView Project(const CameraSpec& spec, const Pose& target_from_cam, std::mt1
                       spec.intrinsics[3], 0, 0, 1);
   std::vector<cv::Point2d> image;
   cv::projectPoints(object, rvec, tvec, K, spec.distortion, image);
-  std::normal_distribution<double> noise(0.0, noise_px);
+  std::normal_distribution<double> gauss(0.0, noise_px > 0 ? noise_px : 1.0);  // needs sigma > 0
+  const auto noise = [&](std::mt19937& r) { return noise_px > 0 ? gauss(r) : 0.0; };
   TargetView view;
   view.t_ns = t_ns;
   view.file = std::to_string(t_ns) + ".csv";
@@ -90,7 +91,7 @@ struct Recording {
 
 // `n` instants; the rig turns about random axes (up to `max_angle` rad) when `one_axis` is
 // false, else about the master's y axis only.
-Recording Simulate(unsigned seed, int n, double max_angle, bool one_axis) {
+Recording Simulate(unsigned seed, int n, double max_angle, bool one_axis, double noise_px = 0.1) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   const Pose d = Rig();
@@ -113,8 +114,8 @@ Recording Simulate(unsigned seed, int n, double max_angle, bool one_axis) {
     const Pose a_cam0 = a_from_cam0 * motion;
     const Pose b_cam1 = rec.w.Inverse() * a_cam0 * d;
     const int64_t t = (k + 1) * 50000000LL;
-    views0.views.push_back(Project(Camera("cam0"), a_cam0, rng, 0.1, t));
-    views1.views.push_back(Project(Camera("cam1"), b_cam1, rng, 0.1, t));
+    views0.views.push_back(Project(Camera("cam0"), a_cam0, rng, noise_px, t));
+    views1.views.push_back(Project(Camera("cam1"), b_cam1, rng, noise_px, t));
   }
   auto poses0 = EstimateTargetPoses(views0, Camera("cam0"));
   auto poses1 = EstimateTargetPoses(views1, Camera("cam1"));
@@ -165,6 +166,17 @@ TEST(IndividualReference, RecoversTheRigWithHonestSigma) {
   // The rotation error norm over the largest-axis σ: RMS at most sqrt(3) = 1.73 for honest σ.
   EXPECT_GT(rot_rms, 0.5);
   EXPECT_LT(rot_rms, 2.0 * std::sqrt(3.0));
+}
+
+TEST(IndividualReference, NoiselessPosesKeepEveryInstant) {
+  // Residuals are rounding: no instant is an outlier, and the rig comes back exactly.
+  const Recording rec = Simulate(2, 30, 0.3, false, /*noise_px=*/0.0);
+  auto fit = EstimateIndividualReference(rec.master, rec.slave, 1000000);
+  ASSERT_TRUE(fit.ok()) << fit.error();
+  EXPECT_EQ(fit->estimate.rejected, 0);
+  EXPECT_EQ(fit->estimate.instants, 30);
+  EXPECT_LT(fit->estimate.master_from_slave.q.angularDistance(Rig().q), 1e-6);
+  EXPECT_LT((fit->estimate.master_from_slave.C - Rig().C).norm(), 1e-6);
 }
 
 TEST(IndividualReference, RotationAboutOneAxisIsReportedNotDetermined) {

@@ -91,7 +91,8 @@ TargetView Project(const CameraSpec& spec, const Pose& cam_from_target, std::mt1
   } else {
     cv::projectPoints(object, rvec, tvec, K, spec.distortion, image);
   }
-  std::normal_distribution<double> noise(0.0, noise_px);
+  std::normal_distribution<double> gauss(0.0, noise_px > 0 ? noise_px : 1.0);  // needs sigma > 0
+  const auto noise = [&](std::mt19937& r) { return noise_px > 0 ? gauss(r) : 0.0; };
   TargetView view;
   view.t_ns = t_ns;
   view.file = "view" + std::to_string(t_ns / 1000000000) + ".png";
@@ -102,14 +103,15 @@ TargetView Project(const CameraSpec& spec, const Pose& cam_from_target, std::mt1
   return view;
 }
 
-CameraViews SyntheticViews(const CameraSpec& spec, int n, unsigned seed) {
+CameraViews SyntheticViews(const CameraSpec& spec, int n, unsigned seed,
+                           double noise_px = kNoisePx) {
   std::mt19937 rng(seed);
   CameraViews views;
   views.camera = spec.name;
   views.width = spec.width;
   views.height = spec.height;
   for (int k = 0; k < n; ++k) {
-    views.views.push_back(Project(spec, CamFromTarget(rng), rng, kNoisePx, (k + 1) * 1000000000LL));
+    views.views.push_back(Project(spec, CamFromTarget(rng), rng, noise_px, (k + 1) * 1000000000LL));
   }
   return views;
 }
@@ -156,6 +158,18 @@ TEST(Intrinsics, EquidistantFisheyeRecovered) {
   EXPECT_EQ(result->spec.model, CameraSpec::Model::kFisheye);
   ExpectIntrinsicsNear(result->spec, truth);
   EXPECT_EQ(result->views_rejected, 0);
+}
+
+TEST(Intrinsics, NoiselessViewsAreAllKept) {
+  // Every view fits to the solver's rounding: their RMS spread is no reason to reject one.
+  const CameraSpec truth = TrueCamera(CameraSpec::Model::kPinhole);
+  const CameraViews views = SyntheticViews(truth, 20, 5, /*noise_px=*/0.0);
+  auto result = CalibrateIntrinsics(views, {});
+  ASSERT_TRUE(result.ok()) << result.error();
+  EXPECT_EQ(result->views_rejected, 0);
+  EXPECT_EQ(result->views_used, 20);
+  EXPECT_LT(result->rms_px, 1e-3);
+  ExpectIntrinsicsNear(result->spec, truth);
 }
 
 TEST(Intrinsics, TooFewViewsIsAnError) {

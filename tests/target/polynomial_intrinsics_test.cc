@@ -67,6 +67,20 @@ TEST(PolynomialIntrinsics, RecoversTheProjectionOverTheFieldOfView) {
   EXPECT_LT(worst, 0.5);
 }
 
+TEST(PolynomialIntrinsics, NoiselessViewsAreAllKept) {
+  // Without noise the residual is the fitted polynomial's departure from the truth's (~0.01 px,
+  // larger towards the edge of the field of view): no view is an outlier for it.
+  const CameraSpec truth = WideOmniCamera("omni");
+  const CameraViews views = SimulatedOmniViews(truth, 24, 7, /*noise_px=*/0.0);
+  IntrinsicsOptions options;
+  options.model = CameraSpec::Model::kScaramuzza;
+  auto result = CalibrateIntrinsics(views, options);
+  ASSERT_TRUE(result.ok()) << result.error();
+  std::cout << FormatIntrinsics(*result, true);
+  EXPECT_EQ(result->views_rejected, 0);
+  EXPECT_LT(result->rms_px, 0.05);
+}
+
 TEST(PolynomialIntrinsics, TargetPosesThroughThePolynomialModel) {
   const CameraSpec truth = WideOmniCamera("omni");
   auto model = camera::MakeCameraModel(truth);

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -193,7 +194,9 @@ Expected<IndividualReference> EstimateIndividualReference(const tools::TimedTraj
       const double med = Median(score);
       std::vector<double> dev;
       for (double s : score) dev.push_back(std::abs(s - med));
-      const double limit = med + 5.0 * 1.4826 * Median(dev);
+      // Scores are in units of the residuals' RMS: within 3 of it is never an outlier (with
+      // noiseless poses the RMS is rounding, and the spread of the scores means nothing).
+      const double limit = std::max(med + 5.0 * 1.4826 * Median(dev), 3.0);
       for (size_t k = 0; k < n; ++k) keep[k] = score[k] <= limit;
     }
     const double sigma_rot = rms(rot);

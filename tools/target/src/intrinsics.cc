@@ -132,7 +132,12 @@ Expected<IntrinsicsResult> CalibrateIntrinsics(const CameraViews& views,
     const double median = Median(view_rms);
     std::vector<double> deviation;
     for (double r : view_rms) deviation.push_back(std::abs(r - median));
-    threshold = std::max(median + 5.0 * 1.4826 * Median(deviation), 2.0 * median);
+    // Far above the others' spread and twice their median, and never under a hundredth of a
+    // pixel: sub-pixel corner detectors reach a few hundredths at best, so a view fitted better
+    // is not an outlier (on noiseless views the RMS is the solver's rounding or the model's
+    // own approximation, and its spread means nothing).
+    constexpr double kPerfectFitPx = 0.01;
+    threshold = std::max({median + 5.0 * 1.4826 * Median(deviation), 2.0 * median, kPerfectFitPx});
     std::vector<size_t> keep;
     for (size_t k = 0; k < used.size(); ++k) {
       if (view_rms[k] <= threshold) {

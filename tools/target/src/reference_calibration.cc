@@ -2,6 +2,7 @@
 #include "rigcal/target/reference_calibration.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -65,14 +66,16 @@ Expected<ReferenceEstimate> EstimateGlobalReference(const tools::TimedTrajectory
     rot_dev[k] = q_mean.angularDistance(qs[k]);
     pos_dev[k] = (cs[k] - c_median).norm();
   }
-  const auto limit = [](const std::vector<double>& d) {
+  // Beyond median + 5 MAD, and beyond rounding: deviations under a nanoradian, or a billionth of
+  // the positions' size, are double arithmetic, not an outlier (noiseless poses).
+  const auto limit = [](const std::vector<double>& d, double floor) {
     const double med = Median(d);
     std::vector<double> abs_dev;
     for (double x : d) abs_dev.push_back(std::abs(x - med));
-    return med + 5.0 * 1.4826 * Median(abs_dev);
+    return std::max(med + 5.0 * 1.4826 * Median(abs_dev), floor);
   };
-  const double rot_limit = limit(rot_dev);
-  const double pos_limit = limit(pos_dev);
+  const double rot_limit = limit(rot_dev, 1e-9);
+  const double pos_limit = limit(pos_dev, 1e-9 * (1.0 + c_median.norm()));
   ReferenceEstimate out;
   out.slave = slave.name;
   for (size_t k = 0; k < n; ++k) {
