@@ -10,6 +10,8 @@
 // with a standard deviation of about 1 / sqrt(2 * 30) = 0.13, so [0.5, 2] fails only for a σ
 // wrong by a factor of two, and 5 σ per single run bounds the error itself.
 
+#include "rigcal/target/individual_reference.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -17,14 +19,9 @@
 #include <random>
 #include <vector>
 
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
-#include <opencv2/calib3d.hpp>
-#pragma GCC diagnostic pop
-
-#include "rigcal/target/individual_reference.h"
 #include "rigcal/target/target_poses.h"
 #include "rigcal/target/target_views.h"
+#include "support/board_views.h"
 
 namespace rigcal::target {
 namespace {
@@ -32,41 +29,14 @@ namespace {
 using camera::CameraSpec;
 
 CameraSpec Camera(const std::string& name) {
-  CameraSpec spec;
-  spec.name = name;
-  spec.width = 752;
-  spec.height = 480;
-  spec.intrinsics = {458.0, 457.0, 367.0, 248.0};
-  spec.distortion = {-0.28, 0.074, 2e-4, -3e-4};
-  return spec;
+  return test_support::EurocLikeCamera(name, CameraSpec::Model::kPinhole);
 }
 
-// The 9x6 board (0.04 m squares) seen by `spec` at target_from_cam.
+// The board seen by `spec` from `target_from_cam`.
 TargetView Project(const CameraSpec& spec, const Pose& target_from_cam, std::mt19937& rng,
                    double noise_px, int64_t t_ns) {
-  const Pose cam_from_target = target_from_cam.Inverse();
-  std::vector<cv::Point3d> object;
-  for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 9; ++c) object.emplace_back(0.04 * c, 0.04 * r, 0.0);
-  }
-  const Eigen::AngleAxisd aa(cam_from_target.q);
-  const Eigen::Vector3d r = aa.angle() * aa.axis();
-  const cv::Vec3d rvec(r.x(), r.y(), r.z());
-  const cv::Vec3d tvec(cam_from_target.C.x(), cam_from_target.C.y(), cam_from_target.C.z());
-  const cv::Matx33d K(spec.intrinsics[0], 0, spec.intrinsics[2], 0, spec.intrinsics[1],
-                      spec.intrinsics[3], 0, 0, 1);
-  std::vector<cv::Point2d> image;
-  cv::projectPoints(object, rvec, tvec, K, spec.distortion, image);
-  std::normal_distribution<double> gauss(0.0, noise_px > 0 ? noise_px : 1.0);  // needs sigma > 0
-  const auto noise = [&](std::mt19937& r) { return noise_px > 0 ? gauss(r) : 0.0; };
-  TargetView view;
-  view.t_ns = t_ns;
-  view.file = std::to_string(t_ns) + ".csv";
-  for (size_t j = 0; j < object.size(); ++j) {
-    view.pixels.emplace_back(image[j].x + noise(rng), image[j].y + noise(rng));
-    view.target_points.emplace_back(object[j].x, object[j].y, object[j].z);
-  }
-  return view;
+  return test_support::ProjectBoard(spec, target_from_cam.Inverse(), rng, noise_px, t_ns,
+                                    std::to_string(t_ns) + ".csv");
 }
 
 // A camera 0.7 m in front of the board's centre, looking at it.
