@@ -193,6 +193,7 @@ Expected<IndividualReference> EstimateIndividualReference(const tools::TimedTraj
       for (size_t k = 0; k < n; ++k) score[k] = std::hypot(rot[k] / sr, pos[k] / sp);
       const double med = Median(score);
       std::vector<double> dev;
+      dev.reserve(score.size());
       for (double s : score) dev.push_back(std::abs(s - med));
       // Scores are in units of the residuals' RMS: within 3 of it is never an outlier (with
       // noiseless poses the RMS is rounding, and the spread of the scores means nothing).

@@ -131,6 +131,7 @@ Expected<IntrinsicsResult> CalibrateIntrinsics(const CameraViews& views,
     }
     const double median = Median(view_rms);
     std::vector<double> deviation;
+    deviation.reserve(view_rms.size());
     for (double r : view_rms) deviation.push_back(std::abs(r - median));
     // Far above the others' spread and twice their median, and never under a hundredth of a
     // pixel: sub-pixel corner detectors reach a few hundredths at best, so a view fitted better

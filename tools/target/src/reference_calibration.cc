@@ -57,6 +57,7 @@ Expected<ReferenceEstimate> EstimateGlobalReference(const tools::TimedTrajectory
   Eigen::Vector3d c_median;
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<double> values;
+    values.reserve(cs.size());
     for (const auto& c : cs) values.push_back(c[axis]);
     c_median[axis] = Median(values);
   }
@@ -71,6 +72,7 @@ Expected<ReferenceEstimate> EstimateGlobalReference(const tools::TimedTrajectory
   const auto limit = [](const std::vector<double>& d, double floor) {
     const double med = Median(d);
     std::vector<double> abs_dev;
+    abs_dev.reserve(d.size());
     for (double x : d) abs_dev.push_back(std::abs(x - med));
     return std::max(med + 5.0 * 1.4826 * Median(abs_dev), floor);
   };
