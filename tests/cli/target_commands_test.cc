@@ -52,6 +52,13 @@ TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
   EXPECT_EQ(json["cameras"][0]["views"].size(), 13u);
   EXPECT_LT(json["cameras"][0]["rms_px"].get<double>(), 0.6);
   EXPECT_GE(json["cameras"][0]["views_rejected"].get<int>(), 0);
+  // sigma of every parameter, named; a chessboard's corners fix the focal length to a fraction
+  // of a percent (finite, positive, far below 1 % of 450 px).
+  const auto& sigma = json["cameras"][0]["parameter_std"];
+  ASSERT_TRUE(sigma.is_object()) << sigma.dump();
+  EXPECT_EQ(sigma.size(), 8u);
+  EXPECT_GT(sigma["fx"].get<double>(), 0.0);
+  EXPECT_LT(sigma["fx"].get<double>(), 4.5);
 
   // The camchain: complete (Kalibr's keys) and read back.
   auto specs = tools::ReadKalibrIntrinsics(Path("camchain.yaml"));

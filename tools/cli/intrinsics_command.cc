@@ -51,6 +51,15 @@ nlohmann::json ToJson(const CameraCalibration& c) {
     out["intrinsics"] = r.spec.intrinsics;
     out["distortion"] = r.spec.distortion;
   }
+  // sigma per parameter; null when unknown (the scaramuzza model, or undetermined parameters).
+  nlohmann::json sigma = nullptr;
+  if (!r.parameter_std.empty()) {
+    sigma = nlohmann::json::object();
+    for (size_t i = 0; i < r.parameter_std.size(); ++i) {
+      sigma[r.parameter_names[i]] = r.parameter_std[i];
+    }
+  }
+  out["parameter_std"] = sigma;
   out.update({{"rms_px", r.rms_px},
               {"rejection_threshold_px", r.rejection_threshold_px},
               {"views_used", r.views_used},

@@ -9,6 +9,7 @@
 #include <exception>
 #include <sstream>
 
+#include "intrinsics_uncertainty.h"
 #include "opencv.h"
 #include "polynomial_calibration.h"
 #include "rigcal/calib/logging.h"
@@ -173,6 +174,13 @@ Expected<IntrinsicsResult> CalibrateIntrinsics(const CameraViews& views,
   result.views_rejected = static_cast<int>(rejected.size());
   result.rms_px = points > 0 ? std::sqrt(sum_sq / static_cast<double>(points)) : 0.0;
   (void)rms;
+  if (auto sigma = internal::ParameterStdDev(spec, views, result.views, used)) {
+    result.parameter_names = internal::ParameterNames(spec);
+    result.parameter_std = std::move(*sigma);
+  } else {
+    result.parameter_std_error = sigma.error();
+    log->debug("{}: parameter sigma unknown: {}", views.camera, sigma.error());
+  }
   return result;
 }
 
@@ -221,6 +229,15 @@ std::string FormatIntrinsics(const IntrinsicsResult& result, bool per_view) {
                 s.name.c_str(), result.rms_px, result.views_used, result.views_rejected,
                 result.rejection_threshold_px, result.views.size());
   out << line;
+  if (!result.parameter_std.empty()) {
+    out << s.name << ": sigma";
+    for (size_t i = 0; i < result.parameter_std.size(); ++i) {
+      std::snprintf(line, sizeof(line), " %s %.3g", result.parameter_names[i].c_str(),
+                    result.parameter_std[i]);
+      out << line;
+    }
+    out << "\n";
+  }
   return out.str();
 }
 

@@ -53,6 +53,13 @@ struct IntrinsicsResult {
   int views_used = 0;
   int views_rejected = 0;
   std::vector<ViewStatistics> views;  // every view of the input, input order
+  // Standard deviation of every camera parameter (Gauss-Newton over the parameters and the used
+  // views' poses, scaled by the residuals' variance): names (fx, fy, cx, cy, then the
+  // distortion coefficients) and values; both empty when unknown (the scaramuzza model, or
+  // views that do not determine every parameter: parameter_std_error says why).
+  std::vector<std::string> parameter_names;
+  std::vector<double> parameter_std;
+  std::string parameter_std_error;
 };
 
 // Calibrates the camera of `views`. Errors: too few views (fewer than options.min_views, or
