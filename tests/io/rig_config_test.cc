@@ -127,6 +127,13 @@ TEST(RigConfig, ErrorsNameFileLineAndKey) {
        ":1: rig.master: 'top' is not in cameras"},
       {"rig: {master: front}\ncameras:\n  - name: front\n  - name: front\n",
        ":4: cameras[1].name: duplicate camera name 'front'"},
+      // A name becomes a file name and part of LCM channel names.
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: ../left\n",
+       ":4: cameras[1].name: '/' in a camera name (it becomes a file name)"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: \"le\\tft\"\n",
+       ":4: cameras[1].name: a control character in a camera name"},
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: ..\n",
+       ":4: cameras[1].name: '..' cannot name a camera"},
       {"rig: {master: front}\ncameras:\n  - name: front\n    nominal: {q_wxyz: [1,0,0,0], C: "
        "[0,0,0]}\n  - name: left\n",
        "front.nominal: the master defines the rig frame"},

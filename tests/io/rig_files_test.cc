@@ -152,6 +152,24 @@ TEST_F(RigFilesTest, RigYamlSyntaxError) {
               ::testing::MatchesRegex(".*syntax.yaml:[0-9]+: YAML syntax error.*"));
 }
 
+TEST_F(RigFilesTest, RigYamlSlaveNamesAreText) {
+  // Found by fuzzing: a name with bytes that are not UTF-8 was read, but written back by
+  // RigToYaml as another name.
+  const std::string slave = "\n  q_wxyz: [1, 0, 0, 0]\n  C: [0, 0, 0]\n  scale: 1\n";
+  EXPECT_THAT(ReadRigError("bytes.yaml",
+                           "master: cam0\n\xff\x01"
+                           "cam1:" +
+                               slave),
+              HasSubstr("bytes.yaml:2: slave name: not UTF-8 text"));
+  EXPECT_THAT(ReadRigError("slash.yaml", "a/b:" + slave),
+              HasSubstr("slash.yaml:1: slave name: '/' in a camera name"));
+  // UTF-8 names are names.
+  const std::string path = Write("utf8.yaml", "cam\xc3\xa9ra:" + slave);
+  auto rig = ReadRigYaml(path);
+  ASSERT_TRUE(rig.ok()) << rig.error();
+  EXPECT_EQ(rig->count("cam\xc3\xa9ra"), 1u);
+}
+
 TEST_F(RigFilesTest, RigYamlMissingFields) {
   EXPECT_THAT(ReadRigError("noq.yaml", "cam1:\n  C: [0, 0, 0]\n  scale: 1\n"),
               HasSubstr("noq.yaml:2: cam1.q_wxyz: missing"));

@@ -92,7 +92,7 @@ Expected<CameraSpec> ParseCameraSection(const YAML::Node& camera, const std::str
   const FieldReader r(path);
   if (!camera.IsMap()) return r.Fail(camera, "cameras[]", "expected a map with name and model");
   if (!camera["name"]) return r.Fail(camera, "name", "missing");
-  auto name = r.String(camera["name"], "name");
+  auto name = r.CameraName(camera["name"], "name");
   if (!name) return Error{name.error()};
   const std::string prefix = *name + ".";
   if (auto e = r.CheckKeys(camera, prefix, kCameraKeys)) return *e;
@@ -206,7 +206,7 @@ Expected<std::vector<CameraSpec>> ReadKalibrIntrinsics(const std::string& path) 
     CameraSpec spec;
     spec.name = cam;
     if (const YAML::Node node = camera["rigcal_name"]) {
-      auto name = r.String(node, prefix + "rigcal_name");
+      auto name = r.CameraName(node, prefix + "rigcal_name");
       if (!name) return Error{name.error()};
       spec.name = *name;
     }

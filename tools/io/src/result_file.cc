@@ -224,7 +224,7 @@ Expected<RigCalibration> ReadResultFile(const std::string& path) {
     for (size_t i = 0; i < slaves.size(); ++i) {
       auto name_node = Child(r, slaves[i], "name", "slaves[" + std::to_string(i) + "].name");
       if (!name_node) return Error{name_node.error()};
-      auto name = r.String(*name_node, "slaves[" + std::to_string(i) + "].name");
+      auto name = r.CameraName(*name_node, "slaves[" + std::to_string(i) + "].name");
       if (!name) return Error{name.error()};
       auto slave = ReadResultSlave(r, slaves[i], *name, true);
       if (!slave) return Error{slave.error()};

@@ -43,7 +43,7 @@ Expected<CameraConfig> ParseCamera(const FieldReader& r, const YAML::Node& node,
   if (!node.IsMap()) return r.Fail(node, field, "expected a map with at least `name`");
   CameraConfig camera;
   if (!node["name"]) return r.Fail(node, field + ".name", "missing");
-  auto name = r.String(node["name"], field + ".name");
+  auto name = r.CameraName(node["name"], field + ".name");
   if (!name) return Error{name.error()};
   camera.name = *name;
   bool has_intrinsics = false;

@@ -118,6 +118,9 @@ Expected<std::map<std::string, Similarity>> RigFromYaml(const YAML::Node& root,
     if (!it->first.IsScalar()) return Error{r.At(it->first) + "slave names must be scalars"};
     const std::string name = it->first.Scalar();
     if (kMetadataKeys.count(name) && it->second.IsScalar()) continue;
+    if (auto checked = r.CameraName(it->first, "slave name"); !checked) {
+      return Error{checked.error()};
+    }
     if (rig.count(name)) return r.Fail(it->first, name, "appears twice");
     auto slave = ReadRigSlave(r, name, it->second);
     if (!slave) return Error{slave.error()};

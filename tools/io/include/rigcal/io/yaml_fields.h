@@ -39,6 +39,9 @@ class FieldReader {
   Expected<int64_t> Integer64(const YAML::Node& node, const std::string& field) const;
   Expected<bool> Bool(const YAML::Node& node, const std::string& field) const;
   Expected<std::string> String(const YAML::Node& node, const std::string& field) const;
+  // A camera's name: it becomes part of LCM channel names and file names, so a non-empty
+  // string of valid UTF-8 without control characters or '/', and not "." or "..".
+  Expected<std::string> CameraName(const YAML::Node& node, const std::string& field) const;
 
   // A sequence of exactly `n` numbers at parent[key]; missing key is an error at the parent.
   Expected<std::vector<double>> Numbers(const YAML::Node& parent, const std::string& key,
