@@ -42,6 +42,11 @@ TEST(NamedTrajectoryPath, SplitsNameUnlessTheArgumentIsAFile) {
   auto missing = ReadNamedTrajectory("front=" + (dir / "none.txt").string());
   ASSERT_FALSE(missing.ok());
   EXPECT_NE(missing.error().find("none.txt"), std::string::npos) << missing.error();
+  // The name becomes file and channel names: checked as in the YAML files.
+  auto tab = ReadNamedTrajectory("fr\tont=" + odd);
+  ASSERT_FALSE(tab.ok());
+  EXPECT_NE(tab.error().find("a control character in a camera name"), std::string::npos)
+      << tab.error();
 }
 
 TEST(WriteRigConfig, RoundTripsThroughTheLoader) {

@@ -11,6 +11,7 @@
 
 #include "rigcal/calib/format.h"
 #include "rigcal/calib/logging.h"
+#include "rigcal/io/camera_name.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_formats.h"
 #include "trajectory_text.h"
@@ -147,6 +148,11 @@ Expected<TimedTrajectory> ReadNamedTrajectory(const std::string& argument,
                                               const TrajectoryReadOptions& options,
                                               TrajectoryFormat* format) {
   const NamedTrajectoryPath named = ParseNamedTrajectoryPath(argument);
+  if (!named.name.empty()) {
+    if (const std::string problem = CameraNameProblem(named.name); !problem.empty()) {
+      return Error{argument + ": " + problem};
+    }
+  }
   auto trajectory = ReadTrajectory(named.path, options, format);
   if (trajectory && !named.name.empty()) trajectory->name = named.name;
   return trajectory;
