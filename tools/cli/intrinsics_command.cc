@@ -191,7 +191,8 @@ void RegisterIntrinsics(CLI::App& app, int* exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "intrinsics",
       "Calibrate camera intrinsics from views of a chessboard (images) or an AprilGrid\n"
-      "(detection CSVs): per-view reprojection statistics, outlier views rejected.");
+      "(detection CSVs): per-view reprojection statistics, outlier views rejected, the\n"
+      "standard deviation of every parameter (pinhole, fisheye; `parameter_std` in --json).");
   AddTargetOptions(cmd, &args->target);
   cmd->add_option("--config-out", args->config_out,
                   "Write a rig config with every camera's intrinsics (model, resolution,\n"
