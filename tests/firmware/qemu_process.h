@@ -1,11 +1,13 @@
 #pragma once
 // Runs the cross-built trigger firmware under `qemu-system-arm -M netduinoplus2` for a test:
 // its USART1 on the test's pipes (-serial stdio) or on a pseudo-terminal (-serial pty, whose
-// path QEMU prints). The process is the test's own child; Stop() ends it by its pid.
+// path QEMU prints). The process is the test's own child; Stop() ends it by its pid, and it
+// dies with the test (PR_SET_PDEATHSIG).
 
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -78,6 +80,11 @@ class QemuFirmware {
       return false;
     }
     if (pid_ == 0) {
+      // QEMU dies with the test: a test killed by a sanitizer's abort or a signal runs no
+      // destructor, and a firmware left running costs a core for ever (the forking thread is
+      // the test's, which lives as long as the process).
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() == 1) _exit(127);
       dup2(in[0], 0);
       dup2(out[1], 1);
       dup2(err[1], 2);
