@@ -1,8 +1,7 @@
 #pragma once
 // Simulated views of the 9x6 chessboard (0.04 m squares) by a pinhole (radtan) or equidistant
 // fisheye camera: OpenCV projects the corners (the convention the target module uses), then
-// Gaussian pixel noise is added, x before y for every corner (the same draws with every
-// compiler). Shared by the target module's tests. Header-only.
+// pixel noise is added (support/pixel_noise.h). Shared by the target module's tests. Header-only.
 
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -19,6 +18,7 @@
 #include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/target/target_views.h"
+#include "support/pixel_noise.h"
 
 namespace rigcal::test_support {
 
@@ -60,14 +60,12 @@ inline target::TargetView ProjectBoard(const camera::CameraSpec& spec, const Pos
   } else {
     cv::projectPoints(object, rvec, tvec, K, spec.distortion, image);
   }
-  std::normal_distribution<double> gauss(0.0, noise_px > 0 ? noise_px : 1.0);  // needs sigma > 0
+  PixelNoise noise(noise_px);
   target::TargetView view;
   view.t_ns = t_ns;
   view.file = std::move(file);
   for (size_t j = 0; j < object.size(); ++j) {
-    const double du = noise_px > 0 ? gauss(rng) : 0.0;
-    const double dv = noise_px > 0 ? gauss(rng) : 0.0;
-    view.pixels.emplace_back(image[j].x + du, image[j].y + dv);
+    view.pixels.push_back(Eigen::Vector2d(image[j].x, image[j].y) + noise(rng));
     view.target_points.emplace_back(object[j].x, object[j].y, object[j].z);
   }
   return view;

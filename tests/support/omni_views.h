@@ -16,6 +16,7 @@
 
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/target/target_views.h"
+#include "support/pixel_noise.h"
 
 namespace rigcal::test_support {
 
@@ -47,8 +48,7 @@ inline target::CameraViews SimulatedOmniViews(const camera::CameraSpec& spec, in
   std::uniform_real_distribution<double> azimuth(-M_PI, M_PI);
   std::uniform_real_distribution<double> tilt(-0.6, 0.6);
   std::uniform_real_distribution<double> depth(0.2, 0.4);
-  std::normal_distribution<double> gauss(0.0, noise_px > 0 ? noise_px : 1.0);  // needs sigma > 0
-  const auto noise = [&](std::mt19937& r) { return noise_px > 0 ? gauss(r) : 0.0; };
+  PixelNoise noise(noise_px);
   const Eigen::Vector3d board_centre(0.16, 0.10, 0.0);
   while (static_cast<int>(views.views.size()) < n) {
     const double a = off_axis(rng);
@@ -76,9 +76,7 @@ inline target::CameraViews SimulatedOmniViews(const camera::CameraSpec& spec, in
         const auto pixel = (*model)->Project(R * X + t);
         inside = pixel && (*model)->InImage(*pixel, 5.0);
         if (!inside) break;
-        const double du = noise(rng);
-        const double dv = noise(rng);
-        view.pixels.emplace_back(pixel->x() + du, pixel->y() + dv);
+        view.pixels.push_back(*pixel + noise(rng));
         view.target_points.push_back(X);
       }
     }
