@@ -159,13 +159,13 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
           "auto|fixed|segments|partitions:N"))
       ->capture_default_str();
   cmd->add_option("--pairs", args->pairs,
-                  "Which pairs of times (a, b) become motions. auto: per slave the\n"
+                  "Which pairs of times (a, b) become motions. gls (default):\n"
+                  "auto's result refined by GLS on chains of auto's span, whitened\n"
+                  "by the pose noise fitted to them (README); auto: per slave the\n"
                   "span N of (k, k + N) whose estimate has the smallest σ (spans\n"
                   "1, 2, 3, 5, 8, ... up to 1/8 of the recording are solved);\n"
                   "start: (first pose, k) for every k; relative:STEP: (k, k + STEP)\n"
-                  "for every k; walk: from spread anchors to a target rotation;\n"
-                  "gls: auto's result refined by GLS on chains of auto's span,\n"
-                  "whitened by the pose noise fitted to them (README).")
+                  "for every k; walk: from spread anchors to a target rotation.")
       ->check(ValueCheck(
           [](const std::string& v) {
             PairOptions p;

@@ -18,7 +18,7 @@ struct SolveArgs {
   std::string method = "nl";
   std::string motion = "auto";
   std::string scale = "auto";
-  std::string pairs = "auto";
+  std::string pairs = "gls";
   double tolerance_ms = 5.0;
   std::string time_offset = "0";
   bool time_offset_given = false;  // --time-offset on the command line (overrides --config)

@@ -16,11 +16,11 @@ struct PairOptions {
   enum class Policy {
     kSinceStart,  // (0, k) for every k: the thesis's camera-local poses
     kRelative,    // (k, k + step) for every k
-    kAuto,        // per slave, the span whose estimate is most certain (default, see below)
+    kAuto,        // per slave, the span whose estimate is most certain (see below)
     kWalk,        // anchors walk to a target motion (see below; the earlier default)
-    kGls,         // per slave, auto's result refined by GLS on every consecutive motion
+    kGls,         // per slave, auto's result refined by GLS on chains of its span (default)
   };
-  Policy policy = Policy::kAuto;
+  Policy policy = Policy::kGls;
 
   // kRelative: frames between a and b.
   int step = 5;
