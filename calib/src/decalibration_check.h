@@ -4,7 +4,8 @@
 // short_half_life_s) follows a new one within seconds. When the two windows' rotations differ by
 // more than decalibration_sigmas times their σ (at least decalibration_min_deg; or C by more
 // than decalibration_min_translation when > 0) for decalibration_confirmations consecutive
-// keyframes, the slave is decalibrated: the estimator re-converges on the recent motions.
+// keyframes spanning at least decalibration_confirm_s, the slave is decalibrated: the estimator
+// re-converges on the recent motions.
 //
 // Only a settled long-window estimate is compared: enough motions and a rotation with a small σ
 // (the first keyframes of a planar drive can look general with the rotation about the axis
@@ -23,6 +24,7 @@ namespace rigcal::internal {
 
 struct DecalibrationState {
   int disagreements = 0;            // consecutive keyframes at which the windows disagreed
+  int64_t disagree_since_ns = -1;   // stream time of the first of them (-1: none)
   int64_t decalibrated_at_ns = -1;  // stream time of the last decalibration (-1: never)
 };
 

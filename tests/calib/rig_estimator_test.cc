@@ -586,6 +586,17 @@ TEST(RigEstimatorOptions, CheckNamesField) {
   }
 }
 
+TEST(RigEstimatorOptions, DecalibrationConfirmationIsADuration) {
+  for (const double bad : {-0.1, std::nan(""), 1e300}) {
+    RigEstimatorOptions o;
+    o.decalibration_confirm_s = bad;
+    EXPECT_EQ(o.Check().message(), "decalibration_confirm_s: must be in [0, 86400] seconds") << bad;
+  }
+  RigEstimatorOptions o;
+  o.decalibration_confirm_s = 0.0;  // keyframes alone
+  EXPECT_TRUE(o.Check().ok());
+}
+
 }  // namespace
 }  // namespace rigcal
 

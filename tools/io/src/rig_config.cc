@@ -137,6 +137,7 @@ const std::map<std::string, FieldSetter>& EstimatorFields() {
       {"decalibration_min_deg", Double(&O::decalibration_min_deg)},
       {"decalibration_min_translation", Double(&O::decalibration_min_translation)},
       {"decalibration_confirmations", Int(&O::decalibration_confirmations)},
+      {"decalibration_confirm_s", Double(&O::decalibration_confirm_s)},
       {"max_open_segments", Int(&O::max_open_segments)},
       {"alpha_maxrot_deg", Double(&O::alpha_maxrot_deg)},
       {"alpha_maxrot_noise_deg", Double(&O::alpha_maxrot_noise_deg)},

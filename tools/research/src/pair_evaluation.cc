@@ -92,23 +92,6 @@ PolicyFigures Figures(const std::string& policy, int span, const Sums& s) {
   return f;
 }
 
-// One noisy recording of a scenario: the exact drive along its master, then each camera's
-// odometry errors.
-RigRecording NoisyRecording(const PairScenario& scenario, uint64_t seed) {
-  DriveOptions exact;
-  exact.rotation_noise_deg = 0.0;
-  exact.position_noise = 0.0;
-  exact.seed = seed;
-  SyntheticDrive drive = GenerateDriveAlong(scenario.names, scenario.rig, scenario.master, exact);
-  std::mt19937_64 rng(seed * 7919 + 17);
-  RigRecording& rec = drive.recording;
-  rec.master = AddPoseNoise(rec.master, scenario.noise, 1.0, rng);
-  for (size_t i = 0; i < rec.slaves.size(); ++i) {
-    rec.slaves[i] = AddPoseNoise(rec.slaves[i], scenario.noise, scenario.rig[i].scale, rng);
-  }
-  return rec;
-}
-
 // The policies of one draw, in the order of PairScenarioResult::policies.
 void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOptions& options,
              const std::vector<int>& spans, std::vector<Sums>* sums, std::vector<Sums>* half,
@@ -186,6 +169,23 @@ std::string Ratio(double value, double best) {
 }
 
 }  // namespace
+
+// One noisy recording of a scenario: the exact drive along its master, then each camera's
+// odometry errors.
+RigRecording NoisyRecording(const PairScenario& scenario, uint64_t seed) {
+  DriveOptions exact;
+  exact.rotation_noise_deg = 0.0;
+  exact.position_noise = 0.0;
+  exact.seed = seed;
+  SyntheticDrive drive = GenerateDriveAlong(scenario.names, scenario.rig, scenario.master, exact);
+  std::mt19937_64 rng(seed * 7919 + 17);
+  RigRecording& rec = drive.recording;
+  rec.master = AddPoseNoise(rec.master, scenario.noise, 1.0, rng);
+  for (size_t i = 0; i < rec.slaves.size(); ++i) {
+    rec.slaves[i] = AddPoseNoise(rec.slaves[i], scenario.noise, scenario.rig[i].scale, rng);
+  }
+  return rec;
+}
 
 const PolicyFigures* PairScenarioResult::Find(const std::string& policy) const {
   for (const auto& p : policies) {

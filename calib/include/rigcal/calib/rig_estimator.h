@@ -65,6 +65,11 @@ struct RigEstimatorOptions {
   double decalibration_min_deg = 0.5;
   double decalibration_min_translation = 0.0;  // 0 = only rotation triggers
   int decalibration_confirmations = 3;         // consecutive keyframes in disagreement
+  // ... holding for at least this much stream time (keyframes come at the rate of the motion:
+  // 3 at 30 Hz are 0.1 s). A motion of unusual leverage can pull the short window away for a
+  // fraction of a second (measured: up to 0.5 s of 1.5° on slow VO drift); a moved camera keeps
+  // it away until the alarm, which this delays by at most 1 s, 5 % of short_half_life_s.
+  double decalibration_confirm_s = 1.0;
 
   // Odometry segments kept open (their scale is a variable); older ones are marginalised.
   int max_open_segments = 2;

@@ -52,6 +52,10 @@ std::vector<PairScenario> PairScenarios(const std::string& trajectory_dir,
 CameraTrack AddPoseNoise(const CameraTrack& exact, const PoseNoiseModel& noise, double unit,
                          std::mt19937_64& rng);
 
+// One noisy recording of `scenario` (the draw `seed`): the exact drive along its master, then
+// each camera's odometry errors.
+RigRecording NoisyRecording(const PairScenario& scenario, uint64_t seed);
+
 struct PairEvaluationOptions {
   int repeats = 3;  // noise draws per scenario
   uint64_t seed = 1;
