@@ -36,10 +36,9 @@ WindowComparison CompareWindows(const RigEstimatorOptions& o, const SlaveCalibra
   }
   state->disagreements = disagree ? state->disagreements + 1 : 0;
   if (state->disagreements == 1) state->disagree_since_ns = now_ns;
-  const bool held =
-      state->disagreements > 0 &&
-      now_ns - state->disagree_since_ns >= static_cast<int64_t>(o.decalibration_confirm_s * 1e9);
-  if (state->disagreements >= o.decalibration_confirmations && held) {
+  const auto hold_ns = static_cast<int64_t>(o.decalibration_confirm_s * 1e9);
+  if (state->disagreements >= o.decalibration_confirmations &&
+      now_ns - state->disagree_since_ns >= hold_ns) {
     out.decalibrated = true;
     state->disagreements = 0;
     state->decalibrated_at_ns = now_ns;

@@ -34,6 +34,8 @@ Status RigEstimatorOptions::Check() const {
     e << "half_life_s: must be >= 0 (0 = never forget)";
   else if (!(short_half_life_s > 0.0))
     e << "short_half_life_s: must be > 0";
+  else if (decalibration_confirmations < 1)
+    e << "decalibration_confirmations: must be >= 1";
   else if (!(decalibration_confirm_s >= 0.0 && decalibration_confirm_s <= 86400.0))
     e << "decalibration_confirm_s: must be in [0, 86400] seconds";
   else if (max_open_segments < 1)

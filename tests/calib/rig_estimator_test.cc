@@ -595,6 +595,9 @@ TEST(RigEstimatorOptions, DecalibrationConfirmationIsADuration) {
   RigEstimatorOptions o;
   o.decalibration_confirm_s = 0.0;  // keyframes alone
   EXPECT_TRUE(o.Check().ok());
+  // No keyframe in disagreement would raise the alarm at every comparison.
+  o.decalibration_confirmations = 0;
+  EXPECT_EQ(o.Check().message(), "decalibration_confirmations: must be >= 1");
 }
 
 }  // namespace
