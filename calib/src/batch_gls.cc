@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -114,47 +115,117 @@ void TakeGls(const GlsResult& g, const GlsInput& in, const CalibrationOptions& o
   }
 }
 
+// One GLS refinement of `start` on the chains of its span: the refined result, or `start` with
+// the reason in `why` when the GLS cannot run or its σ of rotation and of C are both larger.
+struct GlsAttempt {
+  SlaveCalibration result;
+  bool refined = false;
+  std::string why;
+  Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Zero();  // rad², when refined
+  std::string how;                                         // the message's text, when refined
+};
+
+GlsAttempt Refine(const RigRecording& recording, int slave, const SlaveCalibration& start,
+                  const CalibrationOptions& options, const Eigen::Quaterniond& rotation_prior,
+                  const Eigen::Matrix3d& rotation_prior_cov) {
+  GlsAttempt out;
+  out.result = start;
+  if (start.scale_model == ScaleModel::kPartitions) {
+    out.why = "time-partitioned scales";
+    return out;
+  }
+  const int span = ChainSpan(recording, start, options);
+  const std::vector<MotionData> motions = ChainMotions(recording, slave, span, start);
+  GlsInput in = StartOf(start, options);
+  in.time_blocks = BlocksForDurations(motions, options.covariance_time_blocks);
+  in.rotation_prior = rotation_prior;
+  in.rotation_prior_cov = rotation_prior_cov;
+  const GlsResult g = RefineGls(motions, in);
+  if (!g.ok) {
+    out.why = g.message;
+    return out;
+  }
+  SlaveCalibration refined = start;
+  TakeGls(g, in, options, &refined);
+  // The data's own yardstick: when the GLS σ of rotation and of C are both larger than the
+  // start's (cluster-robust, both honest), the chains carry less than its pairs (hand-held PnP
+  // poses whose errors depend on the view: the walk's large rotations), and the start is kept.
+  const bool rot_larger =
+      std::isfinite(start.rot_std_deg) && refined.rot_std_deg > start.rot_std_deg;
+  const bool pos_larger = in.translational || (start.pos_std.allFinite() &&
+                                               refined.pos_std.norm() > start.pos_std.norm());
+  if (options.pairs.gls_keep_more_certain && rot_larger && pos_larger) {
+    out.why = "its sigma " + FixedText(refined.rot_std_deg, 4) + " deg, |C| " +
+              SignificantText(refined.pos_std.norm(), 2) + " are larger than " + start.pairs + "'s";
+    return out;
+  }
+  out.result = std::move(refined);
+  out.refined = true;
+  out.cov_rotation = g.cov_rotation;
+  out.how = "generalised least squares on " + std::to_string(g.increments) + " motions of span " +
+            std::to_string(span) + " in " + std::to_string(g.runs) + " chains (" +
+            std::to_string(g.outliers) +
+            " dropped by their whitened residual), whitened by the pose noise fitted per "
+            "component, chi2 " +
+            FixedText(g.chi2, 2) + ", from " + start.pairs;
+  if (g.clustered_larger) out.how += ", sigma raised to the cluster-robust one";
+  return out;
+}
+
+// The rotation from the chains of the span that determines it best, C and the scales from the
+// chains of the span that determines C best with that rotation (and its covariance) carried
+// over as a prior: spans differ in what they determine (short ones the rotation under drift,
+// long ones C under white noise). Empty state when the mixture cannot be formed.
+std::optional<SlaveCalibration> Mixture(const RigRecording& recording, int slave,
+                                        const AutoPairRanking& ranking,
+                                        const CalibrationOptions& options) {
+  if (!ranking.differ || !ranking.rotation.solved() || !ranking.position.solved()) return {};
+  const GlsAttempt rot = Refine(recording, slave, ranking.rotation, options,
+                                Eigen::Quaterniond::Identity(), Eigen::Matrix3d::Zero());
+  Eigen::Matrix3d cov = rot.cov_rotation;
+  if (!rot.refined) {
+    const double sd = rot.result.rot_std_deg / kDegPerRad;
+    if (!(sd > 0.0) || !std::isfinite(sd)) return {};
+    cov = sd * sd * Eigen::Matrix3d::Identity();
+  }
+  const GlsAttempt pos =
+      Refine(recording, slave, ranking.position, options, rot.result.estimate.q, cov);
+  if (!pos.refined) return {};
+  SlaveCalibration r = pos.result;
+  r.estimate.q = rot.result.estimate.q;
+  r.rot_std_deg = rot.result.rot_std_deg;
+  r.pairs = "gls";
+  r.message +=
+      "; pairs gls: rotation from " +
+      (rot.refined ? rot.how : ranking.rotation.pairs + " (gls not applied: " + rot.why + ")") +
+      "; C and scale by " + pos.how + " with that rotation carried over";
+  return r;
+}
+
 }  // namespace
 
 SlaveCalibration CalibrateSlaveGls(const RigRecording& recording,
                                    const AutoPairCandidates& candidates, int slave,
                                    const CalibrationOptions& options) {
-  SlaveCalibration r = CalibrateSlaveAutoPairs(recording, candidates, slave, options);
+  AutoPairRanking ranking;
+  SlaveCalibration r = CalibrateSlaveAutoPairs(recording, candidates, slave, options, &ranking);
   if (!r.solved()) return r;
-  const std::string start = r.pairs;
-  auto keep = [&](const std::string& why) {
-    r.message += "; gls not applied (" + why + "): the auto result";
-    ModuleLogger("calib")->debug("slave '{}': gls not applied: {}", r.name, why);
+  // A model the data contradict on some span (auto's check of every candidate) makes any
+  // estimate of it not usable: auto's result says so, and is refined alone.
+  std::optional<SlaveCalibration> mixed;
+  if (options.pairs.gls_mixture && r.contradiction.empty())
+    mixed = Mixture(recording, slave, ranking, options);
+  if (mixed) return *mixed;
+  GlsAttempt g =
+      Refine(recording, slave, r, options, Eigen::Quaterniond::Identity(), Eigen::Matrix3d::Zero());
+  if (!g.refined) {
+    r.message += "; gls not applied (" + g.why + "): the auto result";
+    ModuleLogger("calib")->debug("slave '{}': gls not applied: {}", r.name, g.why);
     return r;
-  };
-  if (r.scale_model == ScaleModel::kPartitions) return keep("time-partitioned scales");
-  const int span = ChainSpan(recording, r, options);
-  const std::vector<MotionData> motions = ChainMotions(recording, slave, span, r);
-  GlsInput in = StartOf(r, options);
-  in.time_blocks = BlocksForDurations(motions, options.covariance_time_blocks);
-  const GlsResult g = RefineGls(motions, in);
-  if (!g.ok) return keep(g.message);
-  SlaveCalibration refined = r;
-  TakeGls(g, in, options, &refined);
-  // The data's own yardstick: when the GLS σ of rotation and of C are both larger than auto's
-  // (cluster-robust, both honest), the chains carry less than auto's pairs (hand-held PnP
-  // poses whose errors depend on the view: the walk's large rotations), and auto's is kept.
-  const bool rot_larger = std::isfinite(r.rot_std_deg) && refined.rot_std_deg > r.rot_std_deg;
-  const bool pos_larger =
-      in.translational || (r.pos_std.allFinite() && refined.pos_std.norm() > r.pos_std.norm());
-  if (options.pairs.gls_keep_more_certain && rot_larger && pos_larger) {
-    return keep("its sigma " + FixedText(refined.rot_std_deg, 4) + " deg, |C| " +
-                SignificantText(refined.pos_std.norm(), 2) + " are larger than auto's");
   }
-  r = std::move(refined);
+  r = std::move(g.result);
   r.pairs = "gls";
-  r.message += "; pairs gls: generalised least squares on " + std::to_string(g.increments) +
-               " motions of span " + std::to_string(span) + " in " + std::to_string(g.runs) +
-               " chains (" + std::to_string(g.outliers) +
-               " dropped by their whitened residual), whitened by the pose noise fitted per "
-               "component, chi2 " +
-               FixedText(g.chi2, 2) + ", from auto's " + start;
-  if (g.clustered_larger) r.message += "; gls sigma raised to the cluster-robust one";
+  r.message += "; pairs gls: " + g.how;
   return r;
 }
 

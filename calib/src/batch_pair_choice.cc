@@ -138,8 +138,14 @@ std::vector<double> Predicted(const std::vector<Candidate>& candidates,
 }
 
 // The candidate whose worse predicted σ ratio to the best (rotation, and position where every
-// candidate has one) is smallest; -1 when none has a comparable rotation σ.
-int Best(const std::vector<Candidate>& candidates, bool usable_only) {
+// candidate has one) is smallest (-1 when none has a comparable rotation σ), and the candidates
+// of the smallest predicted rotation and position σ (-1 when none).
+struct Ranking {
+  int best = -1;
+  int rotation = -1;
+  int position = -1;
+};
+Ranking Rank(const std::vector<Candidate>& candidates, bool usable_only) {
   auto eligible = [&](const Candidate& c) {
     return c.result.solved() && (!usable_only || c.result.usable());
   };
@@ -164,13 +170,19 @@ int Best(const std::vector<Candidate>& candidates, bool usable_only) {
   }
   rot = Predicted(candidates, rot, rot_independent);
   pos = Predicted(candidates, pos, pos_independent);
+  Ranking out;
   double rot_min = std::numeric_limits<double>::infinity();
   double pos_min = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < candidates.size(); ++k) {
-    if (std::isfinite(rot[k])) rot_min = std::min(rot_min, rot[k]);
-    if (std::isfinite(pos[k])) pos_min = std::min(pos_min, pos[k]);
+    if (std::isfinite(rot[k]) && rot[k] < rot_min) {
+      rot_min = rot[k];
+      out.rotation = static_cast<int>(k);
+    }
+    if (std::isfinite(rot[k]) && std::isfinite(pos[k]) && pos[k] < pos_min) {
+      pos_min = pos[k];
+      out.position = static_cast<int>(k);
+    }
   }
-  int best = -1;
   double best_score = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < candidates.size(); ++k) {
     if (!std::isfinite(rot[k])) continue;
@@ -178,10 +190,10 @@ int Best(const std::vector<Candidate>& candidates, bool usable_only) {
     if (every_pos && std::isfinite(pos_min)) score = std::max(score, pos[k] / pos_min);
     if (score < best_score) {
       best_score = score;
-      best = static_cast<int>(k);
+      out.best = static_cast<int>(k);
     }
   }
-  return best;
+  return out;
 }
 
 }  // namespace
@@ -209,15 +221,17 @@ AutoPairCandidates MakeAutoPairCandidates(const RigRecording& recording,
 
 SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording,
                                          const AutoPairCandidates& choices, int slave,
-                                         const CalibrationOptions& options) {
+                                         const CalibrationOptions& options,
+                                         AutoPairRanking* ranking) {
   std::vector<Candidate> candidates;
   candidates.reserve(choices.policies.size());
   for (size_t k = 0; k < choices.policies.size(); ++k) {
     candidates.push_back(Solve(recording, slave, options, choices.policies[k], choices.pairs[k]));
   }
 
-  int best = Best(candidates, true);
-  if (best < 0) best = Best(candidates, false);
+  Ranking ranked = Rank(candidates, true);
+  if (ranked.best < 0) ranked = Rank(candidates, false);
+  int best = ranked.best;
   std::string how;
   if (best < 0) {
     // No candidate has a σ: the one with the most motions used says best what is missing.
@@ -233,10 +247,20 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording,
           std::to_string(candidates.front().span) + "-" +
           std::to_string(candidates[candidates.size() - 2].span) + " and the walk";
   }
-  Candidate chosen = candidates[best];
-  if (choices.stride > 1 && chosen.span > 0) {
-    const PairOptions& policy = choices.policies[best];
-    chosen = Solve(recording, slave, options, policy, RelativePairs(recording, chosen.span));
+  // A thinned span is solved again with every k.
+  auto full = [&](int k) {
+    if (choices.stride > 1 && candidates[k].span > 0) {
+      return Solve(recording, slave, options, choices.policies[k],
+                   RelativePairs(recording, candidates[k].span));
+    }
+    return candidates[k];
+  };
+  Candidate chosen = full(best);
+  if (ranking != nullptr && ranked.rotation >= 0 && ranked.position >= 0 &&
+      ranked.rotation != ranked.position) {
+    ranking->rotation = ranked.rotation == best ? chosen.result : full(ranked.rotation).result;
+    ranking->position = ranked.position == best ? chosen.result : full(ranked.position).result;
+    ranking->differ = true;
   }
   SlaveCalibration r = std::move(chosen.result);
   // A motion model given in the options must hold on every span: a span whose solve finds the

@@ -30,8 +30,16 @@ AutoPairCandidates MakeAutoPairCandidates(const RigRecording& recording,
 // fitted to every span's cluster-robust σ at once (the cluster-robust σ of one long span rests
 // on a few time blocks and is too noisy to rank spans by). The result's `pairs` names the
 // candidate and its message how it was chosen.
+// When the candidate of the smallest predicted rotation σ is not the one of the smallest
+// position σ, `ranking` (optional) receives both (solved with every k; differ set).
+struct AutoPairRanking {
+  bool differ = false;
+  SlaveCalibration rotation;
+  SlaveCalibration position;
+};
 SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording,
                                          const AutoPairCandidates& candidates, int slave,
-                                         const CalibrationOptions& options);
+                                         const CalibrationOptions& options,
+                                         AutoPairRanking* ranking = nullptr);
 
 }  // namespace rigcal::internal

@@ -178,6 +178,23 @@ void AddAxisPrior(const GlsInput& input, const Layout& layout, const GlsPoint& p
   sys->motion.push_back(-1);
 }
 
+// The prior rows on the rotation, when it has one: L⁻¹ log(dR dR_prior^T), cov = L Lᵀ.
+void AddRotationPrior(const GlsInput& input, const GlsPoint& p, System* sys) {
+  if (input.translational || !(input.rotation_prior_cov.trace() > 0.0)) return;
+  const Eigen::LLT<Eigen::Matrix3d> llt(input.rotation_prior_cov);
+  if (llt.info() != Eigen::Success) return;
+  const Eigen::Matrix3d white = llt.matrixL().solve(Eigen::Matrix3d::Identity());
+  const Eigen::Vector3d r =
+      Log(p.dR * input.rotation_prior.normalized().toRotationMatrix().transpose());
+  const Eigen::Index rows = sys->a.rows();
+  sys->a.conservativeResize(rows + 3, Eigen::NoChange);
+  sys->b.conservativeResize(rows + 3);
+  sys->a.bottomRows(3).setZero();
+  sys->a.bottomLeftCorner(3, 3) = white;
+  sys->b.tail(3) = white * r;
+  for (int i = 0; i < 3; ++i) sys->motion.push_back(-1);
+}
+
 // H⁻¹ of the normal matrix, or empty when it is singular.
 Eigen::MatrixXd Inverse(const Eigen::MatrixXd& h) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(h);
@@ -266,6 +283,7 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
     for (int iteration = 0; iteration < 20; ++iteration) {
       sys = Whitened(kept, frames, layout, p, noise);
       AddAxisPrior(input, layout, p, &sys);
+      AddRotationPrior(input, p, &sys);
       const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
       const Eigen::VectorXd step = -h.ldlt().solve(sys.a.transpose() * sys.b);
       if (!step.allFinite()) {
@@ -283,6 +301,7 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
   }
   sys = Whitened(kept, frames, layout, p, noise);
   AddAxisPrior(input, layout, p, &sys);
+  AddRotationPrior(input, p, &sys);
   const Eigen::MatrixXd h_inv = Inverse(sys.a.transpose() * sys.a);
   if (h_inv.size() == 0) {
     out.message = "the consecutive motions do not determine the parameters";

@@ -28,6 +28,10 @@ struct GlsInput {
   bool axis_offset_fixed = false;
   double axis_prior = 0.0;
   double axis_prior_sigma = 0.0;
+  // A prior on the rotation: another estimate of it with its covariance (rotation vector, rad²;
+  // zero: no prior), e.g. from the chains of the span that determines the rotation best.
+  Eigen::Quaterniond rotation_prior = Eigen::Quaterniond::Identity();
+  Eigen::Matrix3d rotation_prior_cov = Eigen::Matrix3d::Zero();
   int noise_rounds = 2;  // fit the noise, solve; repeated on the new residuals
   int time_blocks = 0;   // blocks of the cluster-robust check on the whitened residuals
   // After the first round, motions with a whitened residual beyond this many robust σ are

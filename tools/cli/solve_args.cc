@@ -161,7 +161,9 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
   cmd->add_option("--pairs", args->pairs,
                   "Which pairs of times (a, b) become motions. gls (default):\n"
                   "auto's result refined by GLS on chains of auto's span, whitened\n"
-                  "by the pose noise fitted to them (README); auto: per slave the\n"
+                  "by the pose noise fitted to them; when one span determines the\n"
+                  "rotation best and another C, the rotation from the first's\n"
+                  "chains and C and scale from the second's (README); auto: per slave the\n"
                   "span N of (k, k + N) whose estimate has the smallest σ (spans\n"
                   "1, 2, 3, 5, 8, ... up to 1/8 of the recording are solved);\n"
                   "start: (first pose, k) for every k; relative:STEP: (k, k + STEP)\n"

@@ -18,7 +18,7 @@ struct PairOptions {
     kRelative,    // (k, k + step) for every k
     kAuto,        // per slave, the span whose estimate is most certain (see below)
     kWalk,        // anchors walk to a target motion (see below; the earlier default)
-    kGls,         // per slave, auto's result refined by GLS on chains of its span (default)
+    kGls,         // per slave, auto's result refined by GLS on chains of its span(s) (default)
   };
   Policy policy = Policy::kGls;
 
@@ -37,6 +37,10 @@ struct PairOptions {
   double auto_max_span_fraction = 0.125;
   // kGls: keep auto's result when the GLS σ of rotation and of C are both larger than auto's.
   bool gls_keep_more_certain = true;
+  // kGls: when auto's candidate of the smallest rotation σ is not that of the smallest C σ, the
+  // rotation from the first's chains and C and the scales from the second's, the rotation
+  // carried over with its covariance (false: auto's choice refined alone).
+  bool gls_mixture = true;
 
   // kWalk. For anchors a spread evenly over the recording, b walks forward from a until the
   // master motion a->b is "large enough": its rotation angle reaches target_angle_deg or its
