@@ -16,12 +16,6 @@
 namespace rigcal {
 namespace {
 
-int SpanOf(const SlaveCalibration& s) {
-  const std::string prefix = "relative:";
-  if (s.pairs.rfind(prefix, 0) != 0) return -1;
-  return std::stoi(s.pairs.substr(prefix.size()));
-}
-
 SyntheticDrive Drive(uint64_t seed, double white_deg, double white_pos, double drift_deg) {
   DriveOptions opt;
   opt.num_frames = 1200;

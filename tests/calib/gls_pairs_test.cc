@@ -40,14 +40,36 @@ TEST(GlsPairs, NamedInTheResult) {
   }
 }
 
+// Normalised errors of results against the truth: E|ΔC|² = tr Cov(C) = |σ_C|², the rotation
+// angle² at most 3 σ_max² in expectation.
+struct Honesty {
+  double pos_z = 0.0;
+  double rot_z = 0.0;
+  int n = 0;
+  void Add(const SlaveCalibration& s, const Similarity& truth) {
+    const CalibrationError e = CompareToTruth(s.estimate, truth);
+    pos_z += (s.estimate.C - truth.C).squaredNorm() / s.pos_std.squaredNorm();
+    rot_z += e.rot_deg * e.rot_deg / (3.0 * s.rot_std_deg * s.rot_std_deg);
+    ++n;
+  }
+  // Means within ~3 standard errors of 1 (16 results of χ²₃/3 terms: ~0.2).
+  void ExpectHonest() const {
+    std::printf("mean |dC|^2/|sigma_C|^2 %.2f, angle^2/(3 sigma_max^2) %.2f over %d results\n",
+                pos_z / n, rot_z / n, n);
+    EXPECT_GT(pos_z / n, 0.4);
+    EXPECT_LT(pos_z / n, 1.8);
+    EXPECT_LT(rot_z / n, 1.8);
+    EXPECT_GT(rot_z / n, 0.1);
+  }
+};
+
 // On white pose noise the σ of the whitened system matches the spread of the errors over
 // draws: E|ΔC|² = tr Cov(C) = |σ_C|², so the mean of |ΔC|²/|σ_C|² over 2 slaves x 8 draws is
 // 1 with a standard error of ~0.2 (each term ~ χ²₃/3); the rotation angle² is at most
 // 3 σ_max² in expectation. Bounds at ~3 standard errors.
 TEST(GlsPairs, SigmaMatchesTheSpreadOnWhiteNoise) {
-  double pos_z = 0.0, rot_z = 0.0;
+  Honesty honesty;
   double rot_gls = 0.0, rot_auto = 0.0, pos_gls = 0.0, pos_auto = 0.0;
-  int n = 0;
   for (uint64_t seed = 1; seed <= 8; ++seed) {
     const SyntheticDrive d = WhiteNoiseDrive(seed);
     CalibrationOptions options;
@@ -66,33 +88,24 @@ TEST(GlsPairs, SigmaMatchesTheSpreadOnWhiteNoise) {
       const SlaveCalibration& s = r.slaves[i];
       ASSERT_TRUE(s.solved()) << s.message;
       ASSERT_EQ(s.pairs, "gls") << s.message;
-      const CalibrationError e = CompareToTruth(s.estimate, d.truth[i]);
-      pos_z += (s.estimate.C - d.truth[i].C).squaredNorm() / s.pos_std.squaredNorm();
-      rot_z += e.rot_deg * e.rot_deg / (3.0 * s.rot_std_deg * s.rot_std_deg);
-      ++n;
+      honesty.Add(s, d.truth[i]);
     }
   }
-  pos_z /= n;
-  rot_z /= n;
-  std::printf("mean |dC|^2/|sigma_C|^2 %.2f, angle^2/(3 sigma_max^2) %.2f over %d results\n", pos_z,
-              rot_z, n);
+  const int n = honesty.n;
   std::printf("RMS error gls / auto: rotation %.4f / %.4f deg, C %.5f / %.5f\n",
               std::sqrt(rot_gls / n), std::sqrt(rot_auto / n), std::sqrt(pos_gls / n),
               std::sqrt(pos_auto / n));
-  EXPECT_GT(pos_z, 0.4);
-  EXPECT_LT(pos_z, 1.8);
-  EXPECT_LT(rot_z, 1.8);
-  EXPECT_GT(rot_z, 0.1);
+  honesty.ExpectHonest();
 }
 
 // On white pose noise the span that determines the rotation best is often not the one that
 // determines C best (the rotation gains from long spans, C's lever arm less): the mixture takes
 // each part from its span, the rotation carried over with its covariance into C's solve. Its σ
-// must stay honest, bounds as in SigmaMatchesTheSpreadOnWhiteNoise; gls_mixture = false turns
+// must stay honest; gls_mixture = false turns
 // it off.
 TEST(GlsPairs, MixtureOfSpansIsHonest) {
-  double pos_z = 0.0, rot_z = 0.0;
-  int n = 0, mixed = 0, mixed_when_off = 0;
+  Honesty honesty;
+  int mixed = 0, mixed_when_off = 0;
   const std::string mark = "with that rotation carried over";
   for (uint64_t seed = 1; seed <= 8; ++seed) {
     const SyntheticDrive d = WhiteNoiseDrive(seed);
@@ -105,23 +118,13 @@ TEST(GlsPairs, MixtureOfSpansIsHonest) {
       ASSERT_TRUE(s.solved()) << s.message;
       if (s.message.find(mark) != std::string::npos) ++mixed;
       if (off.slaves[i].message.find(mark) != std::string::npos) ++mixed_when_off;
-      const CalibrationError e = CompareToTruth(s.estimate, d.truth[i]);
-      pos_z += (s.estimate.C - d.truth[i].C).squaredNorm() / s.pos_std.squaredNorm();
-      rot_z += e.rot_deg * e.rot_deg / (3.0 * s.rot_std_deg * s.rot_std_deg);
-      ++n;
+      honesty.Add(s, d.truth[i]);
     }
   }
-  pos_z /= n;
-  rot_z /= n;
-  std::printf(
-      "%d of %d results mixed; mean |dC|^2/|sigma_C|^2 %.2f, angle^2/(3 sigma_max^2) %.2f\n", mixed,
-      n, pos_z, rot_z);
+  std::printf("%d of %d results mixed\n", mixed, honesty.n);
   EXPECT_GT(mixed, 0);
   EXPECT_EQ(mixed_when_off, 0);
-  EXPECT_GT(pos_z, 0.4);
-  EXPECT_LT(pos_z, 1.8);
-  EXPECT_LT(rot_z, 1.8);
-  EXPECT_GT(rot_z, 0.1);
+  honesty.ExpectHonest();
 }
 
 }  // namespace
