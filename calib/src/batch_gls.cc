@@ -213,8 +213,9 @@ SlaveCalibration CalibrateSlaveGls(const RigRecording& recording,
   // A model the data contradict on some span (auto's check of every candidate) makes any
   // estimate of it not usable: auto's result says so, and is refined alone.
   std::optional<SlaveCalibration> mixed;
-  if (options.pairs.gls_mixture && r.contradiction.empty())
+  if (options.pairs.gls_mixture && r.contradiction.empty()) {
     mixed = Mixture(recording, slave, ranking, options);
+  }
   if (mixed) return *mixed;
   GlsAttempt g =
       Refine(recording, slave, r, options, Eigen::Quaterniond::Identity(), Eigen::Matrix3d::Zero());
