@@ -115,6 +115,9 @@ void TakeGls(const GlsResult& g, const GlsInput& in, const CalibrationOptions& o
   }
 }
 
+// Motions per chain the rotation's chains of a mixture need (below).
+constexpr int kMinMotionsPerChain = 8;
+
 // One GLS refinement of `start` on the chains of its span: the refined result, or `start` with
 // the reason in `why` when the GLS cannot run or its σ of rotation and of C are both larger.
 struct GlsAttempt {
@@ -180,6 +183,12 @@ std::optional<SlaveCalibration> Mixture(const RigRecording& recording, int slave
                                         const AutoPairRanking& ranking,
                                         const CalibrationOptions& options) {
   if (!ranking.differ || !ranking.rotation.solved() || !ranking.position.solved()) return {};
+  // The rotation's σ carries over into C's: its chains must be long enough for the noise fit to
+  // tell a pose's own error from drift (neighbouring motions of a chain correlate), which a
+  // walk's long spans on a short recording (chains of a few motions) are not; its σ come out
+  // too small.
+  const int rotation_span = ChainSpan(recording, ranking.rotation, options);
+  if (static_cast<int>(recording.size()) < kMinMotionsPerChain * rotation_span) return {};
   const GlsAttempt rot = Refine(recording, slave, ranking.rotation, options,
                                 Eigen::Quaterniond::Identity(), Eigen::Matrix3d::Zero());
   Eigen::Matrix3d cov = rot.cov_rotation;
