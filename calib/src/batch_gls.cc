@@ -172,6 +172,11 @@ GlsAttempt Refine(const RigRecording& recording, int slave, const SlaveCalibrati
             "component, chi2 " +
             FixedText(g.chi2, 2) + ", from " + start.pairs;
   if (g.clustered_larger) out.how += ", sigma raised to the cluster-robust one";
+  if (!in.translational) {
+    out.how += g.regressor_noise_corrected
+                   ? ", C corrected for the rotation noise in its regressor"
+                   : ", C not corrected for rotation noise (the motions turn too little)";
+  }
   return out;
 }
 

@@ -8,6 +8,7 @@
 
 #include "loewner.h"
 #include "planar_solver.h"
+#include "regressor_noise.h"
 #include "rigcal/calib/quaternion.h"
 #include "rigcal/calib/robust_statistics.h"
 #include "time_blocks.h"
@@ -195,6 +196,73 @@ void AddRotationPrior(const GlsInput& input, const GlsPoint& p, System* sys) {
   for (int i = 0; i < 3; ++i) sys->motion.push_back(-1);
 }
 
+// The errors-in-variables term of C (regressor_noise.h) per motion, in C's coordinates z (fixed
+// ones included), with the fitted noise. The rotation residual's noise is the master's and the
+// slave's; the master's share, which R0 carries, is taken as half (cameras of like odometry:
+// which camera is noisier the residual cannot tell). Empty for the translational model.
+std::vector<Eigen::Matrix3d> AttenuationTerms(const std::vector<MotionData>& motions,
+                                              const Frames& frames, const Layout& layout,
+                                              const std::vector<LevelNoise>& noise, int round) {
+  if (layout.translational || layout.c_free == 0 || noise.size() < 6) return {};
+  RegressorNoiseInput in;
+  in.lever.resize(motions.size());
+  for (size_t k = 0; k < motions.size(); ++k) {
+    in.lever[k] = frames.world_from_a[k] * motions[k].R0 * layout.t;
+  }
+  in.run_start = frames.run_start;
+  for (int j = 0; j < 3; ++j) {
+    in.rotation[j] = noise[j];
+    in.rotation[j].white *= 0.5;
+    in.rotation[j].correlated *= 0.5;
+    in.rotation[j].walk *= 0.5;
+    in.position[j] = noise[3 + j];
+  }
+  in.seed = 0x5eed + static_cast<uint64_t>(round);
+  return RegressorNoiseGram(in);
+}
+
+// The corrected normal equations (H - Ξ) step = -(Aᵀb - Ξ z): Ξ the sum of the terms over C's
+// free coordinates. Not applied (`applies` false) when Ξ would take away half of C's
+// information in some direction or more: the motions' rotations too small for the noise, where
+// the first-order correction does not hold.
+struct Attenuation {
+  std::vector<Eigen::Matrix3d> terms;
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  bool applies = false;
+
+  void Decide(const Layout& layout, const Eigen::MatrixXd& h) {
+    applies = false;
+    if (terms.empty()) return;
+    sum.setZero();
+    for (const Eigen::Matrix3d& term : terms) sum += term;
+    const int n = layout.c_free;
+    const Eigen::LLT<Eigen::MatrixXd> llt(h.block(3, 3, n, n));
+    if (llt.info() != Eigen::Success) return;
+    const Eigen::MatrixXd l_inv = llt.matrixL().solve(Eigen::MatrixXd::Identity(n, n));
+    const Eigen::MatrixXd relative = l_inv * sum.topLeftCorner(n, n) * l_inv.transpose();
+    applies =
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(relative).eigenvalues().maxCoeff() < 0.5;
+  }
+  // Subtracts Ξ from the normal matrix h and Ξ z from the gradient g.
+  void Correct(const Layout& layout, const GlsPoint& p, Eigen::MatrixXd* h,
+               Eigen::VectorXd* g) const {
+    if (!applies) return;
+    const int n = layout.c_free;
+    h->block(3, 3, n, n) -= sum.topLeftCorner(n, n);
+    g->segment(3, n) -= (sum * p.z).head(n);
+  }
+  // Per motion, its share of Ξ z over every parameter (the cluster-robust scores' offsets).
+  std::vector<Eigen::VectorXd> ScoreOffsets(const Layout& layout, const GlsPoint& p) const {
+    std::vector<Eigen::VectorXd> out;
+    if (!applies) return out;
+    out.assign(terms.size(), Eigen::VectorXd::Zero(layout.Size()));
+    for (size_t k = 0; k < terms.size(); ++k) {
+      out[k].segment(3, layout.c_free) = (terms[k] * p.z).head(layout.c_free);
+    }
+    return out;
+  }
+};
+
 // H⁻¹ of the normal matrix, or empty when it is singular.
 Eigen::MatrixXd Inverse(const Eigen::MatrixXd& h) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(h);
@@ -204,9 +272,11 @@ Eigen::MatrixXd Inverse(const Eigen::MatrixXd& h) {
 }
 
 // The cluster-robust (sandwich) covariance of the whitened system: motions in `blocks` time
-// blocks, the prior row a cluster of its own; times B / (B - 1).
+// blocks, the prior row a cluster of its own; times B / (B - 1). A motion's score is taken less
+// its `score_offset` (empty: none), the expectation the corrected normal equations remove.
 Eigen::MatrixXd Clustered(const System& sys, const Eigen::MatrixXd& h_inv,
-                          const std::vector<int>& block_of_motion, int blocks) {
+                          const std::vector<int>& block_of_motion, int blocks,
+                          const std::vector<Eigen::VectorXd>& score_offset) {
   const Eigen::Index params = sys.a.cols();
   std::vector<Eigen::VectorXd> g(blocks + 1, Eigen::VectorXd::Zero(params));
   for (Eigen::Index row = 0; row < sys.a.rows(); ++row) {
@@ -214,6 +284,7 @@ Eigen::MatrixXd Clustered(const System& sys, const Eigen::MatrixXd& h_inv,
     const int cluster = motion < 0 ? blocks : block_of_motion[motion];
     g[cluster] += sys.a.row(row).transpose() * sys.b(row);
   }
+  for (size_t k = 0; k < score_offset.size(); ++k) g[block_of_motion[k]] -= score_offset[k];
   Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(params, params);
   for (int c = 0; c <= blocks; ++c) {
     meat += (c < blocks ? blocks / (blocks - 1.0) : 1.0) * g[c] * g[c].transpose();
@@ -256,6 +327,7 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
 
   std::vector<LevelNoise> noise;
   System sys;
+  Attenuation attenuation;
   std::vector<MotionData> kept = motions;
   Frames frames = RunFrames(kept);
   for (int round = 0; round < std::max(1, input.noise_rounds); ++round) {
@@ -280,12 +352,16 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
       frames = RunFrames(kept);
     }
     noise = FitNoise(Increments(kept, frames, layout, p), frames);
+    attenuation.terms = AttenuationTerms(kept, frames, layout, noise, round);
     for (int iteration = 0; iteration < 20; ++iteration) {
       sys = Whitened(kept, frames, layout, p, noise);
       AddAxisPrior(input, layout, p, &sys);
       AddRotationPrior(input, p, &sys);
-      const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
-      const Eigen::VectorXd step = -h.ldlt().solve(sys.a.transpose() * sys.b);
+      Eigen::MatrixXd h = sys.a.transpose() * sys.a;
+      Eigen::VectorXd g = sys.a.transpose() * sys.b;
+      if (iteration == 0) attenuation.Decide(layout, h);
+      attenuation.Correct(layout, p, &h, &g);
+      const Eigen::VectorXd step = -h.ldlt().solve(g);
       if (!step.allFinite()) {
         out.message = "singular GLS normal equations";
         return out;
@@ -302,20 +378,25 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
   sys = Whitened(kept, frames, layout, p, noise);
   AddAxisPrior(input, layout, p, &sys);
   AddRotationPrior(input, p, &sys);
-  const Eigen::MatrixXd h_inv = Inverse(sys.a.transpose() * sys.a);
+  const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
+  Eigen::MatrixXd h_corrected = h;
+  Eigen::VectorXd unused = Eigen::VectorXd::Zero(params);
+  attenuation.Correct(layout, p, &h_corrected, &unused);
+  const Eigen::MatrixXd h_inv = Inverse(h_corrected);
   if (h_inv.size() == 0) {
     out.message = "the consecutive motions do not determine the parameters";
     return out;
   }
   const Eigen::Index rows = sys.a.rows();
   out.chi2 = rows > params ? sys.b.squaredNorm() / static_cast<double>(rows - params) : 1.0;
-  Eigen::MatrixXd cov = out.chi2 * h_inv;
+  Eigen::MatrixXd cov = out.chi2 * h_inv * h * h_inv;
 
   out.q = Canonical(Eigen::Quaterniond(p.dR).normalized());
   out.C = layout.t * p.z;
   out.scales = p.scales;
   out.noise = noise;
   out.increments = static_cast<int>(kept.size());
+  out.regressor_noise_corrected = attenuation.applies;
   out.runs = static_cast<int>(frames.run_start.size()) - 1;
   auto position_of = [&](const Eigen::MatrixXd& c) -> Eigen::Matrix3d {
     if (layout.c_free == 0) return Eigen::Matrix3d::Zero();
@@ -331,7 +412,8 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
   if (use_axis && layout.c_free == 3) out.axis_std = std::sqrt(std::max(0.0, cov(5, 5)));
   if (input.time_blocks >= 2) {
     const Eigen::MatrixXd robust =
-        Clustered(sys, h_inv, TimeBlocks(kept, input.time_blocks), input.time_blocks);
+        Clustered(sys, h_inv, TimeBlocks(kept, input.time_blocks), input.time_blocks,
+                  attenuation.ScoreOffsets(layout, p));
     if (robust.allFinite()) {
       bool larger = false;
       out.cov_rotation = LoewnerMax(out.cov_rotation, robust.topLeftCorner<3, 3>(), &larger);

@@ -51,6 +51,9 @@ struct GlsResult {
   std::vector<double> scale_std;
   double axis_std = 0.0;          // σ of h when it is free
   bool clustered_larger = false;  // the cluster-robust covariance raised the σ
+  // C corrected for the rotation noise in its regressor (regressor_noise.h); false when the
+  // motions turn too little for the first-order correction (or the model has no C).
+  bool regressor_noise_corrected = false;
   double chi2 = 0.0;              // mean square of the whitened residuals (about 1)
   int increments = 0;             // motions used
   int runs = 0;                   // stretches of consecutive motions (restarts of the filter)

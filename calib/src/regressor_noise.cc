@@ -1,0 +1,70 @@
+// Monte Carlo Gram matrix of the whitened regressor noise of C (regressor_noise.h).
+#include "regressor_noise.h"
+
+#include <cmath>
+#include <random>
+
+namespace rigcal::internal {
+namespace {
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+// A draw of n increments of a level y_t = x_t + a_t + w_t (noise_whitening.h): x a random walk,
+// a a stationary AR(1), w white.
+Eigen::VectorXd SampleIncrements(const LevelNoise& noise, Eigen::Index n, std::mt19937_64& rng) {
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const double white = std::sqrt(std::max(0.0, noise.white));
+  const double walk = std::sqrt(std::max(0.0, noise.walk));
+  const double stationary = std::sqrt(std::max(0.0, noise.correlated));
+  const double innovation =
+      std::sqrt(std::max(0.0, noise.correlated * (1.0 - noise.phi * noise.phi)));
+  double x = 0.0;
+  double a = stationary * gauss(rng);
+  double y = a + white * gauss(rng);
+  Eigen::VectorXd out(n);
+  for (Eigen::Index t = 0; t < n; ++t) {
+    x += walk * gauss(rng);
+    a = noise.phi * a + innovation * gauss(rng);
+    const double next = x + a + white * gauss(rng);
+    out(t) = next - y;
+    y = next;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<Eigen::Matrix3d> RegressorNoiseGram(const RegressorNoiseInput& input) {
+  std::vector<Eigen::Matrix3d> gram(input.lever.size(), Eigen::Matrix3d::Zero());
+  if (input.samples <= 0) return gram;
+  std::mt19937_64 rng(input.seed);
+  for (size_t r = 0; r + 1 < input.run_start.size(); ++r) {
+    const int first = input.run_start[r];
+    const int count = input.run_start[r + 1] - first;
+    if (count <= 0) continue;
+    for (int s = 0; s < input.samples; ++s) {
+      Eigen::MatrixXd delta(count, 3);
+      for (int j = 0; j < 3; ++j) delta.col(j) = SampleIncrements(input.rotation[j], count, rng);
+      // Rows of the regressor's change per position component: -[δ_k]× G_k T.
+      Eigen::MatrixXd change[3] = {Eigen::MatrixXd(count, 3), Eigen::MatrixXd(count, 3),
+                                   Eigen::MatrixXd(count, 3)};
+      for (int k = 0; k < count; ++k) {
+        const Eigen::Matrix3d d = -Skew(delta.row(k).transpose()) * input.lever[first + k];
+        for (int c = 0; c < 3; ++c) change[c].row(k) = d.row(c);
+      }
+      for (int c = 0; c < 3; ++c) {
+        const Eigen::MatrixXd white = WhitenIncrements(change[c], input.position[c]);
+        for (int k = 0; k < count; ++k) {
+          gram[first + k] += white.row(k).transpose() * white.row(k) / input.samples;
+        }
+      }
+    }
+  }
+  return gram;
+}
+
+}  // namespace rigcal::internal
