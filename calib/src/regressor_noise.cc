@@ -7,12 +7,6 @@
 namespace rigcal::internal {
 namespace {
 
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
-
 // A draw of n increments of a level y_t = x_t + a_t + w_t (noise_whitening.h): x a random walk,
 // a a stationary AR(1), w white.
 Eigen::VectorXd SampleIncrements(const LevelNoise& noise, Eigen::Index n, std::mt19937_64& rng) {
@@ -53,7 +47,9 @@ std::vector<Eigen::Matrix3d> RegressorNoiseGram(const RegressorNoiseInput& input
       Eigen::MatrixXd change[3] = {Eigen::MatrixXd(count, 3), Eigen::MatrixXd(count, 3),
                                    Eigen::MatrixXd(count, 3)};
       for (int k = 0; k < count; ++k) {
-        const Eigen::Matrix3d d = -Skew(delta.row(k).transpose()) * input.lever[first + k];
+        const Eigen::Vector3d turn = delta.row(k).transpose();
+        Eigen::Matrix3d d;
+        for (int j = 0; j < 3; ++j) d.col(j) = -turn.cross(input.lever[first + k].col(j));
         for (int c = 0; c < 3; ++c) change[c].row(k) = d.row(c);
       }
       for (int c = 0; c < 3; ++c) {
