@@ -243,13 +243,17 @@ struct Attenuation {
     applies =
         Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(relative).eigenvalues().maxCoeff() < 0.5;
   }
-  // Subtracts Ξ from the normal matrix h and Ξ z from the gradient g.
-  void Correct(const Layout& layout, const GlsPoint& p, Eigen::MatrixXd* h,
-               Eigen::VectorXd* g) const {
-    if (!applies) return;
-    const int n = layout.c_free;
-    h->block(3, 3, n, n) -= sum.topLeftCorner(n, n);
-    g->segment(3, n) -= (sum * p.z).head(n);
+  // The normal matrix h less Ξ.
+  Eigen::MatrixXd Normal(const Layout& layout, Eigen::MatrixXd h) const {
+    if (applies)
+      h.block(3, 3, layout.c_free, layout.c_free) -=
+          sum.topLeftCorner(layout.c_free, layout.c_free);
+    return h;
+  }
+  // The gradient g less Ξ z.
+  Eigen::VectorXd Gradient(const Layout& layout, const GlsPoint& p, Eigen::VectorXd g) const {
+    if (applies) g.segment(3, layout.c_free) -= (sum * p.z).head(layout.c_free);
+    return g;
   }
   // Per motion, its share of Ξ z over every parameter (the cluster-robust scores' offsets).
   std::vector<Eigen::VectorXd> ScoreOffsets(const Layout& layout, const GlsPoint& p) const {
@@ -357,11 +361,10 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
       sys = Whitened(kept, frames, layout, p, noise);
       AddAxisPrior(input, layout, p, &sys);
       AddRotationPrior(input, p, &sys);
-      Eigen::MatrixXd h = sys.a.transpose() * sys.a;
-      Eigen::VectorXd g = sys.a.transpose() * sys.b;
+      const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
       if (iteration == 0) attenuation.Decide(layout, h);
-      attenuation.Correct(layout, p, &h, &g);
-      const Eigen::VectorXd step = -h.ldlt().solve(g);
+      const Eigen::VectorXd step = -attenuation.Normal(layout, h).ldlt().solve(
+          attenuation.Gradient(layout, p, sys.a.transpose() * sys.b));
       if (!step.allFinite()) {
         out.message = "singular GLS normal equations";
         return out;
@@ -379,10 +382,7 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
   AddAxisPrior(input, layout, p, &sys);
   AddRotationPrior(input, p, &sys);
   const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
-  Eigen::MatrixXd h_corrected = h;
-  Eigen::VectorXd unused = Eigen::VectorXd::Zero(params);
-  attenuation.Correct(layout, p, &h_corrected, &unused);
-  const Eigen::MatrixXd h_inv = Inverse(h_corrected);
+  const Eigen::MatrixXd h_inv = Inverse(attenuation.Normal(layout, h));
   if (h_inv.size() == 0) {
     out.message = "the consecutive motions do not determine the parameters";
     return out;

@@ -36,26 +36,34 @@ std::vector<Eigen::Matrix3d> RegressorNoiseGram(const RegressorNoiseInput& input
   std::vector<Eigen::Matrix3d> gram(input.lever.size(), Eigen::Matrix3d::Zero());
   if (input.samples <= 0) return gram;
   std::mt19937_64 rng(input.seed);
+  const int samples = input.samples;
   for (size_t r = 0; r + 1 < input.run_start.size(); ++r) {
     const int first = input.run_start[r];
     const int count = input.run_start[r + 1] - first;
     if (count <= 0) continue;
-    for (int s = 0; s < input.samples; ++s) {
+    // Per position component, the regressor's change -[δ_k]× G_k T of every draw side by side
+    // (columns 3s..3s+2 for draw s): the filter's gains do not depend on the data, so one pass
+    // whitens every column.
+    Eigen::MatrixXd change[3] = {Eigen::MatrixXd(count, 3 * samples),
+                                 Eigen::MatrixXd(count, 3 * samples),
+                                 Eigen::MatrixXd(count, 3 * samples)};
+    for (int s = 0; s < samples; ++s) {
       Eigen::MatrixXd delta(count, 3);
       for (int j = 0; j < 3; ++j) delta.col(j) = SampleIncrements(input.rotation[j], count, rng);
-      // Rows of the regressor's change per position component: -[δ_k]× G_k T.
-      Eigen::MatrixXd change[3] = {Eigen::MatrixXd(count, 3), Eigen::MatrixXd(count, 3),
-                                   Eigen::MatrixXd(count, 3)};
       for (int k = 0; k < count; ++k) {
         const Eigen::Vector3d turn = delta.row(k).transpose();
         Eigen::Matrix3d d;
         for (int j = 0; j < 3; ++j) d.col(j) = -turn.cross(input.lever[first + k].col(j));
-        for (int c = 0; c < 3; ++c) change[c].row(k) = d.row(c);
+        for (int c = 0; c < 3; ++c) change[c].block<1, 3>(k, 3 * s) = d.row(c);
       }
+    }
+    Eigen::MatrixXd white[3];
+    for (int c = 0; c < 3; ++c) white[c] = WhitenIncrements(change[c], input.position[c]);
+    for (int s = 0; s < samples; ++s) {
       for (int c = 0; c < 3; ++c) {
-        const Eigen::MatrixXd white = WhitenIncrements(change[c], input.position[c]);
         for (int k = 0; k < count; ++k) {
-          gram[first + k] += white.row(k).transpose() * white.row(k) / input.samples;
+          const Eigen::RowVector3d row = white[c].block<1, 3>(k, 3 * s);
+          gram[first + k] += row.transpose() * row / samples;
         }
       }
     }
