@@ -18,6 +18,7 @@
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
+#include "rigcal/lcm/shared_bus.h"
 #include "rigcal/pipeline/calib_node.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "rigcal/pipeline/pipeline.h"
@@ -84,10 +85,10 @@ TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
   {
     lcm::LCM recorder("file://" + poses + "?mode=w");
     ASSERT_TRUE(recorder.good());
+    SharedBus bus(&recorder);
     PipelineOptions options;
     options.lossless = true;
-    Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, config.online, options,
-                      &recorder);
+    Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, config.online, options, &bus);
     ASSERT_TRUE(RunToEnd(&pipeline));
     live = pipeline.Snapshot();
   }

@@ -22,6 +22,7 @@
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/process_stats.h"
+#include "rigcal/lcm/shared_bus.h"
 #include "rigcal/pipeline/calib_node.h"
 #include "rigcal/pipeline/capture_loops.h"
 #include "rigcal/pipeline/capture_sources.h"
@@ -134,6 +135,7 @@ int RunRecord(const RecordArgs& args) {
 
   // With VO: the live pipeline publishes its poses on an in-process bus, recorded from there.
   std::unique_ptr<lcm::LCM> bus;
+  std::unique_ptr<tools::SharedBus> shared_bus;
   PoseTap pose_tap;
   pose_tap.recorder = &recorder;
   std::unique_ptr<tools::Pipeline> pipeline;
@@ -147,10 +149,12 @@ int RunRecord(const RecordArgs& args) {
       return kExitError;
     }
     bus->subscribeFunction("RIGCAL_POSE_.*", &OnPose, &pose_tap);
+    shared_bus = std::make_unique<tools::SharedBus>(bus.get());
     tools::PipelineOptions pipeline_options;
     pipeline_options.lossless = options.lossless;
-    pipeline = std::make_unique<tools::Pipeline>(names, std::move(devices), sources->models,
-                                                 config->online, pipeline_options, bus.get());
+    pipeline =
+        std::make_unique<tools::Pipeline>(names, std::move(devices), sources->models,
+                                          config->online, pipeline_options, shared_bus.get());
   }
   const auto drain_bus = [&bus] {
     if (bus) {

@@ -26,6 +26,7 @@
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/process_stats.h"
+#include "rigcal/lcm/shared_bus.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
 #include "rigcal/pipeline/capture_sources.h"
@@ -100,7 +101,7 @@ std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
   return line.str();
 }
 
-void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
+void PublishStatus(tools::SharedBus* bus, const tools::PipelineSnapshot& s,
                    std::vector<tools::StampRate>* rates, int32_t capacity, tools::CpuMeter* cpu,
                    const std::vector<std::string>& names) {
   std::vector<tools::CameraStatusInput> cameras;
@@ -116,12 +117,11 @@ void PublishStatus(lcm::LCM* bus, const tools::PipelineSnapshot& s,
   const rig_status_t msg =
       tools::MakeRigStatus(cameras, s.sync, capacity, s.estimate, cpu->Sample(), utime);
   if (auto bytes = tools::EncodeMessage(tools::kStatusChannel, names, msg)) {
-    bus->publish(tools::kStatusChannel, bytes->data(), static_cast<unsigned int>(bytes->size()));
+    bus->Publish(tools::kStatusChannel, *bytes);
   }
   if (auto extrinsics = tools::EstimateToLcm(s.estimate, utime)) {
     if (auto bytes = tools::EncodeMessage(tools::kExtrinsicsChannel, names, *extrinsics)) {
-      bus->publish(tools::kExtrinsicsChannel, bytes->data(),
-                   static_cast<unsigned int>(bytes->size()));
+      bus->Publish(tools::kExtrinsicsChannel, *bytes);
     }
   }
 }
@@ -191,11 +191,14 @@ int RunRun(const RunArgs& args) {
       }
     }
   }
+  // The VO threads publish poses and this thread the status on the same bus.
+  std::unique_ptr<tools::SharedBus> shared_bus;
+  if (bus) shared_bus = std::make_unique<tools::SharedBus>(bus.get());
   tools::PipelineOptions options;
   options.lossless = !realtime;
   options.record_poses = (rig.has_value() && (args.eval || args.json)) || !args.poses_dir.empty();
   tools::Pipeline pipeline(names, std::move(sources->devices), sources->models, config->online,
-                           options, bus.get());
+                           options, shared_bus.get());
 
   StopSignal stop_signal;
   const auto start = std::chrono::steady_clock::now();
@@ -224,7 +227,7 @@ int RunRun(const RunArgs& args) {
       const tools::PipelineSnapshot snapshot = pipeline.Snapshot();
       if (args.status_every_s > 0)
         std::cerr << StatusLine(elapsed, snapshot, frames_before, period) << "\n";
-      if (bus) PublishStatus(bus.get(), snapshot, &rates, capacity, &cpu, names);
+      if (shared_bus) PublishStatus(shared_bus.get(), snapshot, &rates, capacity, &cpu, names);
       for (size_t i = 0; i < names.size(); ++i) {
         frames_before[i] = snapshot.cameras[i].frames_processed;
       }
@@ -236,7 +239,7 @@ int RunRun(const RunArgs& args) {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const tools::PipelineSnapshot final_state = pipeline.Snapshot();
-  if (bus) PublishStatus(bus.get(), final_state, &rates, capacity, &cpu, names);
+  if (shared_bus) PublishStatus(shared_bus.get(), final_state, &rates, capacity, &cpu, names);
   const RigCalibration& result = final_state.estimate.rig;
 
   // What happened to the cameras.

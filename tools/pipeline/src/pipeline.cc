@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
 #include "rigcal/calib/logging.h"
@@ -11,6 +10,7 @@
 #include "rigcal/camera_status_t.hpp"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
+#include "rigcal/lcm/shared_bus.h"
 
 namespace rigcal::tools {
 namespace {
@@ -95,10 +95,10 @@ struct Pipeline::Camera {
 Pipeline::Pipeline(std::vector<std::string> names,
                    std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
                    std::vector<std::shared_ptr<const camera::CameraModel>> cameras,
-                   OnlineOptions online, PipelineOptions options, lcm::LCM* lcm)
+                   OnlineOptions online, PipelineOptions options, SharedBus* bus)
     : names_(std::move(names)),
       options_(options),
-      lcm_(lcm),
+      bus_(bus),
       vo_threads_running_(static_cast<int>(names_.size())) {
   if (names_.size() < 2 || devices.size() != names_.size() || cameras.size() != names_.size()) {
     throw std::invalid_argument("Pipeline: need one device and one camera model per camera (>= 2)");
@@ -188,12 +188,12 @@ void Pipeline::Forward(const CameraPose& pose) {
     MutexLock lock(camera.mutex);
     ++camera.health.sync_rejected;
   }
-  if (lcm_ != nullptr) {
+  if (bus_ != nullptr) {
     auto msg = CameraPoseToLcm(pose, names_, pose.t_ns / 1000);
     if (msg) {
       const std::string channel = PoseChannel(names_[index]);
       auto bytes = EncodeMessage(channel, names_, *msg);
-      if (bytes) lcm_->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
+      if (bytes) bus_->Publish(channel, *bytes);
     }
   }
 }

@@ -30,12 +30,9 @@
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/calib/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
+#include "rigcal/lcm/shared_bus.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/vo/monocular_vo.h"
-
-namespace lcm {
-class LCM;
-}
 
 namespace rigcal {
 class PoseMerge;
@@ -104,13 +101,14 @@ OnlineOptions ProcessOnlineOptions(OnlineOptions online, size_t cameras, bool lo
 class Pipeline {
  public:
   // names[0] is the master; devices[i] and cameras[i] belong to names[i]. `online` are the
-  // calibrator's options, completed by ProcessOnlineOptions (options.lossless). `lcm`
+  // calibrator's options, completed by ProcessOnlineOptions (options.lossless). `bus`
   // (optional, not owned, must outlive the pipeline): every pose is also published on
-  // RIGCAL_POSE_<camera>. Throws std::invalid_argument on inconsistent arguments.
+  // RIGCAL_POSE_<camera>, from the VO threads; the process's other publishers share `bus`. Throws
+  // std::invalid_argument on inconsistent arguments.
   Pipeline(std::vector<std::string> names,
            std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
            std::vector<std::shared_ptr<const camera::CameraModel>> cameras, OnlineOptions online,
-           PipelineOptions options, lcm::LCM* lcm = nullptr);
+           PipelineOptions options, SharedBus* bus = nullptr);
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
@@ -139,7 +137,7 @@ class Pipeline {
 
   std::vector<std::string> names_;
   PipelineOptions options_;
-  lcm::LCM* lcm_ = nullptr;
+  SharedBus* bus_ = nullptr;
   std::unique_ptr<OnlineCalibrator> calibrator_;
   std::vector<std::unique_ptr<Camera>> cameras_;
   std::unique_ptr<PoseMerge> merge_;  // lossless runs only
