@@ -39,6 +39,7 @@ TEST(SharedBus, ThreadsPublishingOnAFileBusLeaveEveryEventWhole) {
     ASSERT_TRUE(bus.good());
     SharedBus shared(&bus);
     std::vector<std::thread> threads;
+    threads.reserve(kThreads);
     std::vector<int> failures(kThreads, 0);
     for (int t = 0; t < kThreads; ++t) {
       threads.emplace_back([&shared, &failures, t] {

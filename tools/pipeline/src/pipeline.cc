@@ -97,7 +97,7 @@ Pipeline::Pipeline(std::vector<std::string> names,
                    std::vector<std::shared_ptr<const camera::CameraModel>> cameras,
                    OnlineOptions online, PipelineOptions options, SharedBus* bus)
     : names_(std::move(names)),
-      options_(options),
+      options_(std::move(options)),
       bus_(bus),
       vo_threads_running_(static_cast<int>(names_.size())) {
   if (names_.size() < 2 || devices.size() != names_.size() || cameras.size() != names_.size()) {

@@ -319,6 +319,10 @@ struct Counts {
            "on the other half): "
         << cv_12 << "/" << cv_scored << "; within 1.5x: " << cv_15 << "/" << cv_scored << "\n";
     }
+    return s.str() + ZText(name);
+  }
+  std::string ZText(const std::string& name) const {
+    std::ostringstream s;
     s << name << " normalised errors, RMS over scenarios: rotation angle/(sqrt(3) sigma_max) "
       << (rot_z_n > 0 ? FixedText(std::sqrt(rot_z / rot_z_n), 2) : "-") << ", |dC|/|sigma_C| "
       << (pos_z_n > 0 ? FixedText(std::sqrt(pos_z / pos_z_n), 2) : "-") << " (1 = honest)\n";
@@ -350,7 +354,7 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
                 "", "", "", "span RMSdeg", "span RMS", "x rot", "x pos", "cv r", "cv p", "x rot",
                 "x pos", "cv r", "cv p", "rot/pos", "rot/pos", "rot", "pos", "scale");
   s << line;
-  Counts auto_counts, gls_counts;
+  Counts auto_counts, gls_counts, online_counts;
   int online_13 = 0, online_scored = 0;
   for (const auto& r : results) {
     const PolicyFigures* a = r.Find("auto");
@@ -385,6 +389,7 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
     s << line;
     auto_counts.Add(r, a);
     gls_counts.Add(r, g);
+    online_counts.Add(r, o);
     if (o && d && std::isfinite(o->rot_rms_deg)) {
       ++online_scored;
       const double worst = std::max({o->rot_rms_deg / d->rot_rms_deg,
@@ -398,6 +403,7 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results) {
   if (online_scored > 0) {
     s << "online within 1.3x of the batch " << (gls_counts.scored > 0 ? "gls" : "auto")
       << " (rotation, position, scale): " << online_13 << "/" << online_scored << "\n";
+    s << online_counts.ZText("online");
   }
   return s.str();
 }
