@@ -30,4 +30,9 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
                                 const CalibrationOptions& options, const std::string& name,
                                 SlaveSolveDetails* details);
 
+// CalibrateRig's result for slave `slave` alone: the glitches are found on every camera of
+// `recording` (their times dropped for all, as in CalibrateRig), only this slave is solved.
+SlaveCalibration CalibrateRigSlave(const RigRecording& recording, const CalibrationOptions& options,
+                                   int slave);
+
 }  // namespace rigcal::internal

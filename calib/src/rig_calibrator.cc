@@ -116,44 +116,79 @@ SlaveCalibration CalibrateSlave(const std::vector<RigMotion>& motions,
 
 }  // namespace internal
 
-RigCalibration CalibrateRig(const RigRecording& input, const CalibrationOptions& options) {
-  // Glitched poses (pose_glitches.h) go first: neither the pair choice nor a motion sees them.
+namespace {
+
+// CalibrateRig's stage 0 and the pair candidates every slave shares.
+struct RigPreparation {
   internal::GlitchReport glitches;
-  const RigRecording recording = internal::WithoutGlitches(input, &glitches);
-  RigCalibration out;
-  out.master = recording.master.name;
-  const std::string invalid = recording.Check().message();
-  const bool options_ok = options.Check().ok();
-  const bool solvable = invalid.empty() && options_ok;
-  const bool gls = options.pairs.policy == PairOptions::Policy::kGls;
-  const bool auto_pairs = options.pairs.policy == PairOptions::Policy::kAuto || gls;
-  std::vector<IndexPair> pairs;
+  RigRecording recording;  // without the glitched times
+  std::string invalid;     // why the recording cannot be calibrated, or empty
+  bool solvable = false;
+  bool gls = false;
+  bool auto_pairs = false;
+  std::vector<IndexPair> pairs;  // fixed policies
   internal::AutoPairCandidates candidates;
-  if (solvable && auto_pairs) {
-    candidates = internal::MakeAutoPairCandidates(recording, options.pairs);
-  } else if (solvable) {
-    pairs = SelectPairs(recording, options.pairs);
+};
+
+RigPreparation Prepare(const RigRecording& input, const CalibrationOptions& options) {
+  // Glitched poses (pose_glitches.h) go first: neither the pair choice nor a motion sees them.
+  RigPreparation p;
+  p.recording = internal::WithoutGlitches(input, &p.glitches);
+  p.invalid = p.recording.Check().message();
+  p.solvable = p.invalid.empty() && options.Check().ok();
+  p.gls = options.pairs.policy == PairOptions::Policy::kGls;
+  p.auto_pairs = options.pairs.policy == PairOptions::Policy::kAuto || p.gls;
+  if (p.solvable && p.auto_pairs) {
+    p.candidates = internal::MakeAutoPairCandidates(p.recording, options.pairs);
+  } else if (p.solvable) {
+    p.pairs = SelectPairs(p.recording, options.pairs);
   }
-  out.pairs_selected = static_cast<int>(pairs.size());
-  for (size_t i = 0; i < recording.slaves.size(); ++i) {
-    const int slave = static_cast<int>(i);
-    SlaveCalibration r;
-    r.name = recording.slaves[i].name;
-    if (!invalid.empty()) {
-      r = internal::Failed(r, Termination::kInvalidInput, "invalid recording: " + invalid);
-    } else if (solvable && auto_pairs) {
-      r = gls ? internal::CalibrateSlaveGls(recording, candidates, slave, options)
-              : internal::CalibrateSlaveAutoPairs(recording, candidates, slave, options);
+  return p;
+}
+
+SlaveCalibration CalibratePrepared(const RigPreparation& p, const CalibrationOptions& options,
+                                   int slave) {
+  SlaveCalibration r;
+  r.name = p.recording.slaves[slave].name;
+  if (!p.invalid.empty()) {
+    return internal::Failed(r, Termination::kInvalidInput, "invalid recording: " + p.invalid);
+  }
+  if (p.solvable && p.auto_pairs) {
+    r = p.gls ? internal::CalibrateSlaveGls(p.recording, p.candidates, slave, options)
+              : internal::CalibrateSlaveAutoPairs(p.recording, p.candidates, slave, options);
+  } else {
+    r = CalibrateSlave(MotionsForSlave(p.recording, slave, p.pairs), options, r.name);
+    r.pairs = PairsText(options.pairs);
+  }
+  internal::ReportGlitches(p.glitches, slave, &r);
+  return r;
+}
+
+}  // namespace
+
+RigCalibration CalibrateRig(const RigRecording& input, const CalibrationOptions& options) {
+  const RigPreparation p = Prepare(input, options);
+  RigCalibration out;
+  out.master = p.recording.master.name;
+  out.pairs_selected = static_cast<int>(p.pairs.size());
+  for (size_t i = 0; i < p.recording.slaves.size(); ++i) {
+    SlaveCalibration r = CalibratePrepared(p, options, static_cast<int>(i));
+    if (p.solvable && p.auto_pairs) {
       out.pairs_selected = std::max(out.pairs_selected, r.motions.total);
-    } else {
-      r = CalibrateSlave(MotionsForSlave(recording, slave, pairs), options, r.name);
-      r.pairs = PairsText(options.pairs);
     }
-    if (invalid.empty()) internal::ReportGlitches(glitches, slave, &r);
     out.slaves.push_back(std::move(r));
   }
   return out;
 }
+
+namespace internal {
+
+SlaveCalibration CalibrateRigSlave(const RigRecording& recording, const CalibrationOptions& options,
+                                   int slave) {
+  return CalibratePrepared(Prepare(recording, options), options, slave);
+}
+
+}  // namespace internal
 
 std::string ToString(Termination t) {
   switch (t) {

@@ -405,6 +405,24 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
       h.slaves[0].poses.push_back(set.slave);
       h.slaves[0].segment.push_back(set.slave_segment);
     }
+    // The other slaves at the same times, each whose history holds them all: the batch
+    // calibrator finds the glitches on every camera (a master glitch is told from a slave's by
+    // the others) and drops their times, as it does on the whole recording.
+    for (size_t other = 0; other < slaves_.size(); ++other) {
+      if (static_cast<int>(other) == slave) continue;
+      const std::deque<Slave::HistorySet>& oh = slaves_[other]->history;
+      CameraTrack camera;
+      camera.name = names_[other + 1];
+      auto it = oh.begin();
+      for (const int64_t t : h.t_ns) {
+        it = std::lower_bound(it, oh.end(), t,
+                              [](const Slave::HistorySet& a, int64_t b) { return a.t_ns < b; });
+        if (it == oh.end() || it->t_ns != t) break;
+        camera.poses.push_back(it->slave);
+        camera.segment.push_back(it->slave_segment);
+      }
+      if (camera.poses.size() == h.t_ns.size()) h.slaves.push_back(std::move(camera));
+    }
     job.history_t_ns = newest;
     if (const std::optional<Similarity> nominal = NominalOf(slave)) {
       job.history_options.nominal[names_[slave + 1]] = *nominal;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 
+#include "batch_solve_details.h"
 #include "linear_solvers.h"
 #include "motion_data.h"
 #include "refinement.h"
@@ -19,7 +20,7 @@ namespace rigcal {
 SlaveCalibration RefineWindow(const RefinementJob& job) {
   if (!job.history.t_ns.empty() && job.start.solved()) {
     // Every set since the restart: the batch calibrator (its pair choice and σ).
-    SlaveCalibration batch = CalibrateRig(job.history, job.history_options).slaves.at(0);
+    SlaveCalibration batch = internal::CalibrateRigSlave(job.history, job.history_options, 0);
     if (batch.solved()) {
       batch.message = "batch on the " + std::to_string(job.history.size()) +
                       " sets since the start: " + batch.message;

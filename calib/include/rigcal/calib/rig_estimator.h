@@ -217,9 +217,11 @@ struct RefinementJob {
   RefinementPrior prior;
   // Huber loss (at 3 sigma) on the window's residuals; the prior has none.
   bool robust_loss = true;
-  // Every set since the last restart (master and this slave), when the pose history holds them
-  // and a history refinement is due: RefineWindow then runs the batch calibrator on it with
-  // `history_options` instead of refining the window.
+  // Every set since the last restart (master and this slave, slaves[0], then every other slave
+  // whose history holds those sets), when the pose history holds them and a history refinement
+  // is due: RefineWindow then runs the batch calibrator on it with `history_options` instead of
+  // refining the window, and solves this slave (the others' poses tell glitches apart, as in
+  // the batch on the whole recording).
   RigRecording history;
   CalibrationOptions history_options;
   // Stream time of the newest set in `history` (when the refinement was made).
