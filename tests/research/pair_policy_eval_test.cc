@@ -1,8 +1,10 @@
 // Issue requirement on the whole pair-policy evaluation set (`rigcal experiment pairs`): the
-// default pair policy (gls) within 1.5x of the best fixed span in rotation and in position on
-// every recording, the online estimate within 1.3x of it (rotation, position, scale); the table
-// and the 1.2x counts are printed. 12 draws per recording: with 4 the best of 9 fixed spans is
-// often a lucky one. Label eval: ~15 minutes on 2 cores.
+// default pair policy (gls) within 1.2x of the best fixed span in rotation and in position on
+// every recording, the online estimate within 1.3x of it (rotation, position, scale) with σ as
+// honest (RMS normalised errors over the recordings within 10 % of gls's); the table and the
+// counts are printed. 12 draws per recording: with 4 the best of 9 fixed spans is often a
+// lucky one. Label eval: ~20 minutes on 2 cores (the same figures as `rigcal experiment pairs
+// --data ../shared/data/trajectories --repeats 12`).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,7 +18,7 @@
 namespace rigcal {
 namespace {
 
-TEST(PairPolicyEval, DefaultWithinOneAndAHalfOfTheBestFixedSpanOnlineWithinOnePointThree) {
+TEST(PairPolicyEval, DefaultWithinOnePointTwoOfTheBestFixedSpanOnlineWithinOnePointThree) {
   const std::string dir = std::string(RIGCAL_SHARED_DATA_DIR) + "/trajectories";
   std::vector<std::string> notes;
   const std::vector<PairScenario> scenarios = PairScenarios(dir, &notes);
@@ -28,6 +30,7 @@ TEST(PairPolicyEval, DefaultWithinOneAndAHalfOfTheBestFixedSpanOnlineWithinOnePo
   options.repeats = 12;
   const auto results = RunPairEvaluation(scenarios, options);
   std::cout << FormatPairTable(results);
+  double gls_z[2] = {0, 0}, online_z[2] = {0, 0};
   for (const auto& r : results) {
     const PolicyFigures* a = r.Find("gls");
     const PolicyFigures* online = r.Find("online");
@@ -35,13 +38,24 @@ TEST(PairPolicyEval, DefaultWithinOneAndAHalfOfTheBestFixedSpanOnlineWithinOnePo
     ASSERT_NE(online, nullptr);
     EXPECT_EQ(a->failed, 0) << r.name;
     ASSERT_GE(r.best_rot, 0) << r.name;
-    EXPECT_LE(a->rot_rms_deg, 1.5 * r.policies[r.best_rot].rot_rms_deg) << r.name;
+    EXPECT_LE(a->rot_rms_deg, 1.2 * r.policies[r.best_rot].rot_rms_deg) << r.name;
     if (r.best_pos >= 0) {
-      EXPECT_LE(a->pos_rms, 1.5 * r.policies[r.best_pos].pos_rms) << r.name;
+      EXPECT_LE(a->pos_rms, 1.2 * r.policies[r.best_pos].pos_rms) << r.name;
     }
     EXPECT_LE(online->rot_rms_deg, 1.3 * a->rot_rms_deg) << r.name;
     EXPECT_LE(online->pos_rms, 1.3 * a->pos_rms) << r.name;
     EXPECT_LE(online->scale_rms_pct, 1.3 * a->scale_rms_pct) << r.name;
+    const double gz[2] = {a->rot_z_rms, a->pos_z_rms};
+    const double oz[2] = {online->rot_z_rms, online->pos_z_rms};
+    for (int k = 0; k < 2; ++k) {
+      if (std::isfinite(gz[k]) && std::isfinite(oz[k])) {
+        gls_z[k] += gz[k] * gz[k];
+        online_z[k] += oz[k] * oz[k];
+      }
+    }
+  }
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_LE(std::sqrt(online_z[k]), 1.1 * std::sqrt(gls_z[k])) << (k == 0 ? "rotation" : "C");
   }
   if (!notes.empty()) RIGCAL_SKIP_MISSING() << "real trajectories left out: " << notes.front();
 }
