@@ -153,13 +153,10 @@ void OnlineCalibrator::Flush() {
   } else {
     sync_.Flush();
   }
-  const uint64_t target = sync_.stats().sets_emitted;
-  MutexLock lock(estimator_mutex_);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  // Sets dropped by a full ready queue never arrive: wait for the queue to drain instead.
-  while (sets_consumed_ < target && sync_.stats().ready_fill != 0) {
-    if (lock.WaitUntil(consumed_, deadline) == std::cv_status::timeout) break;
-  }
+  // Every set emitted is consumed (a set popped counts once its stream-time refinement is
+  // done, so that a final RefineNow after Flush is the last refinement) or dropped. Without an
+  // estimator thread nothing would consume them.
+  if (estimator_thread_.joinable()) Drain();
 }
 
 void OnlineCalibrator::Stop() {
@@ -171,6 +168,11 @@ void OnlineCalibrator::Stop() {
   sync_.Stop();
   if (estimator_thread_.joinable()) estimator_thread_.join();
   if (refinement_thread_.joinable()) refinement_thread_.join();
+}
+
+uint64_t OnlineCalibrator::sets_consumed() const {
+  MutexLock lock(estimator_mutex_);
+  return sets_consumed_;
 }
 
 RigEstimate OnlineCalibrator::Estimate() const {

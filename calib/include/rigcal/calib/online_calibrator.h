@@ -66,7 +66,8 @@ class OnlineCalibrator {
   // Offers a pose (any thread). Never blocks on the estimator, unless options.lossless: then it
   // waits (pushes serialised) until the ready queue has room for every set it may complete.
   PushResult Push(const CameraPose& pose) RIGCAL_EXCLUDES(push_mutex_, estimator_mutex_);
-  // End of stream: resolves buffered sets and waits until the estimator has consumed them.
+  // End of stream: resolves buffered sets and waits until the estimator has consumed them
+  // (each with its stream-time refinement; no time limit) or the buffer is stopped.
   void Flush() RIGCAL_EXCLUDES(push_mutex_, estimator_mutex_);
   // Waits until the estimator has consumed every set completed so far (without resolving the
   // sets still waiting for partners, unlike Flush): Estimate() then reflects every push made
@@ -95,6 +96,8 @@ class OnlineCalibrator {
   // ClockOffsetTracker::SaveState), restored with it: matching starts at the saved offsets.
   RigEstimatorState SaveState() const;
   Status RestoreState(const RigEstimatorState& state);
+  // Sets the estimator thread has consumed (added, and refined when due on stream time).
+  uint64_t sets_consumed() const RIGCAL_EXCLUDES(estimator_mutex_);
   // Number of background refinements applied so far.
   int refinements_applied() const { return refinements_applied_.load(); }
 
