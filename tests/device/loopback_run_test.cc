@@ -61,6 +61,7 @@ constexpr double kDriveS = 12.0;  // the trajectory below: 7 waypoints, 2 s apar
 // sqrt of the 99.9 % quantile of chi-square with 3 degrees of freedom: a 3-vector error with the
 // given per-axis sigma stays within this many sigma (Mahalanobis) but once in a thousand runs.
 constexpr double kChi3Sigma999 = 4.03;
+constexpr double kNormal999 = 3.29;  // two-sided 99.9 % of a normal variable, in sigma
 
 int EnvInt(const char* name, int fallback) {
   const char* v = std::getenv(name);
@@ -343,9 +344,11 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   std::cout << "RIGCAL-FIGURE loopback_run " << width << "x" << height << " " << frames
             << " frames in " << feed_s << " s: rot_deg=" << e.error.rot_deg << " (sigma "
             << slave.rot_std_deg << ") dir_deg=" << e.error.dir_deg
-            << " dist_pct=" << e.error.dist_pct << " scale_pct=" << e.error.scale_pct << " C error "
-            << c_err.transpose() << " (sigma " << slave.pos_std.transpose() << ", " << c_mahalanobis
-            << " sigma)\n";
+            << " dist_pct=" << e.error.dist_pct << " scale_pct=" << e.error.scale_pct << " (sigma "
+            << (slave.scales.empty() ? std::nan("")
+                                     : 100.0 * slave.scales.back().std / e.truth_master_units.scale)
+            << " %) C error " << c_err.transpose() << " (sigma " << slave.pos_std.transpose()
+            << ", " << c_mahalanobis << " sigma)\n";
   // The errors within the estimator's own uncertainty: the rotation within 4.03 sigma of its
   // largest axis, the position in the Mahalanobis sense with the per-axis sigma.
   ASSERT_TRUE(std::isfinite(slave.rot_std_deg));
@@ -353,6 +356,14 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   if (e.position_observable && slave.pos_std.allFinite()) {
     EXPECT_LE(c_mahalanobis, kChi3Sigma999);
   }
+  // The scale of the scored segment within 3.29 of its sigma (99.9 %, one dimension). Its truth
+  // is the ratio of the two VO units fitted to the simulated trajectory (EvaluateRun).
+  ASSERT_FALSE(slave.scales.empty());
+  const SegmentScale& scale = slave.scales.back();
+  ASSERT_TRUE(std::isfinite(scale.std) && std::isfinite(e.truth_master_units.scale));
+  EXPECT_LE(std::abs(scale.scale - e.truth_master_units.scale), kNormal999 * scale.std)
+      << "scale " << scale.scale << " (sigma " << scale.std << "), truth "
+      << e.truth_master_units.scale;
 }
 
 }  // namespace

@@ -20,13 +20,15 @@ std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int came
   const double epoch_ns = static_cast<double>(rig.epoch_ns());
   auto stream_time = [&](int64_t t_ns) { return 1e-9 * (static_cast<double>(t_ns) - epoch_ns); };
   for (const auto& [segment, members] : by_segment) {
-    // The reference frame of the segment: its first pose (the identity at the segment start).
+    // Positions relative to the segment's first pose, in its frame, on both sides: the VO's
+    // origin need not be its first pose written (an initialisation frame before it, a pose
+    // dropped on the way), and a wrong origin shrinks the fitted unit.
     const Pose reference = rig.CameraPoseAt(camera, stream_time(members.front()->t_ns));
-    const Pose reference_inverse = reference.Inverse();
+    const Pose& first = members.front()->pose;
     std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;
     for (const CameraPose* pose : members) {
-      const Pose truth = reference_inverse * rig.CameraPoseAt(camera, stream_time(pose->t_ns));
-      pairs.emplace_back(truth.C, pose->pose.C);
+      const Pose truth = reference.Between(rig.CameraPoseAt(camera, stream_time(pose->t_ns)));
+      pairs.emplace_back(truth.C, first.Between(pose->pose).C);
     }
     const UnitFit fit = FitUnit(pairs);
     SegmentUnit unit;
