@@ -341,14 +341,14 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   const SlaveEvaluation& e = evaluation->slaves[0];
   const Eigen::Vector3d c_err = slave.estimate.C - e.truth_master_units.C;
   const double c_mahalanobis = c_err.cwiseQuotient(slave.pos_std).norm();
+  ASSERT_FALSE(slave.scales.empty());
+  const SegmentScale& scale = slave.scales.back();  // the scored segment's (EvaluateRun)
   std::cout << "RIGCAL-FIGURE loopback_run " << width << "x" << height << " " << frames
             << " frames in " << feed_s << " s: rot_deg=" << e.error.rot_deg << " (sigma "
             << slave.rot_std_deg << ") dir_deg=" << e.error.dir_deg
             << " dist_pct=" << e.error.dist_pct << " scale_pct=" << e.error.scale_pct << " (sigma "
-            << (slave.scales.empty() ? std::nan("")
-                                     : 100.0 * slave.scales.back().std / e.truth_master_units.scale)
-            << " %) C error " << c_err.transpose() << " (sigma " << slave.pos_std.transpose()
-            << ", " << c_mahalanobis << " sigma)\n";
+            << 100.0 * scale.std / e.truth_master_units.scale << " %) C error " << c_err.transpose()
+            << " (sigma " << slave.pos_std.transpose() << ", " << c_mahalanobis << " sigma)\n";
   // The errors within the estimator's own uncertainty: the rotation within 4.03 sigma of its
   // largest axis, the position in the Mahalanobis sense with the per-axis sigma.
   ASSERT_TRUE(std::isfinite(slave.rot_std_deg));
@@ -358,8 +358,6 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   }
   // The scale of the scored segment within 3.29 of its sigma (99.9 %, one dimension). Its truth
   // is the ratio of the two VO units fitted to the simulated trajectory (EvaluateRun).
-  ASSERT_FALSE(slave.scales.empty());
-  const SegmentScale& scale = slave.scales.back();
   ASSERT_TRUE(std::isfinite(scale.std) && std::isfinite(e.truth_master_units.scale));
   EXPECT_LE(std::abs(scale.scale - e.truth_master_units.scale), kNormal999 * scale.std)
       << "scale " << scale.scale << " (sigma " << scale.std << "), truth "
