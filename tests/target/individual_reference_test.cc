@@ -19,6 +19,7 @@
 #include <random>
 #include <vector>
 
+#include "rigcal/calib/synthetic.h"
 #include "rigcal/target/target_poses.h"
 #include "rigcal/target/target_views.h"
 #include "support/board_views.h"
@@ -77,10 +78,11 @@ Recording Simulate(unsigned seed, int n, double max_angle, bool one_axis, double
   views0.height = views1.height = 480;
   for (int k = 0; k < n; ++k) {
     Pose motion;  // the rig's motion, in the master's nominal frame
-    Eigen::Vector3d axis = one_axis ? Eigen::Vector3d::UnitY()
-                                    : Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
+    // Vectors drawn through RandomVector3 (a fixed order of the components).
+    Eigen::Vector3d axis =
+        one_axis ? Eigen::Vector3d::UnitY() : RandomVector3(unit, rng).normalized();
     motion.q = Eigen::Quaterniond(Eigen::AngleAxisd(max_angle * unit(rng), axis));
-    motion.C = 0.08 * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+    motion.C = 0.08 * RandomVector3(unit, rng);
     const Pose a_cam0 = a_from_cam0 * motion;
     const Pose b_cam1 = rec.w.Inverse() * a_cam0 * d;
     const int64_t t = (k + 1) * 50000000LL;

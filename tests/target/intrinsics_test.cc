@@ -58,11 +58,15 @@ Pose CamFromTarget(std::mt19937& rng) {
   std::uniform_real_distribution<double> shift(-0.12, 0.12);
   std::uniform_real_distribution<double> depth(0.5, 0.9);
   Pose p;
-  p.q = Eigen::AngleAxisd(tilt(rng), Eigen::Vector3d::UnitX()) *
-        Eigen::AngleAxisd(tilt(rng), Eigen::Vector3d::UnitY()) *
-        Eigen::AngleAxisd(0.3 * tilt(rng), Eigen::Vector3d::UnitZ());
+  // Drawn one by one, last first (RandomVector3's order, calib/synthetic.h): the order in which
+  // the operands of * or a constructor's arguments are evaluated is unspecified.
+  const double about_z = 0.3 * tilt(rng), about_y = tilt(rng), about_x = tilt(rng);
+  p.q = Eigen::AngleAxisd(about_x, Eigen::Vector3d::UnitX()) *
+        Eigen::AngleAxisd(about_y, Eigen::Vector3d::UnitY()) *
+        Eigen::AngleAxisd(about_z, Eigen::Vector3d::UnitZ());
   // Board centre (0.16, 0.1) at (shift, shift, depth).
-  const Eigen::Vector3d centre(shift(rng), shift(rng), depth(rng));
+  const double cz = depth(rng), cy = shift(rng);
+  const Eigen::Vector3d centre(shift(rng), cy, cz);
   p.C = centre - p.q * Eigen::Vector3d(0.16, 0.10, 0.0);
   return p;  // q, C: cam_from_target rotation and the target origin in the camera
 }

@@ -58,11 +58,15 @@ CameraViews SimulatedViews(const TrueOmni& cam, int n, unsigned seed) {
   views.width = 752;
   views.height = 480;
   while (static_cast<int>(views.views.size()) < n) {
-    const cv::Vec3d rvec(tilt(rng), tilt(rng), 0.3 * tilt(rng));
+    // Every vector drawn last component first (RandomVector3's order, calib/synthetic.h): the
+    // order in which a constructor's arguments are evaluated is unspecified.
+    const double rz = 0.3 * tilt(rng), ry = tilt(rng);
+    const cv::Vec3d rvec(tilt(rng), ry, rz);
     cv::Matx33d R;
     cv::Rodrigues(rvec, R);
     // Board centre (0.16, 0.10) at (shift, shift, depth).
-    const cv::Vec3d centre(shift(rng), shift(rng), depth(rng));
+    const double cz = depth(rng), cy = shift(rng);
+    const cv::Vec3d centre(shift(rng), cy, cz);
     const cv::Vec3d tvec = centre - R * cv::Vec3d(0.16, 0.10, 0.0);
     const std::vector<cv::Point2d> image = Project(cam, board, rvec, tvec);
     bool inside = true;
@@ -74,7 +78,8 @@ CameraViews SimulatedViews(const TrueOmni& cam, int n, unsigned seed) {
     view.t_ns = static_cast<int64_t>(views.views.size() + 1) * 1000000000LL;
     view.file = std::to_string(views.views.size());
     for (size_t j = 0; j < board.size(); ++j) {
-      view.pixels.emplace_back(image[j].x + noise(rng), image[j].y + noise(rng));
+      const double dy = noise(rng);
+      view.pixels.emplace_back(image[j].x + noise(rng), image[j].y + dy);
       view.target_points.emplace_back(board[j].x, board[j].y, board[j].z);
     }
     views.views.push_back(std::move(view));
