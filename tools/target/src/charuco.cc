@@ -103,12 +103,12 @@ Expected<CameraViews> DetectCharucoViews(const std::string& camera, const std::s
   if (Status s = spec.Check(); !s.ok()) return Error{"ChArUco board: " + s.message()};
   const cv::Ptr<cv::aruco::CharucoBoard> board = MakeBoard(spec);
   const cv::Ptr<cv::aruco::DetectorParameters> params = cv::aruco::DetectorParameters::create();
-  // The markers' corners are not refined: they only start the chessboard corners, which
-  // interpolateCornersCharuco refines itself (OpenCV's advice for ChArUco). Refined with
-  // cornerSubPix, a marker corner can settle towards the chessboard corner a margin of
-  // (square - marker) / 2 from it, and the chessboard corner started from it then settles towards
-  // the marker's: on rendered views, corners 4-7 px off in half of the view sets (RMS 0.26-0.52
-  // px, fx up to 1 % off) where unrefined markers give 0.06-0.08 px in every set.
+  // The markers' corners are not refined (OpenCV's default, CORNER_REFINE_NONE): they only start
+  // the chessboard corners, which interpolateCornersCharuco refines itself. Refined with
+  // cornerSubPix, a marker's corner can settle towards the chessboard corner beside it (half the
+  // square less the marker away on the board), and that chessboard corner, started from it, then
+  // settles towards the marker's: on rendered views, corners 4-7 px off in half of the view sets
+  // (RMS 0.26-0.52 px, fx up to 1 % off), where unrefined markers give 0.06-0.08 px in every set.
   params->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
   auto detect = [&](const cv::Mat& image) -> std::optional<TargetView> {
     std::vector<std::vector<cv::Point2f>> markers;
