@@ -58,7 +58,11 @@ TEST_F(ChessboardReal, IntrinsicsCalibrate) {
     EXPECT_EQ(c.views.width, 640);
     EXPECT_EQ(c.views.height, 480);
     EXPECT_GE(c.views.views.size(), 12u);
-    EXPECT_GE(c.intrinsics.views_used, 10);
+    // Most views used. The rejection threshold follows the views' residuals: with corners
+    // refined in windows that fit the squares (target_views.cc) the right camera's views fit to
+    // 0.18 px and 4 of its 13 are rejected (every view kept: 0.40 px RMS, 0.46 with the fixed
+    // 23 x 23 window of OpenCV's sample).
+    EXPECT_GE(c.intrinsics.views_used, 9);
     // OpenCV's stereo_calib sample reports ~0.41 / 0.46 px mono RMS on these images.
     EXPECT_LT(c.intrinsics.rms_px, 0.6);
     // A 640x480 camera: the principal point near the image centre, square pixels.

@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 #include "image_views.h"
 #include "opencv.h"
@@ -18,6 +20,28 @@ namespace rigcal::target {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The half-size of the cornerSubPix window for a chessboard view: half the shortest distance
+// between neighbouring corners of the grid (rows x cols, row-major), at most 11 px (OpenCV's usual
+// 23 x 23 window) and at least 2. A window reaching the neighbouring corners pulls the refined
+// corner towards them: with the fixed 11 px, corners of squares 15 px wide in the image moved 1.9
+// px RMS (6.7 px at worst), of 12 px squares 7.6 px (target/chessboard_render).
+int SubPixelHalfWindow(const std::vector<cv::Point2f>& corners, int cols, int rows) {
+  double shortest = std::numeric_limits<double>::infinity();
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const cv::Point2f& p = corners[static_cast<size_t>(r * cols + c)];
+      if (c + 1 < cols) {
+        shortest = std::min(shortest, cv::norm(corners[static_cast<size_t>(r * cols + c + 1)] - p));
+      }
+      if (r + 1 < rows) {
+        shortest =
+            std::min(shortest, cv::norm(corners[static_cast<size_t>((r + 1) * cols + c)] - p));
+      }
+    }
+  }
+  return std::clamp(static_cast<int>(std::floor(shortest / 2.0)), 2, 11);
+}
 
 bool IsImageFile(const fs::path& path) {
   std::string ext = path.extension().string();
@@ -204,7 +228,8 @@ Expected<CameraViews> DetectChessboardViews(const std::string& camera, const std
     if (!found || corners.size() != static_cast<size_t>(board.cols * board.rows)) {
       return std::nullopt;
     }
-    cv::cornerSubPix(image, corners, cv::Size(11, 11), cv::Size(-1, -1),
+    const int half_window = SubPixelHalfWindow(corners, board.cols, board.rows);
+    cv::cornerSubPix(image, corners, cv::Size(half_window, half_window), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01));
     TargetView view;
     for (int r = 0; r < board.rows; ++r) {
