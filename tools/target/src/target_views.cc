@@ -27,17 +27,14 @@ namespace fs = std::filesystem;
 // corner towards them: with the fixed 11 px, corners of squares 15 px wide in the image moved 1.9
 // px RMS (6.7 px at worst), of 12 px squares 7.6 px (target/chessboard_render).
 int SubPixelHalfWindow(const std::vector<cv::Point2f>& corners, int cols, int rows) {
+  const auto at = [&](int r, int c) -> const cv::Point2f& {
+    return corners[static_cast<size_t>(r) * static_cast<size_t>(cols) + static_cast<size_t>(c)];
+  };
   double shortest = std::numeric_limits<double>::infinity();
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
-      const cv::Point2f& p = corners[static_cast<size_t>(r * cols + c)];
-      if (c + 1 < cols) {
-        shortest = std::min(shortest, cv::norm(corners[static_cast<size_t>(r * cols + c + 1)] - p));
-      }
-      if (r + 1 < rows) {
-        shortest =
-            std::min(shortest, cv::norm(corners[static_cast<size_t>((r + 1) * cols + c)] - p));
-      }
+      if (c + 1 < cols) shortest = std::min(shortest, cv::norm(at(r, c + 1) - at(r, c)));
+      if (r + 1 < rows) shortest = std::min(shortest, cv::norm(at(r + 1, c) - at(r, c)));
     }
   }
   return std::clamp(static_cast<int>(std::floor(shortest / 2.0)), 2, 11);
