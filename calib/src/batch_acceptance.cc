@@ -9,9 +9,9 @@
 
 #include "model_explanation.h"
 #include "non_finite.h"
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::internal {
 namespace {

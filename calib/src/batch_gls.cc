@@ -10,11 +10,11 @@
 
 #include "batch_motions.h"
 #include "gls_refinement.h"
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 #include "time_blocks.h"
 
 namespace rigcal::internal {

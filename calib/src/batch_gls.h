@@ -7,7 +7,7 @@
 #include "batch_pair_choice.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

@@ -6,7 +6,7 @@
 
 #include "batch_motions.h"
 #include "motion_statistics.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 namespace {

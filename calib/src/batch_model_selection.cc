@@ -8,8 +8,8 @@
 
 #include "model_explanation.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 #include "scale_measurement.h"
 
 namespace rigcal::internal {

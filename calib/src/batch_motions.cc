@@ -6,8 +6,8 @@
 #include <sstream>
 
 #include "model_explanation.h"
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::internal {
 namespace {

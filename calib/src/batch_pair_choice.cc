@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "batch_solve_details.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::internal {
 namespace {

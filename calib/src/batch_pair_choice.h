@@ -7,7 +7,7 @@
 
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "linear_solvers.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "time_blocks.h"
 
 namespace rigcal::internal {

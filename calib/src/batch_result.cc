@@ -10,7 +10,7 @@
 
 #include "linear_solvers.h"
 #include "model_explanation.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 namespace {

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/calib/pose_interpolation.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal {
 namespace {

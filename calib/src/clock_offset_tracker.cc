@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "rigcal/calib/clock_offset.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/pose_interpolation.h"
 
 namespace rigcal {

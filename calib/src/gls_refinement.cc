@@ -9,8 +9,8 @@
 #include "loewner.h"
 #include "planar_solver.h"
 #include "regressor_noise.h"
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 #include "time_blocks.h"
 
 namespace rigcal::internal {

@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "rigcal/calib/rig_estimator.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 namespace {

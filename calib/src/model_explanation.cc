@@ -5,7 +5,7 @@
 #include <sstream>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 
 namespace rigcal::internal {
 namespace {

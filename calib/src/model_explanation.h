@@ -8,7 +8,7 @@
 
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 
 namespace rigcal::internal {
 

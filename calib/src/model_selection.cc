@@ -8,8 +8,8 @@
 #include <limits>
 
 #include "non_finite.h"
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::internal {
 namespace {

@@ -1,6 +1,6 @@
 #include "motion_data.h"
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 

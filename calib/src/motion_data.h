@@ -4,7 +4,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "linear_solvers.h"
-#include "rigcal/calib/logging.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/logging.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 namespace {

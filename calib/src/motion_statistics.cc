@@ -8,7 +8,7 @@
 
 #include "kronecker.h"
 #include "linear_solvers.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal {
 namespace {

@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "kronecker.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 namespace {

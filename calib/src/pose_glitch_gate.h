@@ -35,7 +35,7 @@
 #include "fixed_ring.h"
 #include "pose_glitches.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

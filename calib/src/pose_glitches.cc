@@ -9,9 +9,9 @@
 #include <utility>
 
 #include "non_finite.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::internal {
 namespace {

@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

@@ -13,7 +13,7 @@
 #include "linear_solvers.h"
 #include "loewner.h"
 #include "planar_solver.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "statistics_prior.h"
 
 namespace rigcal::internal {

@@ -18,7 +18,7 @@
 #include "batch_solve_details.h"
 #include "motion_data.h"
 #include "pose_glitches.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/pair_selection.h"
 
 namespace rigcal {

@@ -5,7 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 namespace {

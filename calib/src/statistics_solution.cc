@@ -6,7 +6,7 @@
 #include <map>
 
 #include "model_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::internal {
 

@@ -18,7 +18,7 @@
 
 #include "fixed_ring.h"
 #include "rigcal/calib/sync_buffer.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 
 namespace rigcal {
 

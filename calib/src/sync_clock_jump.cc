@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "sync_buffer_impl.h"
 
 namespace rigcal {

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <utility>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal {
 namespace {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <map>
 
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::internal {
 

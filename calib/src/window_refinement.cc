@@ -11,7 +11,7 @@
 #include "linear_solvers.h"
 #include "motion_data.h"
 #include "refinement.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "statistics_prior.h"
 

@@ -9,8 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "rigcal/calib/logging.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/logging.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::drivers {
 namespace {

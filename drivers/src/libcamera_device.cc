@@ -13,8 +13,8 @@
 #include <thread>
 
 #include "libcamera_manager.h"
-#include "rigcal/calib/logging.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/logging.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/v4l2_timestamp.h"
 
 namespace rigcal::drivers {

@@ -2,7 +2,7 @@
 
 #include <cstring>
 
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 
 namespace rigcal::drivers {
 

@@ -6,7 +6,7 @@
 
 #include <memory>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::drivers {
 

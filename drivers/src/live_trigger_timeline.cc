@@ -4,7 +4,7 @@
 #include <cmath>
 #include <thread>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/drivers/serial_port.h"
 
 namespace rigcal::drivers {

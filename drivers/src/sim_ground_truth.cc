@@ -3,8 +3,8 @@
 #include <filesystem>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/time_format.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/time_format.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "sim_rig_data.h"
 

@@ -6,7 +6,7 @@
 #include <memory>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_model.h"
 #include "sim_scene.h"
 

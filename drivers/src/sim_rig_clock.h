@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cstdint>
 
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 
 namespace rigcal::drivers::internal {
 

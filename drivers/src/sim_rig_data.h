@@ -8,7 +8,7 @@
 #include <optional>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "sim_render.h"
 #include "sim_scene.h"

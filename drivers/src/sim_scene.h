@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "sim_texture.h"
 #include "sim_texture_sampling.h"

@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <utility>
 
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 #include "sim_random.h"
 
 namespace rigcal::drivers::internal {

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::drivers::internal {
 

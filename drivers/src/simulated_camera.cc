@@ -6,8 +6,8 @@
 #include <condition_variable>
 #include <sstream>
 
-#include "rigcal/calib/logging.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/logging.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "sim_rig_clock.h"
 #include "sim_rig_data.h"

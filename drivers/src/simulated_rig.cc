@@ -7,7 +7,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "sim_random.h"
 #include "sim_rig_clock.h"
 #include "sim_rig_data.h"

@@ -5,7 +5,7 @@
 #include <set>
 #include <sstream>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace rigcal::drivers {
 

@@ -3,7 +3,7 @@
 #include <chrono>
 #include <cstdlib>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace rigcal::drivers {
 

@@ -1,6 +1,6 @@
 #include "rigcal/drivers/trigger_receiver.h"
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace rigcal::drivers {
 

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace rigcal::drivers {
 

@@ -13,7 +13,7 @@
 #include <cstring>
 #include <vector>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/drivers/v4l2_timestamp.h"
 #include "v4l2_controls.h"
 #include "v4l2_node.h"

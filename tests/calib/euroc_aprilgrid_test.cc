@@ -25,9 +25,9 @@
 
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "rigcal/io/trajectory_io.h"
 #include "support/opencv_handeye.h"
 #include "support/skip.h"

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/calib/timed_trajectory.h"
 

@@ -11,7 +11,7 @@
 #include "../calib/free_running_rig.h"
 #include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/calib/sync_buffer.h"
 

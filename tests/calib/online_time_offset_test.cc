@@ -12,9 +12,9 @@
 #include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/sync_buffer.h"
 
 namespace rigcal {

@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "cli/command_test.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/calib/synthetic_car.h"
 #include "rigcal/io/rig_files.h"

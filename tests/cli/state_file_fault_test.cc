@@ -18,7 +18,7 @@
 
 #include "calib/free_running_rig.h"
 #include "cli/command_test.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/slave_state.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/estimator_state_file.h"

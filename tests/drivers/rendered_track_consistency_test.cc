@@ -15,7 +15,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "drivers/shipped_sim_rig.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/drivers/simulated_rig.h"
 
 namespace rigcal::drivers {

@@ -8,7 +8,7 @@
 #include <functional>
 #include <sstream>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"
 

@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_files.h"
 

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/io/atomic_file.h"
 
 namespace rigcal::tools {

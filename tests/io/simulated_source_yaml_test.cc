@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/io/config_sections.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/yaml_fields.h"

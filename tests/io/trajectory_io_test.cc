@@ -12,7 +12,7 @@
 #include <sstream>
 
 #include "io/trajectory_fixtures.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "support/skip.h"
 
 namespace rigcal::tools::trajectory_test {

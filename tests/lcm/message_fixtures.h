@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/lcm/message_validation.h"

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "lcm/message_fixtures.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/lcm/channels.h"
 
 namespace rigcal::tools::lcm_test {

@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"

@@ -8,7 +8,7 @@
 #include <random>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/pipeline/online_replay.h"

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "pipeline/room_rig.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/lcm/channels.h"

@@ -11,7 +11,7 @@
 
 #include "pipeline/room_rig.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/pipeline/run_evaluation.h"

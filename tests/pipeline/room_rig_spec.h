@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
 

@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "pipeline/room_rig_spec.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::tools {
 namespace {

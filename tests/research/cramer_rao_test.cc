@@ -9,7 +9,7 @@
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/research/experiments.h"

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/pipeline/online_replay.h"
 

@@ -15,7 +15,7 @@
 #include <opencv2/calib3d.hpp>
 #pragma GCC diagnostic pop
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/target/target_views.h"
 #include "support/pixel_noise.h"

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <utility>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::support {
 

@@ -12,8 +12,8 @@
 #include <memory>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_model.h"
 #include "rigcal/drivers/simulated_rig.h"
 

@@ -12,7 +12,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <random>
 
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"
 

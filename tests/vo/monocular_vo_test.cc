@@ -12,8 +12,8 @@
 #include <cstdio>
 #include <map>
 
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/camera/camera_spec.h"
 #include "support/ideal_cameras.h"
 #include "support/room_sequence.h"

@@ -21,7 +21,7 @@
 #include <filesystem>
 #include <map>
 
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"

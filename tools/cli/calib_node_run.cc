@@ -6,7 +6,7 @@
 
 #include "exit_codes.h"
 #include "replay_progress.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "commands.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/research/experiments.h"
 #include "rigcal/research/pair_evaluation.h"

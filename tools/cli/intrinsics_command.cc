@@ -7,7 +7,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/target/kalibr_camchain.h"

@@ -16,7 +16,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"

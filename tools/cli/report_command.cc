@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/report/report_html.h"
 #include "rigcal/report/report_input.h"
 

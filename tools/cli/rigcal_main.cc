@@ -5,7 +5,7 @@
 #include <string>
 
 #include "commands.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace {
 

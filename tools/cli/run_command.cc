@@ -14,8 +14,8 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/ground_truth_files.h"
 #include "rigcal/io/result_json.h"

@@ -14,7 +14,7 @@
 #include "commands.h"
 #include "exit_codes.h"
 #include "rigcal/calib/calibration_options.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/result_json.h"

@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "lcm_image_stream.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/camera/camera_spec.h"
 
 namespace rigcal::cli {

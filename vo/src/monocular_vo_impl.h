@@ -15,7 +15,7 @@
 #include "affine_patch.h"
 #include "feature_grid.h"
 #include "klt_tracker.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/vo/monocular_vo.h"
 #include "vo_map.h"
 

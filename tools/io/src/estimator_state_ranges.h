@@ -3,7 +3,7 @@
 // checksum must not feed negative counts or absurd sums (1e300) to the estimator.
 
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::tools {
 

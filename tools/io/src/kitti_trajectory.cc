@@ -8,7 +8,7 @@
 #include <fstream>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_text.h"
 

@@ -6,7 +6,7 @@
 #include <limits>
 #include <set>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/yaml_fields.h"
 
 namespace rigcal::tools {

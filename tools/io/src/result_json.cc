@@ -7,8 +7,8 @@
 #include <limits>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::tools {
 namespace {

@@ -11,7 +11,7 @@
 #include <set>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/yaml_fields.h"

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/config_sections.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/io/yaml_fields.h"

@@ -2,7 +2,7 @@
 #include <cmath>
 #include <string>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/time_offset.h"
 #include "rigcal/io/trajectory_interpolation.h"

@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_text.h"
 

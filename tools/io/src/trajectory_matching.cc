@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_text.h"
 

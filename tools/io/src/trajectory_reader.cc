@@ -9,8 +9,8 @@
 #include <fstream>
 #include <optional>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/camera_name.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_formats.h"

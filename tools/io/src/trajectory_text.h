@@ -10,7 +10,7 @@
 #include <system_error>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::tools::io_internal {
 

@@ -4,7 +4,7 @@
 #include <array>
 #include <string>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_formats.h"

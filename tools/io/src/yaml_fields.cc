@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/camera_name.h"
 
 namespace rigcal::tools {

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <utility>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 
 namespace rigcal::tools::lcm_internal {
 

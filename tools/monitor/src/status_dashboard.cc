@@ -5,7 +5,7 @@
 #include <sstream>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/monitor/slave_view.h"
 #include "rigcal/monitor/status_snapshot.h"

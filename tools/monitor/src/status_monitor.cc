@@ -3,7 +3,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/lcm/bus_exposure.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"

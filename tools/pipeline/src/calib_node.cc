@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "calib_node_impl.h"
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/estimator_state_file.h"
 #include "rigcal/io/rig_files.h"

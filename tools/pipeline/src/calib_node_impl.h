@@ -17,7 +17,7 @@
 
 #include "frame_feed_device.h"
 #include "periodic_schedule.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/lcm/status_message.h"

@@ -8,7 +8,7 @@
 
 #include <string>
 
-#include "rigcal/calib/bounded_queue.h"
+#include "rigcal/base/bounded_queue.h"
 #include "rigcal/drivers/capture_device.h"
 
 namespace rigcal::tools {

@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::tools {
 namespace {

@@ -13,7 +13,7 @@
 #include <memory>
 #include <optional>
 
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 
 namespace rigcal::tools {

@@ -4,9 +4,9 @@
 #include <array>
 #include <stdexcept>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/pose_merge.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/camera_status_t.hpp"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"

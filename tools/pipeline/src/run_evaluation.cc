@@ -5,7 +5,7 @@
 #include <map>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/truth_alignment.h"
 
 namespace rigcal::tools {

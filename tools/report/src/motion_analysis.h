@@ -6,7 +6,7 @@
 #include <string>
 
 #include "history_log.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/report/report_data.h"
 
 namespace rigcal::tools::report_internal {

@@ -7,7 +7,7 @@
 
 #include "report_plots.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/report/svg_plot.h"

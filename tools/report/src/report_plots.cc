@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/report/svg_plot.h"
 
 namespace rigcal::tools::report_internal {

@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "report_plots.h"
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/report/svg_plot.h"
 
 namespace rigcal::tools::report_internal {

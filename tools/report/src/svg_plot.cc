@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 
 namespace rigcal {

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <limits>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal {
 namespace {

@@ -9,10 +9,10 @@
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
-#include "rigcal/calib/robust_statistics.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/robust_statistics.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/research/cramer_rao.h"
 #include "rigcal/research/experiments.h"
 

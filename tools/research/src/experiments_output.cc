@@ -6,7 +6,7 @@
 #include <map>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/research/experiments.h"
 

@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/pipeline/online_replay.h"
 

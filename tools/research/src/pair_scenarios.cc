@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <random>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic_car.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/research/pair_evaluation.h"

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::target {
 namespace {

@@ -12,8 +12,8 @@
 #include "intrinsics_uncertainty.h"
 #include "opencv.h"
 #include "polynomial_calibration.h"
-#include "rigcal/calib/logging.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/logging.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/target/target_poses.h"
 
 namespace rigcal::target {

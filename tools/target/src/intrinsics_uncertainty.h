@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/target/intrinsics.h"
 #include "rigcal/target/target_views.h"

@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/camera/camera_model.h"
 #include "rigcal/target/target_views.h"
 

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "planar_pose.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace rigcal::target::internal {
 namespace {

@@ -21,7 +21,7 @@
 
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/target/target_views.h"
 

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::target {
 namespace {

@@ -14,7 +14,7 @@
 
 #include "image_views.h"
 #include "opencv.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace rigcal::target {
 namespace {

@@ -5,8 +5,8 @@
 #include <string>
 
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 

@@ -16,7 +16,7 @@
 #include <limits>
 #include <optional>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/calib/timed_trajectory.h"
 
 namespace rigcal {

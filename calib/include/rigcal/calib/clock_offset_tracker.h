@@ -40,8 +40,8 @@
 #include <vector>
 
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 

@@ -6,7 +6,7 @@
 
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 

@@ -22,8 +22,8 @@
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 namespace internal {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 

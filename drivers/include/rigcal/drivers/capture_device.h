@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/frame.h"
 
 namespace rigcal::drivers {

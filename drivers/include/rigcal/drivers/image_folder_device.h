@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 
 namespace rigcal::drivers {

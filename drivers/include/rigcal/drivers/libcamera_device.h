@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/drivers/pixel_format.h"
 

@@ -16,8 +16,8 @@
 #include <optional>
 #include <string>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/trigger_link.h"
 #include "rigcal/drivers/trigger_matcher.h"
 #include "rigcal/drivers/trigger_receiver.h"

@@ -14,7 +14,7 @@
 #include <optional>
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::drivers {
 

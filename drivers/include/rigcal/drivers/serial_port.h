@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::drivers {
 

@@ -21,8 +21,8 @@
 #include <utility>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/drivers/simulated_rig_spec.h"
 

@@ -21,7 +21,7 @@
 #include <random>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/serial_port.h"
 
 namespace rigcal::trigger_core {

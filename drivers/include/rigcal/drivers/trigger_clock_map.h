@@ -31,7 +31,7 @@
 #include <deque>
 #include <optional>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::drivers {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/serial_port.h"
 #include "rigcal/trigger_protocol/frame_codec.h"
 

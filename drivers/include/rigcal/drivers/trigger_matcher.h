@@ -25,8 +25,8 @@
 #include <optional>
 #include <string>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/trigger_clock_map.h"
 #include "rigcal/trigger_protocol/messages.h"
 

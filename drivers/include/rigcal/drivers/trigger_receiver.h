@@ -13,8 +13,8 @@
 #include <string>
 #include <thread>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/trigger_link.h"
 #include "rigcal/drivers/trigger_matcher.h"
 

@@ -21,8 +21,8 @@
 #include <memory>
 #include <string>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/drivers/v4l2_options.h"
 

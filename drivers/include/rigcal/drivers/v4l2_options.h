@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/pixel_format.h"
 
 namespace rigcal::drivers {

@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::tools {
 

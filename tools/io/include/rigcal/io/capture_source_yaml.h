@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/libcamera_device.h"
 #include "rigcal/drivers/v4l2_options.h"
 #include "rigcal/io/yaml_fields.h"

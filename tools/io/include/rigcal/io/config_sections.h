@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "rigcal/calib/clock_offset_tracker.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
 

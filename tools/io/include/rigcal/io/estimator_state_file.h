@@ -23,7 +23,7 @@
 #include <string_view>
 
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::tools {
 

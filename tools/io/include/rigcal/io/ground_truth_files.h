@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/simulated_rig.h"
 
 namespace rigcal::tools {

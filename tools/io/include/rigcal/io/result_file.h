@@ -6,7 +6,7 @@
 #include <string>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::tools {
 

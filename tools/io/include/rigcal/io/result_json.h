@@ -6,7 +6,7 @@
 #include <string>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "rigcal/io/truth_alignment.h"
 
 namespace rigcal::tools {

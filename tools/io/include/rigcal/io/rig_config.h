@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/libcamera_device.h"
 #include "rigcal/drivers/live_trigger_timeline.h"

@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::tools {
 

@@ -7,7 +7,7 @@
 
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/clock_offset.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/trajectory_io.h"
 
 namespace rigcal::tools {

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "rigcal/calib/pose_interpolation.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/trajectory_io.h"
 
 namespace rigcal::tools {

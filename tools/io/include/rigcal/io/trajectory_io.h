@@ -30,10 +30,10 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/time_format.h"  // FormatNsAsSeconds, used with these files
+#include "rigcal/base/status.h"
+#include "rigcal/base/time_format.h"  // FormatNsAsSeconds, used with these files
 #include "rigcal/calib/timed_trajectory.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::tools {
 

@@ -15,7 +15,7 @@
 #include <optional>
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/live_trigger_timeline.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/yaml_fields.h"

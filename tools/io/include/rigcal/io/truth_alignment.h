@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::tools {
 

@@ -11,7 +11,7 @@
 
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::tools {
 

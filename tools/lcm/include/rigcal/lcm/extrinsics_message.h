@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/lcm/message_validation.h"
 #include "rigcal/rig_extrinsics_t.hpp"
 

@@ -24,7 +24,7 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal::tools {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/lcm/message_validation.h"
 
 namespace rigcal::tools {

@@ -8,8 +8,8 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera_pose_t.hpp"
 #include "rigcal/lcm/message_validation.h"
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "rigcal/calib/rig_estimator.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/calib/sync_buffer.h"
 #include "rigcal/lcm/message_validation.h"
 #include "rigcal/rig_status_t.hpp"

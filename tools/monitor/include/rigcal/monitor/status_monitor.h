@@ -12,7 +12,7 @@
 #include <ostream>
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/monitor/status_snapshot.h"
 
 namespace lcm {

@@ -31,7 +31,7 @@
 #include <vector>
 
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 
 namespace rigcal::tools {

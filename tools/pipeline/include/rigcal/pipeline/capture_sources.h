@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/camera/camera_model.h"
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/drivers/image_folder_device.h"

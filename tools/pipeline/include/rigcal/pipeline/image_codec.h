@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/drivers/frame.h"
 #include "rigcal/image_t.hpp"
 #include "rigcal/lcm/message_validation.h"

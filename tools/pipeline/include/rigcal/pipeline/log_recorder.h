@@ -27,9 +27,9 @@
 #include <thread>
 #include <vector>
 
-#include "rigcal/calib/bounded_queue.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/bounded_queue.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/lcm/log_writer.h"
 #include "rigcal/pipeline/image_codec.h"

@@ -26,9 +26,9 @@
 #include <thread>
 #include <vector>
 
-#include "rigcal/calib/bounded_queue.h"
+#include "rigcal/base/bounded_queue.h"
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 #include "rigcal/lcm/shared_bus.h"
 #include "rigcal/lcm/status_message.h"

@@ -12,8 +12,8 @@
 
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/truth_alignment.h"
 

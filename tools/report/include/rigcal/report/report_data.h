@@ -14,7 +14,7 @@
 
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/slave_state.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::tools {
 

@@ -16,7 +16,7 @@
 
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/report/report_data.h"
 
 namespace rigcal::tools {

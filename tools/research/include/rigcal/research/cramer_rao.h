@@ -16,7 +16,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_options.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/report/svg_plot.h"
 

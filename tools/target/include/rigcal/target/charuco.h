@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/target/target_views.h"
 
 namespace rigcal::target {

@@ -20,8 +20,8 @@
 
 #include <cstdint>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/target/reference_calibration.h"
 

@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/target/target_views.h"
 

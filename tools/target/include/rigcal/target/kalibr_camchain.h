@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_spec.h"
 
 namespace rigcal::target {

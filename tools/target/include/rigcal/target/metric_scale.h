@@ -10,7 +10,7 @@
 #include <string>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/trajectory_io.h"
 
 namespace rigcal::target {

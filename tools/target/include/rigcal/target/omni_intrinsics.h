@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/target/kalibr_camchain.h"
 #include "rigcal/target/target_views.h"
 

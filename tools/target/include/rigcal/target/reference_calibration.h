@@ -12,8 +12,8 @@
 #include <cstdint>
 #include <string>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/target/target_views.h"

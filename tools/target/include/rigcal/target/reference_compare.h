@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/target/intrinsics.h"
 #include "rigcal/target/target_views.h"
 

@@ -1,4 +1,4 @@
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 #include <sstream>
 

@@ -1,5 +1,5 @@
 // Tests of robust_statistics.h: medians, quantiles, the MAD-based sigma and RMS.
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 
 #include <gtest/gtest.h>
 

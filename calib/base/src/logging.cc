@@ -1,10 +1,10 @@
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 
 #include <cstdlib>
 
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 
 namespace rigcal {
 namespace {

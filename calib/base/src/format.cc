@@ -1,4 +1,4 @@
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 
 #include <array>
 #include <charconv>

@@ -1,4 +1,4 @@
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 #include <algorithm>
 #include <cmath>

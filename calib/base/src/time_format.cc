@@ -1,4 +1,4 @@
-#include "rigcal/calib/time_format.h"
+#include "rigcal/base/time_format.h"
 
 #include <array>
 #include <cstdio>

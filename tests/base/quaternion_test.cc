@@ -1,13 +1,24 @@
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <random>
-
-#include "rigcal/calib/synthetic.h"
 
 namespace rigcal {
 namespace {
+
+// A direction drawn uniformly on the unit sphere.
+Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::Vector3d v;
+  do {
+    const double z = normal(rng);
+    const double y = normal(rng);
+    v = Eigen::Vector3d(normal(rng), y, z);
+  } while (v.norm() < 1e-9);
+  return v.normalized();
+}
 
 TEST(Quaternion, MultiplicationMatricesMatchHamiltonProduct) {
   std::mt19937_64 rng(3);

@@ -15,7 +15,7 @@
 #include <optional>
 #include <utility>
 
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/thread_annotations.h"
 
 namespace rigcal {
 

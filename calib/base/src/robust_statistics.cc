@@ -1,4 +1,4 @@
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 
 #include <cmath>
 

@@ -1,5 +1,5 @@
 // Tests of format.h: numbers as text.
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The error vocabulary: Status, Expected<T> with a checked value(), RequireValid.
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 #include <gtest/gtest.h>
 

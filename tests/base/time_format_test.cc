@@ -1,5 +1,5 @@
 // Tests of time_format.h: stamps as text.
-#include "rigcal/calib/time_format.h"
+#include "rigcal/base/time_format.h"
 
 #include <gtest/gtest.h>
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
 namespace rigcal {
 
