@@ -27,15 +27,16 @@ rigcal_module(calib TARGET rigcal_calib DIRS calib/src calib/include USES base N
 rigcal_module(drivers TARGET rigcal_drivers DIRS drivers
               USES base camera trigger_protocol trigger_core)
 rigcal_module(vo TARGET rigcal_vo DIRS vo USES base camera)
-# tools.
+# tools: at most five floors (io < lcm < pipeline < research < cli).
 rigcal_module(io TARGET rigcal_io DIRS tools/io USES calib camera drivers)
-rigcal_module(target TARGET rigcal_target DIRS tools/target USES io)
+rigcal_module(plot TARGET rigcal_plot DIRS tools/plot USES io)
+rigcal_module(pattern TARGET rigcal_pattern DIRS tools/pattern USES io)
 rigcal_module(lcm TARGET rigcal_lcm DIRS tools/lcm USES io)
 rigcal_module(pipeline TARGET rigcal_pipeline DIRS tools/pipeline USES lcm vo)
-rigcal_module(monitor TARGET rigcal_monitor DIRS tools/monitor USES pipeline)
-rigcal_module(report TARGET rigcal_report DIRS tools/report USES monitor)
-rigcal_module(research TARGET rigcal_research DIRS tools/research USES report pipeline)
-rigcal_module(cli TARGET rigcal DIRS tools/cli USES research target)
+rigcal_module(monitor TARGET rigcal_monitor DIRS tools/monitor USES lcm)
+rigcal_module(report TARGET rigcal_report DIRS tools/report USES lcm plot)
+rigcal_module(research TARGET rigcal_research DIRS tools/research USES pipeline plot)
+rigcal_module(cli TARGET rigcal DIRS tools/cli USES research report monitor pattern)
 
 # rigcal_module_closure(<module> <out-var>): the module and every module it uses, transitively.
 function(rigcal_module_closure module out)

@@ -100,7 +100,7 @@ endif()
 # The documentation's layer table names the same modules with the same uses: rows
 # "| `module` | `target` | folders | uses |" (uses: module names in backquotes, or —).
 if(DOC_FILE)
-  file(STRINGS ${DOC_FILE} rows REGEX "^\\| `[a-z_]+` \\| `rigcal[a-z_]*` \\|")
+  file(STRINGS ${DOC_FILE} rows ENCODING UTF-8 REGEX "^\\| `[a-z_]+` \\| `rigcal[a-z_]*` \\|")
   set(documented "")
   foreach(row ${rows})
     string(REGEX MATCH "^\\| `([a-z_]+)` \\| `([a-z_]+)` \\|[^|]*\\|([^|]*)\\|" _ "${row}")

@@ -22,10 +22,10 @@
 namespace rigcal {
 namespace {
 
-using tools::free_running::CameraClock;
-using tools::free_running::FreeRunningRig;
-using tools::free_running::InCaptureOrder;
-using tools::free_running::MakeFreeRunningRig;
+using free_running::CameraClock;
+using free_running::FreeRunningRig;
+using free_running::InCaptureOrder;
+using free_running::MakeFreeRunningRig;
 
 constexpr double kSigmas = 4.0;
 

@@ -18,10 +18,10 @@
 namespace rigcal {
 namespace {
 
-using tools::free_running::CameraClock;
-using tools::free_running::FreeRunningRig;
-using tools::free_running::InCaptureOrder;
-using tools::free_running::MakeFreeRunningRig;
+using free_running::CameraClock;
+using free_running::FreeRunningRig;
+using free_running::InCaptureOrder;
+using free_running::MakeFreeRunningRig;
 
 std::vector<Similarity> TwoSlaves() {
   const std::vector<Similarity> demo = DemoRig();

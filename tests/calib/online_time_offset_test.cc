@@ -20,10 +20,10 @@
 namespace rigcal {
 namespace {
 
-using tools::free_running::CameraClock;
-using tools::free_running::FreeRunningRig;
-using tools::free_running::InCaptureOrder;
-using tools::free_running::MakeFreeRunningRig;
+using free_running::CameraClock;
+using free_running::FreeRunningRig;
+using free_running::InCaptureOrder;
+using free_running::MakeFreeRunningRig;
 
 constexpr double kSigmas = 4.0;  // an estimate within kSigmas σ of the truth passes
 constexpr int64_t kFrameNs = 50'000'000;

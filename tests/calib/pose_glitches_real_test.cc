@@ -94,9 +94,9 @@ TEST(PoseGlitchesRealTrajectories, EurocV102) {
   if (!std::filesystem::exists(path)) {
     RIGCAL_SKIP_MISSING() << path << " not found";
   }
-  tools::TrajectoryReadOptions read;
+  io::TrajectoryReadOptions read;
   read.max_quaternion_norm_error = 1e-3;  // the ground truth has 6-decimal quaternions
-  auto body = tools::ReadTrajectory(path.string(), read);
+  auto body = io::ReadTrajectory(path.string(), read);
   ASSERT_TRUE(body) << body.error();
   SampledTrajectory flight;
   flight.t_ns = body->t_ns;

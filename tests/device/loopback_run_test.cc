@@ -54,7 +54,7 @@
 
 extern char** environ;
 
-namespace rigcal::tools {
+namespace rigcal {
 namespace {
 
 constexpr double kDriveS = 12.0;  // the trajectory below: 7 waypoints, 2 s apart
@@ -245,7 +245,7 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   const std::string simulated = SimulatedRigYaml(width, height, frames);
   std::ofstream(dir + "/simulated.yaml") << simulated;
   std::ofstream(dir + "/v4l2.yaml") << V4l2RigYaml(simulated);
-  auto config = LoadRigConfig(dir + "/simulated.yaml");
+  auto config = io::LoadRigConfig(dir + "/simulated.yaml");
   ASSERT_TRUE(config.ok()) << config.error();
   auto rig = drivers::MakeSimulatedRig(*config->simulated_source);
   ASSERT_TRUE(rig.ok()) << rig.error();
@@ -314,7 +314,7 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   // The VO poses back on the simulation's clock: the frame written last before the stamp.
   std::vector<std::vector<CameraPose>> poses(2);
   for (int i = 0; i < 2; ++i) {
-    auto trajectory = ReadTrajectory(dir + "/poses/cam" + std::to_string(i) + ".txt");
+    auto trajectory = io::ReadTrajectory(dir + "/poses/cam" + std::to_string(i) + ".txt");
     ASSERT_TRUE(trajectory.ok()) << trajectory.error();
     for (size_t j = 0; j < trajectory->size(); ++j) {
       const auto after = std::upper_bound(write_ns.begin(), write_ns.end(), trajectory->t_ns[j]);
@@ -330,15 +330,15 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
               << " frames\n";
     EXPECT_GT(poses[i].size(), 0u) << "cam" << i << ": no VO pose";
   }
-  auto result = ReadResultFile(dir + "/result.yaml");
+  auto result = io::ReadResultFile(dir + "/result.yaml");
   ASSERT_TRUE(result.ok()) << result.error();
   ASSERT_EQ(result->slaves.size(), 1u);
-  auto evaluation = EvaluateRun(*rig, poses, *result);
+  auto evaluation = pipeline::EvaluateRun(*rig, poses, *result);
   ASSERT_TRUE(evaluation.ok()) << evaluation.error();
-  std::cout << FormatEvaluation(*evaluation);
+  std::cout << pipeline::FormatEvaluation(*evaluation);
   const SlaveCalibration& slave = result->slaves[0];
   ASSERT_TRUE(slave.usable()) << "the calibration did not converge: " << slave.message;
-  const SlaveEvaluation& e = evaluation->slaves[0];
+  const pipeline::SlaveEvaluation& e = evaluation->slaves[0];
   const Eigen::Vector3d c_err = slave.estimate.C - e.truth_master_units.C;
   const double c_mahalanobis = c_err.cwiseQuotient(slave.pos_std).norm();
   ASSERT_FALSE(slave.scales.empty());
@@ -365,4 +365,4 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal

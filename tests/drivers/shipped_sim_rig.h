@@ -15,7 +15,7 @@ namespace rigcal::drivers::testing {
 // The rig of config/<file> (its `source: {type: simulated}`) with realtime off. A config that
 // does not load or build fails the calling test.
 inline SimulatedRig LoadShippedSimulatedRig(const std::string& file) {
-  auto config = tools::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
+  auto config = io::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
   EXPECT_TRUE(config.ok()) << config.error();
   SimulatedRigSpec spec = *config->simulated_source;
   spec.realtime = false;

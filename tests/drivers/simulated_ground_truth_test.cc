@@ -48,11 +48,11 @@ TEST(SimulatedGroundTruth, FilesRoundTrip) {
   const fs::path dir =
       fs::temp_directory_path() / ("rigcal_sim_truth_" + std::to_string(::getpid())) / "sub";
   fs::remove_all(dir.parent_path());
-  const Status written = tools::WriteGroundTruth(*rig, dir.string());
+  const Status written = io::WriteGroundTruth(*rig, dir.string());
   ASSERT_TRUE(written.ok()) << written.message();
 
   // truth.yaml: one entry per slave, readable by `rigcal solve --truth`.
-  auto truth = tools::ReadRigYaml((dir / "truth.yaml").string());
+  auto truth = io::ReadRigYaml((dir / "truth.yaml").string());
   ASSERT_TRUE(truth) << truth.error();
   ASSERT_EQ(truth->size(), 2u);
   const std::vector<Similarity> expected = rig->TrueRig();
@@ -64,15 +64,15 @@ TEST(SimulatedGroundTruth, FilesRoundTrip) {
   }
 
   // <camera>.txt: camera-local TUM trajectories at the nominal frame stamps.
-  std::vector<tools::TimedTrajectory> local;
+  std::vector<TimedTrajectory> local;
   for (int c = 0; c < 3; ++c) {
     const std::string name = rig->spec().names[c];
-    tools::TrajectoryFormat format;
-    auto trajectory = tools::ReadTrajectory((dir / (name + ".txt")).string(), {}, &format);
+    io::TrajectoryFormat format;
+    auto trajectory = io::ReadTrajectory((dir / (name + ".txt")).string(), {}, &format);
     ASSERT_TRUE(trajectory) << trajectory.error();
-    EXPECT_EQ(format, tools::TrajectoryFormat::kTum);
+    EXPECT_EQ(format, io::TrajectoryFormat::kTum);
     ASSERT_EQ(static_cast<int64_t>(trajectory->size()), rig->num_frames());
-    auto world = tools::ReadTrajectory((dir / ("world_" + name + ".txt")).string());
+    auto world = io::ReadTrajectory((dir / ("world_" + name + ".txt")).string());
     ASSERT_TRUE(world) << world.error();
     const Pose first = rig->CameraPoseAt(c, 0.0);
     for (int64_t k = 0; k < rig->num_frames(); ++k) {
@@ -105,7 +105,7 @@ TEST(SimulatedGroundTruth, FilesRoundTrip) {
     EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
   }
   // An unwritable directory is an error that names it.
-  const Status unwritable = tools::WriteGroundTruth(*rig, "/proc/rigcal_no_such_dir");
+  const Status unwritable = io::WriteGroundTruth(*rig, "/proc/rigcal_no_such_dir");
   EXPECT_FALSE(unwritable.ok());
   EXPECT_NE(unwritable.message().find("/proc/rigcal_no_such_dir"), std::string::npos)
       << unwritable.message();

@@ -7,7 +7,7 @@
 #include "rigcal/io/rig_config.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 std::string Write(const std::string& name, const std::string& text) {
@@ -123,4 +123,4 @@ TEST(CaptureSourceYaml, LibcameraCameraByModel) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

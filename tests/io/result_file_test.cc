@@ -14,7 +14,7 @@
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_files.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using ::testing::HasSubstr;
@@ -143,4 +143,4 @@ TEST_F(ResultFileTest, ErrorsNameLineAndField) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -13,7 +13,7 @@
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using ::testing::HasSubstr;
@@ -482,4 +482,4 @@ TEST(FormatResultTableTest, NoTruthNoTruthColumn) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

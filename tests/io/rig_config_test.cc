@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -208,4 +208,4 @@ TEST(RigConfig, ErrorsNameFileLineAndKey) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -12,7 +12,7 @@
 #include "rigcal/base/quaternion.h"
 #include "rigcal/io/atomic_file.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -468,4 +468,4 @@ TEST_F(RigFilesTest, AtomicWriteErrorNamesPathAndErrno) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -11,11 +11,11 @@
 #include <fstream>
 
 #include "rigcal/base/robust_statistics.h"
-#include "rigcal/io/config_sections.h"
+#include "../../tools/io/src/config_sections.h"
 #include "rigcal/io/rig_config.h"
-#include "rigcal/io/yaml_fields.h"
+#include "../../tools/io/src/yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -431,4 +431,4 @@ TEST(SimulatedConfigs, ShippedConfigsAreTrackable) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -6,11 +6,11 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rigcal/io/config_sections.h"
+#include "../../tools/io/src/config_sections.h"
 #include "rigcal/io/rig_config.h"
-#include "rigcal/io/yaml_fields.h"
+#include "../../tools/io/src/yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -66,4 +66,4 @@ TEST(SimulatedTriggerYaml, ErrorsNameTheKey) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -10,7 +10,7 @@
 #include "rigcal/io/rig_config.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 const char* kCamera =
@@ -215,4 +215,4 @@ TEST(TriggerYaml, ErrorsNameTheFileLineAndField) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

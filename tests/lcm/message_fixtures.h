@@ -21,7 +21,7 @@
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/status_message.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm::lcm_test {
 
 using ::testing::HasSubstr;
 
@@ -254,4 +254,4 @@ inline SlaveCalibration MakeSlave(const std::string& name) {
   return s;
 }
 
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm::lcm_test

@@ -20,7 +20,7 @@
 #include "support/skip.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 TEST(LiveTriggerQemu, FramesCarryTheFirmwaresConsecutivePulses) {
@@ -39,7 +39,7 @@ TEST(LiveTriggerQemu, FramesCarryTheFirmwaresConsecutivePulses) {
     for (int i = 0; i < 60 && events.empty(); ++i) ASSERT_TRUE(link.Poll(500, &events).ok());
     ASSERT_FALSE(events.empty()) << "no message from the firmware within 30 s";
   }
-  auto config = LoadRigConfig(testing::WriteRig(support::FreshTempDir("live_trigger_qemu"),
+  auto config = io::LoadRigConfig(testing::WriteRig(support::FreshTempDir("live_trigger_qemu"),
                                                 qemu.pty_path(), "uart_wire: false"));
   ASSERT_TRUE(config.ok()) << config.error();
   std::ostringstream progress;
@@ -83,4 +83,4 @@ TEST(LiveTriggerQemu, FramesCarryTheFirmwaresConsecutivePulses) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -26,7 +26,7 @@
 #include "support/lcm_log_events.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
@@ -84,7 +84,7 @@ TEST(ImageCodec, RoundTripsEveryEncoding) {
     EXPECT_EQ(msg->t_ns, frame.t_ns);
     EXPECT_EQ(msg->trigger_seq, 42);
     EXPECT_EQ(msg->pixel_format, "GREY");
-    EXPECT_FALSE(CheckMessage(ImageChannel("cam1"), {"cam0", "cam1"}, &*msg).has_value());
+    EXPECT_FALSE(lcm::CheckMessage(lcm::ImageChannel("cam1"), {"cam0", "cam1"}, &*msg).has_value());
     auto back = FrameFromImage(*msg, 0);
     ASSERT_TRUE(back.ok()) << back.error();
     ASSERT_EQ(back->image.size(), frame.image.size());
@@ -142,9 +142,9 @@ struct LogContents {
   std::vector<int64_t> timestamps;
 };
 
-LogContents ReadLog(const std::string& path, const CameraNames& names) {
+LogContents ReadLog(const std::string& path, const lcm::CameraNames& names) {
   LogContents contents;
-  MessageValidator validator(names);
+  lcm::MessageValidator validator(names);
   for (const support::LoggedEvent& e : support::ReadLcmLog(path)) {
     ++contents.events_per_channel[e.channel];
     contents.timestamps.push_back(e.timestamp);
@@ -160,7 +160,7 @@ LogContents ReadLog(const std::string& path, const CameraNames& names) {
 TEST(LogRecorder, RecordsTappedFramesAndMessages) {
   const fs::path dir = support::FreshTempDir("log_recorder_frames");
   const std::string path = (dir / "rec.lcmlog").string();
-  const CameraNames names = {"cam0", "cam1"};
+  const lcm::CameraNames names = {"cam0", "cam1"};
   RecorderOptions options;
   options.image.encoding = ImageEncoding::kPng;
   options.lossless = true;
@@ -209,7 +209,7 @@ TEST(LogRecorder, RecordsTappedFramesAndMessages) {
 TEST(LogRecorder, CutRecordingReadsUpToLastCompleteEvent) {
   const fs::path dir = support::FreshTempDir("log_recorder_cut");
   const std::string path = (dir / "rec.lcmlog").string();
-  const CameraNames names = {"cam0"};
+  const lcm::CameraNames names = {"cam0"};
   RecorderOptions options;
   options.lossless = true;
   auto recorder = LogRecorder::Open(path, names, options);
@@ -247,4 +247,4 @@ TEST(LogRecorder, ReportsAnUnwritableLog) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -16,7 +16,7 @@
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/pipeline/run_evaluation.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 OnlineOptions Online() {
@@ -133,4 +133,4 @@ TEST(Pipeline, RejectsInconsistentArguments) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -10,7 +10,7 @@
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/drivers/simulated_rig.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 // The intrinsics of every camera of the rig.
 inline camera::CameraSpec RoomRigCameraSpec(const std::string& name) {
@@ -59,4 +59,4 @@ inline drivers::SimulatedRigSpec RoomRigSpec(double seconds) {
   return spec;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

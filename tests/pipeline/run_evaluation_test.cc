@@ -10,7 +10,7 @@
 #include "pipeline/room_rig_spec.h"
 #include "rigcal/base/quaternion.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 SlaveEvaluation Scored(const SlaveCalibration& slave, const Similarity& truth) {
@@ -85,7 +85,7 @@ TEST(RunEvaluation, PlanarEstimateWithPriorScoresTheAxisToo) {
                        "unit = 2 m"),
             std::string::npos)
       << table;
-  const TruthAlignment alignment = AlignmentOf(run);
+  const io::TruthAlignment alignment = AlignmentOf(run);
   EXPECT_TRUE(alignment.applied);
   EXPECT_EQ(alignment.metres_per_unit, 2.0);
 }
@@ -151,4 +151,4 @@ TEST(RunEvaluation, UnitsDoNotDependOnWhereTheOdometryStarted) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

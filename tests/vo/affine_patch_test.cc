@@ -71,7 +71,7 @@ TEST(AffinePatch, RecoversAKnownAffineWarp) {
 // aligning their first-frame patches: median distance to the projection of the true point.
 void CompareWithKltChain(const std::string& file, int camera, int frames, double* klt_median,
                          double* affine_median) {
-  auto config = tools::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
+  auto config = io::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
   ASSERT_TRUE(config.ok()) << config.error();
   drivers::SimulatedRigSpec spec = *config->simulated_source;
   spec.realtime = false;

@@ -187,7 +187,7 @@ void MaybeWritePoses(const drivers::SimulatedRig& rig, int camera, const CameraR
   if (dir == nullptr || *dir == '\0') return;
   const std::string base = std::string(dir) + "/" + stem;
   std::filesystem::create_directories(std::filesystem::path(base).parent_path());
-  tools::TimedTrajectory est, truth;
+  TimedTrajectory est, truth;
   std::map<int64_t, std::pair<Pose, int>> by_frame;
   for (const auto& [segment, poses] : run.segments) {
     for (const auto& [k, pose] : poses) by_frame.emplace(k, std::make_pair(pose, segment));
@@ -206,13 +206,13 @@ void MaybeWritePoses(const drivers::SimulatedRig& rig, int camera, const CameraR
     truth.t_ns.push_back(rig.FrameTimeNs(k));
     truth.poses.push_back(local);
   }
-  EXPECT_TRUE(tools::WriteTrajectoryNative(base + ".txt", est).ok());
-  EXPECT_TRUE(tools::WriteTrajectoryNative(base + "_truth.txt", truth).ok());
+  EXPECT_TRUE(io::WriteTrajectoryNative(base + ".txt", est).ok());
+  EXPECT_TRUE(io::WriteTrajectoryNative(base + "_truth.txt", truth).ok());
 }
 
 void EvaluateConfig(const std::string& file, int64_t max_frames) {
   const std::string path = std::string(RIGCAL_SOURCE_DIR) + "/config/" + file;
-  auto config = tools::LoadRigConfig(path);
+  auto config = io::LoadRigConfig(path);
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_TRUE(config->simulated_source.has_value());
   drivers::SimulatedRigSpec spec = *config->simulated_source;

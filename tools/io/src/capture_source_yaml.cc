@@ -1,11 +1,11 @@
-#include "rigcal/io/capture_source_yaml.h"
+#include "capture_source_yaml.h"
 
 #include <algorithm>
 #include <initializer_list>
 #include <set>
 #include <vector>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 const std::set<std::string> kV4l2Keys = {
@@ -159,4 +159,4 @@ std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& 
   return std::nullopt;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -5,7 +5,7 @@
 
 #include "rigcal/io/atomic_file.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 Status WriteGroundTruth(const drivers::SimulatedRig& rig, const std::string& dir) {
   namespace fs = std::filesystem;
@@ -21,4 +21,4 @@ Status WriteGroundTruth(const drivers::SimulatedRig& rig, const std::string& dir
   return Status::Ok();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

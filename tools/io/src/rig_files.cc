@@ -14,9 +14,10 @@
 #include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/rig_config.h"
-#include "rigcal/io/yaml_fields.h"
+#include "rig_config_yaml.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // Quaternions typed by hand with 4 decimals are off by up to ~1e-4.
@@ -377,4 +378,4 @@ Expected<std::vector<CamchainCamera>> ReadCamchain(const std::string& path) {
   return cameras;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "rigcal/base/format.h"
-#include "rigcal/io/config_sections.h"
+#include "config_sections.h"
 #include "rigcal/io/trajectory_io.h"
-#include "rigcal/io/yaml_fields.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using drivers::SimulatedRigSpec;
@@ -383,4 +383,4 @@ Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& sourc
   return spec;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -7,7 +7,7 @@
 #include "rigcal/io/time_offset.h"
 #include "rigcal/io/trajectory_interpolation.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 std::vector<int64_t> OffsetsNs(const std::vector<TimeOffsetEstimate>& offsets) {
@@ -76,4 +76,4 @@ Expected<OffsetMatch> MatchWithTimeOffsets(
   return out;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -12,7 +12,7 @@
 
 #include "rigcal/base/status.h"
 
-namespace rigcal::tools::io_internal {
+namespace rigcal::io::internal {
 
 // `s` without leading and trailing blanks (space, tab, CR, LF).
 std::string_view Trim(std::string_view s);
@@ -70,4 +70,4 @@ class LineParser {
   const char* const* names_;
 };
 
-}  // namespace rigcal::tools::io_internal
+}  // namespace rigcal::io::internal

@@ -10,7 +10,7 @@
 #include "trajectory_formats.h"
 #include "trajectory_text.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajectory,
@@ -19,7 +19,7 @@ Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajector
       (!trajectory.segment.empty() && trajectory.segment.size() != trajectory.t_ns.size())) {
     return Error{"cannot write '" + path + "': t_ns, poses and segment differ in size"};
   }
-  const io_internal::PoseLineFormat& layout = io_internal::LineFormatOf(format);
+  const internal::PoseLineFormat& layout = internal::LineFormatOf(format);
   const bool with_segment =
       format == TrajectoryFormat::kNative ||
       std::any_of(trajectory.segment.begin(), trajectory.segment.end(), [](int s) { return s; });
@@ -32,12 +32,12 @@ Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajector
   for (size_t k = 0; k < trajectory.size(); ++k) {
     const Pose& pose = trajectory.poses[k];
     const std::array<double, 4> q_wxyz = {pose.q.w(), pose.q.x(), pose.q.y(), pose.q.z()};
-    std::array<double, io_internal::kPoseColumns> columns{};  // column 0, the stamp, unused
+    std::array<double, internal::kPoseColumns> columns{};  // column 0, the stamp, unused
     for (int i = 0; i < 3; ++i) columns[layout.c_cols[i]] = pose.C[i];
     for (int i = 0; i < 4; ++i) columns[layout.q_cols[i]] = q_wxyz[i];
     out +=
         layout.seconds ? FormatNsAsSeconds(trajectory.t_ns[k]) : std::to_string(trajectory.t_ns[k]);
-    for (int col = 1; col < io_internal::kPoseColumns; ++col) {
+    for (int col = 1; col < internal::kPoseColumns; ++col) {
       out += ' ' + ShortestText(columns[col]);
     }
     if (with_segment) {
@@ -58,4 +58,4 @@ Status WriteTrajectoryNative(const std::string& path, const TimedTrajectory& tra
   return WriteTrajectory(path, trajectory, TrajectoryFormat::kNative);
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

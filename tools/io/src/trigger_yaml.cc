@@ -1,8 +1,8 @@
-#include "rigcal/io/trigger_yaml.h"
+#include "trigger_yaml.h"
 
 #include <cmath>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // An optional integer at node[key] in [lo, hi] into *out.
@@ -113,9 +113,9 @@ Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAM
   return c;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root,
                                     const std::vector<YAML::Node>& entries,
@@ -223,4 +223,4 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
   return std::nullopt;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -2,7 +2,7 @@
 
 #include <utility>
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 CaptureLoops::CaptureLoops(std::vector<std::unique_ptr<drivers::CameraDevice>> devices)
     : devices_(std::move(devices)), running_(static_cast<int>(devices_.size())) {}
@@ -40,4 +40,4 @@ std::vector<std::string> CaptureLoops::Problems() const {
   return problems_;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -8,7 +8,7 @@
 #include "rigcal/drivers/triggered_camera.h"
 #include "rigcal/drivers/v4l2_timestamp.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 // Frame 0 of a source paced from a live trigger (a simulated rig, an image-folder replay): the
@@ -21,7 +21,7 @@ Expected<int64_t> PacedStart(const drivers::LiveTriggerTimeline& trigger) {
 }
 
 // The devices of the source; `live` is the started trigger generator (may be null).
-Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const std::string& prefix,
+Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast, const std::string& prefix,
                                      std::ostream& progress,
                                      const drivers::LiveTriggerTimeline* live) {
   CaptureSources sources;
@@ -148,7 +148,7 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
 
 }  // namespace
 
-Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
+Expected<CaptureSources> OpenCaptureSources(const io::RigConfig& config, bool fast,
                                             const std::string& prefix, std::ostream& progress) {
   std::shared_ptr<drivers::LiveTriggerTimeline> live;
   if (config.trigger && config.simulated_source && fast) {
@@ -223,4 +223,4 @@ void ReportCaptureStats(const std::vector<drivers::V4l2Device*>& devices, const 
   }
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -11,7 +11,7 @@
 #include "rigcal/base/bounded_queue.h"
 #include "rigcal/drivers/capture_device.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 class FrameFeedDevice : public drivers::CameraDevice {
  public:
@@ -34,4 +34,4 @@ class FrameFeedDevice : public drivers::CameraDevice {
   BoundedQueue<drivers::Frame> frames_;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -8,7 +8,7 @@
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 const char* ToString(ImageEncoding encoding) {
   switch (encoding) {
@@ -85,12 +85,12 @@ Expected<image_t> FrameToImageMessage(const drivers::Frame& frame, const std::st
 }
 
 Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
-                                                const CameraNames& names, int camera,
+                                                const lcm::CameraNames& names, int camera,
                                                 const ImageEncodeOptions& options) {
   const std::string& name = names.at(static_cast<size_t>(camera));
   Expected<image_t> msg = FrameToImageMessage(frame, name, frame.t_ns / 1000, options);
   if (!msg) return msg.status();
-  return EncodeMessage(ImageChannel(name), names, std::move(*msg));
+  return lcm::EncodeMessage(lcm::ImageChannel(name), names, std::move(*msg));
 }
 
 namespace {
@@ -160,4 +160,4 @@ Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera) {
   return frame;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

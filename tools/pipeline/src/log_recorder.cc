@@ -6,7 +6,7 @@
 
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 // A device whose frames are also recorded.
@@ -51,7 +51,7 @@ int64_t RecorderStats::DroppedTotal() const {
 }
 
 LogRecorder::LogRecorder(std::vector<std::string> names, const RecorderOptions& options,
-                         std::unique_ptr<LogWriter> writer)
+                         std::unique_ptr<lcm::LogWriter> writer)
     : names_(std::move(names)),
       options_(options),
       writer_(std::move(writer)),
@@ -69,7 +69,7 @@ Expected<std::unique_ptr<LogRecorder>> LogRecorder::Open(const std::string& path
   if (const Status status = options.Check(); !status.ok()) {
     return Error{"RecorderOptions: " + status.message()};
   }
-  auto writer = LogWriter::Open(path, options.log);
+  auto writer = lcm::LogWriter::Open(path, options.log);
   if (!writer) return writer.status();
   std::unique_ptr<LogRecorder> recorder(
       new LogRecorder(std::move(names), options, std::move(*writer)));
@@ -99,7 +99,7 @@ void LogRecorder::RecordFrame(int camera, const drivers::Frame& frame) {
   }
   Expected<std::vector<uint8_t>> bytes = EncodeImageEvent(frame, names_, camera, options_.image);
   if (!bytes) return Fail(bytes.error());
-  Enqueue(Event{camera, ImageChannel(names_[index]), frame.t_ns / 1000, std::move(*bytes)});
+  Enqueue(Event{camera, lcm::ImageChannel(names_[index]), frame.t_ns / 1000, std::move(*bytes)});
 }
 
 void LogRecorder::Record(std::string channel, int64_t utime, std::vector<uint8_t> data) {
@@ -166,4 +166,4 @@ RecorderStats LogRecorder::Stats() const {
   return stats_;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -6,7 +6,7 @@
 
 #include "rigcal/drivers/v4l2_timestamp.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 int64_t ReplayClock::HostNs(int64_t t_ns) {
   MutexLock lock(mutex_);
@@ -34,4 +34,4 @@ void PacedReplayDevice::Interrupt() {
   device_->Interrupt();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

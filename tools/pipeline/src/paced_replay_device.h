@@ -16,7 +16,7 @@
 #include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 class ReplayClock {
  public:
@@ -47,4 +47,4 @@ class PacedReplayDevice final : public drivers::CameraDevice {
   std::atomic<bool> interrupted_{false};
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

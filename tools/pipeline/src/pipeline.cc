@@ -12,7 +12,7 @@
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/shared_bus.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 constexpr size_t kTimingWindow = 64;
@@ -41,8 +41,8 @@ int8_t CameraStatusVoState(const CameraHealth& health) {
   }
 }
 
-CameraStatusInput StatusInputOf(const CameraHealth& health) {
-  CameraStatusInput c;
+lcm::CameraStatusInput StatusInputOf(const CameraHealth& health) {
+  lcm::CameraStatusInput c;
   c.name = health.name;
   c.frames_received = health.frames_captured;
   c.dropped_backlog = health.dropped_backlog;
@@ -95,7 +95,7 @@ struct Pipeline::Camera {
 Pipeline::Pipeline(std::vector<std::string> names,
                    std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
                    std::vector<std::shared_ptr<const camera::CameraModel>> cameras,
-                   OnlineOptions online, PipelineOptions options, SharedBus* bus)
+                   OnlineOptions online, PipelineOptions options, lcm::SharedBus* bus)
     : names_(std::move(names)),
       options_(std::move(options)),
       bus_(bus),
@@ -189,10 +189,10 @@ void Pipeline::Forward(const CameraPose& pose) {
     ++camera.health.sync_rejected;
   }
   if (bus_ != nullptr) {
-    auto msg = CameraPoseToLcm(pose, names_, pose.t_ns / 1000);
+    auto msg = lcm::CameraPoseToLcm(pose, names_, pose.t_ns / 1000);
     if (msg) {
-      const std::string channel = PoseChannel(names_[index]);
-      auto bytes = EncodeMessage(channel, names_, *msg);
+      const std::string channel = lcm::PoseChannel(names_[index]);
+      auto bytes = lcm::EncodeMessage(channel, names_, *msg);
       if (bytes) bus_->Publish(channel, *bytes);
     }
   }
@@ -280,4 +280,4 @@ std::vector<CameraPose> Pipeline::RecordedPoses(int camera) const {
   return c.recorded;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -8,7 +8,7 @@
 #include "rigcal/base/format.h"
 #include "rigcal/io/truth_alignment.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 // Unit of every VO segment of camera `camera`.
@@ -30,7 +30,7 @@ std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int came
       const Pose truth = reference.Between(rig.CameraPoseAt(camera, stream_time(pose->t_ns)));
       pairs.emplace_back(truth.C, first.Between(pose->pose).C);
     }
-    const UnitFit fit = FitUnit(pairs);
+    const io::UnitFit fit = io::FitUnit(pairs);
     SegmentUnit unit;
     unit.segment = segment;
     unit.poses = static_cast<int>(members.size());
@@ -122,9 +122,9 @@ void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveE
   }
 }
 
-TruthAlignment AlignmentOf(const RunEvaluation& evaluation) {
-  TruthAlignment a;
-  a.mode = TruthUnit::kMetric;
+io::TruthAlignment AlignmentOf(const RunEvaluation& evaluation) {
+  io::TruthAlignment a;
+  a.mode = io::TruthUnit::kMetric;
   a.applied = true;
   a.metres_per_unit = evaluation.master_metres_per_unit;
   for (const SegmentUnit& unit :
@@ -178,4 +178,4 @@ std::string FormatEvaluation(const RunEvaluation& evaluation) {
   return out.str();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

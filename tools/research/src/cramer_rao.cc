@@ -10,7 +10,7 @@
 
 #include "rigcal/base/quaternion.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -297,4 +297,4 @@ ThesisBound ThesisCramerRaoBound(const std::vector<Pose>& master_poses, const Si
   return bound;
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

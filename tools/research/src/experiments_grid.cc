@@ -16,7 +16,7 @@
 #include "rigcal/research/cramer_rao.h"
 #include "rigcal/research/experiments.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 uint64_t SplitMix64(uint64_t x) {
@@ -349,4 +349,4 @@ BoundStats AverageThesisBound(int num_poses, const ExperimentOptions& options) {
   return stats;
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

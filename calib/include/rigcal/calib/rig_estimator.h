@@ -144,16 +144,8 @@ struct RigEstimatorOptions {
   Status Check() const;
 };
 
-// Facts about a slave's published estimate (bitmask). How far the estimate has got is not a
-// flag but its SlaveCalibration::state (slave_state.h).
-enum SlaveFlags : uint32_t {
-  kFlagTranslationalOnly = 1u << 0,  // rotation and scale only (thesis 4.5)
-  kFlagPlanar = 1u << 1,             // C along the rotation axis is unobservable
-  kFlagRefined = 1u << 2,  // the published value comes from the non-linear window refinement
-};
-
 struct SlaveOnlineState {
-  uint32_t flags = 0;
+  uint32_t flags = 0;  // SlaveFlags (slave_state.h)
   int segment = 0;                  // current odometry segment of the slave
   int64_t last_update_ns = 0;       // stream time of the last accepted motion
   double short_long_rot_deg = 0.0;  // disagreement of the short and long windows

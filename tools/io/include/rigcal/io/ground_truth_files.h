@@ -6,10 +6,10 @@
 #include "rigcal/base/status.h"
 #include "rigcal/drivers/simulated_rig.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // Writes SimulatedRig::GroundTruthFiles() into directory `dir` (created if missing), each file
 // atomically (WriteFileAtomically). Ok, or an error naming the file or directory.
 Status WriteGroundTruth(const drivers::SimulatedRig& rig, const std::string& dir);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

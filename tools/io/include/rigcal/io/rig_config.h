@@ -15,12 +15,9 @@
 #include "rigcal/drivers/live_trigger_timeline.h"
 #include "rigcal/drivers/simulated_rig.h"
 
-namespace YAML {
-class Node;
-}  // namespace YAML
 #include "rigcal/drivers/v4l2_options.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 struct PublishOptions {
   double extrinsics_rate_hz = 2.0;  // RIGCAL_EXTRINSICS messages per second, in (0, 1000]
@@ -79,8 +76,6 @@ struct RigConfig {
 // wrong types, out-of-range values, unknown master, duplicate camera names, a nominal on the
 // master, a simulated source with cameras lacking intrinsics or truth, ...).
 Expected<RigConfig> LoadRigConfig(const std::string& path);
-// The same for a file already loaded (LoadYaml, yaml_fields.h), `path` naming it in errors.
-Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string& path);
 
 // Writes a rig config that LoadRigConfig reads back: `rig: {name, master: cameras[0].name}` and
 // per camera its name and, when it has a spec, model, resolution, the model's parameters
@@ -92,4 +87,4 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
                                     const std::vector<CameraConfig>& cameras,
                                     const std::string& comment);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -22,7 +22,7 @@
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // Reads a rig YAML file (truth or result). Quaternions are normalised when their norm is
 // within 1e-3 of 1 (hand-typed values with 4 decimals), else rejected. Errors start with
@@ -85,4 +85,4 @@ struct CamchainCamera {
 // 0 0 0 1, rotation block not orthonormal within 1e-6).
 Expected<std::vector<CamchainCamera>> ReadCamchain(const std::string& path);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -35,10 +35,7 @@
 #include "rigcal/calib/timed_trajectory.h"
 #include "rigcal/base/types.h"
 
-namespace rigcal::tools {
-
-// The poses of one camera with their time stamps (calib/timed_trajectory.h).
-using TimedTrajectory = rigcal::TimedTrajectory;
+namespace rigcal::io {
 
 enum class TrajectoryFormat { kTum, kEurocCsv, kNative };
 std::string ToString(TrajectoryFormat format);  // "TUM", "EuRoC CSV", "rigcal native"
@@ -109,4 +106,4 @@ Expected<RigRecording> MatchTrajectories(const TimedTrajectory& master,
                                          const std::vector<TimedTrajectory>& slaves,
                                          int64_t tolerance_ns);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -15,7 +15,7 @@
 #include "rigcal/base/thread_annotations.h"
 #include "rigcal/drivers/capture_device.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 class CaptureLoops {
  public:
@@ -41,4 +41,4 @@ class CaptureLoops {
   std::vector<std::string> problems_ RIGCAL_GUARDED_BY(mutex_);
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -19,7 +19,7 @@
 #include "rigcal/drivers/v4l2_device.h"
 #include "rigcal/io/rig_config.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 struct CaptureSources {
   // One device and one model per camera, camera index order (config.CameraNames()).
@@ -43,7 +43,7 @@ struct CaptureSources {
 // What is opened goes to `progress` as lines starting with `prefix` ("rigcal run: camera 'cam0':
 // 95 images listed in ..."). Errors name the config file and the camera; a config without a
 // source says which sources exist.
-Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
+Expected<CaptureSources> OpenCaptureSources(const io::RigConfig& config, bool fast,
                                             const std::string& prefix, std::ostream& progress);
 
 // The end-of-run report of the image folders: skipped images and CSV problems, as lines
@@ -61,4 +61,4 @@ void ReportTrigger(const CaptureSources& sources, const std::string& prefix, std
 void ReportCaptureStats(const std::vector<drivers::V4l2Device*>& devices, const std::string& prefix,
                         std::ostream& out);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -14,7 +14,7 @@
 #include "rigcal/image_t.hpp"
 #include "rigcal/lcm/message_validation.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 // How image_t.data holds the pixels: raw rows (no CPU, largest), PNG (lossless, ~2x smaller,
 // slowest) or JPEG (lossy, smallest).
@@ -39,7 +39,7 @@ Expected<image_t> FrameToImageMessage(const drivers::Frame& frame, const std::st
 // FrameToImageMessage at utime = t_ns / 1000 for camera names[camera], checked and encoded for
 // RIGCAL_IMAGE_<name> (EncodeMessage): the data of one log event.
 Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
-                                                const CameraNames& names, int camera,
+                                                const lcm::CameraNames& names, int camera,
                                                 const ImageEncodeOptions& options);
 
 // The frame of a (checked, see image_message.h) image_t for camera index `camera`: t_ns and seq
@@ -49,4 +49,4 @@ Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
 // format, data that does not decode, a decoded size other than width x height.
 Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

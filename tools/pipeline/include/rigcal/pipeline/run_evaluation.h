@@ -17,7 +17,7 @@
 #include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/truth_alignment.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 struct SegmentUnit {
   int segment = 0;
@@ -61,11 +61,11 @@ void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveE
 
 // The master unit of the run as a truth alignment (for ResultToJson): applied, the unit of
 // the master's scored VO segment (FitUnit of its poses against the true trajectory).
-TruthAlignment AlignmentOf(const RunEvaluation& evaluation);
+io::TruthAlignment AlignmentOf(const RunEvaluation& evaluation);
 
 // A table: slave, rotation error (deg), position direction error (deg), distance error (%),
 // scale error (%), position error in the plane and along the axis of planar motion (mm), and
 // the master unit. Figures the estimate does not determine are shown as "unobs".
 std::string FormatEvaluation(const RunEvaluation& evaluation);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline
