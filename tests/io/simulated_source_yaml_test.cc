@@ -19,7 +19,7 @@ namespace rigcal::tools {
 namespace {
 
 namespace fs = std::filesystem;
-using drivers::SimulatedRigSpec;
+using sim::SimulatedRigSpec;
 
 fs::path TempDir() {
   static const fs::path dir = [] {
@@ -92,7 +92,7 @@ TEST(SimulatedSourceYaml, ParsesEveryKey) {
   ASSERT_EQ(spec->waypoints.size(), 3u);
   EXPECT_EQ(spec->waypoints[1].position, Eigen::Vector3d(1, 0.5, 3));
   EXPECT_LT(spec->waypoints[1].world_from_master.angularDistance(
-                drivers::WaypointOrientationFromYpr(30, 5, -5)),
+                sim::WaypointOrientationFromYpr(30, 5, -5)),
             1e-12);
   EXPECT_LT(spec->waypoints[2].world_from_master.angularDistance(Eigen::Quaterniond::Identity()),
             1e-12);
@@ -139,7 +139,7 @@ TEST(SimulatedSourceYaml, TrajectoryFileRelativeToTheConfig) {
   EXPECT_TRUE(spec->waypoints.empty());
   // The body_from_master above makes a camera looking along the body's x axis, level: the same
   // as a waypoint with ypr (0, 0, 0).
-  EXPECT_LT(spec->body_from_master.q.angularDistance(drivers::WaypointOrientationFromYpr(0, 0, 0)),
+  EXPECT_LT(spec->body_from_master.q.angularDistance(sim::WaypointOrientationFromYpr(0, 0, 0)),
             1e-9);
 }
 
@@ -253,7 +253,7 @@ TEST(SimulatedSourceYaml, RigConfigFillsCamerasAndChecksTheSpec) {
   EXPECT_DOUBLE_EQ(spec.master_from_camera[1].C.x(), -0.5);
   const Status status = spec.Check();
   EXPECT_TRUE(status.ok()) << status.message();
-  EXPECT_TRUE(drivers::MakeSimulatedRig(spec));
+  EXPECT_TRUE(sim::MakeSimulatedRig(spec));
 
   auto unknown = LoadRigConfig(Write("rig_bad.yaml", std::string(kRig) +
                                                          "source:\n  type: simulated\n"
@@ -292,7 +292,7 @@ TEST(SimulatedConfigs, ShippedConfigsAreTrackable) {
     ASSERT_TRUE(config) << config.error();
     ASSERT_TRUE(config->simulated_source);
     const SimulatedRigSpec& spec = *config->simulated_source;
-    auto rig = drivers::MakeSimulatedRig(spec);
+    auto rig = sim::MakeSimulatedRig(spec);
     ASSERT_TRUE(rig) << rig.error();
     const int64_t frames = rig->num_frames();
     const int step = 5;

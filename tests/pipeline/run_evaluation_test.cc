@@ -115,7 +115,7 @@ TEST(RunEvaluation, TranslationalEstimateHasNoPositionToScore) {
 // first pose on both sides. Fitted to the raw VO positions, with the origin 10 frames before the
 // first pose, the units here came out 24-25 % small (device/loopback_run's scale truth 5 %).
 TEST(RunEvaluation, UnitsDoNotDependOnWhereTheOdometryStarted) {
-  auto rig = drivers::MakeSimulatedRig(RoomRigSpec(4.0));
+  auto rig = sim::MakeSimulatedRig(RoomRigSpec(4.0));
   ASSERT_TRUE(rig) << rig.error();
   const std::vector<double> units_per_metre = {2.5, 0.8, 1.3};
   const int origin_frame = 10;

@@ -42,7 +42,7 @@ Sequence RunSequence(const std::shared_ptr<const camera::CameraModel>& camera, i
                      PoseOf pose_of, Blank blank, VoOptions options = {}) {
   std::vector<Pose> poses;
   for (int k = 0; k < frames; ++k) poses.push_back(pose_of(k));
-  const drivers::SimulatedRig rig = support::MakeRoomSequence(camera, poses).value();
+  const sim::SimulatedRig rig = support::MakeRoomSequence(camera, poses).value();
   MonocularVo vo(camera, 0, options);
   Sequence s;
   for (int k = 0; k < frames; ++k) {

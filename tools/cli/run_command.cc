@@ -16,7 +16,6 @@
 #include "exit_codes.h"
 #include "rigcal/base/format.h"
 #include "rigcal/base/logging.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/ground_truth_files.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_config.h"
@@ -33,6 +32,7 @@
 #include "rigcal/pipeline/online_replay.h"
 #include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/run_evaluation.h"
+#include "rigcal/sim/simulated_rig.h"
 #include "stop_signal.h"
 
 namespace rigcal::cli {
@@ -169,7 +169,7 @@ int RunRun(const RunArgs& args) {
     std::cerr << "rigcal run: " << sources.error() << "\n";
     return kExitError;
   }
-  const std::optional<drivers::SimulatedRig>& rig = sources->rig;
+  const std::optional<sim::SimulatedRig>& rig = sources->rig;
   const bool realtime = sources->realtime;
   if (rig && !args.truth_dir.empty()) {
     if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {

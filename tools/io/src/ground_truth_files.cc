@@ -7,7 +7,7 @@
 
 namespace rigcal::tools {
 
-Status WriteGroundTruth(const drivers::SimulatedRig& rig, const std::string& dir) {
+Status WriteGroundTruth(const sim::SimulatedRig& rig, const std::string& dir) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(dir, ec);

@@ -425,7 +425,7 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
       return finish();
     }
     if (*type == "v4l2") {
-      drivers::V4l2Options defaults;
+      capture::V4l2Options defaults;
       if (auto e = ParseV4l2Keys(r, source, "source", true, &defaults)) return *e;
       for (size_t i = 0; i < config.cameras.size(); ++i) {
         const CameraConfig& camera = config.cameras[i];
@@ -438,7 +438,7 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
         if (!camera.spec) {
           return r.Fail(entry, camera.name, "a v4l2 camera needs a model and intrinsics");
         }
-        drivers::V4l2Options options = defaults;
+        capture::V4l2Options options = defaults;
         options.device = camera.device;
         options.width = camera.spec->width;
         options.height = camera.spec->height;
@@ -452,7 +452,7 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
       return finish();
     }
     if (*type == "libcamera") {
-      drivers::LibcameraOptions defaults;
+      capture::LibcameraOptions defaults;
       if (auto e = ParseLibcameraKeys(r, source, "source", true, &defaults)) return *e;
       for (size_t i = 0; i < config.cameras.size(); ++i) {
         const CameraConfig& camera = config.cameras[i];
@@ -464,7 +464,7 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
         if (!camera.spec) {
           return r.Fail(entry, camera.name, "a libcamera camera needs a model and intrinsics");
         }
-        drivers::LibcameraOptions options = defaults;
+        capture::LibcameraOptions options = defaults;
         options.camera = camera.device;
         options.width = camera.spec->width;
         options.height = camera.spec->height;

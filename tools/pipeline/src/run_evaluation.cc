@@ -12,7 +12,7 @@ namespace rigcal::tools {
 namespace {
 
 // Unit of every VO segment of camera `camera`.
-std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int camera,
+std::vector<SegmentUnit> SegmentUnits(const sim::SimulatedRig& rig, int camera,
                                       const std::vector<CameraPose>& poses) {
   std::map<int, std::vector<const CameraPose*>> by_segment;
   for (const CameraPose& pose : poses) by_segment[pose.segment].push_back(&pose);
@@ -43,7 +43,7 @@ std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int came
 
 }  // namespace
 
-Expected<RunEvaluation> EvaluateRun(const drivers::SimulatedRig& rig,
+Expected<RunEvaluation> EvaluateRun(const sim::SimulatedRig& rig,
                                     const std::vector<std::vector<CameraPose>>& poses,
                                     const RigCalibration& result) {
   if (poses.size() != static_cast<size_t>(rig.num_cameras())) {

@@ -1,0 +1,116 @@
+// The simulated rig's ground truth files: read back with the project's own readers (TUM and
+// rig YAML), equal to the rig's truth, and consistent with the thesis' rig constraint.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "rigcal/io/ground_truth_files.h"
+#include "rigcal/io/rig_files.h"
+#include "rigcal/io/trajectory_io.h"
+#include "rigcal/sim/simulated_rig.h"
+#include "support/ideal_cameras.h"
+
+namespace rigcal::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+SimulatedRigSpec::Waypoint Waypoint(const Eigen::Vector3d& p, double yaw, double pitch,
+                                    double roll) {
+  SimulatedRigSpec::Waypoint w;
+  w.position = p;
+  w.world_from_master = WaypointOrientationFromYpr(yaw, pitch, roll);
+  return w;
+}
+
+SimulatedRigSpec Spec() {
+  SimulatedRigSpec spec;
+  spec.names = {"front", "side", "back"};
+  for (int i = 0; i < 3; ++i) spec.cameras.push_back(support::PinholeWithFov(32, 24, 60));
+  Pose side, back;
+  side.q = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()));
+  side.C = Eigen::Vector3d(-1, 1, 3);
+  back.q = Eigen::Quaterniond(0, 0, 1, 0);
+  back.C = Eigen::Vector3d(0.1, 0.2, -1.5);
+  spec.master_from_camera = {Pose(), side, back};
+  spec.waypoints = {Waypoint({-1, 0, 3}, 0, 0, 0), Waypoint({0, 1, 3.2}, 30, 10, -5),
+                    Waypoint({1, 0, 2.9}, -20, -10, 10)};
+  spec.waypoint_interval_s = 1.0;
+  spec.frame_rate_hz = 20;
+  spec.start_time_ns = 5'000'000'123;
+  return spec;
+}
+
+TEST(SimulatedGroundTruth, FilesRoundTrip) {
+  auto rig = MakeSimulatedRig(Spec());
+  ASSERT_TRUE(rig) << rig.error();
+  const fs::path dir =
+      fs::temp_directory_path() / ("rigcal_sim_truth_" + std::to_string(::getpid())) / "sub";
+  fs::remove_all(dir.parent_path());
+  const Status written = tools::WriteGroundTruth(*rig, dir.string());
+  ASSERT_TRUE(written.ok()) << written.message();
+
+  // truth.yaml: one entry per slave, readable by `rigcal solve --truth`.
+  auto truth = tools::ReadRigYaml((dir / "truth.yaml").string());
+  ASSERT_TRUE(truth) << truth.error();
+  ASSERT_EQ(truth->size(), 2u);
+  const std::vector<Similarity> expected = rig->TrueRig();
+  for (int i = 0; i < 2; ++i) {
+    const Similarity& s = truth->at(rig->spec().names[i + 1]);
+    EXPECT_LT(s.q.angularDistance(expected[i].q), 1e-12);
+    EXPECT_LT((s.C - expected[i].C).norm(), 1e-12);
+    EXPECT_DOUBLE_EQ(s.scale, 1.0);
+  }
+
+  // <camera>.txt: camera-local TUM trajectories at the nominal frame stamps.
+  std::vector<tools::TimedTrajectory> local;
+  for (int c = 0; c < 3; ++c) {
+    const std::string name = rig->spec().names[c];
+    tools::TrajectoryFormat format;
+    auto trajectory = tools::ReadTrajectory((dir / (name + ".txt")).string(), {}, &format);
+    ASSERT_TRUE(trajectory) << trajectory.error();
+    EXPECT_EQ(format, tools::TrajectoryFormat::kTum);
+    ASSERT_EQ(static_cast<int64_t>(trajectory->size()), rig->num_frames());
+    auto world = tools::ReadTrajectory((dir / ("world_" + name + ".txt")).string());
+    ASSERT_TRUE(world) << world.error();
+    const Pose first = rig->CameraPoseAt(c, 0.0);
+    for (int64_t k = 0; k < rig->num_frames(); ++k) {
+      EXPECT_EQ(trajectory->t_ns[k], rig->FrameTimeNs(k));
+      const Pose truth_world = rig->CameraPoseAt(c, rig->FrameStreamTime(k));
+      EXPECT_LT((world->poses[k].C - truth_world.C).norm(), 1e-12);
+      EXPECT_LT(world->poses[k].q.angularDistance(truth_world.q), 1e-9);
+      const Pose truth_local = first.Between(truth_world);
+      EXPECT_LT((trajectory->poses[k].C - truth_local.C).norm(), 1e-12);
+      EXPECT_LT(trajectory->poses[k].q.angularDistance(truth_local.q), 1e-9);
+    }
+    EXPECT_LT(trajectory->poses[0].C.norm(), 1e-15);
+    local.push_back(std::move(*trajectory));
+  }
+  // The thesis constraint holds between the camera-local trajectories and the true rig:
+  // T_0^k dT_i = dT_i T_i^k.
+  for (int i = 0; i < 2; ++i) {
+    Pose d;
+    d.q = expected[i].q;
+    d.C = expected[i].C;
+    for (int64_t k = 0; k < rig->num_frames(); k += 7) {
+      const Pose lhs = local[0].poses[k] * d;
+      const Pose rhs = d * local[i + 1].poses[k];
+      EXPECT_LT((lhs.C - rhs.C).norm(), 1e-9) << i << " " << k;
+      EXPECT_LT(lhs.q.angularDistance(rhs.q), 1e-9) << i << " " << k;
+    }
+  }
+  // No temporary files are left behind.
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
+  }
+  // An unwritable directory is an error that names it.
+  const Status unwritable = tools::WriteGroundTruth(*rig, "/proc/rigcal_no_such_dir");
+  EXPECT_FALSE(unwritable.ok());
+  EXPECT_NE(unwritable.message().find("/proc/rigcal_no_such_dir"), std::string::npos)
+      << unwritable.message();
+  fs::remove_all(dir.parent_path());
+}
+
+}  // namespace
+}  // namespace rigcal::sim
