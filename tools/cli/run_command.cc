@@ -172,7 +172,8 @@ int RunRun(const RunArgs& args) {
   const std::optional<sim::SimulatedRig>& rig = sources->rig;
   const bool realtime = sources->realtime;
   if (rig && !args.truth_dir.empty()) {
-    if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
+    if (const Status status = tools::WriteGroundTruth(rig->GroundTruth(), args.truth_dir);
+        !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
@@ -277,7 +278,8 @@ int RunRun(const RunArgs& args) {
   if (rig && !args.truth_dir.empty() && !args.poses_dir.empty()) {
     // In real time the devices' stamps start with the rig clock: rewrite the truth now that
     // it runs, so its stamps match the written poses (before the run they count from 0).
-    if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
+    if (const Status status = tools::WriteGroundTruth(rig->GroundTruth(), args.truth_dir);
+        !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }

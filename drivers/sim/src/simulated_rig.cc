@@ -1,6 +1,6 @@
 // SimulatedRig: building a simulated rig from its spec (trajectory, scene, free-space check,
-// render tables, noise table), its devices, ground-truth poses and renders (the truth files:
-// sim_ground_truth.cc).
+// render tables, noise table), its devices, ground-truth poses and renders (the ground truth as
+// data: sim_ground_truth.cc).
 #include "rigcal/sim/simulated_rig.h"
 
 #include <chrono>

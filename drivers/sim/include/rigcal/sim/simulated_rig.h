@@ -18,12 +18,12 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
 #include "rigcal/capture/capture_device.h"
+#include "rigcal/sim/simulated_ground_truth.h"
 #include "rigcal/sim/simulated_rig_spec.h"
 
 namespace rigcal::sim {
@@ -130,18 +130,12 @@ class SimulatedRig {
   std::optional<double> CastRay(const Eigen::Vector3d& origin,
                                 const Eigen::Vector3d& direction) const;
 
-  // The ground-truth files of the simulated drive:
-  //   <camera>.txt  TUM trajectory of every camera at every nominal frame stamp, in the
-  //                 camera's own reference frame (its pose at frame 0 is the identity; thesis
-  //                 T_i^k = (T_i,world^0)^-1 T_i,world^k), metres;
-  //   world_<camera>.txt  the same in the world frame;
-  //   truth.yaml    the true rig in the rig YAML format of tools/rig_files.h (master and one
-  //                 entry per slave: q_wxyz, C, scale 1).
-  // Stamps are FrameTimeNs(k): in realtime mode they match the devices' stamps only once the
-  // rig clock has started (write the truth after the run; before, stamps count from 0).
-  // Returned as (file name, contents) in that order; rigcal_io's WriteGroundTruth writes them
-  // atomically into a directory.
-  std::vector<std::pair<std::string, std::string>> GroundTruthFiles() const;
+  // The ground truth of the simulated drive: every camera's mounting (scale 1) and its poses at
+  // every nominal frame stamp FrameTimeNs(k), in the world and in its own reference frame
+  // (simulated_ground_truth.h); rigcal_io writes it as files (WriteGroundTruth). In realtime
+  // mode the stamps match the devices' stamps only once the rig clock has started (take the
+  // truth after the run; before, stamps count from 0).
+  SimulatedGroundTruth GroundTruth() const;
 
  private:
   friend Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec);
