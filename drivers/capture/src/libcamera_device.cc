@@ -117,7 +117,22 @@ struct LibcameraDevice::Impl {
     return nullptr;
   }
 
+  // Acquires the camera, configures it, maps its buffers and starts it (on failure with the
+  // camera released again).
   Status Connect() {
+    if (Status s = Acquire(); !s.ok()) return s;
+    if (Status s = Configure(); !s.ok()) return s;
+    if (Status s = CreateRequests(); !s.ok()) return s;
+    if (Status s = Start(); !s.ok()) return s;
+    last_sequence = -1;
+    MutexLock lock(mutex);
+    removed = false;
+    stats.connected = true;
+    return Status::Ok();
+  }
+
+  // Finds the camera of options.camera and acquires it.
+  Status Acquire() {
     camera = Find();
     if (!camera) {
       std::string seen;
@@ -131,6 +146,13 @@ struct LibcameraDevice::Impl {
       camera.reset();
       return Error{"libcamera camera '" + options.camera + "' is in use"};
     }
+    return Status::Ok();
+  }
+
+  // Generates the role's configuration, sets the first preferred pixel format offered, the
+  // camera model's size and the buffer count, validates it (validation) and applies it (layout,
+  // stream).
+  Status Configure() {
     config = camera->generateConfiguration({*Role(options.role)});
     if (!config || config->empty()) {
       Disconnect();
@@ -157,40 +179,52 @@ struct LibcameraDevice::Impl {
     cfg.pixelFormat = *chosen;
     cfg.size = libcamera::Size(options.width, options.height);
     cfg.bufferCount = options.buffers;
-    const std::string asked = cfg.toString();
-    switch (config->validate()) {
-      case CameraConfiguration::Invalid:
-        Disconnect();
-        return Error{"the camera refuses the configuration " + asked};
-      case CameraConfiguration::Adjusted:
-        validation = "adjusted: " + asked + " -> " + cfg.toString() + ", " +
-                     std::to_string(cfg.bufferCount) + " buffers";
-        break;
-      case CameraConfiguration::Valid:
-        validation = "valid";
-        break;
-    }
-    if (static_cast<int>(cfg.size.width) != options.width ||
-        static_cast<int>(cfg.size.height) != options.height) {
-      const std::string message = "the camera delivers " + cfg.size.toString() +
-                                  " where the camera model needs " + std::to_string(options.width) +
-                                  "x" + std::to_string(options.height) + " (" + validation + ")";
-      Disconnect();
-      return Error{message};
-    }
+    if (Status s = Validate(&cfg); !s.ok()) return s;
     const auto format = FromLibcamera(cfg.pixelFormat);
-    if (!format) {
-      const std::string message = "the camera changed the format to " + cfg.pixelFormat.toString() +
-                                  ", which rigcal does not convert";
-      Disconnect();
-      return Error{message};
-    }
     if (camera->configure(config.get()) != 0) {
       Disconnect();
       return Error{"configuring " + cfg.toString() + " failed"};
     }
     layout = {*format, options.width, options.height, static_cast<int>(cfg.stride)};
     stream = cfg.stream();
+    return Status::Ok();
+  }
+
+  // Validates the configuration `cfg` is part of: an error when the camera refuses it, or
+  // adjusts the size or to a format rigcal does not convert.
+  Status Validate(libcamera::StreamConfiguration* cfg) {
+    const std::string asked = cfg->toString();
+    switch (config->validate()) {
+      case CameraConfiguration::Invalid:
+        Disconnect();
+        return Error{"the camera refuses the configuration " + asked};
+      case CameraConfiguration::Adjusted:
+        validation = "adjusted: " + asked + " -> " + cfg->toString() + ", " +
+                     std::to_string(cfg->bufferCount) + " buffers";
+        break;
+      case CameraConfiguration::Valid:
+        validation = "valid";
+        break;
+    }
+    if (static_cast<int>(cfg->size.width) != options.width ||
+        static_cast<int>(cfg->size.height) != options.height) {
+      const std::string message = "the camera delivers " + cfg->size.toString() +
+                                  " where the camera model needs " + std::to_string(options.width) +
+                                  "x" + std::to_string(options.height) + " (" + validation + ")";
+      Disconnect();
+      return Error{message};
+    }
+    if (!FromLibcamera(cfg->pixelFormat)) {
+      const std::string message = "the camera changed the format to " +
+                                  cfg->pixelFormat.toString() + ", which rigcal does not convert";
+      Disconnect();
+      return Error{message};
+    }
+    return Status::Ok();
+  }
+
+  // Allocates the stream's buffers, maps each and makes one request per buffer.
+  Status CreateRequests() {
     allocator = std::make_unique<libcamera::FrameBufferAllocator>(camera);
     if (allocator->allocate(stream) < 0) {
       Disconnect();
@@ -215,8 +249,14 @@ struct LibcameraDevice::Impl {
       }
       requests.push_back(std::move(request));
     }
+    const libcamera::StreamConfiguration& cfg = config->at(0);
     configuration = cfg.toString() + " stride " + std::to_string(cfg.stride) + ", " +
                     std::to_string(requests.size()) + " buffers";
+    return Status::Ok();
+  }
+
+  // Connects the completion signal, starts the camera and queues every request.
+  Status Start() {
     camera->requestCompleted.connect(this, &Impl::OnRequestCompleted);
     if (camera->start() != 0) {
       Disconnect();
@@ -228,10 +268,6 @@ struct LibcameraDevice::Impl {
         return Error{"queueing a capture request failed"};
       }
     }
-    last_sequence = -1;
-    MutexLock lock(mutex);
-    removed = false;
-    stats.connected = true;
     return Status::Ok();
   }
 

@@ -26,6 +26,135 @@ constexpr int64_t kFirstBackoffNs = 100'000'000;
 
 std::string V4l2Errno(const char* what) { return std::string(what) + ": " + std::strerror(errno); }
 
+// The steps of V4l2Device::Connect. Errors start with the node.
+
+// Opens `node` into *fd (closed by the caller's stream) and checks that it is a single-planar
+// capture device with streaming I/O; fills in its identity.
+Status OpenCaptureNode(const std::string& node, int* fd, V4l2Negotiated* n) {
+  *fd = open(node.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (*fd < 0) return Error{node + ": " + V4l2Errno("open")};
+  auto info = v4l2::QueryNode(*fd);
+  if (!info) return Error{node + ": " + info.error()};
+  if (!v4l2::CanCapture(*info)) {
+    return Error{node + " (" + info->card +
+                 ") is not a single-planar capture device with "
+                 "streaming I/O"};
+  }
+  n->node = node;
+  n->card = info->card;
+  n->bus_info = info->bus_info;
+  n->driver = info->driver;
+  return Status::Ok();
+}
+
+// The first of the `preferred` pixel formats the driver lists; the error names both lists.
+Expected<PixelFormat> ChoosePixelFormat(int fd, const std::string& node,
+                                        const std::vector<PixelFormat>& preferred) {
+  std::vector<uint32_t> offered;
+  v4l2_fmtdesc desc{};
+  desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  while (v4l2::Ioctl(fd, VIDIOC_ENUM_FMT, &desc) == 0) {
+    offered.push_back(desc.pixelformat);
+    ++desc.index;
+  }
+  for (PixelFormat f : preferred) {
+    if (std::find(offered.begin(), offered.end(), V4l2Fourcc(f)) != offered.end()) return f;
+  }
+  std::string wanted, has;
+  for (PixelFormat f : preferred) wanted += std::string(wanted.empty() ? "" : ", ") + ToString(f);
+  for (uint32_t f : offered) has += (has.empty() ? "" : ", ") + FourccText(f);
+  return Error{node + ": none of the pixel formats " + wanted +
+               " is offered (the driver has: " + (has.empty() ? "none" : has) + ")"};
+}
+
+// Sets `format` at width x height; an error when the driver changes either. Fills in the
+// fourcc and the image layout.
+Status SetPixelFormat(int fd, const std::string& node, PixelFormat chosen, int width, int height,
+                      V4l2Negotiated* n) {
+  v4l2_format format{};
+  format.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  format.fmt.pix.width = static_cast<uint32_t>(width);
+  format.fmt.pix.height = static_cast<uint32_t>(height);
+  format.fmt.pix.pixelformat = V4l2Fourcc(chosen);
+  format.fmt.pix.field = V4L2_FIELD_NONE;
+  if (v4l2::Ioctl(fd, VIDIOC_S_FMT, &format) != 0) {
+    return Error{node + ": " + V4l2Errno("VIDIOC_S_FMT")};
+  }
+  if (format.fmt.pix.pixelformat != V4l2Fourcc(chosen)) {
+    return Error{node + ": asked for " + ToString(chosen) + ", the driver set " +
+                 FourccText(format.fmt.pix.pixelformat)};
+  }
+  if (static_cast<int>(format.fmt.pix.width) != width ||
+      static_cast<int>(format.fmt.pix.height) != height) {
+    return Error{node + ": the driver gives " + std::to_string(format.fmt.pix.width) + "x" +
+                 std::to_string(format.fmt.pix.height) + " " + ToString(chosen) +
+                 " where the camera needs " + std::to_string(width) + "x" + std::to_string(height)};
+  }
+  n->fourcc = format.fmt.pix.pixelformat;
+  n->layout.format = chosen;
+  n->layout.width = width;
+  n->layout.height = height;
+  n->layout.bytes_per_line = static_cast<int>(format.fmt.pix.bytesperline);
+  return Status::Ok();
+}
+
+// Asks for `frame_rate_hz` (> 0; a refusal is logged for `camera`) and reads back the frame
+// interval the driver uses, if it says.
+void SetFrameInterval(int fd, const std::string& node, const std::string& camera,
+                      double frame_rate_hz, V4l2Negotiated* n) {
+  v4l2_streamparm parm{};
+  parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  if (frame_rate_hz > 0.0) {
+    parm.parm.capture.timeperframe.numerator = 1000;
+    parm.parm.capture.timeperframe.denominator =
+        static_cast<uint32_t>(std::llround(frame_rate_hz * 1000.0));
+    if (v4l2::Ioctl(fd, VIDIOC_S_PARM, &parm) != 0) {
+      ModuleLogger("capture")->warn("camera {}: {}: cannot set {} Hz: {}", camera, node,
+                                    frame_rate_hz, std::strerror(errno));
+    }
+  }
+  parm = {};
+  parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  if (v4l2::Ioctl(fd, VIDIOC_G_PARM, &parm) == 0 && parm.parm.capture.timeperframe.numerator > 0) {
+    n->frame_rate_hz = static_cast<double>(parm.parm.capture.timeperframe.denominator) /
+                       parm.parm.capture.timeperframe.numerator;
+  }
+}
+
+// Requests `count` mmap buffers (the driver must grant at least 2), maps each into `buffers`
+// and queues it.
+Status MapBuffers(int fd, const std::string& node, int count,
+                  std::vector<std::pair<void*, size_t>>* buffers, V4l2Negotiated* n) {
+  v4l2_requestbuffers request{};
+  request.count = static_cast<uint32_t>(count);
+  request.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  request.memory = V4L2_MEMORY_MMAP;
+  if (v4l2::Ioctl(fd, VIDIOC_REQBUFS, &request) != 0) {
+    return Error{node + ": " + V4l2Errno("VIDIOC_REQBUFS (mmap)")};
+  }
+  if (request.count < 2) {
+    return Error{node + ": the driver grants " + std::to_string(request.count) + " buffer(s)"};
+  }
+  for (uint32_t i = 0; i < request.count; ++i) {
+    v4l2_buffer buffer{};
+    buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    buffer.memory = V4L2_MEMORY_MMAP;
+    buffer.index = i;
+    if (v4l2::Ioctl(fd, VIDIOC_QUERYBUF, &buffer) != 0) {
+      return Error{node + ": " + V4l2Errno("VIDIOC_QUERYBUF")};
+    }
+    void* start =
+        mmap(nullptr, buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, buffer.m.offset);
+    if (start == MAP_FAILED) return Error{node + ": " + V4l2Errno("mmap")};
+    buffers->emplace_back(start, buffer.length);
+    if (v4l2::Ioctl(fd, VIDIOC_QBUF, &buffer) != 0) {
+      return Error{node + ": " + V4l2Errno("VIDIOC_QBUF")};
+    }
+  }
+  n->buffers = static_cast<int>(request.count);
+  return Status::Ok();
+}
+
 }  // namespace
 
 // The open node and its mapped buffers; closing it stops streaming and unmaps.
@@ -99,122 +228,21 @@ Status V4l2Device::Connect() {
   auto node = v4l2::ResolveNode(options_.device);
   if (!node) return Error{node.error()};
   auto stream = std::make_unique<Stream>();
-  stream->fd = open(node->c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-  if (stream->fd < 0) return Error{*node + ": " + V4l2Errno("open")};
-  auto info = v4l2::QueryNode(stream->fd);
-  if (!info) return Error{*node + ": " + info.error()};
-  if (!v4l2::CanCapture(*info)) {
-    return Error{*node + " (" + info->card +
-                 ") is not a single-planar capture device with "
-                 "streaming I/O"};
-  }
   V4l2Negotiated n;
-  n.node = *node;
-  n.card = info->card;
-  n.bus_info = info->bus_info;
-  n.driver = info->driver;
-
-  // Pixel format: the first preferred one the driver lists.
-  std::vector<uint32_t> offered;
-  v4l2_fmtdesc desc{};
-  desc.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  while (v4l2::Ioctl(stream->fd, VIDIOC_ENUM_FMT, &desc) == 0) {
-    offered.push_back(desc.pixelformat);
-    ++desc.index;
+  if (Status s = OpenCaptureNode(*node, &stream->fd, &n); !s.ok()) return s;
+  auto format = ChoosePixelFormat(stream->fd, *node, options_.formats);
+  if (!format) return Error{format.error()};
+  if (Status s = SetPixelFormat(stream->fd, *node, *format, options_.width, options_.height, &n);
+      !s.ok()) {
+    return s;
   }
-  std::optional<PixelFormat> chosen;
-  for (PixelFormat f : options_.formats) {
-    if (std::find(offered.begin(), offered.end(), V4l2Fourcc(f)) != offered.end()) {
-      chosen = f;
-      break;
-    }
-  }
-  if (!chosen) {
-    std::string wanted, has;
-    for (PixelFormat f : options_.formats)
-      wanted += std::string(wanted.empty() ? "" : ", ") + ToString(f);
-    for (uint32_t f : offered) has += (has.empty() ? "" : ", ") + FourccText(f);
-    return Error{*node + ": none of the pixel formats " + wanted +
-                 " is offered (the driver has: " + (has.empty() ? "none" : has) + ")"};
-  }
-  v4l2_format format{};
-  format.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  format.fmt.pix.width = static_cast<uint32_t>(options_.width);
-  format.fmt.pix.height = static_cast<uint32_t>(options_.height);
-  format.fmt.pix.pixelformat = V4l2Fourcc(*chosen);
-  format.fmt.pix.field = V4L2_FIELD_NONE;
-  if (v4l2::Ioctl(stream->fd, VIDIOC_S_FMT, &format) != 0) {
-    return Error{*node + ": " + V4l2Errno("VIDIOC_S_FMT")};
-  }
-  if (format.fmt.pix.pixelformat != V4l2Fourcc(*chosen)) {
-    return Error{*node + ": asked for " + ToString(*chosen) + ", the driver set " +
-                 FourccText(format.fmt.pix.pixelformat)};
-  }
-  if (static_cast<int>(format.fmt.pix.width) != options_.width ||
-      static_cast<int>(format.fmt.pix.height) != options_.height) {
-    return Error{*node + ": the driver gives " + std::to_string(format.fmt.pix.width) + "x" +
-                 std::to_string(format.fmt.pix.height) + " " + ToString(*chosen) +
-                 " where the camera needs " + std::to_string(options_.width) + "x" +
-                 std::to_string(options_.height)};
-  }
-  n.fourcc = format.fmt.pix.pixelformat;
-  n.layout.format = *chosen;
-  n.layout.width = options_.width;
-  n.layout.height = options_.height;
-  n.layout.bytes_per_line = static_cast<int>(format.fmt.pix.bytesperline);
-
-  // Frame interval.
-  v4l2_streamparm parm{};
-  parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (options_.frame_rate_hz > 0.0) {
-    parm.parm.capture.timeperframe.numerator = 1000;
-    parm.parm.capture.timeperframe.denominator =
-        static_cast<uint32_t>(std::llround(options_.frame_rate_hz * 1000.0));
-    if (v4l2::Ioctl(stream->fd, VIDIOC_S_PARM, &parm) != 0) {
-      ModuleLogger("capture")->warn("camera {}: {}: cannot set {} Hz: {}", name_, *node,
-                                    options_.frame_rate_hz, std::strerror(errno));
-    }
-  }
-  parm = {};
-  parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (v4l2::Ioctl(stream->fd, VIDIOC_G_PARM, &parm) == 0 &&
-      parm.parm.capture.timeperframe.numerator > 0) {
-    n.frame_rate_hz = static_cast<double>(parm.parm.capture.timeperframe.denominator) /
-                      parm.parm.capture.timeperframe.numerator;
-  }
-
+  SetFrameInterval(stream->fd, *node, name_, options_.frame_rate_hz, &n);
   auto exposure = v4l2::ApplyControls(stream->fd, options_);
   if (!exposure) return Error{*node + ": " + exposure.error()};
   exposure_ns_ = *exposure;
-
-  // Buffers.
-  v4l2_requestbuffers request{};
-  request.count = static_cast<uint32_t>(options_.buffers);
-  request.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  request.memory = V4L2_MEMORY_MMAP;
-  if (v4l2::Ioctl(stream->fd, VIDIOC_REQBUFS, &request) != 0) {
-    return Error{*node + ": " + V4l2Errno("VIDIOC_REQBUFS (mmap)")};
+  if (Status s = MapBuffers(stream->fd, *node, options_.buffers, &stream->buffers, &n); !s.ok()) {
+    return s;
   }
-  if (request.count < 2) {
-    return Error{*node + ": the driver grants " + std::to_string(request.count) + " buffer(s)"};
-  }
-  for (uint32_t i = 0; i < request.count; ++i) {
-    v4l2_buffer buffer{};
-    buffer.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    buffer.memory = V4L2_MEMORY_MMAP;
-    buffer.index = i;
-    if (v4l2::Ioctl(stream->fd, VIDIOC_QUERYBUF, &buffer) != 0) {
-      return Error{*node + ": " + V4l2Errno("VIDIOC_QUERYBUF")};
-    }
-    void* start = mmap(nullptr, buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, stream->fd,
-                       buffer.m.offset);
-    if (start == MAP_FAILED) return Error{*node + ": " + V4l2Errno("mmap")};
-    stream->buffers.emplace_back(start, buffer.length);
-    if (v4l2::Ioctl(stream->fd, VIDIOC_QBUF, &buffer) != 0) {
-      return Error{*node + ": " + V4l2Errno("VIDIOC_QBUF")};
-    }
-  }
-  n.buffers = static_cast<int>(request.count);
   v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   if (v4l2::Ioctl(stream->fd, VIDIOC_STREAMON, &type) != 0) {
     return Error{*node + ": " + V4l2Errno("VIDIOC_STREAMON")};

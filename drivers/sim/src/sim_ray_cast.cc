@@ -30,108 +30,117 @@ int32_t Scene::Intersect(const T o[3], const T d[3], T* t_hit, const int* boxes,
                          int num_boxes) const {
   T best = std::numeric_limits<T>::infinity();
   int32_t surface = kSky;
-  if (has_enclosure_) {
-    for (int a = 0; a < 3; ++a) {
-      T t;
-      int face;
-      if (d[a] > T(0)) {
-        t = (static_cast<T>(hi_[a]) - o[a]) / d[a];
-        face = 2 * a + 1;
-      } else if (d[a] < T(0)) {
-        t = (static_cast<T>(lo_[a]) - o[a]) / d[a];
-        face = 2 * a;
-      } else {
-        continue;
-      }
-      if (t < best) {
-        best = t;
-        surface = face;
-      }
-    }
-    // The boxes stand in the bands along the walls (half-spaces). From a camera outside every
-    // band, a ray can only reach the boxes of the bands that contain its exit point from the
-    // enclosure (a segment enters a half-space only if it ends inside it).
-    const T exit[2] = {o[0] + best * d[0], o[1] + best * d[1]};
-    if (open_top_ && surface == 5) {
-      surface = kSky;
-      best = std::numeric_limits<T>::infinity();
-    }
-    if (!boxes_.empty()) {
-      const T inv[3] = {T(1) / d[0], T(1) / d[1], T(1) / d[2]};
-      auto test_box = [&](const Box& box) {
-        T t_near = -std::numeric_limits<T>::infinity();
-        T t_far = std::numeric_limits<T>::infinity();
-        int axis = 0;
-        for (int a = 0; a < 3; ++a) {
-          const T t1 = (static_cast<T>(box.lo[a]) - o[a]) * inv[a];
-          const T t2 = (static_cast<T>(box.hi[a]) - o[a]) * inv[a];
-          const T t_min = std::min(t1, t2);
-          const T t_max = std::max(t1, t2);
-          if (t_min > t_near) {
-            t_near = t_min;
-            axis = a;
-          }
-          t_far = std::min(t_far, t_max);
-        }
-        if (t_near <= t_far && t_near > T(0) && t_near < best) {
-          best = t_near;
-          surface = box.first_surface + 2 * axis + (d[axis] > T(0) ? 0 : 1);
-        }
-      };
-      const bool inner = o[0] > static_cast<T>(band_[0]) && o[0] < static_cast<T>(band_[1]) &&
-                         o[1] > static_cast<T>(band_[2]) && o[1] < static_cast<T>(band_[3]);
-      if (boxes != nullptr) {
-        for (int i = 0; i < num_boxes; ++i) test_box(boxes_[boxes[i]]);
-      } else if (!inner) {
-        for (const Box& box : boxes_) test_box(box);
-      } else {
-        const T margin = T(1e-3);  // against rounding of the exit point
-        const bool in_band[4] = {exit[0] <= static_cast<T>(band_[0]) + margin,
-                                 exit[0] >= static_cast<T>(band_[1]) - margin,
-                                 exit[1] <= static_cast<T>(band_[2]) + margin,
-                                 exit[1] >= static_cast<T>(band_[3]) - margin};
-        for (int w = 0; w < 4; ++w) {
-          if (!in_band[w]) continue;
-          for (int b : wall_boxes_[w]) test_box(boxes_[b]);
-        }
-      }
-    }
-  }
-  if (has_pipe_) {
-    const T a = d[1] * d[1] + d[2] * d[2];
-    bool wall = false;
-    if (a > T(1e-12)) {
-      const T b = o[1] * d[1] + o[2] * d[2];
-      const T c = o[1] * o[1] + o[2] * o[2] - static_cast<T>(radius_) * static_cast<T>(radius_);
-      const T disc = b * b - a * c;
-      if (disc >= T(0)) {
-        const T t = (-b + std::sqrt(disc)) / a;
-        const T x = o[0] + t * d[0];
-        if (t > T(0) && x >= static_cast<T>(x0_) && x <= static_cast<T>(x1_) && t < best) {
-          best = t;
-          surface = 0;
-          wall = true;
-        }
-      }
-    }
-    if (!wall) {
-      if (d[0] > T(0)) {
-        const T t = (static_cast<T>(x1_) - o[0]) / d[0];
-        if (t > T(0) && t < best) {
-          best = t;
-          surface = 2;
-        }
-      } else if (d[0] < T(0)) {
-        const T t = (static_cast<T>(x0_) - o[0]) / d[0];
-        if (t > T(0) && t < best) {
-          best = t;
-          surface = 1;
-        }
-      }
-    }
-  }
+  if (has_enclosure_) IntersectEnclosure(o, d, boxes, num_boxes, &best, &surface);
+  if (has_pipe_) IntersectPipe(o, d, &best, &surface);
   *t_hit = best;
   return surface;
+}
+
+template <typename T>
+void Scene::IntersectEnclosure(const T o[3], const T d[3], const int* boxes, int num_boxes, T* best,
+                               int32_t* surface) const {
+  for (int a = 0; a < 3; ++a) {
+    T t;
+    int face;
+    if (d[a] > T(0)) {
+      t = (static_cast<T>(hi_[a]) - o[a]) / d[a];
+      face = 2 * a + 1;
+    } else if (d[a] < T(0)) {
+      t = (static_cast<T>(lo_[a]) - o[a]) / d[a];
+      face = 2 * a;
+    } else {
+      continue;
+    }
+    if (t < *best) {
+      *best = t;
+      *surface = face;
+    }
+  }
+  // The boxes stand in the bands along the walls (half-spaces). From a camera outside every
+  // band, a ray can only reach the boxes of the bands that contain its exit point from the
+  // enclosure (a segment enters a half-space only if it ends inside it).
+  const T exit[2] = {o[0] + *best * d[0], o[1] + *best * d[1]};
+  if (open_top_ && *surface == 5) {
+    *surface = kSky;
+    *best = std::numeric_limits<T>::infinity();
+  }
+  if (!boxes_.empty()) IntersectBoxes(o, d, exit, boxes, num_boxes, best, surface);
+}
+
+template <typename T>
+void Scene::IntersectBoxes(const T o[3], const T d[3], const T exit[2], const int* boxes,
+                           int num_boxes, T* best, int32_t* surface) const {
+  const T inv[3] = {T(1) / d[0], T(1) / d[1], T(1) / d[2]};
+  auto test_box = [&](const Box& box) {
+    T t_near = -std::numeric_limits<T>::infinity();
+    T t_far = std::numeric_limits<T>::infinity();
+    int axis = 0;
+    for (int a = 0; a < 3; ++a) {
+      const T t1 = (static_cast<T>(box.lo[a]) - o[a]) * inv[a];
+      const T t2 = (static_cast<T>(box.hi[a]) - o[a]) * inv[a];
+      const T t_min = std::min(t1, t2);
+      const T t_max = std::max(t1, t2);
+      if (t_min > t_near) {
+        t_near = t_min;
+        axis = a;
+      }
+      t_far = std::min(t_far, t_max);
+    }
+    if (t_near <= t_far && t_near > T(0) && t_near < *best) {
+      *best = t_near;
+      *surface = box.first_surface + 2 * axis + (d[axis] > T(0) ? 0 : 1);
+    }
+  };
+  const bool inner = o[0] > static_cast<T>(band_[0]) && o[0] < static_cast<T>(band_[1]) &&
+                     o[1] > static_cast<T>(band_[2]) && o[1] < static_cast<T>(band_[3]);
+  if (boxes != nullptr) {
+    for (int i = 0; i < num_boxes; ++i) test_box(boxes_[boxes[i]]);
+  } else if (!inner) {
+    for (const Box& box : boxes_) test_box(box);
+  } else {
+    const T margin = T(1e-3);  // against rounding of the exit point
+    const bool in_band[4] = {
+        exit[0] <= static_cast<T>(band_[0]) + margin, exit[0] >= static_cast<T>(band_[1]) - margin,
+        exit[1] <= static_cast<T>(band_[2]) + margin, exit[1] >= static_cast<T>(band_[3]) - margin};
+    for (int w = 0; w < 4; ++w) {
+      if (!in_band[w]) continue;
+      for (int b : wall_boxes_[w]) test_box(boxes_[b]);
+    }
+  }
+}
+
+template <typename T>
+void Scene::IntersectPipe(const T o[3], const T d[3], T* best, int32_t* surface) const {
+  const T a = d[1] * d[1] + d[2] * d[2];
+  bool wall = false;
+  if (a > T(1e-12)) {
+    const T b = o[1] * d[1] + o[2] * d[2];
+    const T c = o[1] * o[1] + o[2] * o[2] - static_cast<T>(radius_) * static_cast<T>(radius_);
+    const T disc = b * b - a * c;
+    if (disc >= T(0)) {
+      const T t = (-b + std::sqrt(disc)) / a;
+      const T x = o[0] + t * d[0];
+      if (t > T(0) && x >= static_cast<T>(x0_) && x <= static_cast<T>(x1_) && t < *best) {
+        *best = t;
+        *surface = 0;
+        wall = true;
+      }
+    }
+  }
+  if (wall) return;
+  if (d[0] > T(0)) {
+    const T t = (static_cast<T>(x1_) - o[0]) / d[0];
+    if (t > T(0) && t < *best) {
+      *best = t;
+      *surface = 2;
+    }
+  } else if (d[0] < T(0)) {
+    const T t = (static_cast<T>(x0_) - o[0]) / d[0];
+    if (t > T(0) && t < *best) {
+      *best = t;
+      *surface = 1;
+    }
+  }
 }
 
 Hit Scene::Cast(const float o[3], const float d[3], float pixel_angle) const {

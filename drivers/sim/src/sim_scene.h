@@ -80,6 +80,17 @@ class Scene {
   template <typename T>
   int32_t Intersect(const T o[3], const T d[3], T* t_hit, const int* boxes = nullptr,
                     int num_boxes = 0) const;
+  // The steps of Intersect: each lowers *best (distance) and sets *surface when it finds a
+  // nearer surface. The enclosure's faces (its top is the sky in a yard), then its boxes
+  // (`exit`: x, y where the ray leaves the enclosure); the pipe's wall or caps.
+  template <typename T>
+  void IntersectEnclosure(const T o[3], const T d[3], const int* boxes, int num_boxes, T* best,
+                          int32_t* surface) const;
+  template <typename T>
+  void IntersectBoxes(const T o[3], const T d[3], const T exit[2], const int* boxes, int num_boxes,
+                      T* best, int32_t* surface) const;
+  template <typename T>
+  void IntersectPipe(const T o[3], const T d[3], T* best, int32_t* surface) const;
   Hit Shade(const float o[3], const float d[3], float pixel_angle, int32_t surface, float t) const;
 
   std::string description_;

@@ -1,7 +1,8 @@
 #pragma once
-// CameraDevice: the interface every capture source implements (the simulated rig; later V4L2,
-// libcamera and LCM log replay). The pipeline runs one capture thread per device that calls
-// Grab() in a loop and pushes the frames into that camera's bounded queue.
+// CameraDevice: the interface every capture source implements (V4L2, libcamera, image folders,
+// the simulated rig of rigcal_sim, the pipeline's LCM log replay). The pipeline runs one capture
+// thread per device that calls Grab() in a loop and pushes the frames into that camera's bounded
+// queue.
 
 #include <optional>
 #include <string>

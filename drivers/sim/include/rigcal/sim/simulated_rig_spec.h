@@ -136,7 +136,7 @@ struct SimulatedRigSpec {
   std::map<std::string, double> fail_after_s;  // camera name -> stream time of failure, >= 0
   int render_block = 4;                        // [1, 32]
 
-  // --- Hardware trigger (`source.trigger`, simulated_trigger.h / triggered_camera.h) ----------
+  // --- Hardware trigger (`source.trigger`, simulated_trigger_timeline.h) ---------------------
   // Camera i hangs on line i of a simulated trigger generator (the firmware core on a drifting
   // MCU clock, its reports on a link with one-sided delay jitter); every frame gets the pulse's
   // sequence number and mapped exposure centre. The cameras still expose on the rig's clock, so

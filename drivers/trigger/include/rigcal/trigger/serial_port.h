@@ -1,6 +1,7 @@
 #pragma once
 // The byte stream of the trigger link: a serial port (termios: a USB CDC/UART adapter, or a
-// pseudo-terminal such as QEMU's `-serial pty`), or a simulated stream (simulated_trigger.h).
+// pseudo-terminal such as QEMU's `-serial pty`), or a simulated stream (rigcal_sim's
+// SimulatedTriggerStream).
 
 #include <cstddef>
 #include <cstdint>
