@@ -33,7 +33,7 @@ struct TrackStats {
 TrackStats TrackAgainstProjection(const SimulatedRig& rig, int camera, int64_t first, int frames,
                                   bool noise) {
   const camera::CameraModel& model = *rig.spec().cameras[camera];
-  auto pose = [&](int64_t k) { return rig.CameraPoseAt(camera, rig.FrameStreamTime(k)); };
+  auto pose = [&](int64_t k) { return rig.WorldFromCameraAt(camera, rig.FrameStreamTime(k)); };
   auto image = [&](int64_t k) {
     return noise ? rig.RenderFrame(camera, k) : rig.RenderView(camera, pose(k));
   };

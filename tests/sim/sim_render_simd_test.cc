@@ -47,7 +47,7 @@ void ExpectKernelsAgree(const std::string& file) {
       cv::meanStdDev(simd, mean, stddev);
       EXPECT_GT(stddev[0], 5.0) << file << " camera " << camera << " frame " << k;
       Compare(simd, rig.RenderFrame(camera, k, RenderKernel::kScalar), &frames);
-      const Pose pose = rig.CameraPoseAt(camera, rig.FrameStreamTime(k));
+      const Pose pose = rig.WorldFromCameraAt(camera, rig.FrameStreamTime(k));
       for (int block : {2, 8}) {
         Compare(rig.RenderView(camera, pose, block, RenderKernel::kSimd),
                 rig.RenderView(camera, pose, block, RenderKernel::kScalar), &views);

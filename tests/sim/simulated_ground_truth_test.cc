@@ -70,10 +70,10 @@ TEST(SimulatedGroundTruth, IsTheRigsTruthAsData) {
     ASSERT_EQ(static_cast<int64_t>(camera.t_ns.size()), rig->num_frames());
     ASSERT_EQ(camera.world_from_camera.size(), camera.t_ns.size());
     ASSERT_EQ(camera.origin_from_camera.size(), camera.t_ns.size());
-    const Pose origin = rig->CameraPoseAt(c, 0.0);
+    const Pose origin = rig->WorldFromCameraAt(c, 0.0);
     for (int64_t k = 0; k < rig->num_frames(); ++k) {
       EXPECT_EQ(camera.t_ns[k], rig->FrameTimeNs(k));
-      const Pose world = rig->CameraPoseAt(c, rig->FrameStreamTime(k));
+      const Pose world = rig->WorldFromCameraAt(c, rig->FrameStreamTime(k));
       EXPECT_EQ(camera.world_from_camera[k].C, world.C);
       EXPECT_EQ(camera.world_from_camera[k].q.coeffs(), world.q.coeffs());
       const Pose local = origin.Between(world);
@@ -109,7 +109,7 @@ TEST(SimulatedGroundTruth, FilesKeepTheirLayout) {
   }
   EXPECT_EQ(ReadText(dir / "truth.yaml"), yaml);
 
-  const Pose world = rig->CameraPoseAt(1, rig->FrameStreamTime(1));
+  const Pose world = rig->WorldFromCameraAt(1, rig->FrameStreamTime(1));
   const std::string line = FormatNsAsSeconds(rig->FrameTimeNs(1)) + " " +
                            ShortestText(world.C.x()) + " " + ShortestText(world.C.y()) + " " +
                            ShortestText(world.C.z()) + " " + ShortestText(world.q.x()) + " " +
@@ -161,10 +161,10 @@ TEST(SimulatedGroundTruth, FilesRoundTrip) {
     ASSERT_EQ(static_cast<int64_t>(trajectory->size()), rig->num_frames());
     auto world = tools::ReadTrajectory((dir / ("world_" + name + ".txt")).string());
     ASSERT_TRUE(world) << world.error();
-    const Pose first = rig->CameraPoseAt(c, 0.0);
+    const Pose first = rig->WorldFromCameraAt(c, 0.0);
     for (int64_t k = 0; k < rig->num_frames(); ++k) {
       EXPECT_EQ(trajectory->t_ns[k], rig->FrameTimeNs(k));
-      const Pose truth_world = rig->CameraPoseAt(c, rig->FrameStreamTime(k));
+      const Pose truth_world = rig->WorldFromCameraAt(c, rig->FrameStreamTime(k));
       EXPECT_LT((world->poses[k].C - truth_world.C).norm(), 1e-12);
       EXPECT_LT(world->poses[k].q.angularDistance(truth_world.q), 1e-9);
       const Pose truth_local = first.Between(truth_world);

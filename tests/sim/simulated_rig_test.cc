@@ -127,8 +127,8 @@ TEST(SimulatedRig, TrajectoryStartsAndEndsAtTheWaypointsAndIsSmooth) {
   const SimulatedRigSpec spec = TwoCameraSpec();
   const SimulatedRig rig = Make(spec);
   EXPECT_EQ(rig.num_frames(), 121);  // 6 s at 20 Hz, both ends included
-  const Pose start = rig.MasterPoseAt(0.0);
-  const Pose end = rig.MasterPoseAt(6.0);
+  const Pose start = rig.WorldFromMasterAt(0.0);
+  const Pose end = rig.WorldFromMasterAt(6.0);
   EXPECT_LT((start.C - spec.waypoints.front().position).norm(), 1e-12);
   EXPECT_LT((end.C - spec.waypoints.back().position).norm(), 1e-12);
   EXPECT_LT(start.q.angularDistance(spec.waypoints.front().world_from_master), 1e-9);
@@ -136,18 +136,20 @@ TEST(SimulatedRig, TrajectoryStartsAndEndsAtTheWaypointsAndIsSmooth) {
   // Velocity and angular velocity are continuous (C2 spline): no jump at the knots.
   const double h = 1e-4;
   for (double knot : {2.0, 4.0}) {
-    const Eigen::Vector3d v_before = (rig.MasterPoseAt(knot).C - rig.MasterPoseAt(knot - h).C) / h;
-    const Eigen::Vector3d v_after = (rig.MasterPoseAt(knot + h).C - rig.MasterPoseAt(knot).C) / h;
+    const Eigen::Vector3d v_before =
+        (rig.WorldFromMasterAt(knot).C - rig.WorldFromMasterAt(knot - h).C) / h;
+    const Eigen::Vector3d v_after =
+        (rig.WorldFromMasterAt(knot + h).C - rig.WorldFromMasterAt(knot).C) / h;
     EXPECT_LT((v_before - v_after).norm(), 1e-3) << knot;
     const double w_before =
-        rig.MasterPoseAt(knot).q.angularDistance(rig.MasterPoseAt(knot - h).q) / h;
+        rig.WorldFromMasterAt(knot).q.angularDistance(rig.WorldFromMasterAt(knot - h).q) / h;
     const double w_after =
-        rig.MasterPoseAt(knot + h).q.angularDistance(rig.MasterPoseAt(knot).q) / h;
+        rig.WorldFromMasterAt(knot + h).q.angularDistance(rig.WorldFromMasterAt(knot).q) / h;
     EXPECT_NEAR(w_before, w_after, 1e-3) << knot;
   }
   // The slave follows its mounting.
-  const Pose slave = rig.CameraPoseAt(1, 3.3);
-  const Pose expected = rig.MasterPoseAt(3.3) * spec.master_from_camera[1];
+  const Pose slave = rig.WorldFromCameraAt(1, 3.3);
+  const Pose expected = rig.WorldFromMasterAt(3.3) * spec.master_from_camera[1];
   EXPECT_LT((slave.C - expected.C).norm(), 1e-12);
 }
 
@@ -364,7 +366,7 @@ TEST(SimulatedRig, NoiseHasTheConfiguredSigma) {
   spec.noise_sigma = 4;
   const SimulatedRig rig = Make(spec);
   const cv::Mat noisy = rig.RenderFrame(0, 10);
-  const cv::Mat clean = rig.RenderView(0, rig.CameraPoseAt(0, rig.FrameStreamTime(10)));
+  const cv::Mat clean = rig.RenderView(0, rig.WorldFromCameraAt(0, rig.FrameStreamTime(10)));
   double sum = 0, sum2 = 0;
   int n = 0;
   for (int y = 0; y < noisy.rows; ++y) {

@@ -40,7 +40,7 @@ Expected<sim::SimulatedRig> MakeRoomSequence(std::shared_ptr<const camera::Camer
   for (size_t k = 0; k < world_from_camera.size(); ++k) {
     spec.trajectory_t_ns.push_back(std::llround(static_cast<double>(k) * 1e9 / kRoomFrameRateHz));
   }
-  spec.trajectory_poses = world_from_camera;
+  spec.trajectory_world_from_body = world_from_camera;
   spec.scene.type = sim::SimulatedRigSpec::SceneType::kRoom;
   spec.scene.size = Eigen::Vector3d(10.0, 8.0, 6.0);
   spec.scene.boxes = 0;

@@ -78,7 +78,7 @@ void CompareWithKltChain(const std::string& file, int camera, int frames, double
   auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig.ok()) << rig.error();
   const camera::CameraModel& model = *spec.cameras[camera];
-  auto pose = [&](int64_t k) { return rig->CameraPoseAt(camera, rig->FrameStreamTime(k)); };
+  auto pose = [&](int64_t k) { return rig->WorldFromCameraAt(camera, rig->FrameStreamTime(k)); };
   const int64_t first = 40;
   cv::Mat previous = rig->RenderFrame(camera, first);
   const cv::Mat reference = previous.clone();

@@ -124,7 +124,7 @@ void CheckSegment(const sim::SimulatedRig& rig, int camera, const std::map<int64
   std::vector<int64_t> frames;
   for (const auto& [k, pose] : est) frames.push_back(k);
   ASSERT_GE(frames.size(), 3u) << label;
-  auto truth = [&](int64_t k) { return rig.CameraPoseAt(camera, rig.FrameStreamTime(k)); };
+  auto truth = [&](int64_t k) { return rig.WorldFromCameraAt(camera, rig.FrameStreamTime(k)); };
   const Pose reference = truth(frames.front());
   double max_rot = 0.0, path = 0.0, sum2 = 0.0, max_drift = 0.0;
   int64_t max_frame = -1;
@@ -192,14 +192,14 @@ void MaybeWritePoses(const sim::SimulatedRig& rig, int camera, const CameraRun& 
   for (const auto& [segment, poses] : run.segments) {
     for (const auto& [k, pose] : poses) by_frame.emplace(k, std::make_pair(pose, segment));
   }
-  const Pose first = rig.CameraPoseAt(camera, rig.FrameStreamTime(0));
+  const Pose first = rig.WorldFromCameraAt(camera, rig.FrameStreamTime(0));
   for (const auto& [k, entry] : by_frame) {
     est.t_ns.push_back(rig.FrameTimeNs(k));
     est.poses.push_back(entry.first);
     est.segment.push_back(entry.second);
   }
   for (int64_t k = 0; k < run.frames; ++k) {
-    const Pose p = rig.CameraPoseAt(camera, rig.FrameStreamTime(k));
+    const Pose p = rig.WorldFromCameraAt(camera, rig.FrameStreamTime(k));
     Pose local;
     local.q = Eigen::Quaterniond(first.R().transpose() * p.R());
     local.C = first.R().transpose() * (p.C - first.C);

@@ -14,9 +14,9 @@ SimulatedGroundTruth SimulatedRig::GroundTruth() const {
     camera.master_from_camera.q = spec.master_from_camera[c].q;
     camera.master_from_camera.C = spec.master_from_camera[c].C;
     camera.master_from_camera.scale = 1.0;
-    const Pose origin = CameraPoseAt(c, 0.0);
+    const Pose origin = WorldFromCameraAt(c, 0.0);
     for (int64_t k = 0; k < num_frames(); ++k) {
-      const Pose world_from_camera = CameraPoseAt(c, FrameStreamTime(k));
+      const Pose world_from_camera = WorldFromCameraAt(c, FrameStreamTime(k));
       camera.t_ns.push_back(FrameTimeNs(k));
       camera.world_from_camera.push_back(world_from_camera);
       camera.origin_from_camera.push_back(origin.Between(world_from_camera));

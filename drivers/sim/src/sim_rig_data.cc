@@ -34,11 +34,12 @@ cv::Mat SimulatedRigData::Render(int camera, int64_t k, std::vector<float>* acc,
     const float weight = 1.f / static_cast<float>(samples);
     for (int s = 0; s < samples; ++s) {
       const double ts = t + spec.blur_exposure_s * ((s + 0.5) / samples - 0.5);
-      RenderAccumulate(scene, tables, grid, CameraPose(camera, ts), weight, acc->data(), hits,
+      RenderAccumulate(scene, tables, grid, WorldFromCamera(camera, ts), weight, acc->data(), hits,
                        kernel);
     }
   } else {
-    RenderAccumulate(scene, tables, grid, CameraPose(camera, t), 1.f, acc->data(), hits, kernel);
+    RenderAccumulate(scene, tables, grid, WorldFromCamera(camera, t), 1.f, acc->data(), hits,
+                     kernel);
   }
   return Quantise(camera, k, *acc, tables.width, tables.height);
 }

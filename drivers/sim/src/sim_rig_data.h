@@ -36,7 +36,7 @@ struct SimulatedRigData {
     return std::llround(static_cast<double>(k) * 1e9 / spec.frame_rate_hz);
   }
   // world_from_camera of `camera` at stream time t_s.
-  Pose CameraPose(int camera, double t_s) const {
+  Pose WorldFromCamera(int camera, double t_s) const {
     return trajectory.At(t_s) * spec.master_from_camera[camera];
   }
   // Whether frame k of `camera` is dropped (spec.drop_probability).

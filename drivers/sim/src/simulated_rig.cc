@@ -46,10 +46,10 @@ int64_t SimulatedRig::FrameTimeNs(int64_t k) const { return epoch_ns() + data_->
 
 double SimulatedRig::FrameStreamTime(int64_t k) const { return data_->StreamTime(k); }
 
-Pose SimulatedRig::MasterPoseAt(double t_s) const { return data_->trajectory.At(t_s); }
+Pose SimulatedRig::WorldFromMasterAt(double t_s) const { return data_->trajectory.At(t_s); }
 
-Pose SimulatedRig::CameraPoseAt(int camera, double t_s) const {
-  return data_->CameraPose(camera, t_s);
+Pose SimulatedRig::WorldFromCameraAt(int camera, double t_s) const {
+  return data_->WorldFromCamera(camera, t_s);
 }
 
 std::vector<Similarity> SimulatedRig::TrueRig() const {
@@ -120,10 +120,10 @@ Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec) {
     }
     data->trajectory = internal::Trajectory::FromWaypoints(waypoints, spec.waypoint_interval_s);
   } else {
-    for (Pose& p : spec.trajectory_poses) p.q.normalize();
+    for (Pose& p : spec.trajectory_world_from_body) p.q.normalize();
     spec.body_from_master.q.normalize();
     data->trajectory = internal::Trajectory::FromSamples(
-        spec.trajectory_t_ns, spec.trajectory_poses, spec.body_from_master);
+        spec.trajectory_t_ns, spec.trajectory_world_from_body, spec.body_from_master);
   }
   data->fail_after_s.assign(spec.names.size(), std::nullopt);
   for (size_t i = 0; i < spec.names.size(); ++i) {
@@ -137,7 +137,7 @@ Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec) {
   // Every camera must stay in free space.
   for (int64_t k = 0; k < data->num_frames; ++k) {
     for (size_t c = 0; c < s.names.size(); ++c) {
-      const Eigen::Vector3d p = data->CameraPose(static_cast<int>(c), data->StreamTime(k)).C;
+      const Eigen::Vector3d p = data->WorldFromCamera(static_cast<int>(c), data->StreamTime(k)).C;
       if (const Status free = data->scene.CheckFree(p, kMinClearance); !free.ok()) {
         std::ostringstream msg;
         msg << "trajectory: camera " << s.names[c] << " at stream time " << data->StreamTime(k)

@@ -81,7 +81,7 @@ Status CheckTiming(const SimulatedRigSpec& spec) {
 // Waypoints or a trajectory file, exactly one of them, and each well-formed.
 Status CheckTrajectory(const SimulatedRigSpec& spec) {
   std::ostringstream e;
-  const bool has_file = !spec.trajectory_t_ns.empty() || !spec.trajectory_poses.empty();
+  const bool has_file = !spec.trajectory_t_ns.empty() || !spec.trajectory_world_from_body.empty();
   if (spec.waypoints.empty() == !has_file) {
     e << "trajectory: give either waypoints or a trajectory file";
     return Error{e.str()};
@@ -105,9 +105,9 @@ Status CheckTrajectory(const SimulatedRigSpec& spec) {
     return Status::Ok();
   }
   const std::vector<int64_t>& t_ns = spec.trajectory_t_ns;
-  if (t_ns.size() != spec.trajectory_poses.size() || t_ns.size() < 2) {
+  if (t_ns.size() != spec.trajectory_world_from_body.size() || t_ns.size() < 2) {
     e << "trajectory.file: need at least 2 poses with one stamp each, got "
-      << spec.trajectory_poses.size() << " poses and " << t_ns.size() << " stamps";
+      << spec.trajectory_world_from_body.size() << " poses and " << t_ns.size() << " stamps";
     return Error{e.str()};
   }
   for (size_t i = 1; i < t_ns.size(); ++i) {

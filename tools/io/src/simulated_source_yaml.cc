@@ -140,7 +140,7 @@ std::optional<Error> ReadTrajectorySection(const FieldReader& r, const YAML::Nod
   }
   spec->trajectory_file = file_path.string();
   spec->trajectory_t_ns = trajectory->t_ns;
-  spec->trajectory_poses = trajectory->poses;
+  spec->trajectory_world_from_body = trajectory->poses;
   if (const YAML::Node n = node["body_from_master"]) {
     auto pose = ReadPose(r, n, prefix + ".body_from_master");
     if (!pose) return Error{pose.error()};

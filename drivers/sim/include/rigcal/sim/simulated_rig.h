@@ -112,10 +112,10 @@ class SimulatedRig {
 
   // Ground truth at stream time t_s (seconds since frame 0, clamped to the trajectory):
   // world_from_master, and world_from_camera of camera `camera`.
-  Pose MasterPoseAt(double t_s) const;
-  Pose CameraPoseAt(int camera, double t_s) const;
-  // The true rig: per slave (camera 1..N-1), its similarity in the master frame, scale 1
-  // (every camera's truth is metric).
+  Pose WorldFromMasterAt(double t_s) const;
+  Pose WorldFromCameraAt(int camera, double t_s) const;
+  // The true rig: per slave (camera 1..N-1), master_from_slave with scale 1 (every camera's
+  // truth is metric).
   std::vector<Similarity> TrueRig() const;
 
   // Frame k of camera `camera` exactly as its device returns it (noise, blur; ignores drops,

@@ -112,7 +112,7 @@ struct SimulatedRigSpec {
   // strictly increasing stamps; the first stamp is stream time 0.
   std::string trajectory_file;  // informational (log messages)
   std::vector<int64_t> trajectory_t_ns;
-  std::vector<Pose> trajectory_poses;
+  std::vector<Pose> trajectory_world_from_body;
   Pose body_from_master;  // master camera pose in the file's body frame
 
   // --- Scene --------------------------------------------------------------------------------
