@@ -177,7 +177,7 @@ TIDY_DIR ?= build-tidy
 tidy: deps
 	$(call cmake_configure,$(TIDY_DIR),Release,-DRIGCAL_UNITY_BUILD=OFF)
 	cmake --build $(TIDY_DIR) --target rigcal_lcmtypes_cpp
-	find calib/base/src calib/src calib/camera/src vo/src drivers/src tools/*/src tools/cli -name '*.cc' | xargs clang-tidy -p $(TIDY_DIR) --quiet
+	find calib/base/src calib/src calib/camera/src vo/src drivers/*/src tools/*/src tools/cli -name '*.cc' | xargs clang-tidy -p $(TIDY_DIR) --quiet
 
 clean:
 	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(ASAN_ALL_DIR) $(TSAN_DIR) $(TIDY_DIR)

@@ -23,12 +23,16 @@ rigcal_module(trigger_core TARGET rigcal_trigger_core DIRS firmware/core firmwar
 rigcal_module(base TARGET rigcal_base DIRS calib/base NO_OPENCV)
 rigcal_module(camera TARGET rigcal_camera DIRS calib/camera USES base NO_OPENCV)
 rigcal_module(calib TARGET rigcal_calib DIRS calib/src calib/include USES base NO_OPENCV)
-# drivers and vo: frames and poses; never the estimators.
-rigcal_module(drivers TARGET rigcal_drivers DIRS drivers
-              USES base camera trigger_protocol trigger_core)
+# drivers (capture, trigger, sim) and vo: frames and poses; never the estimators. The hardware
+# side (capture, trigger) never uses the simulator.
+rigcal_module(capture TARGET rigcal_capture DIRS drivers/capture USES base)
+rigcal_module(trigger TARGET rigcal_trigger DIRS drivers/trigger
+              USES base capture trigger_protocol)
+rigcal_module(sim TARGET rigcal_sim DIRS drivers/sim
+              USES base camera capture trigger trigger_core)
 rigcal_module(vo TARGET rigcal_vo DIRS vo USES base camera)
 # tools: at most five floors (io < lcm < pipeline < research < cli).
-rigcal_module(io TARGET rigcal_io DIRS tools/io USES calib camera drivers)
+rigcal_module(io TARGET rigcal_io DIRS tools/io USES calib camera capture trigger sim)
 rigcal_module(plot TARGET rigcal_plot DIRS tools/plot USES io)
 rigcal_module(pattern TARGET rigcal_pattern DIRS tools/pattern USES io)
 rigcal_module(lcm TARGET rigcal_lcm DIRS tools/lcm USES io)

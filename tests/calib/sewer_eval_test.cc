@@ -16,10 +16,10 @@
 #include <thread>
 
 #include "rigcal/calib/rig_estimator.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/run_evaluation.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal {
 namespace {
@@ -41,10 +41,10 @@ SewerRun RunSewer(uint64_t seed) {
   auto config = io::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/sim_sewer.yaml");
   EXPECT_TRUE(config) << config.error();
   if (!config || !config->simulated_source) return out;
-  drivers::SimulatedRigSpec spec = *config->simulated_source;
+  sim::SimulatedRigSpec spec = *config->simulated_source;
   spec.realtime = false;
   if (seed != 0) spec.seed = seed;
-  auto rig = drivers::MakeSimulatedRig(spec);
+  auto rig = sim::MakeSimulatedRig(spec);
   EXPECT_TRUE(rig) << rig.error();
   if (!rig) return out;
   pipeline::PipelineOptions options;

@@ -162,7 +162,7 @@ TEST_F(TargetCommandsTest, IntrinsicsFromAnLcmImageLog) {
         char file[64];
         std::snprintf(file, sizeof(file), "/%s%02d.jpg", c == 0 ? "left" : "right", k);
         if (!std::filesystem::exists(DataDir() + file)) continue;  // there is no pair 10
-        drivers::Frame frame;
+        capture::Frame frame;
         frame.camera = c;
         frame.t_ns = k * 1000000000LL;
         frame.image = cv::imread(DataDir() + file, cv::IMREAD_GRAYSCALE);

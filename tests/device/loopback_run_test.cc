@@ -46,7 +46,7 @@
 
 #include "guest_skip.h"
 #include "loopback_writer.h"
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/v4l2_timestamp.h"
 #include "rigcal/io/result_file.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
@@ -247,11 +247,11 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   std::ofstream(dir + "/v4l2.yaml") << V4l2RigYaml(simulated);
   auto config = io::LoadRigConfig(dir + "/simulated.yaml");
   ASSERT_TRUE(config.ok()) << config.error();
-  auto rig = drivers::MakeSimulatedRig(*config->simulated_source);
+  auto rig = sim::MakeSimulatedRig(*config->simulated_source);
   ASSERT_TRUE(rig.ok()) << rig.error();
 
-  drivers::LoopbackWriter writer0("/dev/video20", drivers::PixelFormat::kGrey, width, height);
-  drivers::LoopbackWriter writer1("/dev/video21", drivers::PixelFormat::kYuyv, width, height);
+  capture::LoopbackWriter writer0("/dev/video20", capture::PixelFormat::kGrey, width, height);
+  capture::LoopbackWriter writer1("/dev/video21", capture::PixelFormat::kYuyv, width, height);
   ASSERT_EQ(writer0.error(), "");
   ASSERT_EQ(writer1.error(), "");
   // Frame k+1 is rendered while rigcal processes frame k (within the writer's period).
@@ -286,7 +286,7 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   int64_t drops_seen = 0;
   for (int k = 0; k < frames && run.Running(); ++k) {
     const auto written = std::chrono::steady_clock::now();
-    write_ns[k] = drivers::MonotonicNowNs();
+    write_ns[k] = capture::MonotonicNowNs();
     ASSERT_TRUE(writer0.Write(next.first)) << writer0.error();
     ASSERT_TRUE(writer1.Write(next.second)) << writer1.error();
     // The VO median hides its slow frames (keyframes, bundle adjustment); a backlog drop means

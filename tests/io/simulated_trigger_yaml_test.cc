@@ -15,7 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-Expected<drivers::SimulatedRigSpec> ParseSource(const std::string& trigger_lines) {
+Expected<sim::SimulatedRigSpec> ParseSource(const std::string& trigger_lines) {
   static int counter = 0;
   const fs::path dir =
       fs::temp_directory_path() / ("rigcal_sim_trigger_" + std::to_string(::getpid()));

@@ -53,7 +53,7 @@ TEST(TriggerYaml, ReadsTheGeneratorAndTheCamerasLines) {
                             "2000, stamp: end_of_frame, readout_us: 10000}\n"));
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_TRUE(config->trigger.has_value());
-  const drivers::LiveTriggerOptions& t = *config->trigger;
+  const trigger::LiveTriggerOptions& t = *config->trigger;
   EXPECT_EQ(t.port, "/dev/ttyUSB1");
   EXPECT_EQ(t.baud, 230400);
   EXPECT_FALSE(t.uart_wire);

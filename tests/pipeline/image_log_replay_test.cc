@@ -15,20 +15,20 @@
 #include "pipeline/room_rig.h"
 #include "rigcal/base/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/lcm/shared_bus.h"
 #include "rigcal/pipeline/calib_node.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "rigcal/pipeline/pipeline.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
 
-io::RigConfig Config(const drivers::SimulatedRigSpec& spec) {
+io::RigConfig Config(const sim::SimulatedRigSpec& spec) {
   io::RigConfig config;
   config.path = "test-config";
   config.name = "test";
@@ -72,8 +72,8 @@ TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
   const fs::path dir =
       fs::temp_directory_path() / ("rigcal_image_replay_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const drivers::SimulatedRigSpec spec = RoomRigSpec(8.0);
-  auto rig = drivers::MakeSimulatedRig(spec);
+  const sim::SimulatedRigSpec spec = RoomRigSpec(8.0);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   const io::RigConfig config = Config(spec);
   const std::string images = (dir / "images.lcmlog").string();

@@ -51,7 +51,7 @@ TEST(LiveTrigger, ImageFolderFramesCarryConsecutivePulsesAndTheirMappedTimes) {
       auto frame = sources->devices[c]->Grab();
       ASSERT_TRUE(frame.ok()) << frame.error();
       ASSERT_TRUE(frame->has_value()) << "camera " << c << " ended at frame " << k;
-      const drivers::Frame& f = **frame;
+      const capture::Frame& f = **frame;
       ASSERT_GE(f.seq, 0) << "camera " << c << " frame " << k << " got no pulse";
       seqs[c].push_back(f.seq);
       const int64_t error_ns = f.t_ns - generator.TrueHostNs(f.seq);

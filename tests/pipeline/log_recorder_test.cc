@@ -44,21 +44,21 @@ cv::Mat TestImage(int camera, int64_t k, int width = 64, int height = 48) {
 }
 
 // A device that returns the frames `seqs` (gaps = frames lost by the device), 50 ms apart.
-class ScriptedDevice final : public drivers::CameraDevice {
+class ScriptedDevice final : public capture::CameraDevice {
  public:
   ScriptedDevice(std::string name, int camera, std::vector<int64_t> seqs)
       : name_(std::move(name)), camera_(camera), seqs_(std::move(seqs)) {}
   const std::string& name() const override { return name_; }
   double frame_rate_hz() const override { return 20.0; }
-  Expected<std::optional<drivers::Frame>> Grab() override {
-    if (next_ >= seqs_.size()) return std::optional<drivers::Frame>();
+  Expected<std::optional<capture::Frame>> Grab() override {
+    if (next_ >= seqs_.size()) return std::optional<capture::Frame>();
     const int64_t seq = seqs_[next_++];
-    drivers::Frame frame;
+    capture::Frame frame;
     frame.camera = camera_;
     frame.seq = seq;
     frame.t_ns = 1'000'000'000 + seq * 50'000'000;
     frame.image = TestImage(camera_, seq);
-    return std::optional<drivers::Frame>(std::move(frame));
+    return std::optional<capture::Frame>(std::move(frame));
   }
   void Interrupt() override {}
 
@@ -70,7 +70,7 @@ class ScriptedDevice final : public drivers::CameraDevice {
 };
 
 TEST(ImageCodec, RoundTripsEveryEncoding) {
-  drivers::Frame frame;
+  capture::Frame frame;
   frame.t_ns = 123'456'789;
   frame.seq = 42;
   frame.image = TestImage(1, 3);
@@ -166,7 +166,7 @@ TEST(LogRecorder, RecordsTappedFramesAndMessages) {
   options.lossless = true;
   auto recorder = LogRecorder::Open(path, names, options);
   ASSERT_TRUE(recorder.ok()) << recorder.error();
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   devices.push_back((*recorder)->Tap(
       std::make_unique<ScriptedDevice>("cam0", 0, std::vector<int64_t>{0, 1, 2, 3, 4, 5}), 0));
   // cam1 loses frames 2 and 4..5.
@@ -214,7 +214,7 @@ TEST(LogRecorder, CutRecordingReadsUpToLastCompleteEvent) {
   options.lossless = true;
   auto recorder = LogRecorder::Open(path, names, options);
   ASSERT_TRUE(recorder.ok()) << recorder.error();
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   devices.push_back((*recorder)->Tap(
       std::make_unique<ScriptedDevice>("cam0", 0, std::vector<int64_t>{0, 1, 2, 3, 4}), 0));
   CaptureLoops capture(std::move(devices));

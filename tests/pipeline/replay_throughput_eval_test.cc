@@ -49,7 +49,7 @@ class ReplayThroughput : public ::testing::Test {
 };
 
 TEST_F(ReplayThroughput, ImageLogThroughVo) {
-  drivers::SimulatedRigSpec spec = RoomRigSpec(15.0);
+  sim::SimulatedRigSpec spec = RoomRigSpec(15.0);
   spec.names.resize(2);
   spec.master_from_camera.resize(2);
   spec.cameras.clear();
@@ -68,7 +68,7 @@ TEST_F(ReplayThroughput, ImageLogThroughVo) {
     c.spec = camera;
     config.cameras.push_back(c);
   }
-  auto rig = drivers::MakeSimulatedRig(spec);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   const std::string log = (dir_ / "images.lcmlog").string();
   WriteImageLog(*rig, spec.names, log);

@@ -12,11 +12,11 @@
 #include "pipeline/room_rig_spec.h"
 #include "rigcal/base/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "rigcal/pipeline/pipeline.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal::pipeline {
 
@@ -34,9 +34,9 @@ inline bool RunToEnd(Pipeline* pipeline) {
 }
 
 // Every frame of the rig as an image log, in stamp order (master first at equal stamps).
-inline void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<std::string>& names,
+inline void WriteImageLog(const sim::SimulatedRig& rig, const std::vector<std::string>& names,
                           const std::string& path) {
-  std::vector<drivers::Frame> frames;
+  std::vector<capture::Frame> frames;
   auto devices = rig.MakeDevices();
   for (size_t i = 0; i < devices.size(); ++i) {
     while (true) {
@@ -53,7 +53,7 @@ inline void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<st
   ::lcm::LogFile log(path, "w");
   ASSERT_TRUE(log.good());
   int64_t n = 0;
-  for (const drivers::Frame& frame : frames) {
+  for (const capture::Frame& frame : frames) {
     const std::string& name = names[static_cast<size_t>(frame.camera)];
     const std::string channel = lcm::ImageChannel(name);
     auto bytes = EncodeImageEvent(frame, names, frame.camera, {});

@@ -13,8 +13,8 @@
 #include <random>
 
 #include "rigcal/base/robust_statistics.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal::vo {
 namespace {
@@ -73,12 +73,12 @@ void CompareWithKltChain(const std::string& file, int camera, int frames, double
                          double* affine_median) {
   auto config = io::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
   ASSERT_TRUE(config.ok()) << config.error();
-  drivers::SimulatedRigSpec spec = *config->simulated_source;
+  sim::SimulatedRigSpec spec = *config->simulated_source;
   spec.realtime = false;
-  auto rig = drivers::MakeSimulatedRig(spec);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig.ok()) << rig.error();
   const camera::CameraModel& model = *spec.cameras[camera];
-  auto pose = [&](int64_t k) { return rig->CameraPoseAt(camera, rig->FrameStreamTime(k)); };
+  auto pose = [&](int64_t k) { return rig->WorldFromCameraAt(camera, rig->FrameStreamTime(k)); };
   const int64_t first = 40;
   cv::Mat previous = rig->RenderFrame(camera, first);
   const cv::Mat reference = previous.clone();

@@ -14,7 +14,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/drivers/image_folder_device.h"
+#include "rigcal/capture/image_folder_device.h"
 #include "rigcal/io/camera_files.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
@@ -97,11 +97,11 @@ int RunImportEuroc(const ImportArgs& args) {
   }
   lcm::CameraNames names;
   std::vector<io::CameraConfig> cameras;
-  std::vector<std::unique_ptr<drivers::ImageFolderDevice>> devices;
+  std::vector<std::unique_ptr<capture::ImageFolderDevice>> devices;
   for (const fs::path& folder : *folders) {
     const std::string name = folder.filename().string();
     auto device =
-        drivers::ImageFolderDevice::Open(folder.string(), name, static_cast<int>(names.size()));
+        capture::ImageFolderDevice::Open(folder.string(), name, static_cast<int>(names.size()));
     if (!device) return PrintCommandError("import", folder.string() + ": " + device.error());
     io::CameraConfig camera;
     camera.name = name;
@@ -133,7 +133,7 @@ int RunImportEuroc(const ImportArgs& args) {
   if (!log) return PrintCommandError("import", log.error());
 
   // Merge the cameras by time: always write the earliest pending frame (lower index on ties).
-  std::vector<std::optional<drivers::Frame>> pending(devices.size());
+  std::vector<std::optional<capture::Frame>> pending(devices.size());
   const auto grab = [&](size_t i) -> Status {
     auto frame = devices[i]->Grab();
     if (!frame) return frame.status();
@@ -165,7 +165,7 @@ int RunImportEuroc(const ImportArgs& args) {
   if (Status status = (*log)->Close(); !status.ok())
     return PrintCommandError("import", status.message());
 
-  std::vector<drivers::ImageFolderDevice*> folder_devices;
+  std::vector<capture::ImageFolderDevice*> folder_devices;
   for (const auto& device : devices) folder_devices.push_back(device.get());
   pipeline::ReportFolderProblems(folder_devices, "rigcal import: ", std::cerr);
   const std::string comment = "Cameras of the EuRoC recording " + args.dir +

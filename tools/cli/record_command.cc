@@ -128,7 +128,7 @@ int RunRecord(const RecordArgs& args) {
     return kExitError;
   }
   pipeline::LogRecorder& recorder = **opened;
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   for (size_t i = 0; i < sources->devices.size(); ++i) {
     devices.push_back(recorder.Tap(std::move(sources->devices[i]), static_cast<int>(i)));
   }

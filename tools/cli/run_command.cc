@@ -16,7 +16,6 @@
 #include "exit_codes.h"
 #include "rigcal/base/format.h"
 #include "rigcal/base/logging.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/ground_truth_files.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_config.h"
@@ -33,6 +32,7 @@
 #include "rigcal/pipeline/online_replay.h"
 #include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/run_evaluation.h"
+#include "rigcal/sim/simulated_rig.h"
 #include "stop_signal.h"
 
 namespace rigcal::cli {
@@ -169,10 +169,11 @@ int RunRun(const RunArgs& args) {
     std::cerr << "rigcal run: " << sources.error() << "\n";
     return kExitError;
   }
-  const std::optional<drivers::SimulatedRig>& rig = sources->rig;
+  const std::optional<sim::SimulatedRig>& rig = sources->rig;
   const bool realtime = sources->realtime;
   if (rig && !args.truth_dir.empty()) {
-    if (const Status status = io::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
+    if (const Status status = io::WriteGroundTruth(rig->GroundTruth(), args.truth_dir);
+        !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
@@ -277,7 +278,8 @@ int RunRun(const RunArgs& args) {
   if (rig && !args.truth_dir.empty() && !args.poses_dir.empty()) {
     // In real time the devices' stamps start with the rig clock: rewrite the truth now that
     // it runs, so its stamps match the written poses (before the run they count from 0).
-    if (const Status status = io::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
+    if (const Status status = io::WriteGroundTruth(rig->GroundTruth(), args.truth_dir);
+        !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }

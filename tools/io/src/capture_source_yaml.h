@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "rigcal/base/status.h"
-#include "rigcal/drivers/libcamera_device.h"
-#include "rigcal/drivers/v4l2_options.h"
+#include "rigcal/capture/libcamera_device.h"
+#include "rigcal/capture/v4l2_options.h"
 #include "yaml_fields.h"
 
 namespace rigcal::io {
@@ -23,13 +23,13 @@ namespace rigcal::io {
 // "cam0.capture").
 std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
                                    const std::string& field, bool is_source,
-                                   drivers::V4l2Options* options);
+                                   capture::V4l2Options* options);
 
 // The same for `source: {type: libcamera}` and a camera's `capture:` (the camera's `device` is
 // the libcamera camera id or model). Keys: role, pixel_formats, buffers, reconnect,
 // reconnect_max_backoff_s.
 std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& node,
                                         const std::string& field, bool is_source,
-                                        drivers::LibcameraOptions* options);
+                                        capture::LibcameraOptions* options);
 
 }  // namespace rigcal::io

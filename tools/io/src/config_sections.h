@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/base/status.h"
+#include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal::io {
 
@@ -22,8 +22,8 @@ Expected<camera::CameraSpec> ParseCameraSection(const YAML::Node& camera, const 
 
 // The `source:` section of type `simulated`. Fills every field of SimulatedRigSpec that the
 // section owns; cameras and their true mounting are filled by the caller from `cameras:`.
-Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
-                                                         const std::string& path);
+Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
+                                                     const std::string& path);
 
 // `estimator.time_offset` (cameras that run free): `auto` (every slave's clock offset
 // estimated), a number of seconds (every slave's, given), or a map from slave names to `auto` or

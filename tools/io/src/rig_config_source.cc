@@ -32,7 +32,7 @@ std::optional<Error> ParseImageFolders(const FieldReader& r, const YAML::Node& s
 
 std::optional<Error> ParseV4l2Source(const FieldReader& r, const YAML::Node& source,
                                      const std::vector<YAML::Node>& entries, RigConfig* config) {
-  drivers::V4l2Options defaults;
+  capture::V4l2Options defaults;
   if (auto e = ParseV4l2Keys(r, source, "source", true, &defaults)) return *e;
   for (size_t i = 0; i < config->cameras.size(); ++i) {
     const CameraConfig& camera = config->cameras[i];
@@ -44,7 +44,7 @@ std::optional<Error> ParseV4l2Source(const FieldReader& r, const YAML::Node& sou
     if (!camera.spec) {
       return r.Fail(entries[i], camera.name, "a v4l2 camera needs a model and intrinsics");
     }
-    drivers::V4l2Options options = defaults;
+    capture::V4l2Options options = defaults;
     options.device = camera.device;
     options.width = camera.spec->width;
     options.height = camera.spec->height;
@@ -61,7 +61,7 @@ std::optional<Error> ParseV4l2Source(const FieldReader& r, const YAML::Node& sou
 std::optional<Error> ParseLibcameraSource(const FieldReader& r, const YAML::Node& source,
                                           const std::vector<YAML::Node>& entries,
                                           RigConfig* config) {
-  drivers::LibcameraOptions defaults;
+  capture::LibcameraOptions defaults;
   if (auto e = ParseLibcameraKeys(r, source, "source", true, &defaults)) return *e;
   for (size_t i = 0; i < config->cameras.size(); ++i) {
     const CameraConfig& camera = config->cameras[i];
@@ -72,7 +72,7 @@ std::optional<Error> ParseLibcameraSource(const FieldReader& r, const YAML::Node
     if (!camera.spec) {
       return r.Fail(entries[i], camera.name, "a libcamera camera needs a model and intrinsics");
     }
-    drivers::LibcameraOptions options = defaults;
+    capture::LibcameraOptions options = defaults;
     options.camera = camera.device;
     options.width = camera.spec->width;
     options.height = camera.spec->height;

@@ -2,6 +2,7 @@
 // laid out by the same table the reader uses (trajectory_formats.h).
 #include <algorithm>
 #include <array>
+#include <sstream>
 #include <string>
 
 #include "rigcal/base/format.h"
@@ -13,8 +14,9 @@
 namespace rigcal::io {
 namespace {
 
+// `comment`: written instead of the column legend when not empty.
 Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajectory,
-                       TrajectoryFormat format) {
+                       TrajectoryFormat format, const std::string& comment) {
   if (trajectory.poses.size() != trajectory.t_ns.size() ||
       (!trajectory.segment.empty() && trajectory.segment.size() != trajectory.t_ns.size())) {
     return Error{"cannot write '" + path + "': t_ns, poses and segment differ in size"};
@@ -24,7 +26,10 @@ Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajector
       format == TrajectoryFormat::kNative ||
       std::any_of(trajectory.segment.begin(), trajectory.segment.end(), [](int s) { return s; });
   std::string out;
-  if (format == TrajectoryFormat::kNative) {
+  if (!comment.empty()) {
+    std::istringstream lines(comment);
+    for (std::string line; std::getline(lines, line);) out += "# " + line + '\n';
+  } else if (format == TrajectoryFormat::kNative) {
     out += "# rigcal poses\n# t_ns qw qx qy qz Cx Cy Cz segment\n";
   } else {
     out += with_segment ? "# t tx ty tz qx qy qz qw segment\n" : "# t tx ty tz qx qy qz qw\n";
@@ -50,12 +55,13 @@ Status WriteTrajectory(const std::string& path, const TimedTrajectory& trajector
 
 }  // namespace
 
-Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory) {
-  return WriteTrajectory(path, trajectory, TrajectoryFormat::kTum);
+Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory,
+                          const std::string& comment) {
+  return WriteTrajectory(path, trajectory, TrajectoryFormat::kTum, comment);
 }
 
 Status WriteTrajectoryNative(const std::string& path, const TimedTrajectory& trajectory) {
-  return WriteTrajectory(path, trajectory, TrajectoryFormat::kNative);
+  return WriteTrajectory(path, trajectory, TrajectoryFormat::kNative, "");
 }
 
 }  // namespace rigcal::io

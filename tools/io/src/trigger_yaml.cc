@@ -24,7 +24,7 @@ std::optional<Error> OptionalInteger(const FieldReader& r, const YAML::Node& nod
 }  // namespace
 
 std::optional<Error> ParseTriggerSection(const FieldReader& r, const YAML::Node& node,
-                                         drivers::LiveTriggerOptions* options) {
+                                         trigger::LiveTriggerOptions* options) {
   if (auto e = r.CheckKeys(node, "trigger.",
                            {"port", "baud", "rate_hz", "heartbeat_ms", "uart_wire", "tolerance_ms",
                             "command_timeout_ms"})) {
@@ -100,14 +100,14 @@ Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAM
   if (const YAML::Node n = node["stamp"]) {
     auto text = r.String(n, p + "stamp");
     if (!text) return Error{text.error()};
-    c.stamp = drivers::FrameStampFromString(*text);
+    c.stamp = trigger::FrameStampFromString(*text);
     if (!c.stamp) {
       return r.Fail(
           n, p + "stamp",
           "'" + *text + "' is not one of start_of_exposure, exposure_centre, end_of_frame");
     }
   }
-  if (node["readout_us"] && c.stamp != drivers::FrameStamp::kEndOfFrame) {
+  if (node["readout_us"] && c.stamp != trigger::FrameStamp::kEndOfFrame) {
     return r.Fail(node["readout_us"], p + "readout_us", "only with stamp: end_of_frame");
   }
   return c;
@@ -137,7 +137,7 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
     ++triggered;
   }
   if (!section) return std::nullopt;
-  drivers::LiveTriggerOptions options;
+  trigger::LiveTriggerOptions options;
   if (auto e = ParseTriggerSection(r, section, &options)) return e;
   if (triggered == 0) {
     return r.Fail(section, "trigger", "no camera has a `trigger:` entry (its line)");
@@ -180,10 +180,10 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
       }
       exposure_us = std::llround(*exposure);
     }
-    const drivers::FrameStamp stamp =
-        c.stamp.value_or(start_of_exposure ? drivers::FrameStamp::kStartOfExposure
-                                           : drivers::FrameStamp::kExposureCentre);
-    drivers::TriggerLineSettings line;
+    const trigger::FrameStamp stamp =
+        c.stamp.value_or(start_of_exposure ? trigger::FrameStamp::kStartOfExposure
+                                           : trigger::FrameStamp::kExposureCentre);
+    trigger::TriggerLineSettings line;
     line.line = c.line;
     line.width_us = c.width_us.value_or(std::min<int64_t>(1000, period_us / 2));
     line.phase_offset_us = c.phase_us;
@@ -198,7 +198,7 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
                         std::to_string(period_us) + " us");
     }
     bool known = false;
-    for (const drivers::TriggerLineSettings& other : options.settings.lines) {
+    for (const trigger::TriggerLineSettings& other : options.settings.lines) {
       if (other.line != line.line) continue;
       known = true;
       if (other.width_us != line.width_us || other.phase_offset_us != line.phase_offset_us ||
@@ -209,8 +209,8 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
       }
     }
     if (!known) options.settings.lines.push_back(line);
-    config->camera_triggers[i] = drivers::CameraTriggerSpec{
-        c.line, c.phase_us * 1000, drivers::StampOffsetNs(stamp, exposure_us, c.readout_us)};
+    config->camera_triggers[i] = trigger::CameraTriggerSpec{
+        c.line, c.phase_us * 1000, trigger::StampOffsetNs(stamp, exposure_us, c.readout_us)};
   }
   if (Status s = options.Check(); !s.ok()) return r.Fail(section, "trigger", s.message());
   config->trigger = std::move(options);

@@ -16,8 +16,8 @@
 #include <string>
 
 #include "rigcal/base/status.h"
-#include "rigcal/drivers/live_trigger_timeline.h"
 #include "rigcal/io/rig_config.h"
+#include "rigcal/trigger/live_trigger_timeline.h"
 #include "yaml_fields.h"
 
 namespace rigcal::io {
@@ -28,14 +28,14 @@ struct CameraTriggerConfig {
   std::optional<int64_t> width_us;           // pulse width; default min(1000, period / 2)
   int64_t phase_us = 0;                      // exposure centre - tick
   std::optional<int64_t> exposure_us;        // v4l2: capture.exposure_us instead
-  std::optional<drivers::FrameStamp> stamp;  // v4l2: from the buffer flags instead
+  std::optional<trigger::FrameStamp> stamp;  // v4l2: from the buffer flags instead
   int64_t readout_us = 0;                    // sensor readout, for stamp end_of_frame
 };
 
 // The top-level `trigger:` map into `options` (port, baud, rate_hz, heartbeat_ms, uart_wire,
 // tolerance_ms, command_timeout_ms); its lines come from the cameras.
 std::optional<Error> ParseTriggerSection(const FieldReader& r, const YAML::Node& node,
-                                         drivers::LiveTriggerOptions* options);
+                                         trigger::LiveTriggerOptions* options);
 
 // A camera's `trigger:` map; `field` names it in errors ("cam1.trigger").
 Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAML::Node& node,

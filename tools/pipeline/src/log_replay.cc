@@ -86,7 +86,7 @@ Status CalibNode::Impl::OpenLog() {
   auto models = CameraModels(config);
   if (!models) return models.status();
   const double rate_hz = 1e9 / static_cast<double>(config.online.sync.frame_period_ns);
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   for (const std::string& name : names) {
     auto feed = std::make_unique<FrameFeedDevice>(
         name, rate_hz, static_cast<size_t>(options.replay.frame_feed_capacity));
@@ -168,7 +168,7 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
     // The message's stamp decides the window and the pacing.
     int camera = -1;
     std::optional<CameraPose> pose;
-    std::optional<drivers::Frame> frame;
+    std::optional<capture::Frame> frame;
     if (images) {
       camera = CameraOfChannel(event.channel, /*images=*/true);
       if (camera < 0) {
@@ -178,7 +178,7 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
       auto image = validator.Decode<image_t>(event.channel, event.data.data(),
                                              static_cast<int64_t>(event.data.size()));
       auto decoded =
-          image ? FrameFromImage(*image, camera) : Expected<drivers::Frame>(image.status());
+          image ? FrameFromImage(*image, camera) : Expected<capture::Frame>(image.status());
       if (!decoded) {
         ++summary.cameras[camera].invalid;
         images_invalid[camera].fetch_add(1);

@@ -5,8 +5,8 @@
 #include <stdexcept>
 
 #include "rigcal/base/logging.h"
-#include "rigcal/calib/pose_merge.h"
 #include "rigcal/base/robust_statistics.h"
+#include "rigcal/calib/pose_merge.h"
 #include "rigcal/camera_status_t.hpp"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
@@ -70,9 +70,9 @@ Status PipelineOptions::Check() const {
 // the rest under `mutex`.
 struct Pipeline::Camera {
   int index = 0;
-  std::unique_ptr<drivers::CameraDevice> device;
+  std::unique_ptr<capture::CameraDevice> device;
   vo::MonocularVo vo;
-  BoundedQueue<drivers::Frame> frames;
+  BoundedQueue<capture::Frame> frames;
   std::thread capture_thread;
   std::thread vo_thread;
 
@@ -82,7 +82,7 @@ struct Pipeline::Camera {
   size_t timing_count RIGCAL_GUARDED_BY(mutex) = 0;
   std::vector<CameraPose> recorded RIGCAL_GUARDED_BY(mutex);
 
-  Camera(int i, std::string name, std::unique_ptr<drivers::CameraDevice> d,
+  Camera(int i, std::string name, std::unique_ptr<capture::CameraDevice> d,
          std::shared_ptr<const camera::CameraModel> model, const PipelineOptions& options)
       : index(i),
         device(std::move(d)),
@@ -93,7 +93,7 @@ struct Pipeline::Camera {
 };
 
 Pipeline::Pipeline(std::vector<std::string> names,
-                   std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
+                   std::vector<std::unique_ptr<capture::CameraDevice>> devices,
                    std::vector<std::shared_ptr<const camera::CameraModel>> cameras,
                    OnlineOptions online, PipelineOptions options, lcm::SharedBus* bus)
     : names_(std::move(names)),
@@ -141,7 +141,7 @@ void Pipeline::CaptureLoop(int index) {
   Camera& camera = *cameras_[static_cast<size_t>(index)];
   auto log = ModuleLogger("drivers");
   while (true) {
-    Expected<std::optional<drivers::Frame>> grabbed = camera.device->Grab();
+    Expected<std::optional<capture::Frame>> grabbed = camera.device->Grab();
     if (!grabbed) {
       {
         MutexLock lock(camera.mutex);
@@ -156,7 +156,7 @@ void Pipeline::CaptureLoop(int index) {
       camera.health.ended = true;
       break;
     }
-    drivers::Frame frame = std::move(**grabbed);
+    capture::Frame frame = std::move(**grabbed);
     frame.camera = index;
     {
       MutexLock lock(camera.mutex);
@@ -200,7 +200,7 @@ void Pipeline::Forward(const CameraPose& pose) {
 
 void Pipeline::VoLoop(int index) {
   Camera& camera = *cameras_[static_cast<size_t>(index)];
-  while (std::optional<drivers::Frame> frame = camera.frames.Pop()) {
+  while (std::optional<capture::Frame> frame = camera.frames.Pop()) {
     const vo::VoResult result = camera.vo.Process(frame->t_ns, frame->image);
     std::vector<CameraPose> poses;
     if (result.segment_start) poses.push_back(*result.segment_start);

@@ -7,15 +7,15 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/online_calibrator.h"
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/online_calibrator.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/libcamera_device.h"
-#include "rigcal/drivers/live_trigger_timeline.h"
-#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/capture/libcamera_device.h"
+#include "rigcal/sim/simulated_rig.h"
+#include "rigcal/trigger/live_trigger_timeline.h"
 
-#include "rigcal/drivers/v4l2_options.h"
+#include "rigcal/capture/v4l2_options.h"
 
 namespace rigcal::io {
 
@@ -51,22 +51,22 @@ struct RigConfig {
   OnlineOptions online;  // estimator options incl. nominal per slave; sync.num_cameras set
   PublishOptions publish;
   StateOptions state;
-  std::optional<drivers::SimulatedRigSpec> simulated_source;  // `source: {type: simulated}`
+  std::optional<sim::SimulatedRigSpec> simulated_source;  // `source: {type: simulated}`
   // `source: {type: image_folders}`: one EuRoC-format camera folder per camera (its `device`,
   // resolved against the config file's directory), camera index order.
   std::vector<std::string> image_folders;
   // `source: {type: v4l2}`: one device per camera (camera index order): the source's keys,
   // the camera's `device`, its resolution and its `capture:` keys.
-  std::vector<drivers::V4l2Options> v4l2_devices;
+  std::vector<capture::V4l2Options> v4l2_devices;
   // `source: {type: libcamera}`: the same with the camera's `device` as the libcamera camera.
-  std::vector<drivers::LibcameraOptions> libcamera_devices;
+  std::vector<capture::LibcameraOptions> libcamera_devices;
   // `trigger:`: a trigger generator on a serial port, with one line per line named by the
   // cameras' `trigger:` entries (config/README.md "Hardware trigger"); unset without one.
-  std::optional<drivers::LiveTriggerOptions> trigger;
+  std::optional<trigger::LiveTriggerOptions> trigger;
   // With `trigger:`, camera index order: how each camera hangs on the generator (its line, that
   // line's phase offset, where its source stamps a frame relative to the exposure centre);
   // nullopt for a camera without a `trigger:` entry (free-running).
-  std::vector<std::optional<drivers::CameraTriggerSpec>> camera_triggers;
+  std::vector<std::optional<trigger::CameraTriggerSpec>> camera_triggers;
 
   std::vector<std::string> CameraNames() const;
   const std::string& master() const { return cameras.front().name; }

@@ -16,11 +16,12 @@
 #include <Eigen/Core>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "rigcal/calib/calibration_result.h"
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/calibration_result.h"
 
 namespace rigcal::io {
 
@@ -43,6 +44,11 @@ Expected<std::map<std::string, Similarity>> ReadTrueMountings(const std::string&
 
 // The rig YAML text of `rig` (slave name -> similarity), numbers in shortest round-trip form.
 std::string RigToYaml(const std::map<std::string, Similarity>& rig);
+
+// The rig YAML text of `slaves` (name, similarity) in their order, after `comment` (each line
+// written as "# <line>") and, unless `master` is empty, the metadata `master: <master>`.
+std::string RigToYaml(const std::vector<std::pair<std::string, Similarity>>& slaves,
+                      const std::string& master, const std::string& comment);
 
 // Writes RigToYaml(rig) atomically. The error names the path.
 [[nodiscard]] Status WriteRigYaml(const std::string& path,

@@ -32,8 +32,8 @@
 
 #include "rigcal/base/status.h"
 #include "rigcal/base/time_format.h"  // FormatNsAsSeconds, used with these files
-#include "rigcal/calib/timed_trajectory.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/timed_trajectory.h"
 
 namespace rigcal::io {
 
@@ -82,8 +82,10 @@ Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
 
 // Writes `trajectory` in TUM format (seconds with 9 decimals, so stamps round-trip exactly;
 // doubles in shortest round-trip form), with the segment as 9th column when any segment id is
-// not 0. Atomic (WriteFileAtomically). The error names the path.
-[[nodiscard]] Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory);
+// not 0. `comment`, when not empty, is written instead of the column legend, each line as
+// "# <line>". Atomic (WriteFileAtomically). The error names the path.
+[[nodiscard]] Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory,
+                                        const std::string& comment = "");
 
 // Writes `trajectory` in the native format with its `# rigcal poses` header and the segment
 // column. Atomic. The error names the path.

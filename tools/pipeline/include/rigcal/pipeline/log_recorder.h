@@ -30,7 +30,7 @@
 #include "rigcal/base/bounded_queue.h"
 #include "rigcal/base/status.h"
 #include "rigcal/base/thread_annotations.h"
-#include "rigcal/drivers/capture_device.h"
+#include "rigcal/capture/capture_device.h"
 #include "rigcal/lcm/log_writer.h"
 #include "rigcal/pipeline/image_codec.h"
 
@@ -72,7 +72,7 @@ class LogRecorder {
   // `device` (camera index `camera`) wrapped so that every frame its Grab returns is also
   // encoded (on the grabbing thread) and queued on RIGCAL_IMAGE_<name>. The frames are returned
   // unchanged. The recorder must outlive the returned device's Grab calls.
-  std::unique_ptr<drivers::CameraDevice> Tap(std::unique_ptr<drivers::CameraDevice> device,
+  std::unique_ptr<capture::CameraDevice> Tap(std::unique_ptr<capture::CameraDevice> device,
                                              int camera);
 
   // Queues an encoded message on `channel` at `utime` (µs). Any thread. Ignored after Stop.
@@ -86,7 +86,7 @@ class LogRecorder {
   const std::vector<std::string>& names() const { return names_; }
 
   // Called by Tap'ed devices: encodes and queues one frame of camera `camera`.
-  void RecordFrame(int camera, const drivers::Frame& frame) RIGCAL_EXCLUDES(mutex_);
+  void RecordFrame(int camera, const capture::Frame& frame) RIGCAL_EXCLUDES(mutex_);
 
  private:
   struct Event {

@@ -27,9 +27,9 @@
 #include <vector>
 
 #include "rigcal/base/bounded_queue.h"
-#include "rigcal/calib/online_calibrator.h"
 #include "rigcal/base/thread_annotations.h"
-#include "rigcal/drivers/capture_device.h"
+#include "rigcal/calib/online_calibrator.h"
+#include "rigcal/capture/capture_device.h"
 #include "rigcal/lcm/shared_bus.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/vo/monocular_vo.h"
@@ -106,7 +106,7 @@ class Pipeline {
   // RIGCAL_POSE_<camera>, from the VO threads; the process's other publishers share `bus`. Throws
   // std::invalid_argument on inconsistent arguments.
   Pipeline(std::vector<std::string> names,
-           std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
+           std::vector<std::unique_ptr<capture::CameraDevice>> devices,
            std::vector<std::shared_ptr<const camera::CameraModel>> cameras, OnlineOptions online,
            PipelineOptions options, lcm::SharedBus* bus = nullptr);
   ~Pipeline();

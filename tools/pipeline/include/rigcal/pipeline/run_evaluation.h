@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/error_model.h"
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
-#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/calib/calibration_result.h"
+#include "rigcal/calib/error_model.h"
 #include "rigcal/io/truth_alignment.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal::pipeline {
 
@@ -51,7 +51,7 @@ struct RunEvaluation {
 
 // `poses[i]`: every pose camera i's VO produced (Pipeline::RecordedPoses). Fails when the
 // master has no segment with at least 3 poses.
-Expected<RunEvaluation> EvaluateRun(const drivers::SimulatedRig& rig,
+Expected<RunEvaluation> EvaluateRun(const sim::SimulatedRig& rig,
                                     const std::vector<std::vector<CameraPose>>& poses,
                                     const RigCalibration& result);
 
