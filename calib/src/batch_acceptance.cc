@@ -299,7 +299,7 @@ std::optional<std::string> UnsupportedReason(const CalibrationOptions& options,
   // rotation axes tilt away from the mean axis by far more than rotation noise explains (tilt
   // SNR, Observability::tilt_snr, ≥ 10 max(min_tilt_snr, 1): the model selection's "clearly
   // general" level, model_selection.cc).
-  const double clearly_tilting = 10.0 * std::max(options.min_tilt_snr, 1.0);
+  const double clearly_tilting = 10.0 * std::max(options.model_selection.min_tilt_snr, 1.0);
   if (r.motion_model == MotionModel::kPlanar && r.observability.tilt_snr >= clearly_tilting) {
     return "the data contradict the planar model: the rotation axes tilt " +
            FixedText(r.observability.tilt_snr, 1) +

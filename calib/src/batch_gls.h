@@ -5,9 +5,9 @@
 // (gls_refinement.h): no span is chosen, every pose's information counts with its weight.
 
 #include "batch_pair_choice.h"
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

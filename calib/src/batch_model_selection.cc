@@ -7,9 +7,9 @@
 #include <numeric>
 
 #include "model_explanation.h"
-#include "rigcal/calib/error_model.h"
 #include "rigcal/base/quaternion.h"
 #include "rigcal/base/robust_statistics.h"
+#include "rigcal/calib/error_model.h"
 #include "scale_measurement.h"
 
 namespace rigcal::internal {
@@ -147,9 +147,9 @@ BatchSetting SelectMotionModel(const CalibrationOptions& options, const std::str
   // Thesis 5.2: the purely translational model below the equal-error boundary, which scales
   // with the measured rotation noise (model_selection.h).
   figures->rotation_noise_deg = RotationNoiseDeg(data);
-  figures->translational_below_deg =
-      TranslationalBelowDeg(options.alpha_maxrot_deg, options.alpha_maxrot_noise_deg,
-                            figures->rotation_noise_deg, options.alpha_threshold_deg);
+  figures->translational_below_deg = TranslationalBelowDeg(
+      options.model_selection.alpha_maxrot_deg, options.model_selection.alpha_maxrot_noise_deg,
+      figures->rotation_noise_deg, options.alpha_threshold_deg);
   BatchSetting setting;
   setting.requested = options.motion_model;
   if (setting.requested == MotionModel::kAuto &&
@@ -160,10 +160,7 @@ BatchSetting SelectMotionModel(const CalibrationOptions& options, const std::str
 
   // What the motion cannot determine is taken from the nominal mounting, when there is one:
   // the prior on C along the mean rotation axis (its axis is known once the motions are).
-  setting.select.planar_axis_spread_deg = options.planar_axis_spread_deg;
-  setting.select.min_tilt_snr = options.min_tilt_snr;
-  setting.select.max_axis_std_ratio = options.max_axis_std_ratio;
-  setting.select.general_axis_spread_deg = options.general_axis_spread_deg;
+  setting.select = options.model_selection;
   const auto nominal = options.nominal.find(name);
   if (nominal != options.nominal.end()) {
     setting.prior.given = true;

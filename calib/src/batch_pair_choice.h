@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

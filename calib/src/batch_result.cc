@@ -100,7 +100,7 @@ std::string BatchMessage(const CalibrationOptions& options, const BatchSetting& 
   e.boundary = options.motion_model == MotionModel::kAuto ? ModelExplanation::Boundary::kCompared
                : translational ? ModelExplanation::Boundary::kLargestRotation
                                : ModelExplanation::Boundary::kNone;
-  e.boundary_from_noise = options.alpha_maxrot_noise_deg > 0.0;
+  e.boundary_from_noise = options.model_selection.alpha_maxrot_noise_deg > 0.0;
   e.selection = linear.fit.solution.why;
   e.parallel = parallel;
   e.axis_offset_std = r.axis_offset_std;
@@ -148,10 +148,11 @@ std::optional<SlaveCalibration> UndeterminedResult(const CalibrationOptions& opt
                       std::to_string(used) + " after misfit removal");
   }
   const Observability& figures = r.observability;
+  const ModelSelectionOptions& select = options.model_selection;
   if (options.motion_model == MotionModel::kGeneral && !setting.translational &&
-      ((figures.tilt_snr < options.min_tilt_snr &&
-        figures.axis_spread_deg < options.general_axis_spread_deg) ||
-       figures.axis_spread_deg < options.planar_axis_spread_deg)) {
+      ((figures.tilt_snr < select.min_tilt_snr &&
+        figures.axis_spread_deg < select.general_axis_spread_deg) ||
+       figures.axis_spread_deg < select.planar_axis_spread_deg)) {
     SlaveCalibration planar = r;
     planar.observability.planar = true;
     planar.unobservable = {figures.planar_axis};

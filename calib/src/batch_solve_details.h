@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/base/types.h"
 
 namespace rigcal::internal {
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "rigcal/base/quaternion.h"
+#include "rigcal/calib/rig_estimate.h"
 
 namespace rigcal::internal {
 

@@ -11,7 +11,7 @@
 #include <cstdint>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/rig_estimator_options.h"
 
 namespace rigcal::internal {
 

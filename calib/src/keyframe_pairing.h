@@ -8,8 +8,8 @@
 #include <deque>
 #include <optional>
 
-#include "rigcal/calib/rig_estimator.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/rig_estimator_options.h"
 
 namespace rigcal::internal {
 

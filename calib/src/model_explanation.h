@@ -6,9 +6,9 @@
 
 #include <string>
 
+#include "rigcal/base/format.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/base/format.h"
 
 namespace rigcal::internal {
 

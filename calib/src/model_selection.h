@@ -22,16 +22,9 @@
 #include "motion_statistics.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
+#include "rigcal/calib/model_selection_options.h"
 
 namespace rigcal::internal {
-
-struct ModelSelectionOptions {
-  double planar_axis_spread_deg = 0.0;  // master axes spread below: planar, whatever else
-  // Master axes spread at least this much tilt, whatever the SNR (noisy 6-DoF motion).
-  double general_axis_spread_deg = 10.0;
-  double min_tilt_snr = 10.0;
-  double max_axis_std_ratio = 100.0;
-};
 
 // A prior on the offset of C along the mean rotation axis a: h = a^T C_nominal.
 struct AxisPrior {

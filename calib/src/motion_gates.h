@@ -19,7 +19,7 @@
 #include "motion_data.h"
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/rig_estimator_options.h"
 
 namespace rigcal::internal {
 

@@ -23,7 +23,7 @@
 #include "motion_data.h"
 #include "planar_solver.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/refinement_prior.h"
 
 namespace rigcal::internal {
 
@@ -92,7 +92,7 @@ class MotionStatistics {
   void SetSegmentScale(int segment, double scale);
 
   // The sums as the quadratic forms of a refinement prior (RefinementPrior in
-  // rig_estimator.h); the segments are the open ones, ascending.
+  // refinement_prior.h); the segments are the open ones, ascending.
   RefinementPrior Quadratic() const;
 
   // Every sum as plain data (the estimator's saved state), and statistics made of them.

@@ -15,7 +15,7 @@
 #include "keyframe_pairing.h"
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/rig_estimator_options.h"
 #include "rotation_blocks.h"
 
 namespace rigcal::internal {

@@ -34,8 +34,8 @@
 
 #include "fixed_ring.h"
 #include "pose_glitches.h"
-#include "rigcal/calib/calibration_result.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/calibration_result.h"
 
 namespace rigcal::internal {
 

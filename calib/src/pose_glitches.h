@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/calibration_result.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/calibration_result.h"
 
 namespace rigcal::internal {
 

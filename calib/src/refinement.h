@@ -9,7 +9,7 @@
 
 #include "motion_data.h"
 #include "rigcal/calib/calibration_options.h"
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/refinement_prior.h"
 
 namespace rigcal::internal {
 
@@ -35,7 +35,7 @@ struct RefinementInput {
   bool axis_offset_fixed = false;
   double axis_prior = 0.0;
   double axis_prior_sigma = 0.0;
-  // Motions outside the given ones as quadratic forms (RefinementPrior, rig_estimator.h),
+  // Motions outside the given ones as quadratic forms (RefinementPrior, refinement_prior.h),
   // added as residual blocks whitened by the same sigmas, without robust loss;
   // prior_scale_index[k] is the scale variable of prior->segments[k]. Null: no prior.
   const RefinementPrior* prior = nullptr;

@@ -46,7 +46,7 @@ std::string OnlineMessage(const RigEstimatorOptions& o, const SlaveCalibration& 
   e.figures = published.observability;
   const bool translational = e.model == MotionModel::kTranslational;
   if (translational) e.boundary = internal::ModelExplanation::Boundary::kCompared;
-  e.boundary_from_noise = o.alpha_maxrot_noise_deg > 0.0;
+  e.boundary_from_noise = o.model_selection.alpha_maxrot_noise_deg > 0.0;
   if (e.model == MotionModel::kPlanar) e.selection = selection;
   e.parallel = translational && !std::isfinite(published.rot_std_deg);
   e.axis_offset_std = published.axis_offset_std;

@@ -17,7 +17,8 @@
 
 #include "motion_data.h"
 #include "motion_statistics.h"
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/refinement_job.h"
+#include "rigcal/calib/rig_estimator_options.h"
 #include "rotation_blocks.h"
 
 namespace rigcal::internal {

@@ -1,5 +1,5 @@
 #pragma once
-// The prior of a window refinement (RefinementPrior, rig_estimator.h) in the form Ceres
+// The prior of a window refinement (RefinementPrior, refinement_prior.h) in the form Ceres
 // minimises: square roots of its quadratic forms as residual blocks, so the refinement of a
 // window with this prior minimises the same sum of squares as a refinement over every motion.
 
@@ -9,7 +9,7 @@
 #include <Eigen/Geometry>
 #include <vector>
 
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/refinement_prior.h"
 
 namespace rigcal::internal {
 

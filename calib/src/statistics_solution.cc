@@ -12,10 +12,11 @@ namespace rigcal::internal {
 
 double OnlineTranslationalBelowDeg(const RigEstimatorOptions& o,
                                    const RunningMeanSquare& angle_var) {
-  if (o.alpha_maxrot_noise_deg <= 0.0 || angle_var.count < o.gate_after_motions) {
-    return std::max(o.alpha_maxrot_deg, o.pair_min_angle_deg);
+  const ModelSelectionOptions& m = o.model_selection;
+  if (m.alpha_maxrot_noise_deg <= 0.0 || angle_var.count < o.gate_after_motions) {
+    return std::max(m.alpha_maxrot_deg, o.pair_min_angle_deg);
   }
-  return TranslationalBelowDeg(o.alpha_maxrot_deg, o.alpha_maxrot_noise_deg,
+  return TranslationalBelowDeg(m.alpha_maxrot_deg, m.alpha_maxrot_noise_deg,
                                std::sqrt(std::max(angle_var.value, 0.0)), o.pair_min_angle_deg);
 }
 
@@ -52,11 +53,7 @@ SlaveCalibration SolveStatistics(const MotionStatistics& stats, const RigEstimat
     r.unobservable = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
     if (nominal) r.estimate.C = nominal->C;
   } else {
-    ModelSelectionOptions select;
-    select.planar_axis_spread_deg = opt.planar_axis_spread_deg;
-    select.min_tilt_snr = opt.min_tilt_snr;
-    select.max_axis_std_ratio = opt.max_axis_std_ratio;
-    select.general_axis_spread_deg = opt.general_axis_spread_deg;
+    ModelSelectionOptions select = opt.model_selection;
     // Hysteresis: stay general unless clearly planar, once the figures rest on enough motions
     // (the first few motions' tilt SNR is a ratio of a handful of noise samples).
     if (general != nullptr && *general && stats.motions() >= opt.converged_min_motions) {

@@ -12,7 +12,7 @@
 #include "motion_statistics.h"
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/rig_estimator_options.h"
 
 namespace rigcal::internal {
 
@@ -26,7 +26,7 @@ struct MotionModelChoice {
 
 // The equal-error boundary (degrees) at the running angle-invariant variance `angle_var`
 // (deg^2): the fixed max(alpha_maxrot_deg, pair_min_angle_deg) until gate_after_motions motions
-// measured it, or when alpha_maxrot_noise_deg = 0.
+// measured it, or when alpha_maxrot_noise_deg = 0 (RigEstimatorOptions::model_selection).
 double OnlineTranslationalBelowDeg(const RigEstimatorOptions& options,
                                    const RunningMeanSquare& angle_var);
 

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "fixed_ring.h"
-#include "rigcal/calib/sync_buffer.h"
 #include "rigcal/base/thread_annotations.h"
+#include "rigcal/calib/sync_buffer.h"
 
 namespace rigcal {
 

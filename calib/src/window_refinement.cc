@@ -12,6 +12,7 @@
 #include "motion_data.h"
 #include "refinement.h"
 #include "rigcal/base/quaternion.h"
+#include "rigcal/calib/refinement_job.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "statistics_prior.h"
 

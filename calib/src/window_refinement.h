@@ -1,11 +1,11 @@
 #pragma once
 // The background non-linear refinement of the recursive estimator (RigEstimator): a copy of a
 // slave's window of motions with the statistics of the motions before it as a prior
-// (RefinementJob, RefineWindow in rig_estimator.h), refined on another thread, and published
+// (RefinementJob, RefineWindow in refinement_job.h), refined on another thread, and published
 // when it agrees with the current linear estimate.
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/calib/rig_estimator_options.h"
 
 namespace rigcal::internal {
 

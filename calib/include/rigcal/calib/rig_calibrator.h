@@ -4,9 +4,9 @@
 
 #include <vector>
 
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/base/types.h"
 
 namespace rigcal {
 
