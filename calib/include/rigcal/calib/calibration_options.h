@@ -7,7 +7,7 @@
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
 #include "rigcal/calib/model_selection_options.h"
-#include "rigcal/calib/pair_selection.h"
+#include "rigcal/calib/pair_options.h"
 
 namespace rigcal {
 

@@ -121,10 +121,10 @@ struct SlaveCalibration {
   Observability observability;
 
   // How the solve ended, and what a caller may do with the estimate (slave_state.h: one
-  // meaning per state; batch: usable when the data support the estimate (batch_acceptance in
-  // calib/src: enough independent motions, residuals consistent with the measured noise,
-  // every parameter determined; else initialising and the message says what is missing),
-  // converged when usable with σ computed from the covariance).
+  // meaning per state; batch: usable when the data support the estimate
+  // (calib/src/batch/batch_acceptance.h: enough independent motions, residuals consistent with
+  // the measured noise, every parameter determined; else initialising and the message says
+  // what is missing), converged when usable with σ computed from the covariance).
   Termination termination = Termination::kInsufficientMotion;
   SlaveState state = SlaveState::kInitialising;
   std::string message;

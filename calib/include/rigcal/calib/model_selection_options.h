@@ -3,7 +3,7 @@
 // (CalibrationOptions::model_selection) and the recursive estimator
 // (RigEstimatorOptions::model_selection), so that both decide alike: the purely translational
 // model (thesis 4.5) below the equal-error boundary of thesis 5.2, and general or planar motion
-// for a rotating rig (calib/src/model_selection.h). Plain struct, documented defaults,
+// for a rotating rig (calib/src/models/model_selection.h). Plain struct, documented defaults,
 // Check().
 
 #include "rigcal/base/status.h"

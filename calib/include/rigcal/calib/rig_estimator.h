@@ -61,11 +61,12 @@ class RigEstimator {
 
  private:
   struct Slave;
-  // The stages of one slave's update (calib/src/: keyframe_pairing, motion_gates,
-  // statistics_accumulation), then Publish.
+  // The stages of one slave's update (calib/src/motions/keyframe_pairing,
+  // calib/src/online/: motion_gates, statistics_accumulation), then Publish.
   void UpdateSlave(int index, int64_t t_ns, const CameraPose& master, const CameraPose& slave);
-  // Solves and publishes a slave's estimate (statistics_solution, decalibration_check,
-  // window_refinement, online_uncertainty, convergence_check, model_explanation).
+  // Solves and publishes a slave's estimate (calib/src/online/: statistics_solution,
+  // decalibration_check, window_refinement, online_uncertainty, convergence_check; then
+  // models/model_explanation).
   void Publish(int index);
   void PublishCounts(int index);
   // The nominal mounting of slave `index`, when the options give one.
