@@ -36,28 +36,37 @@ PoseGlitchGate::PoseGlitchGate(int cameras, GlitchTest test) : test_(test) {
 
 PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
                                               const std::vector<std::optional<CameraPose>>& poses) {
-  const size_t n = std::min(poses.size(), cameras_.size());
-  auto present = [&](size_t c) { return c < n && poses[c] && Finite(*poses[c]); };
+  SetSteps steps(std::min(poses.size(), cameras_.size()));
   Verdict out;
   out.rejected.assign(poses.size(), GlitchCause::kNone);
   out.confirmed.resize(poses.size());
   out.warming_up.assign(poses.size(), false);
-  std::vector<GlitchCause>& verdict = out.rejected;
-  std::vector<double> speed(n, 0.0), turn(n, 0.0), turn_ratio(n, 0.0);
-  std::vector<bool> continues(n, false);  // a step from the camera's last accepted pose
+  TestSteps(t_ns, poses, &steps, &out);
+  TestAngles(poses, &steps, &out);
+  AcceptCameras(t_ns, poses, steps, &out);
+  AcceptPairs(poses, steps, out);
+  return out;
+}
 
-  // Each camera's step from its last accepted pose against its recent steps.
-  for (size_t c = 0; c < n; ++c) {
-    if (!present(c)) continue;
+bool PoseGlitchGate::Present(const std::vector<std::optional<CameraPose>>& poses,
+                             const SetSteps& steps, size_t c) {
+  return c < steps.speed.size() && poses[c] && Finite(*poses[c]);
+}
+
+void PoseGlitchGate::TestSteps(int64_t t_ns, const std::vector<std::optional<CameraPose>>& poses,
+                               SetSteps* steps, Verdict* out) const {
+  std::vector<GlitchCause>& verdict = out->rejected;
+  for (size_t c = 0; c < steps->speed.size(); ++c) {
+    if (!Present(poses, *steps, c)) continue;
     const Camera& cam = cameras_[c];
     const CameraPose& p = *poses[c];
-    out.warming_up[c] = static_cast<int>(cam.speeds.size()) < test_.min_steps || !cam.have ||
-                        p.segment != cam.segment;
+    out->warming_up[c] = static_cast<int>(cam.speeds.size()) < test_.min_steps || !cam.have ||
+                         p.segment != cam.segment;
     if (!cam.have || p.segment != cam.segment || t_ns <= cam.t_ns) continue;
-    continues[c] = true;
+    steps->continues[c] = true;
     const double dt = 1e-9 * static_cast<double>(t_ns - cam.t_ns);
-    speed[c] = (p.pose.C - cam.pose.C).norm() / dt;
-    turn[c] = AngleBetween(cam.pose.q, p.pose.q) / dt;
+    steps->speed[c] = (p.pose.C - cam.pose.C).norm() / dt;
+    steps->turn[c] = AngleBetween(cam.pose.q, p.pose.q) / dt;
     if (static_cast<int>(cam.speeds.size()) < test_.min_steps) continue;
     const RobustStats s = StatsOf(cam.speeds), w = StatsOf(cam.turns);
     const double speed_limit =
@@ -65,66 +74,71 @@ PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
                      kGlitchResolution * (1.0 + cam.pose.C.norm()) / dt);
     const double turn_limit = OutlierSpeed(test_, std::max(w.median, cam.last_turn), w.median,
                                            w.sigma, kGlitchResolution / dt);
-    turn_ratio[c] = turn[c] / turn_limit;
-    if (speed[c] > speed_limit) {
+    steps->turn_ratio[c] = steps->turn[c] / turn_limit;
+    if (steps->speed[c] > speed_limit) {
       verdict[c] = GlitchCause::kPositionJump;
-    } else if (turn[c] > turn_limit) {
+    } else if (steps->turn[c] > turn_limit) {
       verdict[c] = GlitchCause::kRotationJump;
     }
   }
+}
 
-  // Master and slave rotate by the same angle since the pair's anchor.
-  std::vector<double> diff(n, 0.0);
-  std::vector<bool> has_diff(n, false);
-  for (size_t c = 1; c < n; ++c) {
+void PoseGlitchGate::TestAngles(const std::vector<std::optional<CameraPose>>& poses,
+                                SetSteps* steps, Verdict* out) const {
+  std::vector<GlitchCause>& verdict = out->rejected;
+  for (size_t c = 1; c < steps->speed.size(); ++c) {
     const Pair& pair = pairs_[c - 1];
-    if (!present(0) || !present(c) || !pair.have || pair.master_segment != poses[0]->segment ||
-        pair.slave_segment != poses[c]->segment) {
+    if (!Present(poses, *steps, 0) || !Present(poses, *steps, c) || !pair.have ||
+        pair.master_segment != poses[0]->segment || pair.slave_segment != poses[c]->segment) {
       continue;
     }
-    diff[c] =
+    steps->diff[c] =
         AngleBetween(pair.master, poses[0]->pose.q) - AngleBetween(pair.slave, poses[c]->pose.q);
-    has_diff[c] = true;
+    steps->has_diff[c] = true;
     if (verdict[0] != GlitchCause::kNone || verdict[c] != GlitchCause::kNone) continue;
     if (!pair.diffs.full()) continue;  // σ from fewer steps is too uncertain for 8 σ
     const RobustStats d = StatsOf(pair.diffs);
-    if (std::abs(diff[c] - d.median) > test_.outlier_sigmas * d.sigma + kGlitchResolution) {
-      verdict[turn_ratio[0] > turn_ratio[c] ? 0 : c] = GlitchCause::kAngleMismatch;
+    if (std::abs(steps->diff[c] - d.median) > test_.outlier_sigmas * d.sigma + kGlitchResolution) {
+      verdict[steps->turn_ratio[0] > steps->turn_ratio[c] ? 0 : c] = GlitchCause::kAngleMismatch;
     }
   }
+}
 
-  // Accepted poses enter the statistics and confirm the rejected run before them as glitches;
-  // a camera rejected more than max_run times in a row moved for real and restarts.
-  for (size_t c = 0; c < n; ++c) {
-    if (!present(c)) continue;
+void PoseGlitchGate::AcceptCameras(int64_t t_ns,
+                                   const std::vector<std::optional<CameraPose>>& poses,
+                                   const SetSteps& steps, Verdict* out) {
+  std::vector<GlitchCause>& verdict = out->rejected;
+  for (size_t c = 0; c < steps.speed.size(); ++c) {
+    if (!Present(poses, steps, c)) continue;
     Camera& cam = cameras_[c];
+    bool continues = steps.continues[c];
     if (verdict[c] != GlitchCause::kNone) {
       if (++cam.rejected_in_row <= test_.max_run) {
         if (cam.run.empty()) {  // the jump into the run, for the bridged test below
-          cam.run_jump = verdict[c] == GlitchCause::kPositionJump ? speed[c] : turn[c];
+          cam.run_jump = verdict[c] == GlitchCause::kPositionJump ? steps.speed[c] : steps.turn[c];
         }
         cam.run.push_back(verdict[c]);
         continue;
       }
       verdict[c] = GlitchCause::kNone;
-      out.warming_up[c] = true;
-      continues[c] = false;
+      out->warming_up[c] = true;
+      continues = false;
       cam.run.clear();
       while (!cam.speeds.empty()) cam.speeds.PopFront();
       while (!cam.turns.empty()) cam.turns.PopFront();
     }
-    if (continues[c]) {
-      Push(&cam.speeds, speed[c]);
-      Push(&cam.turns, turn[c]);
-      cam.last_speed = speed[c];
-      cam.last_turn = turn[c];
+    if (continues) {
+      Push(&cam.speeds, steps.speed[c]);
+      Push(&cam.turns, steps.turn[c]);
+      cam.last_speed = steps.speed[c];
+      cam.last_turn = steps.turn[c];
       // Back on the trajectory: real motion bridges at about its steps' rate, a glitch far
       // below the jump into it (pose_glitches.h).
       if (!cam.run.empty()) {
         const GlitchCause first = cam.run.front();
-        const double bridge = first == GlitchCause::kPositionJump ? speed[c] : turn[c];
+        const double bridge = first == GlitchCause::kPositionJump ? steps.speed[c] : steps.turn[c];
         if (first == GlitchCause::kAngleMismatch || !(test_.jump_factor * bridge > cam.run_jump)) {
-          out.confirmed[c].swap(cam.run);
+          out->confirmed[c].swap(cam.run);
         }
       }
     } else if (cam.have && poses[c]->segment != cam.segment) {
@@ -138,14 +152,19 @@ PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
     cam.segment = poses[c]->segment;
     cam.rejected_in_row = 0;
   }
-  for (size_t c = 1; c < n; ++c) {
-    if (!present(0) || !present(c) || verdict[0] != GlitchCause::kNone ||
-        verdict[c] != GlitchCause::kNone) {
+}
+
+void PoseGlitchGate::AcceptPairs(const std::vector<std::optional<CameraPose>>& poses,
+                                 const SetSteps& steps, const Verdict& out) {
+  const std::vector<GlitchCause>& verdict = out.rejected;
+  for (size_t c = 1; c < steps.speed.size(); ++c) {
+    if (!Present(poses, steps, 0) || !Present(poses, steps, c) ||
+        verdict[0] != GlitchCause::kNone || verdict[c] != GlitchCause::kNone) {
       continue;
     }
     Pair& pair = pairs_[c - 1];
-    if (has_diff[c]) {
-      Push(&pair.diffs, diff[c]);
+    if (steps.has_diff[c]) {
+      Push(&pair.diffs, steps.diff[c]);
     } else {
       while (!pair.diffs.empty()) pair.diffs.PopFront();
     }
@@ -155,7 +174,6 @@ PoseGlitchGate::Verdict PoseGlitchGate::Check(int64_t t_ns,
     pair.master_segment = poses[0]->segment;
     pair.slave_segment = poses[c]->segment;
   }
-  return out;
 }
 
 bool CountGlitch(const PoseGlitchGate::Verdict& verdict, int slave, GlitchCounts* counts) {

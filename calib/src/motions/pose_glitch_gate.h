@@ -61,6 +61,40 @@ class PoseGlitchGate {
   Verdict Check(int64_t t_ns, const std::vector<std::optional<CameraPose>>& poses);
 
  private:
+  // What Check finds of each camera's step in a set (indexed by camera, the cameras of the set
+  // that the gate knows): its speed and angular speed since the camera's last accepted pose (a
+  // step that continues it), the angular speed over its limit, and per slave (c >= 1) the
+  // master-minus-slave rotation angle since the pair's anchor.
+  struct SetSteps {
+    explicit SetSteps(size_t n)
+        : speed(n, 0.0),
+          turn(n, 0.0),
+          turn_ratio(n, 0.0),
+          continues(n, false),
+          diff(n, 0.0),
+          has_diff(n, false) {}
+    std::vector<double> speed, turn, turn_ratio;
+    std::vector<bool> continues;
+    std::vector<double> diff;
+    std::vector<bool> has_diff;
+  };
+  // The steps of Check: each camera's step from its last accepted pose against its recent steps
+  // (position and rotation jumps); master and slave rotating by the same angle since the pair's
+  // anchor (angle mismatches); the accepted poses entering the statistics and confirming the
+  // rejected run before them as glitches (a camera rejected more than max_run times in a row
+  // moved for real and restarts); the pairs' anchors and angle differences.
+  void TestSteps(int64_t t_ns, const std::vector<std::optional<CameraPose>>& poses, SetSteps* steps,
+                 Verdict* out) const;
+  void TestAngles(const std::vector<std::optional<CameraPose>>& poses, SetSteps* steps,
+                  Verdict* out) const;
+  void AcceptCameras(int64_t t_ns, const std::vector<std::optional<CameraPose>>& poses,
+                     const SetSteps& steps, Verdict* out);
+  void AcceptPairs(const std::vector<std::optional<CameraPose>>& poses, const SetSteps& steps,
+                   const Verdict& out);
+  // Camera c's pose is in the set, finite and of a camera the gate knows.
+  static bool Present(const std::vector<std::optional<CameraPose>>& poses, const SetSteps& steps,
+                      size_t c);
+
   struct Camera {
     explicit Camera(size_t capacity) : speeds(capacity, 0.0), turns(capacity, 0.0) {}
     bool have = false;

@@ -120,6 +120,99 @@ struct RigEstimator::Slave {
     last_history_refine_ns = std::numeric_limits<int64_t>::min();
     refined_from_history = false;
   }
+
+  // Publish's steps.
+  // The linear solution of the long statistics in the motion model `choice` (general or planar
+  // with hysteresis; a change of it recorded), its scales kept with the open segments'
+  // statistics.
+  void SolveLongWindow(const RigEstimatorOptions& o, const std::optional<Similarity>& nominal,
+                       const internal::MotionModelChoice& choice) {
+    const bool was_general_model = general_model;
+    linear = internal::SolveStatistics(stats.long_stats, o, nominal, online.segment, choice,
+                                       &general_model);
+    if (rotating && general_model != was_general_model) {
+      model_changed_ns = online.last_update_ns;  // general <-> planar
+    }
+    for (const auto& [id, segment] : stats.long_stats.segments()) {
+      for (const auto& sc : linear.scales) {
+        if (sc.segment == id) stats.long_stats.SetSegmentScale(id, sc.scale);
+      }
+    }
+  }
+
+  // Decalibration (decalibration_check.h): the short window's linear solution against the long
+  // one's, counted in `decalibration`. The published rotation σ is not used for the test: after
+  // a bump the time blocks disagree, which inflates that σ exactly when the windows should be
+  // found to differ.
+  internal::WindowComparison CompareWindows(const RigEstimatorOptions& o,
+                                            const std::optional<Similarity>& nominal,
+                                            const internal::MotionModelChoice& choice,
+                                            const internal::SigmaInflation& inflation) {
+    bool short_general = general_model;
+    const SlaveCalibration short_est =
+        linear.observability.planar
+            ? SlaveCalibration{}
+            : internal::SolveStatistics(stats.short_stats, o, nominal, online.segment, choice,
+                                        &short_general);
+    return internal::CompareWindows(
+        o, linear, short_est, inflation.overlap,
+        internal::ModelSettled(o, model_changed_ns, online.last_update_ns), online.last_update_ns,
+        &decalibration);
+  }
+
+  // A confirmed decalibration: the estimate re-converges on the recent motions (the short
+  // window), without the refinement and the pose history of the old mounting.
+  void FollowShortWindow(const RigEstimatorOptions& o, const std::optional<Similarity>& nominal,
+                         const internal::MotionModelChoice& choice) {
+    internal::RestartFromShortWindow(&stats);
+    refined.reset();
+    RestartHistory();
+    convergence.stable = 0;
+    ++online.decalibration_events;
+    linear = internal::SolveStatistics(stats.long_stats, o, nominal, online.segment, choice,
+                                       &general_model);
+  }
+
+  // The estimate to publish as `name`: the background refinement when it agrees with the
+  // linear solution (flag kFlagRefined), else the linear solution; its σ inflated by
+  // `inflation` unless they are the batch calibrator's on the history (time-block σ already).
+  SlaveCalibration Published(const RigEstimatorOptions& o,
+                             const internal::SigmaInflation& inflation, const std::string& name) {
+    SlaveCalibration published = linear;
+    if (refined && linear.solved() &&
+        internal::RefinementAgrees(o, *refined, linear, inflation.rotation)) {
+      published = *refined;
+      published.motions = linear.motions;
+      online.flags |= kFlagRefined;
+    }
+    published.name = name;
+    published.motions.used = counts.used;
+    const bool from_history = (online.flags & kFlagRefined) != 0 && refined_from_history;
+    if (!from_history) internal::InflateSigmas(inflation, &published);
+    return published;
+  }
+
+  // Why a usable `published` is not supported by the window's motions (batch_acceptance.h) or
+  // not determined, else nullopt. The window's tests run again after kAcceptanceEvery updates,
+  // in a new `generation` or when the estimate becomes usable; whether the published
+  // parameters are determined is cheap and tested on every update.
+  std::optional<std::string> Unsupported(const SlaveCalibration& published, uint64_t generation) {
+    if (!IsUsable(published.state)) {
+      acceptance_age = -1;
+      return std::nullopt;
+    }
+    if (acceptance_age < 0 || acceptance_age >= kAcceptanceEvery ||
+        acceptance_generation != static_cast<int64_t>(generation)) {
+      std::vector<MotionData> window;
+      window.reserve(stats.window.size());
+      for (const internal::WindowEntry& e : stats.window) window.push_back(e.data);
+      unsupported = internal::OnlineUnsupportedReason(window, published);
+      acceptance_age = 0;
+      acceptance_generation = static_cast<int64_t>(generation);
+    }
+    ++acceptance_age;
+    return unsupported ? unsupported : internal::UndeterminedReason(published);
+  }
 };
 
 RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOptions options)
@@ -279,96 +372,33 @@ void RigEstimator::Publish(int index) {
   Slave& s = *slaves_[index];
   const RigEstimatorOptions& o = options_;
   const std::optional<Similarity> nominal = NominalOf(index);
-  SlaveOnlineState& online = s.online;
-  online.flags = 0;
-
-  // The linear solution of the long statistics in the current motion model.
+  s.online.flags = 0;
   const internal::MotionModelChoice choice =
       internal::ChooseMotionModel(o, s.rotating, s.gates.angle_var);
-  const bool was_general_model = s.general_model;
-  s.linear = internal::SolveStatistics(s.stats.long_stats, o, nominal, online.segment, choice,
-                                       &s.general_model);
-  if (s.rotating && s.general_model != was_general_model) {
-    s.model_changed_ns = online.last_update_ns;  // general <-> planar
-  }
-  for (const auto& [id, stats] : s.stats.long_stats.segments()) {
-    for (const auto& sc : s.linear.scales) {
-      if (sc.segment == id) s.stats.long_stats.SetSegmentScale(id, sc.scale);
-    }
-  }
+  s.SolveLongWindow(o, nominal, choice);
   // The σ inflation (of the time blocks before a decalibration clears them).
   const internal::SigmaInflation inflation =
       internal::InflationOf(o, s.gates.angle_var, s.drift, s.stats.rotation_blocks, s.rotating);
-
-  // Decalibration: the short window disagrees with the long one for several keyframes. The
-  // published rotation σ is not used for the test: after a bump the time blocks disagree,
-  // which inflates that σ exactly when the windows should be found to differ.
-  bool short_general = s.general_model;
-  const SlaveCalibration short_est =
-      s.linear.observability.planar
-          ? SlaveCalibration{}
-          : internal::SolveStatistics(s.stats.short_stats, o, nominal, online.segment, choice,
-                                      &short_general);
-  const internal::WindowComparison windows =
-      internal::CompareWindows(o, s.linear, short_est, inflation.overlap,
-                               internal::ModelSettled(o, s.model_changed_ns, online.last_update_ns),
-                               online.last_update_ns, &s.decalibration);
-  online.short_long_rot_deg = windows.rot_diff_deg;
+  const internal::WindowComparison windows = s.CompareWindows(o, nominal, choice, inflation);
+  s.online.short_long_rot_deg = windows.rot_diff_deg;
   if (windows.decalibrated) {
     ModuleLogger("calib")->warn(
         "slave '{}' decalibrated: short and long windows differ by {:.2f} deg; following the "
         "new calibration",
         names_[index + 1], windows.rot_diff_deg);
-    internal::RestartFromShortWindow(&s.stats);  // re-converge on the recent motions
-    s.refined.reset();
-    s.RestartHistory();
-    s.convergence.stable = 0;
-    ++online.decalibration_events;
     ++generation_;
-    s.linear = internal::SolveStatistics(s.stats.long_stats, o, nominal, online.segment, choice,
-                                         &s.general_model);
+    s.FollowShortWindow(o, nominal, choice);
   }
   const bool decalibrated =
-      internal::RecentlyDecalibrated(o, s.decalibration, online.last_update_ns);
+      internal::RecentlyDecalibrated(o, s.decalibration, s.online.last_update_ns);
 
-  // The background refinement when it agrees with the linear solution, with inflated σ.
-  SlaveCalibration published = s.linear;
-  if (s.refined && s.linear.solved() &&
-      internal::RefinementAgrees(o, *s.refined, s.linear, inflation.rotation)) {
-    published = *s.refined;
-    published.motions = s.linear.motions;
-    online.flags |= kFlagRefined;
-  }
-  published.name = names_[index + 1];
-  published.motions.used = s.counts.used;
-  // The batch calibrator's σ on the history are its time-block ones already.
-  const bool from_history = (online.flags & kFlagRefined) != 0 && s.refined_from_history;
-  if (!from_history) internal::InflateSigmas(inflation, &published);
-
-  online.flags |= internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation,
-                                             decalibrated, &s.convergence);
-  // Usable only when the window's motions support the estimate (batch_acceptance.h).
-  std::optional<std::string> unsupported;
-  if (!IsUsable(published.state)) {
-    s.acceptance_age = -1;
-  } else {
-    if (s.acceptance_age < 0 || s.acceptance_age >= kAcceptanceEvery ||
-        s.acceptance_generation != static_cast<int64_t>(generation_)) {
-      std::vector<MotionData> window;
-      window.reserve(s.stats.window.size());
-      for (const internal::WindowEntry& e : s.stats.window) window.push_back(e.data);
-      s.unsupported = internal::OnlineUnsupportedReason(window, published);
-      s.acceptance_age = 0;
-      s.acceptance_generation = static_cast<int64_t>(generation_);
-    }
-    ++s.acceptance_age;
-    // The window's tests are kept for a few updates; whether the published parameters are
-    // determined is cheap and tested on every one.
-    unsupported = s.unsupported ? s.unsupported : internal::UndeterminedReason(published);
-    if (unsupported) {
-      published.state = SlaveState::kInitialising;
-      s.convergence.stable = 0;
-    }
+  SlaveCalibration published = s.Published(o, inflation, names_[index + 1]);
+  s.online.flags |= internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation,
+                                               decalibrated, &s.convergence);
+  const std::optional<std::string> unsupported = s.Unsupported(published, generation_);
+  if (unsupported) {
+    published.state = SlaveState::kInitialising;
+    s.convergence.stable = 0;
   }
   published.message = OnlineMessage(o, published, s.linear.message, nominal);
   if (const std::string g = internal::GlitchText(s.glitches, "set", "skipped"); !g.empty()) {
@@ -376,7 +406,7 @@ void RigEstimator::Publish(int index) {
   }
   if (unsupported) published.message = "not usable: " + *unsupported + "; " + published.message;
   estimate_.rig.slaves[index] = published;
-  estimate_.online[index] = online;
+  estimate_.online[index] = s.online;
   PublishCounts(index);
 }
 

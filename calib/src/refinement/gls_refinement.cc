@@ -31,6 +31,7 @@ Eigen::Vector3d Log(const Eigen::Matrix3d& r) {
 // C in the frame `t` (columns b_1, b_2, axis, or the identity), the scales.
 struct Layout {
   bool translational = false;
+  bool axis = false;  // C in the frame of a unit axis: t = [b_1 b_2 axis]
   Eigen::Matrix3d t = Eigen::Matrix3d::Identity();
   int c_free = 3;  // free coordinates of C: 3, or 2 with the axis offset fixed; 0 translational
   int scales = 0;
@@ -296,39 +297,181 @@ Eigen::MatrixXd Clustered(const System& sys, const Eigen::MatrixXd& h_inv,
   return h_inv * meat * h_inv;
 }
 
-}  // namespace
-
-GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& input) {
-  GlsResult out;
+// The parameters of `input`: C in the axis frame when the input has a unit axis (its offset
+// fixed or free), none for the translational model.
+Layout LayoutOf(const GlsInput& input) {
   Layout layout;
   layout.translational = input.translational;
   layout.scales = static_cast<int>(input.scales.size());
-  const bool use_axis = !input.translational && input.axis.norm() > 0.5;
   if (input.translational) {
     layout.c_free = 0;
-  } else if (use_axis) {
+  } else if (input.axis.norm() > 0.5) {
+    layout.axis = true;
     const Eigen::Vector3d axis = input.axis.normalized();
     layout.t.leftCols<2>() = PlaneBasis(axis);
     layout.t.col(2) = axis;
     layout.c_free = input.axis_offset_fixed ? 2 : 3;
   }
+  return layout;
+}
+
+// Why the motions cannot be refined (a motion without a scale variable, fewer equations than
+// twice the parameters), or empty.
+std::string UnusableReason(const std::vector<MotionData>& motions, const Layout& layout) {
   for (const MotionData& m : motions) {
     if (m.scale_index < 0 || m.scale_index >= layout.scales) {
-      out.message = "a motion without a scale variable";
-      return out;
+      return "a motion without a scale variable";
     }
   }
-  const int params = layout.Size();
-  const int dims = input.translational ? 3 : 6;
-  if (static_cast<int>(motions.size()) * dims < 2 * params) {
-    out.message = "too few consecutive motions";
-    return out;
+  const int dims = layout.translational ? 3 : 6;
+  if (static_cast<int>(motions.size()) * dims < 2 * layout.Size()) {
+    return "too few consecutive motions";
   }
+  return "";
+}
+
+// Drops from `kept` the motions whose whitened residual (in any row of `sys`) lies beyond
+// `factor` robust σ (1.4826 MAD of every row): a glitched pose, a PnP flip. Returns how many.
+int DropOutliers(const System& sys, double factor, std::vector<MotionData>* kept) {
+  std::vector<double> magnitude(kept->size(), 0.0);
+  for (Eigen::Index row = 0; row < sys.b.size(); ++row) {
+    if (sys.motion[row] >= 0) {
+      magnitude[sys.motion[row]] = std::max(magnitude[sys.motion[row]], std::abs(sys.b(row)));
+    }
+  }
+  std::vector<double> all(sys.b.data(), sys.b.data() + sys.b.size());
+  for (double& v : all) v = std::abs(v);
+  const double limit = factor * 1.4826 * Median(all);
+  std::vector<MotionData> inliers;
+  for (size_t k = 0; k < kept->size(); ++k) {
+    if (magnitude[k] <= limit) inliers.push_back((*kept)[k]);
+  }
+  const int dropped = static_cast<int>(kept->size() - inliers.size());
+  kept->swap(inliers);
+  return dropped;
+}
+
+// The whitened system at `p` with the prior rows of `input`.
+System WhitenedWithPriors(const std::vector<MotionData>& motions, const Frames& frames,
+                          const Layout& layout, const GlsPoint& p,
+                          const std::vector<LevelNoise>& noise, const GlsInput& input) {
+  System sys = Whitened(motions, frames, layout, p, noise);
+  AddAxisPrior(input, layout, p, &sys);
+  AddRotationPrior(input, p, &sys);
+  return sys;
+}
+
+// Gauss-Newton on the corrected normal equations at fixed noise, from `p`: at most 20 steps,
+// until a step is below 1e-10 of the point's size; whether to correct for the regressor noise
+// is decided at the first. The last system in `sys`. False when a step is not finite (singular
+// normal equations).
+bool GaussNewton(const std::vector<MotionData>& motions, const Frames& frames, const Layout& layout,
+                 const std::vector<LevelNoise>& noise, const GlsInput& input,
+                 Attenuation* attenuation, GlsPoint* p, System* sys) {
+  const int params = layout.Size();
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    *sys = WhitenedWithPriors(motions, frames, layout, *p, noise, input);
+    const Eigen::MatrixXd h = sys->a.transpose() * sys->a;
+    if (iteration == 0) attenuation->Decide(layout, h);
+    const Eigen::VectorXd step = -attenuation->Normal(layout, h).ldlt().solve(
+        attenuation->Gradient(layout, *p, sys->a.transpose() * sys->b));
+    if (!step.allFinite()) return false;
+    *p = Moved(*p, layout, step);
+    const double size =
+        step.head<3>().norm() +
+        step.tail(params - 3).norm() /
+            (1.0 + p->z.norm() +
+             Eigen::Map<const Eigen::VectorXd>(p->scales.data(), layout.scales).norm());
+    if (size < 1e-10) break;
+  }
+  return true;
+}
+
+// The covariance of C in the master frame from a covariance of the parameters.
+Eigen::Matrix3d PositionCovariance(const Layout& layout, const Eigen::MatrixXd& c) {
+  if (layout.c_free == 0) return Eigen::Matrix3d::Zero();
+  const Eigen::MatrixXd t = layout.t.leftCols(layout.c_free);
+  return t * c.block(3, 3, layout.c_free, layout.c_free) * t.transpose();
+}
+
+// Raises the covariances in `out` to the cluster-robust one of `blocks` time blocks of the
+// motions where that is larger.
+void RaiseToClustered(const System& sys, const Eigen::MatrixXd& h_inv,
+                      const std::vector<MotionData>& motions, int blocks, const Layout& layout,
+                      const Attenuation& attenuation, const GlsPoint& p, GlsResult* out) {
+  const Eigen::MatrixXd robust = Clustered(sys, h_inv, TimeBlocks(motions, blocks), blocks,
+                                           attenuation.ScoreOffsets(layout, p));
+  if (!robust.allFinite()) return;
+  bool larger = false;
+  out->cov_rotation = LoewnerMax(out->cov_rotation, robust.topLeftCorner<3, 3>(), &larger);
+  out->cov_position = LoewnerMax(out->cov_position, PositionCovariance(layout, robust), &larger);
+  for (int s = 0; s < layout.scales; ++s) {
+    const int col = layout.ScaleColumn(s);
+    const double sd = std::sqrt(std::max(0.0, robust(col, col)));
+    if (sd > out->scale_std[s]) {
+      out->scale_std[s] = sd;
+      larger = true;
+    }
+  }
+  if (layout.axis && layout.c_free == 3) {
+    out->axis_std = std::max(out->axis_std, std::sqrt(std::max(0.0, robust(5, 5))));
+  }
+  out->clustered_larger = larger;
+}
+
+// The estimate at `p` with its covariance (the sandwich of the corrected normal equations,
+// scaled by the mean square of the whitened residuals; raised to the cluster-robust one of
+// input.time_blocks) in `out`. False (the message in `out`) when the normal matrix is singular.
+bool TakeEstimate(const std::vector<MotionData>& motions, const Frames& frames,
+                  const Layout& layout, const std::vector<LevelNoise>& noise, const GlsInput& input,
+                  const Attenuation& attenuation, const GlsPoint& p, GlsResult* out) {
+  const int params = layout.Size();
+  const System sys = WhitenedWithPriors(motions, frames, layout, p, noise, input);
+  const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
+  const Eigen::MatrixXd h_inv = Inverse(attenuation.Normal(layout, h));
+  if (h_inv.size() == 0) {
+    out->message = "the consecutive motions do not determine the parameters";
+    return false;
+  }
+  const Eigen::Index rows = sys.a.rows();
+  out->chi2 = rows > params ? sys.b.squaredNorm() / static_cast<double>(rows - params) : 1.0;
+  Eigen::MatrixXd cov = out->chi2 * h_inv * h * h_inv;
+
+  out->q = Canonical(Eigen::Quaterniond(p.dR).normalized());
+  out->C = layout.t * p.z;
+  out->scales = p.scales;
+  out->noise = noise;
+  out->increments = static_cast<int>(motions.size());
+  out->regressor_noise_corrected = attenuation.applies;
+  out->runs = static_cast<int>(frames.run_start.size()) - 1;
+  out->cov_rotation = cov.topLeftCorner<3, 3>();
+  out->cov_position = PositionCovariance(layout, cov);
+  for (int s = 0; s < layout.scales; ++s) {
+    const int col = layout.ScaleColumn(s);
+    out->scale_std.push_back(std::sqrt(std::max(0.0, cov(col, col))));
+  }
+  if (layout.axis && layout.c_free == 3) out->axis_std = std::sqrt(std::max(0.0, cov(5, 5)));
+  if (input.time_blocks >= 2) {
+    RaiseToClustered(sys, h_inv, motions, input.time_blocks, layout, attenuation, p, out);
+  }
+  return true;
+}
+
+}  // namespace
+
+GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& input) {
+  GlsResult out;
+  const Layout layout = LayoutOf(input);
+  out.message = UnusableReason(motions, layout);
+  if (!out.message.empty()) return out;
   GlsPoint p;
   p.dR = input.q.normalized().toRotationMatrix();
   p.z = layout.t.transpose() * (input.translational ? Eigen::Vector3d::Zero() : input.C);
   p.scales = input.scales;
 
+  // Rounds of: the noise fitted to the residuals at the point, then Gauss-Newton with it; from
+  // the second round on without the motions whose whitened residual is an outlier (their
+  // chains restart after them).
   std::vector<LevelNoise> noise;
   System sys;
   Attenuation attenuation;
@@ -336,102 +479,17 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
   Frames frames = RunFrames(kept);
   for (int round = 0; round < std::max(1, input.noise_rounds); ++round) {
     if (round > 0 && input.outlier_factor > 0.0) {
-      // Motions whose whitened residual lies beyond outlier_factor robust σ (a glitched pose,
-      // a PnP flip) are dropped; their chains restart after them.
-      std::vector<double> magnitude(kept.size(), 0.0);
-      for (Eigen::Index row = 0; row < sys.b.size(); ++row) {
-        if (sys.motion[row] >= 0) {
-          magnitude[sys.motion[row]] = std::max(magnitude[sys.motion[row]], std::abs(sys.b(row)));
-        }
-      }
-      std::vector<double> all(sys.b.data(), sys.b.data() + sys.b.size());
-      for (double& v : all) v = std::abs(v);
-      const double limit = input.outlier_factor * 1.4826 * Median(all);
-      std::vector<MotionData> inliers;
-      for (size_t k = 0; k < kept.size(); ++k) {
-        if (magnitude[k] <= limit) inliers.push_back(kept[k]);
-      }
-      out.outliers += static_cast<int>(kept.size() - inliers.size());
-      kept.swap(inliers);
+      out.outliers += DropOutliers(sys, input.outlier_factor, &kept);
       frames = RunFrames(kept);
     }
     noise = FitNoise(Increments(kept, frames, layout, p), frames);
     attenuation.terms = AttenuationTerms(kept, frames, layout, noise, round);
-    for (int iteration = 0; iteration < 20; ++iteration) {
-      sys = Whitened(kept, frames, layout, p, noise);
-      AddAxisPrior(input, layout, p, &sys);
-      AddRotationPrior(input, p, &sys);
-      const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
-      if (iteration == 0) attenuation.Decide(layout, h);
-      const Eigen::VectorXd step = -attenuation.Normal(layout, h).ldlt().solve(
-          attenuation.Gradient(layout, p, sys.a.transpose() * sys.b));
-      if (!step.allFinite()) {
-        out.message = "singular GLS normal equations";
-        return out;
-      }
-      p = Moved(p, layout, step);
-      const double size =
-          step.head<3>().norm() +
-          step.tail(params - 3).norm() /
-              (1.0 + p.z.norm() +
-               Eigen::Map<const Eigen::VectorXd>(p.scales.data(), layout.scales).norm());
-      if (size < 1e-10) break;
+    if (!GaussNewton(kept, frames, layout, noise, input, &attenuation, &p, &sys)) {
+      out.message = "singular GLS normal equations";
+      return out;
     }
   }
-  sys = Whitened(kept, frames, layout, p, noise);
-  AddAxisPrior(input, layout, p, &sys);
-  AddRotationPrior(input, p, &sys);
-  const Eigen::MatrixXd h = sys.a.transpose() * sys.a;
-  const Eigen::MatrixXd h_inv = Inverse(attenuation.Normal(layout, h));
-  if (h_inv.size() == 0) {
-    out.message = "the consecutive motions do not determine the parameters";
-    return out;
-  }
-  const Eigen::Index rows = sys.a.rows();
-  out.chi2 = rows > params ? sys.b.squaredNorm() / static_cast<double>(rows - params) : 1.0;
-  Eigen::MatrixXd cov = out.chi2 * h_inv * h * h_inv;
-
-  out.q = Canonical(Eigen::Quaterniond(p.dR).normalized());
-  out.C = layout.t * p.z;
-  out.scales = p.scales;
-  out.noise = noise;
-  out.increments = static_cast<int>(kept.size());
-  out.regressor_noise_corrected = attenuation.applies;
-  out.runs = static_cast<int>(frames.run_start.size()) - 1;
-  auto position_of = [&](const Eigen::MatrixXd& c) -> Eigen::Matrix3d {
-    if (layout.c_free == 0) return Eigen::Matrix3d::Zero();
-    const Eigen::MatrixXd t = layout.t.leftCols(layout.c_free);
-    return t * c.block(3, 3, layout.c_free, layout.c_free) * t.transpose();
-  };
-  out.cov_rotation = cov.topLeftCorner<3, 3>();
-  out.cov_position = position_of(cov);
-  for (int s = 0; s < layout.scales; ++s) {
-    const int col = layout.ScaleColumn(s);
-    out.scale_std.push_back(std::sqrt(std::max(0.0, cov(col, col))));
-  }
-  if (use_axis && layout.c_free == 3) out.axis_std = std::sqrt(std::max(0.0, cov(5, 5)));
-  if (input.time_blocks >= 2) {
-    const Eigen::MatrixXd robust =
-        Clustered(sys, h_inv, TimeBlocks(kept, input.time_blocks), input.time_blocks,
-                  attenuation.ScoreOffsets(layout, p));
-    if (robust.allFinite()) {
-      bool larger = false;
-      out.cov_rotation = LoewnerMax(out.cov_rotation, robust.topLeftCorner<3, 3>(), &larger);
-      out.cov_position = LoewnerMax(out.cov_position, position_of(robust), &larger);
-      for (int s = 0; s < layout.scales; ++s) {
-        const int col = layout.ScaleColumn(s);
-        const double sd = std::sqrt(std::max(0.0, robust(col, col)));
-        if (sd > out.scale_std[s]) {
-          out.scale_std[s] = sd;
-          larger = true;
-        }
-      }
-      if (use_axis && layout.c_free == 3) {
-        out.axis_std = std::max(out.axis_std, std::sqrt(std::max(0.0, robust(5, 5))));
-      }
-      out.clustered_larger = larger;
-    }
-  }
+  if (!TakeEstimate(kept, frames, layout, noise, input, attenuation, p, &out)) return out;
   out.ok = out.cov_rotation.allFinite() && out.cov_position.allFinite();
   if (!out.ok) out.message = "non-finite covariance";
   return out;
