@@ -118,42 +118,6 @@ Eigen::Quaterniond SolveAbsoluteOrientation(const Eigen::Matrix3d& s) {
   return Canonical(FromWxyz(eig.eigenvectors().col(3)).normalized());
 }
 
-LinearPositionScale SolveLinearPositionScale(const std::vector<MotionData>& motions,
-                                             const Eigen::Quaterniond& dq, int num_scales) {
-  // Normal equations of (4.16) with unknowns x = (dC, dλ^(1..n)), B_i^k of eq. (4.15).
-  const int dim = 3 + num_scales;
-  Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(dim, dim);
-  Eigen::VectorXd jtr = Eigen::VectorXd::Zero(dim);
-  const Eigen::Matrix3d dr = dq.toRotationMatrix();
-  for (const auto& m : motions) {
-    Eigen::Matrix<double, 3, 4> b;
-    b.leftCols<3>() = Eigen::Matrix3d::Identity() - m.R0;
-    b.col(3) = dr * m.Ci;
-    const int s = 3 + m.scale_index;
-    // Accumulate B^T B and B^T C_0 into the blocks of (dC, dλ^(s)).
-    jtj.topLeftCorner<3, 3>().noalias() += b.leftCols<3>().transpose() * b.leftCols<3>();
-    const Eigen::Vector3d cross = b.leftCols<3>().transpose() * b.col(3);
-    jtj.block<3, 1>(0, s) += cross;
-    jtj.block<1, 3>(s, 0) += cross.transpose();
-    jtj(s, s) += b.col(3).squaredNorm();
-    jtr.head<3>().noalias() += b.leftCols<3>().transpose() * m.C0;
-    jtr(s) += b.col(3).dot(m.C0);
-  }
-  LinearPositionScale out;
-  // Column normalisation (Jacobi scaling) so the eigenvalue is a unit-free condition figure.
-  Eigen::VectorXd d = jtj.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  const Eigen::MatrixXd normalized = d.asDiagonal() * jtj * d.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(normalized);
-  out.min_eigenvalue = eig.eigenvalues()(0);
-  const Eigen::VectorXd y = normalized.ldlt().solve(d.asDiagonal() * jtr);
-  const Eigen::VectorXd x = d.asDiagonal() * y;
-  if (!x.allFinite()) return out;
-  out.C = x.head<3>();
-  out.scales.assign(x.data() + 3, x.data() + dim);
-  out.ok = true;
-  return out;
-}
-
 Eigen::Quaterniond SolveTranslationalRotation(const std::vector<MotionData>& motions) {
   std::vector<Eigen::Vector3d> source, target;
   for (const auto& m : motions) {

@@ -47,10 +47,6 @@ struct LinearPositionScale {
   bool ok = false;
 };
 
-// (I - R_0) dC + dR C_i dλ^(ν) = C_0, eq. (4.14)-(4.17), in the least-squares sense (4.16).
-LinearPositionScale SolveLinearPositionScale(const std::vector<MotionData>& motions,
-                                             const Eigen::Quaterniond& dq, int num_scales);
-
 // Purely translational model, eq. (4.29)-(4.30): dR from the directions of C_i and C_0.
 Eigen::Quaterniond SolveTranslationalRotation(const std::vector<MotionData>& motions);
 

@@ -79,7 +79,6 @@ class MotionStatistics {
   // Drops the position/scale statistics (master odometry re-initialised: new master unit).
   void ResetPosition();
 
-  const Eigen::Matrix4d& rotation_information() const { return M_; }
   const PlanarSums& planar() const { return planar_; }
   // Stage 1 and 2 of the planar solver on these sums (planar_solver.h).
   PlanarFrame SolvePlanarFrame() const;
