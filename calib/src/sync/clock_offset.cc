@@ -176,8 +176,10 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
 }
 
 TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTrajectory& slave,
-                                    const Eigen::Quaterniond& x, const TimeOffsetEstimate& initial,
+                                    const Eigen::Quaterniond& master_from_slave,
+                                    const TimeOffsetEstimate& initial,
                                     const TimeOffsetOptions& options) {
+  const Eigen::Quaterniond& x = master_from_slave;  // X of the hand-eye residuals A X = X B
   const int64_t master_interval = MedianInterval(master.t_ns);
   const int64_t slave_interval = MedianInterval(slave.t_ns);
   if (master_interval <= 0 || slave_interval <= 0) return initial;
