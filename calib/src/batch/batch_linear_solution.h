@@ -18,7 +18,7 @@ namespace rigcal::internal {
 struct BatchSetting {
   MotionModel requested = MotionModel::kAuto;  // kAuto made translational below the boundary
   bool translational = false;                  // requested == kTranslational
-  ModelSelectionOptions select;                // general or planar (model_selection.h)
+  ModelSelectionOptions select;  // options.model_selection: general or planar (model_selection.h)
   AxisPrior prior;  // the nominal mounting's C along the mean rotation axis, when given
   // The prior's offset along `axis` (0 without a prior).
   double AxisPriorAlong(const Eigen::Vector3d& axis) const {

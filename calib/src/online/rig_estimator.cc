@@ -59,8 +59,9 @@ std::string OnlineMessage(const RigEstimatorOptions& o, const SlaveCalibration& 
                      std::to_string(published.motions.used) + " motions used, " +
                      std::to_string(published.motions.rejected()) + " rejected; " +
                      internal::ExplainModel(e);
-  if (published.state == SlaveState::kDecalibrated)
+  if (published.state == SlaveState::kDecalibrated) {
     text += "; DECALIBRATED (camera moved), re-converging";
+  }
   return text;
 }
 

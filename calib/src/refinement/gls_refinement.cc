@@ -246,9 +246,10 @@ struct Attenuation {
   }
   // The normal matrix h less Ξ.
   Eigen::MatrixXd Normal(const Layout& layout, Eigen::MatrixXd h) const {
-    if (applies)
+    if (applies) {
       h.block(3, 3, layout.c_free, layout.c_free) -=
           sum.topLeftCorner(layout.c_free, layout.c_free);
+    }
     return h;
   }
   // The gradient g less Ξ z.
