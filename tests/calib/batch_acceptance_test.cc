@@ -1,5 +1,5 @@
 // Honest states: a result is usable only when the data support it (batch_acceptance in
-// calib/src), σ is never silently 0, and an estimate with unknown σ is never converged.
+// calib/src/batch), σ is never silently 0, and an estimate with unknown σ is never converged.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>

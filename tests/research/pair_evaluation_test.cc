@@ -152,7 +152,7 @@ TEST(OnlinePairs, DriftingOdometryOfAFixedRigRaisesNoDecalibrationAlarm) {
 // sim-30Hz-fast-vo-strong (0.1°/frame of rotation drift, consecutive motions of ~1.5°) GLS
 // without the correction put C 0.36 % and 1.15 % (3 and 6 standard errors) short of the truth
 // (the back camera: most of its error). With the expected term subtracted
-// (calib/src/regressor_noise.h) the mean error along C over 12 draws must be within 3 standard
+// (calib/src/noise/regressor_noise.h) the mean error along C over 12 draws must be within 3 standard
 // errors of 0 (from the errors' own spread) for both slaves.
 TEST(GlsPairs, RotationNoiseDoesNotShrinkC) {
   std::vector<std::string> notes;

@@ -93,6 +93,16 @@ FieldSetter Double(double RigEstimatorOptions::*member) {
   };
 }
 
+FieldSetter Double(double ModelSelectionOptions::*member) {
+  return [member](const FieldReader& r, const YAML::Node& node, const std::string& field,
+                  OnlineOptions* options) -> std::optional<Error> {
+    auto v = r.Number(node, field);
+    if (!v) return Error{v.error()};
+    options->estimator.model_selection.*member = *v;
+    return std::nullopt;
+  };
+}
+
 FieldSetter Int(int RigEstimatorOptions::*member) {
   return [member](const FieldReader& r, const YAML::Node& node, const std::string& field,
                   OnlineOptions* options) -> std::optional<Error> {
@@ -117,6 +127,7 @@ FieldSetter Seconds(int64_t RigEstimatorOptions::*member) {
 
 const std::map<std::string, FieldSetter>& EstimatorFields() {
   using O = RigEstimatorOptions;
+  using M = ModelSelectionOptions;
   static const std::map<std::string, FieldSetter> fields = {
       {"keyframe_min_angle_deg", Double(&O::keyframe_min_angle_deg)},
       {"keyframe_min_translation", Double(&O::keyframe_min_translation)},
@@ -139,12 +150,12 @@ const std::map<std::string, FieldSetter>& EstimatorFields() {
       {"decalibration_confirmations", Int(&O::decalibration_confirmations)},
       {"decalibration_confirm_s", Double(&O::decalibration_confirm_s)},
       {"max_open_segments", Int(&O::max_open_segments)},
-      {"alpha_maxrot_deg", Double(&O::alpha_maxrot_deg)},
-      {"alpha_maxrot_noise_deg", Double(&O::alpha_maxrot_noise_deg)},
-      {"planar_axis_spread_deg", Double(&O::planar_axis_spread_deg)},
-      {"min_tilt_snr", Double(&O::min_tilt_snr)},
-      {"max_axis_std_ratio", Double(&O::max_axis_std_ratio)},
-      {"general_axis_spread_deg", Double(&O::general_axis_spread_deg)},
+      {"alpha_maxrot_deg", Double(&M::alpha_maxrot_deg)},
+      {"alpha_maxrot_noise_deg", Double(&M::alpha_maxrot_noise_deg)},
+      {"planar_axis_spread_deg", Double(&M::planar_axis_spread_deg)},
+      {"min_tilt_snr", Double(&M::min_tilt_snr)},
+      {"max_axis_std_ratio", Double(&M::max_axis_std_ratio)},
+      {"general_axis_spread_deg", Double(&M::general_axis_spread_deg)},
       {"planar_hysteresis", Double(&O::planar_hysteresis)},
       {"nominal_sigma", Double(&O::nominal_sigma)},
       {"converged_min_motions", Int(&O::converged_min_motions)},

@@ -39,9 +39,9 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/estimator_state.h"
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/estimator_state.h"
 
 namespace rigcal {
 

@@ -9,7 +9,7 @@
 //                  parameters, or the data do not support the
 //                  estimate (residuals beyond the measured noise,
 //                  unrelated trajectories, a model the data
-//                  contradict; calib/src/batch_acceptance.h)
+//                  contradict; calib/src/batch/batch_acceptance.h)
 //   usable         an estimate the data support; its σ has not settled 1    usable         0
 //                  (online) or could not be computed (batch)
 //   converged      usable, and σ has settled: below the thresholds and 2    converged      0

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/synthetic.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/synthetic.h"
 
 namespace rigcal {
 

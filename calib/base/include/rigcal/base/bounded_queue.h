@@ -5,10 +5,9 @@
 // an element arrives or the queue is stopped.
 //
 // Threads: producers (capture threads) call Push/PushWait, consumers (VO threads) call
-// Pop/PopFor, any thread calls Stop and the counters. Every member is thread-safe: all state is
+// Pop, any thread calls Stop and the counters. Every member is thread-safe: all state is
 // guarded by mutex_; the queue owns no thread.
 
-#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -59,19 +58,6 @@ class BoundedQueue {
   std::optional<T> Pop() RIGCAL_EXCLUDES(mutex_) {
     MutexLock lock(mutex_);
     while (!stopped_ && items_.empty()) lock.Wait(ready_);
-    return TakeFront();
-  }
-
-  // Like Pop, but gives up after `timeout` (nullopt).
-  template <typename Duration>
-  std::optional<T> PopFor(Duration timeout) RIGCAL_EXCLUDES(mutex_) {
-    // As std::condition_variable::wait_for(lock, timeout, predicate).
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::ceil<std::chrono::steady_clock::duration>(timeout);
-    MutexLock lock(mutex_);
-    while (!stopped_ && items_.empty()) {
-      if (lock.WaitUntil(ready_, deadline) == std::cv_status::timeout) break;
-    }
     return TakeFront();
   }
 

@@ -64,8 +64,6 @@ class RIGCAL_CAPABILITY("mutex") Mutex {
 
   void Lock() RIGCAL_ACQUIRE() { mutex_.lock(); }
   void Unlock() RIGCAL_RELEASE() { mutex_.unlock(); }
-  // True when the mutex was free and is now held.
-  bool TryLock() RIGCAL_TRY_ACQUIRE(true) { return mutex_.try_lock(); }
 
  private:
   friend class MutexLock;
