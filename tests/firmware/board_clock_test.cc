@@ -159,7 +159,7 @@ TEST(Peripherals, UsartTimersSysTickAndPinsGetTheReferenceValues) {
   EXPECT_EQ(f.Peek(kTim3 + kTimSmcr), 0x16u);
   EXPECT_EQ(f.Peek(kTim4 + kTimSmcr), 0x16u);
   EXPECT_EQ(f.Peek(kTim5 + kTimSmcr), 0x06u);
-  EXPECT_EQ(f.writes().back().address, kNvicIser0 + 4);  // then the interrupts
+  EXPECT_EQ(f.writes().back().address, kNvicIser0 + 4);  // the interrupts last
   EXPECT_LT(f.FirstWrite(kTim5 + kTimSmcr, 6), f.FirstWrite(kTim2 + kTimCr1, 1))
       << "slaves wait for the master's start";
   // Outputs forced low (OCxM = 100 in both channels of each CCMR), all four enabled.
@@ -177,9 +177,15 @@ TEST(Peripherals, UsartTimersSysTickAndPinsGetTheReferenceValues) {
   EXPECT_EQ(f.Peek(kGpioC + kGpioAfrl) >> 24, 0x22u);
   EXPECT_EQ(f.Peek(kGpioC + kGpioAfrh) & 0xFF, 0x22u);
   EXPECT_EQ((f.Peek(kGpioB + kGpioAfrl) >> 12) & 0xF, 1u);
-  // Timers first among the interrupts: priority byte 0 for TIM2 (irq 28), 0x20 for USART1 (37).
+  // Priorities (one byte per irq): TIM2 (28) 0, TIM3 (29) 0x10, USART1 (37) 0x20, TIM5 (50) 0.
   EXPECT_EQ(f.Peek(kNvicIpr0 + 28) & 0xFF, 0x00u);
+  EXPECT_EQ((f.Peek(kNvicIpr0 + 28) >> 8) & 0xFF, 0x10u);
   EXPECT_EQ((f.Peek(kNvicIpr0 + 36) >> 8) & 0xFF, 0x20u);
+  EXPECT_EQ((f.Peek(kNvicIpr0 + 48) >> 16) & 0xFF, 0x00u);
+  // ISER is write-1-to-set: TIM5 (50) and USART1 (37) in ISER1, TIM2-4 (28-30) in ISER0.
+  EXPECT_EQ(f.ValuesWritten(kNvicIser0 + 4),
+            (std::vector<uint32_t>{1u << (50 - 32), 1u << (37 - 32)}));
+  EXPECT_EQ(f.ValuesWritten(kNvicIser0), (std::vector<uint32_t>{1u << 28, 1u << 29, 1u << 30}));
 }
 
 }  // namespace

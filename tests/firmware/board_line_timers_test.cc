@@ -202,10 +202,10 @@ TEST(BoardLineTimers, ComparesCrossTheCountersWrap) {
 TEST(BoardLineTimers, AnInterruptTooLateForTheFallForcesTheLineLow) {
   Bench b(1'000);
   b.SetRate(100'000);
-  b.SetLine(2, 20, 0, 0);  // TIM5 CH3, 20 µs wide
+  b.SetLine(2, 25, 0, 0);  // TIM5 CH3, 25 µs wide
   b.Start();
   b.RunUntil(b.t_start + 1'001, /*latency_us=*/30);  // the interrupt 30 µs after the rise
-  // The fall at rise + 20 was already past: OC3M forced inactive (100), the next rise armed.
+  // The fall at rise + 25 was already past: OC3M forced inactive (100), the next rise armed.
   uint32_t ccr;
   bool high;
   ASSERT_TRUE(b.Armed(2, &ccr, &high));

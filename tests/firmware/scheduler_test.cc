@@ -179,11 +179,11 @@ TEST(Scheduler, StopReleasesTheLinesAndSequenceNumbersContinueAfterRestart) {
 TEST(Scheduler, ConfigurationIsRefusedWhileRunningOrInvalid) {
   Scheduler s;
   EXPECT_FALSE(s.Configure(OneLine(20'000, 50'000)));  // width == period
-  EXPECT_FALSE(s.Configure(OneLine(20'000, 49'991)));  // gap to the next rise below 10 µs
-  EXPECT_FALSE(s.Configure(OneLine(20'000, 9)));       // below the minimum width
+  EXPECT_FALSE(s.Configure(OneLine(20'000, 49'976)));  // gap to the next rise below 25 µs
+  EXPECT_FALSE(s.Configure(OneLine(20'000, 24)));      // below the minimum width
   IdealRun r(&s);
   EXPECT_FALSE(r.Start(0));  // default config has no line enabled
-  ASSERT_TRUE(s.Configure(OneLine(20'000, 49'990)));
+  ASSERT_TRUE(s.Configure(OneLine(20'000, 49'975)));
   ASSERT_TRUE(r.Start(0));
   EXPECT_FALSE(s.Configure(OneLine(10'000, 100)));
   EXPECT_EQ(s.config().rate_mhz, 20'000u);
@@ -246,9 +246,9 @@ TEST(TriggerConfig, RangeChecksNameTheField) {
   EXPECT_EQ(CheckRate(400'001).field, proto::Field::kRate);
   LineConfig line{true, 0, 0, 0};
   EXPECT_EQ(CheckLine(line, 20'000).field, proto::Field::kWidth);
-  line.width_us = 49'990;
+  line.width_us = 49'975;
   EXPECT_TRUE(CheckLine(line, 20'000).ok());
-  line.width_us = 49'991;
+  line.width_us = 49'976;
   EXPECT_EQ(CheckLine(line, 20'000).field, proto::Field::kWidth);
   line.width_us = 100;
   line.exposure_us = 1'000'001;

@@ -140,13 +140,13 @@ TEST(TriggerApp, RefusesOutOfRangeValuesWithTheField) {
   ExpectAck(b.Ask(SetRate(3, 400'000)), 3, MessageType::kSetRate);  // 2500 µs
   ExpectNack(b.Ask(SetLine(4, 8, 1, 100)), 4, NackReason::kOutOfRange, Field::kLine);
   ExpectNack(b.Ask(SetLine(5, 0, 2, 100)), 5, NackReason::kOutOfRange, Field::kLine);
-  ExpectNack(b.Ask(SetLine(6, 0, 1, 9)), 6, NackReason::kOutOfRange, Field::kWidth);
-  ExpectNack(b.Ask(SetLine(7, 0, 1, 2'491)), 7, NackReason::kOutOfRange, Field::kWidth);
+  ExpectNack(b.Ask(SetLine(6, 0, 1, 24)), 6, NackReason::kOutOfRange, Field::kWidth);
+  ExpectNack(b.Ask(SetLine(7, 0, 1, 2'476)), 7, NackReason::kOutOfRange, Field::kWidth);
   ExpectNack(b.Ask(SetLine(8, 0, 1, 100, 0, 1'000'001)), 8, NackReason::kOutOfRange,
              Field::kExposure);
   ExpectNack(b.Ask(SetLine(9, 0, 1, 100, -2'000, 1'000)), 9, NackReason::kOutOfRange,
              Field::kPhaseOffset);
-  ExpectAck(b.Ask(SetLine(10, 0, 1, 2'490, -1'999, 1'000)), 10, MessageType::kSetLine);
+  ExpectAck(b.Ask(SetLine(10, 0, 1, 2'475, -1'999, 1'000)), 10, MessageType::kSetLine);
   // At 400 Hz no exposure report fits the link beside the pulse reports.
   ExpectNack(b.Ask(SetLine(16, 1, 1, 100, 0, 0, proto::ExposureInput::kActiveHigh)), 16,
              NackReason::kOutOfRange, Field::kExposureInput);
@@ -155,11 +155,11 @@ TEST(TriggerApp, RefusesOutOfRangeValuesWithTheField) {
   // A slower rate is fine; a faster one would make line 0's width exceed the period.
   ExpectNack(b.Ask(SetRate(11, 400'001)), 11, NackReason::kOutOfRange, Field::kRate);
   ExpectAck(b.Ask(SetRate(12, 20'000)), 12, MessageType::kSetRate);
-  ExpectAck(b.Ask(SetLine(13, 0, 1, 2'490, 0, 1'000, proto::ExposureInput::kActiveLow)), 13,
+  ExpectAck(b.Ask(SetLine(13, 0, 1, 2'475, 0, 1'000, proto::ExposureInput::kActiveLow)), 13,
             MessageType::kSetLine);
   // 400 Hz with a wired line exceeds the link: refused as a rate problem.
   ExpectNack(b.Ask(SetRate(18, 400'000)), 18, NackReason::kOutOfRange, Field::kRate);
-  ExpectAck(b.Ask(SetLine(19, 0, 1, 2'490, 0, 1'000)), 19, MessageType::kSetLine);
+  ExpectAck(b.Ask(SetLine(19, 0, 1, 2'475, 0, 1'000)), 19, MessageType::kSetLine);
   ExpectAck(b.Ask(SetRate(14, 400'000)), 14, MessageType::kSetRate);
   Message hb;
   hb.type = MessageType::kSetHeartbeat;
@@ -167,7 +167,7 @@ TEST(TriggerApp, RefusesOutOfRangeValuesWithTheField) {
   ExpectNack(b.Ask(hb), 15, NackReason::kOutOfRange, Field::kHeartbeatPeriod);
   // Refused values changed nothing.
   EXPECT_EQ(b.app.config().rate_mhz, 400'000u);
-  EXPECT_EQ(b.app.config().lines[0].width_us, 2'490u);
+  EXPECT_EQ(b.app.config().lines[0].width_us, 2'475u);
   EXPECT_EQ(b.app.config().lines[1].enabled, false);
   EXPECT_EQ(b.app.config().heartbeat_period_ms, 100u);
 }

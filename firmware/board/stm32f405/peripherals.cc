@@ -1,7 +1,5 @@
 #include "peripherals.h"
 
-#include <initializer_list>
-
 #include "pinout.h"
 #include "register_access.h"
 #include "stm32f405_map.h"
@@ -76,15 +74,23 @@ void InitSysTick(const ClockPlan& plan) {
   Write32(kSysTickCsr, kSysTickCsrCoreClock | kSysTickCsrTickInt | kSysTickCsrEnable);
 }
 
+namespace {
+// 4 priority bits in the top of each byte (PM0214 4.3.7): 0 is the highest.
+void EnableIrq(uint32_t irq, uint32_t priority) {
+  const uint32_t shift = 8 * (irq % 4);
+  Modify32(kNvicIpr0 + (irq & ~3u), 0xFFu << shift, priority << shift);
+  Write32(kNvicIser0 + 4 * (irq / 32), 1u << (irq % 32));
+}
+}  // namespace
+
 void InitInterrupts() {
-  // 4 priority bits in the top of each byte: 0 highest. Timers 0, USART1 2 (PM0214 4.3.7).
-  for (uint32_t irq : {kTimIrqTim2, kTimIrqTim3, kTimIrqTim4, kTimIrqTim5}) {
-    Modify32(kNvicIpr0 + (irq & ~3u), 0xFFu << (8 * (irq % 4)), 0x00u << (8 * (irq % 4)));
-    Write32(kNvicIser0 + 4 * (irq / 32), 1u << (irq % 32));
-  }
-  const uint32_t u = kUsart1Irq;
-  Modify32(kNvicIpr0 + (u & ~3u), 0xFFu << (8 * (u % 4)), 0x20u << (8 * (u % 4)));
-  Write32(kNvicIser0 + 4 * (u / 32), 1u << (u % 32));
+  // Compares (0) preempt captures (0x10), which preempt USART1 (0x20): nothing but a compare
+  // service delays the arming of the next edge.
+  EnableIrq(kTimIrqTim2, 0x00);
+  EnableIrq(kTimIrqTim5, 0x00);
+  EnableIrq(kTimIrqTim3, 0x10);
+  EnableIrq(kTimIrqTim4, 0x10);
+  EnableIrq(kUsart1Irq, 0x20);
 }
 
 }  // namespace rigcal::board

@@ -21,8 +21,8 @@ void InitUsart1(const ClockPlan& plan);
 void InitTimers(uint32_t psc, uint32_t preset_count);
 // SysTick at kSysTickHz from the core clock (wakes the main loop), with its interrupt.
 void InitSysTick(const ClockPlan& plan);
-// Interrupt priorities and enables: the timers (compare and capture) at the highest priority,
-// USART1 below them (an edge's re-arming never waits for a received byte).
+// Interrupt priorities and enables: the compare timers (TIM2, TIM5) highest, the capture timers
+// (TIM3, TIM4) next, USART1 last (an edge's re-arming never waits for a capture or a byte).
 void InitInterrupts();
 
 }  // namespace rigcal::board

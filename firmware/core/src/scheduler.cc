@@ -18,12 +18,12 @@ bool Scheduler::Configure(const TriggerConfig& config) {
 }
 
 void Scheduler::Advance(TickClock* clock) const {
-  const uint32_t rate = config_.rate_mhz;
+  // No division: the compare interrupt runs this for every edge.
   clock->k += 1;
-  clock->t_us += 1'000'000'000ull / rate;
-  clock->frac += static_cast<uint32_t>(1'000'000'000ull % rate);
-  if (clock->frac >= rate) {
-    clock->frac -= rate;
+  clock->t_us += period_us_;
+  clock->frac += period_rem_;
+  if (clock->frac >= config_.rate_mhz) {
+    clock->frac -= config_.rate_mhz;
     clock->t_us += 1;
   }
 }
@@ -49,6 +49,8 @@ bool Scheduler::Start(uint64_t now_us, LineTimers* timers) {
     }
   }
   t0_ = now_us + kArmLeadUs + static_cast<uint64_t>(lead);
+  period_us_ = static_cast<uint32_t>(1'000'000'000ull / config_.rate_mhz);
+  period_rem_ = static_cast<uint32_t>(1'000'000'000ull % config_.rate_mhz);
   first_seq_ = next_seq();
   report_ = ClockAt(0);
   skip_from_k_ = skip_before_k_ = 0;
@@ -146,10 +148,16 @@ void Scheduler::QueueReports() {
 }
 
 bool Scheduler::LastRise(int line, uint32_t* seq, uint64_t* rise_us) const {
-  const LineState& s = lines_[line];
-  if (!running() || s.rises == 0) return false;
-  *seq = first_seq_ + static_cast<uint32_t>(s.rises - 1);
-  *rise_us = s.last_rise_us;
+  const volatile LineState& s = lines_[line];
+  // The capture interrupt may be preempted by the compare interrupt: read until both fields
+  // belong to the same rise.
+  uint64_t rises = 0;
+  do {
+    rises = s.rises;
+    *rise_us = s.last_rise_us;
+  } while (rises != s.rises);
+  if (!running() || rises == 0) return false;
+  *seq = first_seq_ + static_cast<uint32_t>(rises - 1);
   return true;
 }
 

@@ -23,8 +23,9 @@
 // T_k (PopReport), so a report never leaves before T_k nor before any rise of its tick. T_k is
 // the compare times' own reference: what the report states is what the hardware did.
 //
-// Contexts: Configure, Start, Stop, PopReport, NextReportUs in the main loop; OnCompare and
-// LastRise in the compare context (an interrupt, or the main loop with it masked). Start arms
+// Contexts: Configure, Start, Stop, PopReport, NextReportUs in the main loop; OnCompare in the
+// compare context (an interrupt, or the main loop with it masked); LastRise in the capture
+// context, which the compare context may preempt (it reads until consistent). Start arms
 // the first edges only after the run's state is set; Stop releases every line before it reads
 // the state. The counters are atomics (the main loop reads them for heartbeats).
 //
@@ -101,6 +102,8 @@ class Scheduler {
   void Skip(uint64_t from_k, uint64_t before_k);
 
   TriggerConfig config_;
+  uint32_t period_us_ = 0;    // 1e9 / rate, whole µs (Start)
+  uint32_t period_rem_ = 0;   // 1e9 mod rate: the fraction, in 1/rate µs
   std::atomic<bool> running_{false};
   uint8_t enabled_mask_ = 0;
   uint64_t t0_ = 0;
