@@ -119,6 +119,9 @@ Status TriggerLink::Poll(int timeout_ms, std::vector<TriggerEvent>* events) {
       const double wire_ns = uart_byte_ns_ * static_cast<double>(frame_bytes_ + (*n - 1 - i));
       events->push_back({decoder_.message(), rx_ns - std::llround(wire_ns)});
     } else if (e != trigger_proto::DecodeEvent::kNone) {
+      if (e == trigger_proto::DecodeEvent::kUnsupportedVersion) {
+        other_version_ = decoder_.raw_version();
+      }
       ModuleLogger("drivers")->debug("trigger link: dropped a frame ({})", static_cast<int>(e));
     }
     if (buffer[i] == 0) frame_bytes_ = 0;  // the frame delimiter

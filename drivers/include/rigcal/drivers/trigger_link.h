@@ -71,6 +71,9 @@ class TriggerLink {
   void set_uart_byte_ns(double byte_ns) { uart_byte_ns_ = byte_ns; }
 
   const trigger_proto::DecoderStats& stats() const { return decoder_.stats(); }
+  // The version of the last frame refused for its protocol version (0: none): a generator
+  // built for another protocol version than this host's.
+  uint8_t other_version() const { return other_version_; }
   ByteStream& stream() { return *stream_; }
 
  private:
@@ -79,6 +82,7 @@ class TriggerLink {
   uint16_t next_command_id_ = 1;
   double uart_byte_ns_ = 0.0;
   size_t frame_bytes_ = 0;  // bytes of the frame being received (since the last delimiter)
+  uint8_t other_version_ = 0;
 };
 
 // "SetLine", "Start", ...; "type 0x7f" for unknown ones.
