@@ -110,7 +110,7 @@ inline constexpr uint32_t kMinRateMilliHz = 100;      // 0.1 Hz
 inline constexpr uint32_t kMaxRateMilliHz = 400'000;  // 400 Hz (reports fit 115200 baud)
 // Width and the gap to the next rise (period - width): the board re-arms a line's compare for
 // its next edge in an interrupt, whose worst-case response (every line's edge at the same µs:
-// eight services of ~2.2 µs, docs/firmware.md "Timing") stays below this.
+// eight services of ~2-2.6 µs, docs/firmware.md "Timing") stays below this.
 inline constexpr uint32_t kMinWidthUs = 25;
 inline constexpr uint32_t kMaxExposureUs = 1'000'000;  // and |offset| + exposure / 2 < period
 inline constexpr uint16_t kMinHeartbeatMs = 10;        // 0 = heartbeats off
