@@ -14,6 +14,7 @@
 
 #include "firmware/qemu_process.h"
 #include "rigcal/trigger/serial_port.h"
+#include "rigcal/trigger/trigger_hello.h"
 #include "rigcal/trigger/trigger_link.h"
 #include "rigcal/trigger/trigger_matcher.h"
 #include "rigcal/trigger/trigger_receiver.h"
@@ -53,6 +54,18 @@ TEST(TriggerQemu, LinkThroughAPtyMapsAndMatchesTheFirmwaresPulses) {
     bad.lines = {{0, 60'000, 0, 0}};
     const Status s = link.Apply(bad, 3000, &events);
     EXPECT_NE(s.message().find("lines[0].width_us"), std::string::npos) << s.message();
+    // The link check of `rigcal trigger --hello`: QEMU has no RCC model, so the image reports
+    // the HSE and PLL timeouts and its measured timer clock.
+    const Expected<TriggerHelloInfo> hello = QueryTriggerHello(&link, 10000);
+    ASSERT_TRUE(hello.ok()) << hello.error();
+    EXPECT_EQ(hello->hello.firmware_version, 2);
+    EXPECT_EQ(hello->hello.clock_status, trigger_protocol::kClockHseFallback |
+                                             trigger_protocol::kClockPllFailed |
+                                             trigger_protocol::kClockTimerMeasured);
+    const std::string clock = DescribeClockStatus(hello->hello.clock_status, hello->hello.hse_mhz);
+    std::printf("trigger --hello under QEMU: %s (round trip %.1f ms)\n", clock.c_str(),
+                hello->round_trip_ns * 1e-6);
+    EXPECT_NE(clock.find("did not start"), std::string::npos) << clock;
   }
   port = SerialPort::Open(qemu.pty_path(), 115200);
   ASSERT_TRUE(port.ok()) << port.error();

@@ -3,14 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rigcal/trigger_core/ideal_line_timers.h"
 #include "rigcal/trigger_core/trigger_app.h"
 
 namespace rigcal::sim {
-
-class SimulatedTriggerStream::NullLines final : public trigger_core::LineDriver {
- public:
-  void SetLines(uint8_t) override {}
-};
 
 Status SimulatedTriggerOptions::Check() const {
   if (boot_host_ns < start_host_ns) return Error{"boot_host_ns: must be >= start_host_ns"};
@@ -33,8 +29,7 @@ SimulatedTriggerStream::SimulatedTriggerStream(SimulatedTriggerOptions options)
     : options_(std::move(options)),
       rng_(options_.seed),
       now_ns_(options_.start_host_ns),
-      mcu_time_ns_(options_.start_host_ns),
-      lines_(std::make_unique<NullLines>()) {
+      mcu_time_ns_(options_.start_host_ns) {
   RequireValid(options_.Check(), "SimulatedTriggerOptions");
   if (options_.boot_host_ns == now_ns_) Boot(now_ns_);  // else AdvanceMcu boots it on time
 }
@@ -56,20 +51,23 @@ int64_t SimulatedTriggerStream::TrueHostNs(int boot, uint64_t mcu_us) const {
 
 void SimulatedTriggerStream::Boot(int64_t host_ns) {
   boots_.push_back(host_ns);
-  app_ = std::make_unique<trigger_core::TriggerApp>(lines_.get());
+  app_.reset();
+  timers_ = std::make_unique<trigger_core::IdealLineTimers>();  // a reset restarts the timers
+  app_ = std::make_unique<trigger_core::TriggerApp>(timers_.get());
   app_->Boot(0);
 }
 
 void SimulatedTriggerStream::AdvanceMcu(int64_t to_ns) {
   while (mcu_time_ns_ < to_ns) {
-    // The next instant the MCU does something: boot, reset, a scheduler event, or 1 ms on (the
-    // main loop's SysTick wake-up: heartbeats).
+    // The next instant the MCU does something: boot, reset, an edge of its timers, a queued
+    // report's time, or 1 ms on (the main loop's SysTick wake-up: heartbeats).
     int64_t next = to_ns;
     if (boots_.empty()) {
       next = std::min(next, options_.boot_host_ns);
     } else {
       const uint64_t now_us = McuUs(mcu_time_ns_);
-      const uint64_t event_us = std::min(app_->scheduler().NextEventUs(), now_us + 1000);
+      const uint64_t event_us =
+          std::min({timers_->NextEdgeUs(), app_->scheduler().NextReportUs(), now_us + 1000});
       next = std::min(next, std::max(HostNs(event_us), mcu_time_ns_ + 1));
       if (next_reset_ < options_.reset_host_ns.size()) {
         next = std::min(next, options_.reset_host_ns[next_reset_]);
@@ -84,6 +82,7 @@ void SimulatedTriggerStream::AdvanceMcu(int64_t to_ns) {
       ++next_reset_;
       Boot(mcu_time_ns_);
     } else {
+      timers_->RunUntil(McuUs(mcu_time_ns_), app_.get());
       app_->Poll(McuUs(mcu_time_ns_));
     }
     // Frames leave whole; each arrives after its delay, not before the previous one.
@@ -138,6 +137,7 @@ Status SimulatedTriggerStream::Write(const uint8_t* data, size_t size) {
   AdvanceMcu(now_ns_);
   if (app_ == nullptr) return Status::Ok();  // not booted yet: the bytes are lost
   const uint64_t now_us = McuUs(now_ns_);
+  timers_->RunUntil(now_us, app_.get());
   for (size_t i = 0; i < size; ++i) app_->OnRxByte(data[i], now_us);
   return Status::Ok();
 }

@@ -24,6 +24,8 @@ std::string TriggerMessageName(uint8_t type) {
       return "Ack";
     case MessageType::kNack:
       return "Nack";
+    case MessageType::kExposureReport:
+      return "ExposureReport";
     case MessageType::kSetRate:
       return "SetRate";
     case MessageType::kSetLine:
@@ -57,13 +59,19 @@ Status TriggerSettings::Check() const {
   for (size_t i = 0; i < lines.size(); ++i) {
     const TriggerLineSettings& l = lines[i];
     const std::string at = "lines[" + std::to_string(i) + "].";
+    if (static_cast<uint8_t>(l.exposure_input) >
+        static_cast<uint8_t>(trigger_proto::ExposureInput::kActiveLow)) {
+      return Error{at + "exposure_input: must be none, active_high or active_low"};
+    }
     if (l.line < 0 || l.line >= trigger_proto::kMaxLines) {
       return Error{at + "line: must be in [0, 8), is " + std::to_string(l.line)};
     }
     if (!seen.insert(l.line).second)
       return Error{at + "line: line " + std::to_string(l.line) + " twice"};
-    if (l.width_us < 1 || l.width_us >= period) {
-      return Error{at + "width_us: must be in [1, period " + std::to_string(period) + " us), is " +
+    const int64_t min_width = trigger_proto::kMinWidthUs;
+    if (l.width_us < min_width || l.width_us > period - min_width) {
+      return Error{at + "width_us: must be in [" + std::to_string(min_width) + ", period " +
+                   std::to_string(period) + " us - " + std::to_string(min_width) + "], is " +
                    std::to_string(l.width_us)};
     }
     if (l.exposure_us < 0 || l.exposure_us > trigger_proto::kMaxExposureUs) {
@@ -78,6 +86,20 @@ Status TriggerSettings::Check() const {
   if (heartbeat_ms != 0 && (heartbeat_ms < trigger_proto::kMinHeartbeatMs ||
                             heartbeat_ms > trigger_proto::kMaxHeartbeatMs)) {
     return Error{"heartbeat_ms: must be 0 or in [10, 10000], is " + std::to_string(heartbeat_ms)};
+  }
+  int wired = 0;
+  for (const TriggerLineSettings& l : lines) {
+    wired += l.exposure_input != trigger_proto::ExposureInput::kNone ? 1 : 0;
+  }
+  const auto heartbeat = static_cast<uint16_t>(heartbeat_ms);
+  if (!trigger_proto::FitsLink(RateMilliHz(), wired, heartbeat)) {
+    return Error{
+        "rate_hz: " + std::to_string(rate_hz) + " Hz with " + std::to_string(wired) +
+        " exposure input(s) sends " +
+        std::to_string(trigger_proto::LinkMilliBytesPerSecond(RateMilliHz(), wired, heartbeat) /
+                       1000) +
+        " B/s, above 90 % of the link's " + std::to_string(trigger_proto::kLinkBytesPerSecond) +
+        " B/s"};
   }
   return Status::Ok();
 }
@@ -97,6 +119,9 @@ Status TriggerLink::Poll(int timeout_ms, std::vector<TriggerEvent>* events) {
       const double wire_ns = uart_byte_ns_ * static_cast<double>(frame_bytes_ + (*n - 1 - i));
       events->push_back({decoder_.message(), rx_ns - std::llround(wire_ns)});
     } else if (e != trigger_proto::DecodeEvent::kNone) {
+      if (e == trigger_proto::DecodeEvent::kUnsupportedVersion) {
+        other_version_ = decoder_.raw_version();
+      }
       ModuleLogger("trigger")->debug("trigger link: dropped a frame ({})", static_cast<int>(e));
     }
     if (buffer[i] == 0) frame_bytes_ = 0;  // the frame delimiter
@@ -168,7 +193,7 @@ Status TriggerLink::Apply(const TriggerSettings& settings, int timeout_ms,
     m.type = MessageType::kSetLine;
     m.set_line.line = static_cast<uint8_t>(line);
     m.set_line.enabled = 0;
-    m.set_line.width_us = 1;
+    m.set_line.width_us = trigger_proto::kMinWidthUs;
     if (Status s = Command(m, timeout_ms, events); !s.ok()) return s;
   }
   m = Message{};
@@ -183,6 +208,7 @@ Status TriggerLink::Apply(const TriggerSettings& settings, int timeout_ms,
     m.set_line.width_us = static_cast<uint32_t>(l.width_us);
     m.set_line.phase_offset_us = static_cast<int32_t>(l.phase_offset_us);
     m.set_line.exposure_us = static_cast<uint32_t>(l.exposure_us);
+    m.set_line.exposure_input = l.exposure_input;
     if (Status s = Command(m, timeout_ms, events); !s.ok()) return s;
   }
   m = Message{};

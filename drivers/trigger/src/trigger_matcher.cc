@@ -41,6 +41,14 @@ void TriggerMatcher::Restart() {
 }
 
 void TriggerMatcher::OnMessage(const trigger_protocol::Message& m, int64_t rx_ns) {
+  if (m.type == MessageType::kExposureReport) {  // no clock sample: it carries no send time
+    {
+      MutexLock lock(mutex_);
+      OnExposure(m.exposure);
+    }
+    changed_.notify_all();
+    return;
+  }
   {
     MutexLock lock(mutex_);
     uint64_t mcu_us = 0;
@@ -82,34 +90,59 @@ void TriggerMatcher::OnMessage(const trigger_protocol::Message& m, int64_t rx_ns
   changed_.notify_all();
 }
 
-int64_t TriggerMatcher::PulseTimeNs(const Pulse& p) const {
+void TriggerMatcher::OnExposure(const trigger_protocol::ExposureReport& e) {
+  if (e.line >= trigger_protocol::kMaxLines) return;
+  const int64_t seq = seq_base_ + e.seq;  // the report follows its pulse within one boot
+  for (auto it = pulses_.rbegin(); it != pulses_.rend(); ++it) {
+    if (it->seq < seq || it->boot != boot_) break;
+    if (it->seq == seq) {
+      it->measured_mask = static_cast<uint8_t>(it->measured_mask | (1u << e.line));
+      it->centre_us[e.line] = e.CentreUs();
+      ++stats_.exposures;
+      return;
+    }
+  }
+  ++stats_.exposures_orphaned;
+}
+
+int64_t TriggerMatcher::PulseTimeNs(const Pulse& p, uint64_t mcu_us) const {
   if (p.boot == boot_ && !options_.map_at_arrival) {
-    if (std::optional<int64_t> t = map_.ToHostNs(p.mcu_us)) return *t;
+    if (std::optional<int64_t> t = map_.ToHostNs(mcu_us)) return *t;
     return -1;
   }
-  return p.mapped_ns;
+  if (p.mapped_ns < 0) return -1;
+  // Near the pulse, the nominal slope (1000 ns per µs) is off by the drift only (< 0.1 µs).
+  return p.mapped_ns + (static_cast<int64_t>(mcu_us) - static_cast<int64_t>(p.mcu_us)) * 1000;
 }
 
 MatchOutcome TriggerMatcher::MatchLocked(const CameraTriggerSpec& camera, int64_t stamp_ns,
                                          TriggerMatch* match) const {
   const Pulse* best = nullptr;
+  const Pulse* newest = nullptr;
   int64_t best_distance = INT64_MAX;
   int64_t best_expected = 0;
+  bool best_measured = false;
   int64_t newest_expected = INT64_MIN;
   bool any_mapped = false;
+  const uint8_t bit = static_cast<uint8_t>(1u << camera.line);
   for (auto it = pulses_.rbegin(); it != pulses_.rend(); ++it) {
     const Pulse& p = *it;
-    if (((p.line_mask >> camera.line) & 1u) == 0) continue;
-    const int64_t t = PulseTimeNs(p);
+    if ((p.line_mask & bit) == 0) continue;
+    if (newest == nullptr) newest = &p;
+    const bool measured = (p.measured_mask & bit) != 0;
+    // The measured exposure centre when the generator reported one, else the scheduled one.
+    const int64_t t =
+        measured ? PulseTimeNs(p, p.centre_us[camera.line]) : PulseTimeNs(p, p.mcu_us);
     if (t < 0) continue;
     any_mapped = true;
-    const int64_t expected = t + camera.phase_offset_ns + camera.stamp_offset_ns;
+    const int64_t expected = t + (measured ? 0 : camera.phase_offset_ns) + camera.stamp_offset_ns;
     newest_expected = std::max(newest_expected, expected);
     const int64_t distance = std::llabs(stamp_ns - expected);
     if (distance < best_distance) {
       best = &p;
       best_distance = distance;
       best_expected = expected;
+      best_measured = measured;
     }
     if (expected < stamp_ns - options_.tolerance_ns && best_distance <= options_.tolerance_ns) {
       break;  // older pulses are further away
@@ -117,9 +150,16 @@ MatchOutcome TriggerMatcher::MatchLocked(const CameraTriggerSpec& camera, int64_
   }
   if (!any_mapped) return map_.synced() ? MatchOutcome::kNotYet : MatchOutcome::kNotSynced;
   if (best != nullptr && best_distance <= options_.tolerance_ns) {
+    if (camera.exposure_feedback && !best_measured) {
+      // Its measurement may still come, until a later pulse of the line has arrived.
+      if (best == newest) return MatchOutcome::kNotYet;
+      ++stats_.exposure_missing;
+    }
+    if (best_measured) ++stats_.measured_matches;
     match->seq = best->seq;
     match->centre_ns = best_expected - camera.stamp_offset_ns;
     match->residual_ns = stamp_ns - best_expected;
+    match->measured = best_measured;
     return MatchOutcome::kMatched;
   }
   if (newest_expected < stamp_ns + options_.tolerance_ns) return MatchOutcome::kNotYet;

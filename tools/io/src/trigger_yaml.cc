@@ -74,8 +74,9 @@ std::optional<Error> ParseTriggerSection(const FieldReader& r, const YAML::Node&
 Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAML::Node& node,
                                                  const std::string& field) {
   const std::string p = field + ".";
-  if (auto e = r.CheckKeys(
-          node, p, {"line", "phase_us", "width_us", "exposure_us", "stamp", "readout_us"})) {
+  if (auto e = r.CheckKeys(node, p,
+                           {"line", "phase_us", "width_us", "exposure_us", "stamp", "readout_us",
+                            "exposure_input"})) {
     return *e;
   }
   CameraTriggerConfig c;
@@ -88,7 +89,10 @@ Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAM
   }
   if (node["width_us"]) {
     int64_t width = 0;
-    if (auto e = OptionalInteger(r, node, p, "width_us", 1, 10'000'000, &width)) return *e;
+    if (auto e = OptionalInteger(r, node, p, "width_us", trigger_protocol::kMinWidthUs, 10'000'000,
+                                 &width)) {
+      return *e;
+    }
     c.width_us = width;
   }
   if (node["exposure_us"]) {
@@ -105,6 +109,21 @@ Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAM
       return r.Fail(
           n, p + "stamp",
           "'" + *text + "' is not one of start_of_exposure, exposure_centre, end_of_frame");
+    }
+  }
+  if (const YAML::Node n = node["exposure_input"]) {
+    auto text = r.String(n, p + "exposure_input");
+    if (!text) return Error{text.error()};
+    using trigger_protocol::ExposureInput;
+    if (*text == "none") {
+      c.exposure_input = ExposureInput::kNone;
+    } else if (*text == "active_high") {
+      c.exposure_input = ExposureInput::kActiveHigh;
+    } else if (*text == "active_low") {
+      c.exposure_input = ExposureInput::kActiveLow;
+    } else {
+      return r.Fail(n, p + "exposure_input",
+                    "'" + *text + "' is not one of none, active_high, active_low");
     }
   }
   if (node["readout_us"] && c.stamp != trigger::FrameStamp::kEndOfFrame) {
@@ -188,6 +207,7 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
     line.width_us = c.width_us.value_or(std::min<int64_t>(1000, period_us / 2));
     line.phase_offset_us = c.phase_us;
     line.exposure_us = exposure_us;
+    line.exposure_input = c.exposure_input;
     if (line.width_us >= period_us) {
       return r.Fail(node["width_us"] ? node["width_us"] : node, p + "width_us",
                     "must be below the trigger period " + std::to_string(period_us) + " us");
@@ -202,15 +222,17 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
       if (other.line != line.line) continue;
       known = true;
       if (other.width_us != line.width_us || other.phase_offset_us != line.phase_offset_us ||
-          other.exposure_us != line.exposure_us) {
+          other.exposure_us != line.exposure_us || other.exposure_input != line.exposure_input) {
         return r.Fail(node, p + "line",
                       "line " + std::to_string(line.line) +
-                          " is shared with another camera whose width, phase or exposure differ");
+                          " is shared with another camera whose width, phase, exposure or "
+                          "exposure input differ");
       }
     }
     if (!known) options.settings.lines.push_back(line);
     config->camera_triggers[i] = trigger::CameraTriggerSpec{
-        c.line, c.phase_us * 1000, trigger::StampOffsetNs(stamp, exposure_us, c.readout_us)};
+        c.line, c.phase_us * 1000, trigger::StampOffsetNs(stamp, exposure_us, c.readout_us),
+        c.exposure_input != trigger_protocol::ExposureInput::kNone};
   }
   if (Status s = options.Check(); !s.ok()) return r.Fail(section, "trigger", s.message());
   config->trigger = std::move(options);

@@ -7,7 +7,7 @@
 //             uart_wire: true, tolerance_ms: 5, command_timeout_ms: 1000}
 //   cameras[i].trigger: {line: 0, phase_us: 0, width_us: 1000, exposure_us: 4000,
 //                        stamp: start_of_exposure | exposure_centre | end_of_frame,
-//                        readout_us: 0}
+//                        readout_us: 0, exposure_input: none | active_high | active_low}
 
 #include <yaml-cpp/yaml.h>
 
@@ -30,6 +30,9 @@ struct CameraTriggerConfig {
   std::optional<int64_t> exposure_us;        // v4l2: capture.exposure_us instead
   std::optional<trigger::FrameStamp> stamp;  // v4l2: from the buffer flags instead
   int64_t readout_us = 0;                    // sensor readout, for stamp end_of_frame
+  // The camera's exposure output wired to the line's capture input (docs/firmware.md): frames
+  // then get the measured exposure centre.
+  trigger_protocol::ExposureInput exposure_input = trigger_protocol::ExposureInput::kNone;
 };
 
 // The top-level `trigger:` map into `options` (port, baud, rate_hz, heartbeat_ms, uart_wire,

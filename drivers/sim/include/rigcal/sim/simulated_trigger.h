@@ -1,6 +1,7 @@
 #pragma once
 // A simulated trigger generator on a simulated serial link, for tests and for the simulated
-// rig: the real firmware core (firmware/core TriggerApp) runs on a simulated MCU clock, and its
+// rig: the real firmware core (firmware/core TriggerApp) runs on a simulated MCU clock with ideal
+// output-compare timers (IdealLineTimers: every edge exactly at its time), and its
 // bytes reach the host through a link with a transport delay, jitter and corruption.
 //
 //   MCU clock    mcu_us = (host_ns - boot_host_ns) * (1 + drift_ppm 1e-6) / 1000; a reset
@@ -25,8 +26,9 @@
 #include "rigcal/trigger/serial_port.h"
 
 namespace rigcal::trigger_core {
+class IdealLineTimers;
 class TriggerApp;
-}
+}  // namespace rigcal::trigger_core
 
 namespace rigcal::sim {
 
@@ -74,8 +76,7 @@ class SimulatedTriggerStream final : public trigger::ByteStream {
   int64_t mcu_time_ns_;         // host time the MCU has been run to
   std::vector<int64_t> boots_;  // boot host times
   size_t next_reset_ = 0;
-  class NullLines;
-  std::unique_ptr<NullLines> lines_;
+  std::unique_ptr<trigger_core::IdealLineTimers> timers_;  // the MCU's timers (ideal edges)
   std::unique_ptr<trigger_core::TriggerApp> app_;
   std::deque<Byte> in_flight_;
   int64_t last_arrival_ns_ = 0;

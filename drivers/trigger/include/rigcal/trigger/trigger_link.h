@@ -29,13 +29,16 @@ struct TriggerEvent {
 // One trigger line as the host configures it.
 struct TriggerLineSettings {
   int line = 0;                 // [0, 8)
-  int64_t width_us = 1000;      // pulse width, [1, period)
+  int64_t width_us = 1000;      // pulse width, [10, period - 10] (trigger_protocol::kMinWidthUs)
   int64_t phase_offset_us = 0;  // exposure centre relative to the tick
   int64_t exposure_us = 0;      // camera exposure (the rise leads the centre by half of it)
+  // The camera's exposure output wired to the line's capture input: the generator then reports
+  // each measured exposure (ExposureReport) and the matcher uses its centre.
+  trigger_proto::ExposureInput exposure_input = trigger_proto::ExposureInput::kNone;
 };
 
-// What the host asks the generator for. Check() applies the firmware's ranges (messages.h) so
-// that a bad value is reported by field before anything is sent.
+// What the host asks the generator for. Check() applies the firmware's ranges and link budget
+// (messages.h) so that a bad value is reported by field before anything is sent.
 struct TriggerSettings {
   double rate_hz = 20.0;                   // [0.1, 400]
   std::vector<TriggerLineSettings> lines;  // >= 1, distinct lines
@@ -68,6 +71,9 @@ class TriggerLink {
   void set_uart_byte_ns(double byte_ns) { uart_byte_ns_ = byte_ns; }
 
   const trigger_proto::DecoderStats& stats() const { return decoder_.stats(); }
+  // The version of the last frame refused for its protocol version (0: none): a generator
+  // built for another protocol version than this host's.
+  uint8_t other_version() const { return other_version_; }
   ByteStream& stream() { return *stream_; }
 
  private:
@@ -76,6 +82,7 @@ class TriggerLink {
   uint16_t next_command_id_ = 1;
   double uart_byte_ns_ = 0.0;
   size_t frame_bytes_ = 0;  // bytes of the frame being received (since the last delimiter)
+  uint8_t other_version_ = 0;
 };
 
 // "SetLine", "Start", ...; "type 0x7f" for unknown ones.

@@ -9,6 +9,14 @@
 // never repeats or goes back (seq = the MCU's number + a base that jumps past every earlier
 // number).
 //
+// Exposure feedback: for a line whose camera reports its exposure (TriggerLineSettings::
+// exposure_input), the generator sends an ExposureReport {seq, line, measured start, duration}
+// after each exposure. The matcher then uses the measured exposure centre instead of the
+// scheduled one (T_k + phase offset): a camera that exposed late or for less than configured
+// (auto exposure) gets the time it really exposed at. A camera with
+// CameraTriggerSpec::exposure_feedback waits (kNotYet) for its pulse's measurement until a later
+// pulse has arrived; then it takes the scheduled centre (counted: exposure_missing).
+//
 // A capture source asks Match(camera, stamp_ns) for each frame (any thread): the pulse whose
 // expected stamp, mapped(T_k) + the line's phase offset + the camera's stamp offset (where in
 // its exposure the driver stamps a frame: 0 for the middle, +exposure/2 for the end, plus any
@@ -48,12 +56,15 @@ struct CameraTriggerSpec {
   int line = 0;                 // the trigger line the camera hangs on, [0, 8)
   int64_t phase_offset_ns = 0;  // that line's phase offset (exposure centre - T_k)
   int64_t stamp_offset_ns = 0;  // frame stamp - exposure centre, as the driver stamps
+  // The line reports the camera's measured exposure: wait for it (see the class comment).
+  bool exposure_feedback = false;
 };
 
 struct TriggerMatch {
   int64_t seq = -1;         // continuous across MCU resets (see the class comment)
   int64_t centre_ns = 0;    // mapped exposure centre: mapped(T_k) + phase offset, host ns
   int64_t residual_ns = 0;  // stamp - expected stamp
+  bool measured = false;    // centre_ns is the measured exposure centre (ExposureReport)
 };
 
 enum class MatchOutcome {
@@ -72,8 +83,12 @@ struct TriggerMatcherStats {
   int64_t map_restarts = 0;
   int64_t seq_gaps = 0;  // pulses missing between consecutive reports
   int64_t matched = 0;
-  int64_t unmatched = 0;   // kNoPulse answers
-  double drift_ppm = 0.0;  // current clock-map estimate
+  int64_t unmatched = 0;           // kNoPulse answers
+  int64_t exposures = 0;           // ExposureReports that found their pulse
+  int64_t exposures_orphaned = 0;  // ExposureReports whose pulse was not (or no longer) known
+  int64_t measured_matches = 0;    // matches that used a measured exposure centre
+  int64_t exposure_missing = 0;    // exposure_feedback matches that fell back to the schedule
+  double drift_ppm = 0.0;          // current clock-map estimate
   bool synced = false;
 };
 
@@ -100,11 +115,15 @@ class TriggerMatcher {
     int64_t seq;
     uint64_t mcu_us;
     uint8_t line_mask;
-    int boot;           // MCU boot it belongs to
-    int64_t mapped_ns;  // when it arrived (used once its boot is over), or -1
+    int boot;                   // MCU boot it belongs to
+    int64_t mapped_ns;          // when it arrived (used once its boot is over), or -1
+    uint8_t measured_mask = 0;  // lines with a measured exposure centre
+    uint64_t centre_us[trigger_protocol::kMaxLines] = {};
   };
   void Restart() RIGCAL_REQUIRES(mutex_);
-  int64_t PulseTimeNs(const Pulse& p) const RIGCAL_REQUIRES(mutex_);
+  void OnExposure(const trigger_protocol::ExposureReport& e) RIGCAL_REQUIRES(mutex_);
+  // Host time of MCU time `mcu_us` as pulse `p` maps it (its boot's map or its arrival mapping).
+  int64_t PulseTimeNs(const Pulse& p, uint64_t mcu_us) const RIGCAL_REQUIRES(mutex_);
   MatchOutcome MatchLocked(const CameraTriggerSpec& camera, int64_t stamp_ns,
                            TriggerMatch* match) const RIGCAL_REQUIRES(mutex_);
 
