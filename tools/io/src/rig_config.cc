@@ -405,8 +405,11 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
     if (!type) return Error{type.error()};
     source_type = *type;
     if (*type == "image_folders") {
-      if (auto e = r.CheckKeys(source, "source.", {"type"})) return *e;
       const std::filesystem::path base = std::filesystem::path(path).parent_path();
+      drivers::ImageFolderOptions defaults;
+      if (auto e = ParseImageFolderKeys(r, source, "source", true, base.string(), &defaults)) {
+        return *e;
+      }
       for (size_t i = 0; i < config.cameras.size(); ++i) {
         const CameraConfig& camera = config.cameras[i];
         const YAML::Node entry = cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)];
@@ -421,6 +424,14 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
         const std::filesystem::path folder(camera.device);
         config.image_folders.push_back(folder.is_absolute() ? folder.string()
                                                             : (base / folder).string());
+        drivers::ImageFolderOptions options = defaults;
+        if (const YAML::Node capture = entry["capture"]) {
+          if (auto e = ParseImageFolderKeys(r, capture, camera.name + ".capture", false,
+                                            base.string(), &options)) {
+            return *e;
+          }
+        }
+        config.image_folder_options.push_back(std::move(options));
       }
       return finish();
     }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rigcal/calib/status.h"
+#include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/drivers/libcamera_device.h"
 #include "rigcal/drivers/v4l2_options.h"
 #include "rigcal/io/yaml_fields.h"
@@ -31,5 +32,13 @@ std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
 std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& node,
                                         const std::string& field, bool is_source,
                                         drivers::LibcameraOptions* options);
+
+// The same for `source: {type: image_folders}` and a camera's `capture:` (the camera's `device`
+// is its folder). Keys: rate_hz, timestamps (a file, resolved against `base_dir` when
+// relative); both only matter for plain folders (ImageFolderOptions).
+std::optional<Error> ParseImageFolderKeys(const FieldReader& r, const YAML::Node& node,
+                                          const std::string& field, bool is_source,
+                                          const std::string& base_dir,
+                                          drivers::ImageFolderOptions* options);
 
 }  // namespace rigcal::tools

@@ -11,6 +11,7 @@
 #include "rigcal/calib/status.h"
 #include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_spec.h"
+#include "rigcal/drivers/image_folder_device.h"
 #include "rigcal/drivers/libcamera_device.h"
 #include "rigcal/drivers/live_trigger_timeline.h"
 #include "rigcal/drivers/simulated_rig.h"
@@ -55,9 +56,12 @@ struct RigConfig {
   PublishOptions publish;
   StateOptions state;
   std::optional<drivers::SimulatedRigSpec> simulated_source;  // `source: {type: simulated}`
-  // `source: {type: image_folders}`: one EuRoC-format camera folder per camera (its `device`,
-  // resolved against the config file's directory), camera index order.
+  // `source: {type: image_folders}`: one folder per camera (its `device`, resolved against the
+  // config file's directory; an ASL camera folder or a plain folder of images), camera index
+  // order, and its options (`source:` keys rate_hz, timestamps, overridden by the camera's
+  // `capture:`).
   std::vector<std::string> image_folders;
+  std::vector<drivers::ImageFolderOptions> image_folder_options;
   // `source: {type: v4l2}`: one device per camera (camera index order): the source's keys,
   // the camera's `device`, its resolution and its `capture:` keys.
   std::vector<drivers::V4l2Options> v4l2_devices;
