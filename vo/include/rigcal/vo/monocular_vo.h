@@ -139,7 +139,7 @@ struct VoOptions {
   // Keyframes in the local bundle adjustment window (the two oldest are held fixed, which
   // fixes the gauge and the scale), and its iteration limit.
   int ba_window = 6;
-  int ba_max_iterations = 8;
+  int ba_max_iterations = 5;
 
   // Seed of the RANSAC sampling (the VO is deterministic for a given input).
   uint32_t seed = 42;
