@@ -44,7 +44,9 @@ TEST(MapDescriptors, SameTextureMatchesAfterAShiftAndASmallRotation) {
   for (size_t i = 0; i < points.size(); ++i) {
     EXPECT_LT(HammingDistance(reference[i], after[i]), 50) << i;
     for (size_t j = 0; j < points.size(); ++j) {
-      if (j != i) EXPECT_GT(HammingDistance(reference[i], after[j]), 80) << i << " " << j;
+      if (j != i) {
+        EXPECT_GT(HammingDistance(reference[i], after[j]), 80) << i << " " << j;
+      }
     }
   }
   // A point whose patch leaves the image has no descriptor.

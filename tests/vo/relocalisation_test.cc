@@ -131,7 +131,9 @@ TEST(Relocalisation, GapsOfOneToThirtyFramesKeepTheSegment) {
     EXPECT_LE(error.rotation_deg, 0.1);
     EXPECT_LE(error.direction_deg, 2.0);
     EXPECT_NEAR(error.scale, 1.0, 0.02);
-    if (gap == 30) EXPECT_GE(Relocalisations(run), 1);  // shorter gaps may be tracked through
+    if (gap == 30) {
+      EXPECT_GE(Relocalisations(run), 1);  // shorter gaps may be tracked through
+    }
     int poses_after = 0;
     for (const VoResult& r : run.results) poses_after += r.pose && r.pose->t_ns > 100 * kFrameNs;
     EXPECT_EQ(poses_after, 59);  // every frame after the gap has a pose

@@ -118,13 +118,14 @@ class MonocularVo::Impl {
   // pose is found.
   bool EstimateFramePose(const MapMatches& matches, const CameraPoseRC& predicted,
                          CameraPoseRC* pose);
-  // Classifies the tracks under `pose`: map matches within the gate are inliers, the others
-  // lose their landmark; tracks without a landmark that contradict their anchor's epipolar
-  // geometry (moving objects, KLT slips) are dropped. Returns the inliers; *parallax receives
-  // their rotation-free angles to the last keyframe.
+  // Classifies the tracks under `pose`: map matches within the pose gate are inliers (their
+  // number is returned, their rotation-free angles to the last keyframe go to *parallax), those
+  // within the two-view gate keep their landmark (counted in *linked), the others lose it;
+  // tracks without a landmark that contradict their anchor's epipolar geometry (moving
+  // objects, KLT slips) are dropped.
   int ClassifyTracks(const MapMatches& matches, const CameraPoseRC& pose,
-                     std::vector<double>* parallax);
-  bool NeedKeyframe(int inliers, const std::vector<double>& parallax) const;
+                     std::vector<double>* parallax, int* linked);
+  bool NeedKeyframe(int inliers, int linked, const std::vector<double>& parallax) const;
   // Tracking failed: starts relocalising against the map (at once with `grey` if not empty).
   void Lose(const std::string& reason, int64_t t_ns, const cv::Mat& grey, VoResult* result);
   // Tracks whose landmark was removed from the map lose it.

@@ -105,17 +105,25 @@ bool MonocularVo::Impl::EstimateFramePose(const MapMatches& matches, const Camer
 }
 
 int MonocularVo::Impl::ClassifyTracks(const MapMatches& matches, const CameraPoseRC& pose,
-                                      std::vector<double>* parallax) {
-  const double gate = PoseGateRad();
+                                      std::vector<double>* parallax, int* linked) {
+  // A landmark's residual against a pose estimated from the others carries the track's noise,
+  // the landmark's own position error (it was triangulated from tracks as noisy) and the
+  // pose's: about twice the variance of the noise alone. Within the pose gate it is an inlier;
+  // within the two-view gate it keeps its landmark; beyond it the landmark is wrong or the track
+  // slipped, and the track is judged below as one without a map point.
+  const double inlier_gate = PoseGateRad();
+  const double link_gate = PairGateRad();
   const Keyframe* last_kf = map_.keyframe(last_keyframe_);
   int inliers = 0;
+  *linked = 0;
   for (size_t k = 0; k < matches.size(); ++k) {
-    if (AngularResidual(pose, matches.bearing[k], matches.point[k]) > gate) {
-      // A wrong landmark or a slipped track: the track is judged below as one without a map
-      // point (kept if it still fits the geometry of its anchor keyframe).
+    const double residual = AngularResidual(pose, matches.bearing[k], matches.point[k]);
+    if (residual > link_gate) {
       tracks_[matches.track[k]].landmark = -1;
       continue;
     }
+    ++*linked;
+    if (residual > inlier_gate) continue;
     ++inliers;
     if (last_kf != nullptr) {
       parallax->push_back(VectorAngle(matches.point[k] - last_kf->C, matches.point[k] - pose.C));
@@ -139,10 +147,11 @@ int MonocularVo::Impl::ClassifyTracks(const MapMatches& matches, const CameraPos
   return inliers;
 }
 
-bool MonocularVo::Impl::NeedKeyframe(int inliers, const std::vector<double>& parallax) const {
+bool MonocularVo::Impl::NeedKeyframe(int inliers, int linked,
+                                     const std::vector<double>& parallax) const {
   const double median_parallax = UpperMedian(parallax);
   const double kf_parallax = options_.keyframe_parallax_deg * kDegToRad;
-  return inliers < options_.keyframe_track_ratio * keyframe_landmarks_ ||
+  return linked < options_.keyframe_track_ratio * keyframe_landmarks_ ||
          median_parallax >= kf_parallax ||
          (frames_since_keyframe_ >= options_.keyframe_max_frames &&
           median_parallax >= 0.5 * kf_parallax) ||
@@ -165,7 +174,8 @@ void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* 
     return;
   }
   std::vector<double> parallax;
-  const int inliers = ClassifyTracks(matches, pose, &parallax);
+  int linked = 0;
+  const int inliers = ClassifyTracks(matches, pose, &parallax, &linked);
   if (inliers < options_.min_tracking_inliers ||
       inliers < options_.min_inlier_ratio * static_cast<double>(matches.size())) {
     Lose("PnP: too few inliers (" + std::to_string(inliers) + " of " + matched + ")", t_ns, grey,
@@ -177,7 +187,7 @@ void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* 
   has_velocity_ = true;
   pose_ = pose;
   pose_t_ns_ = t_ns;
-  if (NeedKeyframe(inliers, parallax)) {
+  if (NeedKeyframe(inliers, linked, parallax)) {
     CreateKeyframe(t_ns, grey);
     result->keyframe = true;
   }
