@@ -11,7 +11,7 @@ CTEST     = bash scripts/ctest_with_skips.sh
 
 .PHONY: all deps configure build demo test test-suite test-fast test-core test-asan-core test-asan-core-clang test-tsan-core \
 	asan-configure test-asan test-asan-gcc \
-	test-fuzz fuzz tsan-configure test-tsan test-arm64 eval bench format tidy clean
+	test-fuzz fuzz tsan-configure test-tsan test-arm64 eval bench format tidy clean firmware flash
 
 all: build
 
@@ -168,6 +168,32 @@ bench: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal_calib_bench
 	./$(BUILD_DIR)/tests/bench/rigcal_calib_bench
 
+# The trigger firmware on its own (no host libraries needed): firmware/board/stm32f405 cross-built
+# for the board's crystal, HSE_MHZ (8, 12, 16 or 25). Images: $(FW_BUILD_DIR)/trigger_firmware.elf,
+# .bin, .hex, with a flash / RAM report; docs/firmware.md.
+FW_BUILD_DIR ?= build-fw
+HSE_MHZ ?= 8
+FW_IMAGE = $(FW_BUILD_DIR)/trigger_firmware
+firmware:
+	@bash scripts/install-deps.sh --flash
+	cmake -S firmware/board/stm32f405 -B $(FW_BUILD_DIR) -DCMAKE_BUILD_TYPE=MinSizeRel \
+	  -DCMAKE_TOOLCHAIN_FILE=$(CURDIR)/firmware/board/stm32f405/arm-none-eabi.cmake \
+	  -DTRIGGER_HSE_HZ=$(HSE_MHZ)000000
+	cmake --build $(FW_BUILD_DIR) --target trigger_firmware.elf
+
+# Writes the firmware into a connected STM32F405 board at 0x08000000 (docs/firmware.md
+# "Flashing"). FLASH_TOOL: st-flash (an ST-LINK on SWD; default), openocd (ST-LINK through
+# OpenOCD, verifies), dfu-util (the ROM bootloader over USB: BOOT0 high, USB on PA11/PA12).
+FLASH_TOOL ?= st-flash
+flash: firmware
+	@case "$(FLASH_TOOL)" in \
+	  st-flash) st-flash --reset write $(FW_IMAGE).bin 0x08000000 ;; \
+	  openocd) openocd -f interface/stlink.cfg -f target/stm32f4x.cfg \
+	             -c "program $(FW_IMAGE).elf verify reset exit" ;; \
+	  dfu-util) dfu-util -a 0 -s 0x08000000:leave -D $(FW_IMAGE).bin ;; \
+	  *) echo "FLASH_TOOL must be st-flash, openocd or dfu-util" >&2; exit 2 ;; \
+	esac
+
 format:
 	find calib vo drivers tools tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
 
@@ -177,7 +203,7 @@ TIDY_DIR ?= build-tidy
 tidy: deps
 	$(call cmake_configure,$(TIDY_DIR),Release,-DRIGCAL_UNITY_BUILD=OFF)
 	cmake --build $(TIDY_DIR) --target rigcal_lcmtypes_cpp
-	find calib/src calib/camera/src vo/src drivers/src tools/*/src tools/cli -name '*.cc' | xargs clang-tidy -p $(TIDY_DIR) --quiet
+	find calib/base/src calib/src calib/camera/src vo/src drivers/*/src tools/*/src tools/cli -name '*.cc' | xargs clang-tidy -p $(TIDY_DIR) --quiet
 
 clean:
-	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(ASAN_ALL_DIR) $(TSAN_DIR) $(TIDY_DIR)
+	rm -rf $(BUILD_DIR) $(ASAN_DIR) $(ASAN_ALL_DIR) $(TSAN_DIR) $(TIDY_DIR) $(FW_BUILD_DIR)

@@ -8,9 +8,9 @@
 include(CMakePackageConfigHelpers)
 
 # rigcal_<name> is exported as rigcal::<name>; the same names exist in this tree as aliases.
-set(RIGCAL_EXPORTED_LIBRARIES rigcal_trigger_protocol rigcal_trigger_core rigcal_calib
-    rigcal_camera rigcal_drivers rigcal_vo rigcal_io rigcal_target rigcal_lcmtypes rigcal_lcm
-    rigcal_pipeline rigcal_monitor rigcal_report)
+set(RIGCAL_EXPORTED_LIBRARIES rigcal_trigger_protocol rigcal_trigger_core rigcal_base rigcal_calib
+    rigcal_camera rigcal_capture rigcal_trigger rigcal_sim rigcal_vo rigcal_io rigcal_plot
+    rigcal_pattern rigcal_lcmtypes rigcal_lcm rigcal_pipeline rigcal_monitor rigcal_report)
 if(TARGET rigcal_research)
   list(APPEND RIGCAL_EXPORTED_LIBRARIES rigcal_research)
 endif()

@@ -47,7 +47,7 @@ endif()
 set(CPACK_DEBIAN_DEV_PACKAGE_NAME rigcal-dev)
 set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
 set(CPACK_COMPONENT_DEV_DESCRIPTION "Headers, static libraries and the CMake package of rigcal: find_package(rigcal)
-gives rigcal::calib, rigcal::drivers, rigcal::vo and the others. Also the LCM
+gives rigcal::calib, rigcal::capture, rigcal::vo and the others. Also the LCM
 message definitions and their generated C++, Python and Java (lcm-spy) types.")
 # The static libraries' own dependencies, as rigcalConfig.cmake finds them.
 set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS

@@ -2,6 +2,10 @@
 # Installs the Debian packages rigcal needs to build and test. Idempotent: packages
 # already present are skipped, so a second run changes nothing and needs no network.
 # Works as root, or through sudo for a normal user.
+#   scripts/install-deps.sh           everything rigcal builds and tests with
+#   scripts/install-deps.sh --flash   only what `make flash` needs: the ARM cross toolchain and the
+#                                     flashing tools (st-flash, openocd, dfu-util); they are in no
+#                                     other list (docs/firmware.md "Flashing")
 set -euo pipefail
 
 # One line per package, with why it is there (see README "Dependencies").
@@ -49,6 +53,17 @@ PACKAGES=(
   qemu-user            # ctest install/arm64_qemu: qemu-aarch64 runs the arm64 build here
   mmdebstrap           # scripts/arm64-sysroot.sh: Debian's arm64 -dev packages in a sysroot
 )
+
+if [ "${1:-}" = "--flash" ]; then
+  PACKAGES=(
+    gcc-arm-none-eabi                # cross-builds the trigger firmware
+    libnewlib-arm-none-eabi          # its C library (nano specs)
+    libstdc++-arm-none-eabi-newlib   # its freestanding C++ headers
+    stlink-tools                     # st-flash: make flash FLASH_TOOL=st-flash (ST-LINK probe)
+    openocd                          # make flash FLASH_TOOL=openocd (ST-LINK or CMSIS-DAP probe)
+    dfu-util                         # make flash FLASH_TOOL=dfu-util (USB DFU, BOOT0 high)
+  )
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -13,11 +13,8 @@ Status CalibrationOptions::Check() const {
     e << "partitions: must be >= 1 for the partition scale model, got " << partitions;
   else if (alpha_threshold_deg < 0.0 || alpha_threshold_deg >= 180.0)
     e << "alpha_threshold_deg: must be in [0, 180), got " << alpha_threshold_deg;
-  else if (alpha_maxrot_deg < 0.0 || alpha_maxrot_deg >= 180.0)
-    e << "alpha_maxrot_deg: must be in [0, 180), got " << alpha_maxrot_deg;
-  else if (!(alpha_maxrot_noise_deg >= 0.0) || std::isinf(alpha_maxrot_noise_deg))
-    e << "alpha_maxrot_noise_deg: must be finite and >= 0 (0 = fixed alpha_maxrot_deg), got "
-      << alpha_maxrot_noise_deg;
+  else if (const Status model = model_selection.Check(); !model.ok())
+    e << model.message();
   else if (!(scale_deviation_threshold > 0.0))
     e << "scale_deviation_threshold: must be > 0, got " << scale_deviation_threshold;
   else if (min_motions_per_partition < 2)
@@ -37,14 +34,6 @@ Status CalibrationOptions::Check() const {
     e << "covariance_time_blocks: must be 0 (off) or in [2, 10000], got " << covariance_time_blocks;
   else if (max_iterations < 1)
     e << "max_iterations: must be >= 1, got " << max_iterations;
-  else if (!(planar_axis_spread_deg >= 0.0))
-    e << "planar_axis_spread_deg: must be >= 0, got " << planar_axis_spread_deg;
-  else if (!(min_tilt_snr >= 0.0))
-    e << "min_tilt_snr: must be >= 0, got " << min_tilt_snr;
-  else if (!(general_axis_spread_deg > 0.0))
-    e << "general_axis_spread_deg: must be > 0, got " << general_axis_spread_deg;
-  else if (!(max_axis_std_ratio > 0.0))
-    e << "max_axis_std_ratio: must be > 0, got " << max_axis_std_ratio;
   else if (!(nominal_sigma >= 0.0) || std::isinf(nominal_sigma))
     e << "nominal_sigma: must be finite and >= 0 (0 = no weighted prior), got " << nominal_sigma;
   else if (min_motions < 2)

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal {
 namespace {

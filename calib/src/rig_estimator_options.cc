@@ -1,8 +1,8 @@
 // Check() of the recursive estimator's options.
+#include "rigcal/calib/rig_estimator_options.h"
+
 #include <cmath>
 #include <sstream>
-
-#include "rigcal/calib/rig_estimator.h"
 
 namespace rigcal {
 
@@ -40,10 +40,8 @@ Status RigEstimatorOptions::Check() const {
     e << "decalibration_confirm_s: must be in [0, 86400] seconds";
   else if (max_open_segments < 1)
     e << "max_open_segments: must be >= 1";
-  else if (!(alpha_maxrot_deg >= 0.0 && alpha_maxrot_deg < 180.0))
-    e << "alpha_maxrot_deg: must be in [0, 180)";
-  else if (!(alpha_maxrot_noise_deg >= 0.0) || std::isinf(alpha_maxrot_noise_deg))
-    e << "alpha_maxrot_noise_deg: must be finite and >= 0 (0 = fixed alpha_maxrot_deg)";
+  else if (const Status model = model_selection.Check(); !model.ok())
+    e << model.message();
   else if (window_size < 2)
     e << "window_size: must be >= 2";
   else if (history_sets < 0)
@@ -54,16 +52,8 @@ Status RigEstimatorOptions::Check() const {
     e << "history_min_sets: must be >= 2";
   else if (converged_min_motions < 2)
     e << "converged_min_motions: must be >= 2";
-  else if (!(min_tilt_snr >= 0.0))
-    e << "min_tilt_snr: must be >= 0";
-  else if (!(max_axis_std_ratio > 0.0))
-    e << "max_axis_std_ratio: must be > 0";
   else if (!(planar_hysteresis >= 1.0))
     e << "planar_hysteresis: must be >= 1 (1 = none)";
-  else if (!(general_axis_spread_deg > 0.0))
-    e << "general_axis_spread_deg: must be > 0";
-  else if (!(planar_axis_spread_deg >= 0.0))
-    e << "planar_axis_spread_deg: must be >= 0";
   else if (!(nominal_sigma >= 0.0) || std::isinf(nominal_sigma))
     e << "nominal_sigma: must be finite and >= 0 (0 = no weighted prior)";
   else if (!(sigma_block_s >= 0.0) || std::isinf(sigma_block_s))

@@ -36,6 +36,20 @@ std::string_view ToString(RigState state) {
   return "unknown";
 }
 
+std::vector<std::string_view> FactNames(uint32_t facts) {
+  std::vector<std::string_view> names;
+  if (facts & kFlagTranslationalOnly) names.push_back("translational-only");
+  if (facts & kFlagPlanar) names.push_back("planar");
+  if (facts & kFlagRefined) names.push_back("refined");
+  return names;
+}
+
+std::string StateText(SlaveState state, uint32_t facts) {
+  std::string text(ToString(state));
+  for (std::string_view fact : FactNames(facts)) (text += ' ') += fact;
+  return text;
+}
+
 RigState CombineStates(const std::vector<SlaveState>& slaves, bool any_motion) {
   const auto count = [&](auto pred) { return std::count_if(slaves.begin(), slaves.end(), pred); };
   if (count([](SlaveState s) { return s == SlaveState::kDecalibrated; }) > 0)

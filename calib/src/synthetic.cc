@@ -6,7 +6,7 @@
 #include <numbers>
 #include <utility>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal {
 namespace {
@@ -135,9 +135,10 @@ SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
 
 SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
                                   const std::vector<Similarity>& rigs,
-                                  const std::vector<int64_t>& t_ns, std::vector<Pose> master_world,
+                                  const std::vector<int64_t>& t_ns,
+                                  std::vector<Pose> world_from_master,
                                   const DriveOptions& options) {
-  std::vector<Pose> truth_master = std::move(master_world);
+  std::vector<Pose> truth_master = std::move(world_from_master);
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
   const int n = static_cast<int>(std::min(t_ns.size(), truth_master.size()));

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Clang's thread-safety analysis (-Wthread-safety, rigcal/calib/thread_annotations.h) over every
+# Clang's thread-safety analysis (-Wthread-safety, rigcal/base/thread_annotations.h) over every
 # source file of rigcal that uses threads or locks, with the flags of the normal (GCC) build
 # tree from its compile_commands.json, syntax-only (no objects, no second build tree); the
 # sources of a unity batch (RIGCAL_UNITY_BUILD) each on its own, with the batch's flags.
@@ -93,7 +93,7 @@ if [ ${#files[@]} -eq 0 ]; then
 fi
 
 # What "uses threads or locks" means, in a file's text.
-uses='std::(mutex|recursive_mutex|shared_mutex|timed_mutex|thread|jthread|condition_variable|atomic|lock_guard|unique_lock|scoped_lock)\b|rigcal/calib/thread_annotations\.h|\bMutex(Lock)?\b|RIGCAL_(GUARDED_BY|PT_GUARDED_BY|REQUIRES|EXCLUDES|ACQUIRE|RELEASE)\b'
+uses='std::(mutex|recursive_mutex|shared_mutex|timed_mutex|thread|jthread|condition_variable|atomic|lock_guard|unique_lock|scoped_lock)\b|rigcal/base/thread_annotations\.h|\bMutex(Lock)?\b|RIGCAL_(GUARDED_BY|PT_GUARDED_BY|REQUIRES|EXCLUDES|ACQUIRE|RELEASE)\b'
 layers=(calib drivers vo tools)
 in_layers() {
   local rel=${1#"$src"/} l

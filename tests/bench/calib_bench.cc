@@ -30,7 +30,7 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_options.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 #include "support/opencv_handeye.h"

@@ -127,20 +127,20 @@ void BM_OpenCvRerun(benchmark::State& state) {
   const std::vector<Pose> master(rec.master.poses.begin(), rec.master.poses.begin() + k);
   std::vector<Pose> slave(rec.slaves[0].poses.begin(), rec.slaves[0].poses.begin() + k);
   for (Pose& p : slave) p.C *= DemoRig()[0].scale;  // OpenCV needs one metric
-  const double opencv_start = tools::ProcessCpuSeconds();
+  const double opencv_start = lcm::ProcessCpuSeconds();
   for (auto _ : state) {
     benchmark::DoNotOptimize(support::OpenCvHandEye(master, slave, support::HandEyeMethod::kTsai));
   }
   const double opencv_s =
-      (tools::ProcessCpuSeconds() - opencv_start) / static_cast<double>(state.iterations());
+      (lcm::ProcessCpuSeconds() - opencv_start) / static_cast<double>(state.iterations());
   // One update of one slave, measured here (the two benchmarks may run in any order).
   RigEstimator estimator(Names(rec), RigEstimatorOptions());
   SetFeeder feeder(rec);
   for (int64_t n = 0; n < 2000; ++n) feeder.Feed(&estimator, n);
-  const double start = tools::ProcessCpuSeconds();
+  const double start = lcm::ProcessCpuSeconds();
   constexpr int kUpdates = 4000;
   for (int64_t n = 2000; n < 2000 + kUpdates; ++n) feeder.Feed(&estimator, n);
-  const double update_s = (tools::ProcessCpuSeconds() - start) / kUpdates;
+  const double update_s = (lcm::ProcessCpuSeconds() - start) / kUpdates;
   state.counters["update_us"] = 1e6 * update_s;
   state.counters["x_update"] = opencv_s / update_s;
 }
@@ -152,9 +152,9 @@ void BM_EstimatorMemory(benchmark::State& state) {
     RigEstimator estimator(Names(rec), RigEstimatorOptions());
     SetFeeder feeder(rec);
     for (int64_t n = 0; n < 20'000; ++n) feeder.Feed(&estimator, n);  // reach steady state
-    const double before = static_cast<double>(tools::ResidentSetBytes()) / (1 << 20);
+    const double before = static_cast<double>(lcm::ResidentSetBytes()) / (1 << 20);
     for (int64_t n = 20'000; n < sets; ++n) feeder.Feed(&estimator, n);
-    const double after = static_cast<double>(tools::ResidentSetBytes()) / (1 << 20);
+    const double after = static_cast<double>(lcm::ResidentSetBytes()) / (1 << 20);
     state.counters["rss_mb_before"] = before;
     state.counters["rss_mb_after"] = after;
     state.counters["rss_growth_mb"] = after - before;

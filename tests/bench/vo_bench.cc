@@ -33,8 +33,7 @@ struct Frames {
     constexpr int kFrames = 200;
     std::vector<rigcal::Pose> poses;
     for (int k = 0; k < kFrames; ++k) poses.push_back(rigcal::support::RoomPose(k));
-    const rigcal::drivers::SimulatedRig rig =
-        rigcal::support::MakeRoomSequence(camera, poses).value();
+    const rigcal::sim::SimulatedRig rig = rigcal::support::MakeRoomSequence(camera, poses).value();
     for (int k = 0; k < kFrames; ++k) images.push_back(rig.RenderFrame(0, k));
   }
 };

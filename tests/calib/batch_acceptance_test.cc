@@ -1,5 +1,5 @@
 // Honest states: a result is usable only when the data support it (batch_acceptance in
-// calib/src), σ is never silently 0, and an estimate with unknown σ is never converged.
+// calib/src/batch), σ is never silently 0, and an estimate with unknown σ is never converged.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -8,7 +8,7 @@
 #include <string>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"

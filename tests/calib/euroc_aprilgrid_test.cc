@@ -25,9 +25,9 @@
 
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "rigcal/io/trajectory_io.h"
 #include "support/opencv_handeye.h"
 #include "support/skip.h"
@@ -281,10 +281,10 @@ TEST_F(EurocAprilGridTest, RigcalSolveOnTumFiles) {
   // stamps, poses to the printed precision).
   for (const auto& [file, track] :
        {std::pair{"cam0.txt", &rec.master}, std::pair{"cam1.txt", &rec.slaves[0]}}) {
-    tools::TrajectoryFormat format = tools::TrajectoryFormat::kNative;
-    auto read = tools::ReadTrajectory((dir / file).string(), {}, &format);
+    io::TrajectoryFormat format = io::TrajectoryFormat::kNative;
+    auto read = io::ReadTrajectory((dir / file).string(), {}, &format);
     ASSERT_TRUE(read.ok()) << read.error();
-    EXPECT_EQ(format, tools::TrajectoryFormat::kTum);
+    EXPECT_EQ(format, io::TrajectoryFormat::kTum);
     EXPECT_EQ(read->name, track->name);
     ASSERT_EQ(read->t_ns, rec.t_ns);
     for (size_t k = 0; k < read->size(); ++k) {

@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/calib/timed_trajectory.h"
 
-namespace rigcal::tools::free_running {
+namespace rigcal::free_running {
 
 // A camera of the rig: its capture rate, the phase of its first frame and its clock offset.
 struct CameraClock {
@@ -120,4 +120,4 @@ inline std::vector<CameraPose> InCaptureOrder(
   return out;
 }
 
-}  // namespace rigcal::tools::free_running
+}  // namespace rigcal::free_running

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"
@@ -109,7 +109,7 @@ TEST(MotionModel, SmallRotationsAboveTheNoiseChooseTheGeneralModel) {
     // The thesis's fixed alpha_maxrot of 10 degrees (for 1 degree of noise) takes the same
     // drive as purely translational.
     CalibrationOptions fixed = walk;
-    fixed.alpha_maxrot_noise_deg = 0.0;
+    fixed.model_selection.alpha_maxrot_noise_deg = 0.0;
     EXPECT_EQ(CalibrateRig(drive.recording, fixed).slaves[0].motion_model,
               MotionModel::kTranslational);
   }

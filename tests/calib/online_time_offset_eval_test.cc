@@ -11,17 +11,17 @@
 #include "../calib/free_running_rig.h"
 #include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/calib/sync_buffer.h"
 
 namespace rigcal {
 namespace {
 
-using tools::free_running::CameraClock;
-using tools::free_running::FreeRunningRig;
-using tools::free_running::InCaptureOrder;
-using tools::free_running::MakeFreeRunningRig;
+using free_running::CameraClock;
+using free_running::FreeRunningRig;
+using free_running::InCaptureOrder;
+using free_running::MakeFreeRunningRig;
 
 std::vector<Similarity> TwoSlaves() {
   const std::vector<Similarity> demo = DemoRig();

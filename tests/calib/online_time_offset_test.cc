@@ -12,18 +12,18 @@
 #include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/sync_buffer.h"
 
 namespace rigcal {
 namespace {
 
-using tools::free_running::CameraClock;
-using tools::free_running::FreeRunningRig;
-using tools::free_running::InCaptureOrder;
-using tools::free_running::MakeFreeRunningRig;
+using free_running::CameraClock;
+using free_running::FreeRunningRig;
+using free_running::InCaptureOrder;
+using free_running::MakeFreeRunningRig;
 
 constexpr double kSigmas = 4.0;  // an estimate within kSigmas σ of the truth passes
 constexpr int64_t kFrameNs = 50'000'000;

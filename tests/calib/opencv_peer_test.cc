@@ -22,10 +22,10 @@
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "support/opencv_handeye.h"
 
 namespace rigcal {

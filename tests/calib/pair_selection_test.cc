@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <map>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 
 namespace rigcal {

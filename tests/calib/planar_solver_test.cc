@@ -7,7 +7,7 @@
 #include <optional>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"

@@ -1,4 +1,4 @@
-// Glitch detection (calib/src/pose_glitches.h) on real trajectories: the KITTI 00 car drive
+// Glitch detection (calib/src/motions/pose_glitches.h) on real trajectories: the KITTI 00 car drive
 // and the EuRoC V1_02 drone flight, as recorded and with simulated rigs along them. No pose
 // of these clean recordings may be taken for a glitch, by the batch stage or by the online
 // gate (pose_glitch_gate.h); a 100-unit jump in them is found.
@@ -94,9 +94,9 @@ TEST(PoseGlitchesRealTrajectories, EurocV102) {
   if (!std::filesystem::exists(path)) {
     RIGCAL_SKIP_MISSING() << path << " not found";
   }
-  tools::TrajectoryReadOptions read;
+  io::TrajectoryReadOptions read;
   read.max_quaternion_norm_error = 1e-3;  // the ground truth has 6-decimal quaternions
-  auto body = tools::ReadTrajectory(path.string(), read);
+  auto body = io::ReadTrajectory(path.string(), read);
   ASSERT_TRUE(body) << body.error();
   SampledTrajectory flight;
   flight.t_ns = body->t_ns;

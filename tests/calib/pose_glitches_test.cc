@@ -1,7 +1,7 @@
 // Gross pose outliers (glitches): a pose off by 100 units, a rotated pose, 1 % of the poses off
 // by a large fraction of the trajectory. The batch calibrator drops them before the pairs are
-// chosen (calib/src/pose_glitches.h), the online estimator skips them before the keyframe
-// offer (calib/src/pose_glitch_gate.h); the results stay within their own σ of the clean
+// chosen (calib/src/motions/pose_glitches.h), the online estimator skips them before the keyframe
+// offer (calib/src/motions/pose_glitch_gate.h); the results stay within their own σ of the clean
 // recording's, and clean drives lose no pose.
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 #include "glitch_injection.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"

@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 
 namespace rigcal {
@@ -288,7 +288,7 @@ TEST(CalibrateSlave, AutoModelBoundaryScalesWithTheRotationNoise) {
   ExpectExact(general, truth[0]);
   EXPECT_NE(general.message.find("equal-error boundary"), std::string::npos) << general.message;
   CalibrationOptions fixed = SinceStart();
-  fixed.alpha_maxrot_noise_deg = 0.0;
+  fixed.model_selection.alpha_maxrot_noise_deg = 0.0;
   const auto r = CalibrateRig(rec, fixed).slaves[0];
   EXPECT_EQ(r.motion_model, MotionModel::kTranslational);
   EXPECT_NE(r.message.find("position unobservable"), std::string::npos);
@@ -449,7 +449,7 @@ TEST(CalibrateSlave, UncertaintyWithCorrelatedErrors) {
 
 TEST(CalibrationOptions, CheckNamesTheField) {
   CalibrationOptions o;
-  o.alpha_maxrot_deg = -1;
+  o.model_selection.alpha_maxrot_deg = -1;
   const Status status = o.Check();
   EXPECT_FALSE(status.ok());
   EXPECT_NE(status.message().find("alpha_maxrot_deg"), std::string::npos);

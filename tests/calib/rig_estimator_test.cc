@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 

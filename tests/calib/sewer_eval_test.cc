@@ -16,10 +16,10 @@
 #include <thread>
 
 #include "rigcal/calib/rig_estimator.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/run_evaluation.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal {
 namespace {
@@ -38,19 +38,19 @@ struct SewerRun {
 
 SewerRun RunSewer(uint64_t seed) {
   SewerRun out;
-  auto config = tools::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/sim_sewer.yaml");
+  auto config = io::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/sim_sewer.yaml");
   EXPECT_TRUE(config) << config.error();
   if (!config || !config->simulated_source) return out;
-  drivers::SimulatedRigSpec spec = *config->simulated_source;
+  sim::SimulatedRigSpec spec = *config->simulated_source;
   spec.realtime = false;
   if (seed != 0) spec.seed = seed;
-  auto rig = drivers::MakeSimulatedRig(spec);
+  auto rig = sim::MakeSimulatedRig(spec);
   EXPECT_TRUE(rig) << rig.error();
   if (!rig) return out;
-  tools::PipelineOptions options;
+  pipeline::PipelineOptions options;
   options.lossless = true;
   options.record_poses = true;
-  tools::Pipeline pipeline(config->CameraNames(), rig->MakeDevices(), spec.cameras, config->online,
+  pipeline::Pipeline pipeline(config->CameraNames(), rig->MakeDevices(), spec.cameras, config->online,
                            options);
   pipeline.Start();
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(10);
@@ -59,10 +59,10 @@ SewerRun RunSewer(uint64_t seed) {
   }
   EXPECT_TRUE(pipeline.Finished());
   pipeline.Stop();
-  const tools::PipelineSnapshot s = pipeline.Snapshot();
+  const pipeline::PipelineSnapshot s = pipeline.Snapshot();
   std::vector<std::vector<CameraPose>> poses;
   for (int i = 0; i < 2; ++i) poses.push_back(pipeline.RecordedPoses(i));
-  auto evaluation = tools::EvaluateRun(*rig, poses, s.estimate.rig);
+  auto evaluation = pipeline::EvaluateRun(*rig, poses, s.estimate.rig);
   EXPECT_TRUE(evaluation) << evaluation.error();
   if (!evaluation || evaluation->slaves.empty() || s.estimate.online.empty()) return out;
   const SlaveCalibration& slave = s.estimate.rig.slaves[0];

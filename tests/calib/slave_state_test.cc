@@ -40,5 +40,15 @@ TEST(SlaveState, ExitCodeThreeUnlessEverySlaveIsUsable) {
   EXPECT_EQ(ExitCodeFor({}), 3);
 }
 
+TEST(SlaveState, FactsAsWords) {
+  EXPECT_EQ(StateText(SlaveState::kConverged, kFlagPlanar), "converged planar");
+  EXPECT_EQ(StateText(SlaveState::kUsable, 0), "usable");
+  EXPECT_EQ(StateText(SlaveState::kDecalibrated, kFlagTranslationalOnly | kFlagRefined),
+            "decalibrated translational-only refined");
+  EXPECT_EQ(FactNames(kFlagRefined | kFlagPlanar),
+            (std::vector<std::string_view>{"planar", "refined"}));
+  EXPECT_TRUE(FactNames(0).empty());
+}
+
 }  // namespace
 }  // namespace rigcal

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/sync_buffer.h"
 
 namespace rigcal {

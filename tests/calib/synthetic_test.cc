@@ -7,7 +7,7 @@
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic_car.h"
 
 namespace rigcal {

@@ -116,12 +116,12 @@ TEST_F(EurocImportReplayTest, StaticFramesImageLogReportsInsufficientMotion) {
 
   // Every frame in the log is the recording's PNG, pixel for pixel.
   std::map<std::string, int> frames;
-  tools::MessageValidator validator({"cam0", "cam1"});
+  lcm::MessageValidator validator({"cam0", "cam1"});
   for (const support::LoggedEvent& e : support::ReadLcmLog(Path("static.lcmlog"))) {
     auto msg = validator.Decode<image_t>(e.channel, e.data.data(), e.data.size());
     ASSERT_TRUE(msg.ok()) << msg.error();
     ++frames[msg->camera];
-    auto image = tools::FrameFromImage(*msg, 0);
+    auto image = pipeline::FrameFromImage(*msg, 0);
     ASSERT_TRUE(image.ok()) << image.error();
     const fs::path png =
         data / "mav0" / msg->camera / "data" / (std::to_string(msg->t_ns) + ".png");

@@ -83,7 +83,7 @@ TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
   EXPECT_EQ(events[0].timestamp, sim.recording.t_ns[0] / 1000);
 
   // The rig config beside the log names the cameras, master first.
-  auto config = tools::LoadRigConfig(Path("poses.lcmlog.yaml"));
+  auto config = io::LoadRigConfig(Path("poses.lcmlog.yaml"));
   ASSERT_TRUE(config.ok()) << config.error();
   EXPECT_EQ(config->CameraNames(), (std::vector<std::string>{"front", "side"}));
 
@@ -181,7 +181,7 @@ TEST_F(ImportCommandTest, EurocImagesInTimeOrder) {
 
   const std::vector<support::LoggedEvent> events = support::ReadLcmLog(Path("images.lcmlog"));
   ASSERT_EQ(events.size(), 9u);
-  tools::MessageValidator validator({"cam0", "cam1"});
+  lcm::MessageValidator validator({"cam0", "cam1"});
   int64_t last_t_ns = 0;
   for (const support::LoggedEvent& e : events) {
     auto msg = validator.Decode<image_t>(e.channel, e.data.data(), e.data.size());
@@ -190,7 +190,7 @@ TEST_F(ImportCommandTest, EurocImagesInTimeOrder) {
     EXPECT_GT(msg->t_ns, last_t_ns);  // time order across the cameras
     last_t_ns = msg->t_ns;
     EXPECT_EQ(msg->encoding, image_t::ENCODING_PNG);  // the default for imports
-    auto image = tools::FrameFromImage(*msg, 0);
+    auto image = pipeline::FrameFromImage(*msg, 0);
     ASSERT_TRUE(image.ok()) << image.error();
     const int camera = msg->camera == "cam0" ? 0 : 1;
     const int k = static_cast<int>(msg->trigger_seq);  // the CSV line index
@@ -199,7 +199,7 @@ TEST_F(ImportCommandTest, EurocImagesInTimeOrder) {
   }
 
   // The rig config carries the intrinsics of sensor.yaml.
-  auto config = tools::LoadRigConfig(Path("rig.yaml"));
+  auto config = io::LoadRigConfig(Path("rig.yaml"));
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_EQ(config->CameraNames(), (std::vector<std::string>{"cam0", "cam1"}));
   ASSERT_TRUE(config->cameras[1].spec.has_value());

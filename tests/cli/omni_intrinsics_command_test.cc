@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "command_test.h"
-#include "rigcal/io/config_sections.h"
+#include "rigcal/io/camera_files.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
 #include "support/omni_views.h"
@@ -22,9 +22,9 @@ class OmniIntrinsicsCommandTest : public cli_test::CommandTest {
  protected:
   // One <frame>.csv per view (frame = t_ns in seconds):
   // ts,tag_rows,tag_cols,tag_size,tag_spacing,kp_x,kp_y,p_x,p_y,p_z, tag_id,corner_idx.
-  void WriteDetections(const target::CameraViews& views, const std::string& folder) {
+  void WriteDetections(const pattern::CameraViews& views, const std::string& folder) {
     std::filesystem::create_directories(folder);
-    for (const target::TargetView& view : views.views) {
+    for (const pattern::TargetView& view : views.views) {
       std::ofstream out(folder + "/" + std::to_string(view.t_ns / 1000000000) + ".csv");
       out.precision(10);
       out << "# ts,tag_rows,tag_cols,tag_size,tag_spacing,kp_x,kp_y,p_x,p_y,p_z,tag_id,corner\n";
@@ -39,7 +39,7 @@ class OmniIntrinsicsCommandTest : public cli_test::CommandTest {
 
 TEST_F(OmniIntrinsicsCommandTest, PolynomialModelIntoRigConfigOmniIntoCamchain) {
   const camera::CameraSpec truth = test_support::WideOmniCamera("fish");
-  const target::CameraViews views = test_support::SimulatedOmniViews(truth, 24, 21, 0.1);
+  const pattern::CameraViews views = test_support::SimulatedOmniViews(truth, 24, 21, 0.1);
   // Two cameras of the same views (a rig config has at least two; their poses coincide).
   WriteDetections(views, Path("fish"));
   WriteDetections(views, Path("twin"));
@@ -65,7 +65,7 @@ TEST_F(OmniIntrinsicsCommandTest, PolynomialModelIntoRigConfigOmniIntoCamchain) 
   EXPECT_GE(camera["poly"].size(), 4u);
 
   // The rig config holds the polynomial model, and it is a camera rigcal can build.
-  auto config = tools::LoadRigConfig(Path("rig.yaml"));
+  auto config = io::LoadRigConfig(Path("rig.yaml"));
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_EQ(config->cameras.size(), 2u);
   ASSERT_TRUE(config->cameras[0].spec.has_value());
@@ -81,7 +81,7 @@ TEST_F(OmniIntrinsicsCommandTest, PolynomialModelIntoRigConfigOmniIntoCamchain) 
   const std::string chain = cli_test::Slurp(Path("camchain.yaml"));
   EXPECT_NE(chain.find("camera_model: omni"), std::string::npos) << chain;
   EXPECT_NE(chain.find("distortion_model: radtan"), std::string::npos) << chain;
-  auto links = tools::ReadCamchain(Path("camchain.yaml"));
+  auto links = io::ReadCamchain(Path("camchain.yaml"));
   ASSERT_TRUE(links.ok()) << links.error();
   ASSERT_EQ(links->size(), 2u);
   EXPECT_LT((*links)[1].cn_from_cnm1.topRightCorner(3, 1).norm(), 1e-3);  // the same poses

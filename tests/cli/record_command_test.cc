@@ -32,7 +32,7 @@ struct LogSummary {
 
 LogSummary ReadLog(const std::string& path) {
   LogSummary summary;
-  tools::MessageValidator validator;
+  lcm::MessageValidator validator;
   for (const support::LoggedEvent& e : support::ReadLcmLog(path)) {
     ++summary.events[e.channel];
     if (e.channel.rfind("RIGCAL_IMAGE_", 0) != 0) continue;
@@ -68,7 +68,7 @@ TEST_F(RecordCommandTest, RecordsEveryFrameWithProgress) {
   EXPECT_EQ(summary.bad_images, 0);
   for (const image_t& msg : summary.images) {
     EXPECT_EQ(msg.encoding, image_t::ENCODING_PNG);
-    auto image = tools::FrameFromImage(msg, 0);
+    auto image = pipeline::FrameFromImage(msg, 0);
     ASSERT_TRUE(image.ok()) << image.error();
     EXPECT_EQ(image->image.cols, 160);
     EXPECT_GT(cv::norm(image->image, cv::NORM_L1), 0.0);  // rendered, not blank
@@ -128,7 +128,7 @@ TEST_F(RecordCommandTest, SplitsBySize) {
   int frames = 0;
   int parts = 0;
   for (;; ++parts) {
-    const std::string part = tools::LogPartPath(log, parts);
+    const std::string part = lcm::LogPartPath(log, parts);
     if (!fs::exists(part)) break;
     EXPECT_LE(fs::file_size(part), 100'000u) << part;
     const LogSummary summary = ReadLog(part);

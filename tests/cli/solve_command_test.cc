@@ -13,13 +13,13 @@
 #include <sstream>
 
 #include "cli/command_test.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/calib/synthetic_car.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools {
+namespace rigcal {
 namespace {
 
 namespace fs = std::filesystem;
@@ -40,7 +40,7 @@ class SolveCommandTest : public cli_test::CommandTest {
     for (const CameraTrack& slave : rec.slaves) WriteTrack(rec, slave, slave_time_offset_ns);
     std::map<std::string, Similarity> truth;
     for (size_t i = 0; i < drive.truth.size(); ++i) truth[names[i + 1]] = drive.truth[i];
-    ASSERT_TRUE(WriteRigYaml(Path("truth.yaml"), truth).ok());
+    ASSERT_TRUE(io::WriteRigYaml(Path("truth.yaml"), truth).ok());
     truth_ = truth;
   }
 
@@ -50,7 +50,7 @@ class SolveCommandTest : public cli_test::CommandTest {
     for (const int64_t stamp : rec.t_ns) t.t_ns.push_back(stamp + offset_ns);
     t.poses = track.poses;
     t.segment = track.segment;
-    ASSERT_TRUE(WriteTrajectoryTum(Path(track.name + ".txt"), t).ok());
+    ASSERT_TRUE(io::WriteTrajectoryTum(Path(track.name + ".txt"), t).ok());
   }
 
   std::string DemoArgs() const {
@@ -90,7 +90,7 @@ TEST_F(SolveCommandTest, SolvesDemoRigWithJsonOutAndCamchain) {
   ASSERT_TRUE(j.contains("slaves") && j["slaves"].is_array()) << j.dump(2);
   ASSERT_EQ(j["slaves"].size(), 2u) << j.dump(2);
 
-  const auto out_yaml = ReadRigYaml(Path("result.yaml"));
+  const auto out_yaml = io::ReadRigYaml(Path("result.yaml"));
   ASSERT_TRUE(out_yaml.ok()) << out_yaml.error();
   EXPECT_EQ(out_yaml->size(), 2u);
 
@@ -133,7 +133,7 @@ TEST_F(SolveCommandTest, SolvesDemoRigWithJsonOutAndCamchain) {
 
   // --camchain: parseable, cameras in --slave order, rotations consistent with the truth:
   // T_c1_c0 rotates by R1^T and T_c2_c1 by R2^T R1 (two estimates, so twice the 0.5 deg).
-  const auto chain = ReadCamchain(Path("camchain.yaml"));
+  const auto chain = io::ReadCamchain(Path("camchain.yaml"));
   ASSERT_TRUE(chain.ok()) << chain.error();
   ASSERT_EQ(chain->size(), 3u);
   EXPECT_EQ((*chain)[0].name, "cam0");
@@ -170,7 +170,7 @@ std::map<std::string, Similarity> InMetres(std::map<std::string, Similarity> tru
 
 TEST_F(SolveCommandTest, MetricTruthIsComparedAfterAligningTheMasterUnit) {
   WriteDemoDrive();
-  ASSERT_TRUE(WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
+  ASSERT_TRUE(io::WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
   const RunResult r = Run(DemoArgs() + " --truth " + Quote(Path("metric.yaml")) + " --json");
   ASSERT_EQ(r.exit_code, 0) << Explain(r);
   const nlohmann::json j = ParseJson(r);
@@ -232,7 +232,7 @@ TEST_F(SolveCommandTest, TruthInMasterUnitsIsComparedAsGiven) {
   }
 
   // Declared in master units, a metric truth is not aligned: its C are 0.37 times too short.
-  ASSERT_TRUE(WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
+  ASSERT_TRUE(io::WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
   const RunResult forced =
       Run(DemoArgs() + " --truth " + Quote(Path("metric.yaml")) + " --truth-unit master --json");
   ASSERT_EQ(forced.exit_code, 0) << Explain(forced);
@@ -250,7 +250,7 @@ TEST_F(SolveCommandTest, TruthInMasterUnitsIsComparedAsGiven) {
 
 TEST_F(SolveCommandTest, OnlineConvergenceErrorsUseTheAlignedTruth) {
   WriteDemoDrive();
-  ASSERT_TRUE(WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
+  ASSERT_TRUE(io::WriteRigYaml(Path("metric.yaml"), InMetres(truth_)).ok());
   const RunResult r =
       Run(DemoArgs() + " --online --truth " + Quote(Path("metric.yaml")) + " --truth-unit metric");
   ASSERT_EQ(r.exit_code, 0) << Explain(r);
@@ -313,7 +313,7 @@ TEST_F(SolveCommandTest, MissingFile) {
 
 TEST_F(SolveCommandTest, TruthWithoutSlaveNamesTheSlave) {
   WriteDemoDrive();
-  ASSERT_TRUE(WriteRigYaml(Path("partial.yaml"), {{"cam1", truth_.at("cam1")}}).ok());
+  ASSERT_TRUE(io::WriteRigYaml(Path("partial.yaml"), {{"cam1", truth_.at("cam1")}}).ok());
   const RunResult r = Run(DemoArgs() + " --truth " + Quote(Path("partial.yaml")));
   EXPECT_EQ(r.exit_code, 1) << Explain(r);
   EXPECT_THAT(r.err, HasSubstr(Path("partial.yaml") + ": no entry for slave 'cam2'"));
@@ -354,8 +354,8 @@ TEST_F(SolveCommandTest, UnusableSlaveExitsWith3AndStillWritesTheResult) {
     slave.poses.push_back(SlavePoseFromMaster(p, rig));
     slave.segment.push_back(0);
   }
-  ASSERT_TRUE(WriteTrajectoryTum(Path("m.txt"), master).ok());
-  ASSERT_TRUE(WriteTrajectoryTum(Path("s.txt"), slave).ok());
+  ASSERT_TRUE(io::WriteTrajectoryTum(Path("m.txt"), master).ok());
+  ASSERT_TRUE(io::WriteTrajectoryTum(Path("s.txt"), slave).ok());
   const RunResult r =
       Run("solve --master " + Quote(Path("m.txt")) + " --slave " + Quote(Path("s.txt")) +
           " --motion general --json --out " + Quote(Path("result.yaml")));
@@ -424,8 +424,8 @@ TEST_F(SolveCommandTest, PlanarCarDriveReportsTheVerticalAsUnobservable) {
     nominal[rec.slaves[i].name] = drive.truth[i];
     nominal[rec.slaves[i].name].C.y() += 0.05;  // CAD heights 5 cm off
   }
-  ASSERT_TRUE(WriteRigYaml(Path("truth.yaml"), truth).ok());
-  ASSERT_TRUE(WriteRigYaml(Path("nominal.yaml"), nominal).ok());
+  ASSERT_TRUE(io::WriteRigYaml(Path("truth.yaml"), truth).ok());
+  ASSERT_TRUE(io::WriteRigYaml(Path("nominal.yaml"), nominal).ok());
   args += " --truth " + Quote(Path("truth.yaml")) + " --json";
 
   const RunResult plain = Run(args);
@@ -552,4 +552,4 @@ TEST_F(SolveCommandTest, InvalidOptionValuesAreRejected) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal

@@ -13,7 +13,7 @@
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools {
+namespace rigcal {
 namespace {
 
 using cli_test::Quote;
@@ -31,15 +31,15 @@ class SolveTimeOffsetTest : public cli_test::CommandTest {
     const std::vector<Similarity> demo = DemoRig();
     rig_ = free_running::MakeFreeRunningRig({}, clocks, {demo[0], demo[1]}, 40.0, options);
     std::string args = "solve --master " + Quote(Path("master.txt"));
-    EXPECT_TRUE(WriteTrajectoryTum(Path("master.txt"), rig_.master).ok());
+    EXPECT_TRUE(io::WriteTrajectoryTum(Path("master.txt"), rig_.master).ok());
     std::map<std::string, Similarity> truth;
     for (size_t i = 0; i < rig_.slaves.size(); ++i) {
       const std::string path = Path(rig_.slaves[i].name + ".txt");
-      EXPECT_TRUE(WriteTrajectoryTum(path, rig_.slaves[i]).ok());
+      EXPECT_TRUE(io::WriteTrajectoryTum(path, rig_.slaves[i]).ok());
       args += " --slave " + Quote(path);
       truth[rig_.slaves[i].name] = rig_.truth[i];
     }
-    EXPECT_TRUE(WriteRigYaml(Path("truth.yaml"), truth).ok());
+    EXPECT_TRUE(io::WriteRigYaml(Path("truth.yaml"), truth).ok());
     return args + " --truth " + Quote(Path("truth.yaml")) + " --truth-unit master";
   }
 
@@ -158,18 +158,18 @@ TEST_F(SolveTimeOffsetTest, BadInputIsAClearError) {
   // A slave with too few poses.
   TimedTrajectory few = rig_.slaves[1];
   few.t_ns.resize(4), few.poses.resize(4), few.segment.resize(4);
-  ASSERT_TRUE(WriteTrajectoryTum(Path("cam2.txt"), few).ok());
+  ASSERT_TRUE(io::WriteTrajectoryTum(Path("cam2.txt"), few).ok());
   r = Run(args + " --time-offset auto");
   EXPECT_EQ(r.exit_code, 1) << Explain(r);
   EXPECT_THAT(r.err, HasSubstr("rigcal solve: time offset of 'cam2': camera 'cam2' has 4 poses"));
   // A search window without enough overlap (the slave's clock 100 s ahead).
   TimedTrajectory late = rig_.slaves[1];
   for (int64_t& t : late.t_ns) t += 100'000'000'000;
-  ASSERT_TRUE(WriteTrajectoryTum(Path("cam2.txt"), late).ok());
+  ASSERT_TRUE(io::WriteTrajectoryTum(Path("cam2.txt"), late).ok());
   r = Run(args + " --time-offset auto --time-offset-window 0.2");
   EXPECT_EQ(r.exit_code, 1) << Explain(r);
   EXPECT_THAT(r.err, HasSubstr("time offset of 'cam2': master and slave overlap by less than"));
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal

@@ -18,7 +18,7 @@
 
 #include "calib/free_running_rig.h"
 #include "cli/command_test.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/slave_state.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/estimator_state_file.h"
@@ -63,7 +63,7 @@ class StateFileFault : public cli_test::CommandTest {
     d.change_frame = change_frame;
     if (change_frame >= 0) d.changed_rigs = {moved};
     const SyntheticDrive drive = GenerateDrive({"front", "left"}, {kLeft}, d);
-    ASSERT_TRUE(tools::WritePoseLog(Path(name), drive.recording).ok());
+    ASSERT_TRUE(lcm::WritePoseLog(Path(name), drive.recording).ok());
   }
 
   RunResult Replay(const std::string& log, const std::string& extra) const {
@@ -71,7 +71,7 @@ class StateFileFault : public cli_test::CommandTest {
   }
 
   static SlaveCalibration Left(const std::string& result_path) {
-    const Expected<RigCalibration> rig = tools::ReadResultFile(result_path);
+    const Expected<RigCalibration> rig = io::ReadResultFile(result_path);
     EXPECT_TRUE(rig.ok()) << (rig.ok() ? "" : rig.error());
     if (!rig.ok() || rig->slaves.empty()) return {};
     return rig->slaves[0];
@@ -99,7 +99,7 @@ TEST_F(StateFileFault, KillNineWhileSavingLeavesACompleteState) {
   const auto run_us = std::chrono::duration_cast<std::chrono::microseconds>(
                           std::chrono::steady_clock::now() - start)
                           .count();
-  ASSERT_TRUE(tools::ParseEstimatorState(Slurp(state)).ok());
+  ASSERT_TRUE(io::ParseEstimatorState(Slurp(state)).ok());
 
   constexpr int kTrials = 100;
   constexpr unsigned kSeed = 16;
@@ -120,7 +120,7 @@ TEST_F(StateFileFault, KillNineWhileSavingLeavesACompleteState) {
       WaitExit(pid, std::chrono::seconds(60));
     }
     const std::string after = Slurp(state);
-    const Expected<RigEstimatorState> parsed = tools::ParseEstimatorState(after);
+    const Expected<RigEstimatorState> parsed = io::ParseEstimatorState(after);
     ASSERT_TRUE(parsed.ok()) << "trial " << trial << " (seed " << kSeed << "): " << parsed.error();
     EXPECT_EQ(parsed->cameras, (std::vector<std::string>{"front", "left"}));
     versions.insert(after);
@@ -188,17 +188,17 @@ TEST_F(StateFileFault, ClockOffsetsOfFreeRunningCamerasSurviveAResume) {
   std::ofstream(Path("rig.yaml"), std::ios::app) << "estimator: {time_offset: auto}\n";
   DriveOptions d;
   d.seed = 5;
-  const tools::free_running::FreeRunningRig rig =
-      tools::free_running::MakeFreeRunningRig({}, {{20.0, 0.019, 0.0}}, {kLeft}, 60.0, d);
+  const free_running::FreeRunningRig rig =
+      free_running::MakeFreeRunningRig({}, {{20.0, 0.019, 0.0}}, {kLeft}, 60.0, d);
   const std::vector<CameraPose> poses =
-      tools::free_running::InCaptureOrder(rig, [](int, int64_t) -> int64_t { return 40'000'000; });
-  ASSERT_TRUE(tools::WritePoseEvents(Path("free.lcmlog"), {"front", "left"}, poses).ok());
+      free_running::InCaptureOrder(rig, [](int, int64_t) -> int64_t { return 40'000'000; });
+  ASSERT_TRUE(lcm::WritePoseEvents(Path("free.lcmlog"), {"front", "left"}, poses).ok());
   const std::string state = "--state " + Path("s.state");
   const RunResult first = Replay("free.lcmlog", "--to 30 --out " + Path("a.yaml") + " " + state);
   ASSERT_EQ(first.exit_code, 0) << first.Explain();
   EXPECT_NE(first.err.find("time offset of 'left': initialised at"), std::string::npos)
       << first.Explain();
-  const Expected<RigEstimatorState> saved = tools::ParseEstimatorState(Slurp(Path("s.state")));
+  const Expected<RigEstimatorState> saved = io::ParseEstimatorState(Slurp(Path("s.state")));
   ASSERT_TRUE(saved.ok()) << saved.error();
   ASSERT_EQ(saved->clock_offsets.size(), 1u);
   const ClockOffsetState& a = saved->clock_offsets[0];
@@ -213,7 +213,7 @@ TEST_F(StateFileFault, ClockOffsetsOfFreeRunningCamerasSurviveAResume) {
   EXPECT_EQ(resumed.err.find("initialised at"), std::string::npos)
       << "the offset was searched afresh:\n"
       << resumed.Explain();
-  const Expected<RigEstimatorState> after = tools::ParseEstimatorState(Slurp(Path("s.state")));
+  const Expected<RigEstimatorState> after = io::ParseEstimatorState(Slurp(Path("s.state")));
   ASSERT_TRUE(after.ok()) << after.error();
   ASSERT_EQ(after->clock_offsets.size(), 1u);
   EXPECT_GT(after->clock_offsets[0].measurements, a.measurements);

@@ -15,7 +15,7 @@
 #include "rigcal/lcm/channels.h"
 #include "support/skip.h"
 
-namespace rigcal::tools {
+namespace rigcal {
 namespace {
 
 using cli_test::Quote;
@@ -27,12 +27,12 @@ class StatusCommandTest : public cli_test::CommandTest {
   // A log of `statuses` RIGCAL_STATUS in `state`, each followed by a RIGCAL_EXTRINSICS.
   std::string WriteLog(const std::string& name, int8_t state, int statuses) {
     const std::string path = (dir_ / name).string();
-    lcm::LogFile log(path, "w");
+    ::lcm::LogFile log(path, "w");
     int64_t n = 0;
     auto write = [&](const char* channel, const auto& msg) {
-      auto bytes = EncodeMessage(channel, CameraNames{}, msg);
+      auto bytes = lcm::EncodeMessage(channel, lcm::CameraNames{}, msg);
       ASSERT_TRUE(bytes.ok()) << bytes.error();
-      lcm::LogEvent event;
+      ::lcm::LogEvent event;
       event.eventnum = n;
       event.timestamp = 1000 * ++n;
       event.channel = channel;
@@ -44,8 +44,8 @@ class StatusCommandTest : public cli_test::CommandTest {
                                    ? slave_extrinsics_t::STATE_CONVERGED
                                    : slave_extrinsics_t::STATE_USABLE;
     for (int i = 0; i < statuses; ++i) {
-      write(kStatusChannel, MakeStatus(state, 1000 + i));
-      write(kExtrinsicsChannel, MakeExtrinsics(slave_state, 0.01));
+      write(lcm::kStatusChannel, MakeStatus(state, 1000 + i));
+      write(lcm::kExtrinsicsChannel, MakeExtrinsics(slave_state, 0.01));
     }
     return path;
   }
@@ -75,9 +75,9 @@ TEST_F(StatusCommandTest, NoDataIsExitCode3) {
   // A log with an unrelated channel only.
   const std::string path = (dir_ / "other.lcmlog").string();
   {
-    lcm::LogFile log(path, "w");
+    ::lcm::LogFile log(path, "w");
     uint8_t byte = 0;
-    lcm::LogEvent event{0, 1, "SOMETHING_ELSE", 1, &byte};
+    ::lcm::LogEvent event{0, 1, "SOMETHING_ELSE", 1, &byte};
     ASSERT_EQ(log.writeEvent(&event), 0);
   }
   const RunResult r = Status(path, "--once --json --timeout 1");
@@ -131,4 +131,4 @@ TEST_F(StatusCommandTest, UsageErrors) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal

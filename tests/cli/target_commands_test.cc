@@ -12,7 +12,7 @@
 #pragma GCC diagnostic pop
 
 #include "command_test.h"
-#include "rigcal/io/config_sections.h"
+#include "rigcal/io/camera_files.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/lcm/channels.h"
@@ -61,13 +61,13 @@ TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
   EXPECT_LT(sigma["fx"].get<double>(), 4.5);
 
   // The camchain: complete (Kalibr's keys) and read back.
-  auto specs = tools::ReadKalibrIntrinsics(Path("camchain.yaml"));
+  auto specs = io::ReadKalibrIntrinsics(Path("camchain.yaml"));
   ASSERT_TRUE(specs.ok()) << specs.error();
   ASSERT_EQ(specs->size(), 2u);
   EXPECT_EQ((*specs)[1].name, "right");
   EXPECT_EQ((*specs)[0].width, 640);
   EXPECT_NEAR((*specs)[0].intrinsics[0], json["cameras"][0]["intrinsics"][0].get<double>(), 1e-9);
-  auto chain = tools::ReadCamchain(Path("camchain.yaml"));
+  auto chain = io::ReadCamchain(Path("camchain.yaml"));
   ASSERT_TRUE(chain.ok()) << chain.error();
   // The right camera ~3.34 squares from the left one.
   const Eigen::Vector3d t = (*chain)[1].cn_from_cnm1.topRightCorner(3, 1);
@@ -78,7 +78,7 @@ TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
     EXPECT_NE(text.find(key), std::string::npos) << key << " missing:\n" << text;
   }
   // The rig config.
-  auto config = tools::LoadRigConfig(Path("rig.yaml"));
+  auto config = io::LoadRigConfig(Path("rig.yaml"));
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_EQ(config->cameras.size(), 2u);
   ASSERT_TRUE(config->cameras[0].spec.has_value());
@@ -152,25 +152,25 @@ TEST_F(TargetCommandsTest, IntrinsicsWriteConfigCamchainPosesAndSolveUsesThem) {
 TEST_F(TargetCommandsTest, IntrinsicsFromAnLcmImageLog) {
   const std::string log_path = Path("stereo.lcmlog");
   {
-    auto writer = tools::LogWriter::Open(log_path);
+    auto writer = lcm::LogWriter::Open(log_path);
     ASSERT_TRUE(writer.ok()) << writer.error();
-    const tools::CameraNames names = {"left", "right"};
-    tools::ImageEncodeOptions raw;
-    raw.encoding = tools::ImageEncoding::kRaw;
+    const lcm::CameraNames names = {"left", "right"};
+    pipeline::ImageEncodeOptions raw;
+    raw.encoding = pipeline::ImageEncoding::kRaw;
     for (int k = 1; k <= 14; ++k) {
       for (int c = 0; c < 2; ++c) {
         char file[64];
         std::snprintf(file, sizeof(file), "/%s%02d.jpg", c == 0 ? "left" : "right", k);
         if (!std::filesystem::exists(DataDir() + file)) continue;  // there is no pair 10
-        drivers::Frame frame;
+        capture::Frame frame;
         frame.camera = c;
         frame.t_ns = k * 1000000000LL;
         frame.image = cv::imread(DataDir() + file, cv::IMREAD_GRAYSCALE);
         ASSERT_FALSE(frame.image.empty()) << file;
-        auto data = tools::EncodeImageEvent(frame, names, c, raw);
+        auto data = pipeline::EncodeImageEvent(frame, names, c, raw);
         ASSERT_TRUE(data.ok()) << data.error();
         ASSERT_TRUE((*writer)
-                        ->Write(tools::ImageChannel(names[static_cast<size_t>(c)]),
+                        ->Write(lcm::ImageChannel(names[static_cast<size_t>(c)]),
                                 frame.t_ns / 1000, data->data(), data->size())
                         .ok());
       }

@@ -10,12 +10,12 @@
 #include <future>
 #include <thread>
 
-#include "../../drivers/src/libcamera_manager.h"
+#include "../../drivers/capture/src/libcamera_manager.h"
 #include "guest_skip.h"
-#include "rigcal/drivers/libcamera_device.h"
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/libcamera_device.h"
+#include "rigcal/capture/v4l2_timestamp.h"
 
-namespace rigcal::drivers {
+namespace rigcal::capture {
 namespace {
 
 LibcameraOptions VimcOptions(int width, int height) {
@@ -136,4 +136,4 @@ TEST(LibcameraVimc, UnknownCameraNamesWhatThereIs) {
 }
 
 }  // namespace
-}  // namespace rigcal::drivers
+}  // namespace rigcal::capture

@@ -29,11 +29,11 @@
 
 #include "guest_skip.h"
 #include "loopback_writer.h"
-#include "rigcal/drivers/v4l2_device.h"
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/v4l2_device.h"
+#include "rigcal/capture/v4l2_timestamp.h"
 #include "sample_quantile.h"
 
-namespace rigcal::drivers {
+namespace rigcal::capture {
 namespace {
 
 constexpr int kWidth = 320;
@@ -172,4 +172,4 @@ TEST(LoopbackLatency, StampedAtTheWriteLatencyAndCpuPerCamera) {
 }
 
 }  // namespace
-}  // namespace rigcal::drivers
+}  // namespace rigcal::capture

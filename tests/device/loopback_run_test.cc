@@ -46,7 +46,7 @@
 
 #include "guest_skip.h"
 #include "loopback_writer.h"
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/v4l2_timestamp.h"
 #include "rigcal/io/result_file.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
@@ -54,7 +54,7 @@
 
 extern char** environ;
 
-namespace rigcal::tools {
+namespace rigcal {
 namespace {
 
 constexpr double kDriveS = 12.0;  // the trajectory below: 7 waypoints, 2 s apart
@@ -245,13 +245,13 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   const std::string simulated = SimulatedRigYaml(width, height, frames);
   std::ofstream(dir + "/simulated.yaml") << simulated;
   std::ofstream(dir + "/v4l2.yaml") << V4l2RigYaml(simulated);
-  auto config = LoadRigConfig(dir + "/simulated.yaml");
+  auto config = io::LoadRigConfig(dir + "/simulated.yaml");
   ASSERT_TRUE(config.ok()) << config.error();
-  auto rig = drivers::MakeSimulatedRig(*config->simulated_source);
+  auto rig = sim::MakeSimulatedRig(*config->simulated_source);
   ASSERT_TRUE(rig.ok()) << rig.error();
 
-  drivers::LoopbackWriter writer0("/dev/video20", drivers::PixelFormat::kGrey, width, height);
-  drivers::LoopbackWriter writer1("/dev/video21", drivers::PixelFormat::kYuyv, width, height);
+  capture::LoopbackWriter writer0("/dev/video20", capture::PixelFormat::kGrey, width, height);
+  capture::LoopbackWriter writer1("/dev/video21", capture::PixelFormat::kYuyv, width, height);
   ASSERT_EQ(writer0.error(), "");
   ASSERT_EQ(writer1.error(), "");
   // Frame k+1 is rendered while rigcal processes frame k (within the writer's period).
@@ -286,7 +286,7 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   int64_t drops_seen = 0;
   for (int k = 0; k < frames && run.Running(); ++k) {
     const auto written = std::chrono::steady_clock::now();
-    write_ns[k] = drivers::MonotonicNowNs();
+    write_ns[k] = capture::MonotonicNowNs();
     ASSERT_TRUE(writer0.Write(next.first)) << writer0.error();
     ASSERT_TRUE(writer1.Write(next.second)) << writer1.error();
     // The VO median hides its slow frames (keyframes, bundle adjustment); a backlog drop means
@@ -314,7 +314,7 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   // The VO poses back on the simulation's clock: the frame written last before the stamp.
   std::vector<std::vector<CameraPose>> poses(2);
   for (int i = 0; i < 2; ++i) {
-    auto trajectory = ReadTrajectory(dir + "/poses/cam" + std::to_string(i) + ".txt");
+    auto trajectory = io::ReadTrajectory(dir + "/poses/cam" + std::to_string(i) + ".txt");
     ASSERT_TRUE(trajectory.ok()) << trajectory.error();
     for (size_t j = 0; j < trajectory->size(); ++j) {
       const auto after = std::upper_bound(write_ns.begin(), write_ns.end(), trajectory->t_ns[j]);
@@ -330,15 +330,15 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
               << " frames\n";
     EXPECT_GT(poses[i].size(), 0u) << "cam" << i << ": no VO pose";
   }
-  auto result = ReadResultFile(dir + "/result.yaml");
+  auto result = io::ReadResultFile(dir + "/result.yaml");
   ASSERT_TRUE(result.ok()) << result.error();
   ASSERT_EQ(result->slaves.size(), 1u);
-  auto evaluation = EvaluateRun(*rig, poses, *result);
+  auto evaluation = pipeline::EvaluateRun(*rig, poses, *result);
   ASSERT_TRUE(evaluation.ok()) << evaluation.error();
-  std::cout << FormatEvaluation(*evaluation);
+  std::cout << pipeline::FormatEvaluation(*evaluation);
   const SlaveCalibration& slave = result->slaves[0];
   ASSERT_TRUE(slave.usable()) << "the calibration did not converge: " << slave.message;
-  const SlaveEvaluation& e = evaluation->slaves[0];
+  const pipeline::SlaveEvaluation& e = evaluation->slaves[0];
   const Eigen::Vector3d c_err = slave.estimate.C - e.truth_master_units.C;
   const double c_mahalanobis = c_err.cwiseQuotient(slave.pos_std).norm();
   ASSERT_FALSE(slave.scales.empty());
@@ -365,4 +365,4 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal

@@ -8,7 +8,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace rigcal::drivers {
+namespace rigcal::capture {
 
 LoopbackWriter::LoopbackWriter(const std::string& node, PixelFormat format, int width, int height)
     : format_(format), width_(width), height_(height), node_(node) {
@@ -65,4 +65,4 @@ bool LoopbackWriter::Write(const std::vector<uint8_t>& bytes) {
   return false;
 }
 
-}  // namespace rigcal::drivers
+}  // namespace rigcal::capture

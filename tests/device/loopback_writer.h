@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/drivers/pixel_format.h"
+#include "rigcal/capture/pixel_format.h"
 
-namespace rigcal::drivers {
+namespace rigcal::capture {
 
 class LoopbackWriter {
  public:
@@ -37,4 +37,4 @@ class LoopbackWriter {
   std::string error_;
 };
 
-}  // namespace rigcal::drivers
+}  // namespace rigcal::capture

@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace rigcal::drivers {
+namespace rigcal::capture {
 
 inline double SampleQuantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -14,4 +14,4 @@ inline double SampleQuantile(std::vector<double> v, double q) {
   return v[k];
 }
 
-}  // namespace rigcal::drivers
+}  // namespace rigcal::capture

@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "guest_skip.h"
-#include "rigcal/drivers/v4l2_device.h"
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/v4l2_device.h"
+#include "rigcal/capture/v4l2_timestamp.h"
 #include "sample_quantile.h"
 
-namespace rigcal::drivers {
+namespace rigcal::capture {
 namespace {
 
 struct RunFigures {
@@ -92,4 +92,4 @@ TEST(VividLongRun, DropsLatencyAndCpuPerCamera) {
 }
 
 }  // namespace
-}  // namespace rigcal::drivers
+}  // namespace rigcal::capture

@@ -21,10 +21,10 @@
 #include <vector>
 
 #include "guest_skip.h"
-#include "rigcal/drivers/v4l2_device.h"
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/v4l2_device.h"
+#include "rigcal/capture/v4l2_timestamp.h"
 
-namespace rigcal::drivers {
+namespace rigcal::capture {
 namespace {
 
 constexpr int kWidth = 320;  // vivid's smallest webcam size
@@ -329,4 +329,4 @@ TEST(Vivid, ControlsFromOptions) {
 }
 
 }  // namespace
-}  // namespace rigcal::drivers
+}  // namespace rigcal::capture

@@ -3,7 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "rigcal/trigger_protocol/frame_codec.h"
@@ -45,7 +50,11 @@ std::vector<Message> AllTypes() {
   std::vector<Message> all;
   Message m;
   m.type = MessageType::kHello;
-  m.hello = {0x0102, 8, 0x0000'00FF'0000'1234ull};
+  m.hello = {0x0102, 8, 0x0000'00FF'0000'1234ull, kClockHseFallback | kClockTestImage, 25};
+  all.push_back(m);
+  m = Message{};
+  m.type = MessageType::kExposureReport;
+  m.exposure = {0xCAFE'0001, 7, 0x0000'0001'0000'0010ull, 0x00FF'00FF};
   all.push_back(m);
   all.push_back(Pulse(0xDEADBEEF, 0x0102'0304'0506'0708ull, 0xFF));
   m = Message{};
@@ -66,7 +75,7 @@ std::vector<Message> AllTypes() {
   all.push_back(m);
   m = Message{};
   m.type = MessageType::kSetLine;
-  m.set_line = {10, 7, 1, 500, -1234, 8000};
+  m.set_line = {10, 7, 1, 500, -1234, 8000, ExposureInput::kActiveLow};
   all.push_back(m);
   m = Message{};
   m.type = MessageType::kSetHeartbeat;
@@ -88,6 +97,18 @@ bool SameMessage(const Message& a, const Message& b) {
   const size_t na = EncodePayload(a, pa.data(), pa.size());
   const size_t nb = EncodePayload(b, pb.data(), pb.size());
   return na == nb && na > 0 && std::memcmp(pa.data(), pb.data(), na) == 0;
+}
+
+// Frames whose CRC is valid but whose payload is refused, as a buggy or newer peer would send.
+std::vector<uint8_t> RawFrame(std::vector<uint8_t> payload) {
+  const uint16_t crc = Crc16(payload.data(), payload.size());
+  payload.push_back(static_cast<uint8_t>(crc & 0xFF));
+  payload.push_back(static_cast<uint8_t>(crc >> 8));
+  std::vector<uint8_t> out(CobsEncodedSize(payload.size()) + 1);
+  const size_t n = CobsEncode(payload.data(), payload.size(), out.data(), out.size());
+  out.resize(n);
+  out.push_back(0);
+  return out;
 }
 
 TEST(Crc16, CheckValueOfTheStandard) {
@@ -158,9 +179,39 @@ TEST(Messages, FieldsAreLittleEndianAtFixedOffsets) {
   Message m;
   m.type = MessageType::kSetLine;
   m.set_line.phase_offset_us = -2;
-  ASSERT_EQ(EncodePayload(m, p, sizeof(p)), 18u);
+  m.set_line.exposure_input = ExposureInput::kActiveLow;
+  ASSERT_EQ(EncodePayload(m, p, sizeof(p)), 19u);
   EXPECT_EQ(p[10], 0xFE);  // after version, type, id, line, enabled, width: LE two's complement
   EXPECT_EQ(p[13], 0xFF);
+  EXPECT_EQ(p[18], 2);  // version 2: exposure_input after the exposure
+  // Version 2's Hello: version 1's fields, then clock_status and hse_mhz.
+  m = Message{};
+  m.type = MessageType::kHello;
+  m.hello = {0x0201, 8, 0x0807060504030201ull, kClockPllFailed | kClockTimerMeasured, 8};
+  ASSERT_EQ(EncodePayload(m, p, sizeof(p)), 15u);
+  const uint8_t hello[] = {2, 0x01, 0x01, 0x02, 8, 1, 2, 3, 4, 5, 6, 7, 8, 0x06, 8};
+  EXPECT_EQ(std::memcmp(p, hello, sizeof(hello)), 0);
+  m = Message{};
+  m.type = MessageType::kExposureReport;
+  m.exposure = {0x04030201, 3, 0x0D0C0B0A09080706ull, 0x11100F0E};
+  ASSERT_EQ(EncodePayload(m, p, sizeof(p)), 19u);
+  const uint8_t exposure[] = {2, 0x06, 1, 2, 3, 4, 3, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17};
+  EXPECT_EQ(std::memcmp(p, exposure, sizeof(exposure)), 0);
+  EXPECT_EQ(m.exposure.CentreUs(), 0x0D0C0B0A09080706ull + 0x11100F0E / 2);
+}
+
+TEST(Messages, AVersionOneFirmwareIsRecognisedAsSuch) {
+  // A version 1 firmware's Hello (11-byte body) as it boots: refused, with its version known,
+  // so the host can say which side to update.
+  MessageDecoder decoder;
+  std::vector<DecodeEvent> errors;
+  const std::vector<Message> got =
+      Decode(&decoder, RawFrame({1, 0x01, 1, 0, 8, 0x10, 0x27, 0, 0, 0, 0, 0, 0}), &errors);
+  EXPECT_TRUE(got.empty());
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0], DecodeEvent::kUnsupportedVersion);
+  EXPECT_EQ(decoder.raw_version(), 1);
+  EXPECT_EQ(decoder.raw_type(), 0x01);
 }
 
 TEST(Messages, RejectsOtherVersionsUnknownTypesAndWrongLengths) {
@@ -183,33 +234,22 @@ TEST(Messages, RejectsOtherVersionsUnknownTypesAndWrongLengths) {
   EXPECT_EQ(ParsePayload(p, n, &out), ParseStatus::kUnknownType);
 }
 
-// Frames whose CRC is valid but whose payload is refused, as a buggy or newer peer would send.
-std::vector<uint8_t> RawFrame(std::vector<uint8_t> payload) {
-  const uint16_t crc = Crc16(payload.data(), payload.size());
-  payload.push_back(static_cast<uint8_t>(crc & 0xFF));
-  payload.push_back(static_cast<uint8_t>(crc >> 8));
-  std::vector<uint8_t> out(CobsEncodedSize(payload.size()) + 1);
-  const size_t n = CobsEncode(payload.data(), payload.size(), out.data(), out.size());
-  out.resize(n);
-  out.push_back(0);
-  return out;
-}
-
 TEST(Decoder, ReportsRejectedFramesWithTheirTypeAndCommandId) {
   MessageDecoder decoder;
   std::vector<DecodeEvent> errors;
-  Decode(&decoder, RawFrame({2, 0x10, 0x34, 0x12, 0, 0, 0, 0}), &errors);
+  Decode(&decoder, RawFrame({3, 0x10, 0x34, 0x12, 0, 0, 0, 0}), &errors);
   ASSERT_EQ(errors.size(), 1u);
   EXPECT_EQ(errors[0], DecodeEvent::kUnsupportedVersion);
   EXPECT_EQ(decoder.command_id(), 0x1234);
+  EXPECT_EQ(decoder.raw_version(), 3);
   errors.clear();
-  Decode(&decoder, RawFrame({1, 0x10, 0x35, 0x12, 1}), &errors);
+  Decode(&decoder, RawFrame({kProtocolVersion, 0x10, 0x35, 0x12, 1}), &errors);
   ASSERT_EQ(errors.size(), 1u);
   EXPECT_EQ(errors[0], DecodeEvent::kBadLength);
   EXPECT_EQ(decoder.raw_type(), 0x10);
   EXPECT_EQ(decoder.command_id(), 0x1235);
   errors.clear();
-  Decode(&decoder, RawFrame({1, 0x66, 1, 0}), &errors);
+  Decode(&decoder, RawFrame({kProtocolVersion, 0x66, 1, 0}), &errors);
   ASSERT_EQ(errors.size(), 1u);
   EXPECT_EQ(errors[0], DecodeEvent::kUnknownType);
   EXPECT_EQ(decoder.stats().rejected, 3u);
@@ -309,6 +349,53 @@ TEST(Decoder, SurvivesRandomBytesWithoutAcceptingAnything) {
     if (decoder.Push(b) == DecodeEvent::kMessage) ++accepted;
   }
   EXPECT_EQ(accepted, 0);
+}
+
+// The fuzzer's seeds (firmware/tests/fuzz_corpus/) speak the current version: each decodes to
+// what its name says, so a version change cannot leave the fuzzer starting from rejected frames.
+TEST(FuzzCorpus, SeedsDecodeAsTheirNamesSay) {
+  const std::filesystem::path dir =
+      std::filesystem::path(RIGCAL_FIRMWARE_DIR) / "tests/fuzz_corpus";
+  struct Want {
+    std::vector<MessageType> messages;
+    DecodeEvent error = DecodeEvent::kNone;
+  };
+  const std::map<std::string, Want> seeds = {
+      {"hello", {{MessageType::kHello}}},
+      {"pulse_report", {{MessageType::kPulseReport}}},
+      {"exposure_report", {{MessageType::kExposureReport}}},
+      {"heartbeat", {{MessageType::kHeartbeat}}},
+      {"ack_nack", {{MessageType::kAck, MessageType::kNack}}},
+      {"set_line", {{MessageType::kSetLine}}},
+      {"commands",
+       {{MessageType::kSetRate, MessageType::kSetHeartbeat, MessageType::kStart, MessageType::kStop,
+         MessageType::kGetInfo}}},
+      {"bad_crc", {{}, DecodeEvent::kCrcError}},
+      {"bad_version", {{}, DecodeEvent::kUnsupportedVersion}},
+      {"garbage_then_frame", {{MessageType::kPulseReport}, DecodeEvent::kFramingError}},
+  };
+  size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    const std::string name = entry.path().filename().string();
+    ASSERT_TRUE(seeds.count(name)) << "seed without an expectation: " << name;
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                     std::istreambuf_iterator<char>());
+    MessageDecoder decoder;
+    std::vector<DecodeEvent> errors;
+    std::vector<MessageType> types;
+    for (const Message& m : Decode(&decoder, bytes, &errors)) types.push_back(m.type);
+    const Want& want = seeds.at(name);
+    EXPECT_EQ(types, want.messages) << name;
+    if (want.error == DecodeEvent::kNone) {
+      EXPECT_TRUE(errors.empty()) << name;
+    } else {
+      ASSERT_FALSE(errors.empty()) << name;
+      EXPECT_EQ(errors.front(), want.error) << name;
+    }
+  }
+  EXPECT_EQ(files, seeds.size());
 }
 
 }  // namespace

@@ -28,9 +28,17 @@ inline std::string TriggerFirmwareElf() {
 #endif
 }
 
-// Why the firmware cannot run here, or "" when it can.
-inline std::string QemuFirmwareMissing() {
-  const std::string elf = TriggerFirmwareElf();
+// The wrap-test image: its µs counter preset 4 s before 2^32 (CMake TRIGGER_TEST_COUNTER_PRESET).
+inline std::string TriggerFirmwareWrapTestElf() {
+#ifdef RIGCAL_TRIGGER_FIRMWARE_WRAPTEST_ELF
+  return RIGCAL_TRIGGER_FIRMWARE_WRAPTEST_ELF;
+#else
+  return "";
+#endif
+}
+
+// Why the firmware `elf` cannot run here, or "" when it can.
+inline std::string QemuFirmwareMissing(const std::string& elf = TriggerFirmwareElf()) {
   if (elf.empty()) {
     return "arm-none-eabi-g++ was not found when the build was configured, so the trigger "
            "firmware was not built (install gcc-arm-none-eabi libnewlib-arm-none-eabi "
@@ -54,14 +62,13 @@ class QemuFirmware {
   enum class Serial { kStdio, kPty };
   ~QemuFirmware() { Stop(); }
 
-  // Starts QEMU. kStdio: Write/Read talk to USART1. kPty: pty_path() names the terminal.
-  bool Start(Serial serial, std::string* error) {
+  // Starts QEMU on `elf`. kStdio: Write/Read talk to USART1. kPty: pty_path() names the terminal.
+  bool Start(Serial serial, std::string* error, const std::string& elf = TriggerFirmwareElf()) {
     int in[2], out[2], err[2];
     if (pipe(in) != 0 || pipe(out) != 0 || pipe(err) != 0) {
       *error = "pipe failed";
       return false;
     }
-    const std::string elf = TriggerFirmwareElf();
     std::vector<std::string> args = {"qemu-system-arm",
                                      "-M",
                                      "netduinoplus2",

@@ -1,6 +1,7 @@
 // The firmware logic without the board (firmware/core TriggerApp): command answers (Ack, every
-// Nack reason with its field), heartbeats, the transmit queue, and a run of pulse reports,
-// driven through the protocol's byte stream exactly as the UART would.
+// Nack reason with its field, the link budget), heartbeats, the transmit queue, a run of pulse
+// reports on ideal compare timers, and exposure reports from captured exposure edges, driven
+// through the protocol's byte stream exactly as the UART would.
 #include "rigcal/trigger_core/trigger_app.h"
 
 #include <gtest/gtest.h>
@@ -17,20 +18,22 @@ using proto::Message;
 using proto::MessageType;
 using proto::NackReason;
 
-class Lines : public LineDriver {
+class Lines : public EdgeSink {
  public:
-  void SetLines(uint8_t mask) override {
-    if ((mask & 1u) && !(level & 1u)) ++rises0;
-    level = mask;
+  void OnEdge(const LineEdge& e) override {
+    if (e.line == 0 && e.high) rises0.push_back(e.t_us);
   }
-  uint8_t level = 0xFF;
-  int rises0 = 0;
+  std::vector<uint64_t> rises0;
 };
 
-// The board around a TriggerApp: sends commands as frames, drains and decodes its output.
+// The board around a TriggerApp: sends commands as frames, drains and decodes its output; its
+// timers are ideal (IdealLineTimers).
 class Board {
  public:
-  Board() : app(&lines) { app.Boot(now); }
+  Board() : timers(&lines), app(&timers) {
+    timers.set_now(now);
+    app.Boot(now, {proto::kClockHseFallback, 25});
+  }
 
   void SendBytes(const std::vector<uint8_t>& bytes) {
     for (uint8_t b : bytes) app.OnRxByte(b, now);
@@ -44,6 +47,7 @@ class Board {
   void RunTo(uint64_t t_us, uint64_t step_us = 10) {
     while (now < t_us) {
       now += step_us;
+      timers.RunUntil(now, &app);
       app.Poll(now);
       Drain();
     }
@@ -76,6 +80,7 @@ class Board {
   }
 
   Lines lines;
+  IdealLineTimers timers;
   TriggerApp app;
   proto::MessageDecoder decoder;
   std::vector<Message> received;
@@ -89,10 +94,10 @@ Message SetRate(uint16_t id, uint32_t rate_mhz) {
   return m;
 }
 Message SetLine(uint16_t id, uint8_t line, uint8_t enabled, uint32_t width, int32_t offset = 0,
-                uint32_t exposure = 0) {
+                uint32_t exposure = 0, proto::ExposureInput input = proto::ExposureInput::kNone) {
   Message m;
   m.type = MessageType::kSetLine;
-  m.set_line = {id, line, enabled, width, offset, exposure};
+  m.set_line = {id, line, enabled, width, offset, exposure, input};
   return m;
 }
 Message Simple(MessageType type, uint16_t id) {
@@ -121,7 +126,9 @@ TEST(TriggerApp, BootSaysHelloAndDropsTheLines) {
   EXPECT_EQ(hello[0].hello.firmware_version, kFirmwareVersion);
   EXPECT_EQ(hello[0].hello.max_lines, proto::kMaxLines);
   EXPECT_EQ(hello[0].hello.mcu_time_us, 5'000u);
-  EXPECT_EQ(b.lines.level, 0);
+  EXPECT_EQ(hello[0].hello.clock_status, proto::kClockHseFallback);  // what the board said
+  EXPECT_EQ(hello[0].hello.hse_mhz, 25);
+  EXPECT_EQ(b.timers.levels(), 0);
   ExpectAck(b.Ask(Simple(MessageType::kGetInfo, 3)), 3, MessageType::kGetInfo);
   EXPECT_EQ(b.Take(MessageType::kHello).size(), 1u);
 }
@@ -133,17 +140,26 @@ TEST(TriggerApp, RefusesOutOfRangeValuesWithTheField) {
   ExpectAck(b.Ask(SetRate(3, 400'000)), 3, MessageType::kSetRate);  // 2500 µs
   ExpectNack(b.Ask(SetLine(4, 8, 1, 100)), 4, NackReason::kOutOfRange, Field::kLine);
   ExpectNack(b.Ask(SetLine(5, 0, 2, 100)), 5, NackReason::kOutOfRange, Field::kLine);
-  ExpectNack(b.Ask(SetLine(6, 0, 1, 0)), 6, NackReason::kOutOfRange, Field::kWidth);
-  ExpectNack(b.Ask(SetLine(7, 0, 1, 2'500)), 7, NackReason::kOutOfRange, Field::kWidth);
+  ExpectNack(b.Ask(SetLine(6, 0, 1, 24)), 6, NackReason::kOutOfRange, Field::kWidth);
+  ExpectNack(b.Ask(SetLine(7, 0, 1, 2'476)), 7, NackReason::kOutOfRange, Field::kWidth);
   ExpectNack(b.Ask(SetLine(8, 0, 1, 100, 0, 1'000'001)), 8, NackReason::kOutOfRange,
              Field::kExposure);
   ExpectNack(b.Ask(SetLine(9, 0, 1, 100, -2'000, 1'000)), 9, NackReason::kOutOfRange,
              Field::kPhaseOffset);
-  ExpectAck(b.Ask(SetLine(10, 0, 1, 2'499, -1'999, 1'000)), 10, MessageType::kSetLine);
+  ExpectAck(b.Ask(SetLine(10, 0, 1, 2'475, -1'999, 1'000)), 10, MessageType::kSetLine);
+  // At 400 Hz no exposure report fits the link beside the pulse reports.
+  ExpectNack(b.Ask(SetLine(16, 1, 1, 100, 0, 0, proto::ExposureInput::kActiveHigh)), 16,
+             NackReason::kOutOfRange, Field::kExposureInput);
+  ExpectNack(b.Ask(SetLine(17, 1, 1, 100, 0, 0, static_cast<proto::ExposureInput>(3))), 17,
+             NackReason::kOutOfRange, Field::kExposureInput);
   // A slower rate is fine; a faster one would make line 0's width exceed the period.
   ExpectNack(b.Ask(SetRate(11, 400'001)), 11, NackReason::kOutOfRange, Field::kRate);
   ExpectAck(b.Ask(SetRate(12, 20'000)), 12, MessageType::kSetRate);
-  ExpectAck(b.Ask(SetLine(13, 0, 1, 2'499, 0, 1'000)), 13, MessageType::kSetLine);
+  ExpectAck(b.Ask(SetLine(13, 0, 1, 2'475, 0, 1'000, proto::ExposureInput::kActiveLow)), 13,
+            MessageType::kSetLine);
+  // 400 Hz with a wired line exceeds the link: refused as a rate problem.
+  ExpectNack(b.Ask(SetRate(18, 400'000)), 18, NackReason::kOutOfRange, Field::kRate);
+  ExpectAck(b.Ask(SetLine(19, 0, 1, 2'475, 0, 1'000)), 19, MessageType::kSetLine);
   ExpectAck(b.Ask(SetRate(14, 400'000)), 14, MessageType::kSetRate);
   Message hb;
   hb.type = MessageType::kSetHeartbeat;
@@ -151,7 +167,8 @@ TEST(TriggerApp, RefusesOutOfRangeValuesWithTheField) {
   ExpectNack(b.Ask(hb), 15, NackReason::kOutOfRange, Field::kHeartbeatPeriod);
   // Refused values changed nothing.
   EXPECT_EQ(b.app.config().rate_mhz, 400'000u);
-  EXPECT_EQ(b.app.config().lines[0].width_us, 2'499u);
+  EXPECT_EQ(b.app.config().lines[0].width_us, 2'475u);
+  EXPECT_EQ(b.app.config().lines[1].enabled, false);
   EXPECT_EQ(b.app.config().heartbeat_period_ms, 100u);
 }
 
@@ -171,7 +188,7 @@ TEST(TriggerApp, AnswersBadFramesThatCarryACommandIdAndCountsTheRest) {
   Board b;
   b.Take(MessageType::kHello);
   // Wrong version with a valid CRC: Nack naming the command id.
-  uint8_t payload[8] = {2, 0x10, 0x22, 0x11, 1, 0, 0, 0};
+  uint8_t payload[8] = {1, 0x10, 0x22, 0x11, 1, 0, 0, 0};  // protocol version 1
   const uint16_t crc = proto::Crc16(payload, 6);
   payload[6] = static_cast<uint8_t>(crc & 0xFF);
   payload[7] = static_cast<uint8_t>(crc >> 8);
@@ -228,7 +245,7 @@ TEST(TriggerApp, ARunReportsEveryPulseInOrderAtItsRate) {
   ExpectAck(b.Ask(SetLine(2, 0, 1, 1'000, 0, 4'000)), 2, MessageType::kSetLine);
   ExpectAck(b.Ask(SetLine(3, 1, 1, 1'000, 0, 4'000)), 3, MessageType::kSetLine);
   ExpectAck(b.Ask(Simple(MessageType::kStart, 4)), 4, MessageType::kStart);
-  const uint64_t start = b.now;
+  const uint64_t start = b.now + Scheduler::kArmLeadUs;
   b.RunTo(start + 2'000'000 - 1'000, 10);
   const std::vector<Message> pulses = b.Take(MessageType::kPulseReport);
   ASSERT_EQ(pulses.size(), 100u);
@@ -237,7 +254,8 @@ TEST(TriggerApp, ARunReportsEveryPulseInOrderAtItsRate) {
     EXPECT_EQ(pulses[k].pulse.line_mask, 0x03);
     EXPECT_EQ(pulses[k].pulse.mcu_time_us, start + 2'000 + 20'000 * k);  // lead: exposure / 2
   }
-  EXPECT_EQ(b.lines.rises0, 100);
+  ASSERT_EQ(b.lines.rises0.size(), 100u);
+  EXPECT_EQ(b.lines.rises0[99], start + 20'000 * 99);  // rises 2 ms before T_k
   const std::vector<Message> hb = b.Take(MessageType::kHeartbeat);
   ASSERT_FALSE(hb.empty());
   EXPECT_EQ(hb.back().heartbeat.running, 1);
@@ -256,7 +274,10 @@ TEST(TriggerApp, AFullTransmitQueueDropsWholeFrames) {
   ExpectAck(b.Ask(SetLine(2, 0, 1, 100)), 2, MessageType::kSetLine);
   ExpectAck(b.Ask(Simple(MessageType::kStart, 3)), 3, MessageType::kStart);
   // Nobody drains the UART for a second: 400 reports do not fit.
-  for (uint64_t t = b.now; t < b.now + 1'000'000; t += 10) b.app.Poll(t);
+  for (uint64_t t = b.now; t < b.now + 1'000'000; t += 10) {
+    b.timers.RunUntil(t, &b.app);
+    b.app.Poll(t);
+  }
   b.now += 1'000'000;
   EXPECT_GT(b.app.tx_dropped(), 0u);
   EXPECT_LE(b.app.tx_pending(), TriggerApp::kTxCapacity);
@@ -267,6 +288,54 @@ TEST(TriggerApp, AFullTransmitQueueDropsWholeFrames) {
   for (size_t k = 1; k < pulses.size(); ++k) {
     EXPECT_EQ(pulses[k].pulse.seq, pulses[k - 1].pulse.seq + 1);  // the oldest ones are kept
   }
+}
+
+TEST(TriggerApp, WiredLinesReportTheirMeasuredExposures) {
+  Board b;
+  ExpectAck(b.Ask(SetRate(1, 50'000)), 1, MessageType::kSetRate);  // 50 Hz
+  ExpectAck(b.Ask(SetLine(2, 0, 1, 100, 0, 4'000, proto::ExposureInput::kActiveHigh)), 2,
+            MessageType::kSetLine);
+  ExpectAck(b.Ask(SetLine(3, 1, 1, 100, 0, 4'000)), 3, MessageType::kSetLine);  // not wired
+  ExpectAck(b.Ask(Simple(MessageType::kStart, 4)), 4, MessageType::kStart);
+  EXPECT_EQ(b.timers.capture(0), proto::ExposureInput::kActiveHigh);
+  EXPECT_EQ(b.timers.capture(1), proto::ExposureInput::kNone);
+  // The camera on line 0 starts exposing 23 µs after each trigger rise, for 3000 + k µs (its
+  // auto exposure shortened the configured 4 ms); the capture channel sees both edges.
+  size_t seen = 0;
+  for (int step = 0; step < 600; ++step) {
+    b.RunTo(b.now + 1'000, 1'000);
+    while (seen < b.lines.rises0.size()) {
+      const uint64_t rise = b.lines.rises0[seen];
+      const uint64_t start = rise + 23, end = start + 3'000 + seen;
+      EXPECT_TRUE(b.app.meter().ExpectsStart(0));
+      b.app.OnCapture(0, static_cast<uint32_t>(start));
+      EXPECT_FALSE(b.app.meter().ExpectsStart(0));
+      b.app.OnCapture(0, static_cast<uint32_t>(end));
+      ++seen;
+    }
+  }
+  b.RunTo(b.now + 1'000, 1'000);
+  const std::vector<Message> exposures = b.Take(MessageType::kExposureReport);
+  const std::vector<Message> pulses = b.Take(MessageType::kPulseReport);
+  ASSERT_EQ(exposures.size(), seen);
+  ASSERT_GE(pulses.size(), 25u);
+  for (size_t k = 0; k < exposures.size(); ++k) {
+    const proto::ExposureReport& e = exposures[k].exposure;
+    EXPECT_EQ(e.seq, k);
+    EXPECT_EQ(e.line, 0);
+    EXPECT_EQ(e.start_us, b.lines.rises0[k] + 23);
+    EXPECT_EQ(e.duration_us, 3'000 + k);
+    if (k < pulses.size()) {  // T_k is the scheduled centre; the measured one 477 - k/2 µs early
+      EXPECT_EQ(e.CentreUs() + 477, pulses[k].pulse.mcu_time_us + k / 2);
+    }
+  }
+  EXPECT_EQ(b.app.meter().errors(), 0u);
+  // An edge before the first rise of a run, or a start a period after the rise, is an error.
+  b.app.OnCapture(0, static_cast<uint32_t>(b.lines.rises0.back() + 20'000));
+  EXPECT_EQ(b.app.meter().errors(), 1u);
+  b.app.OnOvercapture(0);
+  EXPECT_EQ(b.app.meter().errors(), 2u);
+  EXPECT_TRUE(b.app.meter().ExpectsStart(0));
 }
 
 }  // namespace

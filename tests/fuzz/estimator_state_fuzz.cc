@@ -1,5 +1,5 @@
 // Fuzz target `estimator_state`: ParseEstimatorState (the `--resume` state file) on any bytes, and
-// on the same bytes with the checksum line made right (tools::WithEstimatorStateChecksum, as the
+// on the same bytes with the checksum line made right (io::WithEstimatorStateChecksum, as the
 // writer computes it), so that the fuzzer reaches the parser behind the checksum: a hand-edited file.
 // An accepted state formats to a text that parses to the same text again, and restoring it into
 // an estimator for its cameras either works or fails with a message (never a crash).
@@ -22,15 +22,15 @@ namespace {
 
 void ParseAndCheck(std::string_view text) {
   using namespace rigcal;
-  Expected<RigEstimatorState> state = tools::ParseEstimatorState(text);
+  Expected<RigEstimatorState> state = io::ParseEstimatorState(text);
   if (!state) {
     RIGCAL_FUZZ_EXPECT(!state.error().empty(), "an error says what is wrong");
     return;
   }
-  const std::string formatted = tools::FormatEstimatorState(*state);
-  Expected<RigEstimatorState> again = tools::ParseEstimatorState(formatted);
+  const std::string formatted = io::FormatEstimatorState(*state);
+  Expected<RigEstimatorState> again = io::ParseEstimatorState(formatted);
   RIGCAL_FUZZ_EXPECT(again.ok(), "a formatted state parses: " + formatted);
-  RIGCAL_FUZZ_EXPECT(tools::FormatEstimatorState(*again) == formatted,
+  RIGCAL_FUZZ_EXPECT(io::FormatEstimatorState(*again) == formatted,
                      "format and parse round-trip");
   // Small rigs only: the estimator's buffers grow with the camera count. And only for one state
   // in four (chosen by its text, so a rerun is the same): building an estimator allocates its
@@ -68,6 +68,6 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   ParseAndCheck(text);
-  ParseAndCheck(rigcal::tools::WithEstimatorStateChecksum(text));
+  ParseAndCheck(io::WithEstimatorStateChecksum(text));
   return 0;
 }

@@ -8,7 +8,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace rigcal::fuzz {
 

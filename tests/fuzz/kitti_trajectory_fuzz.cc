@@ -23,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const size_t poses_size = nul != nullptr ? static_cast<size_t>(nul - data) : size;
   const uint8_t* times = nul != nullptr ? nul + 1 : data + size;
   const size_t times_size = static_cast<size_t>(data + size - times);
-  Expected<tools::TimedTrajectory> t = tools::ReadKittiTrajectory(
+  Expected<TimedTrajectory> t = io::ReadKittiTrajectory(
       poses_file.Write(data, poses_size), times_file.Write(times, times_size));
   if (!t) {
     RIGCAL_FUZZ_EXPECT(!t.error().empty(), "an error says what is wrong");

@@ -14,8 +14,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const char* channel = "RIGCAL_POSE_left";
   fuzz::DecodeAndCheck<camera_pose_t>(channel, fuzz::kFuzzNames, data, size);
   fuzz::DecodeAndCheck<camera_pose_t>(channel, {}, data, size);
-  tools::MessageValidator validator(fuzz::kFuzzNames);
-  Expected<tools::PoseMessage> pose =
+  lcm::MessageValidator validator(fuzz::kFuzzNames);
+  Expected<lcm::PoseMessage> pose =
       validator.DecodeCameraPose(channel, data, static_cast<int64_t>(size));
   if (pose) {
     RIGCAL_FUZZ_EXPECT(

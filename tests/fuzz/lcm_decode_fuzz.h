@@ -14,16 +14,16 @@
 
 namespace rigcal::fuzz {
 
-inline const tools::CameraNames kFuzzNames = {"front", "left", "back"};
+inline const lcm::CameraNames kFuzzNames = {"front", "left", "back"};
 
 // Decode<Message> of `data` against `names`; the accepted message, re-encoded, or nothing.
 template <typename Message>
-std::optional<Message> DecodeAndCheck(const char* channel, const tools::CameraNames& names,
+std::optional<Message> DecodeAndCheck(const char* channel, const lcm::CameraNames& names,
                                       const uint8_t* data, size_t size) {
-  tools::MessageValidator validator(names);
+  lcm::MessageValidator validator(names);
   Expected<Message> msg =
       validator.template Decode<Message>(channel, data, static_cast<int64_t>(size));
-  const tools::DecodeStats& stats = validator.stats();
+  const lcm::DecodeStats& stats = validator.stats();
   if (!msg) {
     RIGCAL_FUZZ_EXPECT(stats.accepted == 0 && stats.TotalRejected() == 1,
                        "a rejection is counted once");
@@ -32,14 +32,14 @@ std::optional<Message> DecodeAndCheck(const char* channel, const tools::CameraNa
   }
   RIGCAL_FUZZ_EXPECT(stats.accepted == 1 && stats.TotalRejected() == 0, "acceptance counted");
   Message copy = *msg;
-  RIGCAL_FUZZ_EXPECT(!tools::CheckMessage(channel, names, &copy).has_value(),
+  RIGCAL_FUZZ_EXPECT(!lcm::CheckMessage(channel, names, &copy).has_value(),
                      "an accepted message passes CheckMessage");
-  Expected<std::vector<uint8_t>> encoded = tools::EncodeMessage(channel, names, *msg);
+  Expected<std::vector<uint8_t>> encoded = lcm::EncodeMessage(channel, names, *msg);
   RIGCAL_FUZZ_EXPECT(encoded.ok(), "an accepted message encodes: " + encoded.error());
   Expected<Message> again = validator.template Decode<Message>(
       channel, encoded->data(), static_cast<int64_t>(encoded->size()));
   RIGCAL_FUZZ_EXPECT(again.ok(), "a re-encoded message decodes: " + again.error());
-  Expected<std::vector<uint8_t>> twice = tools::EncodeMessage(channel, names, *again);
+  Expected<std::vector<uint8_t>> twice = lcm::EncodeMessage(channel, names, *again);
   RIGCAL_FUZZ_EXPECT(twice.ok() && *twice == *encoded, "encoding is stable");
   return *msg;
 }

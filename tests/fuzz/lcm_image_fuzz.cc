@@ -17,7 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::optional<image_t> msg = fuzz::DecodeAndCheck<image_t>(channel, fuzz::kFuzzNames, data, size);
   fuzz::DecodeAndCheck<image_t>(channel, {}, data, size);
   if (!msg) return 0;
-  Expected<drivers::Frame> frame = tools::FrameFromImage(*msg, 2);
+  Expected<capture::Frame> frame = pipeline::FrameFromImage(*msg, 2);
   if (frame) {
     RIGCAL_FUZZ_EXPECT(frame->image.cols == msg->width && frame->image.rows == msg->height,
                        "a frame of width x height");

@@ -18,20 +18,20 @@
 namespace rigcal::fuzz {
 namespace {
 
-const tools::CameraNames kNames = {"front", "left", "back"};
+const lcm::CameraNames kNames = {"front", "left", "back"};
 
 struct Pass {
   std::vector<int64_t> offsets;
-  tools::LogReader::Outcome outcome = tools::LogReader::Outcome::kEnd;
+  lcm::LogReader::Outcome outcome = lcm::LogReader::Outcome::kEnd;
 };
 
 Pass ReadAll(const std::string& path, int64_t file_size, bool with_data) {
-  using Outcome = tools::LogReader::Outcome;
+  using Outcome = lcm::LogReader::Outcome;
   Pass pass;
-  Expected<std::unique_ptr<tools::LogReader>> reader = tools::LogReader::Open(path);
+  Expected<std::unique_ptr<lcm::LogReader>> reader = lcm::LogReader::Open(path);
   RIGCAL_FUZZ_EXPECT(reader.ok(), "an existing file opens: " + reader.error());
-  tools::MessageValidator validator(kNames);
-  tools::LogEvent event;
+  lcm::MessageValidator validator(kNames);
+  rigcal::lcm::LogEvent event;
   int64_t previous_end = 0;
   while (true) {
     const Outcome outcome = with_data ? (*reader)->Next(&event) : (*reader)->NextHeader(&event);

@@ -19,14 +19,14 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace rigcal;
   static fuzz::InputFile file("rig_config.yaml");
-  Expected<tools::RigConfig> config = tools::LoadRigConfig(file.Write(data, size));
+  Expected<io::RigConfig> config = io::LoadRigConfig(file.Write(data, size));
   if (!config) {
     RIGCAL_FUZZ_EXPECT(!config.error().empty(), "an error says what is wrong");
     return 0;
   }
   RIGCAL_FUZZ_EXPECT(!config->cameras.empty(), "a config has cameras");
   std::set<std::string> names;
-  for (const tools::CameraConfig& camera : config->cameras) {
+  for (const io::CameraConfig& camera : config->cameras) {
     RIGCAL_FUZZ_EXPECT(!camera.name.empty(), "a camera has a name");
     RIGCAL_FUZZ_EXPECT(names.insert(camera.name).second, "distinct camera names");
     for (const auto* mounting : {&camera.nominal, &camera.truth}) {

@@ -38,11 +38,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static fuzz::InputFile file("rig.yaml");
   static fuzz::InputFile again("again.yaml");
   const std::string& path = file.Write(data, size);
-  if (auto rig = tools::ReadRigYaml(path)) {
+  if (auto rig = io::ReadRigYaml(path)) {
     fuzz::CheckMountings(*rig);
-    const std::string text = tools::RigToYaml(*rig);
+    const std::string text = io::RigToYaml(*rig);
     auto back =
-        tools::ReadRigYaml(again.Write(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
+        io::ReadRigYaml(again.Write(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
     RIGCAL_FUZZ_EXPECT(back.ok(), "RigToYaml reads back: " + text);
     RIGCAL_FUZZ_EXPECT(back->size() == rig->size(), "RigToYaml keeps every slave");
     for (const auto& [name, s] : *rig) {
@@ -52,8 +52,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                          "RigToYaml round-trips C and scale of " + name);
     }
   }
-  if (auto truth = tools::ReadTrueMountings(path)) fuzz::CheckMountings(*truth);
-  if (auto chain = tools::ReadCamchain(path)) {
+  if (auto truth = io::ReadTrueMountings(path)) fuzz::CheckMountings(*truth);
+  if (auto chain = io::ReadCamchain(path)) {
     for (const auto& camera : *chain) {
       RIGCAL_FUZZ_EXPECT(camera.cn_from_cnm1.allFinite(), "finite camchain transform");
     }

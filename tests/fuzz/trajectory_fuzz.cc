@@ -14,7 +14,7 @@
 namespace rigcal::fuzz {
 namespace {
 
-void CheckTrajectory(const tools::TimedTrajectory& t) {
+void CheckTrajectory(const TimedTrajectory& t) {
   RIGCAL_FUZZ_EXPECT(t.size() > 0, "an accepted trajectory has poses");
   RIGCAL_FUZZ_EXPECT(t.poses.size() == t.size() && t.segment.size() == t.size(),
                      "one pose and one segment per stamp");
@@ -37,17 +37,17 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace rigcal;
   static fuzz::InputFile file("cam1.txt");
-  tools::TrajectoryFormat format;
-  Expected<tools::TimedTrajectory> trajectory =
-      tools::ReadTrajectory(file.Write(data, size), {}, &format);
+  io::TrajectoryFormat format;
+  Expected<TimedTrajectory> trajectory =
+      io::ReadTrajectory(file.Write(data, size), {}, &format);
   if (!trajectory) {
     RIGCAL_FUZZ_EXPECT(!trajectory.error().empty(), "an error says what is wrong");
     return 0;
   }
   fuzz::CheckTrajectory(*trajectory);
-  tools::TimedTrajectory copy = *trajectory;
+  TimedTrajectory copy = *trajectory;
   copy.name = "cam2";
-  Expected<RigRecording> matched = tools::MatchTrajectories(*trajectory, {copy}, 0);
+  Expected<RigRecording> matched = io::MatchTrajectories(*trajectory, {copy}, 0);
   if (trajectory->size() >= 2) {
     RIGCAL_FUZZ_EXPECT(matched && matched->size() == trajectory->size(),
                        "a trajectory matches itself stamp for stamp");

@@ -11,7 +11,7 @@
 #include "lcm/message_fixtures.h"
 #include "rigcal/lcm/log_writer.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm_test {
 namespace {
 
 void WriteFile(const std::string& path, const std::vector<uint8_t>& bytes) {
@@ -27,7 +27,7 @@ void WriteFile(const std::string& path, const std::vector<uint8_t>& bytes) {
 std::vector<uint8_t> Log(const std::vector<std::pair<std::string, std::vector<uint8_t>>>& events,
                          const std::string& path) {
   std::remove(path.c_str());
-  auto writer = LogWriter::Open(path);
+  auto writer = lcm::LogWriter::Open(path);
   if (!writer) {
     std::fprintf(stderr, "%s\n", writer.error().c_str());
     std::exit(1);
@@ -43,12 +43,12 @@ std::vector<uint8_t> Log(const std::vector<std::pair<std::string, std::vector<ui
 }
 
 }  // namespace
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm_test
 
 int main(int argc, char** argv) {
   using namespace rigcal;
-  using namespace rigcal::tools;
-  using namespace rigcal::tools::lcm_test;
+  using namespace rigcal::io;
+  using namespace rigcal::lcm_test;
   if (argc != 2) {
     std::fprintf(stderr, "usage: %s <corpus dir>\n", argv[0]);
     return 2;

@@ -20,7 +20,7 @@ check() {  # check NAME EXPR
 }
 check "bin/rigcal installed" '[ -x "$prefix/bin/rigcal" ]'
 check "installed rigcal --version" '"$prefix/bin/rigcal" --version | grep -q "^rigcal [0-9]"'
-for header in calib/types.h camera/camera_model.h drivers/frame.h vo/monocular_vo.h io/rig_config.h \
+for header in calib/types.h camera/camera_model.h capture/frame.h vo/monocular_vo.h io/rig_config.h \
               lcm/message_validation.h pipeline/pipeline.h camera_pose_t.hpp rig_status_t.hpp; do
   check "include/rigcal/$header" '[ -f "$prefix/include/rigcal/$header" ]'
 done

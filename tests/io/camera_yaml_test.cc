@@ -10,9 +10,10 @@
 #include <string>
 
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/io/config_sections.h"
+#include "rigcal/io/camera_files.h"
+#include "../../tools/io/src/config_sections.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -408,4 +409,4 @@ TEST(KalibrCamchain, UnsupportedModelsAndBadValuesAreErrorsWithLines) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -9,7 +9,7 @@
 #include "rigcal/io/rig_config.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 std::string Write(const std::string& name, const std::string& text) {
@@ -48,12 +48,12 @@ TEST(CaptureSourceYaml, V4l2DefaultsAndOverrides) {
   auto config = LoadRigConfig(path);
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_EQ(config->v4l2_devices.size(), 2u);
-  const drivers::V4l2Options& front = config->v4l2_devices[0];
+  const capture::V4l2Options& front = config->v4l2_devices[0];
   EXPECT_EQ(front.device, "/dev/v4l/by-id/usb-cam-front");
   EXPECT_EQ(front.width, 640);
   EXPECT_EQ(front.height, 480);
-  EXPECT_EQ(front.formats, (std::vector<drivers::PixelFormat>{drivers::PixelFormat::kGrey,
-                                                              drivers::PixelFormat::kYuyv}));
+  EXPECT_EQ(front.formats, (std::vector<capture::PixelFormat>{capture::PixelFormat::kGrey,
+                                                              capture::PixelFormat::kYuyv}));
   EXPECT_DOUBLE_EQ(front.frame_rate_hz, 30.0);
   EXPECT_EQ(front.buffers, 6);
   ASSERT_TRUE(front.exposure_us.has_value());
@@ -62,10 +62,10 @@ TEST(CaptureSourceYaml, V4l2DefaultsAndOverrides) {
   EXPECT_FALSE(front.gain.has_value());
   EXPECT_FALSE(front.external_trigger);
   EXPECT_TRUE(front.Check().ok()) << front.Check().message();
-  const drivers::V4l2Options& left = config->v4l2_devices[1];
+  const capture::V4l2Options& left = config->v4l2_devices[1];
   EXPECT_EQ(left.device, "bus:usb-0000:00:14.0-2");
   EXPECT_EQ(left.width, 320);
-  EXPECT_EQ(left.formats, (std::vector<drivers::PixelFormat>{drivers::PixelFormat::kMjpeg}));
+  EXPECT_EQ(left.formats, (std::vector<capture::PixelFormat>{capture::PixelFormat::kMjpeg}));
   EXPECT_EQ(left.gain, 12);
   EXPECT_TRUE(left.external_trigger);
   EXPECT_EQ(left.controls.at("power_line_frequency"), 1);
@@ -155,4 +155,4 @@ TEST(CaptureSourceYaml, ImageFolderRateAndTimestamps) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -8,11 +8,11 @@
 #include <functional>
 #include <sstream>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/synthetic.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // A drive of the demo rig's first `slaves` slaves (front is the master), fed to `est`.
@@ -226,9 +226,9 @@ TEST(EstimatorStateFile, ValuesOutOfRangeAreRejectedDespiteTheChecksum) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // Version 4: how far each camera was consumed (the newest stamp of a set the estimator took)
@@ -323,4 +323,4 @@ TEST(EstimatorStateFile, ClockOffsetsRoundTripAndVersionFourFilesHaveNone) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -11,7 +11,7 @@
 #include "rigcal/io/trajectory_io.h"
 #include "support/skip.h"
 
-namespace rigcal::tools::trajectory_test {
+namespace rigcal::io::trajectory_test {
 namespace {
 
 TEST_F(TrajectoryIoTest, ReadsKittiPosesAndTimes) {
@@ -69,4 +69,4 @@ TEST(TrajectoryIoDataTest, KittiGroundTruth) {
   EXPECT_LT(length, 4500.0);
 }
 }  // namespace
-}  // namespace rigcal::tools::trajectory_test
+}  // namespace rigcal::io::trajectory_test

@@ -10,7 +10,7 @@
 #include "rigcal/io/trajectory_io.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -98,4 +98,4 @@ TEST(WriteRigConfig, RoundTripsThroughTheLoader) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -13,7 +13,7 @@
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 constexpr double kSigmas = 4.0;  // an estimate within kSigmas σ of the truth passes
@@ -102,4 +102,4 @@ TEST(OnlineTimeOffset, RealEurocTrajectoryWithOneClockShifted) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -15,7 +15,7 @@
 #include "io/trajectory_fixtures.h"
 #include "rigcal/io/atomic_file.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using trajectory_test::HasSubstr;
@@ -170,4 +170,4 @@ TEST_F(OutputFileFault, CommitAndKeepOpenWritesOnUnderTheName) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -10,11 +10,11 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_files.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using ::testing::HasSubstr;
@@ -143,4 +143,4 @@ TEST_F(ResultFileTest, ErrorsNameLineAndField) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -9,11 +9,11 @@
 #include <set>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using ::testing::HasSubstr;
@@ -482,4 +482,4 @@ TEST(FormatResultTableTest, NoTruthNoTruthColumn) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

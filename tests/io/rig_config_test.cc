@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -76,11 +76,11 @@ TEST(RigConfig, OptionSections) {
   EXPECT_EQ(config->online.estimator.keyframe_max_interval_ns, 500'000'000);
   EXPECT_DOUBLE_EQ(config->online.refine_period_s, 0.0);
   EXPECT_DOUBLE_EQ(config->online.estimator.nominal_sigma, 0.03);
-  EXPECT_DOUBLE_EQ(config->online.estimator.min_tilt_snr, 8.0);
-  EXPECT_DOUBLE_EQ(config->online.estimator.max_axis_std_ratio, 50.0);
+  EXPECT_DOUBLE_EQ(config->online.estimator.model_selection.min_tilt_snr, 8.0);
+  EXPECT_DOUBLE_EQ(config->online.estimator.model_selection.max_axis_std_ratio, 50.0);
   EXPECT_DOUBLE_EQ(config->online.estimator.planar_hysteresis, 1.5);
-  EXPECT_DOUBLE_EQ(config->online.estimator.general_axis_spread_deg, 12.0);
-  EXPECT_DOUBLE_EQ(config->online.estimator.alpha_maxrot_noise_deg, 0.0);
+  EXPECT_DOUBLE_EQ(config->online.estimator.model_selection.general_axis_spread_deg, 12.0);
+  EXPECT_DOUBLE_EQ(config->online.estimator.model_selection.alpha_maxrot_noise_deg, 0.0);
   EXPECT_DOUBLE_EQ(config->online.estimator.sigma_block_s, 5.0);
   EXPECT_EQ(config->online.estimator.sigma_blocks, 30);
   EXPECT_EQ(config->online.sync.frame_period_ns, 100'000'000);
@@ -208,4 +208,4 @@ TEST(RigConfig, ErrorsNameFileLineAndKey) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

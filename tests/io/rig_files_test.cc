@@ -9,10 +9,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/io/atomic_file.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -468,4 +468,4 @@ TEST_F(RigFilesTest, AtomicWriteErrorNamesPathAndErrno) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -7,7 +7,7 @@
 
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools::trajectory_test {
+namespace rigcal::io::trajectory_test {
 namespace {
 
 TEST(ParseSecondsToNsTest, ExactDecimalConversion) {
@@ -47,4 +47,4 @@ TEST(FormatNsAsSecondsTest, ExactAndRoundTrips) {
   }
 }
 }  // namespace
-}  // namespace rigcal::tools::trajectory_test
+}  // namespace rigcal::io::trajectory_test

@@ -10,16 +10,16 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rigcal/calib/robust_statistics.h"
-#include "rigcal/io/config_sections.h"
+#include "rigcal/base/robust_statistics.h"
+#include "../../tools/io/src/config_sections.h"
 #include "rigcal/io/rig_config.h"
-#include "rigcal/io/yaml_fields.h"
+#include "../../tools/io/src/yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
-using drivers::SimulatedRigSpec;
+using sim::SimulatedRigSpec;
 
 fs::path TempDir() {
   static const fs::path dir = [] {
@@ -92,7 +92,7 @@ TEST(SimulatedSourceYaml, ParsesEveryKey) {
   ASSERT_EQ(spec->waypoints.size(), 3u);
   EXPECT_EQ(spec->waypoints[1].position, Eigen::Vector3d(1, 0.5, 3));
   EXPECT_LT(spec->waypoints[1].world_from_master.angularDistance(
-                drivers::WaypointOrientationFromYpr(30, 5, -5)),
+                sim::WaypointOrientationFromYpr(30, 5, -5)),
             1e-12);
   EXPECT_LT(spec->waypoints[2].world_from_master.angularDistance(Eigen::Quaterniond::Identity()),
             1e-12);
@@ -131,15 +131,15 @@ TEST(SimulatedSourceYaml, TrajectoryFileRelativeToTheConfig) {
       "    file: drive.tum\n"
       "    body_from_master: {q_wxyz: [0.5, -0.5, 0.5, -0.5], C: [0.1, 0, 0]}\n");
   ASSERT_TRUE(spec) << spec.error();
-  ASSERT_EQ(spec->trajectory_poses.size(), 3u);
+  ASSERT_EQ(spec->trajectory_world_from_body.size(), 3u);
   EXPECT_EQ(spec->trajectory_t_ns[1] - spec->trajectory_t_ns[0], 1'000'000'000);
-  EXPECT_DOUBLE_EQ(spec->trajectory_poses[2].C.x(), 2.0);
+  EXPECT_DOUBLE_EQ(spec->trajectory_world_from_body[2].C.x(), 2.0);
   EXPECT_NE(spec->trajectory_file.find("drive.tum"), std::string::npos);
   EXPECT_DOUBLE_EQ(spec->body_from_master.C.x(), 0.1);
   EXPECT_TRUE(spec->waypoints.empty());
   // The body_from_master above makes a camera looking along the body's x axis, level: the same
   // as a waypoint with ypr (0, 0, 0).
-  EXPECT_LT(spec->body_from_master.q.angularDistance(drivers::WaypointOrientationFromYpr(0, 0, 0)),
+  EXPECT_LT(spec->body_from_master.q.angularDistance(sim::WaypointOrientationFromYpr(0, 0, 0)),
             1e-9);
 }
 
@@ -253,7 +253,7 @@ TEST(SimulatedSourceYaml, RigConfigFillsCamerasAndChecksTheSpec) {
   EXPECT_DOUBLE_EQ(spec.master_from_camera[1].C.x(), -0.5);
   const Status status = spec.Check();
   EXPECT_TRUE(status.ok()) << status.message();
-  EXPECT_TRUE(drivers::MakeSimulatedRig(spec));
+  EXPECT_TRUE(sim::MakeSimulatedRig(spec));
 
   auto unknown = LoadRigConfig(Write("rig_bad.yaml", std::string(kRig) +
                                                          "source:\n  type: simulated\n"
@@ -292,7 +292,7 @@ TEST(SimulatedConfigs, ShippedConfigsAreTrackable) {
     ASSERT_TRUE(config) << config.error();
     ASSERT_TRUE(config->simulated_source);
     const SimulatedRigSpec& spec = *config->simulated_source;
-    auto rig = drivers::MakeSimulatedRig(spec);
+    auto rig = sim::MakeSimulatedRig(spec);
     ASSERT_TRUE(rig) << rig.error();
     const int64_t frames = rig->num_frames();
     const int step = 5;
@@ -301,10 +301,10 @@ TEST(SimulatedConfigs, ShippedConfigsAreTrackable) {
     double max_angle = 0.0;
     Eigen::Matrix3d axes = Eigen::Matrix3d::Zero();
     double max_tilt = 0.0, max_height_change = 0.0;
-    const Pose first = rig->MasterPoseAt(0.0);
+    const Pose first = rig->WorldFromMasterAt(0.0);
     for (int64_t k = 0; k + 20 < frames; k += step) {
-      const Pose a = rig->MasterPoseAt(rig->FrameStreamTime(k));
-      const Pose b = rig->MasterPoseAt(rig->FrameStreamTime(k + 20));
+      const Pose a = rig->WorldFromMasterAt(rig->FrameStreamTime(k));
+      const Pose b = rig->WorldFromMasterAt(rig->FrameStreamTime(k + 20));
       max_angle = std::max(max_angle, first.q.angularDistance(a.q));
       const Eigen::AngleAxisd relative(a.q.conjugate() * b.q);
       const Eigen::Vector3d axis_world = a.q * relative.axis();
@@ -342,8 +342,8 @@ TEST(SimulatedConfigs, ShippedConfigsAreTrackable) {
       std::vector<double> flow;
       int valid = 0, hit = 0;
       for (int64_t k = 0; k + 1 < frames; k += 4 * step) {
-        const Pose a = rig->CameraPoseAt(c, rig->FrameStreamTime(k));
-        const Pose b = rig->CameraPoseAt(c, rig->FrameStreamTime(k + 1));
+        const Pose a = rig->WorldFromCameraAt(c, rig->FrameStreamTime(k));
+        const Pose b = rig->WorldFromCameraAt(c, rig->FrameStreamTime(k + 1));
         for (int y = 8; y < model.height(); y += 24) {
           for (int x = 8; x < model.width(); x += 24) {
             const auto bearing = model.Unproject(Eigen::Vector2d(x, y));
@@ -377,8 +377,8 @@ TEST(SimulatedConfigs, ShippedConfigsAreTrackable) {
       double sum = 0, sum_off = 0;
       int n = 0;
       for (int64_t k = frames / 3; k + 3 < frames; k += frames / 3) {
-        const Pose a = rig->CameraPoseAt(c, rig->FrameStreamTime(k));
-        const Pose b = rig->CameraPoseAt(c, rig->FrameStreamTime(k + 3));
+        const Pose a = rig->WorldFromCameraAt(c, rig->FrameStreamTime(k));
+        const Pose b = rig->WorldFromCameraAt(c, rig->FrameStreamTime(k + 3));
         const cv::Mat image_a = rig->RenderView(c, a);
         const cv::Mat image_b = rig->RenderView(c, b);
         for (int y = 10; y < model.height() - 10; y += 5) {
@@ -431,4 +431,4 @@ TEST(SimulatedConfigs, ShippedConfigsAreTrackable) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

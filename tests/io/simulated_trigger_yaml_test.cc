@@ -6,16 +6,16 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rigcal/io/config_sections.h"
+#include "../../tools/io/src/config_sections.h"
 #include "rigcal/io/rig_config.h"
-#include "rigcal/io/yaml_fields.h"
+#include "../../tools/io/src/yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 namespace fs = std::filesystem;
 
-Expected<drivers::SimulatedRigSpec> ParseSource(const std::string& trigger_lines) {
+Expected<sim::SimulatedRigSpec> ParseSource(const std::string& trigger_lines) {
   static int counter = 0;
   const fs::path dir =
       fs::temp_directory_path() / ("rigcal_sim_trigger_" + std::to_string(::getpid()));
@@ -66,4 +66,4 @@ TEST(SimulatedTriggerYaml, ErrorsNameTheKey) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

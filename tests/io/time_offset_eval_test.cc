@@ -15,7 +15,7 @@
 #include "rigcal/io/time_offset.h"
 #include "rigcal/io/trajectory_interpolation.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using free_running::CameraClock;
@@ -93,4 +93,4 @@ TEST(TimeOffsetEval, InterpolationCostPerPose) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

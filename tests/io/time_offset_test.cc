@@ -19,7 +19,7 @@
 #include "rigcal/io/trajectory_interpolation.h"
 #include "trajectory_fixtures.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using free_running::CameraClock;
@@ -221,4 +221,4 @@ TEST(TimeOffset, BadInputIsAClearError) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

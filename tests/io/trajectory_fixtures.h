@@ -14,7 +14,7 @@
 
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools::trajectory_test {
+namespace rigcal::io::trajectory_test {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
@@ -66,4 +66,4 @@ inline TimedTrajectory MakeTrajectory(const std::string& name, const std::vector
   return t;
 }
 
-}  // namespace rigcal::tools::trajectory_test
+}  // namespace rigcal::io::trajectory_test

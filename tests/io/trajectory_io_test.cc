@@ -12,10 +12,10 @@
 #include <sstream>
 
 #include "io/trajectory_fixtures.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "support/skip.h"
 
-namespace rigcal::tools::trajectory_test {
+namespace rigcal::io::trajectory_test {
 namespace {
 
 TEST_F(TrajectoryIoTest, ReadsTum) {
@@ -275,4 +275,4 @@ TEST(TrajectoryIoDataTest, EurocGroundTruth) {
   EXPECT_EQ(t->t_ns.front(), 1403715524907143168LL);
 }
 }  // namespace
-}  // namespace rigcal::tools::trajectory_test
+}  // namespace rigcal::io::trajectory_test

@@ -9,7 +9,7 @@
 #include "io/trajectory_fixtures.h"
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools::trajectory_test {
+namespace rigcal::io::trajectory_test {
 namespace {
 
 std::vector<int64_t> Stamps(int64_t start, int64_t step, int count) {
@@ -111,4 +111,4 @@ TEST(MatchTrajectoriesTest, DuplicateNamesAreRejected) {
   EXPECT_THAT(rec.error(), HasSubstr("two cameras are named 'cam'"));
 }
 }  // namespace
-}  // namespace rigcal::tools::trajectory_test
+}  // namespace rigcal::io::trajectory_test

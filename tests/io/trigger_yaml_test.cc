@@ -10,7 +10,7 @@
 #include "rigcal/io/rig_config.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 const char* kCamera =
@@ -48,12 +48,13 @@ TEST(TriggerYaml, ReadsTheGeneratorAndTheCamerasLines) {
                             "trigger: {port: /dev/ttyUSB1, baud: 230400, rate_hz: 30, "
                             "heartbeat_ms: 50, uart_wire: false, tolerance_ms: 3, "
                             "command_timeout_ms: 200}\n",
-                            "    trigger: {line: 0, exposure_us: 4000}\n",
+                            "    trigger: {line: 0, exposure_us: 4000, exposure_input: "
+                            "active_low}\n",
                             "    trigger: {line: 2, phase_us: 100, width_us: 500, exposure_us: "
                             "2000, stamp: end_of_frame, readout_us: 10000}\n"));
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_TRUE(config->trigger.has_value());
-  const drivers::LiveTriggerOptions& t = *config->trigger;
+  const trigger::LiveTriggerOptions& t = *config->trigger;
   EXPECT_EQ(t.port, "/dev/ttyUSB1");
   EXPECT_EQ(t.baud, 230400);
   EXPECT_FALSE(t.uart_wire);
@@ -65,12 +66,17 @@ TEST(TriggerYaml, ReadsTheGeneratorAndTheCamerasLines) {
   EXPECT_EQ(t.settings.lines[0].line, 0);
   EXPECT_EQ(t.settings.lines[0].width_us, 1000);  // default: min(1000 us, period / 2)
   EXPECT_EQ(t.settings.lines[0].exposure_us, 4000);
+  // cam0's exposure output is wired: the generator measures it, the matcher waits for it.
+  EXPECT_EQ(t.settings.lines[0].exposure_input, trigger_protocol::ExposureInput::kActiveLow);
+  EXPECT_EQ(t.settings.lines[1].exposure_input, trigger_protocol::ExposureInput::kNone);
   EXPECT_EQ(t.settings.lines[1].line, 2);
   EXPECT_EQ(t.settings.lines[1].width_us, 500);
   EXPECT_EQ(t.settings.lines[1].phase_offset_us, 100);
   ASSERT_EQ(config->camera_triggers.size(), 2u);
   // Image folders are stamped at the exposure centre unless `stamp` says otherwise.
   EXPECT_EQ(config->camera_triggers[0]->stamp_offset_ns, 0);
+  EXPECT_TRUE(config->camera_triggers[0]->exposure_feedback);
+  EXPECT_FALSE(config->camera_triggers[1]->exposure_feedback);
   EXPECT_EQ(config->camera_triggers[1]->line, 2);
   EXPECT_EQ(config->camera_triggers[1]->phase_offset_ns, 100'000);
   EXPECT_EQ(config->camera_triggers[1]->stamp_offset_ns, 1'000'000 + 10'000'000);
@@ -203,6 +209,10 @@ TEST(TriggerYaml, ErrorsNameTheFileLineAndField) {
       {kTrigger, "    trigger: {line: 0, exposure_us: 100}\n",
        "    trigger: {line: 0, exposure_us: 200}\n", "cam1.trigger.line: line 0 is shared", 19},
       {kTrigger, "    trigger: {line: 0, flash: 1}\n", "", "cam0.trigger.flash: unknown key", 11},
+      {kTrigger, "    trigger: {line: 0, exposure_input: strobe}\n", "",
+       "cam0.trigger.exposure_input: 'strobe' is not one of none, active_high, active_low", 11},
+      {kTrigger, "    trigger: {line: 0, width_us: 10}\n", "",
+       "cam0.trigger.width_us: must be in [25, 10000000]", 11},
   };
   for (const Bad& bad : cases) {
     std::string path;
@@ -215,4 +225,4 @@ TEST(TriggerYaml, ErrorsNameTheFileLineAndField) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

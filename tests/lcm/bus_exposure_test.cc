@@ -13,7 +13,7 @@
 
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
 using ::testing::HasSubstr;
@@ -24,7 +24,7 @@ constexpr const char* kHeader =
 constexpr const char* kDefaultViaEth0 =
     "eth0\t00000000\t0100A8C0\t0003\t0\t0\t0\t00000000\t0\t0\t0\n"
     "eth0\t0000A8C0\t00000000\t0001\t0\t0\t0\t00FFFFFF\t0\t0\t0\n";
-// 224.0.0.0/4 on lo (the private namespaces of the tests; DESIGN.md "LCM").
+// 224.0.0.0/4 on lo (the private namespaces of the tests; docs/architecture.md "LCM").
 constexpr const char* kMulticastOnLo = "lo\t000000E0\t00000000\t0001\t0\t0\t0\t000000F0\t0\t0\t0\n";
 // 239.255.76.67/32 on lo.
 constexpr const char* kGroupOnLo = "lo\t434CFFEF\t00000000\t0005\t0\t0\t0\tFFFFFFFF\t0\t0\t0\n";
@@ -108,4 +108,4 @@ TEST_F(BusExposure, UnreadableUrlsAreErrorsNamingThem) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -12,7 +12,7 @@
 #include "lcm/message_fixtures.h"
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm::lcm_test {
 namespace {
 
 TEST(ExtrinsicsMessage, RoundTrip) {
@@ -62,13 +62,13 @@ TEST(ExtrinsicsMessage, RigCalibrationToLcmSetsFlagsAndFields) {
   waiting.rot_std_deg = kInf;
   result.slaves = {general, translational, planar, waiting};
 
-  EXPECT_EQ(SlaveFlags(general), 0);
-  EXPECT_EQ(SlaveFlags(translational), kWireFlagTranslationalOnly);
-  EXPECT_EQ(SlaveFlags(planar), kWireFlagPlanar);
-  EXPECT_EQ(SlaveFlags(waiting), 0);
+  EXPECT_EQ(WireFlagsOf(general), 0);
+  EXPECT_EQ(WireFlagsOf(translational), kWireFlagTranslationalOnly);
+  EXPECT_EQ(WireFlagsOf(planar), kWireFlagPlanar);
+  EXPECT_EQ(WireFlagsOf(waiting), 0);
   SlaveCalibration no_convergence = general;
   no_convergence.termination = Termination::kNoConvergence;  // usable: linear estimate kept
-  EXPECT_EQ(SlaveFlags(no_convergence), 0);
+  EXPECT_EQ(WireFlagsOf(no_convergence), 0);
 
   Expected<rig_extrinsics_t> msg = RigCalibrationToLcm(result, 1234, 5678);
   ASSERT_TRUE(msg.ok()) << msg.error();
@@ -327,4 +327,4 @@ TEST(ExtrinsicsMessage, RejectsOutOfRange) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm::lcm_test

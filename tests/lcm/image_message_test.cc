@@ -10,7 +10,7 @@
 #include "lcm/message_fixtures.h"
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm::lcm_test {
 namespace {
 
 TEST(ImageMessage, RoundTrip) {
@@ -77,4 +77,4 @@ TEST(ImageMessage, RejectsOutOfRange) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm::lcm_test

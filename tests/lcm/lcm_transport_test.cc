@@ -1,5 +1,5 @@
 // The rigcal LCM messages on LCM itself: in-process publish/subscribe (memq://) and LCM log files,
-// written directly and through the file:// provider. Never UDP multicast (DESIGN.md "LCM").
+// written directly and through the file:// provider. Never UDP multicast (docs/architecture.md "LCM").
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -18,7 +18,7 @@
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/status_message.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm::lcm_test {
 namespace {
 
 TEST(LcmTransport, ChannelNames) {
@@ -32,12 +32,12 @@ class Receiver {
  public:
   explicit Receiver(CameraNames names) : validator(std::move(names)) {}
 
-  void HandlePose(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  void HandlePose(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     ++handled;
     Expected<PoseMessage> pose = validator.DecodeCameraPose(channel, rbuf->data, rbuf->data_size);
     if (pose) poses.push_back(std::move(pose).value());
   }
-  void HandleExtrinsics(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  void HandleExtrinsics(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     ++handled;
     Expected<rig_extrinsics_t> msg =
         validator.Decode<rig_extrinsics_t>(channel, rbuf->data, rbuf->data_size);
@@ -53,15 +53,15 @@ class Receiver {
 // LCM 1.3.1 has no lambda subscribe. Its member-function subscribe crashes when built with GCC 12
 // and -fsanitize=vptr (RIGCAL_ASAN_ENABLED): GCC miscompiles the pointer-to-member call inside
 // lcm-cpp-impl.hpp. subscribeFunction with a context pointer has no such call.
-void OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Receiver* receiver) {
+void OnPose(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, Receiver* receiver) {
   receiver->HandlePose(rbuf, channel);
 }
-void OnExtrinsics(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Receiver* receiver) {
+void OnExtrinsics(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, Receiver* receiver) {
   receiver->HandleExtrinsics(rbuf, channel);
 }
 
 TEST(LcmTransport, MemqPublishSubscribe) {
-  lcm::LCM lcm("memq://");
+  ::lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   Receiver receiver(kNames);
   ASSERT_NE(lcm.subscribeFunction("RIGCAL_POSE_.*", &OnPose, &receiver), nullptr);
@@ -165,11 +165,11 @@ std::vector<Event> MakeRecording() {
 std::vector<Event> ReadLog(const std::string& path, MessageValidator* validator,
                            std::vector<int64_t>* timestamps) {
   std::vector<Event> events;
-  lcm::LogFile log(path, "r");
+  ::lcm::LogFile log(path, "r");
   EXPECT_TRUE(log.good()) << path;
   if (!log.good()) return events;
   int64_t previous_eventnum = -1;
-  while (const lcm::LogEvent* event = log.readNextEvent()) {
+  while (const ::lcm::LogEvent* event = log.readNextEvent()) {
     EXPECT_GT(event->eventnum, previous_eventnum);
     previous_eventnum = event->eventnum;
     if (timestamps) timestamps->push_back(event->timestamp);
@@ -207,10 +207,10 @@ TEST(LcmTransport, LogFileRoundTrip) {
   const std::vector<Event> written = MakeRecording();
   ASSERT_EQ(written.size(), 36u + 3u + 4u);
   {
-    lcm::LogFile log(path, "w");
+    ::lcm::LogFile log(path, "w");
     ASSERT_TRUE(log.good()) << path;
     for (size_t i = 0; i < written.size(); ++i) {
-      lcm::LogEvent event;
+      ::lcm::LogEvent event;
       event.eventnum = static_cast<int64_t>(i);
       event.timestamp = 1'000'000 + 10 * static_cast<int64_t>(i);
       event.channel = written[i].channel;
@@ -240,7 +240,7 @@ TEST(LcmTransport, FileProviderWritesALog) {
   const std::string path = TempLogPath("provider");
   const std::vector<Event> written = MakeRecording();
   {
-    lcm::LCM lcm("file://" + path + "?mode=w");
+    ::lcm::LCM lcm("file://" + path + "?mode=w");
     ASSERT_TRUE(lcm.good()) << path;
     for (const Event& event : written) {
       ASSERT_EQ(lcm.publish(event.channel, event.data.data(), event.data.size()), 0);
@@ -254,4 +254,4 @@ TEST(LcmTransport, FileProviderWritesALog) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm::lcm_test

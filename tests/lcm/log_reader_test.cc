@@ -1,4 +1,4 @@
-// LogReader against logs written by lcm::LogFile: the same events, and damage (a cut file, a
+// LogReader against logs written by ::lcm::LogFile: the same events, and damage (a cut file, a
 // corrupt sync word, an absurd length) reported with its byte offset instead of being skipped or
 // allocated.
 #include "rigcal/lcm/log_reader.h"
@@ -10,7 +10,7 @@
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
 namespace fs = std::filesystem;
@@ -25,16 +25,16 @@ class LogReaderTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove(path_); }
 
-  // Writes `count` events with lcm::LogFile: channel CH<k % 3>, k + 1 bytes of value k.
+  // Writes `count` events with ::lcm::LogFile: channel CH<k % 3>, k + 1 bytes of value k.
   // Returns the byte offset of every event.
   std::vector<int64_t> WriteEvents(int count) {
     std::vector<int64_t> offsets;
-    lcm::LogFile log(path_, "w");
+    ::lcm::LogFile log(path_, "w");
     EXPECT_TRUE(log.good());
     for (int k = 0; k < count; ++k) {
       offsets.push_back(static_cast<int64_t>(std::ftell(log.getFilePtr())));
       std::vector<uint8_t> data(static_cast<size_t>(k + 1), static_cast<uint8_t>(k));
-      lcm::LogEvent event;
+      ::lcm::LogEvent event;
       event.eventnum = k;
       event.timestamp = 1000 * k + 7;
       event.channel = "CH" + std::to_string(k % 3);
@@ -141,7 +141,7 @@ TEST_F(LogReaderTest, CorruptSyncWordStopsThereInsteadOfSkipping) {
 TEST_F(LogReaderTest, OversizedLengthsAreRejectedBeforeAllocation) {
   WriteEvents(3);
   const int64_t bad = static_cast<int64_t>(fs::file_size(path_));
-  // A header announcing 2 GiB - 1 of data (lcm::LogFile would try to allocate it).
+  // A header announcing 2 GiB - 1 of data (::lcm::LogFile would try to allocate it).
   Append({0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0,    0,    3,    0,    0,   0,
           0,    0,    0,    0,    9, 0, 0, 0, 2, 0x7F, 0xFF, 0xFF, 0xFF, 'C', 'H'});
   LogReaderOptions options;
@@ -173,4 +173,4 @@ TEST_F(LogReaderTest, EmptyAndMissingFiles) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

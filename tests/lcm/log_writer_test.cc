@@ -18,7 +18,7 @@
 #include "support/lcm_log_events.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
 namespace fs = std::filesystem;
@@ -274,4 +274,4 @@ TEST(PoseLog, WritePoseEventsSortsAndRoundTrips) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

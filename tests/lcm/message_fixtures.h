@@ -14,14 +14,14 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/lcm/message_validation.h"
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/status_message.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm::lcm_test {
 
 using ::testing::HasSubstr;
 
@@ -254,4 +254,4 @@ inline SlaveCalibration MakeSlave(const std::string& name) {
   return s;
 }
 
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm::lcm_test

@@ -15,7 +15,7 @@
 #include "lcm/message_fixtures.h"
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm::lcm_test {
 namespace {
 
 TEST(LcmValidation, WrongType) {
@@ -205,4 +205,4 @@ TEST(LcmValidation, StatsSummaryCountsByCause) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm::lcm_test

@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "lcm/message_fixtures.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm::lcm_test {
 namespace {
 
 TEST(PoseMessage, RoundTrip) {
@@ -179,4 +179,4 @@ TEST(PoseMessage, RejectsOutOfRange) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm::lcm_test

@@ -14,7 +14,7 @@
 
 #include "rigcal/lcm/log_reader.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
 namespace fs = std::filesystem;
@@ -35,7 +35,7 @@ TEST(SharedBus, ThreadsPublishingOnAFileBusLeaveEveryEventWhole) {
   constexpr int kThreads = 4;
   constexpr int kMessages = 3000;
   {
-    lcm::LCM bus("file://" + path + "?mode=w");
+    ::lcm::LCM bus("file://" + path + "?mode=w");
     ASSERT_TRUE(bus.good());
     SharedBus shared(&bus);
     std::vector<std::thread> threads;
@@ -72,4 +72,4 @@ TEST(SharedBus, ThreadsPublishingOnAFileBusLeaveEveryEventWhole) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -10,7 +10,7 @@
 #include "lcm/message_fixtures.h"
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools::lcm_test {
+namespace rigcal::lcm::lcm_test {
 namespace {
 
 TEST(StatusMessage, RoundTrip) {
@@ -186,4 +186,4 @@ TEST(StatusMessage, ClockFieldsFromTheEstimate) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::lcm_test
+}  // namespace rigcal::lcm::lcm_test

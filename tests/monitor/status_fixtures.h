@@ -7,7 +7,7 @@
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
 
-namespace rigcal::tools {
+namespace rigcal::monitor {
 
 // Cameras front (tracking) and left (lost): 19.5 fps, 1234 frames, drops late 3 and never
 // matched 7, pose age 42 ms; sync 999 sets, 5 / 64; CPU 87.5 %, RSS 123 MiB.
@@ -69,7 +69,7 @@ inline rig_extrinsics_t MakeExtrinsics(int8_t state, double rot_std_deg) {
   s.motions_used = 321;
   s.motions_rejected = 9;
   s.state = state;
-  s.flags = kWireFlagRefined;
+  s.flags = lcm::kWireFlagRefined;
   s.axis_offset_std = -1;
   s.message = "solved: fine";
   e.slaves.push_back(s);
@@ -77,4 +77,4 @@ inline rig_extrinsics_t MakeExtrinsics(int8_t state, double rot_std_deg) {
   return e;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::monitor

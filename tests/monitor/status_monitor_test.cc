@@ -16,15 +16,15 @@
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
 
-namespace rigcal::tools {
+namespace rigcal::monitor {
 namespace {
 
 using ::testing::HasSubstr;
 using ::testing::Not;
 
 template <typename Message>
-void Publish(lcm::LCM* lcm, const char* channel, const Message& msg) {
-  auto bytes = EncodeMessage(channel, CameraNames{}, msg);
+void Publish(::lcm::LCM* lcm, const char* channel, const Message& msg) {
+  auto bytes = lcm::EncodeMessage(channel, lcm::CameraNames{}, msg);
   ASSERT_TRUE(bytes.ok()) << bytes.error();
   ASSERT_EQ(lcm->publish(channel, bytes->data(), bytes->size()), 0);
 }
@@ -37,9 +37,9 @@ struct MonitorRun {
 
 // memq:// delivers a message to the subscriptions that exist when it is published: the
 // messages go out from another thread once the monitor listens.
-using Publisher = std::function<void(lcm::LCM*)>;
+using Publisher = std::function<void(::lcm::LCM*)>;
 
-MonitorRun RunOnce(lcm::LCM* lcm, bool json, double timeout_s = 2.0,
+MonitorRun RunOnce(::lcm::LCM* lcm, bool json, double timeout_s = 2.0,
                    const Publisher& publish = nullptr) {
   StatusRunOptions options;
   options.url = "memq://";
@@ -64,11 +64,11 @@ MonitorRun RunOnce(lcm::LCM* lcm, bool json, double timeout_s = 2.0,
 }
 
 TEST(StatusMonitor, OnceJsonShowsTheNewestMessagesAndTheHealth) {
-  lcm::LCM lcm("memq://");
+  ::lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
-  const MonitorRun run = RunOnce(&lcm, true, 2.0, [](lcm::LCM* bus) {
-    Publish(bus, kStatusChannel, MakeStatus(rig_status_t::ESTIMATOR_USABLE));
-    Publish(bus, kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_USABLE, -1));
+  const MonitorRun run = RunOnce(&lcm, true, 2.0, [](::lcm::LCM* bus) {
+    Publish(bus, lcm::kStatusChannel, MakeStatus(rig_status_t::ESTIMATOR_USABLE));
+    Publish(bus, lcm::kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_USABLE, -1));
   });
   EXPECT_EQ(run.code, 1) << run.out;  // usable, not converged: still converging
   const nlohmann::json j = nlohmann::json::parse(run.out);
@@ -97,25 +97,25 @@ TEST(StatusMonitor, HealthCodes) {
       {rig_status_t::ESTIMATOR_INITIALISING, 1}, {rig_status_t::ESTIMATOR_DEGRADED, 1},
       {rig_status_t::ESTIMATOR_USABLE, 1},       {rig_status_t::ESTIMATOR_DECALIBRATED, 2}};
   for (const auto& [state, code] : cases) {
-    lcm::LCM lcm("memq://");
+    ::lcm::LCM lcm("memq://");
     const int8_t s = state;
-    const MonitorRun run = RunOnce(&lcm, true, 2.0, [s](lcm::LCM* bus) {
-      Publish(bus, kStatusChannel, MakeStatus(s));
-      Publish(bus, kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_CONVERGED, 0.1));
+    const MonitorRun run = RunOnce(&lcm, true, 2.0, [s](::lcm::LCM* bus) {
+      Publish(bus, lcm::kStatusChannel, MakeStatus(s));
+      Publish(bus, lcm::kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_CONVERGED, 0.1));
     });
     EXPECT_EQ(run.code, code) << EstimatorStateName(state);
   }
   // Without a status the slaves' states decide.
-  lcm::LCM lcm("memq://");
-  const MonitorRun run = RunOnce(&lcm, false, 0.5, [](lcm::LCM* bus) {
-    Publish(bus, kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_DECALIBRATED, 0.1));
+  ::lcm::LCM lcm("memq://");
+  const MonitorRun run = RunOnce(&lcm, false, 0.5, [](::lcm::LCM* bus) {
+    Publish(bus, lcm::kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_DECALIBRATED, 0.1));
   });
   EXPECT_EQ(run.code, 2);
   EXPECT_THAT(run.out, HasSubstr("RIGCAL_STATUS never"));
 }
 
 TEST(StatusMonitor, NoDataWithinTheTimeoutIsExitCode3) {
-  lcm::LCM lcm("memq://");
+  ::lcm::LCM lcm("memq://");
   const auto start = std::chrono::steady_clock::now();
   const MonitorRun run = RunOnce(&lcm, true, 0.3);
   const double waited =
@@ -128,17 +128,17 @@ TEST(StatusMonitor, NoDataWithinTheTimeoutIsExitCode3) {
 }
 
 TEST(StatusMonitor, RejectedMessagesAreCountedNotShown) {
-  lcm::LCM lcm("memq://");
+  ::lcm::LCM lcm("memq://");
   rig_status_t bad = MakeStatus(rig_status_t::ESTIMATOR_CONVERGED);
   bad.cameras[0].fps = -1.0;  // violates fps >= 0: a sender that skips the checks
   const int size = bad.getEncodedSize();
   std::vector<uint8_t> raw(size);
   ASSERT_EQ(bad.encode(raw.data(), 0, size), size);
-  const MonitorRun run = RunOnce(&lcm, true, 0.6, [&raw](lcm::LCM* bus) {
+  const MonitorRun run = RunOnce(&lcm, true, 0.6, [&raw](::lcm::LCM* bus) {
     const uint8_t junk[] = {1, 2, 3, 4, 5};
-    bus->publish(kStatusChannel, junk, sizeof(junk));
-    bus->publish(kStatusChannel, raw.data(), raw.size());
-    Publish(bus, kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_CONVERGED, 0.1));
+    bus->publish(lcm::kStatusChannel, junk, sizeof(junk));
+    bus->publish(lcm::kStatusChannel, raw.data(), raw.size());
+    Publish(bus, lcm::kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_CONVERGED, 0.1));
   });
   const nlohmann::json j = nlohmann::json::parse(run.out);
   EXPECT_EQ(j["rejected_messages"], 2);
@@ -209,7 +209,7 @@ TEST(StatusMonitor, DashboardShowsEveryFigure) {
 }
 
 TEST(StatusMonitor, PlainLinesPerStatusUntilStopped) {
-  lcm::LCM lcm("memq://");
+  ::lcm::LCM lcm("memq://");
   std::atomic<bool> stop{false};
   std::ostringstream out, err;
   StatusRunOptions options;
@@ -218,7 +218,7 @@ TEST(StatusMonitor, PlainLinesPerStatusUntilStopped) {
   std::thread monitor([&]() { code = RunStatusMonitor(options, out, err, stop, &lcm); });
   for (int i = 0; i < 3; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(150));
-    Publish(&lcm, kStatusChannel,
+    Publish(&lcm, lcm::kStatusChannel,
             MakeStatus(i < 2 ? rig_status_t::ESTIMATOR_USABLE : rig_status_t::ESTIMATOR_CONVERGED,
                        1000 + i));
   }
@@ -237,4 +237,4 @@ TEST(StatusMonitor, PlainLinesPerStatusUntilStopped) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::monitor

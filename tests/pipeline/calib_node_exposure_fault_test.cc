@@ -17,14 +17,14 @@
 #include "rigcal/pipeline/calib_node.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
-void Publish(lcm::LCM& bus, const std::string& channel, const CameraPose& pose,
-             const CameraNames& names) {
-  auto msg = CameraPoseToLcm(pose, names, pose.t_ns / 1000);
+void Publish(::lcm::LCM& bus, const std::string& channel, const CameraPose& pose,
+             const lcm::CameraNames& names) {
+  auto msg = lcm::CameraPoseToLcm(pose, names, pose.t_ns / 1000);
   ASSERT_TRUE(msg) << msg.error();
-  auto bytes = EncodeMessage(channel, names, *msg);
+  auto bytes = lcm::EncodeMessage(channel, names, *msg);
   ASSERT_TRUE(bytes) << bytes.error();
   bus.publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
 }
@@ -36,12 +36,12 @@ TEST(CalibNodeExposure, OnlyConfiguredCamerasOnTheirOwnChannelsReachTheEstimator
                                 "cameras:\n"
                                 "  - name: front\n"
                                 "  - name: left\n";
-  auto config = LoadRigConfig(config_path);
+  auto config = io::LoadRigConfig(config_path);
   ASSERT_TRUE(config) << config.error();
-  const CameraNames names{"front", "left"};
-  const CameraNames intruders{"front", "left", "roof"};
+  const lcm::CameraNames names{"front", "left"};
+  const lcm::CameraNames intruders{"front", "left", "roof"};
 
-  lcm::LCM bus("memq://");
+  ::lcm::LCM bus("memq://");
   ASSERT_TRUE(bus.good());
   CalibNode node(*config, CalibNodeOptions{}, &bus);
   ASSERT_TRUE(node.Open().ok());
@@ -55,18 +55,18 @@ TEST(CalibNodeExposure, OnlyConfiguredCamerasOnTheirOwnChannelsReachTheEstimator
   int64_t good = 0;
   for (size_t k = 0; k < drive.recording.size(); ++k) {
     for (int cam = 0; cam < 2; ++cam) {
-      Publish(bus, PoseChannel(names[cam]), drive.recording.PoseAt(cam, k), names);
+      Publish(bus, lcm::PoseChannel(names[cam]), drive.recording.PoseAt(cam, k), names);
       ++good;
     }
     CameraPose p = drive.recording.PoseAt(0, k);
     p.t_ns += 1;
     // The master's pose on the slave's channel (a publisher naming another camera).
-    Publish(bus, PoseChannel("left"), p, names);
+    Publish(bus, lcm::PoseChannel("left"), p, names);
     // A camera the config does not name, on its own channel.
     p.camera = 2;
-    Publish(bus, PoseChannel("roof"), p, intruders);
+    Publish(bus, lcm::PoseChannel("roof"), p, intruders);
     // The same on a configured camera's channel: its name is not the rig's.
-    Publish(bus, PoseChannel("front"), p, intruders);
+    Publish(bus, lcm::PoseChannel("front"), p, intruders);
   }
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (node.ReceivedPoses() < good && std::chrono::steady_clock::now() < deadline) {
@@ -88,4 +88,4 @@ TEST(CalibNodeExposure, OnlyConfiguredCamerasOnTheirOwnChannelsReachTheEstimator
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
@@ -23,7 +23,7 @@
 #include "rigcal/lcm/pose_log.h"
 #include "rigcal/lcm/pose_message.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
@@ -73,13 +73,13 @@ SyntheticDrive Drive(int frames = 1600) {
 // Received messages, collected by handlers that run on the node's LCM thread.
 struct Sink {
   std::mutex mutex;
-  MessageValidator validator{CameraNames{"front", "left", "back"}};
+  lcm::MessageValidator validator{lcm::CameraNames{"front", "left", "back"}};
   std::vector<rig_extrinsics_t> extrinsics;
   std::vector<rig_status_t> status;
   int64_t rejected = 0;
 };
 
-void OnExtrinsics(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Sink* sink) {
+void OnExtrinsics(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, Sink* sink) {
   std::lock_guard<std::mutex> lock(sink->mutex);
   auto msg = sink->validator.Decode<rig_extrinsics_t>(channel, rbuf->data, rbuf->data_size);
   if (msg) {
@@ -89,7 +89,7 @@ void OnExtrinsics(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Si
   }
 }
 
-void OnStatus(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Sink* sink) {
+void OnStatus(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, Sink* sink) {
   std::lock_guard<std::mutex> lock(sink->mutex);
   auto msg = sink->validator.Decode<rig_status_t>(channel, rbuf->data, rbuf->data_size);
   if (msg) {
@@ -99,11 +99,11 @@ void OnStatus(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Sink* 
   }
 }
 
-void Publish(lcm::LCM& bus, const CameraPose& pose, const CameraNames& names) {
-  auto msg = CameraPoseToLcm(pose, names, pose.t_ns / 1000);
+void Publish(::lcm::LCM& bus, const CameraPose& pose, const lcm::CameraNames& names) {
+  auto msg = lcm::CameraPoseToLcm(pose, names, pose.t_ns / 1000);
   ASSERT_TRUE(msg) << msg.error();
-  const std::string channel = PoseChannel(names[pose.camera]);
-  auto bytes = EncodeMessage(channel, names, *msg);
+  const std::string channel = lcm::PoseChannel(names[pose.camera]);
+  auto bytes = lcm::EncodeMessage(channel, names, *msg);
   ASSERT_TRUE(bytes) << bytes.error();
   bus.publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
 }
@@ -118,17 +118,17 @@ const slave_extrinsics_t* FindSlave(const rig_extrinsics_t& msg, const std::stri
 
 TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
   TempDir dir;
-  auto config = LoadRigConfig(WriteConfig(dir));
+  auto config = io::LoadRigConfig(WriteConfig(dir));
   ASSERT_TRUE(config) << config.error();
   ASSERT_EQ(config->CameraNames(), kNames);  // the master first, then file order
   const SyntheticDrive drive = Drive();
   const RigRecording& rec = drive.recording;
 
-  lcm::LCM bus("memq://");
+  ::lcm::LCM bus("memq://");
   ASSERT_TRUE(bus.good());
   Sink sink;
-  bus.subscribeFunction(kExtrinsicsChannel, &OnExtrinsics, &sink);
-  bus.subscribeFunction(kStatusChannel, &OnStatus, &sink);
+  bus.subscribeFunction(lcm::kExtrinsicsChannel, &OnExtrinsics, &sink);
+  bus.subscribeFunction(lcm::kStatusChannel, &OnStatus, &sink);
 
   CalibNodeOptions options;
   options.result_path = dir / "result.yaml";
@@ -162,16 +162,16 @@ TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
       bad.quality = 1.0;
       std::vector<uint8_t> buffer(bad.getEncodedSize());
       bad.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
-      bus.publish(PoseChannel("left"), buffer.data(), static_cast<unsigned int>(buffer.size()));
+      bus.publish(lcm::PoseChannel("left"), buffer.data(), static_cast<unsigned int>(buffer.size()));
       const uint8_t garbage[7] = {1, 2, 3, 4, 5, 6, 7};
-      bus.publish(PoseChannel("back"), garbage, sizeof(garbage));
+      bus.publish(lcm::PoseChannel("back"), garbage, sizeof(garbage));
       CameraPose stranger;
       stranger.t_ns = rec.t_ns[k];
-      auto msg = CameraPoseToLcm(stranger, CameraNames{"roof"}, 1);
+      auto msg = lcm::CameraPoseToLcm(stranger, lcm::CameraNames{"roof"}, 1);
       ASSERT_TRUE(msg);
-      auto bytes = EncodeMessage(PoseChannel("roof"), CameraNames{"roof"}, *msg);
+      auto bytes = lcm::EncodeMessage(lcm::PoseChannel("roof"), lcm::CameraNames{"roof"}, *msg);
       ASSERT_TRUE(bytes);
-      bus.publish(PoseChannel("roof"), bytes->data(), static_cast<unsigned int>(bytes->size()));
+      bus.publish(lcm::PoseChannel("roof"), bytes->data(), static_cast<unsigned int>(bytes->size()));
     }
   }
   // Wait until the node has received everything and has published on its periods at least
@@ -199,7 +199,7 @@ TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
   EXPECT_EQ(summary.unknown_channel, bad_batches);
   EXPECT_EQ(summary.cameras[1].invalid, bad_batches);  // NaN on left
   EXPECT_EQ(summary.cameras[2].invalid, bad_batches);  // garbage on back
-  EXPECT_EQ(summary.decode.Rejected(RejectCause::kNonFinite), bad_batches);
+  EXPECT_EQ(summary.decode.Rejected(lcm::RejectCause::kNonFinite), bad_batches);
   for (int i = 0; i < 2; ++i) {
     const SlaveCalibration& slave = summary.estimate.rig.slaves[i];
     ASSERT_TRUE(slave.usable()) << slave.message;
@@ -237,7 +237,7 @@ TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
   EXPECT_EQ(status.estimator_state, rig_status_t::ESTIMATOR_CONVERGED) << status.estimator_message;
 
   // The result YAML and the state file were written on stop.
-  auto result = ReadRigYaml(options.result_path);
+  auto result = io::ReadRigYaml(options.result_path);
   ASSERT_TRUE(result) << result.error();
   EXPECT_NEAR((*result)["left"].C.x(), summary.estimate.rig.slaves[0].estimate.C.x(), 1e-9);
   EXPECT_TRUE(fs::exists(options.state_path));
@@ -248,15 +248,15 @@ TEST(CalibNode, MemqEndToEndConvergesAndPublishes) {
 // event (a logger killed mid-write).
 std::string WriteDamagedLog(const TempDir& dir, const RigRecording& recording) {
   const std::string path = dir / "poses.lcmlog";
-  EXPECT_TRUE(WritePoseLog(path, recording).ok());
+  EXPECT_TRUE(lcm::WritePoseLog(path, recording).ok());
   {
-    lcm::LogFile log(path, "a");
+    ::lcm::LogFile log(path, "a");
     EXPECT_TRUE(log.good());
     const uint8_t garbage[5] = {9, 9, 9, 9, 9};
-    lcm::LogEvent event;
+    ::lcm::LogEvent event;
     event.eventnum = 1'000'000;
     event.timestamp = recording.t_ns.back() / 1000 + 1;
-    event.channel = PoseChannel("left");
+    event.channel = lcm::PoseChannel("left");
     event.datalen = sizeof(garbage);
     event.data = const_cast<uint8_t*>(garbage);
     EXPECT_EQ(log.writeEvent(&event), 0);
@@ -270,7 +270,7 @@ std::string WriteDamagedLog(const TempDir& dir, const RigRecording& recording) {
 
 TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
   TempDir dir;
-  auto config = LoadRigConfig(WriteConfig(dir));
+  auto config = io::LoadRigConfig(WriteConfig(dir));
   ASSERT_TRUE(config) << config.error();
   // The resume check compares the window refinement of the statistics with the first run's:
   // without the pose history (which a restored state does not have) both refine alike.
@@ -299,12 +299,12 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
 
   // What the node published went into the output log: the last extrinsics equal the result.
   {
-    lcm::LogFile out(dir / "out.lcmlog", "r");
+    ::lcm::LogFile out(dir / "out.lcmlog", "r");
     ASSERT_TRUE(out.good());
-    MessageValidator validator(CameraNames{"front", "left", "back"});
+    lcm::MessageValidator validator(lcm::CameraNames{"front", "left", "back"});
     std::optional<rig_extrinsics_t> last;
-    while (const lcm::LogEvent* event = out.readNextEvent()) {
-      if (event->channel != kExtrinsicsChannel) continue;
+    while (const ::lcm::LogEvent* event = out.readNextEvent()) {
+      if (event->channel != lcm::kExtrinsicsChannel) continue;
       auto msg = validator.Decode<rig_extrinsics_t>(event->channel, event->data, event->datalen);
       ASSERT_TRUE(msg) << msg.error();
       last = *msg;
@@ -316,7 +316,7 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
   // Resume from the saved state with an empty log: the estimate continues from the state.
   const std::string empty_log = dir / "empty.lcmlog";
   ASSERT_TRUE(
-      WritePoseLog(empty_log,
+      lcm::WritePoseLog(empty_log,
                    RigRecording{{}, {"front", {}, {}}, {{"left", {}, {}}, {"back", {}, {}}}})
           .ok());
   options.log_path = empty_log;
@@ -363,7 +363,7 @@ TEST(CalibNode, ReplaysLogFileWithDamageAndResumes) {
 
 TEST(CalibNode, OpenReportsUnusableInputs) {
   TempDir dir;
-  auto config = LoadRigConfig(WriteConfig(dir));
+  auto config = io::LoadRigConfig(WriteConfig(dir));
   ASSERT_TRUE(config) << config.error();
   CalibNodeOptions options;
   options.log_path = dir / "missing.lcmlog";
@@ -376,25 +376,25 @@ TEST(CalibNode, OpenReportsUnusableInputs) {
 TEST(CalibNode, EstimatorStateNamesTheDecalibratedSlave) {
   RigEstimate estimate;
   std::string message;
-  EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_IDLE);
+  EXPECT_EQ(lcm::EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_IDLE);
   estimate.sets = 10;
   estimate.rig.slaves.resize(2);
   estimate.rig.slaves[0].name = "left";
   estimate.rig.slaves[1].name = "back";
   estimate.online.resize(2);
-  EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_INITIALISING);
+  EXPECT_EQ(lcm::EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_INITIALISING);
   estimate.rig.slaves[0].state = SlaveState::kConverged;
-  EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_DEGRADED);
+  EXPECT_EQ(lcm::EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_DEGRADED);
   EXPECT_NE(message.find("back"), std::string::npos) << message;  // the one holding it back
   EXPECT_NE(message.find("1 of 2 slaves usable"), std::string::npos) << message;
   estimate.rig.slaves[1].state = SlaveState::kUsable;
-  EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_USABLE);
+  EXPECT_EQ(lcm::EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_USABLE);
   estimate.rig.slaves[1].state = SlaveState::kConverged;
-  EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_CONVERGED);
+  EXPECT_EQ(lcm::EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_CONVERGED);
   estimate.rig.slaves[1].state = SlaveState::kDecalibrated;
-  EXPECT_EQ(EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_DECALIBRATED);
+  EXPECT_EQ(lcm::EstimatorState(estimate, &message), rig_status_t::ESTIMATOR_DECALIBRATED);
   EXPECT_NE(message.find("back"), std::string::npos) << message;
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -8,13 +8,13 @@
 #include <random>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/pipeline/online_replay.h"
 #include "support/skip.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 const std::string kPath =
@@ -46,9 +46,9 @@ Rig MakeRig() {
 
 TEST(EurocV102Drive, OnlineEstimateConverges) {
   if (!std::filesystem::exists(kPath)) RIGCAL_SKIP_MISSING() << kPath << " not found";
-  TrajectoryReadOptions read;
+  io::TrajectoryReadOptions read;
   read.max_quaternion_norm_error = 1e-3;  // the ground truth has 6-decimal quaternions
-  auto body = ReadTrajectory(kPath, read);
+  auto body = io::ReadTrajectory(kPath, read);
   ASSERT_TRUE(body) << body.error();
   ASSERT_GT(body->size(), 10000u);
 
@@ -139,4 +139,4 @@ TEST(EurocV102Drive, OnlineEstimateConverges) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

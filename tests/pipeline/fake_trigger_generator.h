@@ -18,7 +18,7 @@
 #include <string>
 #include <thread>
 
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/v4l2_timestamp.h"
 #include "rigcal/trigger_protocol/frame_codec.h"
 
 namespace rigcal::testing {
@@ -44,7 +44,7 @@ class FakeTriggerGenerator {
     }
     cfmakeraw(&tio);
     tcsetattr(slave_, TCSANOW, &tio);
-    boot_ns_ = drivers::MonotonicNowNs() - 1'000'000'000;
+    boot_ns_ = capture::MonotonicNowNs() - 1'000'000'000;
     return true;
   }
   // Answers commands (`answer` false: stays silent, a dead generator).
@@ -70,7 +70,7 @@ class FakeTriggerGenerator {
 
  private:
   uint64_t McuUs() const {
-    return static_cast<uint64_t>((drivers::MonotonicNowNs() - boot_ns_) / 1000);
+    return static_cast<uint64_t>((capture::MonotonicNowNs() - boot_ns_) / 1000);
   }
   void Send(const trigger_protocol::Message& m) {
     uint8_t frame[trigger_protocol::kMaxFrameSize];

@@ -13,27 +13,27 @@
 #include <thread>
 
 #include "pipeline/room_rig.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/lcm/shared_bus.h"
 #include "rigcal/pipeline/calib_node.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "rigcal/pipeline/pipeline.h"
+#include "rigcal/sim/simulated_rig.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
 
-RigConfig Config(const drivers::SimulatedRigSpec& spec) {
-  RigConfig config;
+io::RigConfig Config(const sim::SimulatedRigSpec& spec) {
+  io::RigConfig config;
   config.path = "test-config";
   config.name = "test";
   for (const std::string& name : spec.names) {
-    CameraConfig camera;
+    io::CameraConfig camera;
     camera.name = name;
     camera.spec = RoomRigCameraSpec(name);
     config.cameras.push_back(camera);
@@ -42,7 +42,7 @@ RigConfig Config(const drivers::SimulatedRigSpec& spec) {
   return config;
 }
 
-CalibNodeSummary ReplayLog(const RigConfig& config, const std::string& path, bool poses_only) {
+CalibNodeSummary ReplayLog(const io::RigConfig& config, const std::string& path, bool poses_only) {
   CalibNodeOptions options;
   options.log_path = path;
   options.replay.poses_only = poses_only;
@@ -72,10 +72,10 @@ TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
   const fs::path dir =
       fs::temp_directory_path() / ("rigcal_image_replay_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const drivers::SimulatedRigSpec spec = RoomRigSpec(8.0);
-  auto rig = drivers::MakeSimulatedRig(spec);
+  const sim::SimulatedRigSpec spec = RoomRigSpec(8.0);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
-  const RigConfig config = Config(spec);
+  const io::RigConfig config = Config(spec);
   const std::string images = (dir / "images.lcmlog").string();
   const std::string poses = (dir / "poses.lcmlog").string();
   WriteImageLog(*rig, spec.names, images);
@@ -83,9 +83,9 @@ TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
   // The live run: lossless, publishing every pose on a file:// bus (the recording).
   PipelineSnapshot live;
   {
-    lcm::LCM recorder("file://" + poses + "?mode=w");
+    ::lcm::LCM recorder("file://" + poses + "?mode=w");
     ASSERT_TRUE(recorder.good());
-    SharedBus bus(&recorder);
+    lcm::SharedBus bus(&recorder);
     PipelineOptions options;
     options.lossless = true;
     Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, config.online, options, &bus);
@@ -108,9 +108,9 @@ TEST(ImageLogReplay, RecordedLiveRunReplaysToTheLiveResult) {
   // --poses-only on the image log: it has no poses, nothing is calibrated, and says so.
   const CalibNodeSummary no_poses = ReplayLog(config, images, /*poses_only=*/true);
   EXPECT_EQ(no_poses.estimate.sets, 0u);
-  EXPECT_EQ(no_poses.skipped_channels.at(ImageChannel("front")), rig->num_frames());
+  EXPECT_EQ(no_poses.skipped_channels.at(lcm::ImageChannel("front")), rig->num_frames());
   if (!::testing::Test::HasFailure()) fs::remove_all(dir);
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

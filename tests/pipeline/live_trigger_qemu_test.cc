@@ -13,14 +13,14 @@
 
 #include "firmware/qemu_process.h"
 #include "live_trigger_rig.h"
-#include "rigcal/drivers/serial_port.h"
-#include "rigcal/drivers/trigger_link.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/pipeline/capture_sources.h"
+#include "rigcal/trigger/serial_port.h"
+#include "rigcal/trigger/trigger_link.h"
 #include "support/skip.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 TEST(LiveTriggerQemu, FramesCarryTheFirmwaresConsecutivePulses) {
@@ -32,14 +32,14 @@ TEST(LiveTriggerQemu, FramesCarryTheFirmwaresConsecutivePulses) {
   ASSERT_TRUE(qemu.Start(testing::QemuFirmware::Serial::kPty, &error)) << error;
   {
     // On a loaded host QEMU may take seconds to run the firmware: wait until it speaks.
-    auto port = drivers::SerialPort::Open(qemu.pty_path(), 115200);
+    auto port = trigger::SerialPort::Open(qemu.pty_path(), 115200);
     ASSERT_TRUE(port.ok()) << port.error();
-    drivers::TriggerLink link(std::move(*port));
-    std::vector<drivers::TriggerEvent> events;
+    trigger::TriggerLink link(std::move(*port));
+    std::vector<trigger::TriggerEvent> events;
     for (int i = 0; i < 60 && events.empty(); ++i) ASSERT_TRUE(link.Poll(500, &events).ok());
     ASSERT_FALSE(events.empty()) << "no message from the firmware within 30 s";
   }
-  auto config = LoadRigConfig(testing::WriteRig(support::FreshTempDir("live_trigger_qemu"),
+  auto config = io::LoadRigConfig(testing::WriteRig(support::FreshTempDir("live_trigger_qemu"),
                                                 qemu.pty_path(), "uart_wire: false"));
   ASSERT_TRUE(config.ok()) << config.error();
   std::ostringstream progress;
@@ -83,4 +83,4 @@ TEST(LiveTriggerQemu, FramesCarryTheFirmwaresConsecutivePulses) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

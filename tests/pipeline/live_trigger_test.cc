@@ -19,7 +19,7 @@
 #include "rigcal/pipeline/capture_sources.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
@@ -33,7 +33,7 @@ TEST(LiveTrigger, ImageFolderFramesCarryConsecutivePulsesAndTheirMappedTimes) {
   generator.Start();
   const fs::path dir = support::FreshTempDir("live_trigger_folders");
   auto config =
-      LoadRigConfig(WriteRig(dir, generator.slave_path(), "uart_wire: false, tolerance_ms: 5"));
+      io::LoadRigConfig(WriteRig(dir, generator.slave_path(), "uart_wire: false, tolerance_ms: 5"));
   ASSERT_TRUE(config.ok()) << config.error();
   EXPECT_TRUE(config->online.sync.match_by_trigger_seq);
   std::ostringstream progress;
@@ -51,7 +51,7 @@ TEST(LiveTrigger, ImageFolderFramesCarryConsecutivePulsesAndTheirMappedTimes) {
       auto frame = sources->devices[c]->Grab();
       ASSERT_TRUE(frame.ok()) << frame.error();
       ASSERT_TRUE(frame->has_value()) << "camera " << c << " ended at frame " << k;
-      const drivers::Frame& f = **frame;
+      const capture::Frame& f = **frame;
       ASSERT_GE(f.seq, 0) << "camera " << c << " frame " << k << " got no pulse";
       seqs[c].push_back(f.seq);
       const int64_t error_ns = f.t_ns - generator.TrueHostNs(f.seq);
@@ -83,7 +83,7 @@ TEST(LiveTrigger, ImageFolderFramesCarryConsecutivePulsesAndTheirMappedTimes) {
 
 TEST(LiveTrigger, ADeadPortIsAnErrorNamingIt) {
   const fs::path dir = support::FreshTempDir("live_trigger_dead");
-  auto config = LoadRigConfig(WriteRig(dir, "/dev/rigcal-no-such-tty", "uart_wire: false"));
+  auto config = io::LoadRigConfig(WriteRig(dir, "/dev/rigcal-no-such-tty", "uart_wire: false"));
   ASSERT_TRUE(config.ok()) << config.error();
   std::ostringstream progress;
   auto sources = OpenCaptureSources(*config, false, "", progress);
@@ -96,7 +96,7 @@ TEST(LiveTrigger, ADeadPortIsAnErrorNamingIt) {
   std::string error;
   ASSERT_TRUE(silent.Open(&error)) << error;
   silent.Start(/*answer=*/false);
-  auto quiet = LoadRigConfig(WriteRig(support::FreshTempDir("live_trigger_silent"),
+  auto quiet = io::LoadRigConfig(WriteRig(support::FreshTempDir("live_trigger_silent"),
                                       silent.slave_path(), "command_timeout_ms: 100"));
   ASSERT_TRUE(quiet.ok()) << quiet.error();
   auto none = OpenCaptureSources(*quiet, false, "", progress);
@@ -107,4 +107,4 @@ TEST(LiveTrigger, ADeadPortIsAnErrorNamingIt) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

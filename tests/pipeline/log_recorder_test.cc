@@ -26,7 +26,7 @@
 #include "support/lcm_log_events.h"
 #include "support/temp_dir.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
@@ -44,21 +44,21 @@ cv::Mat TestImage(int camera, int64_t k, int width = 64, int height = 48) {
 }
 
 // A device that returns the frames `seqs` (gaps = frames lost by the device), 50 ms apart.
-class ScriptedDevice final : public drivers::CameraDevice {
+class ScriptedDevice final : public capture::CameraDevice {
  public:
   ScriptedDevice(std::string name, int camera, std::vector<int64_t> seqs)
       : name_(std::move(name)), camera_(camera), seqs_(std::move(seqs)) {}
   const std::string& name() const override { return name_; }
   double frame_rate_hz() const override { return 20.0; }
-  Expected<std::optional<drivers::Frame>> Grab() override {
-    if (next_ >= seqs_.size()) return std::optional<drivers::Frame>();
+  Expected<std::optional<capture::Frame>> Grab() override {
+    if (next_ >= seqs_.size()) return std::optional<capture::Frame>();
     const int64_t seq = seqs_[next_++];
-    drivers::Frame frame;
+    capture::Frame frame;
     frame.camera = camera_;
     frame.seq = seq;
     frame.t_ns = 1'000'000'000 + seq * 50'000'000;
     frame.image = TestImage(camera_, seq);
-    return std::optional<drivers::Frame>(std::move(frame));
+    return std::optional<capture::Frame>(std::move(frame));
   }
   void Interrupt() override {}
 
@@ -70,7 +70,7 @@ class ScriptedDevice final : public drivers::CameraDevice {
 };
 
 TEST(ImageCodec, RoundTripsEveryEncoding) {
-  drivers::Frame frame;
+  capture::Frame frame;
   frame.t_ns = 123'456'789;
   frame.seq = 42;
   frame.image = TestImage(1, 3);
@@ -84,7 +84,7 @@ TEST(ImageCodec, RoundTripsEveryEncoding) {
     EXPECT_EQ(msg->t_ns, frame.t_ns);
     EXPECT_EQ(msg->trigger_seq, 42);
     EXPECT_EQ(msg->pixel_format, "GREY");
-    EXPECT_FALSE(CheckMessage(ImageChannel("cam1"), {"cam0", "cam1"}, &*msg).has_value());
+    EXPECT_FALSE(lcm::CheckMessage(lcm::ImageChannel("cam1"), {"cam0", "cam1"}, &*msg).has_value());
     auto back = FrameFromImage(*msg, 0);
     ASSERT_TRUE(back.ok()) << back.error();
     ASSERT_EQ(back->image.size(), frame.image.size());
@@ -142,9 +142,9 @@ struct LogContents {
   std::vector<int64_t> timestamps;
 };
 
-LogContents ReadLog(const std::string& path, const CameraNames& names) {
+LogContents ReadLog(const std::string& path, const lcm::CameraNames& names) {
   LogContents contents;
-  MessageValidator validator(names);
+  lcm::MessageValidator validator(names);
   for (const support::LoggedEvent& e : support::ReadLcmLog(path)) {
     ++contents.events_per_channel[e.channel];
     contents.timestamps.push_back(e.timestamp);
@@ -160,13 +160,13 @@ LogContents ReadLog(const std::string& path, const CameraNames& names) {
 TEST(LogRecorder, RecordsTappedFramesAndMessages) {
   const fs::path dir = support::FreshTempDir("log_recorder_frames");
   const std::string path = (dir / "rec.lcmlog").string();
-  const CameraNames names = {"cam0", "cam1"};
+  const lcm::CameraNames names = {"cam0", "cam1"};
   RecorderOptions options;
   options.image.encoding = ImageEncoding::kPng;
   options.lossless = true;
   auto recorder = LogRecorder::Open(path, names, options);
   ASSERT_TRUE(recorder.ok()) << recorder.error();
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   devices.push_back((*recorder)->Tap(
       std::make_unique<ScriptedDevice>("cam0", 0, std::vector<int64_t>{0, 1, 2, 3, 4, 5}), 0));
   // cam1 loses frames 2 and 4..5.
@@ -209,12 +209,12 @@ TEST(LogRecorder, RecordsTappedFramesAndMessages) {
 TEST(LogRecorder, CutRecordingReadsUpToLastCompleteEvent) {
   const fs::path dir = support::FreshTempDir("log_recorder_cut");
   const std::string path = (dir / "rec.lcmlog").string();
-  const CameraNames names = {"cam0"};
+  const lcm::CameraNames names = {"cam0"};
   RecorderOptions options;
   options.lossless = true;
   auto recorder = LogRecorder::Open(path, names, options);
   ASSERT_TRUE(recorder.ok()) << recorder.error();
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   devices.push_back((*recorder)->Tap(
       std::make_unique<ScriptedDevice>("cam0", 0, std::vector<int64_t>{0, 1, 2, 3, 4}), 0));
   CaptureLoops capture(std::move(devices));
@@ -247,4 +247,4 @@ TEST(LogRecorder, ReportsAnUnwritableLog) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

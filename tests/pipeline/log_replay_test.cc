@@ -14,7 +14,7 @@
 
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/rig_config.h"
-#include "rigcal/io/yaml_fields.h"
+#include "rigcal/io/text_file.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/log_reader.h"
@@ -22,7 +22,7 @@
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
@@ -44,13 +44,13 @@ class LogReplayTest : public ::testing::Test {
                                        "  - name: left\n"
                                        "  - name: back\n"
                                        "publish: {extrinsics_rate_hz: 2, status_rate_hz: 1}\n";
-    auto config = LoadRigConfig(Path("rig.yaml"));
+    auto config = io::LoadRigConfig(Path("rig.yaml"));
     ASSERT_TRUE(config) << config.error();
     config_ = *config;
     DriveOptions d;
     d.num_frames = kFrames;
     drive_ = GenerateDrive(kNames, DemoRig(), d);
-    ASSERT_TRUE(WritePoseLog(Path("poses.lcmlog"), drive_.recording).ok());
+    ASSERT_TRUE(lcm::WritePoseLog(Path("poses.lcmlog"), drive_.recording).ok());
   }
   void TearDown() override {
     std::error_code ec;
@@ -76,10 +76,10 @@ class LogReplayTest : public ::testing::Test {
   // The events of an output log by channel.
   std::map<std::string, std::vector<std::vector<uint8_t>>> Events(const std::string& tag) {
     std::map<std::string, std::vector<std::vector<uint8_t>>> events;
-    auto reader = LogReader::Open(Path(tag + ".out.lcmlog"));
+    auto reader = lcm::LogReader::Open(Path(tag + ".out.lcmlog"));
     EXPECT_TRUE(reader) << reader.error();
-    LogEvent event;
-    while ((*reader)->Next(&event) == LogReader::Outcome::kEvent) {
+    lcm::LogEvent event;
+    while ((*reader)->Next(&event) == lcm::LogReader::Outcome::kEvent) {
       events[event.channel].push_back(event.data);
     }
     EXPECT_TRUE((*reader)->problem().empty()) << (*reader)->problem();
@@ -87,7 +87,7 @@ class LogReplayTest : public ::testing::Test {
   }
 
   fs::path dir_;
-  RigConfig config_;
+  io::RigConfig config_;
   SyntheticDrive drive_;
 };
 
@@ -109,12 +109,12 @@ TEST_F(LogReplayTest, SameLogSameResultBitForBitAndNothingDropped) {
     EXPECT_EQ(x.estimate.C, y.estimate.C) << x.name;
     EXPECT_EQ(x.estimate.scale, y.estimate.scale) << x.name;
   }
-  auto yaml_a = ReadWholeFile(Path("a.yaml"));
-  auto yaml_b = ReadWholeFile(Path("b.yaml"));
+  auto yaml_a = io::ReadWholeFile(Path("a.yaml"));
+  auto yaml_b = io::ReadWholeFile(Path("b.yaml"));
   ASSERT_TRUE(yaml_a && yaml_b);
   EXPECT_EQ(*yaml_a, *yaml_b);
   // The published history is the same too, message for message.
-  EXPECT_EQ(Events("a")[kExtrinsicsChannel], Events("b")[kExtrinsicsChannel]);
+  EXPECT_EQ(Events("a")[lcm::kExtrinsicsChannel], Events("b")[lcm::kExtrinsicsChannel]);
 }
 
 TEST_F(LogReplayTest, TimersRunOnLogTimeAndStatusIsTrue) {
@@ -123,16 +123,16 @@ TEST_F(LogReplayTest, TimersRunOnLogTimeAndStatusIsTrue) {
   EXPECT_NEAR(summary.log_span_s, span_s, 1e-9);
   auto events = Events("out");
   // 2 Hz and 1 Hz of log time, plus the last message at the end.
-  const auto extrinsics = events[kExtrinsicsChannel].size();
-  const auto status = events[kStatusChannel].size();
+  const auto extrinsics = events[lcm::kExtrinsicsChannel].size();
+  const auto status = events[lcm::kStatusChannel].size();
   EXPECT_NEAR(static_cast<double>(extrinsics), 2.0 * span_s + 1, 1.5);
   EXPECT_NEAR(static_cast<double>(status), 1.0 * span_s + 1, 1.5);
   EXPECT_EQ(summary.extrinsics_published, static_cast<int64_t>(extrinsics));
 
-  MessageValidator validator(kNames);
+  lcm::MessageValidator validator(kNames);
   int64_t previous_utime = -1;
-  for (const auto& data : events[kExtrinsicsChannel]) {
-    auto msg = validator.Decode<rig_extrinsics_t>(kExtrinsicsChannel, data.data(),
+  for (const auto& data : events[lcm::kExtrinsicsChannel]) {
+    auto msg = validator.Decode<rig_extrinsics_t>(lcm::kExtrinsicsChannel, data.data(),
                                                   static_cast<int64_t>(data.size()));
     ASSERT_TRUE(msg) << msg.error();
     EXPECT_GE(msg->utime, previous_utime);  // log time, not the wall clock
@@ -140,8 +140,8 @@ TEST_F(LogReplayTest, TimersRunOnLogTimeAndStatusIsTrue) {
   }
   EXPECT_EQ(previous_utime, drive_.recording.t_ns.back() / 1000);
   // STATUS: rates from the stamps (20 Hz), and no drop that did not happen.
-  for (const auto& data : events[kStatusChannel]) {
-    auto msg = validator.Decode<rig_status_t>(kStatusChannel, data.data(),
+  for (const auto& data : events[lcm::kStatusChannel]) {
+    auto msg = validator.Decode<rig_status_t>(lcm::kStatusChannel, data.data(),
                                               static_cast<int64_t>(data.size()));
     ASSERT_TRUE(msg) << msg.error();
     for (const camera_status_t& camera : msg->cameras) {
@@ -183,10 +183,10 @@ TEST_F(LogReplayTest, DamagedLogsReplayUpToTheDamage) {
   // Another channel, then an event whose header announces 2 GiB.
   const std::string log = Path("poses.lcmlog");
   {
-    lcm::LogFile file(log, "a");
+    ::lcm::LogFile file(log, "a");
     ASSERT_TRUE(file.good());
     uint8_t byte = 1;
-    lcm::LogEvent event;
+    ::lcm::LogEvent event;
     event.eventnum = 1'000'000;
     event.timestamp = 1;
     event.channel = "OTHER_TOPIC";
@@ -216,4 +216,4 @@ TEST_F(LogReplayTest, DamagedLogsReplayUpToTheDamage) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

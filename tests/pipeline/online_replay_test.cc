@@ -4,7 +4,7 @@
 
 #include "rigcal/calib/synthetic.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 TEST(OnlineReplay, ConvergesAndRecordsHistory) {
@@ -43,12 +43,5 @@ TEST(OnlineReplay, ConvergesAndRecordsHistory) {
   EXPECT_NE(table.find("left"), std::string::npos);
 }
 
-TEST(OnlineReplay, FlagsAsWords) {
-  EXPECT_EQ(StateText(SlaveState::kConverged, kFlagPlanar), "converged planar");
-  EXPECT_EQ(StateText(SlaveState::kUsable, 0), "usable");
-  EXPECT_EQ(StateText(SlaveState::kDecalibrated, kFlagTranslationalOnly | kFlagRefined),
-            "decalibrated translational-only refined");
-}
-
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -10,13 +10,13 @@
 #include <thread>
 
 #include "pipeline/room_rig.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/pipeline/run_evaluation.h"
+#include "rigcal/sim/simulated_rig.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 OnlineOptions Online() {
@@ -28,8 +28,8 @@ OnlineOptions Online() {
 }
 
 TEST(Pipeline, SimulatedDriveConverges) {
-  const drivers::SimulatedRigSpec spec = RoomRigSpec(20.0);
-  auto rig = drivers::MakeSimulatedRig(spec);
+  const sim::SimulatedRigSpec spec = RoomRigSpec(20.0);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   PipelineOptions options;
   options.lossless = true;
@@ -59,9 +59,9 @@ TEST(Pipeline, SimulatedDriveConverges) {
 }
 
 TEST(Pipeline, DeadCameraLeavesOthersCalibrating) {
-  drivers::SimulatedRigSpec spec = RoomRigSpec(16.0);
+  sim::SimulatedRigSpec spec = RoomRigSpec(16.0);
   spec.fail_after_s["up"] = 4.0;
-  auto rig = drivers::MakeSimulatedRig(spec);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   PipelineOptions options;
   options.lossless = true;
@@ -82,8 +82,8 @@ TEST(Pipeline, DeadCameraLeavesOthersCalibrating) {
 // A lossless run does not depend on how the VO threads are scheduled: the same source gives
 // the same sets and the same estimate, however far one thread gets ahead of another.
 TEST(Pipeline, LosslessRunsAreDeterministic) {
-  const drivers::SimulatedRigSpec spec = RoomRigSpec(8.0);
-  auto rig = drivers::MakeSimulatedRig(spec);
+  const sim::SimulatedRigSpec spec = RoomRigSpec(8.0);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   std::vector<PipelineSnapshot> runs;
   for (int run = 0; run < 2; ++run) {
@@ -111,7 +111,7 @@ TEST(Pipeline, LosslessRunsAreDeterministic) {
 
 TEST(Pipeline, RejectsInconsistentArguments) {
   const auto models = RoomRigSpec(1.0).cameras;
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   EXPECT_THROW(
       Pipeline({"a", "b"}, std::move(devices), {models[0], models[1]}, Online(), PipelineOptions()),
       std::invalid_argument);
@@ -124,7 +124,7 @@ TEST(Pipeline, RejectsInconsistentArguments) {
   PipelineOptions bad_vo;
   bad_vo.vo.max_features = 1;
   EXPECT_EQ(bad_vo.Check().message().rfind("vo.max_features: ", 0), 0u) << bad_vo.Check().message();
-  std::vector<std::unique_ptr<drivers::CameraDevice>> two_devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> two_devices;
   two_devices.push_back(nullptr);
   two_devices.push_back(nullptr);
   EXPECT_THROW(
@@ -133,4 +133,4 @@ TEST(Pipeline, RejectsInconsistentArguments) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

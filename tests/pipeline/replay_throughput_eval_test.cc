@@ -14,7 +14,7 @@
 #include "rigcal/lcm/pose_log.h"
 #include "rigcal/pipeline/calib_node.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
@@ -24,7 +24,7 @@ struct Timed {
   double wall_s = 0.0;
 };
 
-Timed Replay(const RigConfig& config, const std::string& log) {
+Timed Replay(const io::RigConfig& config, const std::string& log) {
   CalibNodeOptions options;
   options.log_path = log;
   CalibNode node(config, options);
@@ -49,11 +49,11 @@ class ReplayThroughput : public ::testing::Test {
 };
 
 TEST_F(ReplayThroughput, ImageLogThroughVo) {
-  drivers::SimulatedRigSpec spec = RoomRigSpec(15.0);
+  sim::SimulatedRigSpec spec = RoomRigSpec(15.0);
   spec.names.resize(2);
   spec.master_from_camera.resize(2);
   spec.cameras.clear();
-  RigConfig config;
+  io::RigConfig config;
   config.path = "eval";
   for (const std::string& name : spec.names) {
     camera::CameraSpec camera = RoomRigCameraSpec(name);
@@ -63,12 +63,12 @@ TEST_F(ReplayThroughput, ImageLogThroughVo) {
     auto model = camera::MakeCameraModel(camera);
     ASSERT_TRUE(model) << model.error();
     spec.cameras.emplace_back(std::move(*model));
-    CameraConfig c;
+    io::CameraConfig c;
     c.name = name;
     c.spec = camera;
     config.cameras.push_back(c);
   }
-  auto rig = drivers::MakeSimulatedRig(spec);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   const std::string log = (dir_ / "images.lcmlog").string();
   WriteImageLog(*rig, spec.names, log);
@@ -90,11 +90,11 @@ TEST_F(ReplayThroughput, PoseLog) {
   d.num_frames = 20000;
   const SyntheticDrive drive = GenerateDrive(names, DemoRig(), d);
   const std::string log = (dir_ / "poses.lcmlog").string();
-  ASSERT_TRUE(WritePoseLog(log, drive.recording).ok());
-  RigConfig config;
+  ASSERT_TRUE(lcm::WritePoseLog(log, drive.recording).ok());
+  io::RigConfig config;
   config.path = "eval";
   for (const std::string& name : names) {
-    CameraConfig camera;
+    io::CameraConfig camera;
     camera.name = name;
     config.cameras.push_back(camera);
   }
@@ -108,4 +108,4 @@ TEST_F(ReplayThroughput, PoseLog) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -10,15 +10,15 @@
 #include <thread>
 
 #include "pipeline/room_rig_spec.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
 #include "rigcal/pipeline/image_codec.h"
 #include "rigcal/pipeline/pipeline.h"
+#include "rigcal/sim/simulated_rig.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 // Starts `pipeline`, waits (at most 5 minutes) until every camera's stream has been processed,
 // stops it; false when it did not finish in time.
@@ -34,9 +34,9 @@ inline bool RunToEnd(Pipeline* pipeline) {
 }
 
 // Every frame of the rig as an image log, in stamp order (master first at equal stamps).
-inline void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<std::string>& names,
+inline void WriteImageLog(const sim::SimulatedRig& rig, const std::vector<std::string>& names,
                           const std::string& path) {
-  std::vector<drivers::Frame> frames;
+  std::vector<capture::Frame> frames;
   auto devices = rig.MakeDevices();
   for (size_t i = 0; i < devices.size(); ++i) {
     while (true) {
@@ -50,15 +50,15 @@ inline void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<st
   std::stable_sort(frames.begin(), frames.end(), [](const auto& a, const auto& b) {
     return a.t_ns != b.t_ns ? a.t_ns < b.t_ns : a.camera < b.camera;
   });
-  lcm::LogFile log(path, "w");
+  ::lcm::LogFile log(path, "w");
   ASSERT_TRUE(log.good());
   int64_t n = 0;
-  for (const drivers::Frame& frame : frames) {
+  for (const capture::Frame& frame : frames) {
     const std::string& name = names[static_cast<size_t>(frame.camera)];
-    const std::string channel = ImageChannel(name);
+    const std::string channel = lcm::ImageChannel(name);
     auto bytes = EncodeImageEvent(frame, names, frame.camera, {});
     ASSERT_TRUE(bytes) << bytes.error();
-    lcm::LogEvent event;
+    ::lcm::LogEvent event;
     event.eventnum = n++;
     event.timestamp = frame.t_ns / 1000;
     event.channel = channel;
@@ -68,4 +68,4 @@ inline void WriteImageLog(const drivers::SimulatedRig& rig, const std::vector<st
   }
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

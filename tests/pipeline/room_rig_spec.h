@@ -6,11 +6,11 @@
 
 #include <string>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/sim/simulated_rig.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 // The intrinsics of every camera of the rig.
 inline camera::CameraSpec RoomRigCameraSpec(const std::string& name) {
@@ -24,8 +24,8 @@ inline camera::CameraSpec RoomRigCameraSpec(const std::string& name) {
 }
 
 // The rig for `seconds` at 20 Hz.
-inline drivers::SimulatedRigSpec RoomRigSpec(double seconds) {
-  drivers::SimulatedRigSpec spec;
+inline sim::SimulatedRigSpec RoomRigSpec(double seconds) {
+  sim::SimulatedRigSpec spec;
   spec.names = {"front", "side", "up"};
   for (const std::string& name : spec.names) {
     auto model = camera::MakeCameraModel(RoomRigCameraSpec(name));
@@ -51,12 +51,12 @@ inline drivers::SimulatedRigSpec RoomRigSpec(double seconds) {
                          {1.5, -1, 2.9},   {0.5, -1.5, 2.3}, {-0.5, -0.5, 2.7}, {-1.5, 0.5, 2.4},
                          {-0.5, 1.2, 2.6}, {0.8, 0.8, 2.2},  {1.2, -0.6, 2.8},  {0, 0, 2.5}};
   for (int i = 0; i < 12; ++i) {
-    drivers::SimulatedRigSpec::Waypoint w;
+    sim::SimulatedRigSpec::Waypoint w;
     w.position = Eigen::Vector3d(p[i][0], p[i][1], p[i][2]);
-    w.world_from_master = drivers::WaypointOrientationFromYpr(ypr[i][0], ypr[i][1], ypr[i][2]);
+    w.world_from_master = sim::WaypointOrientationFromYpr(ypr[i][0], ypr[i][1], ypr[i][2]);
     spec.waypoints.push_back(w);
   }
   return spec;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

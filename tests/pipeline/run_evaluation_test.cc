@@ -8,9 +8,9 @@
 #include <cmath>
 
 #include "pipeline/room_rig_spec.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 SlaveEvaluation Scored(const SlaveCalibration& slave, const Similarity& truth) {
@@ -85,7 +85,7 @@ TEST(RunEvaluation, PlanarEstimateWithPriorScoresTheAxisToo) {
                        "unit = 2 m"),
             std::string::npos)
       << table;
-  const TruthAlignment alignment = AlignmentOf(run);
+  const io::TruthAlignment alignment = AlignmentOf(run);
   EXPECT_TRUE(alignment.applied);
   EXPECT_EQ(alignment.metres_per_unit, 2.0);
 }
@@ -115,7 +115,7 @@ TEST(RunEvaluation, TranslationalEstimateHasNoPositionToScore) {
 // first pose on both sides. Fitted to the raw VO positions, with the origin 10 frames before the
 // first pose, the units here came out 24-25 % small (device/loopback_run's scale truth 5 %).
 TEST(RunEvaluation, UnitsDoNotDependOnWhereTheOdometryStarted) {
-  auto rig = drivers::MakeSimulatedRig(RoomRigSpec(4.0));
+  auto rig = sim::MakeSimulatedRig(RoomRigSpec(4.0));
   ASSERT_TRUE(rig) << rig.error();
   const std::vector<double> units_per_metre = {2.5, 0.8, 1.3};
   const int origin_frame = 10;
@@ -124,12 +124,12 @@ TEST(RunEvaluation, UnitsDoNotDependOnWhereTheOdometryStarted) {
     const auto time_s = [&](int k) {
       return 1e-9 * static_cast<double>(rig->FrameTimeNs(k) - rig->epoch_ns());
     };
-    const Pose origin = rig->CameraPoseAt(camera, time_s(origin_frame));
+    const Pose origin = rig->WorldFromCameraAt(camera, time_s(origin_frame));
     for (int k = origin_frame + 10; k < rig->num_frames(); k += 2) {
       CameraPose p;
       p.camera = camera;
       p.t_ns = rig->FrameTimeNs(k);
-      p.pose = origin.Between(rig->CameraPoseAt(camera, time_s(k)));
+      p.pose = origin.Between(rig->WorldFromCameraAt(camera, time_s(k)));
       p.pose.C *= units_per_metre[static_cast<size_t>(camera)];
       poses[static_cast<size_t>(camera)].push_back(p);
     }
@@ -151,4 +151,4 @@ TEST(RunEvaluation, UnitsDoNotDependOnWhereTheOdometryStarted) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

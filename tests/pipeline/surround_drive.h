@@ -37,7 +37,7 @@
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
 
-namespace rigcal::tools::surround_drive {
+namespace rigcal::pipeline::surround_drive {
 
 struct Sample {
   double drive_s = 0.0;  // drive time
@@ -109,11 +109,11 @@ inline std::map<std::string, double> ThreadCpu() {
 // RIGCAL_STATUS into the report (the handler runs on the node's LCM thread).
 struct StatusSink {
   std::mutex mutex;
-  MessageValidator validator;
+  lcm::MessageValidator validator;
   Report* report = nullptr;
 };
 
-inline void OnStatus(const lcm::ReceiveBuffer* rbuf, const std::string& channel, StatusSink* sink) {
+inline void OnStatus(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, StatusSink* sink) {
   std::lock_guard<std::mutex> lock(sink->mutex);
   auto msg = sink->validator.Decode<rig_status_t>(channel, rbuf->data, rbuf->data_size);
   if (!msg) return;
@@ -126,7 +126,7 @@ inline void OnStatus(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
 inline Report Drive(double drive_s, double speed, int history_sets) {
   Report report;
   const std::string config_path = std::string(RIGCAL_SOURCE_DIR) + "/config/sim_surround4.yaml";
-  auto config = LoadRigConfig(config_path);
+  auto config = io::LoadRigConfig(config_path);
   if (!config) {
     ADD_FAILURE() << config.error();
     return report;
@@ -153,11 +153,11 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
   const SyntheticDrive drive = GenerateDrive(names, rigs, d);
   const RigRecording& rec = drive.recording;
 
-  lcm::LCM bus("memq://");
+  ::lcm::LCM bus("memq://");
   StatusSink sink;
-  sink.validator = MessageValidator(CameraNames(names));
+  sink.validator = lcm::MessageValidator(lcm::CameraNames(names));
   sink.report = &report;
-  bus.subscribeFunction(kStatusChannel, &OnStatus, &sink);
+  bus.subscribeFunction(lcm::kStatusChannel, &OnStatus, &sink);
   CalibNodeOptions options;
   options.camera_timeout_s = std::max(0.5, 5.0 / speed);  // 5 s of drive time
   CalibNode node(*config, options, &bus);
@@ -170,7 +170,7 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
     pthread_setname_np(pthread_self(), "rigcal-input");
     report.summary = node.Run(stop);
   });
-  const CameraNames camera_names(names);
+  const lcm::CameraNames camera_names(names);
   pthread_setname_np(pthread_self(), "drive-publish");  // the VO of the four cameras
   const auto start = std::chrono::steady_clock::now();
   const int64_t t0 = rec.t_ns.front();
@@ -190,10 +190,10 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
         continue;
       }
       const CameraPose pose = rec.PoseAt(cam, k);
-      auto msg = CameraPoseToLcm(pose, camera_names, pose.t_ns / 1000);
+      auto msg = lcm::CameraPoseToLcm(pose, camera_names, pose.t_ns / 1000);
       if (!msg) continue;
-      const std::string channel = PoseChannel(names[cam]);
-      auto bytes = EncodeMessage(channel, camera_names, *msg);
+      const std::string channel = lcm::PoseChannel(names[cam]);
+      auto bytes = lcm::EncodeMessage(channel, camera_names, *msg);
       if (!bytes) continue;
       bus.publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
       ++report.published;
@@ -227,4 +227,4 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
   return report;
 }
 
-}  // namespace rigcal::tools::surround_drive
+}  // namespace rigcal::pipeline::surround_drive

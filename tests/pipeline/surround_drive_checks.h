@@ -12,7 +12,7 @@
 #include "rigcal/calib/slave_state.h"
 #include "surround_drive.h"
 
-namespace rigcal::tools::surround_drive {
+namespace rigcal::pipeline::surround_drive {
 
 inline void CheckDrive(const Report& r, double flat_after_s) {
   ASSERT_FALSE(r.samples.empty());
@@ -106,4 +106,4 @@ inline void CheckDrive(const Report& r, double flat_after_s) {
               total / (drive_s / 60.0));
 }
 
-}  // namespace rigcal::tools::surround_drive
+}  // namespace rigcal::pipeline::surround_drive

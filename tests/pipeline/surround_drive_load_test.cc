@@ -10,7 +10,7 @@
 #include "surround_drive.h"
 #include "surround_drive_checks.h"
 
-namespace rigcal::tools::surround_drive {
+namespace rigcal::pipeline::surround_drive {
 namespace {
 
 TEST(SurroundDriveLoad, TwoMinutesStayFlatAndRight) {
@@ -21,4 +21,4 @@ TEST(SurroundDriveLoad, TwoMinutesStayFlatAndRight) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::surround_drive
+}  // namespace rigcal::pipeline::surround_drive

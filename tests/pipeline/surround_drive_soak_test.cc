@@ -8,7 +8,7 @@
 #include "surround_drive.h"
 #include "surround_drive_checks.h"
 
-namespace rigcal::tools::surround_drive {
+namespace rigcal::pipeline::surround_drive {
 namespace {
 
 TEST(SurroundDriveSoak, OneHourStaysFlatAndRight) {
@@ -20,4 +20,4 @@ TEST(SurroundDriveSoak, OneHourStaysFlatAndRight) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::surround_drive
+}  // namespace rigcal::pipeline::surround_drive

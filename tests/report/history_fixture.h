@@ -19,9 +19,9 @@
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_log.h"
 #include "rigcal/lcm/status_message.h"
-#include "rigcal/pipeline/calib_node.h"
+#include "rigcal/lcm/extrinsics_message.h"
 
-namespace rigcal::tools::report_test {
+namespace rigcal::report::report_test {
 
 struct HistoryFiles {
   std::filesystem::path dir;
@@ -46,11 +46,11 @@ inline int CountOf(const std::string& text, const std::string& needle) {
 
 // Appends one checked message to `log` as an event at `utime`; false when it fails.
 template <typename Message>
-bool WriteEvent(lcm::LogFile* log, const std::string& channel, const Message& msg, int64_t utime,
+bool WriteEvent(::lcm::LogFile* log, const std::string& channel, const Message& msg, int64_t utime,
                 int64_t* event_number) {
-  auto bytes = EncodeMessage(channel, CameraNames{}, msg);
+  auto bytes = lcm::EncodeMessage(channel, lcm::CameraNames{}, msg);
   if (!bytes) return false;
-  lcm::LogEvent event;
+  ::lcm::LogEvent event;
   event.eventnum = (*event_number)++;
   event.timestamp = utime;
   event.channel = channel;
@@ -81,24 +81,24 @@ inline HistoryFiles MakeHistory(const std::string& tag, int frames = 600, bool p
   drive.position_noise = 0.001;
   const SyntheticDrive synthetic = GenerateDrive(files.names, rigs, drive);
   for (size_t i = 0; i < rigs.size(); ++i) files.truth_rig[files.names[i + 1]] = rigs[i];
-  if (!WriteRigYaml(files.truth, files.truth_rig).ok()) return files;
-  if (!WritePoseLog(files.pose_log, synthetic.recording).ok()) return files;
+  if (!io::WriteRigYaml(files.truth, files.truth_rig).ok()) return files;
+  if (!lcm::WritePoseLog(files.pose_log, synthetic.recording).ok()) return files;
 
   RigEstimator estimator(files.names, RigEstimatorOptions{});
-  lcm::LogFile log(files.history_log, "w");
+  ::lcm::LogFile log(files.history_log, "w");
   int64_t event_number = 0;
   const RigRecording& rec = synthetic.recording;
   for (size_t k = 0; k < rec.size(); ++k) {
     estimator.AddSet(rec.t_ns[k], rec.SetAt(k));
     if (k % 10 != 9) continue;
     const int64_t utime = rec.t_ns[k] / 1000;
-    auto extrinsics = EstimateToLcm(estimator.Estimate(), utime);
-    if (extrinsics && WriteEvent(&log, kExtrinsicsChannel, *extrinsics, utime, &event_number)) {
+    auto extrinsics = lcm::EstimateToLcm(estimator.Estimate(), utime);
+    if (extrinsics && WriteEvent(&log, lcm::kExtrinsicsChannel, *extrinsics, utime, &event_number)) {
       ++files.extrinsics;
     }
-    std::vector<CameraStatusInput> cameras;
+    std::vector<lcm::CameraStatusInput> cameras;
     for (const std::string& name : files.names) {
-      CameraStatusInput c;
+      lcm::CameraStatusInput c;
       c.name = name;
       c.fps = 20.0;
       c.frames_received = static_cast<int64_t>(k + 1);
@@ -120,10 +120,10 @@ inline HistoryFiles MakeHistory(const std::string& tag, int frames = 600, bool p
     clock.clock_jumps = k < 400 ? 0 : 1;
     estimate.rig.slaves[0].time_offset_s = k < 400 ? 0.040 : -2.5;
     estimate.rig.slaves[0].time_offset_std_s = 1e-4;
-    const rig_status_t status = MakeRigStatus(cameras, SyncStats{}, 64, estimate, 42.0, utime);
-    if (WriteEvent(&log, kStatusChannel, status, utime, &event_number)) ++files.status;
+    const rig_status_t status = lcm::MakeRigStatus(cameras, SyncStats{}, 64, estimate, 42.0, utime);
+    if (WriteEvent(&log, lcm::kStatusChannel, status, utime, &event_number)) ++files.status;
   }
   return files;
 }
 
-}  // namespace rigcal::tools::report_test
+}  // namespace rigcal::report::report_test

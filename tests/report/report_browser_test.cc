@@ -16,7 +16,7 @@
 #include "rigcal/report/report_input.h"
 #include "support/skip.h"
 
-namespace rigcal::tools::report_test {
+namespace rigcal::report::report_test {
 namespace {
 
 std::string FindChromium() {
@@ -136,4 +136,4 @@ TEST_F(ReportBrowserTest, BrokenPageIsDetected) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::report_test
+}  // namespace rigcal::report::report_test

@@ -12,7 +12,7 @@
 #include "rigcal/report/report_html.h"
 #include "rigcal/report/report_input.h"
 
-namespace rigcal::tools::report_test {
+namespace rigcal::report::report_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -136,7 +136,7 @@ TEST_F(ReportTest, ResultFileGivesTableAndRigButNoHistory) {
   auto history = LoadReport({files_->history_log, "", ""});
   ASSERT_TRUE(history.ok()) << history.error();
   const std::string result = (files_->dir / "result.yaml").string();
-  ASSERT_TRUE(WriteResultYaml(result, history->final_result).ok());
+  ASSERT_TRUE(io::WriteResultYaml(result, history->final_result).ok());
   auto data = LoadReport({result, "", ""});
   ASSERT_TRUE(data.ok()) << data.error();
   EXPECT_FALSE(data->from_log);
@@ -178,7 +178,7 @@ TEST_F(ReportTest, BadInputsAreNamed) {
 
   // A truth that lacks a slave.
   const std::string partial = (files_->dir / "partial_truth.yaml").string();
-  ASSERT_TRUE(WriteRigYaml(partial, {{"cam1", files_->truth_rig.at("cam1")}}).ok());
+  ASSERT_TRUE(io::WriteRigYaml(partial, {{"cam1", files_->truth_rig.at("cam1")}}).ok());
   auto no_truth = LoadReport({files_->history_log, "", partial});
   ASSERT_FALSE(no_truth.ok());
   EXPECT_THAT(no_truth.error(), HasSubstr("no truth for slave 'cam2'"));
@@ -199,4 +199,4 @@ TEST_F(ReportTest, WritesAtomicallyAndNamesAnUnwritablePath) {
 }
 
 }  // namespace
-}  // namespace rigcal::tools::report_test
+}  // namespace rigcal::report::report_test

@@ -9,7 +9,7 @@
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/research/experiments.h"
@@ -29,12 +29,12 @@ Eigen::MatrixXd RandomSpd(int n, int rank, std::mt19937_64& rng) {
 TEST(CramerRaoTest, PseudoInverseOfSingularMatrix) {
   std::mt19937_64 rng(1);
   const Eigen::MatrixXd m = RandomSpd(6, 4, rng);
-  const Eigen::MatrixXd p = PseudoInverseSpd(m);
+  const Eigen::MatrixXd p = research::PseudoInverseSpd(m);
   EXPECT_LT((m * p * m - m).norm(), 1e-9 * m.norm());
   EXPECT_LT((p * m * p - p).norm(), 1e-9 * p.norm());
   EXPECT_LT((p - p.transpose()).norm(), 1e-12 * p.norm());
   const Eigen::MatrixXd full = RandomSpd(5, 5, rng);
-  EXPECT_LT((PseudoInverseSpd(full) - full.inverse()).norm(), 1e-8 * full.inverse().norm());
+  EXPECT_LT((research::PseudoInverseSpd(full) - full.inverse()).norm(), 1e-8 * full.inverse().norm());
 }
 
 // Straight line y_j = theta + beta x_j + e_j, e_j ~ N(0, sigma^2), beta a nuisance parameter:
@@ -52,12 +52,12 @@ TEST(CramerRaoTest, LinearRegressionInterceptClosedForm) {
   }
   const double n = static_cast<double>(x.size());
   const Eigen::MatrixXd w = Eigen::MatrixXd::Identity(x.size(), x.size()) / (sigma * sigma);
-  const Eigen::MatrixXd fisher = FisherInformation(h, w);
+  const Eigen::MatrixXd fisher = research::FisherInformation(h, w);
   const double expected = sigma * sigma * sxx / (n * sxx - sx * sx);
-  EXPECT_NEAR(SchurComplementBound(fisher, 1)(0, 0), expected, 1e-12);
-  EXPECT_NEAR(ConstrainedBound(fisher, Eigen::MatrixXd(0, 2), 1)(0, 0), expected, 1e-12);
+  EXPECT_NEAR(research::SchurComplementBound(fisher, 1)(0, 0), expected, 1e-12);
+  EXPECT_NEAR(research::ConstrainedBound(fisher, Eigen::MatrixXd(0, 2), 1)(0, 0), expected, 1e-12);
   // Without the nuisance (beta known): sigma^2 / n.
-  EXPECT_NEAR(SchurComplementBound(fisher.topLeftCorner(1, 1), 1)(0, 0), sigma * sigma / n, 1e-12);
+  EXPECT_NEAR(research::SchurComplementBound(fisher.topLeftCorner(1, 1), 1)(0, 0), sigma * sigma / n, 1e-12);
 }
 
 // y1 = t1 + b + e1, y2 = t2 + b + e2, y3 = b + e3: only y3 tells b, so t_i = y_i - y3 and the
@@ -71,11 +71,11 @@ TEST(CramerRaoTest, SharedNuisanceClosedForm) {
   Eigen::MatrixXd w = Eigen::Vector3d(1 / (s1 * s1), 1 / (s2 * s2), 1 / (s3 * s3)).asDiagonal();
   Eigen::Matrix2d expected;
   expected << s1 * s1 + s3 * s3, s3 * s3, s3 * s3, s2 * s2 + s3 * s3;
-  const Eigen::MatrixXd fisher = FisherInformation(h, w);
-  EXPECT_LT((SchurComplementBound(fisher, 2) - expected).norm(), 1e-12);
-  EXPECT_LT((ConstrainedBound(fisher, Eigen::MatrixXd(0, 3), 2) - expected).norm(), 1e-12);
+  const Eigen::MatrixXd fisher = research::FisherInformation(h, w);
+  EXPECT_LT((research::SchurComplementBound(fisher, 2) - expected).norm(), 1e-12);
+  EXPECT_LT((research::ConstrainedBound(fisher, Eigen::MatrixXd(0, 3), 2) - expected).norm(), 1e-12);
   EXPECT_LT(
-      (SchurComplementBound(fisher, 2) - Eigen::MatrixXd(fisher.inverse()).topLeftCorner(2, 2))
+      (research::SchurComplementBound(fisher, 2) - Eigen::MatrixXd(fisher.inverse()).topLeftCorner(2, 2))
           .norm(),
       1e-12);
 }
@@ -85,15 +85,15 @@ TEST(CramerRaoTest, UndeterminedParametersGiveInfiniteBound) {
   Eigen::MatrixXd h(2, 2);
   h << 0, 1,  //
       0, 2;
-  const Eigen::MatrixXd fisher = FisherInformation(h, Eigen::MatrixXd::Identity(2, 2));
-  EXPECT_TRUE(std::isinf(SchurComplementBound(fisher, 1)(0, 0)));
-  EXPECT_TRUE(std::isinf(ConstrainedBound(fisher, Eigen::MatrixXd(0, 2), 1)(0, 0)));
+  const Eigen::MatrixXd fisher = research::FisherInformation(h, Eigen::MatrixXd::Identity(2, 2));
+  EXPECT_TRUE(std::isinf(research::SchurComplementBound(fisher, 1)(0, 0)));
+  EXPECT_TRUE(std::isinf(research::ConstrainedBound(fisher, Eigen::MatrixXd(0, 2), 1)(0, 0)));
   // An undetermined nuisance that does not couple to theta does not matter.
   Eigen::MatrixXd h2(1, 2);
   h2 << 2, 0;
-  const Eigen::MatrixXd f2 = FisherInformation(h2, Eigen::MatrixXd::Identity(1, 1));
-  EXPECT_NEAR(SchurComplementBound(f2, 1)(0, 0), 0.25, 1e-12);
-  EXPECT_NEAR(ConstrainedBound(f2, Eigen::MatrixXd(0, 2), 1)(0, 0), 0.25, 1e-12);
+  const Eigen::MatrixXd f2 = research::FisherInformation(h2, Eigen::MatrixXd::Identity(1, 1));
+  EXPECT_NEAR(research::SchurComplementBound(f2, 1)(0, 0), 0.25, 1e-12);
+  EXPECT_NEAR(research::ConstrainedBound(f2, Eigen::MatrixXd(0, 2), 1)(0, 0), 0.25, 1e-12);
 }
 
 // An exact observation is the limit of ever more precise ones: the constrained bound equals the
@@ -104,13 +104,13 @@ TEST(CramerRaoTest, ConstrainedBoundIsLimitOfPreciseObservations) {
   std::normal_distribution<double> g(0.0, 1.0);
   Eigen::MatrixXd constraints(2, 8);
   for (int i = 0; i < constraints.size(); ++i) constraints.data()[i] = g(rng);
-  const Eigen::MatrixXd exact = ConstrainedBound(fisher, constraints, 3);
+  const Eigen::MatrixXd exact = research::ConstrainedBound(fisher, constraints, 3);
   // The difference falls as 1/weight (1e-4 relative at 1e4); much larger weights lose digits.
   const Eigen::MatrixXd precise =
-      SchurComplementBound(fisher + 1e6 * constraints.transpose() * constraints, 3);
+      research::SchurComplementBound(fisher + 1e6 * constraints.transpose() * constraints, 3);
   EXPECT_LT((exact - precise).norm(), 1e-4 * exact.norm());
   // Constraints add information: the bound shrinks (in the positive semi-definite order).
-  const Eigen::MatrixXd free = SchurComplementBound(fisher, 3);
+  const Eigen::MatrixXd free = research::SchurComplementBound(fisher, 3);
   EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(free - exact).eigenvalues().minCoeff(),
             -1e-12);
 }
@@ -138,12 +138,12 @@ TEST(CramerRaoTest, PoseByPoseEliminationEqualsFullSystem) {
   for (int trial = 0; trial < 5; ++trial) {
     const Geometry g = RandomGeometry(3 + trial, 180.0, rng);
     const double eps = 1.0 * kRadPerDeg;
-    const ThesisBound bound = ThesisCramerRaoBound(g.master, g.rig, eps);
+    const research::ThesisBound bound = research::ThesisCramerRaoBound(g.master, g.rig, eps);
     ASSERT_TRUE(bound.finite);
-    const ThesisFisherSystem system = ThesisFisher(g.master, g.rig, eps);
+    const research::ThesisFisherSystem system = research::ThesisFisher(g.master, g.rig, eps);
     EXPECT_EQ(system.fisher.rows(), 7 + 6 * (3 + trial));
     EXPECT_EQ(system.constraints.rows(), 2 * (3 + trial));
-    const Eigen::MatrixXd dense = ConstrainedBound(system.fisher, system.constraints, 7);
+    const Eigen::MatrixXd dense = research::ConstrainedBound(system.fisher, system.constraints, 7);
     EXPECT_LT((dense - bound.covariance).norm(), 1e-8 * bound.covariance.norm());
   }
 }
@@ -151,8 +151,8 @@ TEST(CramerRaoTest, PoseByPoseEliminationEqualsFullSystem) {
 TEST(CramerRaoTest, BoundIsLinearInEpsAndShrinksWithMorePoses) {
   std::mt19937_64 rng(5);
   const Geometry g = RandomGeometry(12, 180.0, rng);
-  const ThesisBound one = ThesisCramerRaoBound(g.master, g.rig, 1.0 * kRadPerDeg);
-  const ThesisBound two = ThesisCramerRaoBound(g.master, g.rig, 2.0 * kRadPerDeg);
+  const research::ThesisBound one = research::ThesisCramerRaoBound(g.master, g.rig, 1.0 * kRadPerDeg);
+  const research::ThesisBound two = research::ThesisCramerRaoBound(g.master, g.rig, 2.0 * kRadPerDeg);
   ASSERT_TRUE(one.finite);
   EXPECT_NEAR(two.rot_deg, 2.0 * one.rot_deg, 1e-6 * one.rot_deg);
   EXPECT_NEAR(two.dir_deg, 2.0 * one.dir_deg, 1e-6 * one.dir_deg);
@@ -160,13 +160,13 @@ TEST(CramerRaoTest, BoundIsLinearInEpsAndShrinksWithMorePoses) {
   EXPECT_NEAR(two.scale_pct, 2.0 * one.scale_pct, 1e-6 * one.scale_pct);
   // Dropping poses loses information.
   const std::vector<Pose> fewer(g.master.begin(), g.master.begin() + 4);
-  const ThesisBound four = ThesisCramerRaoBound(fewer, g.rig, 1.0 * kRadPerDeg);
+  const research::ThesisBound four = research::ThesisCramerRaoBound(fewer, g.rig, 1.0 * kRadPerDeg);
   EXPECT_GT(four.rot_deg, one.rot_deg);
   EXPECT_GT(four.dir_deg, one.dir_deg);
   // Without any length information the scale is not determined.
-  ThesisNoiseModel no_lengths;
+  research::ThesisNoiseModel no_lengths;
   no_lengths.exact_lengths = false;
-  EXPECT_FALSE(ThesisCramerRaoBound(g.master, g.rig, 1.0 * kRadPerDeg, no_lengths).finite);
+  EXPECT_FALSE(research::ThesisCramerRaoBound(g.master, g.rig, 1.0 * kRadPerDeg, no_lengths).finite);
 }
 
 // The noise model's covariances are the second moments of the thesis perturbation (PerturbPose).
@@ -187,7 +187,7 @@ TEST(CramerRaoTest, NoiseModelMatchesThesisPerturbation) {
     rot_cov += r * r.transpose() / n;
     pos_cov += d * d.transpose() / n;
   }
-  const ThesisNoiseModel model;
+  const research::ThesisNoiseModel model;
   const Eigen::Matrix3d rot_expected =
       model.rotation_variance_factor * eps * eps * Eigen::Matrix3d::Identity();
   const double len2 = pose.C.squaredNorm();
@@ -209,9 +209,9 @@ TEST(CramerRaoTest, NonlinearEstimatorDoesNotBeatTheBound) {
   double err_rot2 = 0.0, bound_rot2 = 0.0, err_dir2 = 0.0, bound_dir2 = 0.0;
   int used = 0;
   for (int i = 0; i < num_samples; ++i) {
-    std::mt19937_64 rng = SampleRng(42, 0, i);
+    std::mt19937_64 rng = research::SampleRng(42, 0, i);
     const Geometry g = RandomGeometry(num_poses, 150.0, rng);
-    const ThesisBound bound = ThesisCramerRaoBound(g.master, g.rig, eps);
+    const research::ThesisBound bound = research::ThesisCramerRaoBound(g.master, g.rig, eps);
     if (!bound.finite) continue;
     RigRecording noisy = g.recording;
     for (int k = 1; k <= num_poses; ++k) {
@@ -223,7 +223,7 @@ TEST(CramerRaoTest, NonlinearEstimatorDoesNotBeatTheBound) {
     const auto motions = MotionsForSlave(noisy, 0, SelectPairs(noisy, pairs));
     const SlaveCalibration result = CalibrateSlave(
         motions,
-        ThesisCalibrationOptions(Method::kNonlinear, MotionModel::kGeneral, ScaleModel::kFixed));
+        research::ThesisCalibrationOptions(Method::kNonlinear, MotionModel::kGeneral, ScaleModel::kFixed));
     ASSERT_TRUE(result.usable()) << result.message;
     const CalibrationError error = CompareToTruth(result.estimate, g.rig);
     err_rot2 += error.rot_deg * error.rot_deg;

@@ -15,8 +15,8 @@
 namespace rigcal {
 namespace {
 
-ExperimentOptions Small(int samples) {
-  ExperimentOptions options;
+research::ExperimentOptions Small(int samples) {
+  research::ExperimentOptions options;
   options.samples = samples;
   options.seed = 7;
   options.threads = 2;
@@ -24,9 +24,9 @@ ExperimentOptions Small(int samples) {
   return options;
 }
 
-const ExperimentRow& Row(const ExperimentResult& r, const std::string& series, double eps,
-                         int num_poses = 0, double swept = kNotAvailable) {
-  for (const ExperimentRow& row : r.rows) {
+const research::ExperimentRow& Row(const research::ExperimentResult& r, const std::string& series, double eps,
+                         int num_poses = 0, double swept = research::kNotAvailable) {
+  for (const research::ExperimentRow& row : r.rows) {
     if (row.series != series || std::abs(row.eps_deg - eps) > 1e-9) continue;
     if (num_poses > 0 && row.num_poses != num_poses) continue;
     if (std::isfinite(swept) && !(std::abs(row.alpha_max_deg - swept) < 1e-9 ||
@@ -37,7 +37,7 @@ const ExperimentRow& Row(const ExperimentResult& r, const std::string& series, d
   }
   ADD_FAILURE() << "no row " << series << " eps " << eps << " K " << num_poses << " swept "
                 << swept;
-  static const ExperimentRow kEmpty;
+  static const research::ExperimentRow kEmpty;
   return kEmpty;
 }
 
@@ -69,35 +69,35 @@ std::string ReadFile(const std::string& path) {
 }
 
 TEST(ExperimentsTest, GridsNamesAndOptionChecks) {
-  const std::vector<double> grid = LinearGrid(0.0, 3.0, 0.1);
+  const std::vector<double> grid = research::LinearGrid(0.0, 3.0, 0.1);
   ASSERT_EQ(grid.size(), 31u);
   EXPECT_EQ(grid[3], 0.3);
   EXPECT_EQ(grid.back(), 3.0);
-  EXPECT_EQ(LinearGrid(0.0, 100.0, 5.0).size(), 21u);
-  for (ExperimentKind kind : {ExperimentKind::kStability, ExperimentKind::kPoses,
-                              ExperimentKind::kMotionModel, ExperimentKind::kScaleModel}) {
-    ExperimentKind parsed = ExperimentKind::kStability;
-    ASSERT_TRUE(ParseExperimentKind(ToString(kind), &parsed));
+  EXPECT_EQ(research::LinearGrid(0.0, 100.0, 5.0).size(), 21u);
+  for (research::ExperimentKind kind : {research::ExperimentKind::kStability, research::ExperimentKind::kPoses,
+                              research::ExperimentKind::kMotionModel, research::ExperimentKind::kScaleModel}) {
+    research::ExperimentKind parsed = research::ExperimentKind::kStability;
+    ASSERT_TRUE(research::ParseExperimentKind(ToString(kind), &parsed));
     EXPECT_EQ(parsed, kind);
   }
-  ExperimentKind unchanged = ExperimentKind::kPoses;
-  EXPECT_FALSE(ParseExperimentKind("stabilty", &unchanged));
-  EXPECT_EQ(unchanged, ExperimentKind::kPoses);
+  research::ExperimentKind unchanged = research::ExperimentKind::kPoses;
+  EXPECT_FALSE(research::ParseExperimentKind("stabilty", &unchanged));
+  EXPECT_EQ(unchanged, research::ExperimentKind::kPoses);
 
-  EXPECT_TRUE(ExperimentOptions().Check().ok()) << ExperimentOptions().Check().message();
-  ExperimentOptions bad;
+  EXPECT_TRUE(research::ExperimentOptions().Check().ok()) << research::ExperimentOptions().Check().message();
+  research::ExperimentOptions bad;
   bad.samples = 0;
   EXPECT_FALSE(bad.Check().ok());
   EXPECT_EQ(bad.Check().message().rfind("samples: ", 0), 0u) << bad.Check().message();
-  bad = ExperimentOptions();
+  bad = research::ExperimentOptions();
   bad.alpha_max_deg = {};
   EXPECT_FALSE(bad.Check().ok());
   EXPECT_EQ(bad.Check().message().rfind("alpha_max_deg: ", 0), 0u) << bad.Check().message();
-  bad = ExperimentOptions();
+  bad = research::ExperimentOptions();
   bad.poses_max = 3;
   EXPECT_FALSE(bad.Check().ok());
   EXPECT_EQ(bad.Check().message().rfind("poses_max: ", 0), 0u) << bad.Check().message();
-  const ExperimentResult result = RunStability(bad);
+  const research::ExperimentResult result = research::RunStability(bad);
   EXPECT_FALSE(result.error.empty());
   EXPECT_TRUE(result.rows.empty());
 }
@@ -109,21 +109,21 @@ TEST(ExperimentsTest, GridsNamesAndOptionChecks) {
 // chance. (Means are not used: the rare gross failures near 180 deg rotations dominate the mean
 // of a few hundred samples.)
 TEST(ExperimentsTest, StabilityExactWithoutNoiseAndLinearInNoise) {
-  ExperimentOptions options = Small(400);
+  research::ExperimentOptions options = Small(400);
   options.stability_eps_deg = {0.0, 1.0, 2.0};
-  const ExperimentResult r = RunStability(options);
+  const research::ExperimentResult r = research::RunStability(options);
   ASSERT_TRUE(r.error.empty()) << r.error;
   ASSERT_EQ(r.rows.size(), 6u);
   for (const char* series : {"lls", "nl"}) {
-    const ErrorStats& zero = Row(r, series, 0.0).errors;
+    const research::ErrorStats& zero = Row(r, series, 0.0).errors;
     EXPECT_EQ(zero.failed, 0);
     EXPECT_EQ(zero.usable, 400);
     for (double v : {zero.rot_mean_deg, zero.dir_mean_deg, zero.dist_mean_pct, zero.scale_mean_pct,
                      zero.rot_rms_deg}) {
       EXPECT_LT(v, 1e-6) << series;
     }
-    const ErrorStats& one = Row(r, series, 1.0).errors;
-    const ErrorStats& two = Row(r, series, 2.0).errors;
+    const research::ErrorStats& one = Row(r, series, 1.0).errors;
+    const research::ErrorStats& two = Row(r, series, 2.0).errors;
     for (auto [a, b] :
          std::vector<std::pair<double, double>>{{one.rot_median_deg, two.rot_median_deg},
                                                 {one.dir_median_deg, two.dir_median_deg},
@@ -145,13 +145,13 @@ TEST(ExperimentsTest, StabilityExactWithoutNoiseAndLinearInNoise) {
 // Thesis 5.1.2: "The combined non-linear estimation method yields better results for position".
 // LLS and NL see the same samples, so the comparison is paired.
 TEST(ExperimentsTest, NonlinearPositionNotWorseThanLinear) {
-  ExperimentOptions options = Small(400);
+  research::ExperimentOptions options = Small(400);
   options.stability_eps_deg = {1.0};
   options.crb_samples = 0;
-  const ExperimentResult r = RunStability(options);
+  const research::ExperimentResult r = research::RunStability(options);
   ASSERT_TRUE(r.error.empty()) << r.error;
-  const ErrorStats& lls = Row(r, "lls", 1.0).errors;
-  const ErrorStats& nl = Row(r, "nl", 1.0).errors;
+  const research::ErrorStats& lls = Row(r, "lls", 1.0).errors;
+  const research::ErrorStats& nl = Row(r, "nl", 1.0).errors;
   EXPECT_LE(nl.dir_mean_deg, lls.dir_mean_deg);
   EXPECT_LE(nl.dir_median_deg, lls.dir_median_deg);
   EXPECT_LE(nl.dist_mean_pct, lls.dist_mean_pct);
@@ -161,13 +161,13 @@ TEST(ExperimentsTest, NonlinearPositionNotWorseThanLinear) {
 
 // Thesis 5.1.3: errors fall with the number of poses.
 TEST(ExperimentsTest, MorePosesGiveSmallerErrors) {
-  ExperimentOptions options = Small(150);
-  const ExperimentResult r = RunPoses(options);
+  research::ExperimentOptions options = Small(150);
+  const research::ExperimentResult r = research::RunPoses(options);
   ASSERT_TRUE(r.error.empty()) << r.error;
   ASSERT_EQ(r.rows.size(), 2u * 21u);
   for (const char* series : {"lls", "nl"}) {
-    const ExperimentRow& k4 = Row(r, series, 1.0, 4);
-    const ExperimentRow& k24 = Row(r, series, 1.0, 24);
+    const research::ExperimentRow& k4 = Row(r, series, 1.0, 4);
+    const research::ExperimentRow& k24 = Row(r, series, 1.0, 24);
     EXPECT_LT(k24.errors.rot_mean_deg, k4.errors.rot_mean_deg) << series;
     EXPECT_LT(k24.errors.rot_median_deg, k4.errors.rot_median_deg) << series;
     EXPECT_LT(k24.errors.dir_mean_deg, k4.errors.dir_mean_deg) << series;
@@ -181,10 +181,10 @@ TEST(ExperimentsTest, MorePosesGiveSmallerErrors) {
 // translation and the general model for any rotation; with noise the general model wins only
 // for large rotations, so the boundary moves up with eps.
 TEST(ExperimentsTest, MotionModelComparisonAndBoundary) {
-  ExperimentOptions options = Small(100);
+  research::ExperimentOptions options = Small(100);
   options.model_eps_deg = {0.0, 1.0};
   options.alpha_max_deg = {0.0, 2.0, 25.0};
-  const ExperimentResult r = RunMotionModel(options);
+  const research::ExperimentResult r = research::RunMotionModel(options);
   ASSERT_TRUE(r.error.empty()) << r.error;
   ASSERT_EQ(r.rows.size(), 2u * 2u * 3u);
   EXPECT_LT(Row(r, "translational", 0.0, 0, 0.0).errors.rot_mean_deg, 1e-6);
@@ -204,10 +204,10 @@ TEST(ExperimentsTest, MotionModelComparisonAndBoundary) {
 // Thesis 5.3 on a coarse grid: without noise the time-dependent model is exact for any scale
 // drift and the time-fixed one only without drift.
 TEST(ExperimentsTest, ScaleModelComparisonAndBoundary) {
-  ExperimentOptions options = Small(100);
+  research::ExperimentOptions options = Small(100);
   options.model_eps_deg = {0.0, 1.0};
   options.max_scale_error_pct = {0.0, 20.0, 100.0};
-  const ExperimentResult r = RunScaleModel(options);
+  const research::ExperimentResult r = research::RunScaleModel(options);
   ASSERT_TRUE(r.error.empty()) << r.error;
   ASSERT_EQ(r.rows.size(), 2u * 2u * 3u);
   for (double pct : {0.0, 20.0, 100.0}) {
@@ -222,21 +222,21 @@ TEST(ExperimentsTest, ScaleModelComparisonAndBoundary) {
 }
 
 TEST(ExperimentsTest, ResultsDependOnSeedNotOnThreads) {
-  ExperimentOptions options = Small(60);
+  research::ExperimentOptions options = Small(60);
   options.stability_eps_deg = {0.5, 1.5};
   options.threads = 1;
-  const std::string one = ExperimentCsv(RunStability(options));
+  const std::string one = research::ExperimentCsv(research::RunStability(options));
   options.threads = 2;
-  const std::string two = ExperimentCsv(RunStability(options));
+  const std::string two = research::ExperimentCsv(research::RunStability(options));
   options.threads = 3;
   EXPECT_EQ(one, two);
-  EXPECT_EQ(one, ExperimentCsv(RunStability(options)));
+  EXPECT_EQ(one, research::ExperimentCsv(research::RunStability(options)));
   options.seed = 8;
-  EXPECT_NE(one, ExperimentCsv(RunStability(options)));
+  EXPECT_NE(one, research::ExperimentCsv(research::RunStability(options)));
 }
 
 TEST(ExperimentsTest, ProgressReachesTotalInOrder) {
-  ExperimentOptions options = Small(50);
+  research::ExperimentOptions options = Small(50);
   options.stability_eps_deg = {0.0, 1.0, 2.0, 3.0};
   std::mutex mutex;
   std::vector<std::pair<int64_t, int64_t>> calls;
@@ -244,7 +244,7 @@ TEST(ExperimentsTest, ProgressReachesTotalInOrder) {
     std::lock_guard<std::mutex> lock(mutex);
     calls.push_back({done, total});
   };
-  RunStability(options);
+  research::RunStability(options);
   ASSERT_FALSE(calls.empty());
   EXPECT_LE(calls.size(), 10u);
   for (size_t i = 1; i < calls.size(); ++i) EXPECT_GT(calls[i].first, calls[i - 1].first);
@@ -253,11 +253,11 @@ TEST(ExperimentsTest, ProgressReachesTotalInOrder) {
 }
 
 TEST(ExperimentsTest, CsvHasExpectedColumnsAndRows) {
-  ExperimentOptions options = Small(20);
+  research::ExperimentOptions options = Small(20);
   options.model_eps_deg = {0.0, 2.0};
   options.alpha_max_deg = {0.0, 10.0, 20.0};
-  const ExperimentResult r = RunMotionModel(options);
-  const std::vector<std::string> lines = Lines(ExperimentCsv(r));
+  const research::ExperimentResult r = research::RunMotionModel(options);
+  const std::vector<std::string> lines = Lines(research::ExperimentCsv(r));
   const std::string header =
       "experiment,series,eps_deg,num_poses,alpha_max_deg,max_scale_error_pct,usable,failed,"
       "rot_mean_deg,rot_rms_deg,rot_median_deg,dir_mean_deg,dir_rms_deg,dir_median_deg,"
@@ -268,36 +268,36 @@ TEST(ExperimentsTest, CsvHasExpectedColumnsAndRows) {
   for (const std::string& line : lines) EXPECT_EQ(Fields(line), 24) << line;
   EXPECT_EQ(lines[1].rfind("motion-model,translational,0,4,0,,20,0,", 0), 0u) << lines[1];
   EXPECT_EQ(lines[13].rfind("motion-model,equal_error_boundary,0,4,", 0), 0u) << lines[13];
-  EXPECT_EQ(Count(ExperimentCsv(r), "equal_error_boundary"), 2);
+  EXPECT_EQ(Count(research::ExperimentCsv(r), "equal_error_boundary"), 2);
 }
 
 TEST(ExperimentsTest, WritesCsvSummaryAndWellFormedFigures) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() /
                                     ("experiments_test_" + std::to_string(::getpid())) / "out";
-  ExperimentOptions options = Small(20);
+  research::ExperimentOptions options = Small(20);
   options.stability_eps_deg = {0.0, 1.0, 2.0};
   options.model_eps_deg = {0.0, 1.0, 3.0};
   options.max_scale_error_pct = {0.0, 50.0};
 
   struct Expectation {
-    ExperimentResult result;
+    research::ExperimentResult result;
     std::vector<std::string> figures;
     int series_per_figure;
   };
   const std::vector<Expectation> expectations = {
       // 4 panels x (mean, median, RMS, bound)
-      {RunStability(options), {"fig5_1_lls.svg", "fig5_2_nl.svg"}, 16},
+      {research::RunStability(options), {"fig5_1_lls.svg", "fig5_2_nl.svg"}, 16},
       // 2 models x 3 eps, plus the boundary
-      {RunScaleModel(options), {"fig5_6.svg"}, 7},
+      {research::RunScaleModel(options), {"fig5_6.svg"}, 7},
   };
   for (const Expectation& e : expectations) {
-    const auto written = WriteExperimentOutputs(e.result, dir.string());
+    const auto written = research::WriteExperimentOutputs(e.result, dir.string());
     ASSERT_TRUE(written.ok()) << written.error();
     const std::string name = ToString(e.result.kind);
     EXPECT_EQ(written->size(), 2 + e.figures.size());
-    EXPECT_EQ(ReadFile((dir / (name + ".csv")).string()), ExperimentCsv(e.result));
+    EXPECT_EQ(ReadFile((dir / (name + ".csv")).string()), research::ExperimentCsv(e.result));
     const std::string summary = ReadFile((dir / (name + "_summary.txt")).string());
-    EXPECT_EQ(summary, FormatSummary(e.result));
+    EXPECT_EQ(summary, research::FormatSummary(e.result));
     EXPECT_NE(summary.find("notes:"), std::string::npos);
     for (const std::string& figure : e.figures) {
       const std::string svg = ReadFile((dir / figure).string());
@@ -310,17 +310,17 @@ TEST(ExperimentsTest, WritesCsvSummaryAndWellFormedFigures) {
     }
   }
   // The stability summary shows the bound next to the errors and says what it bounds.
-  const std::string summary = FormatSummary(expectations[0].result);
+  const std::string summary = research::FormatSummary(expectations[0].result);
   EXPECT_NE(summary.find("CRB (RMS)"), std::string::npos);
   EXPECT_NE(summary.find("RMS"), std::string::npos);
   EXPECT_NE(summary.find("linear in eps"), std::string::npos);
-  const std::string scale_summary = FormatSummary(expectations[1].result);
+  const std::string scale_summary = research::FormatSummary(expectations[1].result);
   EXPECT_NE(scale_summary.find("equal-error boundary"), std::string::npos);
 
   // An unwritable directory is reported, not thrown.
   const std::filesystem::path file = dir / "not_a_dir";
   std::ofstream(file.string()) << "x";
-  const auto failed = WriteExperimentOutputs(expectations[0].result, (file / "sub").string());
+  const auto failed = research::WriteExperimentOutputs(expectations[0].result, (file / "sub").string());
   EXPECT_FALSE(failed.ok());
   std::filesystem::remove_all(dir.parent_path());
 }

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/pipeline/online_replay.h"
 
@@ -33,8 +33,8 @@ CameraTrack Straight(int n) {
 TEST(PoseNoise, WhiteNoiseHasItsSigma) {
   const CameraTrack exact = Straight(4001);
   std::mt19937_64 rng(5);
-  const PoseNoiseModel white{"white", 0.1, 0.01, 0.0, 0.0};
-  const CameraTrack noisy = AddPoseNoise(exact, white, 2.0, rng);  // 2 master units per unit
+  const research::PoseNoiseModel white{"white", 0.1, 0.01, 0.0, 0.0};
+  const CameraTrack noisy = research::AddPoseNoise(exact, white, 2.0, rng);  // 2 master units per unit
   double rot = 0.0, pos = 0.0;
   for (size_t k = 1; k < exact.poses.size(); ++k) {
     rot += std::pow(AngleBetween(exact.poses[k].q, noisy.poses[k].q) * kDegPerRad, 2);
@@ -52,8 +52,8 @@ TEST(PoseNoise, WhiteNoiseHasItsSigma) {
 TEST(PoseNoise, DriftGrowsWithTheSpan) {
   const CameraTrack exact = Straight(4001);
   std::mt19937_64 rng(6);
-  const PoseNoiseModel drift{"drift", 0.0, 0.0, 0.05, 0.0};
-  const CameraTrack noisy = AddPoseNoise(exact, drift, 1.0, rng);
+  const research::PoseNoiseModel drift{"drift", 0.0, 0.0, 0.05, 0.0};
+  const CameraTrack noisy = research::AddPoseNoise(exact, drift, 1.0, rng);
   auto rms_over = [&](int span) {
     double sum = 0.0;
     int count = 0;
@@ -74,24 +74,24 @@ TEST(PoseNoise, DriftGrowsWithTheSpan) {
 // calls for long spans (same noise, more signal), VO-like drift for short ones.
 TEST(AutoPairs, SpanFollowsTheNoiseOfTheRecording) {
   std::vector<std::string> notes;
-  const std::vector<PairScenario> scenarios = PairScenarios("", &notes);
-  const PairScenario* mocap = nullptr;
-  const PairScenario* vo = nullptr;
+  const std::vector<research::PairScenario> scenarios = research::PairScenarios("", &notes);
+  const research::PairScenario* mocap = nullptr;
+  const research::PairScenario* vo = nullptr;
   for (const auto& s : scenarios) {
     if (s.name == "sim-30Hz-fast-mocap") mocap = &s;
     if (s.name == "sim-30Hz-fast-vo-strong") vo = &s;
   }
   ASSERT_TRUE(mocap && vo);
-  PairEvaluationOptions options;
+  research::PairEvaluationOptions options;
   options.repeats = 1;
   options.spans = {};
   options.online = false;
   options.gls = false;
   options.threads = 1;
   options.only = "sim-30Hz-fast-";
-  const auto results = RunPairEvaluation(scenarios, options);
+  const auto results = research::RunPairEvaluation(scenarios, options);
   ASSERT_EQ(results.size(), 3u);
-  auto spans_of = [](const PairScenarioResult& r) {
+  auto spans_of = [](const research::PairScenarioResult& r) {
     std::vector<int> spans;
     std::string chosen = r.Find("auto")->chosen + " ";
     for (size_t at = chosen.find("relative:"); at != std::string::npos;
@@ -120,20 +120,20 @@ TEST(AutoPairs, SpanFollowsTheNoiseOfTheRecording) {
 // decalibration_confirm_s.
 TEST(OnlinePairs, DriftingOdometryOfAFixedRigRaisesNoDecalibrationAlarm) {
   std::vector<std::string> notes;
-  const std::vector<PairScenario> scenarios = PairScenarios("", &notes);
-  const PairScenario* slow_vo = nullptr;
+  const std::vector<research::PairScenario> scenarios = research::PairScenarios("", &notes);
+  const research::PairScenario* slow_vo = nullptr;
   for (const auto& s : scenarios) {
     if (s.name == "sim-20Hz-slow-vo") slow_vo = &s;
   }
   ASSERT_NE(slow_vo, nullptr);
   int by_keyframes_only = 0;
   for (uint64_t seed = 1; seed <= 4; ++seed) {
-    const RigRecording rec = NoisyRecording(*slow_vo, seed);
+    const RigRecording rec = research::NoisyRecording(*slow_vo, seed);
     for (const double confirm_s : {0.0, RigEstimatorOptions{}.decalibration_confirm_s}) {
-      tools::OnlineReplayOptions replay;
+      pipeline::OnlineReplayOptions replay;
       replay.report_every_s = 0.0;
       replay.estimator.decalibration_confirm_s = confirm_s;
-      const RigEstimate estimate = tools::ReplayOnline(rec, replay, nullptr).estimate;
+      const RigEstimate estimate = pipeline::ReplayOnline(rec, replay, nullptr).estimate;
       for (size_t i = 0; i < estimate.online.size(); ++i) {
         const int events = estimate.online[i].decalibration_events;
         if (confirm_s == 0.0) {
@@ -152,19 +152,19 @@ TEST(OnlinePairs, DriftingOdometryOfAFixedRigRaisesNoDecalibrationAlarm) {
 // sim-30Hz-fast-vo-strong (0.1°/frame of rotation drift, consecutive motions of ~1.5°) GLS
 // without the correction put C 0.36 % and 1.15 % (3 and 6 standard errors) short of the truth
 // (the back camera: most of its error). With the expected term subtracted
-// (calib/src/regressor_noise.h) the mean error along C over 12 draws must be within 3 standard
+// (calib/src/noise/regressor_noise.h) the mean error along C over 12 draws must be within 3 standard
 // errors of 0 (from the errors' own spread) for both slaves.
 TEST(GlsPairs, RotationNoiseDoesNotShrinkC) {
   std::vector<std::string> notes;
-  const PairScenario* vo = nullptr;
-  const std::vector<PairScenario> scenarios = PairScenarios("", &notes);
+  const research::PairScenario* vo = nullptr;
+  const std::vector<research::PairScenario> scenarios = research::PairScenarios("", &notes);
   for (const auto& s : scenarios) {
     if (s.name == "sim-30Hz-fast-vo-strong") vo = &s;
   }
   ASSERT_NE(vo, nullptr);
   std::vector<double> radial[2];
   for (uint64_t seed = 1; seed <= 12; ++seed) {
-    const RigRecording rec = NoisyRecording(*vo, seed);
+    const RigRecording rec = research::NoisyRecording(*vo, seed);
     CalibrationOptions options;
     options.pairs.policy = PairOptions::Policy::kGls;
     const RigCalibration r = CalibrateRig(rec, options);

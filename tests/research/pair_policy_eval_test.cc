@@ -21,19 +21,19 @@ namespace {
 TEST(PairPolicyEval, DefaultWithinOnePointTwoOfTheBestFixedSpanOnlineWithinOnePointThree) {
   const std::string dir = std::string(RIGCAL_SHARED_DATA_DIR) + "/trajectories";
   std::vector<std::string> notes;
-  const std::vector<PairScenario> scenarios = PairScenarios(dir, &notes);
+  const std::vector<research::PairScenario> scenarios = research::PairScenarios(dir, &notes);
   for (const auto& note : notes) std::cout << "note: " << note << "\n";
   if (!notes.empty() && std::getenv("CI") != nullptr && std::string(std::getenv("CI")) == "true") {
     FAIL() << "real trajectories missing under CI: " << notes.front();
   }
-  PairEvaluationOptions options;
+  research::PairEvaluationOptions options;
   options.repeats = 12;
-  const auto results = RunPairEvaluation(scenarios, options);
-  std::cout << FormatPairTable(results);
+  const auto results = research::RunPairEvaluation(scenarios, options);
+  std::cout << research::FormatPairTable(results);
   double gls_z[2] = {0, 0}, online_z[2] = {0, 0};
   for (const auto& r : results) {
-    const PolicyFigures* a = r.Find("gls");
-    const PolicyFigures* online = r.Find("online");
+    const research::PolicyFigures* a = r.Find("gls");
+    const research::PolicyFigures* online = r.Find("online");
     ASSERT_NE(a, nullptr);
     ASSERT_NE(online, nullptr);
     EXPECT_EQ(a->failed, 0) << r.name;

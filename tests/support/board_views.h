@@ -15,9 +15,9 @@
 #include <opencv2/calib3d.hpp>
 #pragma GCC diagnostic pop
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/target/target_views.h"
+#include "rigcal/pattern/target_views.h"
 #include "support/pixel_noise.h"
 
 namespace rigcal::test_support {
@@ -41,7 +41,7 @@ inline camera::CameraSpec EurocLikeCamera(const std::string& name,
 // The board's corners seen by `spec` with the board at `cam_from_target` (q: rotation, C: the
 // board's origin in the camera), plus noise of `noise_px` per axis (none when 0); stamped
 // `t_ns`, named `file`.
-inline target::TargetView ProjectBoard(const camera::CameraSpec& spec, const Pose& cam_from_target,
+inline pattern::TargetView ProjectBoard(const camera::CameraSpec& spec, const Pose& cam_from_target,
                                        std::mt19937& rng, double noise_px, int64_t t_ns,
                                        std::string file) {
   std::vector<cv::Point3d> object;
@@ -61,7 +61,7 @@ inline target::TargetView ProjectBoard(const camera::CameraSpec& spec, const Pos
     cv::projectPoints(object, rvec, tvec, K, spec.distortion, image);
   }
   PixelNoise noise(noise_px);
-  target::TargetView view;
+  pattern::TargetView view;
   view.t_ns = t_ns;
   view.file = std::move(file);
   for (size_t j = 0; j < object.size(); ++j) {

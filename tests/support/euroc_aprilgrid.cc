@@ -17,7 +17,7 @@
 #include <opencv2/core.hpp>
 #pragma GCC diagnostic pop
 
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::support {
 namespace {

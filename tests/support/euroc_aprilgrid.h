@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::support {
 

@@ -14,7 +14,7 @@ Expected<SampledTrajectory> LoadKitti00() {
   if (!std::filesystem::exists(poses) || !std::filesystem::exists(times)) {
     return Error{"KITTI 00 ground truth not found in " + dir.string()};
   }
-  auto read = tools::ReadKittiTrajectory(poses.string(), times.string());
+  auto read = io::ReadKittiTrajectory(poses.string(), times.string());
   if (!read) return Error{read.error()};
   SampledTrajectory out;
   out.t_ns = read->t_ns;

@@ -3,7 +3,7 @@
 // tests (data, read from the shared data folder; the synthetic car rig that drives along it is
 // in rigcal/calib/synthetic_car.h).
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/calib/synthetic.h"
 
 namespace rigcal::support {

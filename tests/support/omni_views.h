@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/target/target_views.h"
+#include "rigcal/pattern/target_views.h"
 #include "support/pixel_noise.h"
 
 namespace rigcal::test_support {
@@ -34,10 +34,10 @@ inline camera::CameraSpec WideOmniCamera(const std::string& name) {
   return out;
 }
 
-inline target::CameraViews SimulatedOmniViews(const camera::CameraSpec& spec, int n, unsigned seed,
+inline pattern::CameraViews SimulatedOmniViews(const camera::CameraSpec& spec, int n, unsigned seed,
                                               double noise_px,
                                               std::vector<BoardPose>* poses = nullptr) {
-  target::CameraViews views;
+  pattern::CameraViews views;
   views.camera = spec.name;
   views.width = spec.width;
   views.height = spec.height;
@@ -68,7 +68,7 @@ inline target::CameraViews SimulatedOmniViews(const camera::CameraSpec& spec, in
     R = R * Eigen::AngleAxisd(tilt_x, Eigen::Vector3d::UnitX()).toRotationMatrix() *
         Eigen::AngleAxisd(tilt_y, Eigen::Vector3d::UnitY()).toRotationMatrix();
     const Eigen::Vector3d t = depth(rng) * direction - R * board_centre;
-    target::TargetView view;
+    pattern::TargetView view;
     bool inside = true;
     for (int r = 0; r < 6 && inside; ++r) {
       for (int c = 0; c < 9 && inside; ++c) {
@@ -120,13 +120,13 @@ inline double WorstProjectionDifference(const camera::CameraSpec& truth,
 // frames that best aligns the bearings both models give the corners' pixels.
 inline double AlignedRmsAtCorners(const camera::CameraSpec& truth,
                                   const camera::CameraSpec& estimate,
-                                  const target::CameraViews& views) {
+                                  const pattern::CameraViews& views) {
   auto a = camera::MakeCameraModel(truth);
   auto b = camera::MakeCameraModel(estimate);
   if (!a.ok() || !b.ok()) return std::numeric_limits<double>::infinity();
   std::vector<Eigen::Vector3d> bearings;
   Eigen::Matrix3d correlation = Eigen::Matrix3d::Zero();
-  for (const target::TargetView& v : views.views) {
+  for (const pattern::TargetView& v : views.views) {
     for (const Eigen::Vector2d& p : v.pixels) {
       const auto truth_bearing = (*a)->Unproject(p);
       const auto estimate_bearing = (*b)->Unproject(p);

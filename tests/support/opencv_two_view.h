@@ -7,7 +7,7 @@
 #include <optional>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal::support {
 

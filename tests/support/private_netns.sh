@@ -1,6 +1,6 @@
 # Sourced at the top of a multi-process LCM test script: runs the script inside a private network
 # namespace (unshare --net) whose only link, lo, gets a multicast route, so udpm:// traffic never
-# leaves it (DESIGN.md "LCM"); sets `url` to the udpm URL to use there. Also gives the script
+# leaves it (docs/architecture.md "LCM"); sets `url` to the udpm URL to use there. Also gives the script
 # what a multi-process test needs: `dir`, a temporary directory removed at exit; `pids`, the
 # processes it started (add with pids+=("$pid"); TERMed at exit unless emptied); `stop PID`;
 # `check NAME EXPR` (prints ok/FAIL, sets `fail` to 1 on a failure).

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/image_folder_device.h"
+#include "rigcal/capture/image_folder_device.h"
 
 namespace rigcal::support {
 namespace {
@@ -178,7 +178,7 @@ Expected<RealMonoSequence> LoadRealMono(const std::string& name) {
   auto camera = ReadIntrinsics(folder);
   if (!camera) return Error{camera.error()};
   sequence.camera = *camera;
-  auto device = drivers::ImageFolderDevice::Open(sequence.folder, name, 0, kRealMonoRateHz);
+  auto device = capture::ImageFolderDevice::Open(sequence.folder, name, 0, kRealMonoRateHz);
   if (!device) return Error{device.error()};
   for (;;) {
     auto grabbed = (*device)->Grab();

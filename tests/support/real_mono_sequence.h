@@ -1,6 +1,6 @@
 #pragma once
 // The real monocular sequences of ../shared/data/real_mono (README-provenance.txt there), for
-// the VO's tests and evaluations: the frames read by drivers' ImageFolderDevice as a plain
+// the VO's tests and evaluations: the frames read by capture's ImageFolderDevice as a plain
 // folder (the recordings have no stamps; 30 Hz is assumed), the intrinsics of the sequence's
 // calibration file, and for visp_rbt_sequence the metric AprilTag poses of every frame (the
 // grid's, and each detected tag's own).
@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_model.h"
 
 namespace rigcal::support {

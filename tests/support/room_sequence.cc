@@ -4,13 +4,13 @@
 #include <cmath>
 #include <utility>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
 namespace rigcal::support {
 
 Pose RoomCentre() {
   Pose centre;
-  centre.q = drivers::WaypointOrientationFromYpr(0.0, 0.0, 0.0);
+  centre.q = sim::WaypointOrientationFromYpr(0.0, 0.0, 0.0);
   centre.C = Eigen::Vector3d(0.0, 0.0, 3.0);
   return centre;
 }
@@ -28,10 +28,10 @@ Pose RoomPose(int k) {
   return RoomCentre() * motion;
 }
 
-Expected<drivers::SimulatedRig> MakeRoomSequence(std::shared_ptr<const camera::CameraModel> camera,
-                                                 const std::vector<Pose>& world_from_camera,
-                                                 double noise_sigma) {
-  drivers::SimulatedRigSpec spec;
+Expected<sim::SimulatedRig> MakeRoomSequence(std::shared_ptr<const camera::CameraModel> camera,
+                                             const std::vector<Pose>& world_from_camera,
+                                             double noise_sigma) {
+  sim::SimulatedRigSpec spec;
   spec.names = {"cam0"};
   spec.cameras = {std::move(camera)};
   spec.master_from_camera = {Pose()};
@@ -40,12 +40,12 @@ Expected<drivers::SimulatedRig> MakeRoomSequence(std::shared_ptr<const camera::C
   for (size_t k = 0; k < world_from_camera.size(); ++k) {
     spec.trajectory_t_ns.push_back(std::llround(static_cast<double>(k) * 1e9 / kRoomFrameRateHz));
   }
-  spec.trajectory_poses = world_from_camera;
-  spec.scene.type = drivers::SimulatedRigSpec::SceneType::kRoom;
+  spec.trajectory_world_from_body = world_from_camera;
+  spec.scene.type = sim::SimulatedRigSpec::SceneType::kRoom;
   spec.scene.size = Eigen::Vector3d(10.0, 8.0, 6.0);
   spec.scene.boxes = 0;
   spec.noise_sigma = noise_sigma;
-  return drivers::MakeSimulatedRig(std::move(spec));
+  return sim::MakeSimulatedRig(std::move(spec));
 }
 
 }  // namespace rigcal::support

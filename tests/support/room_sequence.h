@@ -12,10 +12,10 @@
 #include <memory>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_model.h"
-#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal::support {
 
@@ -34,10 +34,10 @@ Pose RoomPose(int k);
 // A simulated rig of one camera "cam0" (model `camera`) whose frame k (20 Hz, stamps k * 50 ms)
 // is taken at world_from_camera[k] (at least 2 poses; poses between frames are interpolated),
 // with Gaussian image noise of `noise_sigma` grey levels. Frame k: rig.RenderFrame(0, k); its
-// truth: rig.CameraPoseAt(0, rig.FrameStreamTime(k)). Error when the spec is rejected (a pose
+// truth: rig.WorldFromCameraAt(0, rig.FrameStreamTime(k)). Error when the spec is rejected (a pose
 // outside the room's free space, fewer than 2 poses).
-Expected<drivers::SimulatedRig> MakeRoomSequence(std::shared_ptr<const camera::CameraModel> camera,
-                                                 const std::vector<Pose>& world_from_camera,
-                                                 double noise_sigma = 1.0);
+Expected<sim::SimulatedRig> MakeRoomSequence(std::shared_ptr<const camera::CameraModel> camera,
+                                             const std::vector<Pose>& world_from_camera,
+                                             double noise_sigma = 1.0);
 
 }  // namespace rigcal::support

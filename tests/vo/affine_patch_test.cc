@@ -12,9 +12,9 @@
 #include <opencv2/video/tracking.hpp>
 #include <random>
 
-#include "rigcal/calib/robust_statistics.h"
-#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/io/rig_config.h"
+#include "rigcal/sim/simulated_rig.h"
 
 namespace rigcal::vo {
 namespace {
@@ -71,14 +71,14 @@ TEST(AffinePatch, RecoversAKnownAffineWarp) {
 // aligning their first-frame patches: median distance to the projection of the true point.
 void CompareWithKltChain(const std::string& file, int camera, int frames, double* klt_median,
                          double* affine_median) {
-  auto config = tools::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
+  auto config = io::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/" + file);
   ASSERT_TRUE(config.ok()) << config.error();
-  drivers::SimulatedRigSpec spec = *config->simulated_source;
+  sim::SimulatedRigSpec spec = *config->simulated_source;
   spec.realtime = false;
-  auto rig = drivers::MakeSimulatedRig(spec);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig.ok()) << rig.error();
   const camera::CameraModel& model = *spec.cameras[camera];
-  auto pose = [&](int64_t k) { return rig->CameraPoseAt(camera, rig->FrameStreamTime(k)); };
+  auto pose = [&](int64_t k) { return rig->WorldFromCameraAt(camera, rig->FrameStreamTime(k)); };
   const int64_t first = 40;
   cv::Mat previous = rig->RenderFrame(camera, first);
   const cv::Mat reference = previous.clone();

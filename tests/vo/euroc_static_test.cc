@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/image_folder_device.h"
+#include "rigcal/capture/image_folder_device.h"
 #include "rigcal/vo/monocular_vo.h"
 #include "support/skip.h"
 
@@ -48,7 +48,7 @@ struct StaticRun {
 
 StaticRun RunCamera(int index) {
   StaticRun run;
-  auto device = drivers::ImageFolderDevice::Open(kEuroc + "/cam" + std::to_string(index),
+  auto device = capture::ImageFolderDevice::Open(kEuroc + "/cam" + std::to_string(index),
                                                  "cam" + std::to_string(index), index);
   EXPECT_TRUE(device.ok()) << device.error();
   const auto camera = EurocCamera(index);
@@ -58,7 +58,7 @@ StaticRun RunCamera(int index) {
     auto grabbed = (*device)->Grab();
     EXPECT_TRUE(grabbed.ok()) << grabbed.error();
     if (!grabbed.ok() || !grabbed->has_value()) break;
-    const drivers::Frame& frame = **grabbed;
+    const capture::Frame& frame = **grabbed;
     const VoResult r = vo.Process(frame.t_ns, frame.image);
     ++run.frames;
     run.poses += r.pose.has_value();

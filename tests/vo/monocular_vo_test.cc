@@ -12,8 +12,8 @@
 #include <cstdio>
 #include <map>
 
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/camera/camera_spec.h"
 #include "support/ideal_cameras.h"
 #include "support/room_sequence.h"
@@ -42,11 +42,11 @@ Sequence RunSequence(const std::shared_ptr<const camera::CameraModel>& camera, i
                      PoseOf pose_of, Blank blank, VoOptions options = {}) {
   std::vector<Pose> poses;
   for (int k = 0; k < frames; ++k) poses.push_back(pose_of(k));
-  const drivers::SimulatedRig rig = support::MakeRoomSequence(camera, poses).value();
+  const sim::SimulatedRig rig = support::MakeRoomSequence(camera, poses).value();
   MonocularVo vo(camera, 0, options);
   Sequence s;
   for (int k = 0; k < frames; ++k) {
-    const Pose truth = rig.CameraPoseAt(0, rig.FrameStreamTime(k));
+    const Pose truth = rig.WorldFromCameraAt(0, rig.FrameStreamTime(k));
     cv::Mat image = blank(k) ? cv::Mat(camera->height(), camera->width(), CV_8UC1, cv::Scalar(128))
                              : rig.RenderFrame(0, k);
     s.t_ns.push_back(k * kFrameNs);

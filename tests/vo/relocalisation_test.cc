@@ -12,7 +12,7 @@
 #include <map>
 #include <vector>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/vo/monocular_vo.h"
 #include "support/ideal_cameras.h"
 #include "support/relative_pose_errors.h"
@@ -42,10 +42,10 @@ RenderedRoom Render(int frames, const std::function<Pose(int)>& pose_of) {
   room.camera = support::PinholeWithFov(752, 480, 60.0);
   std::vector<Pose> poses;
   for (int k = 0; k < frames; ++k) poses.push_back(pose_of(k));
-  const drivers::SimulatedRig rig = support::MakeRoomSequence(room.camera, poses).value();
+  const sim::SimulatedRig rig = support::MakeRoomSequence(room.camera, poses).value();
   for (int k = 0; k < frames; ++k) {
     room.images.push_back(rig.RenderFrame(0, k));
-    room.truth[k] = rig.CameraPoseAt(0, rig.FrameStreamTime(k));
+    room.truth[k] = rig.WorldFromCameraAt(0, rig.FrameStreamTime(k));
   }
   return room;
 }

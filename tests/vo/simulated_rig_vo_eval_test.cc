@@ -1,4 +1,4 @@
-// MonocularVo on the simulated rig's rendered sequences (drivers/simulated_rig.h) of the
+// MonocularVo on the simulated rig's rendered sequences (sim/simulated_rig.h) of the
 // example configs, one camera at a time in one thread (deterministic, no pipeline): the thesis
 // 5.4 virtual scene (two 60-degree pinhole cameras, 468 frames), the spherical rig of thesis 5.7
 // (two 186-degree fisheyes back to back), the sewer of thesis 5.6 (two fisheyes in a 60 cm
@@ -21,11 +21,11 @@
 #include <filesystem>
 #include <map>
 
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
+#include "rigcal/sim/simulated_rig.h"
 #include "rigcal/vo/monocular_vo.h"
 #include "vo_eval_options.h"
 
@@ -39,7 +39,7 @@ struct CameraRun {
   double median_ms = 0.0;
 };
 
-CameraRun RunCamera(const drivers::SimulatedRig& rig, int camera, int64_t frames) {
+CameraRun RunCamera(const sim::SimulatedRig& rig, int camera, int64_t frames) {
   CameraRun run;
   MonocularVo vo(rig.spec().cameras[camera], camera, EvalOptions());
   std::map<int64_t, int64_t> frame_of;  // t_ns -> frame index
@@ -76,12 +76,12 @@ double Sim3Scale(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& dst, int i
   return sim.block<3, 1>(0, 0).norm();
 }
 
-void CheckSegment(const drivers::SimulatedRig& rig, int camera, const std::map<int64_t, Pose>& est,
+void CheckSegment(const sim::SimulatedRig& rig, int camera, const std::map<int64_t, Pose>& est,
                   const std::string& label) {
   std::vector<int64_t> frames;
   for (const auto& [k, pose] : est) frames.push_back(k);
   ASSERT_GE(frames.size(), 3u) << label;
-  auto truth = [&](int64_t k) { return rig.CameraPoseAt(camera, rig.FrameStreamTime(k)); };
+  auto truth = [&](int64_t k) { return rig.WorldFromCameraAt(camera, rig.FrameStreamTime(k)); };
   const Pose reference = truth(frames.front());
   double max_rot = 0.0, path = 0.0, sum2 = 0.0, max_drift = 0.0;
   int64_t max_frame = -1;
@@ -138,46 +138,46 @@ void CheckSegment(const drivers::SimulatedRig& rig, int camera, const std::map<i
 
 // Writes the VO poses (all segments) and the true poses of `camera` when
 // RIGCAL_VO_EVAL_POSES_DIR is set.
-void MaybeWritePoses(const drivers::SimulatedRig& rig, int camera, const CameraRun& run,
+void MaybeWritePoses(const sim::SimulatedRig& rig, int camera, const CameraRun& run,
                      const std::string& stem) {
   const char* dir = std::getenv("RIGCAL_VO_EVAL_POSES_DIR");
   if (dir == nullptr || *dir == '\0') return;
   const std::string base = std::string(dir) + "/" + stem;
   std::filesystem::create_directories(std::filesystem::path(base).parent_path());
-  tools::TimedTrajectory est, truth;
+  TimedTrajectory est, truth;
   std::map<int64_t, std::pair<Pose, int>> by_frame;
   for (const auto& [segment, poses] : run.segments) {
     for (const auto& [k, pose] : poses) by_frame.emplace(k, std::make_pair(pose, segment));
   }
-  const Pose first = rig.CameraPoseAt(camera, rig.FrameStreamTime(0));
+  const Pose first = rig.WorldFromCameraAt(camera, rig.FrameStreamTime(0));
   for (const auto& [k, entry] : by_frame) {
     est.t_ns.push_back(rig.FrameTimeNs(k));
     est.poses.push_back(entry.first);
     est.segment.push_back(entry.second);
   }
   for (int64_t k = 0; k < run.frames; ++k) {
-    const Pose p = rig.CameraPoseAt(camera, rig.FrameStreamTime(k));
+    const Pose p = rig.WorldFromCameraAt(camera, rig.FrameStreamTime(k));
     Pose local;
     local.q = Eigen::Quaterniond(first.R().transpose() * p.R());
     local.C = first.R().transpose() * (p.C - first.C);
     truth.t_ns.push_back(rig.FrameTimeNs(k));
     truth.poses.push_back(local);
   }
-  EXPECT_TRUE(tools::WriteTrajectoryNative(base + ".txt", est).ok());
-  EXPECT_TRUE(tools::WriteTrajectoryNative(base + "_truth.txt", truth).ok());
+  EXPECT_TRUE(io::WriteTrajectoryNative(base + ".txt", est).ok());
+  EXPECT_TRUE(io::WriteTrajectoryNative(base + "_truth.txt", truth).ok());
 }
 
 void EvaluateConfig(const std::string& file, int64_t max_frames) {
   const std::string path = std::string(RIGCAL_SOURCE_DIR) + "/config/" + file;
-  auto config = tools::LoadRigConfig(path);
+  auto config = io::LoadRigConfig(path);
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_TRUE(config->simulated_source.has_value());
-  drivers::SimulatedRigSpec spec = *config->simulated_source;
+  sim::SimulatedRigSpec spec = *config->simulated_source;
   spec.realtime = false;
   if (const char* block = std::getenv("RIGCAL_VO_EVAL_RENDER_BLOCK")) {
     spec.render_block = std::atoi(block);  // 1 = exact ray casting, to judge the renderer
   }
-  auto rig = drivers::MakeSimulatedRig(spec);
+  auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig.ok()) << rig.error();
   const int64_t frames = std::min(rig->num_frames(), max_frames);
   const std::string config_stem = std::filesystem::path(file).stem().string();

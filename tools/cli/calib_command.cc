@@ -11,7 +11,7 @@ namespace {
 
 struct CalibArgs {
   NodeRunArgs run;
-  tools::CalibNodeOptions node;
+  pipeline::CalibNodeOptions node;
 };
 
 }  // namespace

@@ -6,7 +6,7 @@
 
 #include "exit_codes.h"
 #include "replay_progress.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
@@ -26,9 +26,9 @@ std::string ChannelList(const std::map<std::string, int64_t>& channels) {
 }
 
 // Why nothing was calibrated when no set reached the estimator.
-std::string NoSetsMessage(const tools::CalibNodeOptions& options,
+std::string NoSetsMessage(const pipeline::CalibNodeOptions& options,
                           const std::vector<std::string>& names,
-                          const tools::CalibNodeSummary& summary) {
+                          const pipeline::CalibNodeSummary& summary) {
   std::ostringstream text;
   text << "no synchronised pose set reached the estimator: ";
   if (options.log_path.empty()) {
@@ -54,7 +54,7 @@ std::string NoSetsMessage(const tools::CalibNodeOptions& options,
 
 }  // namespace
 
-void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, tools::CalibNodeOptions* node) {
+void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, pipeline::CalibNodeOptions* node) {
   cmd->add_option("--config", run->config,
                   "Rig config YAML (see config/README.md; camera models for image logs)")
       ->required();
@@ -72,10 +72,10 @@ void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, tools::CalibNodeOptions* no
                 "ignored");
 }
 
-int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
+int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
   auto log = ModuleLogger("tools");
   const std::string prefix = "rigcal " + args.command + ": ";
-  auto config = tools::LoadRigConfig(args.config);
+  auto config = io::LoadRigConfig(args.config);
   if (!config) {
     std::cerr << prefix << config.error() << "\n";
     return kExitError;
@@ -83,21 +83,21 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
   const std::vector<std::string> names = config->CameraNames();
   // With true mountings in the config (simulations), the result also shows the errors.
   std::map<std::string, Similarity> truth;
-  for (const tools::CameraConfig& camera : config->cameras) {
+  for (const io::CameraConfig& camera : config->cameras) {
     if (camera.truth) truth[camera.name] = *camera.truth;
   }
   const std::map<std::string, Similarity>* truth_ptr = truth.empty() ? nullptr : &truth;
   std::unique_ptr<ReplayProgressDisplay> display;
   if (args.progress && !options.log_path.empty()) {
     display = std::make_unique<ReplayProgressDisplay>("rigcal " + args.command);
-    options.on_progress = [&display](const tools::ReplayProgress& p) { display->Update(p); };
+    options.on_progress = [&display](const pipeline::ReplayProgress& p) { display->Update(p); };
   }
   // Under systemd (config/systemd/rigcal.service): READY=1 once listening, the watchdog from
   // the receive loop.
   ServiceNotifier service;
   const bool live = options.log_path.empty();
   if (live) options.on_tick = [&service] { service.Tick(); };
-  tools::CalibNode node(std::move(*config), options);
+  pipeline::CalibNode node(std::move(*config), options);
   if (const Status status = node.Open(); !status.ok()) {
     std::cerr << prefix << status.message() << "\n";
     return kExitError;
@@ -107,7 +107,7 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
     log->info("listening for RIGCAL_POSE_<camera>; stop with Ctrl-C (SIGINT), SIGTERM or SIGHUP");
     service.Ready("listening for RIGCAL_POSE_<camera>");
   }
-  const tools::CalibNodeSummary summary = node.Run(stop_signal.flag());
+  const pipeline::CalibNodeSummary summary = node.Run(stop_signal.flag());
   if (live) service.Stopping();
   if (stop_signal.received() != 0) {
     log->info("signal {} received: stopped cleanly", stop_signal.received());
@@ -128,9 +128,9 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
   if (!summary.log_problem.empty()) std::cerr << prefix << summary.log_problem << "\n";
   const RigCalibration& result = summary.estimate.rig;
   if (args.json) {
-    std::cout << tools::ResultToJson(result, truth_ptr).dump(2) << "\n";
+    std::cout << io::ResultToJson(result, truth_ptr).dump(2) << "\n";
   } else {
-    std::cout << tools::FormatResultTable(result, truth_ptr);
+    std::cout << io::FormatResultTable(result, truth_ptr);
   }
   std::cout.flush();
   if (summary.result_written) log->info("result written to {}", options.result_path);
@@ -138,7 +138,7 @@ int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options) {
     std::cerr << prefix << "calibrated nothing: " << kept << " left as it was\n";
   }
   if (!args.camchain.empty()) {
-    if (const Status status = tools::WriteCamchain(args.camchain, result); !status.ok()) {
+    if (const Status status = io::WriteCamchain(args.camchain, result); !status.ok()) {
       std::cerr << prefix << status.message() << "\n";
       return kExitError;
     }

@@ -19,9 +19,9 @@ struct NodeRunArgs {
 };
 
 // The options calib and replay share: --config, --out, --camchain, --json, --state, --resume.
-void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, tools::CalibNodeOptions* node);
+void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, pipeline::CalibNodeOptions* node);
 
 // Runs the node; returns the process exit code.
-int RunCalibNode(const NodeRunArgs& args, tools::CalibNodeOptions options);
+int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options);
 
 }  // namespace rigcal::cli

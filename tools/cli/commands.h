@@ -20,5 +20,6 @@ void RegisterRecord(CLI::App& app, int* exit_code);
 void RegisterImport(CLI::App& app, int* exit_code);
 void RegisterIntrinsics(CLI::App& app, int* exit_code);
 void RegisterReferenceCompare(CLI::App& app, int* exit_code);
+void RegisterTrigger(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

@@ -31,7 +31,7 @@ int RunDemo(const DemoArgs& args) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
   if (args.json) {
-    std::cout << tools::ResultToJson(result, &truth).dump(2) << "\n";
+    std::cout << io::ResultToJson(result, &truth).dump(2) << "\n";
   } else {
     std::cout << "Simulated rig: master 'front', slaves 'left' (looking left, odometry unit x2) "
                  "and 'back' (looking backwards, odometry unit x0.5)\n"
@@ -40,7 +40,7 @@ int RunDemo(const DemoArgs& args) {
               << " deg / " << args.drive.position_noise << " units, seed " << args.drive.seed
               << "\n"
               << result.pairs_selected << " time pairs, solved in " << ms << " ms\n\n"
-              << tools::FormatResultTable(result, &truth);
+              << io::FormatResultTable(result, &truth);
   }
   std::vector<SlaveState> states;
   for (const auto& s : result.slaves) states.push_back(s.state);

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "commands.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/research/experiments.h"
 #include "rigcal/research/pair_evaluation.h"
@@ -34,7 +34,7 @@ struct ExperimentArgs {
 };
 
 // Progress on stderr at every 10 % of the work, once the run has taken more than 2 s.
-ExperimentProgress StderrProgress(const std::string& name, bool quiet) {
+research::ExperimentProgress StderrProgress(const std::string& name, bool quiet) {
   if (quiet) return nullptr;
   const auto start = std::chrono::steady_clock::now();
   return [name, start](int64_t done, int64_t total) {
@@ -55,9 +55,9 @@ int RunPairs(const ExperimentArgs& args) {
   // Hundreds of solves and replays: their per-slave log lines would drown the table.
   ModuleLogger("calib")->set_level(spdlog::level::err);
   std::vector<std::string> notes;
-  const std::vector<PairScenario> scenarios = PairScenarios(args.data_dir, &notes);
+  const std::vector<research::PairScenario> scenarios = research::PairScenarios(args.data_dir, &notes);
   for (const auto& note : notes) std::cerr << "rigcal experiment pairs: " << note << "\n";
-  PairEvaluationOptions options;
+  research::PairEvaluationOptions options;
   options.repeats = args.repeats;
   options.seed = args.seed;
   options.threads = args.threads;
@@ -65,19 +65,19 @@ int RunPairs(const ExperimentArgs& args) {
   options.only = args.only;
   options.progress = StderrProgress("pairs", args.quiet);
   const auto start = std::chrono::steady_clock::now();
-  const auto results = RunPairEvaluation(scenarios, options);
+  const auto results = research::RunPairEvaluation(scenarios, options);
   if (results.empty()) {
     std::cerr << "rigcal experiment pairs: no scenario matches --only '" << args.only << "'\n";
     return 2;
   }
-  const std::string table = FormatPairTable(results);
+  const std::string table = research::FormatPairTable(results);
   std::cout << table;
   std::error_code ec;
   std::filesystem::create_directories(args.out_dir, ec);
   const std::string csv = args.out_dir + "/pairs.csv";
   const std::string txt = args.out_dir + "/pairs_summary.txt";
-  for (const auto& [path, text] : {std::pair{csv, PairCsv(results)}, std::pair{txt, table}}) {
-    if (const Status written = tools::WriteFileAtomically(path, text); !written.ok()) {
+  for (const auto& [path, text] : {std::pair{csv, research::PairCsv(results)}, std::pair{txt, table}}) {
+    if (const Status written = io::WriteFileAtomically(path, text); !written.ok()) {
       std::cerr << "rigcal experiment pairs: " << written.message() << "\n";
       return 1;
     }
@@ -90,19 +90,19 @@ int RunPairs(const ExperimentArgs& args) {
 
 int Run(const ExperimentArgs& args) {
   if (args.name == "pairs") return RunPairs(args);
-  std::vector<ExperimentKind> kinds;
+  std::vector<research::ExperimentKind> kinds;
   if (args.name == "all") {
-    kinds = {ExperimentKind::kStability, ExperimentKind::kPoses, ExperimentKind::kMotionModel,
-             ExperimentKind::kScaleModel};
+    kinds = {research::ExperimentKind::kStability, research::ExperimentKind::kPoses, research::ExperimentKind::kMotionModel,
+             research::ExperimentKind::kScaleModel};
   } else {
-    ExperimentKind kind;
-    if (!ParseExperimentKind(args.name, &kind)) {
+    research::ExperimentKind kind;
+    if (!research::ParseExperimentKind(args.name, &kind)) {
       std::cerr << "rigcal experiment: unknown experiment '" << args.name << "'\n";
       return 2;
     }
     kinds = {kind};
   }
-  ExperimentOptions options;
+  research::ExperimentOptions options;
   options.samples = args.samples;
   options.seed = args.seed;
   options.threads = args.threads;
@@ -112,18 +112,18 @@ int Run(const ExperimentArgs& args) {
     std::cerr << "rigcal experiment: invalid options: " << status.message() << "\n";
     return 2;
   }
-  for (ExperimentKind kind : kinds) {
+  for (research::ExperimentKind kind : kinds) {
     options.progress = StderrProgress(ToString(kind), args.quiet);
     const auto start = std::chrono::steady_clock::now();
-    const ExperimentResult result = RunExperiment(kind, options);
+    const research::ExperimentResult result = research::RunExperiment(kind, options);
     if (!result.error.empty()) {
       std::cerr << "rigcal experiment " << ToString(kind) << ": " << result.error << "\n";
       return 2;
     }
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cout << FormatSummary(result);
-    const auto written = WriteExperimentOutputs(result, args.out_dir);
+    std::cout << research::FormatSummary(result);
+    const auto written = research::WriteExperimentOutputs(result, args.out_dir);
     if (!written.ok()) {
       std::cerr << "rigcal experiment " << ToString(kind) << ": " << written.error() << "\n";
       return 1;

@@ -14,8 +14,8 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/drivers/image_folder_device.h"
-#include "rigcal/io/config_sections.h"
+#include "rigcal/capture/image_folder_device.h"
+#include "rigcal/io/camera_files.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/lcm/channels.h"
@@ -95,20 +95,20 @@ int RunImportEuroc(const ImportArgs& args) {
   for (const std::string& path : {args.out, config_path}) {
     if (auto problem = ExistingOutput(args, path)) return PrintCommandError("import", *problem);
   }
-  tools::CameraNames names;
-  std::vector<tools::CameraConfig> cameras;
-  std::vector<std::unique_ptr<drivers::ImageFolderDevice>> devices;
+  lcm::CameraNames names;
+  std::vector<io::CameraConfig> cameras;
+  std::vector<std::unique_ptr<capture::ImageFolderDevice>> devices;
   for (const fs::path& folder : *folders) {
     const std::string name = folder.filename().string();
     auto device =
-        drivers::ImageFolderDevice::Open(folder.string(), name, static_cast<int>(names.size()));
+        capture::ImageFolderDevice::Open(folder.string(), name, static_cast<int>(names.size()));
     if (!device) return PrintCommandError("import", folder.string() + ": " + device.error());
-    tools::CameraConfig camera;
+    io::CameraConfig camera;
     camera.name = name;
     const fs::path sensor = folder / "sensor.yaml";
     std::error_code ec;
     if (fs::exists(sensor, ec)) {
-      auto spec = tools::ReadEurocSensorYaml(sensor.string(), name);
+      auto spec = io::ReadEurocSensorYaml(sensor.string(), name);
       if (!spec) return PrintCommandError("import", spec.error());
       camera.spec = *spec;
     } else {
@@ -122,18 +122,18 @@ int RunImportEuroc(const ImportArgs& args) {
     devices.push_back(std::move(*device));
   }
 
-  tools::ImageEncodeOptions encode;
-  encode.encoding = *tools::ParseImageEncoding(args.image_encoding);  // CLI-checked
+  pipeline::ImageEncodeOptions encode;
+  encode.encoding = *pipeline::ParseImageEncoding(args.image_encoding);  // CLI-checked
   encode.jpeg_quality = args.jpeg_quality;
-  tools::LogWriterOptions log_options;
+  lcm::LogWriterOptions log_options;
   log_options.atomic = true;
   log_options.overwrite = true;  // existing files were checked above
   log_options.split_bytes = static_cast<int64_t>(std::llround(args.split_mb * 1e6));
-  auto log = tools::LogWriter::Open(args.out, log_options);
+  auto log = lcm::LogWriter::Open(args.out, log_options);
   if (!log) return PrintCommandError("import", log.error());
 
   // Merge the cameras by time: always write the earliest pending frame (lower index on ties).
-  std::vector<std::optional<drivers::Frame>> pending(devices.size());
+  std::vector<std::optional<capture::Frame>> pending(devices.size());
   const auto grab = [&](size_t i) -> Status {
     auto frame = devices[i]->Grab();
     if (!frame) return frame.status();
@@ -151,9 +151,9 @@ int RunImportEuroc(const ImportArgs& args) {
     }
     if (!next) break;
     const auto camera = static_cast<int>(*next);
-    auto bytes = tools::EncodeImageEvent(*pending[*next], names, camera, encode);
+    auto bytes = pipeline::EncodeImageEvent(*pending[*next], names, camera, encode);
     if (!bytes) return PrintCommandError("import", bytes.error());
-    if (Status status = (*log)->Write(tools::ImageChannel(names[*next]),
+    if (Status status = (*log)->Write(lcm::ImageChannel(names[*next]),
                                       pending[*next]->t_ns / 1000, bytes->data(), bytes->size());
         !status.ok()) {
       return PrintCommandError("import", status.message());
@@ -165,14 +165,14 @@ int RunImportEuroc(const ImportArgs& args) {
   if (Status status = (*log)->Close(); !status.ok())
     return PrintCommandError("import", status.message());
 
-  std::vector<drivers::ImageFolderDevice*> folder_devices;
+  std::vector<capture::ImageFolderDevice*> folder_devices;
   for (const auto& device : devices) folder_devices.push_back(device.get());
-  tools::ReportFolderProblems(folder_devices, "rigcal import: ", std::cerr);
+  pipeline::ReportFolderProblems(folder_devices, "rigcal import: ", std::cerr);
   const std::string comment = "Cameras of the EuRoC recording " + args.dir +
                               " (intrinsics from mav0/camN/sensor.yaml),\nwritten by rigcal "
                               "import euroc with the log " +
                               args.out;
-  if (Status status = tools::WriteRigConfig(config_path, fs::path(args.dir).filename().string(),
+  if (Status status = io::WriteRigConfig(config_path, fs::path(args.dir).filename().string(),
                                             cameras, comment);
       !status.ok()) {
     return PrintCommandError("import", status.message());
@@ -181,7 +181,7 @@ int RunImportEuroc(const ImportArgs& args) {
   for (size_t i = 0; i < names.size(); ++i) {
     std::cout << (i == 0 ? " " : ", ") << frames[i] << " frames of " << names[i];
   }
-  std::cout << " (" << tools::ToString(encode.encoding) << ", "
+  std::cout << " (" << ToString(encode.encoding) << ", "
             << static_cast<double>((*log)->bytes()) / 1e6 << " MB) into";
   for (const std::string& file : (*log)->files()) std::cout << " " << file;
   std::cout << "\nrig config: " << config_path << "\n";
@@ -193,12 +193,12 @@ int RunImportTum(const ImportArgs& args) {
   for (const std::string& path : {args.out, config_path}) {
     if (auto problem = ExistingOutput(args, path)) return PrintCommandError("import", *problem);
   }
-  tools::CameraNames names;
-  std::vector<tools::CameraConfig> cameras;
+  lcm::CameraNames names;
+  std::vector<io::CameraConfig> cameras;
   std::vector<CameraPose> poses;
   for (const std::string& argument : args.trajectories) {
-    tools::TrajectoryFormat format = tools::TrajectoryFormat::kTum;
-    auto trajectory = tools::ReadNamedTrajectory(argument, {}, &format);
+    io::TrajectoryFormat format = io::TrajectoryFormat::kTum;
+    auto trajectory = io::ReadNamedTrajectory(argument, {}, &format);
     if (!trajectory) return PrintCommandError("import", trajectory.error());
     if (!ValidCameraName(trajectory->name)) {
       return PrintCommandError("import",
@@ -210,7 +210,7 @@ int RunImportTum(const ImportArgs& args) {
                                              "' (name them with NAME=FILE)");
     }
     std::cerr << "rigcal import: " << argument << ": " << trajectory->size() << " poses ("
-              << tools::ToString(format) << "), camera '" << trajectory->name << "'"
+              << ToString(format) << "), camera '" << trajectory->name << "'"
               << (names.empty() ? " (master)" : "") << "\n";
     for (size_t k = 0; k < trajectory->size(); ++k) {
       CameraPose pose;
@@ -221,15 +221,15 @@ int RunImportTum(const ImportArgs& args) {
       poses.push_back(pose);
     }
     names.push_back(trajectory->name);
-    tools::CameraConfig camera;
+    io::CameraConfig camera;
     camera.name = trajectory->name;
     cameras.push_back(std::move(camera));
   }
   const size_t count = poses.size();
-  if (Status status = tools::WritePoseEvents(args.out, names, std::move(poses)); !status.ok()) {
+  if (Status status = lcm::WritePoseEvents(args.out, names, std::move(poses)); !status.ok()) {
     return PrintCommandError("import", status.message());
   }
-  if (Status status = tools::WriteRigConfig(
+  if (Status status = io::WriteRigConfig(
           config_path, fs::path(args.out).stem().string(), cameras,
           "Cameras of the pose log " + args.out + " (master first), written by rigcal import tum");
       !status.ok()) {

@@ -7,13 +7,13 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
-#include "rigcal/target/kalibr_camchain.h"
-#include "rigcal/target/omni_intrinsics.h"
-#include "rigcal/target/reference_calibration.h"
-#include "rigcal/target/target_poses.h"
+#include "rigcal/pattern/kalibr_camchain.h"
+#include "rigcal/pattern/omni_intrinsics.h"
+#include "rigcal/pattern/reference_calibration.h"
+#include "rigcal/pattern/target_poses.h"
 #include "target_args.h"
 
 namespace rigcal::cli {
@@ -30,9 +30,9 @@ struct IntrinsicsArgs {
 };
 
 nlohmann::json ToJson(const CameraCalibration& c) {
-  const target::IntrinsicsResult& r = c.intrinsics;
+  const pattern::IntrinsicsResult& r = c.intrinsics;
   nlohmann::json views = nlohmann::json::array();
-  for (const target::ViewStatistics& v : r.views) {
+  for (const pattern::ViewStatistics& v : r.views) {
     views.push_back({{"file", v.file},
                      {"corners", v.corners},
                      {"rms_px", v.rms_px},
@@ -83,31 +83,31 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
 
   // Per camera its kept target poses; cameras after the first get their pose in cam0's frame
   // from the target reference (needs shared instants).
-  std::vector<tools::TimedTrajectory> poses;
+  std::vector<TimedTrajectory> poses;
   for (const CameraCalibration& c : *cameras) {
-    poses.push_back(target::PosesAsTrajectory(c.views.camera, c.intrinsics.views,
+    poses.push_back(pattern::PosesAsTrajectory(c.views.camera, c.intrinsics.views,
                                               c.intrinsics.rejection_threshold_px));
   }
-  std::vector<target::CamchainEntry> chain;
+  std::vector<pattern::CamchainEntry> chain;
   std::string chain_error;
   std::string model_error;
   nlohmann::json extrinsics = nlohmann::json::array();
   for (size_t i = 0; i < cameras->size(); ++i) {
-    target::CamchainEntry entry;
+    pattern::CamchainEntry entry;
     entry.spec = (*cameras)[i].intrinsics.spec;
     if (entry.spec.model == camera::CameraSpec::Model::kScaramuzza && !args.camchain.empty()) {
       // Kalibr has no polynomial model: its omni (unified) model from the same views.
       // A failure is reported when the camchain is written, after the other outputs.
-      auto omni = target::CalibrateOmni((*cameras)[i].views, args.target.max_views);
+      auto omni = pattern::CalibrateOmni((*cameras)[i].views, args.target.max_views);
       if (omni) {
-        if (!args.json) std::cout << target::FormatOmni(*omni);
+        if (!args.json) std::cout << pattern::FormatOmni(*omni);
         entry = omni->ToCamchainEntry();
       } else if (model_error.empty()) {
         model_error = "Kalibr's omni model for " + entry.spec.name + ": " + omni.error();
       }
     }
     if (i > 0) {
-      auto reference = target::EstimateGlobalReference(poses[0], poses[i], args.tolerance_ns);
+      auto reference = pattern::EstimateGlobalReference(poses[0], poses[i], args.tolerance_ns);
       if (reference) {
         entry.cam0_from_cam = reference->master_from_slave;
         extrinsics.push_back(
@@ -120,7 +120,7 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
                reference->master_from_slave.C.z()}},
              {"rot_std_deg", reference->rot_std_deg},
              {"instants", reference->instants}});
-        if (!args.json) std::cout << target::FormatReference(*reference, "units");
+        if (!args.json) std::cout << pattern::FormatReference(*reference, "units");
       } else if (chain_error.empty()) {
         chain_error = reference.error();
       }
@@ -134,20 +134,20 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
     std::cout << out.dump(2) << "\n";
   } else {
     for (const CameraCalibration& c : *cameras) {
-      std::cout << target::FormatIntrinsics(c.intrinsics, args.per_view);
+      std::cout << pattern::FormatIntrinsics(c.intrinsics, args.per_view);
     }
   }
   std::cout.flush();
 
   if (!args.config_out.empty()) {
-    std::vector<tools::CameraConfig> configs;
+    std::vector<io::CameraConfig> configs;
     for (const CameraCalibration& c : *cameras) {
-      tools::CameraConfig config;
+      io::CameraConfig config;
       config.name = c.intrinsics.spec.name;
       config.spec = c.intrinsics.spec;
       configs.push_back(std::move(config));
     }
-    const Status s = tools::WriteRigConfig(
+    const Status s = io::WriteRigConfig(
         args.config_out, "calibrated", configs,
         "rig config written by rigcal intrinsics: intrinsics calibrated from target views");
     if (!s.ok()) return PrintCommandError("intrinsics", s.message());
@@ -160,9 +160,9 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
       return PrintCommandError(
           "intrinsics", "--poses-out: cannot create '" + args.poses_out + "': " + ec.message());
     }
-    for (const tools::TimedTrajectory& t : poses) {
+    for (const TimedTrajectory& t : poses) {
       const std::string path = args.poses_out + "/" + t.name + ".tum";
-      if (Status s = tools::WriteTrajectoryTum(path, t); !s.ok()) {
+      if (Status s = io::WriteTrajectoryTum(path, t); !s.ok()) {
         return PrintCommandError("intrinsics", s.message());
       }
       log->info("{}: {} target poses written to {}", t.name, t.size(), path);
@@ -174,7 +174,7 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
       return PrintCommandError("intrinsics",
                                "--camchain: no extrinsics between the cameras: " + chain_error);
     }
-    const Status s = target::WriteKalibrCamchain(
+    const Status s = pattern::WriteKalibrCamchain(
         args.camchain, chain,
         "Kalibr camchain written by rigcal intrinsics: intrinsics from target views (OpenCV);\n"
         "T_cn_cnm1 from the target poses (global reference model), in the target's unit.");

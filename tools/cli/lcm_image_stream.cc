@@ -28,28 +28,28 @@ bool IsLcmImageLog(const std::string& source) {
   return true;
 }
 
-target::ImageStream LcmImageStream(const std::string& path, const std::string& camera) {
+pattern::ImageStream LcmImageStream(const std::string& path, const std::string& camera) {
   struct State {
-    std::unique_ptr<tools::LogReader> reader;
-    tools::MessageValidator validator;
-    tools::LogEvent event;
+    std::unique_ptr<lcm::LogReader> reader;
+    lcm::MessageValidator validator;
+    lcm::LogEvent event;
     std::map<std::string, int> channels;  // seen, for the message when the camera has none
     int images = 0;
   };
   auto state = std::make_shared<State>();
-  const std::string channel = tools::ImageChannel(camera);
-  return [state, path, camera, channel](target::GreyImage* out) -> Expected<bool> {
+  const std::string channel = lcm::ImageChannel(camera);
+  return [state, path, camera, channel](pattern::GreyImage* out) -> Expected<bool> {
     if (!state->reader) {
-      auto reader = tools::LogReader::Open(path);
+      auto reader = lcm::LogReader::Open(path);
       if (!reader) return Error{reader.error()};
       state->reader = std::move(*reader);
     }
     while (true) {
       const auto outcome = state->reader->Next(&state->event);
-      if (outcome == tools::LogReader::Outcome::kDamaged) {
+      if (outcome == lcm::LogReader::Outcome::kDamaged) {
         return Error{state->reader->problem()};
       }
-      if (outcome == tools::LogReader::Outcome::kEnd) {
+      if (outcome == lcm::LogReader::Outcome::kEnd) {
         if (state->images > 0) return false;
         std::string seen;
         for (const auto& [name, count] : state->channels) {
@@ -66,7 +66,7 @@ target::ImageStream LcmImageStream(const std::string& path, const std::string& c
         return Error{path + ": event " + std::to_string(state->event.event_number) + " on " +
                      channel + ": " + image.error()};
       }
-      auto frame = tools::FrameFromImage(*image, 0);
+      auto frame = pipeline::FrameFromImage(*image, 0);
       if (!frame) {
         return Error{path + ": event " + std::to_string(state->event.event_number) + " on " +
                      channel + ": " + frame.error()};

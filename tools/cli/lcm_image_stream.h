@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "rigcal/target/target_views.h"
+#include "rigcal/pattern/target_views.h"
 
 namespace rigcal::cli {
 
@@ -18,6 +18,6 @@ bool IsLcmImageLog(const std::string& source);
 // their stamps). Errors: the log cannot be opened, is damaged (the byte offset), an image does
 // not decode (the event's channel and reason), or no image of the camera is in the log (the
 // channels it has are listed).
-target::ImageStream LcmImageStream(const std::string& path, const std::string& camera);
+pattern::ImageStream LcmImageStream(const std::string& path, const std::string& camera);
 
 }  // namespace rigcal::cli

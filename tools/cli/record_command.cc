@@ -16,7 +16,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"
@@ -51,11 +51,11 @@ struct RecordArgs {
 
 // The poses the pipeline publishes on its in-process bus, recorded as they come.
 struct PoseTap {
-  tools::LogRecorder* recorder = nullptr;
-  tools::MessageValidator validator;
+  pipeline::LogRecorder* recorder = nullptr;
+  lcm::MessageValidator validator;
 };
 
-void OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel, PoseTap* tap) {
+void OnPose(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, PoseTap* tap) {
   // The message's utime (capture time) dates the event; an invalid message is not recorded.
   auto msg = tap->validator.Decode<camera_pose_t>(channel, rbuf->data, rbuf->data_size);
   if (!msg) return;
@@ -64,7 +64,7 @@ void OnPose(const lcm::ReceiveBuffer* rbuf, const std::string& channel, PoseTap*
 }
 
 // "  12.0 s | 86.4 MB (7.2 MB/s) | frames 240 240 | drops 0 | 1 file".
-std::string ProgressLine(double elapsed_s, const tools::RecorderStats& s) {
+std::string ProgressLine(double elapsed_s, const pipeline::RecorderStats& s) {
   char buf[256];
   const double mb = static_cast<double>(s.bytes) / 1e6;
   std::snprintf(buf, sizeof(buf), "%7.1f s | %8.1f MB (%.1f MB/s) | frames", elapsed_s, mb,
@@ -104,56 +104,56 @@ class Progress {
 };
 
 int RunRecord(const RecordArgs& args) {
-  auto config = tools::LoadRigConfig(args.config);
+  auto config = io::LoadRigConfig(args.config);
   if (!config) {
     std::cerr << kPrefix << config.error() << "\n";
     return kExitError;
   }
   const std::vector<std::string> names = config->CameraNames();
-  tools::RecorderOptions options;
-  options.image.encoding = *tools::ParseImageEncoding(args.image_encoding);  // CLI-checked
+  pipeline::RecorderOptions options;
+  options.image.encoding = *pipeline::ParseImageEncoding(args.image_encoding);  // CLI-checked
   options.image.jpeg_quality = args.jpeg_quality;
   options.log.split_bytes = static_cast<int64_t>(std::llround(args.split_mb * 1e6));
   options.log.overwrite = args.force;
 
-  auto sources = tools::OpenCaptureSources(*config, args.fast, kPrefix, std::cerr);
+  auto sources = pipeline::OpenCaptureSources(*config, args.fast, kPrefix, std::cerr);
   if (!sources) {
     std::cerr << kPrefix << sources.error() << "\n";
     return kExitError;
   }
   options.lossless = !sources->realtime;
-  auto opened = tools::LogRecorder::Open(args.out, names, options);
+  auto opened = pipeline::LogRecorder::Open(args.out, names, options);
   if (!opened) {
     std::cerr << kPrefix << opened.error() << "\n";
     return kExitError;
   }
-  tools::LogRecorder& recorder = **opened;
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  pipeline::LogRecorder& recorder = **opened;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   for (size_t i = 0; i < sources->devices.size(); ++i) {
     devices.push_back(recorder.Tap(std::move(sources->devices[i]), static_cast<int>(i)));
   }
 
   // With VO: the live pipeline publishes its poses on an in-process bus, recorded from there.
-  std::unique_ptr<lcm::LCM> bus;
-  std::unique_ptr<tools::SharedBus> shared_bus;
+  std::unique_ptr<::lcm::LCM> bus;
+  std::unique_ptr<lcm::SharedBus> shared_bus;
   PoseTap pose_tap;
   pose_tap.recorder = &recorder;
-  std::unique_ptr<tools::Pipeline> pipeline;
-  std::unique_ptr<tools::CaptureLoops> capture;
+  std::unique_ptr<pipeline::Pipeline> pipeline;
+  std::unique_ptr<pipeline::CaptureLoops> capture;
   if (args.no_vo) {
-    capture = std::make_unique<tools::CaptureLoops>(std::move(devices));
+    capture = std::make_unique<pipeline::CaptureLoops>(std::move(devices));
   } else {
-    bus = std::make_unique<lcm::LCM>("memq://");
+    bus = std::make_unique<::lcm::LCM>("memq://");
     if (!bus->good()) {
       std::cerr << kPrefix << "cannot open the in-process LCM bus (memq://)\n";
       return kExitError;
     }
     bus->subscribeFunction("RIGCAL_POSE_.*", &OnPose, &pose_tap);
-    shared_bus = std::make_unique<tools::SharedBus>(bus.get());
-    tools::PipelineOptions pipeline_options;
+    shared_bus = std::make_unique<lcm::SharedBus>(bus.get());
+    pipeline::PipelineOptions pipeline_options;
     pipeline_options.lossless = options.lossless;
     pipeline =
-        std::make_unique<tools::Pipeline>(names, std::move(devices), sources->models,
+        std::make_unique<pipeline::Pipeline>(names, std::move(devices), sources->models,
                                           config->online, pipeline_options, shared_bus.get());
   }
   const auto drain_bus = [&bus] {
@@ -164,25 +164,25 @@ int RunRecord(const RecordArgs& args) {
   };
   int64_t newest_t_ns = 0;
   const auto record_extrinsics = [&] {
-    const tools::PipelineSnapshot snapshot = pipeline->Snapshot();
-    for (const tools::CameraHealth& h : snapshot.cameras) {
+    const pipeline::PipelineSnapshot snapshot = pipeline->Snapshot();
+    for (const pipeline::CameraHealth& h : snapshot.cameras) {
       newest_t_ns = std::max(newest_t_ns, h.last_frame_t_ns);
     }
     if (snapshot.estimate.sets == 0) return;
-    auto msg = tools::EstimateToLcm(snapshot.estimate, newest_t_ns / 1000);
+    auto msg = lcm::EstimateToLcm(snapshot.estimate, newest_t_ns / 1000);
     if (!msg) return;
-    auto bytes = tools::EncodeMessage(tools::kExtrinsicsChannel, names, *msg);
-    if (bytes) recorder.Record(tools::kExtrinsicsChannel, newest_t_ns / 1000, std::move(*bytes));
+    auto bytes = lcm::EncodeMessage(lcm::kExtrinsicsChannel, names, *msg);
+    if (bytes) recorder.Record(lcm::kExtrinsicsChannel, newest_t_ns / 1000, std::move(*bytes));
   };
 
   StopSignal stop_signal;
-  tools::CpuMeter cpu;
-  const double cpu_start_s = tools::ProcessCpuSeconds();
+  lcm::CpuMeter cpu;
+  const double cpu_start_s = lcm::ProcessCpuSeconds();
   const auto start = Clock::now();
   if (pipeline) pipeline->Start();
   if (capture) capture->Start();
   std::cerr << kPrefix << "recording " << names.size() << " cameras ("
-            << tools::ToString(options.image.encoding) << (args.no_vo ? "" : ", with VO poses")
+            << ToString(options.image.encoding) << (args.no_vo ? "" : ", with VO poses")
             << ") to " << args.out << "; Ctrl-C stops cleanly\n";
   Progress progress;
   auto last_progress = start;
@@ -215,8 +215,8 @@ int RunRecord(const RecordArgs& args) {
   if (sources->trigger) sources->trigger->Stop();  // after the cameras it exposes
   const Status stopped = recorder.Stop();
   const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-  const double cpu_percent = 100.0 * (tools::ProcessCpuSeconds() - cpu_start_s) / elapsed;
-  const tools::RecorderStats stats = recorder.Stats();
+  const double cpu_percent = 100.0 * (lcm::ProcessCpuSeconds() - cpu_start_s) / elapsed;
+  const pipeline::RecorderStats stats = recorder.Stats();
   progress.Show(ProgressLine(elapsed, stats));
   progress.End();
 
@@ -224,13 +224,13 @@ int RunRecord(const RecordArgs& args) {
     for (const std::string& problem : capture->Problems()) std::cerr << kPrefix << problem << "\n";
   }
   if (pipeline) {
-    for (const tools::CameraHealth& h : pipeline->Snapshot().cameras) {
+    for (const pipeline::CameraHealth& h : pipeline->Snapshot().cameras) {
       if (h.dead)
         std::cerr << kPrefix << "camera '" << h.name << "' died: " << h.dead_reason << "\n";
     }
   }
-  tools::ReportFolderProblems(sources->folders, kPrefix, std::cerr);
-  tools::ReportTrigger(*sources, kPrefix, std::cerr);
+  pipeline::ReportFolderProblems(sources->folders, kPrefix, std::cerr);
+  pipeline::ReportTrigger(*sources, kPrefix, std::cerr);
   if (!stopped.ok()) {
     std::cerr << kPrefix << stopped.message() << "\n";
     return kExitError;

@@ -8,7 +8,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/target/reference_compare.h"
+#include "rigcal/pattern/reference_compare.h"
 #include "target_args.h"
 
 namespace rigcal::cli {
@@ -30,13 +30,13 @@ int RunCompare(const CompareArgs& args) {
   }
   auto cameras = CalibrateCameras(args.target);
   if (!cameras) return PrintCommandError("reference-compare", cameras.error());
-  std::vector<target::CameraInput> inputs;
+  std::vector<pattern::CameraInput> inputs;
   for (CameraCalibration& c : *cameras) inputs.push_back({c.views, c.intrinsics});
-  const target::ReferenceKind kind = args.reference == "stereo"   ? target::ReferenceKind::kStereo
-                                     : args.reference == "global" ? target::ReferenceKind::kGlobal
-                                                                  : target::ReferenceKind::kAuto;
+  const pattern::ReferenceKind kind = args.reference == "stereo"   ? pattern::ReferenceKind::kStereo
+                                     : args.reference == "global" ? pattern::ReferenceKind::kGlobal
+                                                                  : pattern::ReferenceKind::kAuto;
   const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
-  auto comparisons = target::CompareWithReference(inputs, kind, tolerance_ns);
+  auto comparisons = pattern::CompareWithReference(inputs, kind, tolerance_ns);
   if (!comparisons) return PrintCommandError("reference-compare", comparisons.error());
 
   const std::string& master = inputs.front().views.camera;
@@ -45,7 +45,7 @@ int RunCompare(const CompareArgs& args) {
                          {"unit", "the target's (chessboard --square, AprilGrid metres)"},
                          {"cameras", nlohmann::json::array()},
                          {"slaves", nlohmann::json::array()}};
-  for (const target::CameraInput& c : inputs) {
+  for (const pattern::CameraInput& c : inputs) {
     const auto& s = c.intrinsics.spec;
     json["cameras"].push_back({{"name", s.name},
                                {"intrinsics", s.intrinsics},
@@ -54,9 +54,9 @@ int RunCompare(const CompareArgs& args) {
                                {"views_used", c.intrinsics.views_used},
                                {"views_rejected", c.intrinsics.views_rejected}});
   }
-  for (const target::SlaveComparison& cmp : *comparisons) {
+  for (const pattern::SlaveComparison& cmp : *comparisons) {
     nlohmann::json rows = nlohmann::json::array();
-    for (const target::ComparisonRow& row : cmp.rows) {
+    for (const pattern::ComparisonRow& row : cmp.rows) {
       const Similarity& s = row.estimate;
       all_usable = all_usable && row.usable;
       rows.push_back({{"method", row.method},
@@ -74,11 +74,11 @@ int RunCompare(const CompareArgs& args) {
   if (args.json) {
     std::cout << json.dump(2) << "\n";
   } else {
-    for (const target::CameraInput& c : inputs) {
-      std::cout << target::FormatIntrinsics(c.intrinsics, false);
+    for (const pattern::CameraInput& c : inputs) {
+      std::cout << pattern::FormatIntrinsics(c.intrinsics, false);
     }
-    for (const target::SlaveComparison& cmp : *comparisons) {
-      std::cout << target::FormatComparison(cmp, master);
+    for (const pattern::SlaveComparison& cmp : *comparisons) {
+      std::cout << pattern::FormatComparison(cmp, master);
     }
   }
   return all_usable ? kExitOk : kExitUnusable;

@@ -10,7 +10,7 @@ namespace {
 
 struct ReplayArgs {
   NodeRunArgs run;
-  tools::CalibNodeOptions node;
+  pipeline::CalibNodeOptions node;
   bool fast = false;
   bool no_progress = false;
 };

@@ -32,7 +32,7 @@ ReplayProgressDisplay::ReplayProgressDisplay(std::string label)
       start_(Clock::now()),
       next_line_(start_ + kLinePeriod) {}
 
-void ReplayProgressDisplay::Update(const tools::ReplayProgress& p) {
+void ReplayProgressDisplay::Update(const pipeline::ReplayProgress& p) {
   const double fraction =
       p.log_bytes > 0 ? std::clamp(static_cast<double>(p.bytes_read) / p.log_bytes, 0.0, 1.0) : 1.0;
   const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();

@@ -14,7 +14,7 @@ class ReplayProgressDisplay {
   // `label` starts every line ("rigcal replay").
   explicit ReplayProgressDisplay(std::string label);
   // Shows `progress` (called about every 0.2 s, and once with done = true).
-  void Update(const tools::ReplayProgress& progress);
+  void Update(const pipeline::ReplayProgress& progress);
 
  private:
   std::string label_;

@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/report/report_html.h"
 #include "rigcal/report/report_input.h"
 
@@ -16,17 +16,17 @@ namespace {
 constexpr int kExitBadInput = 1;
 
 struct ReportArgs {
-  tools::ReportOptions input;
+  report::ReportOptions input;
   std::string out;
 };
 
 int RunReport(const ReportArgs& args) {
-  auto data = tools::LoadReport(args.input);
+  auto data = report::LoadReport(args.input);
   if (!data) {
     std::cerr << "rigcal report: " << data.error() << "\n";
     return kExitBadInput;
   }
-  if (Status written = tools::WriteReportHtml(args.out, *data); !written.ok()) {
+  if (Status written = report::WriteReportHtml(args.out, *data); !written.ok()) {
     std::cerr << "rigcal report: " << written.message() << "\n";
     return kExitBadInput;
   }

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "commands.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 
 namespace {
 
@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
   rigcal::cli::RegisterImport(app, &exit_code);
   rigcal::cli::RegisterIntrinsics(app, &exit_code);
   rigcal::cli::RegisterReferenceCompare(app, &exit_code);
+  rigcal::cli::RegisterTrigger(app, &exit_code);
 
   try {
     app.parse(argc, argv);

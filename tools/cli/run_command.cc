@@ -14,9 +14,8 @@
 
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/logging.h"
-#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/ground_truth_files.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_config.h"
@@ -33,6 +32,7 @@
 #include "rigcal/pipeline/online_replay.h"
 #include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/run_evaluation.h"
+#include "rigcal/sim/simulated_rig.h"
 #include "stop_signal.h"
 
 namespace rigcal::cli {
@@ -65,14 +65,14 @@ const char* VoStateShort(vo::VoState state) {
 }
 
 // One line: time, per camera fps / VO state / segment / VO ms, sets, per slave estimate.
-std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
+std::string StatusLine(double t_s, const pipeline::PipelineSnapshot& s,
                        const std::vector<int64_t>& frames_before, double period_s) {
   std::ostringstream line;
   char buf[160];
   std::snprintf(buf, sizeof(buf), "%6.1fs", t_s);
   line << buf;
   for (size_t i = 0; i < s.cameras.size(); ++i) {
-    const tools::CameraHealth& h = s.cameras[i];
+    const pipeline::CameraHealth& h = s.cameras[i];
     const double fps = period_s > 0 ? (h.frames_processed - frames_before[i]) / period_s : 0.0;
     if (h.dead) {
       line << " | " << h.name << " DEAD";
@@ -95,19 +95,19 @@ std::string StatusLine(double t_s, const tools::PipelineSnapshot& s,
       line << " | " << slave.name << " " << slave.motions.used << " mot";
     }
     if (i < s.estimate.online.size()) {
-      line << " [" << tools::StateText(slave.state, s.estimate.online[i].flags) << "]";
+      line << " [" << StateText(slave.state, s.estimate.online[i].flags) << "]";
     }
   }
   return line.str();
 }
 
-void PublishStatus(tools::SharedBus* bus, const tools::PipelineSnapshot& s,
-                   std::vector<tools::StampRate>* rates, int32_t capacity, tools::CpuMeter* cpu,
+void PublishStatus(lcm::SharedBus* bus, const pipeline::PipelineSnapshot& s,
+                   std::vector<lcm::StampRate>* rates, int32_t capacity, lcm::CpuMeter* cpu,
                    const std::vector<std::string>& names) {
-  std::vector<tools::CameraStatusInput> cameras;
+  std::vector<lcm::CameraStatusInput> cameras;
   for (size_t i = 0; i < s.cameras.size(); ++i) {
-    const tools::CameraHealth& h = s.cameras[i];
-    tools::CameraStatusInput c = tools::StatusInputOf(h);
+    const pipeline::CameraHealth& h = s.cameras[i];
+    lcm::CameraStatusInput c = pipeline::StatusInputOf(h);
     c.fps = (*rates)[i].Update(h.frames_processed, h.last_frame_t_ns, -1);
     cameras.push_back(c);
   }
@@ -115,13 +115,13 @@ void PublishStatus(tools::SharedBus* bus, const tools::PipelineSnapshot& s,
                             std::chrono::steady_clock::now().time_since_epoch())
                             .count();
   const rig_status_t msg =
-      tools::MakeRigStatus(cameras, s.sync, capacity, s.estimate, cpu->Sample(), utime);
-  if (auto bytes = tools::EncodeMessage(tools::kStatusChannel, names, msg)) {
-    bus->Publish(tools::kStatusChannel, *bytes);
+      lcm::MakeRigStatus(cameras, s.sync, capacity, s.estimate, cpu->Sample(), utime);
+  if (auto bytes = lcm::EncodeMessage(lcm::kStatusChannel, names, msg)) {
+    bus->Publish(lcm::kStatusChannel, *bytes);
   }
-  if (auto extrinsics = tools::EstimateToLcm(s.estimate, utime)) {
-    if (auto bytes = tools::EncodeMessage(tools::kExtrinsicsChannel, names, *extrinsics)) {
-      bus->Publish(tools::kExtrinsicsChannel, *bytes);
+  if (auto extrinsics = lcm::EstimateToLcm(s.estimate, utime)) {
+    if (auto bytes = lcm::EncodeMessage(lcm::kExtrinsicsChannel, names, *extrinsics)) {
+      bus->Publish(lcm::kExtrinsicsChannel, *bytes);
     }
   }
 }
@@ -129,12 +129,12 @@ void PublishStatus(tools::SharedBus* bus, const tools::PipelineSnapshot& s,
 // Writes every recorded VO pose of camera i to <dir>/<name>.txt in the rigcal native format
 // (`t_ns qw qx qy qz Cx Cy Cz segment`), which `rigcal solve` reads.
 Status WritePoses(const std::string& dir, const std::vector<std::string>& names,
-                  const tools::Pipeline& pipeline) {
+                  const pipeline::Pipeline& pipeline) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return Error{"cannot create '" + dir + "': " + ec.message()};
   for (size_t i = 0; i < names.size(); ++i) {
-    tools::TimedTrajectory trajectory;
+    TimedTrajectory trajectory;
     trajectory.name = names[i];
     for (const CameraPose& p : pipeline.RecordedPoses(static_cast<int>(i))) {
       // A segment's reference pose and its first pose are distinct stamps; keep stamps
@@ -145,7 +145,7 @@ Status WritePoses(const std::string& dir, const std::vector<std::string>& names,
       trajectory.segment.push_back(p.segment);
     }
     const std::string path = (std::filesystem::path(dir) / (names[i] + ".txt")).string();
-    if (Status status = tools::WriteTrajectoryNative(path, trajectory); !status.ok()) {
+    if (Status status = io::WriteTrajectoryNative(path, trajectory); !status.ok()) {
       return status;
     }
   }
@@ -154,7 +154,7 @@ Status WritePoses(const std::string& dir, const std::vector<std::string>& names,
 
 int RunRun(const RunArgs& args) {
   auto log = ModuleLogger("tools");
-  auto config = tools::LoadRigConfig(args.config);
+  auto config = io::LoadRigConfig(args.config);
   if (!config) {
     std::cerr << "rigcal run: " << config.error() << "\n";
     return kExitError;
@@ -164,40 +164,41 @@ int RunRun(const RunArgs& args) {
     std::cerr << "rigcal run: --eval needs a simulated source (ground truth)\n";
     return kExitError;
   }
-  auto sources = tools::OpenCaptureSources(*config, args.fast, "rigcal run: ", std::cerr);
+  auto sources = pipeline::OpenCaptureSources(*config, args.fast, "rigcal run: ", std::cerr);
   if (!sources) {
     std::cerr << "rigcal run: " << sources.error() << "\n";
     return kExitError;
   }
-  const std::optional<drivers::SimulatedRig>& rig = sources->rig;
+  const std::optional<sim::SimulatedRig>& rig = sources->rig;
   const bool realtime = sources->realtime;
   if (rig && !args.truth_dir.empty()) {
-    if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
+    if (const Status status = io::WriteGroundTruth(rig->GroundTruth(), args.truth_dir);
+        !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
   }
-  std::unique_ptr<lcm::LCM> bus;
+  std::unique_ptr<::lcm::LCM> bus;
   if (!args.lcm_url.empty()) {
-    bus = std::make_unique<lcm::LCM>(args.lcm_url);
+    bus = std::make_unique<::lcm::LCM>(args.lcm_url);
     if (!bus->good()) {
       std::cerr << "rigcal run: " << args.lcm_url << ": cannot open LCM\n";
       return kExitError;
     }
     if (!args.lcm_network) {
-      if (const Status status = tools::CheckBusStaysOnHost(args.lcm_url); !status.ok()) {
+      if (const Status status = lcm::CheckBusStaysOnHost(args.lcm_url); !status.ok()) {
         std::cerr << "rigcal run: " << status.message() << "\n";
         return kExitError;
       }
     }
   }
   // The VO threads publish poses and this thread the status on the same bus.
-  std::unique_ptr<tools::SharedBus> shared_bus;
-  if (bus) shared_bus = std::make_unique<tools::SharedBus>(bus.get());
-  tools::PipelineOptions options;
+  std::unique_ptr<lcm::SharedBus> shared_bus;
+  if (bus) shared_bus = std::make_unique<lcm::SharedBus>(bus.get());
+  pipeline::PipelineOptions options;
   options.lossless = !realtime;
   options.record_poses = (rig.has_value() && (args.eval || args.json)) || !args.poses_dir.empty();
-  tools::Pipeline pipeline(names, std::move(sources->devices), sources->models, config->online,
+  pipeline::Pipeline pipeline(names, std::move(sources->devices), sources->models, config->online,
                            options, shared_bus.get());
 
   StopSignal stop_signal;
@@ -205,9 +206,9 @@ int RunRun(const RunArgs& args) {
   pipeline.Start();
   std::cerr << "rigcal run: running; Ctrl-C stops cleanly\n";
   std::vector<int64_t> frames_before(names.size(), 0);
-  std::vector<tools::StampRate> rates(names.size());
+  std::vector<lcm::StampRate> rates(names.size());
   auto last_status = start;
-  tools::CpuMeter cpu;
+  lcm::CpuMeter cpu;
   const int32_t capacity = config->online.sync.capacity * static_cast<int32_t>(names.size());
   bool trigger_failure_told = false;
   while (!pipeline.Finished() && !stop_signal.flag().load()) {
@@ -224,7 +225,7 @@ int RunRun(const RunArgs& args) {
     if (args.duration_s > 0 && elapsed >= args.duration_s) break;
     const double period = std::chrono::duration<double>(now - last_status).count();
     if (period >= (args.status_every_s > 0 ? args.status_every_s : 1.0)) {
-      const tools::PipelineSnapshot snapshot = pipeline.Snapshot();
+      const pipeline::PipelineSnapshot snapshot = pipeline.Snapshot();
       if (args.status_every_s > 0)
         std::cerr << StatusLine(elapsed, snapshot, frames_before, period) << "\n";
       if (shared_bus) PublishStatus(shared_bus.get(), snapshot, &rates, capacity, &cpu, names);
@@ -238,12 +239,12 @@ int RunRun(const RunArgs& args) {
   if (sources->trigger) sources->trigger->Stop();  // after the cameras it exposes
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const tools::PipelineSnapshot final_state = pipeline.Snapshot();
+  const pipeline::PipelineSnapshot final_state = pipeline.Snapshot();
   if (shared_bus) PublishStatus(shared_bus.get(), final_state, &rates, capacity, &cpu, names);
   const RigCalibration& result = final_state.estimate.rig;
 
   // What happened to the cameras.
-  for (const tools::CameraHealth& h : final_state.cameras) {
+  for (const pipeline::CameraHealth& h : final_state.cameras) {
     if (h.dead)
       std::cerr << "rigcal run: camera '" << h.name << "' died: " << h.dead_reason << "\n";
     if (h.dropped_backlog > 0) {
@@ -251,17 +252,17 @@ int RunRun(const RunArgs& args) {
                 << " frames dropped because its VO fell behind\n";
     }
   }
-  tools::ReportFolderProblems(sources->folders, "rigcal run: ", std::cerr);
-  tools::ReportCaptureStats(sources->v4l2, "rigcal run: ", std::cerr);
-  tools::ReportTrigger(*sources, "rigcal run: ", std::cerr);
+  pipeline::ReportFolderProblems(sources->folders, "rigcal run: ", std::cerr);
+  pipeline::ReportCaptureStats(sources->v4l2, "rigcal run: ", std::cerr);
+  pipeline::ReportTrigger(*sources, "rigcal run: ", std::cerr);
   std::fprintf(stderr, "rigcal run: %.1f s, %llu sets; RSS %.0f MB\n", elapsed,
                static_cast<unsigned long long>(final_state.estimate.sets),
-               static_cast<double>(tools::ResidentSetBytes()) / (1 << 20));
+               static_cast<double>(lcm::ResidentSetBytes()) / (1 << 20));
   if (!args.out.empty() && final_state.estimate.sets == 0 && std::filesystem::exists(args.out)) {
     // A run that calibrated nothing never replaces an earlier result.
     std::cerr << "rigcal run: calibrated nothing: " << args.out << " left as it was\n";
   } else if (!args.out.empty()) {
-    if (const Status status = tools::WriteResultYaml(args.out, result); !status.ok()) {
+    if (const Status status = io::WriteResultYaml(args.out, result); !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
@@ -277,7 +278,8 @@ int RunRun(const RunArgs& args) {
   if (rig && !args.truth_dir.empty() && !args.poses_dir.empty()) {
     // In real time the devices' stamps start with the rig clock: rewrite the truth now that
     // it runs, so its stamps match the written poses (before the run they count from 0).
-    if (const Status status = tools::WriteGroundTruth(*rig, args.truth_dir); !status.ok()) {
+    if (const Status status = io::WriteGroundTruth(rig->GroundTruth(), args.truth_dir);
+        !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
@@ -285,13 +287,13 @@ int RunRun(const RunArgs& args) {
 
   bool any_usable = false;
   for (const SlaveCalibration& slave : result.slaves) any_usable = any_usable || slave.usable();
-  std::optional<tools::RunEvaluation> evaluation;
+  std::optional<pipeline::RunEvaluation> evaluation;
   if (rig && (args.eval || args.json)) {
     std::vector<std::vector<CameraPose>> poses;
     for (size_t i = 0; i < names.size(); ++i) {
       poses.push_back(pipeline.RecordedPoses(static_cast<int>(i)));
     }
-    auto e = tools::EvaluateRun(*rig, poses, result);
+    auto e = pipeline::EvaluateRun(*rig, poses, result);
     if (e) {
       evaluation = *e;
     } else {
@@ -301,23 +303,23 @@ int RunRun(const RunArgs& args) {
   if (args.json) {
     std::map<std::string, Similarity> truth;
     if (evaluation) {
-      for (const tools::SlaveEvaluation& e : evaluation->slaves)
+      for (const pipeline::SlaveEvaluation& e : evaluation->slaves)
         truth[e.name] = e.truth_master_units;
     }
-    std::optional<tools::TruthAlignment> alignment;
-    if (evaluation) alignment = tools::AlignmentOf(*evaluation);
-    std::cout << tools::ResultToJson(result, evaluation ? &truth : nullptr,
+    std::optional<io::TruthAlignment> alignment;
+    if (evaluation) alignment = pipeline::AlignmentOf(*evaluation);
+    std::cout << io::ResultToJson(result, evaluation ? &truth : nullptr,
                                      alignment ? &*alignment : nullptr)
                      .dump(2)
               << "\n";
   } else {
-    std::cout << tools::FormatResultTable(result, nullptr);
+    std::cout << io::FormatResultTable(result, nullptr);
     if (!any_usable) {
       std::cout << "insufficient motion: no slave could be calibrated (see the messages above; "
                    "the rig must rotate about at least two axes, or move, while the cameras "
                    "track)\n";
     }
-    if (args.eval && evaluation) std::cout << tools::FormatEvaluation(*evaluation);
+    if (args.eval && evaluation) std::cout << pipeline::FormatEvaluation(*evaluation);
   }
   std::vector<SlaveState> states;
   for (const SlaveCalibration& slave : result.slaves) states.push_back(slave.state);

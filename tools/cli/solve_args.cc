@@ -17,7 +17,7 @@ int CountAfter(const std::string& text, const std::string& prefix) {
 // One --time-offset value: nullopt for auto, else seconds; sets *error on a bad value.
 std::optional<double> ParseTimeOffset(const std::string& text, std::string* error = nullptr) {
   if (text == "auto") return std::nullopt;
-  const auto ns = tools::ParseSecondsToNs(text);
+  const auto ns = io::ParseSecondsToNs(text);
   if (!ns && error != nullptr) *error = "expected auto or a number of seconds, got '" + text + "'";
   return ns ? static_cast<double>(*ns) * 1e-9 : 0.0;
 }
@@ -108,7 +108,10 @@ std::vector<std::optional<double>> ParseTimeOffsets(const std::string& text,
   return out;
 }
 
-void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
+namespace {
+
+// The trajectories, and how their poses are read.
+void AddSolveInputOptions(CLI::App* cmd, SolveArgs* args) {
   cmd->add_option("--master", args->master,
                   "Trajectory file of the master camera. It defines the rig frame\n"
                   "and the unit of every position in the result. NAME=FILE names the\n"
@@ -122,6 +125,10 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
                   "--slave cam1=mav0/cam1/data.csv).")
       ->type_name("[NAME=]FILE")
       ->required();
+}
+
+// The method, motion, scale and pair models.
+void AddSolveModelOptions(CLI::App* cmd, SolveArgs* args) {
   cmd->add_option("--method", args->method,
                   "lls: linear least squares only (thesis 4.3); nl: the linear\n"
                   "estimate refined by non-linear least squares, with standard\n"
@@ -175,6 +182,11 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
           },
           "auto|gls|start|walk|relative:STEP"))
       ->capture_default_str();
+}
+
+// Matching in time: the stamp tolerance, clock offsets, the config that gives them, and the
+// quaternion check of the input.
+void AddSolveTimingOptions(CLI::App* cmd, SolveArgs* args) {
   cmd->add_option("--tolerance-ms", args->tolerance_ms,
                   "Largest time difference in milliseconds between a master pose\n"
                   "and the slave pose matched to it (mutually nearest stamps).\n"
@@ -223,6 +235,10 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
       ->type_name("X")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+}
+
+// A truth to compare with, and nominal mountings.
+void AddSolveTruthOptions(CLI::App* cmd, SolveArgs* args) {
   auto* truth =
       cmd->add_option("--truth", args->truth,
                       "Rig YAML with the true parameters of every slave (see below):\n"
@@ -260,6 +276,10 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
       ->check(CLI::NonNegativeNumber)
       ->needs(prior)
       ->capture_default_str();
+}
+
+// σ's time blocks and the files written.
+void AddSolveOutputOptions(CLI::App* cmd, SolveArgs* args) {
   cmd->add_option("--time-blocks", args->time_blocks,
                   "Standard deviations: the motions' errors are taken as shared within this\n"
                   "many contiguous time blocks and independent between them (cluster-robust\n"
@@ -278,6 +298,10 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
                   "the usable slaves in --slave order, each with T_cn_cnm1\n"
                   "(extrinsics only, no intrinsics).")
       ->type_name("FILE");
+}
+
+// Other paths through the data (online, pattern references, metric scale) and JSON output.
+void AddSolveModeOptions(CLI::App* cmd, SolveArgs* args) {
   // Options that would have no effect together are usage errors naming both.
   auto* online =
       cmd->add_flag("--online", args->online,
@@ -330,6 +354,10 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
                 "Print only the result, as one JSON object, on stdout (logs stay\n"
                 "on stderr).");
 
+}
+
+// The formats of the files, and the exit status.
+void AddSolveFooter(CLI::App* cmd) {
   cmd->footer(
       "Trajectory files: one pose per line, '#' comments; the format is detected:\n"
       "  TUM:         t tx ty tz qx qy qz qw [segment]   t in seconds\n"
@@ -348,6 +376,18 @@ void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
       "'rigcal solve: <file>:<line>: <what>' on stderr); 3 the solve ran but at least one\n"
       "slave has no usable estimate (too little motion, degenerate motion); the result is\n"
       "still printed and written.");
+}
+
+}  // namespace
+
+void AddSolveOptions(CLI::App* cmd, SolveArgs* args) {
+  AddSolveInputOptions(cmd, args);
+  AddSolveModelOptions(cmd, args);
+  AddSolveTimingOptions(cmd, args);
+  AddSolveTruthOptions(cmd, args);
+  AddSolveOutputOptions(cmd, args);
+  AddSolveModeOptions(cmd, args);
+  AddSolveFooter(cmd);
 }
 
 }  // namespace rigcal::cli

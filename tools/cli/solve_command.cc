@@ -14,7 +14,7 @@
 #include "commands.h"
 #include "exit_codes.h"
 #include "rigcal/calib/calibration_options.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/result_json.h"
@@ -35,7 +35,7 @@ namespace {
 // that is not a camera of the rig.
 Expected<std::vector<std::optional<double>>> TimeOffsetsFromConfig(
     const std::string& path, const std::vector<std::string>& slaves) {
-  auto config = tools::LoadRigConfig(path);
+  auto config = io::LoadRigConfig(path);
   if (!config) return Error{config.error()};
   const std::vector<std::string> names = config->CameraNames();
   const ClockOffsetOptions& clock = config->online.time_offset;
@@ -51,9 +51,8 @@ Expected<std::vector<std::optional<double>>> TimeOffsetsFromConfig(
   return out;
 }
 
-int RunSolve(const SolveArgs& args) {
-  const auto log = ModuleLogger("tools");
-
+// The calibration options of the command line. Errors name the flag.
+Expected<CalibrationOptions> SolveOptionsOf(const SolveArgs& args) {
   CalibrationOptions options;
   options.method = args.method == "lls" ? Method::kLinear : Method::kNonlinear;
   options.motion_model = args.motion == "general"         ? MotionModel::kGeneral
@@ -63,167 +62,202 @@ int RunSolve(const SolveArgs& args) {
   options.nominal_sigma = args.prior_sigma;
   options.covariance_time_blocks = args.time_blocks;
   if (std::string e = ApplyScale(args.scale, &options); !e.empty()) {
-    return PrintCommandError("solve", "--scale: " + e);
+    return Error{"--scale: " + e};
   }
   if (args.pose_model != "global" && args.reference != "target") {
-    return PrintCommandError("solve",
-                             "--pose-model " + args.pose_model + " needs --reference target");
+    return Error{"--pose-model " + args.pose_model + " needs --reference target"};
   }
   if (std::string e = ApplyPairs(args.pairs, &options.pairs); !e.empty()) {
-    return PrintCommandError("solve", "--pairs: " + e);
+    return Error{"--pairs: " + e};
   }
   if (const Status checked = options.Check(); !checked.ok()) {
-    return PrintCommandError("solve", "invalid options: " + checked.message());
+    return Error{"invalid options: " + checked.message()};
   }
+  return options;
+}
 
-  tools::TrajectoryReadOptions read_options;
+// What the command reads: the trajectories and the truth.
+struct SolveInput {
+  TimedTrajectory master;
+  std::vector<TimedTrajectory> slaves;
+  std::map<std::string, Similarity> truth;  // empty without --truth
+};
+
+Expected<SolveInput> ReadSolveInput(const SolveArgs& args, spdlog::logger& log) {
+  io::TrajectoryReadOptions read_options;
   read_options.max_quaternion_norm_error = args.max_quaternion_norm_error;
   auto read = [&](const std::string& argument) {
-    tools::TrajectoryFormat format = tools::TrajectoryFormat::kTum;
-    auto trajectory = tools::ReadNamedTrajectory(argument, read_options, &format);
+    io::TrajectoryFormat format = io::TrajectoryFormat::kTum;
+    auto trajectory = io::ReadNamedTrajectory(argument, read_options, &format);
     if (trajectory) {
-      log->info("{}: {} poses ({} format), camera '{}'",
-                tools::ParseNamedTrajectoryPath(argument).path, trajectory->size(),
-                tools::ToString(format), trajectory->name);
+      log.info("{}: {} poses ({} format), camera '{}'",
+               io::ParseNamedTrajectoryPath(argument).path, trajectory->size(), ToString(format),
+               trajectory->name);
     }
     return trajectory;
   };
+  SolveInput input;
   auto master = read(args.master);
-  if (!master) return PrintCommandError("solve", master.error());
-  std::vector<tools::TimedTrajectory> slaves;
+  if (!master) return Error{master.error()};
+  input.master = std::move(*master);
   for (const std::string& path : args.slaves) {
     auto slave = read(path);
-    if (!slave) return PrintCommandError("solve", slave.error());
-    slaves.push_back(std::move(*slave));
+    if (!slave) return Error{slave.error()};
+    input.slaves.push_back(std::move(*slave));
   }
-
-  std::map<std::string, Similarity> truth;
-  if (!args.truth.empty()) {
-    auto loaded = tools::ReadRigYaml(args.truth);
-    if (!loaded) return PrintCommandError("solve", loaded.error());
-    truth = std::move(*loaded);
-    for (const auto& slave : slaves) {
-      if (truth.count(slave.name) == 0) {
-        std::string known;
-        for (const auto& [name, rig] : truth) known += (known.empty() ? "" : ", ") + name;
-        return PrintCommandError("solve", args.truth + ": no entry for slave '" + slave.name +
-                                              "' (the file has: " + known + ")");
-      }
+  if (args.truth.empty()) return input;
+  auto loaded = io::ReadRigYaml(args.truth);
+  if (!loaded) return Error{loaded.error()};
+  input.truth = std::move(*loaded);
+  for (const auto& slave : input.slaves) {
+    if (input.truth.count(slave.name) == 0) {
+      std::string known;
+      for (const auto& [name, rig] : input.truth) known += (known.empty() ? "" : ", ") + name;
+      return Error{args.truth + ": no entry for slave '" + slave.name + "' (the file has: " +
+                   known + ")"};
     }
   }
+  return input;
+}
 
-  if (!args.prior.empty()) {
-    auto nominal = tools::ReadNominalMountings(args.prior);
-    if (!nominal) return PrintCommandError("solve", nominal.error());
-    for (const auto& slave : slaves) {
-      if (nominal->count(slave.name) == 0) {
-        log->warn(
-            "{}: no nominal mounting for slave '{}': what its motion cannot determine is "
-            "reported unknown",
-            args.prior, slave.name);
-      }
+// --prior: the nominal mountings into options->nominal (a slave without one is warned of).
+Status ReadPrior(const SolveArgs& args, const SolveInput& input, CalibrationOptions* options,
+                 spdlog::logger& log) {
+  if (args.prior.empty()) return Status::Ok();
+  auto nominal = io::ReadNominalMountings(args.prior);
+  if (!nominal) return Error{nominal.error()};
+  for (const auto& slave : input.slaves) {
+    if (nominal->count(slave.name) == 0) {
+      log.warn(
+          "{}: no nominal mounting for slave '{}': what its motion cannot determine is "
+          "reported unknown",
+          args.prior, slave.name);
     }
-    options.nominal = std::move(*nominal);
   }
+  options->nominal = std::move(*nominal);
+  return Status::Ok();
+}
 
-  const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
+// What the solve produced.
+struct SolveOutcome {
   RigCalibration result;
-  std::vector<tools::ConvergencePoint> history;
-  std::optional<ResultUnit> unit;
-  if (args.reference == "target") {
-    // The poses are target poses (camera in the target frame): global reference pose model.
-    auto reference =
-        TargetReferenceResult(*master, slaves, tolerance_ns, args.pose_model == "individual");
-    if (!reference) return PrintCommandError("solve", reference.error());
-    result = std::move(*reference);
-    unit = ResultUnit{false, 1.0, 0.0, "target reference",
-                      "target reference: positions in the target's unit (metres for a metric "
-                      "target), scale 1 by definition"};
-  } else {
-    tools::TimeOffsetOptions offset_options;
-    offset_options.search_window_s = args.time_offset_window_s;
-    std::vector<std::string> slave_names;
-    for (const auto& slave : slaves) slave_names.push_back(slave.name);
-    std::vector<std::optional<double>> given_offsets;
-    if (!args.config.empty() && !args.time_offset_given) {
-      auto from_config = TimeOffsetsFromConfig(args.config, slave_names);
-      if (!from_config) return PrintCommandError("solve", from_config.error());
-      given_offsets = std::move(*from_config);
-      log->info("time offsets from {} (estimator.time_offset)", args.config);
+  std::vector<pipeline::ConvergencePoint> history;  // --online
+  std::optional<ResultUnit> unit;                   // what the positions are in, when known
+};
+
+// The given offsets of the slaves: from --config's estimator.time_offset, or --time-offset.
+Expected<std::vector<std::optional<double>>> GivenTimeOffsets(
+    const SolveArgs& args, const std::vector<TimedTrajectory>& slaves, spdlog::logger& log) {
+  std::vector<std::string> slave_names;
+  for (const auto& slave : slaves) slave_names.push_back(slave.name);
+  if (!args.config.empty() && !args.time_offset_given) {
+    auto from_config = TimeOffsetsFromConfig(args.config, slave_names);
+    if (!from_config) return Error{from_config.error()};
+    log.info("time offsets from {} (estimator.time_offset)", args.config);
+    return from_config;
+  }
+  std::string offset_error;
+  auto given = ParseTimeOffsets(args.time_offset, slave_names, &offset_error);
+  if (!offset_error.empty()) return Error{"--time-offset: " + offset_error};
+  return given;
+}
+
+// The hand-eye calibration from the motions: the poses matched in time (at the slaves' clock
+// offsets), then the batch calibrator or, with --online, the online estimator.
+Expected<SolveOutcome> SolveFromMotion(const SolveArgs& args, const SolveInput& input,
+                                       const CalibrationOptions& options, int64_t tolerance_ns,
+                                       spdlog::logger& log) {
+  TimeOffsetOptions offset_options;
+  offset_options.search_window_s = args.time_offset_window_s;
+  auto given_offsets = GivenTimeOffsets(args, input.slaves, log);
+  if (!given_offsets) return Error{given_offsets.error()};
+  auto matched = io::MatchWithTimeOffsets(input.master, input.slaves, *given_offsets,
+                                          tolerance_ns, options, offset_options);
+  if (!matched) return Error{matched.error()};
+  const RigRecording* recording = &matched->recording;
+  log.info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
+           input.slaves.size() + 1, args.tolerance_ms);
+  SolveOutcome outcome;
+  try {
+    if (args.online) {
+      pipeline::OnlineReplayOptions replay;
+      replay.report_every_s = args.report_every_s;
+      replay.estimator.nominal_sigma = options.nominal_sigma;
+      for (const auto& slave : recording->slaves) {
+        const auto it = options.nominal.find(slave.name);
+        replay.estimator.nominal.push_back(
+            it == options.nominal.end() ? std::nullopt : std::optional<Similarity>(it->second));
+      }
+      const pipeline::OnlineReplayResult online =
+          pipeline::ReplayOnline(*recording, replay, args.truth.empty() ? nullptr : &input.truth);
+      log.info("sync buffer: {}", online.sync.BriefReport());
+      outcome.history = online.history;
+      outcome.result = online.estimate.rig;
     } else {
-      std::string offset_error;
-      given_offsets = ParseTimeOffsets(args.time_offset, slave_names, &offset_error);
-      if (!offset_error.empty()) {
-        return PrintCommandError("solve", "--time-offset: " + offset_error);
-      }
+      outcome.result = CalibrateRig(*recording, options);
     }
-    auto matched = tools::MatchWithTimeOffsets(*master, slaves, given_offsets, tolerance_ns,
-                                               options, offset_options);
-    if (!matched) return PrintCommandError("solve", matched.error());
-    const RigRecording* recording = &matched->recording;
-    log->info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
-              slaves.size() + 1, args.tolerance_ms);
-
-    const std::map<std::string, Similarity>* truth_for_replay =
-        args.truth.empty() ? nullptr : &truth;
-    try {
-      if (args.online) {
-        tools::OnlineReplayOptions replay;
-        replay.report_every_s = args.report_every_s;
-        replay.estimator.nominal_sigma = options.nominal_sigma;
-        for (const auto& slave : recording->slaves) {
-          const auto it = options.nominal.find(slave.name);
-          replay.estimator.nominal.push_back(
-              it == options.nominal.end() ? std::nullopt : std::optional<Similarity>(it->second));
-        }
-        const tools::OnlineReplayResult online =
-            tools::ReplayOnline(*recording, replay, truth_for_replay);
-        log->info("sync buffer: {}", online.sync.BriefReport());
-        history = online.history;
-        result = online.estimate.rig;
-      } else {
-        result = CalibrateRig(*recording, options);
-      }
-    } catch (const std::exception& e) {
-      return PrintCommandError("solve", std::string("calibration failed: ") + e.what());
-    }
-    if (result.master.empty()) result.master = master->name;
-    for (size_t i = 0; i < result.slaves.size() && i < matched->offsets.size(); ++i) {
-      result.slaves[i].time_offset_s = matched->offsets[i].offset_s;
-      result.slaves[i].time_offset_std_s = matched->offsets[i].std_s;
-    }
+  } catch (const std::exception& e) {
+    return Error{std::string("calibration failed: ") + e.what()};
   }
+  if (outcome.result.master.empty()) outcome.result.master = input.master.name;
+  for (size_t i = 0; i < outcome.result.slaves.size() && i < matched->offsets.size(); ++i) {
+    outcome.result.slaves[i].time_offset_s = matched->offsets[i].offset_s;
+    outcome.result.slaves[i].time_offset_std_s = matched->offsets[i].std_s;
+  }
+  return outcome;
+}
+
+// --metric-target or --master-metric: the unit of the positions (printed above the result).
+Status ApplyMetricUnit(const SolveArgs& args, const SolveInput& input, int64_t tolerance_ns,
+                       SolveOutcome* outcome) {
   if (!args.metric_target.empty()) {
-    auto applied = ApplyMetricTarget(args.metric_target, *master, tolerance_ns, &result);
-    if (!applied) return PrintCommandError("solve", applied.error());
-    unit = *applied;
+    auto applied =
+        ApplyMetricTarget(args.metric_target, input.master, tolerance_ns, &outcome->result);
+    if (!applied) return Error{applied.error()};
+    outcome->unit = *applied;
   } else if (args.master_metric) {
-    unit = ResultUnit{true, 1.0, 0.0, "master odometry",
-                      "positions in metres: the master odometry is metric (--master-metric), "
-                      "its scale fixed to 1; slave scales map slave units to metres"};
+    outcome->unit = ResultUnit{true, 1.0, 0.0, "master odometry",
+                               "positions in metres: the master odometry is metric "
+                               "(--master-metric), its scale fixed to 1; slave scales map slave "
+                               "units to metres"};
   }
-  if (unit) {
-    (args.json ? std::cerr : std::cout) << "units: " << unit->message << "\n";
-    if (unit->metric) (args.json ? std::cerr : std::cout) << UnobservableHeightNote(result);
+  if (outcome->unit) {
+    std::ostream& stream = args.json ? std::cerr : std::cout;
+    stream << "units: " << outcome->unit->message << "\n";
+    if (outcome->unit->metric) stream << UnobservableHeightNote(outcome->result);
   }
+  return Status::Ok();
+}
 
-  // The truth in the estimate's unit (a metric truth against monocular odometry: the master
-  // unit fitted to the truth's C), also for the convergence history's errors.
-  std::optional<tools::TruthAlignment> alignment;
-  std::map<std::string, Similarity> truth_master_units;
-  if (!args.truth.empty()) {
-    tools::TruthUnit unit = tools::TruthUnit::kAuto;
-    tools::ParseTruthUnit(args.truth_unit, &unit);
-    alignment = tools::AlignTruthUnit(result, truth, unit);
-    truth_master_units = tools::TruthInMasterUnits(truth, *alignment);
-    log->info("--truth: {}", alignment->message);
-    for (tools::ConvergencePoint& p : history) {
-      const auto it = truth_master_units.find(p.slave);
-      if (p.error && it != truth_master_units.end()) {
-        p.error = CompareToTruth(p.estimate, it->second);
-      }
+// The truth in the estimate's unit (a metric truth against monocular odometry: the master unit
+// fitted to the truth's C), also for the convergence history's errors.
+struct AlignedTruth {
+  std::optional<io::TruthAlignment> alignment;
+  std::map<std::string, Similarity> in_master_units;
+};
+
+AlignedTruth AlignSolveTruth(const SolveArgs& args, const SolveInput& input,
+                             SolveOutcome* outcome, spdlog::logger& log) {
+  AlignedTruth aligned;
+  if (args.truth.empty()) return aligned;
+  io::TruthUnit unit = io::TruthUnit::kAuto;
+  io::ParseTruthUnit(args.truth_unit, &unit);
+  aligned.alignment = io::AlignTruthUnit(outcome->result, input.truth, unit);
+  aligned.in_master_units = io::TruthInMasterUnits(input.truth, *aligned.alignment);
+  log.info("--truth: {}", aligned.alignment->message);
+  for (pipeline::ConvergencePoint& p : outcome->history) {
+    const auto it = aligned.in_master_units.find(p.slave);
+    if (p.error && it != aligned.in_master_units.end()) {
+      p.error = CompareToTruth(p.estimate, it->second);
     }
   }
+  return aligned;
+}
+
+// The convergence (--online), then the result as a table or JSON on stdout.
+void PrintSolveResult(const SolveArgs& args, const SolveOutcome& outcome,
+                      const AlignedTruth& truth) {
+  const std::optional<io::TruthAlignment>& alignment = truth.alignment;
   if (args.online) {
     // Convergence goes to stderr with --json so stdout stays one JSON object.
     std::ostream& stream = args.json ? std::cerr : std::cout;
@@ -231,35 +265,40 @@ int RunSolve(const SolveArgs& args) {
       stream << "convergence errors in master units, the truth aligned: " << alignment->message
              << "\n";
     }
-    stream << tools::FormatConvergence(history) << "\n";
+    stream << pipeline::FormatConvergence(outcome.history) << "\n";
   }
   const std::map<std::string, Similarity>* truth_ptr =
-      args.truth.empty() ? nullptr : &truth_master_units;
-  const tools::TruthAlignment* alignment_ptr = alignment ? &*alignment : nullptr;
+      args.truth.empty() ? nullptr : &truth.in_master_units;
+  const io::TruthAlignment* alignment_ptr = alignment ? &*alignment : nullptr;
   if (args.json) {
-    nlohmann::json json = tools::ResultToJson(result, truth_ptr, alignment_ptr);
-    if (unit) json["unit"] = unit->ToJson();
+    nlohmann::json json = io::ResultToJson(outcome.result, truth_ptr, alignment_ptr);
+    if (outcome.unit) json["unit"] = outcome.unit->ToJson();
     std::cout << json.dump(2) << "\n";
   } else {
-    std::cout << tools::FormatResultTable(result, truth_ptr, alignment_ptr);
+    std::cout << io::FormatResultTable(outcome.result, truth_ptr, alignment_ptr);
   }
   std::cout.flush();
+}
 
+// --out and --camchain.
+Status WriteSolveFiles(const SolveArgs& args, const SolveOutcome& outcome, spdlog::logger& log) {
   if (!args.out.empty()) {
-    const Status s = unit
-                         ? tools::WriteFileAtomically(args.out, "# units: " + unit->message + "\n" +
-                                                                    tools::ResultToYaml(result))
-                         : tools::WriteResultYaml(args.out, result);
-    if (!s.ok()) return PrintCommandError("solve", s.message());
-    log->info("wrote result to {}", args.out);
+    const Status s =
+        outcome.unit ? io::WriteFileAtomically(args.out, "# units: " + outcome.unit->message +
+                                                             "\n" + io::ResultToYaml(outcome.result))
+                     : io::WriteResultYaml(args.out, outcome.result);
+    if (!s.ok()) return s;
+    log.info("wrote result to {}", args.out);
   }
   if (!args.camchain.empty()) {
-    if (Status s = tools::WriteCamchain(args.camchain, result); !s.ok()) {
-      return PrintCommandError("solve", s.message());
-    }
-    log->info("wrote camera chain to {}", args.camchain);
+    if (Status s = io::WriteCamchain(args.camchain, outcome.result); !s.ok()) return s;
+    log.info("wrote camera chain to {}", args.camchain);
   }
+  return Status::Ok();
+}
 
+// 0 every slave usable, else 3, with the reason of each unusable slave on stderr.
+int SolveExitCode(const RigCalibration& result) {
   std::vector<SlaveState> states;
   for (const SlaveCalibration& slave : result.slaves) {
     states.push_back(slave.state);
@@ -268,6 +307,41 @@ int RunSolve(const SolveArgs& args) {
               << ToString(slave.termination) << "): " << slave.message << "\n";
   }
   return ExitCodeFor(states);
+}
+
+int RunSolve(const SolveArgs& args) {
+  const auto log = ModuleLogger("tools");
+  auto options = SolveOptionsOf(args);
+  if (!options) return PrintCommandError("solve", options.error());
+  auto input = ReadSolveInput(args, *log);
+  if (!input) return PrintCommandError("solve", input.error());
+  if (Status s = ReadPrior(args, *input, &*options, *log); !s.ok()) {
+    return PrintCommandError("solve", s.message());
+  }
+  const auto tolerance_ns = static_cast<int64_t>(std::llround(args.tolerance_ms * 1e6));
+  Expected<SolveOutcome> outcome = Error{""};
+  if (args.reference == "target") {
+    // The poses are target poses (camera in the target frame): global reference pose model.
+    auto reference = TargetReferenceResult(input->master, input->slaves, tolerance_ns,
+                                           args.pose_model == "individual");
+    if (!reference) return PrintCommandError("solve", reference.error());
+    outcome = SolveOutcome{std::move(*reference), {},
+                           ResultUnit{false, 1.0, 0.0, "target reference",
+                                      "target reference: positions in the target's unit (metres "
+                                      "for a metric target), scale 1 by definition"}};
+  } else {
+    outcome = SolveFromMotion(args, *input, *options, tolerance_ns, *log);
+    if (!outcome) return PrintCommandError("solve", outcome.error());
+  }
+  if (Status s = ApplyMetricUnit(args, *input, tolerance_ns, &*outcome); !s.ok()) {
+    return PrintCommandError("solve", s.message());
+  }
+  const AlignedTruth truth = AlignSolveTruth(args, *input, &*outcome, *log);
+  PrintSolveResult(args, *outcome, truth);
+  if (Status s = WriteSolveFiles(args, *outcome, *log); !s.ok()) {
+    return PrintCommandError("solve", s.message());
+  }
+  return SolveExitCode(outcome->result);
 }
 
 }  // namespace

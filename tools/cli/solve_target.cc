@@ -3,27 +3,27 @@
 
 #include <cstdio>
 
-#include "rigcal/target/individual_reference.h"
-#include "rigcal/target/metric_scale.h"
-#include "rigcal/target/reference_calibration.h"
+#include "rigcal/pattern/individual_reference.h"
+#include "rigcal/pattern/metric_scale.h"
+#include "rigcal/pattern/reference_calibration.h"
 
 namespace rigcal::cli {
 
-Expected<RigCalibration> TargetReferenceResult(const tools::TimedTrajectory& master,
-                                               const std::vector<tools::TimedTrajectory>& slaves,
+Expected<RigCalibration> TargetReferenceResult(const TimedTrajectory& master,
+                                               const std::vector<TimedTrajectory>& slaves,
                                                int64_t tolerance_ns, bool individual) {
   RigCalibration result;
   result.master = master.name;
-  for (const tools::TimedTrajectory& slave : slaves) {
-    Expected<target::ReferenceEstimate> reference = Error{""};
+  for (const TimedTrajectory& slave : slaves) {
+    Expected<pattern::ReferenceEstimate> reference = Error{""};
     std::string model = "global reference pose model, thesis 4.2): mean of";
     if (individual) {
-      auto fitted = target::EstimateIndividualReference(master, slave, tolerance_ns);
+      auto fitted = pattern::EstimateIndividualReference(master, slave, tolerance_ns);
       if (!fitted) return Error{fitted.error()};
       reference = fitted->estimate;
       model = "individual reference pose model, thesis 4.2): T_0 dT = W T_i fitted to";
     } else {
-      reference = target::EstimateGlobalReference(master, slave, tolerance_ns);
+      reference = pattern::EstimateGlobalReference(master, slave, tolerance_ns);
     }
     if (!reference) return Error{reference.error()};
     SlaveCalibration s;
@@ -59,14 +59,14 @@ nlohmann::json ResultUnit::ToJson() const {
 }
 
 Expected<ResultUnit> ApplyMetricTarget(const std::string& target_file,
-                                       const tools::TimedTrajectory& master, int64_t tolerance_ns,
+                                       const TimedTrajectory& master, int64_t tolerance_ns,
                                        RigCalibration* result) {
-  tools::TrajectoryReadOptions options;
-  auto poses = tools::ReadTrajectory(target_file, options);
+  io::TrajectoryReadOptions options;
+  auto poses = io::ReadTrajectory(target_file, options);
   if (!poses) return Error{"--metric-target: " + poses.error()};
-  auto scale = target::EstimateWorldScale(master, *poses, tolerance_ns);
+  auto scale = pattern::EstimateWorldScale(master, *poses, tolerance_ns);
   if (!scale) return Error{"--metric-target " + target_file + ": " + scale.error()};
-  target::ScaleResult(scale->metres_per_unit, result);
+  pattern::ScaleResult(scale->metres_per_unit, result);
   ResultUnit unit;
   unit.metric = true;
   unit.metres_per_master_unit = scale->metres_per_unit;

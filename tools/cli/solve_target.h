@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/trajectory_io.h"
 
 namespace rigcal::cli {
@@ -20,8 +20,8 @@ namespace rigcal::cli {
 // (individual reference pose model, individual_reference.h), else in one shared target's frame
 // (global model, σ of the mean). Errors: a slave sharing too few instants with the master
 // (within tolerance_ns); for the individual model, motion that does not determine the pose.
-Expected<RigCalibration> TargetReferenceResult(const tools::TimedTrajectory& master,
-                                               const std::vector<tools::TimedTrajectory>& slaves,
+Expected<RigCalibration> TargetReferenceResult(const TimedTrajectory& master,
+                                               const std::vector<TimedTrajectory>& slaves,
                                                int64_t tolerance_ns, bool individual = false);
 
 // What the result's positions are in, for the output (a line above the table, `unit` in the
@@ -38,7 +38,7 @@ struct ResultUnit {
 // --metric-target FILE: lambda_world from the master's target poses in FILE against the master
 // odometry; scales `result` to metres. Errors: the file, or the fit (metric_scale.h).
 Expected<ResultUnit> ApplyMetricTarget(const std::string& target_file,
-                                       const tools::TimedTrajectory& master, int64_t tolerance_ns,
+                                       const TimedTrajectory& master, int64_t tolerance_ns,
                                        RigCalibration* result);
 
 // Lines for a metric master whose slaves moved in a plane: C along the rotation axis (the

@@ -24,7 +24,7 @@ int TerminalWidth() {
 }  // namespace
 
 void RegisterStatus(CLI::App& app, int* exit_code) {
-  auto options = std::make_shared<tools::StatusRunOptions>();
+  auto options = std::make_shared<monitor::StatusRunOptions>();
   CLI::App* cmd = app.add_subcommand(
       "status",
       "Headless status monitor: listens to RIGCAL_STATUS and RIGCAL_EXTRINSICS of a running\n"
@@ -52,11 +52,11 @@ void RegisterStatus(CLI::App& app, int* exit_code) {
       ->check(CLI::PositiveNumber)
       ->default_val(1.0);
   cmd->callback([options, exit_code]() {
-    tools::StatusRunOptions run = *options;
+    monitor::StatusRunOptions run = *options;
     run.ansi = !run.once && !run.json && isatty(STDOUT_FILENO) == 1;
     run.width = run.ansi ? TerminalWidth() : 0;
     StopSignal stop_signal;
-    *exit_code = tools::RunStatusMonitor(run, std::cout, std::cerr, stop_signal.flag());
+    *exit_code = monitor::RunStatusMonitor(run, std::cout, std::cerr, stop_signal.flag());
   });
 }
 

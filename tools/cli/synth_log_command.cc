@@ -23,7 +23,7 @@ struct SynthLogArgs {
 };
 
 int RunSynthLog(const SynthLogArgs& args) {
-  auto config = tools::LoadRigConfig(args.config);
+  auto config = io::LoadRigConfig(args.config);
   if (!config) {
     std::cerr << "rigcal synth-log: " << config.error() << "\n";
     return 1;
@@ -31,7 +31,7 @@ int RunSynthLog(const SynthLogArgs& args) {
   std::vector<Similarity> rigs;
   std::map<std::string, Similarity> truth;
   for (size_t i = 1; i < config->cameras.size(); ++i) {
-    const tools::CameraConfig& camera = config->cameras[i];
+    const io::CameraConfig& camera = config->cameras[i];
     if (!camera.truth) {
       std::cerr << "rigcal synth-log: " << args.config << ": camera '" << camera.name
                 << "' has no `truth` mounting to simulate\n";
@@ -47,12 +47,12 @@ int RunSynthLog(const SynthLogArgs& args) {
     drive.motion = DriveOptions::Motion::kTranslationOnly;
   }
   const SyntheticDrive sim = GenerateDrive(config->CameraNames(), rigs, drive);
-  if (const Status status = tools::WritePoseLog(args.out, sim.recording); !status.ok()) {
+  if (const Status status = lcm::WritePoseLog(args.out, sim.recording); !status.ok()) {
     std::cerr << "rigcal synth-log: " << status.message() << "\n";
     return 1;
   }
   if (!args.truth_out.empty()) {
-    if (const Status status = tools::WriteRigYaml(args.truth_out, truth); !status.ok()) {
+    if (const Status status = io::WriteRigYaml(args.truth_out, truth); !status.ok()) {
       std::cerr << "rigcal synth-log: " << status.message() << "\n";
       return 1;
     }

@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "lcm_image_stream.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/camera/camera_spec.h"
 
 namespace rigcal::cli {
@@ -41,8 +41,8 @@ void AddTargetOptions(CLI::App* cmd, TargetArgs* args) {
       ->type_name("COLSxROWS")
       ->check(CLI::Validator(
           [](std::string& v) {
-            target::ChessboardSpec b;
-            const Status s = target::ParseChessboardSize(v, &b);
+            pattern::ChessboardSpec b;
+            const Status s = pattern::ParseChessboardSize(v, &b);
             return s.ok() ? std::string() : s.message();
           },
           "COLSxROWS"))
@@ -53,8 +53,8 @@ void AddTargetOptions(CLI::App* cmd, TargetArgs* args) {
       ->type_name("SQUARESxSQUARES")
       ->check(CLI::Validator(
           [](std::string& v) {
-            target::CharucoSpec b;
-            const Status s = target::ParseCharucoSquares(v, &b);
+            pattern::CharucoSpec b;
+            const Status s = pattern::ParseCharucoSquares(v, &b);
             return s.ok() ? std::string() : s.message();
           },
           "SQUARESxSQUARES"))
@@ -99,14 +99,14 @@ void AddTargetOptions(CLI::App* cmd, TargetArgs* args) {
 
 Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args) {
   const auto log = ModuleLogger("tools");
-  target::ChessboardSpec board;
+  pattern::ChessboardSpec board;
   board.square_size = args.square;
-  if (Status s = target::ParseChessboardSize(args.chessboard, &board); !s.ok()) {
+  if (Status s = pattern::ParseChessboardSize(args.chessboard, &board); !s.ok()) {
     return Error{"--chessboard: " + s.message()};
   }
-  target::CharucoSpec charuco;
+  pattern::CharucoSpec charuco;
   if (!args.charuco.empty()) {
-    if (Status s = target::ParseCharucoSquares(args.charuco, &charuco); !s.ok()) {
+    if (Status s = pattern::ParseCharucoSquares(args.charuco, &charuco); !s.ok()) {
       return Error{"--charuco: " + s.message()};
     }
     charuco.square_size = args.square;
@@ -119,7 +119,7 @@ Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args
   if (Status s = ParseResolution(args.resolution, &width, &height); !s.ok()) {
     return Error{s.message()};
   }
-  target::IntrinsicsOptions options;
+  pattern::IntrinsicsOptions options;
   options.model = *camera::ModelFromName(args.model);
   options.max_views = args.max_views;
   options.reject_outliers = !args.no_reject;
@@ -136,17 +136,17 @@ Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args
     const std::string source = argument.substr(eq + 1);
     // An LCM image log: the camera's RIGCAL_IMAGE_<name> images through the same detectors.
     const bool from_log = IsLcmImageLog(source);
-    const target::ImageStream images =
-        from_log ? LcmImageStream(source, name) : target::ImageStream{};
-    auto views = !args.charuco.empty() && (from_log || !target::IsDetectionFolder(source))
-                     ? target::DetectCharucoViews(name, source, charuco, images)
-                 : from_log ? target::DetectChessboardViews(name, source, board, images)
-                            : target::LoadCameraViews(name, source, board, width, height);
+    const pattern::ImageStream images =
+        from_log ? LcmImageStream(source, name) : pattern::ImageStream{};
+    auto views = !args.charuco.empty() && (from_log || !pattern::IsDetectionFolder(source))
+                     ? pattern::DetectCharucoViews(name, source, charuco, images)
+                 : from_log ? pattern::DetectChessboardViews(name, source, board, images)
+                            : pattern::LoadCameraViews(name, source, board, width, height);
     if (!views) return Error{name + ": " + views.error()};
     camera.views = std::move(*views);
     log->info("{}: {} files, {} with a target ({}x{})", name, camera.views.files,
               camera.views.views.size(), camera.views.width, camera.views.height);
-    auto intrinsics = target::CalibrateIntrinsics(camera.views, options);
+    auto intrinsics = pattern::CalibrateIntrinsics(camera.views, options);
     if (!intrinsics) return Error{intrinsics.error()};
     camera.intrinsics = std::move(*intrinsics);
     out.push_back(std::move(camera));

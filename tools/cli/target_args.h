@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/target/charuco.h"
-#include "rigcal/target/intrinsics.h"
-#include "rigcal/target/target_views.h"
+#include "rigcal/base/status.h"
+#include "rigcal/pattern/charuco.h"
+#include "rigcal/pattern/intrinsics.h"
+#include "rigcal/pattern/target_views.h"
 
 namespace rigcal::cli {
 
@@ -19,11 +19,11 @@ struct TargetArgs {
   std::string chessboard = "9x6";
   std::string charuco;  // SQUARESxSQUARES: images hold a ChArUco board instead of a chessboard
   double marker = 0.0;  // ChArUco marker edge (0: 0.7 of --square)
-  std::string dictionary = target::CharucoSpec{}.dictionary;
+  std::string dictionary = pattern::CharucoSpec{}.dictionary;
   double square = 1.0;
   std::string resolution;  // WIDTHxHEIGHT, for detection CSVs
   std::string model = "pinhole";
-  int max_views = target::IntrinsicsOptions{}.max_views;
+  int max_views = pattern::IntrinsicsOptions{}.max_views;
   bool no_reject = false;
 };
 
@@ -32,8 +32,8 @@ struct TargetArgs {
 void AddTargetOptions(CLI::App* cmd, TargetArgs* args);
 
 struct CameraCalibration {
-  target::CameraViews views;
-  target::IntrinsicsResult intrinsics;
+  pattern::CameraViews views;
+  pattern::IntrinsicsResult intrinsics;
 };
 
 // For every --camera: its views and intrinsics (logs a line per camera). Errors name the

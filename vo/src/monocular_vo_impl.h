@@ -18,7 +18,7 @@
 #include "klt_tracker.h"
 #include "map_descriptors.h"
 #include "relative_pose.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/vo/monocular_vo.h"
 #include "track_noise.h"
 #include "vo_map.h"

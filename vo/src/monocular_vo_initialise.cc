@@ -9,7 +9,7 @@
 #include "local_bundle_adjustment.h"
 #include "monocular_vo_impl.h"
 #include "relative_pose.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 #include "triangulation.h"
 
 namespace rigcal::vo {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "monocular_vo_impl.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/robust_statistics.h"
 #include "triangulation.h"
 
 namespace rigcal::vo {

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/camera/camera_model.h"
 #include "rigcal/camera/camera_spec.h"
 

@@ -8,8 +8,8 @@
 #include <sstream>
 
 #include "camera_models.h"
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/logging.h"
 
 namespace rigcal::camera {
 namespace {

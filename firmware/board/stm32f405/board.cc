@@ -1,52 +1,26 @@
 #include "board.h"
 
+#include "clock_tree.h"
+#include "peripherals.h"
+#include "register_access.h"
+#include "rigcal/trigger_core/counter_extension.h"
+#include "stm32f405_map.h"
+
+// A test image presets the µs counter (CMake TRIGGER_TEST_COUNTER_PRESET) to run across its wrap.
+#ifdef RIGCAL_COUNTER_PRESET
+#define RIGCAL_TEST_IMAGE 1
+#else
+#define RIGCAL_COUNTER_PRESET 0u
+#define RIGCAL_TEST_IMAGE 0
+#endif
+
 namespace rigcal::board {
 namespace {
 
-template <typename T = uint32_t>
-volatile T& Reg(uint32_t address) {
-  return *reinterpret_cast<volatile T*>(address);
-}
+using namespace stm32;
+namespace proto = ::rigcal::trigger_protocol;
 
-// Core peripherals.
-constexpr uint32_t kSysTickCsr = 0xE000E010;
-constexpr uint32_t kSysTickRvr = 0xE000E014;
-constexpr uint32_t kSysTickCvr = 0xE000E018;
-constexpr uint32_t kNvicIser1 = 0xE000E104;
-constexpr uint32_t kCpacr = 0xE000ED88;
-// STM32F405 peripherals.
-constexpr uint32_t kRccAhb1Enr = 0x40023830;
-constexpr uint32_t kRccApb1Enr = 0x40023840;
-constexpr uint32_t kRccApb2Enr = 0x40023844;
-// TIM2: the 32-bit µs counter. Its input clock is 84 MHz on a real F405 (APB1 x 2); QEMU 7.2's
-// netduinoplus2 clocks it at a fixed 1 GHz, hence the build option (CMake TRIGGER_TIMER_CLOCK_HZ).
-#ifndef RIGCAL_TIMER_CLOCK_HZ
-#define RIGCAL_TIMER_CLOCK_HZ 84000000u
-#endif
-constexpr uint32_t kTimerClockHz = RIGCAL_TIMER_CLOCK_HZ;
-constexpr uint32_t kTim2 = 0x40000000;
-constexpr uint32_t kTimCr1 = kTim2 + 0x00;
-constexpr uint32_t kTimEgr = kTim2 + 0x14;
-constexpr uint32_t kTimCnt = kTim2 + 0x24;
-constexpr uint32_t kTimPsc = kTim2 + 0x28;
-constexpr uint32_t kTimArr = kTim2 + 0x2C;
-constexpr uint32_t kGpioE = 0x40021000;
-constexpr uint32_t kUsart1 = 0x40011000;
-constexpr uint32_t kUsartSr = kUsart1 + 0x00;
-constexpr uint32_t kUsartDr = kUsart1 + 0x04;
-constexpr uint32_t kUsartBrr = kUsart1 + 0x08;
-constexpr uint32_t kUsartCr1 = kUsart1 + 0x0C;
-constexpr uint32_t kSrRxne = 1u << 5;
-constexpr uint32_t kSrTxe = 1u << 7;
-constexpr uint32_t kSrOre = 1u << 3;
-constexpr int kUsart1Irq = 37;
-
-constexpr uint32_t kTicksPerMs = kCoreClockHz / 1000;
-
-// The 64-bit extension of TIM2's count (NowUs runs in the main loop only, which wakes at least
-// every millisecond: the 32-bit count wraps every 71 minutes).
-uint32_t g_last_count = 0;
-uint64_t g_high = 0;
+trigger_core::CounterExtension g_time;  // main loop only
 
 // Received bytes: the USART1 interrupt writes rx_head, the main loop rx_tail.
 constexpr uint32_t kRxSize = 256;
@@ -57,35 +31,22 @@ volatile uint32_t g_rx_overruns = 0;
 
 }  // namespace
 
-void Init() {
-  Reg(kCpacr) = Reg(kCpacr) | (0xFu << 20);         // FPU: full access to CP10 and CP11
-  Reg(kRccAhb1Enr) = Reg(kRccAhb1Enr) | (1u << 4);  // GPIOE clock
-  Reg(kRccApb2Enr) = Reg(kRccApb2Enr) | (1u << 4);  // USART1 clock
-  Reg(kGpioE + 0x00) = 0x5555;                      // MODER: PE0..PE7 outputs
-  Reg(kGpioE + 0x18) = 0xFFu << 16;                 // BSRR: all low
-  // USART1 at 115200 baud from the 84 MHz APB2 clock (BRR = 84e6 / 115200 = 45.5625 = 45 + 9/16).
-  Reg(kUsartBrr) = (45u << 4) | 9u;
-  Reg(kUsartCr1) = (1u << 13) | (1u << 5) | (1u << 3) | (1u << 2);  // UE, RXNEIE, TE, RE
-  Reg(kNvicIser1) = 1u << (kUsart1Irq - 32);
-  Reg(kRccApb1Enr) = Reg(kRccApb1Enr) | 1u;      // TIM2 clock
-  Reg(kTimPsc) = kTimerClockHz / 1'000'000 - 1;  // 1 MHz
-  Reg(kTimArr) = 0xFFFFFFFFu;
-  Reg(kTimEgr) = 1;  // load the prescaler
-  Reg(kTimCnt) = 0;
-  Reg(kTimCr1) = 1;  // count
-  // SysTick only wakes the main loop every millisecond (its interrupts are not counted for the
-  // time: QEMU loses some when the host is busy, TIM2's count follows the host clock).
-  Reg(kSysTickRvr) = kTicksPerMs - 1;
-  Reg(kSysTickCvr) = 0;
-  Reg(kSysTickCsr) = 0x7;  // processor clock, interrupt, enable
+trigger_core::BoardInfo Init() {
+  uint8_t status = ConfigureClockTree(kClockPlan);
+  const TimerClock timer = MeasureTimerClock(kClockPlan);
+  status |= timer.status;
+  if (RIGCAL_TEST_IMAGE) status |= proto::kClockTestImage;
+  InitPins();
+  InitUsart1(kClockPlan);
+  InitTimers(timer.psc, RIGCAL_COUNTER_PRESET);
+  InitSysTick(kClockPlan);
+  InitInterrupts();
+  return {status, static_cast<uint8_t>(kClockPlan.hse_hz / 1'000'000)};
 }
 
-uint64_t NowUs() {
-  const uint32_t count = Reg(kTimCnt);
-  if (count < g_last_count) g_high += uint64_t{1} << 32;
-  g_last_count = count;
-  return g_high | count;
-}
+uint32_t Now32() { return Read32(kTim2 + kTimCnt); }
+
+uint64_t NowUs() { return g_time.Extend(Now32()); }
 
 bool ReadByte(uint8_t* byte) {
   const uint32_t tail = g_rx_tail;
@@ -95,18 +56,12 @@ bool ReadByte(uint8_t* byte) {
   return true;
 }
 
-bool CanWrite() { return (Reg(kUsartSr) & kSrTxe) != 0; }
+bool CanWrite() { return (Read32(kUsartSr) & kUsartSrTxe) != 0; }
 
 void WriteByte(uint8_t byte) {
   while (!CanWrite()) {
   }
-  Reg(kUsartDr) = byte;
-}
-
-void SetLines(uint8_t high_mask) {
-  // BSRR: low half sets, high half resets; one write changes all eight lines at once.
-  Reg(kGpioE + 0x18) = static_cast<uint32_t>(high_mask) |
-                       (static_cast<uint32_t>(static_cast<uint8_t>(~high_mask)) << 16);
+  Write32(kUsartDr, byte);
 }
 
 void WaitForInterrupt() { asm volatile("wfi"); }
@@ -125,14 +80,13 @@ void Exit(bool success) {
 
 }  // namespace rigcal::board
 
-// Interrupt handlers (named in the vector table of startup.cc).
 extern "C" void SysTick_Handler() {}  // wakes WaitForInterrupt
 
 extern "C" void USART1_IRQHandler() {
   using namespace rigcal::board;
-  const uint32_t sr = Reg(kUsartSr);
-  if (sr & (kSrRxne | kSrOre)) {
-    const uint8_t byte = static_cast<uint8_t>(Reg(kUsartDr));  // also clears RXNE / ORE
+  const uint32_t sr = Read32(kUsartSr);
+  if (sr & (kUsartSrRxne | kUsartSrOre)) {
+    const uint8_t byte = static_cast<uint8_t>(Read32(kUsartDr));  // also clears RXNE / ORE
     const uint32_t head = g_rx_head;
     if (head - g_rx_tail < kRxSize) {
       g_rx[head % kRxSize] = byte;

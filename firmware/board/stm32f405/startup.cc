@@ -13,6 +13,10 @@ int main();
 void Reset_Handler();
 void SysTick_Handler();
 void USART1_IRQHandler();
+void TIM2_IRQHandler();
+void TIM3_IRQHandler();
+void TIM4_IRQHandler();
+void TIM5_IRQHandler();
 
 void Fault_Handler() { rigcal::board::Exit(false); }
 void Default_Handler() { rigcal::board::Exit(false); }
@@ -51,6 +55,10 @@ constexpr VectorTable MakeTable() {
   t.core[12] = nullptr;                              // reserved
   t.core[14] = SysTick_Handler;
   for (int i = 0; i < kIrqs; ++i) t.irq[i] = Default_Handler;
+  t.irq[28] = TIM2_IRQHandler;
+  t.irq[29] = TIM3_IRQHandler;
+  t.irq[30] = TIM4_IRQHandler;
+  t.irq[50] = TIM5_IRQHandler;
   t.irq[37] = USART1_IRQHandler;
   return t;
 }

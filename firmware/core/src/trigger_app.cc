@@ -20,8 +20,9 @@ proto::NackReason ReasonOf(proto::DecodeEvent event) {
 
 }  // namespace
 
-void TriggerApp::Boot(uint64_t now_us) {
-  lines_->SetLines(0);
+void TriggerApp::Boot(uint64_t now_us, BoardInfo board) {
+  board_ = board;
+  for (int line = 0; line < proto::kMaxLines; ++line) timers_->Release(line);
   SendHello(now_us);
   next_heartbeat_us_ = now_us;
 }
@@ -51,7 +52,8 @@ void TriggerApp::HandleCommand(const proto::Message& m, uint64_t now_us) {
       TriggerConfig next = config_;
       next.rate_mhz = m.set_rate.rate_mhz;
       ConfigProblem problem = CheckRate(next.rate_mhz);
-      // A rate whose period is too short for a configured line is refused as a rate problem.
+      // A rate whose period is too short for a configured line, or whose reports do not fit the
+      // link, is refused as a rate problem.
       if (problem.ok() && !CheckConfig(next).ok())
         problem = {proto::NackReason::kOutOfRange, proto::Field::kRate};
       if (problem.ok()) {
@@ -71,7 +73,13 @@ void TriggerApp::HandleCommand(const proto::Message& m, uint64_t now_us) {
       line.width_us = s.width_us;
       line.phase_offset_us = s.phase_offset_us;
       line.exposure_us = s.exposure_us;
-      const ConfigProblem problem = CheckLine(line, config_.rate_mhz);
+      line.exposure_input = s.exposure_input;
+      ConfigProblem problem = CheckLine(line, config_.rate_mhz);
+      TriggerConfig next = config_;
+      next.lines[s.line] = line;
+      if (problem.ok() && !next.FitsLink()) {
+        problem = {proto::NackReason::kOutOfRange, proto::Field::kExposureInput};
+      }
       if (problem.ok()) {
         config_.lines[s.line] = line;
         scheduler_.Configure(config_);
@@ -79,7 +87,12 @@ void TriggerApp::HandleCommand(const proto::Message& m, uint64_t now_us) {
       return Answer(s.command_id, type, problem);
     }
     case proto::MessageType::kSetHeartbeat: {
-      const ConfigProblem problem = CheckHeartbeat(m.set_heartbeat.period_ms);
+      ConfigProblem problem = CheckHeartbeat(m.set_heartbeat.period_ms);
+      TriggerConfig next = config_;
+      next.heartbeat_period_ms = m.set_heartbeat.period_ms;
+      if (problem.ok() && !next.FitsLink()) {
+        problem = {proto::NackReason::kOutOfRange, proto::Field::kHeartbeatPeriod};
+      }
       if (problem.ok()) {
         config_.heartbeat_period_ms = m.set_heartbeat.period_ms;
         next_heartbeat_us_ = now_us + 1000ull * config_.heartbeat_period_ms;
@@ -87,14 +100,15 @@ void TriggerApp::HandleCommand(const proto::Message& m, uint64_t now_us) {
       return Answer(m.set_heartbeat.command_id, type, problem);
     }
     case proto::MessageType::kStart: {
-      if (!scheduler_.running() && !scheduler_.Start(now_us)) {
+      if (!scheduler_.running() && config_.EnabledMask() == 0) {
         return Answer(m.simple.command_id, type,
                       {proto::NackReason::kNoLinesEnabled, proto::Field::kLine});
       }
+      if (!scheduler_.running()) StartRun(now_us);
       return Answer(m.simple.command_id, type, {});
     }
     case proto::MessageType::kStop:
-      scheduler_.Stop(this);
+      scheduler_.Stop(timers_);
       return Answer(m.simple.command_id, type, {});
     case proto::MessageType::kGetInfo:
       Answer(m.simple.command_id, type, {});
@@ -102,6 +116,15 @@ void TriggerApp::HandleCommand(const proto::Message& m, uint64_t now_us) {
       return;
     default:
       return Answer(0, type, {proto::NackReason::kUnknownType, proto::Field::kNone});
+  }
+}
+
+void TriggerApp::StartRun(uint64_t now_us) {
+  meter_.Start();
+  scheduler_.Start(now_us, timers_);
+  for (int line = 0; line < proto::kMaxLines; ++line) {
+    if (config_.lines[line].wired())
+      timers_->StartCapture(line, config_.lines[line].exposure_input);
   }
 }
 
@@ -122,22 +145,17 @@ void TriggerApp::Answer(uint16_t id, uint8_t type, ConfigProblem problem) {
 }
 
 void TriggerApp::Poll(uint64_t now_us) {
-  scheduler_.Poll(now_us, this);
+  proto::Message m;
+  m.type = proto::MessageType::kPulseReport;
+  while (scheduler_.PopReport(now_us, &m.pulse)) Send(m);
+  m.type = proto::MessageType::kExposureReport;
+  while (meter_.Pop(&m.exposure)) Send(m);
   if (config_.heartbeat_period_ms != 0 && now_us >= next_heartbeat_us_) {
     SendHeartbeat(now_us);
     const uint64_t period = 1000ull * config_.heartbeat_period_ms;
     next_heartbeat_us_ += period;
     if (next_heartbeat_us_ <= now_us) next_heartbeat_us_ = now_us + period;  // fell behind
   }
-}
-
-void TriggerApp::OnLines(uint8_t high_mask) { lines_->SetLines(high_mask); }
-
-void TriggerApp::OnPulse(const proto::PulseReport& report) {
-  proto::Message m;
-  m.type = proto::MessageType::kPulseReport;
-  m.pulse = report;
-  Send(m);
 }
 
 void TriggerApp::SendHeartbeat(uint64_t now_us) {
@@ -148,7 +166,7 @@ void TriggerApp::SendHeartbeat(uint64_t now_us) {
   m.heartbeat.running = scheduler_.running() ? 1 : 0;
   m.heartbeat.late_edges = Saturate16(scheduler_.late_edges());
   m.heartbeat.rx_errors = Saturate16(rx_errors());
-  m.heartbeat.tx_dropped = Saturate16(tx_dropped_);
+  m.heartbeat.tx_dropped = Saturate16(tx_dropped());
   m.heartbeat.skipped_ticks = Saturate16(scheduler_.skipped_ticks());
   Send(m);
 }
@@ -159,6 +177,8 @@ void TriggerApp::SendHello(uint64_t now_us) {
   m.hello.firmware_version = kFirmwareVersion;
   m.hello.max_lines = proto::kMaxLines;
   m.hello.mcu_time_us = now_us;
+  m.hello.clock_status = board_.clock_status;
+  m.hello.hse_mhz = board_.hse_mhz;
   Send(m);
 }
 

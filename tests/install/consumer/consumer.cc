@@ -1,5 +1,5 @@
 // Calibrates a synthetic two-camera drive with the installed rigcal::calib, checks VO options
-// (rigcal::vo), makes a Frame (rigcal::drivers) and encodes an LCM pose message
+// (rigcal::vo), makes a Frame (rigcal::capture) and encodes an LCM pose message
 // (rigcal::lcmtypes). Exit 0 when the estimate matches the truth, 1 otherwise.
 #include <cmath>
 #include <cstdio>
@@ -8,7 +8,7 @@
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/camera_pose_t.hpp"
-#include "rigcal/drivers/frame.h"
+#include "rigcal/capture/frame.h"
 #include "rigcal/vo/monocular_vo.h"
 
 int main() {
@@ -29,7 +29,7 @@ int main() {
   std::printf("consumer: rotation error %.4f deg, position error %.4f, scale error %.4f\n",
               rot_err_rad * 180.0 / 3.14159265358979, pos_err, scale_err);
 
-  rigcal::drivers::Frame frame;
+  rigcal::capture::Frame frame;
   frame.image = cv::Mat::zeros(4, 4, CV_8UC1);
   rigcal::vo::VoOptions vo_options;
   rigcal::camera_pose_t message{};

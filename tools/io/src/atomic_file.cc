@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 std::string ErrnoText(int err) { return std::strerror(err); }
@@ -225,4 +225,4 @@ Expected<std::string> KeepAside(const std::string& path, const std::string& tag)
   return aside;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -1,7 +1,7 @@
 // Camera names (camera_name.h).
 #include "rigcal/io/camera_name.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 std::string CameraNameProblem(const std::string& name) {
   if (name == "." || name == "..") return "'" + name + "' cannot name a camera";
@@ -29,4 +29,4 @@ std::string CameraNameProblem(const std::string& name) {
   return "";
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -9,10 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/io/config_sections.h"
-#include "rigcal/io/yaml_fields.h"
+#include "rigcal/io/camera_files.h"
+#include "config_sections.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 using camera::CameraSpec;
@@ -273,4 +274,4 @@ Expected<std::vector<CameraSpec>> ReadKalibrIntrinsics(const std::string& path) 
   return specs;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -1,4 +1,4 @@
-#include "rigcal/io/capture_source_yaml.h"
+#include "capture_source_yaml.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -6,7 +6,7 @@
 #include <set>
 #include <vector>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 const std::set<std::string> kV4l2Keys = {
@@ -43,9 +43,9 @@ std::optional<Error> OptionalBuffers(const FieldReader& r, const YAML::Node& nod
 // `unsupported` are refused, naming the `supported` ones.
 std::optional<Error> OptionalPixelFormats(const FieldReader& r, const YAML::Node& node,
                                           const std::string& prefix,
-                                          std::initializer_list<drivers::PixelFormat> unsupported,
+                                          std::initializer_list<capture::PixelFormat> unsupported,
                                           const std::string& supported,
-                                          std::vector<drivers::PixelFormat>* out) {
+                                          std::vector<capture::PixelFormat>* out) {
   const YAML::Node n = node["pixel_formats"];
   if (!n) return std::nullopt;
   if (!n.IsSequence() || n.size() == 0) {
@@ -56,7 +56,7 @@ std::optional<Error> OptionalPixelFormats(const FieldReader& r, const YAML::Node
     const std::string item = prefix + "pixel_formats[" + std::to_string(i) + "]";
     auto name = r.String(n[i], item);
     if (!name) return Error{name.error()};
-    const auto format = drivers::ParsePixelFormat(*name);
+    const auto format = capture::ParsePixelFormat(*name);
     if (!format ||
         std::find(unsupported.begin(), unsupported.end(), *format) != unsupported.end()) {
       return r.Fail(n[i], item, "'" + *name + "' is not one of " + supported);
@@ -70,14 +70,14 @@ std::optional<Error> OptionalPixelFormats(const FieldReader& r, const YAML::Node
 
 std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
                                    const std::string& field, bool is_source,
-                                   drivers::V4l2Options* options) {
+                                   capture::V4l2Options* options) {
   if (!node.IsMap()) return r.Fail(node, field, "expected a map");
   std::set<std::string> known = kV4l2Keys;
   if (is_source) known.insert("type");
   if (auto e = r.CheckKeys(node, field + ".", known)) return e;
   const std::string p = field + ".";
   if (auto e = OptionalPixelFormats(r, node, p,
-                                    {drivers::PixelFormat::kBgr24, drivers::PixelFormat::kRgb24},
+                                    {capture::PixelFormat::kBgr24, capture::PixelFormat::kRgb24},
                                     "GREY, Y10, Y16, YUYV, NV12, MJPEG", &options->formats))
     return e;
   auto number = [&](const char* key, double low, double high, bool open_low,
@@ -128,7 +128,7 @@ std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
 
 std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& node,
                                         const std::string& field, bool is_source,
-                                        drivers::LibcameraOptions* options) {
+                                        capture::LibcameraOptions* options) {
   if (!node.IsMap()) return r.Fail(node, field, "expected a map");
   std::set<std::string> known = {"role", "pixel_formats", "buffers", "reconnect",
                                  "reconnect_max_backoff_s"};
@@ -144,7 +144,7 @@ std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& 
     options->role = *v;
   }
   if (auto e =
-          OptionalPixelFormats(r, node, p, {drivers::PixelFormat::kY10, drivers::PixelFormat::kY16},
+          OptionalPixelFormats(r, node, p, {capture::PixelFormat::kY10, capture::PixelFormat::kY16},
                                "GREY, YUYV, NV12, BGR24, RGB24, MJPEG", &options->formats))
     return e;
   if (auto e = OptionalBuffers(r, node, p, 1, &options->buffers)) return e;
@@ -163,7 +163,7 @@ std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& 
 std::optional<Error> ParseImageFolderKeys(const FieldReader& r, const YAML::Node& node,
                                           const std::string& field, bool is_source,
                                           const std::string& base_dir,
-                                          drivers::ImageFolderOptions* options) {
+                                          capture::ImageFolderOptions* options) {
   if (!node.IsMap()) return r.Fail(node, field, "expected a map");
   std::set<std::string> known = {"rate_hz", "timestamps"};
   if (is_source) known.insert("type");
@@ -186,4 +186,4 @@ std::optional<Error> ParseImageFolderKeys(const FieldReader& r, const YAML::Node
   return std::nullopt;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

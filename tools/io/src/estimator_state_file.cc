@@ -9,7 +9,7 @@
 
 #include "estimator_state_ranges.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 constexpr const char* kMagic = "rigcal-estimator-state";
@@ -319,4 +319,4 @@ Expected<RigEstimatorState> ParseEstimatorState(std::string_view view) {
   return state;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -4,7 +4,7 @@
 #include <sstream>
 #include <string>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -135,4 +135,4 @@ Status CheckEstimatorStateRanges(const RigEstimatorState& state) {
   return Status::Ok();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

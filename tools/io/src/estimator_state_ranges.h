@@ -3,9 +3,9 @@
 // checksum must not feed negative counts or absurd sums (1e300) to the estimator.
 
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // Largest magnitude of any saved number: sums of squared positions over millions of motions stay
 // far below it, and its square is still finite.
@@ -15,4 +15,4 @@ inline constexpr double kMaxStateMagnitude = 1e100;
 // of range.
 Status CheckEstimatorStateRanges(const RigEstimatorState& state);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -1,12 +1,14 @@
-// Camera intrinsics from a EuRoC / ASL sensor.yaml (config_sections.h).
+// Camera intrinsics from a EuRoC / ASL sensor.yaml (camera_files.h).
+#include "rigcal/io/camera_files.h"
+
 #include <algorithm>
 #include <string>
 #include <vector>
 
-#include "rigcal/io/config_sections.h"
-#include "rigcal/io/yaml_fields.h"
+#include "config_sections.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 Expected<camera::CameraSpec> ReadEurocSensorYaml(const std::string& path, const std::string& name) {
   auto root = LoadYaml(path);
@@ -59,4 +61,4 @@ Expected<camera::CameraSpec> ReadEurocSensorYaml(const std::string& path, const 
   return spec;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

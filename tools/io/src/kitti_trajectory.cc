@@ -8,15 +8,15 @@
 #include <fstream>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_text.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
-using io_internal::LineParser;
-using io_internal::SplitWhitespace;
-using io_internal::Trim;
+using internal::LineParser;
+using internal::SplitWhitespace;
+using internal::Trim;
 
 Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
                                               const std::string& times_path) {
@@ -97,4 +97,4 @@ Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
   return trajectory;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

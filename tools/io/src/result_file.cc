@@ -6,10 +6,11 @@
 #include <limits>
 #include <set>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/io/yaml_fields.h"
+#include "rigcal/base/format.h"
+#include "rigcal/io/text_file.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -248,4 +249,4 @@ Expected<RigCalibration> ReadResultFile(const std::string& path) {
   return result;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -7,10 +7,10 @@
 #include <limits>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/quaternion.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // A number, or null when it is not finite (JSON has no NaN or infinity).
@@ -294,4 +294,4 @@ std::string FormatResultTable(const RigCalibration& result,
   return out;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

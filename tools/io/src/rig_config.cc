@@ -6,12 +6,12 @@
 #include <map>
 #include <set>
 
-#include "rigcal/io/capture_source_yaml.h"
-#include "rigcal/io/config_sections.h"
-#include "rigcal/io/trigger_yaml.h"
-#include "rigcal/io/yaml_fields.h"
+#include "config_sections.h"
+#include "rig_config_yaml.h"
+#include "trigger_yaml.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // Keys of a camera entry read here; the camera section parser reads the others.
@@ -93,6 +93,16 @@ FieldSetter Double(double RigEstimatorOptions::*member) {
   };
 }
 
+FieldSetter Double(double ModelSelectionOptions::*member) {
+  return [member](const FieldReader& r, const YAML::Node& node, const std::string& field,
+                  OnlineOptions* options) -> std::optional<Error> {
+    auto v = r.Number(node, field);
+    if (!v) return Error{v.error()};
+    options->estimator.model_selection.*member = *v;
+    return std::nullopt;
+  };
+}
+
 FieldSetter Int(int RigEstimatorOptions::*member) {
   return [member](const FieldReader& r, const YAML::Node& node, const std::string& field,
                   OnlineOptions* options) -> std::optional<Error> {
@@ -117,6 +127,7 @@ FieldSetter Seconds(int64_t RigEstimatorOptions::*member) {
 
 const std::map<std::string, FieldSetter>& EstimatorFields() {
   using O = RigEstimatorOptions;
+  using M = ModelSelectionOptions;
   static const std::map<std::string, FieldSetter> fields = {
       {"keyframe_min_angle_deg", Double(&O::keyframe_min_angle_deg)},
       {"keyframe_min_translation", Double(&O::keyframe_min_translation)},
@@ -139,12 +150,12 @@ const std::map<std::string, FieldSetter>& EstimatorFields() {
       {"decalibration_confirmations", Int(&O::decalibration_confirmations)},
       {"decalibration_confirm_s", Double(&O::decalibration_confirm_s)},
       {"max_open_segments", Int(&O::max_open_segments)},
-      {"alpha_maxrot_deg", Double(&O::alpha_maxrot_deg)},
-      {"alpha_maxrot_noise_deg", Double(&O::alpha_maxrot_noise_deg)},
-      {"planar_axis_spread_deg", Double(&O::planar_axis_spread_deg)},
-      {"min_tilt_snr", Double(&O::min_tilt_snr)},
-      {"max_axis_std_ratio", Double(&O::max_axis_std_ratio)},
-      {"general_axis_spread_deg", Double(&O::general_axis_spread_deg)},
+      {"alpha_maxrot_deg", Double(&M::alpha_maxrot_deg)},
+      {"alpha_maxrot_noise_deg", Double(&M::alpha_maxrot_noise_deg)},
+      {"planar_axis_spread_deg", Double(&M::planar_axis_spread_deg)},
+      {"min_tilt_snr", Double(&M::min_tilt_snr)},
+      {"max_axis_std_ratio", Double(&M::max_axis_std_ratio)},
+      {"general_axis_spread_deg", Double(&M::general_axis_spread_deg)},
       {"planar_hysteresis", Double(&O::planar_hysteresis)},
       {"nominal_sigma", Double(&O::nominal_sigma)},
       {"converged_min_motions", Int(&O::converged_min_motions)},
@@ -258,6 +269,133 @@ std::optional<Error> ParseRate(const FieldReader& r, const YAML::Node& node,
   return std::nullopt;
 }
 
+
+// `rig:` and `cameras:`: fills config->name and config->cameras (the master first, then the
+// others in file order); returns the cameras' YAML entries in that order.
+Expected<std::vector<YAML::Node>> ParseCameras(const FieldReader& r, const YAML::Node& root,
+                                               RigConfig* config) {
+  const YAML::Node rig = root["rig"];
+  if (!rig) return r.Fail(root, "rig", "missing (needs at least `master`)");
+  if (auto e = r.CheckKeys(rig, "rig.", {"name", "master"})) return *e;
+  if (const YAML::Node name = rig["name"]) {
+    auto text = r.String(name, "rig.name");
+    if (!text) return Error{text.error()};
+    config->name = *text;
+  }
+  if (!rig["master"]) return r.Fail(rig, "rig.master", "missing");
+  auto master = r.String(rig["master"], "rig.master");
+  if (!master) return Error{master.error()};
+
+  const YAML::Node cameras = root["cameras"];
+  if (!cameras) return r.Fail(root, "cameras", "missing");
+  if (!cameras.IsSequence() || cameras.size() < 2) {
+    return r.Fail(cameras, "cameras", "expected a list of at least two cameras");
+  }
+  std::vector<CameraConfig> listed;
+  std::set<std::string> names;
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    auto camera = ParseCamera(r, cameras[i], config->path, i);
+    if (!camera) return Error{camera.error()};
+    if (!names.insert(camera->name).second) {
+      return r.Fail(cameras[i]["name"], "cameras[" + std::to_string(i) + "].name",
+                    "duplicate camera name '" + camera->name + "'");
+    }
+    listed.push_back(std::move(*camera));
+  }
+  size_t master_index = 0;
+  while (master_index < listed.size() && listed[master_index].name != *master) ++master_index;
+  if (master_index == listed.size()) {
+    return r.Fail(rig["master"], "rig.master", "'" + *master + "' is not in cameras");
+  }
+  if (listed[master_index].nominal) {
+    return r.Fail(cameras[master_index]["nominal"], *master + ".nominal",
+                  "the master defines the rig frame; a nominal mounting is only for slaves");
+  }
+  for (size_t i = 0; i < listed.size(); ++i) {
+    if (i != master_index && listed[i].metric) {
+      return r.Fail(cameras[i]["metric"], listed[i].name + ".metric",
+                    "only the master's odometry can be metric (its scale is fixed to 1); a "
+                    "slave's scale is estimated");
+    }
+  }
+  std::vector<YAML::Node> entries = {cameras[master_index]};
+  config->cameras.push_back(listed[master_index]);
+  for (size_t i = 0; i < listed.size(); ++i) {
+    if (i == master_index) continue;
+    entries.push_back(cameras[i]);
+    config->cameras.push_back(std::move(listed[i]));
+  }
+  return entries;
+}
+
+// `estimator:` (with its time_offset) and `sync:` into config->online, with the cameras'
+// metric master and nominal mountings; checks the whole.
+std::optional<Error> ParseOnline(const FieldReader& r, const YAML::Node& root, RigConfig* config) {
+  OnlineOptions& online = config->online;
+  online.sync.num_cameras = static_cast<int>(config->cameras.size());
+  if (const YAML::Node estimator = root["estimator"]) {
+    if (auto e = ParseEstimator(r, estimator, &online)) return *e;
+    if (const YAML::Node offset = estimator["time_offset"]) {
+      std::vector<std::string> slaves;
+      for (size_t i = 1; i < config->cameras.size(); ++i) {
+        slaves.push_back(config->cameras[i].name);
+      }
+      auto parsed = ParseTimeOffsetSection(offset, slaves, config->master(), config->path);
+      if (!parsed) return Error{parsed.error()};
+      online.time_offset = *parsed;
+    }
+  }
+  if (const YAML::Node sync = root["sync"]) {
+    if (auto e = ParseSync(r, sync, config->cameras, &online.sync)) return *e;
+  }
+  online.estimator.master_metric = config->cameras.front().metric;
+  online.estimator.nominal.assign(config->cameras.size() - 1, std::nullopt);
+  for (size_t i = 1; i < config->cameras.size(); ++i) {
+    online.estimator.nominal[i - 1] = config->cameras[i].nominal;
+  }
+  if (const Status checked = online.Check(); !checked.ok()) {
+    return Error{config->path + ": estimator/sync options: " + checked.message()};
+  }
+  return std::nullopt;
+}
+
+// `publish:` (absent: the defaults).
+std::optional<Error> ParsePublish(const FieldReader& r, const YAML::Node& publish,
+                                  PublishOptions* options) {
+  if (!publish) return std::nullopt;
+  if (auto e = r.CheckKeys(publish, "publish.", {"extrinsics_rate_hz", "status_rate_hz"})) {
+    return *e;
+  }
+  if (const YAML::Node n = publish["extrinsics_rate_hz"]) {
+    if (auto e = ParseRate(r, n, "publish.extrinsics_rate_hz", &options->extrinsics_rate_hz)) {
+      return *e;
+    }
+  }
+  if (const YAML::Node n = publish["status_rate_hz"]) {
+    if (auto e = ParseRate(r, n, "publish.status_rate_hz", &options->status_rate_hz)) return *e;
+  }
+  return std::nullopt;
+}
+
+// `state:` (absent: the defaults).
+std::optional<Error> ParseState(const FieldReader& r, const YAML::Node& state,
+                                StateOptions* options) {
+  if (!state) return std::nullopt;
+  if (auto e = r.CheckKeys(state, "state.", {"path", "save_interval_s"})) return *e;
+  if (const YAML::Node n = state["path"]) {
+    auto text = r.String(n, "state.path");
+    if (!text) return Error{text.error()};
+    options->path = *text;
+  }
+  if (const YAML::Node n = state["save_interval_s"]) {
+    auto v = r.Number(n, "state.save_interval_s");
+    if (!v) return Error{v.error()};
+    if (!(*v > 0.0)) return r.Fail(n, "state.save_interval_s", "must be > 0");
+    options->save_interval_s = *v;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::vector<std::string> RigConfig::CameraNames() const {
@@ -283,254 +421,16 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
   }
   RigConfig config;
   config.path = path;
-
-  const YAML::Node rig = root["rig"];
-  if (!rig) return r.Fail(root, "rig", "missing (needs at least `master`)");
-  if (auto e = r.CheckKeys(rig, "rig.", {"name", "master"})) return *e;
-  if (const YAML::Node name = rig["name"]) {
-    auto text = r.String(name, "rig.name");
-    if (!text) return Error{text.error()};
-    config.name = *text;
-  }
-  if (!rig["master"]) return r.Fail(rig, "rig.master", "missing");
-  auto master = r.String(rig["master"], "rig.master");
-  if (!master) return Error{master.error()};
-
-  const YAML::Node cameras = root["cameras"];
-  if (!cameras) return r.Fail(root, "cameras", "missing");
-  if (!cameras.IsSequence() || cameras.size() < 2) {
-    return r.Fail(cameras, "cameras", "expected a list of at least two cameras");
-  }
-  std::vector<CameraConfig> listed;
-  std::set<std::string> names;
-  for (size_t i = 0; i < cameras.size(); ++i) {
-    auto camera = ParseCamera(r, cameras[i], path, i);
-    if (!camera) return Error{camera.error()};
-    if (!names.insert(camera->name).second) {
-      return r.Fail(cameras[i]["name"], "cameras[" + std::to_string(i) + "].name",
-                    "duplicate camera name '" + camera->name + "'");
-    }
-    listed.push_back(std::move(*camera));
-  }
-  // The master first, then the others in file order.
-  size_t master_index = 0;
-  while (master_index < listed.size() && listed[master_index].name != *master) ++master_index;
-  if (master_index == listed.size()) {
-    return r.Fail(rig["master"], "rig.master", "'" + *master + "' is not in cameras");
-  }
-  if (listed[master_index].nominal) {
-    return r.Fail(cameras[master_index]["nominal"], *master + ".nominal",
-                  "the master defines the rig frame; a nominal mounting is only for slaves");
-  }
-  for (size_t i = 0; i < listed.size(); ++i) {
-    if (i != master_index && listed[i].metric) {
-      return r.Fail(cameras[i]["metric"], listed[i].name + ".metric",
-                    "only the master's odometry can be metric (its scale is fixed to 1); a "
-                    "slave's scale is estimated");
-    }
-  }
-  config.cameras.push_back(listed[master_index]);
-  for (size_t i = 0; i < listed.size(); ++i) {
-    if (i != master_index) config.cameras.push_back(std::move(listed[i]));
-  }
-
-  OnlineOptions& online = config.online;
-  online.sync.num_cameras = static_cast<int>(config.cameras.size());
-  if (const YAML::Node estimator = root["estimator"]) {
-    if (auto e = ParseEstimator(r, estimator, &online)) return *e;
-    if (const YAML::Node offset = estimator["time_offset"]) {
-      std::vector<std::string> slaves;
-      for (size_t i = 1; i < config.cameras.size(); ++i) slaves.push_back(config.cameras[i].name);
-      auto parsed = ParseTimeOffsetSection(offset, slaves, config.master(), path);
-      if (!parsed) return Error{parsed.error()};
-      online.time_offset = *parsed;
-    }
-  }
-  if (const YAML::Node sync = root["sync"]) {
-    if (auto e = ParseSync(r, sync, config.cameras, &online.sync)) return *e;
-  }
-  online.estimator.master_metric = config.cameras.front().metric;
-  online.estimator.nominal.assign(config.cameras.size() - 1, std::nullopt);
-  for (size_t i = 1; i < config.cameras.size(); ++i) {
-    online.estimator.nominal[i - 1] = config.cameras[i].nominal;
-  }
-  if (const Status checked = online.Check(); !checked.ok()) {
-    return Error{path + ": estimator/sync options: " + checked.message()};
-  }
-
-  if (const YAML::Node publish = root["publish"]) {
-    if (auto e = r.CheckKeys(publish, "publish.", {"extrinsics_rate_hz", "status_rate_hz"})) {
-      return *e;
-    }
-    if (const YAML::Node n = publish["extrinsics_rate_hz"]) {
-      if (auto e =
-              ParseRate(r, n, "publish.extrinsics_rate_hz", &config.publish.extrinsics_rate_hz)) {
-        return *e;
-      }
-    }
-    if (const YAML::Node n = publish["status_rate_hz"]) {
-      if (auto e = ParseRate(r, n, "publish.status_rate_hz", &config.publish.status_rate_hz)) {
-        return *e;
-      }
-    }
-  }
-  if (const YAML::Node state = root["state"]) {
-    if (auto e = r.CheckKeys(state, "state.", {"path", "save_interval_s"})) return *e;
-    if (const YAML::Node n = state["path"]) {
-      auto text = r.String(n, "state.path");
-      if (!text) return Error{text.error()};
-      config.state.path = *text;
-    }
-    if (const YAML::Node n = state["save_interval_s"]) {
-      auto v = r.Number(n, "state.save_interval_s");
-      if (!v) return Error{v.error()};
-      if (!(*v > 0.0)) return r.Fail(n, "state.save_interval_s", "must be > 0");
-      config.state.save_interval_s = *v;
-    }
-  }
-
+  auto entries = ParseCameras(r, root, &config);
+  if (!entries) return Error{entries.error()};
+  if (auto e = ParseOnline(r, root, &config)) return *e;
+  if (auto e = ParsePublish(r, root["publish"], &config.publish)) return *e;
+  if (auto e = ParseState(r, root["state"], &config.state)) return *e;
   // The hardware trigger, once the source is known (its stamps and exposures).
-  std::vector<YAML::Node> entries;
-  for (size_t i = 0; i < config.cameras.size(); ++i) {
-    entries.push_back(cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)]);
-  }
-  std::string source_type;
-  auto finish = [&]() -> Expected<RigConfig> {
-    if (auto e = ReadRigTrigger(r, root, entries, source_type, &config)) return *e;
-    return std::move(config);
-  };
-  if (const YAML::Node source = root["source"]) {
-    if (!source.IsMap() || !source["type"]) return r.Fail(source, "source.type", "missing");
-    auto type = r.String(source["type"], "source.type");
-    if (!type) return Error{type.error()};
-    source_type = *type;
-    if (*type == "image_folders") {
-      const std::filesystem::path base = std::filesystem::path(path).parent_path();
-      drivers::ImageFolderOptions defaults;
-      if (auto e = ParseImageFolderKeys(r, source, "source", true, base.string(), &defaults)) {
-        return *e;
-      }
-      for (size_t i = 0; i < config.cameras.size(); ++i) {
-        const CameraConfig& camera = config.cameras[i];
-        const YAML::Node entry = cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)];
-        if (camera.device.empty()) {
-          return r.Fail(entry, camera.name + ".device",
-                        "missing: image_folders needs the camera's folder (e.g. mav0/cam0)");
-        }
-        if (!camera.spec) {
-          return r.Fail(entry, camera.name,
-                        "a camera of image_folders needs a model and intrinsics");
-        }
-        const std::filesystem::path folder(camera.device);
-        config.image_folders.push_back(folder.is_absolute() ? folder.string()
-                                                            : (base / folder).string());
-        drivers::ImageFolderOptions options = defaults;
-        if (const YAML::Node capture = entry["capture"]) {
-          if (auto e = ParseImageFolderKeys(r, capture, camera.name + ".capture", false,
-                                            base.string(), &options)) {
-            return *e;
-          }
-        }
-        config.image_folder_options.push_back(std::move(options));
-      }
-      return finish();
-    }
-    if (*type == "v4l2") {
-      drivers::V4l2Options defaults;
-      if (auto e = ParseV4l2Keys(r, source, "source", true, &defaults)) return *e;
-      for (size_t i = 0; i < config.cameras.size(); ++i) {
-        const CameraConfig& camera = config.cameras[i];
-        const YAML::Node entry = cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)];
-        if (camera.device.empty()) {
-          return r.Fail(entry, camera.name + ".device",
-                        "missing: a v4l2 camera needs its device (/dev/videoN, "
-                        "/dev/v4l/by-id/..., bus:<bus info> or card:<card name>)");
-        }
-        if (!camera.spec) {
-          return r.Fail(entry, camera.name, "a v4l2 camera needs a model and intrinsics");
-        }
-        drivers::V4l2Options options = defaults;
-        options.device = camera.device;
-        options.width = camera.spec->width;
-        options.height = camera.spec->height;
-        if (const YAML::Node capture = entry["capture"]) {
-          if (auto e = ParseV4l2Keys(r, capture, camera.name + ".capture", false, &options)) {
-            return *e;
-          }
-        }
-        config.v4l2_devices.push_back(std::move(options));
-      }
-      return finish();
-    }
-    if (*type == "libcamera") {
-      drivers::LibcameraOptions defaults;
-      if (auto e = ParseLibcameraKeys(r, source, "source", true, &defaults)) return *e;
-      for (size_t i = 0; i < config.cameras.size(); ++i) {
-        const CameraConfig& camera = config.cameras[i];
-        const YAML::Node entry = cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)];
-        if (camera.device.empty()) {
-          return r.Fail(entry, camera.name + ".device",
-                        "missing: a libcamera camera needs its camera id or model (cam --list)");
-        }
-        if (!camera.spec) {
-          return r.Fail(entry, camera.name, "a libcamera camera needs a model and intrinsics");
-        }
-        drivers::LibcameraOptions options = defaults;
-        options.camera = camera.device;
-        options.width = camera.spec->width;
-        options.height = camera.spec->height;
-        if (const YAML::Node capture = entry["capture"]) {
-          if (auto e = ParseLibcameraKeys(r, capture, camera.name + ".capture", false, &options)) {
-            return *e;
-          }
-        }
-        config.libcamera_devices.push_back(std::move(options));
-      }
-      return finish();
-    }
-    for (size_t i = 0; i < cameras.size(); ++i) {
-      if (cameras[i].IsMap() && cameras[i]["capture"]) {
-        return r.Fail(cameras[i]["capture"], "cameras[" + std::to_string(i) + "].capture",
-                      "only for a live source (source.type: v4l2 or libcamera)");
-      }
-    }
-    if (*type != "simulated") {
-      return r.Fail(source["type"], "source.type",
-                    "'" + *type +
-                        "' is not supported (supported: simulated, image_folders, v4l2, "
-                        "libcamera)");
-    }
-    auto spec = ParseSimulatedSource(source, path);
-    if (!spec) return Error{spec.error()};
-    for (size_t i = 0; i < config.cameras.size(); ++i) {
-      const CameraConfig& camera = config.cameras[i];
-      const YAML::Node entry = cameras[i == 0 ? master_index : (i <= master_index ? i - 1 : i)];
-      if (!camera.spec) {
-        return r.Fail(entry, camera.name, "a simulated camera needs a model and intrinsics");
-      }
-      Similarity truth;  // the master is the rig frame
-      if (i > 0) {
-        if (!camera.truth) {
-          return r.Fail(entry, camera.name + ".truth",
-                        "missing: a simulated camera needs its true mounting");
-        }
-        truth = *camera.truth;
-      }
-      auto model = camera::MakeCameraModel(*camera.spec);
-      if (!model) return r.Fail(entry, camera.name, model.error());
-      spec->names.push_back(camera.name);
-      spec->cameras.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
-      Pose master_from_camera;
-      master_from_camera.q = truth.q;
-      master_from_camera.C = truth.C;
-      spec->master_from_camera.push_back(master_from_camera);
-    }
-    if (const Status status = spec->Check(); !status.ok()) {
-      return status.Prefixed(path + ": source");
-    }
-    config.simulated_source = std::move(*spec);
-  }
-  return finish();
+  auto source_type = ParseSourceSection(r, root, *entries, &config);
+  if (!source_type) return Error{source_type.error()};
+  if (auto e = ReadRigTrigger(r, root, *entries, *source_type, &config)) return *e;
+  return config;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -7,7 +7,7 @@
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/rig_config.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 template <typename Container>
@@ -59,4 +59,4 @@ Status WriteRigConfig(const std::string& path, const std::string& rig_name,
   return WriteFileAtomically(path, out.str());
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -11,12 +11,13 @@
 #include <set>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/rig_config.h"
-#include "rigcal/io/yaml_fields.h"
+#include "rig_config_yaml.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // Quaternions typed by hand with 4 decimals are off by up to ~1e-4.
@@ -169,18 +170,26 @@ Expected<std::map<std::string, Similarity>> ReadTrueMountings(const std::string&
 }
 
 std::string RigToYaml(const std::map<std::string, Similarity>& rig) {
+  return RigToYaml({rig.begin(), rig.end()}, "",
+                   "rigcal rig: per slave its orientation q_wxyz and centre C in the master frame\n"
+                   "(master units) and the scale mapping its odometry units to master units.");
+}
+
+std::string RigToYaml(const std::vector<std::pair<std::string, Similarity>>& slaves,
+                      const std::string& master, const std::string& comment) {
+  std::string text;
+  std::istringstream comment_lines(comment);
+  for (std::string line; std::getline(comment_lines, line);) text += "# " + line + "\n";
   YAML::Emitter out;
   out << YAML::BeginMap;
-  for (const auto& [name, similarity] : rig) {
+  if (!master.empty()) out << YAML::Key << "master" << YAML::Value << master;
+  for (const auto& [name, similarity] : slaves) {
     out << YAML::Key << name << YAML::Value << YAML::BeginMap;
     EmitRigEntry(out, similarity);
     out << YAML::EndMap;
   }
   out << YAML::EndMap;
-  return std::string(
-             "# rigcal rig: per slave its orientation q_wxyz and centre C in the master frame\n"
-             "# (master units) and the scale mapping its odometry units to master units.\n") +
-         out.c_str() + "\n";
+  return text + out.c_str() + "\n";
 }
 
 Status WriteRigYaml(const std::string& path, const std::map<std::string, Similarity>& rig) {
@@ -377,4 +386,4 @@ Expected<std::vector<CamchainCamera>> ReadCamchain(const std::string& path) {
   return cameras;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

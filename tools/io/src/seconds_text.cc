@@ -8,7 +8,7 @@
 
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 std::optional<int64_t> ParseSecondsToNs(std::string_view text) {
   size_t i = 0;
@@ -71,4 +71,4 @@ std::optional<int64_t> ParseSecondsToNs(std::string_view text) {
   return negative ? -value : value;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -1,5 +1,5 @@
 // The `source:` section of type `simulated` (keys documented in
-// drivers/include/rigcal/drivers/simulated_rig.h): fills drivers::SimulatedRigSpec, with
+// drivers/sim/include/rigcal/sim/simulated_rig.h): fills sim::SimulatedRigSpec, with
 // errors that name the line and key. Cameras and their true mounting are the caller's
 // (`cameras:` of the rig config).
 #include <cmath>
@@ -9,15 +9,15 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/io/config_sections.h"
+#include "rigcal/base/format.h"
+#include "config_sections.h"
 #include "rigcal/io/trajectory_io.h"
-#include "rigcal/io/yaml_fields.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
-using drivers::SimulatedRigSpec;
+using sim::SimulatedRigSpec;
 
 const std::set<std::string> kSourceKeys = {
     "type",         "frame_rate_hz", "num_frames",       "duration_s",
@@ -114,7 +114,7 @@ std::optional<Error> ReadTrajectorySection(const FieldReader& r, const YAML::Nod
         auto ypr = r.NumbersOf(w["ypr_deg"], field + ".ypr_deg", 3);
         if (!ypr) return Error{ypr.error()};
         waypoint.world_from_master =
-            drivers::WaypointOrientationFromYpr((*ypr)[0], (*ypr)[1], (*ypr)[2]);
+            sim::WaypointOrientationFromYpr((*ypr)[0], (*ypr)[1], (*ypr)[2]);
       } else {
         auto q = Quaternion(r, w["q_wxyz"], field + ".q_wxyz");
         if (!q) return Error{q.error()};
@@ -140,7 +140,7 @@ std::optional<Error> ReadTrajectorySection(const FieldReader& r, const YAML::Nod
   }
   spec->trajectory_file = file_path.string();
   spec->trajectory_t_ns = trajectory->t_ns;
-  spec->trajectory_poses = trajectory->poses;
+  spec->trajectory_world_from_body = trajectory->poses;
   if (const YAML::Node n = node["body_from_master"]) {
     auto pose = ReadPose(r, n, prefix + ".body_from_master");
     if (!pose) return Error{pose.error()};
@@ -160,7 +160,7 @@ std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& no
   if (const YAML::Node n = node["type"]) {
     auto text = r.String(n, prefix + ".type");
     if (!text) return Error{text.error()};
-    const auto type = drivers::SceneTypeFromString(*text);
+    const auto type = sim::SceneTypeFromString(*text);
     if (!type) {
       return r.Fail(n, prefix + ".type",
                     "'" + *text + "' is not a scene (expected room, yard, street or pipe)");
@@ -168,7 +168,7 @@ std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& no
     scene.type = *type;
   }
   const bool pipe = scene.type == SimulatedRigSpec::SceneType::kPipe;
-  const std::string type_name = drivers::ToString(scene.type);
+  const std::string type_name = sim::ToString(scene.type);
   auto only = [&](const std::string& key, bool allowed, const std::string& types) {
     return allowed ? std::nullopt
                    : std::optional<Error>(
@@ -218,8 +218,8 @@ std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& no
 
 }  // namespace
 
-Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
-                                                         const std::string& path) {
+Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
+                                                     const std::string& path) {
   const FieldReader r(path);
   if (auto e = r.CheckKeys(source, "source.", kSourceKeys)) return *e;
   SimulatedRigSpec spec;
@@ -383,4 +383,4 @@ Expected<drivers::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& sourc
   return spec;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

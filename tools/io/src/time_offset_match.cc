@@ -2,12 +2,12 @@
 #include <cmath>
 #include <string>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/time_offset.h"
 #include "rigcal/io/trajectory_interpolation.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 std::vector<int64_t> OffsetsNs(const std::vector<TimeOffsetEstimate>& offsets) {
@@ -76,4 +76,4 @@ Expected<OffsetMatch> MatchWithTimeOffsets(
   return out;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -3,10 +3,10 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/io/config_sections.h"
-#include "rigcal/io/yaml_fields.h"
+#include "config_sections.h"
+#include "yaml_fields.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 constexpr double kMaxOffsetS = 86400.0;
@@ -61,4 +61,4 @@ Expected<ClockOffsetOptions> ParseTimeOffsetSection(const YAML::Node& node,
   return options;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -1,7 +1,7 @@
 #include "trajectory_formats.h"
 
-namespace rigcal::tools {
-namespace io_internal {
+namespace rigcal::io {
+namespace internal {
 namespace {
 
 // `t tx ty tz qx qy qz qw [segment]`, t in seconds.
@@ -85,7 +85,7 @@ Expected<ParsedLine> ParseFields(const std::vector<std::string_view>& fields,
   return out;
 }
 
-}  // namespace io_internal
+}  // namespace internal
 
 std::string ToString(TrajectoryFormat format) {
   switch (format) {
@@ -99,4 +99,4 @@ std::string ToString(TrajectoryFormat format) {
   return "unknown";
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -8,11 +8,11 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_text.h"
 
-namespace rigcal::tools::io_internal {
+namespace rigcal::io::internal {
 
 // Columns of a pose: the time stamp and the 7 numbers of q and C; an optional 9th column.
 inline constexpr int kPoseColumns = 8;
@@ -51,4 +51,4 @@ struct ParsedLine {
 Expected<ParsedLine> ParseFields(const std::vector<std::string_view>& fields,
                                  const PoseLineFormat& format, const LineParser& p);
 
-}  // namespace rigcal::tools::io_internal
+}  // namespace rigcal::io::internal

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 TimedTrajectory ResampleAt(const TimedTrajectory& slave, const std::vector<int64_t>& master_t_ns,
                            int64_t offset_ns, const InterpolationOptions& options) {
@@ -70,4 +70,4 @@ Expected<RigRecording> MatchFreeRunning(const TimedTrajectory& master,
   return MatchTrajectories(master, matched, tolerance_ns);
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -6,11 +6,11 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_text.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 std::string FormatRange(const TimedTrajectory& t) {
@@ -143,4 +143,4 @@ Expected<RigRecording> MatchTrajectories(const TimedTrajectory& master,
   return recording;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

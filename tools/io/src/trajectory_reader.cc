@@ -9,20 +9,20 @@
 #include <fstream>
 #include <optional>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/io/camera_name.h"
 #include "rigcal/io/trajectory_io.h"
 #include "trajectory_formats.h"
 #include "trajectory_text.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
-using io_internal::kPoseColumns;
-using io_internal::LineParser;
-using io_internal::ParsedLine;
-using io_internal::PoseLineFormat;
+using internal::kPoseColumns;
+using internal::LineParser;
+using internal::ParsedLine;
+using internal::PoseLineFormat;
 
 // Deviations of |q| from 1 below this are print rounding of a unit quaternion (>= 9
 // decimals) and are normalised without being counted in the warning.
@@ -53,22 +53,22 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
   int line = 0;
   while (std::getline(in, raw)) {
     ++line;
-    const std::string_view text = io_internal::Trim(raw);
+    const std::string_view text = internal::Trim(raw);
     if (text.empty()) continue;
     if (text[0] == '#') {
-      if (!format && io_internal::Trim(text.substr(1)).starts_with("rigcal poses")) {
+      if (!format && internal::Trim(text.substr(1)).starts_with("rigcal poses")) {
         native_header = true;
       }
       continue;
     }
     if (!format) {
-      format = io_internal::DetectFormat(text, native_header);
-      layout = &io_internal::LineFormatOf(*format);
+      format = internal::DetectFormat(text, native_header);
+      layout = &internal::LineFormatOf(*format);
       first_data_line = line;
     }
     const LineParser parser(path, line, layout->column_names.data());
-    const auto fields = layout->comma_separated ? io_internal::SplitComma(text)
-                                                : io_internal::SplitWhitespace(text);
+    const auto fields = layout->comma_separated ? internal::SplitComma(text)
+                                                : internal::SplitWhitespace(text);
     if (layout->comma_separated) {
       if (fields.size() < kPoseColumns) {
         return Error{parser.Where() + "expected at least 8 comma-separated columns " +
@@ -87,7 +87,7 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
                    std::to_string(fields.size())};
     }
 
-    auto parsed = io_internal::ParseFields(fields, *layout, parser);
+    auto parsed = internal::ParseFields(fields, *layout, parser);
     if (!parsed) return Error{parsed.error()};
     const ParsedLine& p = *parsed;
 
@@ -158,4 +158,4 @@ Expected<TimedTrajectory> ReadNamedTrajectory(const std::string& argument,
   return trajectory;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -7,7 +7,7 @@
 
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools::io_internal {
+namespace rigcal::io::internal {
 
 std::string_view Trim(std::string_view s) {
   const auto first = s.find_first_not_of(" \t\r\n");
@@ -93,4 +93,4 @@ Expected<int> LineParser::Segment(std::string_view field, int index) const {
   return *value;
 }
 
-}  // namespace rigcal::tools::io_internal
+}  // namespace rigcal::io::internal

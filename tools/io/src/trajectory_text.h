@@ -10,9 +10,9 @@
 #include <system_error>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools::io_internal {
+namespace rigcal::io::internal {
 
 // `s` without leading and trailing blanks (space, tab, CR, LF).
 std::string_view Trim(std::string_view s);
@@ -70,4 +70,4 @@ class LineParser {
   const char* const* names_;
 };
 
-}  // namespace rigcal::tools::io_internal
+}  // namespace rigcal::io::internal

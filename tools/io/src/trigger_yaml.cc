@@ -1,8 +1,8 @@
-#include "rigcal/io/trigger_yaml.h"
+#include "trigger_yaml.h"
 
 #include <cmath>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // An optional integer at node[key] in [lo, hi] into *out.
@@ -24,7 +24,7 @@ std::optional<Error> OptionalInteger(const FieldReader& r, const YAML::Node& nod
 }  // namespace
 
 std::optional<Error> ParseTriggerSection(const FieldReader& r, const YAML::Node& node,
-                                         drivers::LiveTriggerOptions* options) {
+                                         trigger::LiveTriggerOptions* options) {
   if (auto e = r.CheckKeys(node, "trigger.",
                            {"port", "baud", "rate_hz", "heartbeat_ms", "uart_wire", "tolerance_ms",
                             "command_timeout_ms"})) {
@@ -74,8 +74,9 @@ std::optional<Error> ParseTriggerSection(const FieldReader& r, const YAML::Node&
 Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAML::Node& node,
                                                  const std::string& field) {
   const std::string p = field + ".";
-  if (auto e = r.CheckKeys(
-          node, p, {"line", "phase_us", "width_us", "exposure_us", "stamp", "readout_us"})) {
+  if (auto e = r.CheckKeys(node, p,
+                           {"line", "phase_us", "width_us", "exposure_us", "stamp", "readout_us",
+                            "exposure_input"})) {
     return *e;
   }
   CameraTriggerConfig c;
@@ -88,7 +89,10 @@ Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAM
   }
   if (node["width_us"]) {
     int64_t width = 0;
-    if (auto e = OptionalInteger(r, node, p, "width_us", 1, 10'000'000, &width)) return *e;
+    if (auto e = OptionalInteger(r, node, p, "width_us", trigger_protocol::kMinWidthUs, 10'000'000,
+                                 &width)) {
+      return *e;
+    }
     c.width_us = width;
   }
   if (node["exposure_us"]) {
@@ -100,22 +104,37 @@ Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAM
   if (const YAML::Node n = node["stamp"]) {
     auto text = r.String(n, p + "stamp");
     if (!text) return Error{text.error()};
-    c.stamp = drivers::FrameStampFromString(*text);
+    c.stamp = trigger::FrameStampFromString(*text);
     if (!c.stamp) {
       return r.Fail(
           n, p + "stamp",
           "'" + *text + "' is not one of start_of_exposure, exposure_centre, end_of_frame");
     }
   }
-  if (node["readout_us"] && c.stamp != drivers::FrameStamp::kEndOfFrame) {
+  if (const YAML::Node n = node["exposure_input"]) {
+    auto text = r.String(n, p + "exposure_input");
+    if (!text) return Error{text.error()};
+    using trigger_protocol::ExposureInput;
+    if (*text == "none") {
+      c.exposure_input = ExposureInput::kNone;
+    } else if (*text == "active_high") {
+      c.exposure_input = ExposureInput::kActiveHigh;
+    } else if (*text == "active_low") {
+      c.exposure_input = ExposureInput::kActiveLow;
+    } else {
+      return r.Fail(n, p + "exposure_input",
+                    "'" + *text + "' is not one of none, active_high, active_low");
+    }
+  }
+  if (node["readout_us"] && c.stamp != trigger::FrameStamp::kEndOfFrame) {
     return r.Fail(node["readout_us"], p + "readout_us", "only with stamp: end_of_frame");
   }
   return c;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root,
                                     const std::vector<YAML::Node>& entries,
@@ -137,7 +156,7 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
     ++triggered;
   }
   if (!section) return std::nullopt;
-  drivers::LiveTriggerOptions options;
+  trigger::LiveTriggerOptions options;
   if (auto e = ParseTriggerSection(r, section, &options)) return e;
   if (triggered == 0) {
     return r.Fail(section, "trigger", "no camera has a `trigger:` entry (its line)");
@@ -180,14 +199,15 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
       }
       exposure_us = std::llround(*exposure);
     }
-    const drivers::FrameStamp stamp =
-        c.stamp.value_or(start_of_exposure ? drivers::FrameStamp::kStartOfExposure
-                                           : drivers::FrameStamp::kExposureCentre);
-    drivers::TriggerLineSettings line;
+    const trigger::FrameStamp stamp =
+        c.stamp.value_or(start_of_exposure ? trigger::FrameStamp::kStartOfExposure
+                                           : trigger::FrameStamp::kExposureCentre);
+    trigger::TriggerLineSettings line;
     line.line = c.line;
     line.width_us = c.width_us.value_or(std::min<int64_t>(1000, period_us / 2));
     line.phase_offset_us = c.phase_us;
     line.exposure_us = exposure_us;
+    line.exposure_input = c.exposure_input;
     if (line.width_us >= period_us) {
       return r.Fail(node["width_us"] ? node["width_us"] : node, p + "width_us",
                     "must be below the trigger period " + std::to_string(period_us) + " us");
@@ -198,19 +218,21 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
                         std::to_string(period_us) + " us");
     }
     bool known = false;
-    for (const drivers::TriggerLineSettings& other : options.settings.lines) {
+    for (const trigger::TriggerLineSettings& other : options.settings.lines) {
       if (other.line != line.line) continue;
       known = true;
       if (other.width_us != line.width_us || other.phase_offset_us != line.phase_offset_us ||
-          other.exposure_us != line.exposure_us) {
+          other.exposure_us != line.exposure_us || other.exposure_input != line.exposure_input) {
         return r.Fail(node, p + "line",
                       "line " + std::to_string(line.line) +
-                          " is shared with another camera whose width, phase or exposure differ");
+                          " is shared with another camera whose width, phase, exposure or "
+                          "exposure input differ");
       }
     }
     if (!known) options.settings.lines.push_back(line);
-    config->camera_triggers[i] = drivers::CameraTriggerSpec{
-        c.line, c.phase_us * 1000, drivers::StampOffsetNs(stamp, exposure_us, c.readout_us)};
+    config->camera_triggers[i] = trigger::CameraTriggerSpec{
+        c.line, c.phase_us * 1000, trigger::StampOffsetNs(stamp, exposure_us, c.readout_us),
+        c.exposure_input != trigger_protocol::ExposureInput::kNone};
   }
   if (Status s = options.Check(); !s.ok()) return r.Fail(section, "trigger", s.message());
   config->trigger = std::move(options);
@@ -223,4 +245,4 @@ std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root
   return std::nullopt;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 namespace {
 
 // One slave's contribution: its true and estimated C, both restricted to the estimated
@@ -214,4 +214,4 @@ std::map<std::string, Similarity> TruthInMasterUnits(const std::map<std::string,
   return out;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -1,4 +1,4 @@
-#include "rigcal/io/yaml_fields.h"
+#include "yaml_fields.h"
 
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/parser.h>
@@ -12,19 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/camera_name.h"
+#include "rigcal/io/text_file.h"
 
-namespace rigcal::tools {
-
-Expected<std::string> ReadWholeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{path + ": cannot open: " + std::strerror(errno)};
-  std::ostringstream contents;
-  contents << in.rdbuf();
-  if (in.bad()) return Error{path + ": read error"};
-  return contents.str();
-}
+namespace rigcal::io {
 
 namespace {
 
@@ -285,4 +277,4 @@ std::optional<Error> FieldReader::CheckKeys(const YAML::Node& node, const std::s
   return std::nullopt;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -9,7 +9,7 @@
 #include <optional>
 #include <sstream>
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
 constexpr const char* kLcmDefaultUrl = "udpm://239.255.76.67:7667?ttl=0";
@@ -115,4 +115,4 @@ Status CheckBusStaysOnHost(const std::string& given, const std::string& route_ta
   return Status::Ok();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

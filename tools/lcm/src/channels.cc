@@ -1,8 +1,8 @@
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 std::string PoseChannel(std::string_view camera) { return "RIGCAL_POSE_" + std::string(camera); }
 std::string ImageChannel(std::string_view camera) { return "RIGCAL_IMAGE_" + std::string(camera); }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

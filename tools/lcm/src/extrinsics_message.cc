@@ -11,12 +11,12 @@
 #include "message_codec.h"
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
-using lcm_internal::Checker;
-using lcm_internal::FormatNumber;
-using lcm_internal::LayoutWalk;
+using internal::Checker;
+using internal::FormatNumber;
+using internal::LayoutWalk;
 
 // The encoding of an unknown standard deviation in slave_extrinsics_t (rot_std_deg, pos_std,
 // scale_std, axis_offset_std): a σ that was not computed, whose covariance failed, or that is
@@ -117,13 +117,13 @@ void CheckExtrinsics(const CameraNames& names, rig_extrinsics_t* msg, Checker* c
 }  // namespace
 
 template <>
-struct lcm_internal::MessageTraits<rig_extrinsics_t> {
+struct internal::MessageTraits<rig_extrinsics_t> {
   static constexpr char kTypeName[] = "rig_extrinsics_t";
   static constexpr auto WalkLayout = &WalkExtrinsicsLayout;
   static constexpr auto CheckContent = &CheckExtrinsics;
 };
 
-int32_t SlaveFlags(const SlaveCalibration& slave) {
+int32_t WireFlagsOf(const SlaveCalibration& slave) {
   int32_t flags = 0;
   if (slave.motion_model == MotionModel::kTranslational || !slave.position_observable) {
     flags |= kWireFlagTranslationalOnly;
@@ -133,6 +133,22 @@ int32_t SlaveFlags(const SlaveCalibration& slave) {
     if (slave.unobservable_from_prior) flags |= kWireFlagAxisFromPrior;
   }
   return flags;
+}
+
+int32_t WireFlagsOfFacts(uint32_t facts) {
+  int32_t flags = 0;
+  if (facts & kFlagPlanar) flags |= kWireFlagPlanar;
+  if (facts & kFlagTranslationalOnly) flags |= kWireFlagTranslationalOnly;
+  if (facts & kFlagRefined) flags |= kWireFlagRefined;
+  return flags;
+}
+
+uint32_t FactsOfWireFlags(int32_t wire_flags) {
+  uint32_t facts = 0;
+  if (wire_flags & kWireFlagPlanar) facts |= kFlagPlanar;
+  if (wire_flags & kWireFlagTranslationalOnly) facts |= kFlagTranslationalOnly;
+  if (wire_flags & kWireFlagRefined) facts |= kFlagRefined;
+  return facts;
 }
 
 Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave) {
@@ -183,7 +199,7 @@ Expected<slave_extrinsics_t> SlaveCalibrationToLcm(const SlaveCalibration& slave
   msg.position_min_eigenvalue = or_zero(obs.position_min_eigenvalue);
   msg.axis_spread_deg = or_zero(obs.axis_spread_deg);
   msg.state = static_cast<int8_t>(slave.state);
-  msg.flags = SlaveFlags(slave);
+  msg.flags = WireFlagsOf(slave);
   Eigen::Vector3d axis = Eigen::Vector3d::Zero();
   const bool axis_known = obs.planar_axis.allFinite() && obs.planar_axis.norm() > 0.5;
   if (obs.planar && !axis_known) {
@@ -253,4 +269,22 @@ template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const Ca
 template Expected<rig_extrinsics_t> MessageValidator::Decode(std::string_view, const void*,
                                                              int64_t);
 
-}  // namespace rigcal::tools
+Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t utime) {
+  auto msg = RigCalibrationToLcm(estimate.rig, utime, estimate.t_ns);
+  if (!msg) return msg;
+  for (size_t i = 0; i < msg->slaves.size() && i < estimate.online.size(); ++i) {
+    msg->slaves[i].flags |= WireFlagsOfFacts(estimate.online[i].flags);
+    // Cameras that run free: an offset still being (re)estimated, and the jumps of it.
+    const SlaveOnlineState& state = estimate.online[i];
+    slave_extrinsics_t& slave = msg->slaves[i];
+    slave.clock_jumps = state.clock_jumps;
+    if (state.clock_offset_estimated && !state.clock_offset_known) {
+      slave.time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATING;
+      slave.time_offset_s = 0.0;
+      slave.time_offset_std_s = -1.0;
+    }
+  }
+  return msg;
+}
+
+}  // namespace rigcal::lcm

@@ -6,11 +6,11 @@
 #include "message_checker.h"
 #include "message_codec.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
-using lcm_internal::Checker;
-using lcm_internal::LayoutWalk;
+using internal::Checker;
+using internal::LayoutWalk;
 
 // Bytes per pixel of the raw pixel formats this project writes; 0 when unknown.
 int BytesPerPixel(const std::string& fourcc) {
@@ -75,7 +75,7 @@ void CheckImage(const CameraNames& names, image_t* msg, Checker* check) {
 }  // namespace
 
 template <>
-struct lcm_internal::MessageTraits<image_t> {
+struct internal::MessageTraits<image_t> {
   static constexpr char kTypeName[] = "image_t";
   static constexpr auto WalkLayout = &WalkImageLayout;
   static constexpr auto CheckContent = &CheckImage;
@@ -86,4 +86,4 @@ template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const Ca
                                                       image_t);
 template Expected<image_t> MessageValidator::Decode(std::string_view, const void*, int64_t);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

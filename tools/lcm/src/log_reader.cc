@@ -9,7 +9,7 @@
 
 #include "rigcal/lcm/log_writer.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
 constexpr uint32_t kSyncWord = 0xEDA1DA01u;
@@ -183,4 +183,4 @@ LogReader::Outcome LogReader::Read(LogEvent* event, bool with_data) {
   return Outcome::kEvent;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -14,7 +14,7 @@
 
 #include "rigcal/io/atomic_file.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -50,7 +50,7 @@ std::string LogPartPath(const std::string& path, int part) {
 // event) or a descriptor written in place.
 struct LogWriter::Part {
   std::string path;
-  std::optional<AtomicFile> atomic;
+  std::optional<io::AtomicFile> atomic;
   bool replacing = false;  // `atomic` replaces an existing file at the first event
   int fd = -1;
   int64_t bytes = 0;
@@ -90,7 +90,7 @@ Status LogWriter::OpenPart() {
   const bool replacing =
       !options_.atomic && options_.overwrite && std::filesystem::exists(path, ec);
   if (options_.atomic || replacing) {
-    Expected<AtomicFile> file = AtomicFile::Create(path);
+    Expected<io::AtomicFile> file = io::AtomicFile::Create(path);
     if (!file) return file.status();
     part->atomic.emplace(std::move(*file));
     part->replacing = replacing;
@@ -170,7 +170,7 @@ Status LogWriter::Write(std::string_view channel, int64_t utime, const void* dat
       part_->last_sync = Clock::now();
     }
   } else {
-    if (const int err = WriteAllBytes(part_->fd, bytes); err != 0) {
+    if (const int err = io::WriteAllBytes(part_->fd, bytes); err != 0) {
       failed_ = true;
       return Error{CannotWrite(part_->path, "write", err)};
     }
@@ -194,4 +194,4 @@ Status LogWriter::Close() {
   return ClosePart();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

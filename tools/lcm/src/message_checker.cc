@@ -6,9 +6,9 @@
 #include <sstream>
 #include <utility>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 
-namespace rigcal::tools::lcm_internal {
+namespace rigcal::lcm::internal {
 
 std::string FormatNumber(double value) { return SignificantText(value, 10); }
 
@@ -98,4 +98,4 @@ void Checker::CameraName(std::string_view field, const std::string& name, const 
   }
 }
 
-}  // namespace rigcal::tools::lcm_internal
+}  // namespace rigcal::lcm::internal

@@ -13,7 +13,7 @@
 
 #include "rigcal/lcm/message_validation.h"
 
-namespace rigcal::tools::lcm_internal {
+namespace rigcal::lcm::internal {
 
 // `value` with 10 significant digits, as rejection messages print numbers.
 std::string FormatNumber(double value);
@@ -111,4 +111,4 @@ class Checker {
   std::optional<Rejection> rejection_;
 };
 
-}  // namespace rigcal::tools::lcm_internal
+}  // namespace rigcal::lcm::internal

@@ -17,8 +17,8 @@
 #include "message_checker.h"
 #include "rigcal/lcm/message_validation.h"
 
-namespace rigcal::tools {
-namespace lcm_internal {
+namespace rigcal::lcm {
+namespace internal {
 
 inline constexpr int kHashBytes = 8;
 
@@ -114,15 +114,15 @@ class LayoutWalk {
 template <typename Message>
 struct MessageTraits;
 
-}  // namespace lcm_internal
+}  // namespace internal
 
 // The schema version, then the type's own rules.
 template <typename Message>
 std::optional<Rejection> CheckMessage(std::string_view channel, const CameraNames& names,
                                       Message* msg) {
-  lcm_internal::Checker check(channel, lcm_internal::MessageTraits<Message>::kTypeName);
+  internal::Checker check(channel, internal::MessageTraits<Message>::kTypeName);
   check.Version(msg->version, Message::VERSION);
-  lcm_internal::MessageTraits<Message>::CheckContent(names, msg, &check);
+  internal::MessageTraits<Message>::CheckContent(names, msg, &check);
   return check.TakeRejection();
 }
 
@@ -144,11 +144,11 @@ template <typename Message>
 std::optional<Rejection> MessageValidator::DecodeUncounted(std::string_view channel,
                                                            const void* data, int64_t size,
                                                            Message* msg) const {
-  using lcm_internal::kHashBytes;
-  using lcm_internal::ReadBigEndian;
-  using Traits = lcm_internal::MessageTraits<Message>;
+  using internal::kHashBytes;
+  using internal::ReadBigEndian;
+  using Traits = internal::MessageTraits<Message>;
   const char* type = Traits::kTypeName;
-  lcm_internal::Checker check(channel, type);
+  internal::Checker check(channel, type);
   const auto* bytes = static_cast<const uint8_t*>(data);
   if (size < 0 || (size > 0 && data == nullptr)) {
     check.Fail(RejectCause::kTruncated, "buffer", "no data (size " + std::to_string(size) + ")");
@@ -175,7 +175,7 @@ std::optional<Rejection> MessageValidator::DecodeUncounted(std::string_view chan
     return check.TakeRejection();
   }
   check.Version(static_cast<int16_t>(ReadBigEndian(bytes + kHashBytes, 2)), Message::VERSION);
-  lcm_internal::LayoutWalk walk(bytes, size, &check);
+  internal::LayoutWalk walk(bytes, size, &check);
   Traits::WalkLayout(&walk);
   if (!check.ok()) return check.TakeRejection();
 
@@ -209,4 +209,4 @@ Expected<Message> MessageValidator::Decode(std::string_view channel, const void*
   return msg;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -2,7 +2,7 @@
 
 #include <utility>
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 const char* ToString(RejectCause cause) {
   switch (cause) {
@@ -59,4 +59,4 @@ Error MessageValidator::Reject(Rejection rejection) {
   return error;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -8,7 +8,7 @@
 #include "rigcal/lcm/log_writer.h"
 #include "rigcal/lcm/pose_message.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 Status WritePoseLog(const std::string& path, const RigRecording& recording) {
   if (const Status status = recording.Check(); !status.ok()) return status.Prefixed(path);
@@ -60,4 +60,4 @@ Status WritePoseEvents(const std::string& path, const CameraNames& names,
   return (*log)->Close();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -9,11 +9,11 @@
 #include "message_codec.h"
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
-using lcm_internal::Checker;
-using lcm_internal::LayoutWalk;
+using internal::Checker;
+using internal::LayoutWalk;
 
 // The fields of camera_pose_t.lcm up to the camera name (it has no arrays of variable length).
 void WalkPoseLayout(LayoutWalk* walk) {
@@ -46,9 +46,9 @@ void CheckPose(const CameraNames& names, camera_pose_t* msg, Checker* check) {
         if (std::abs(cov[r * 6 + c] - cov[c * 6 + r]) > 1e-9 * std::max(1.0, max_abs)) {
           check->Fail(RejectCause::kOutOfRange, "covariance",
                       "not symmetric: element (" + std::to_string(r) + ", " + std::to_string(c) +
-                          ") = " + lcm_internal::FormatNumber(cov[r * 6 + c]) + ", (" +
+                          ") = " + internal::FormatNumber(cov[r * 6 + c]) + ", (" +
                           std::to_string(c) + ", " + std::to_string(r) +
-                          ") = " + lcm_internal::FormatNumber(cov[c * 6 + r]));
+                          ") = " + internal::FormatNumber(cov[c * 6 + r]));
           break;
         }
       }
@@ -59,7 +59,7 @@ void CheckPose(const CameraNames& names, camera_pose_t* msg, Checker* check) {
 }  // namespace
 
 template <>
-struct lcm_internal::MessageTraits<camera_pose_t> {
+struct internal::MessageTraits<camera_pose_t> {
   static constexpr char kTypeName[] = "camera_pose_t";
   static constexpr auto WalkLayout = &WalkPoseLayout;
   static constexpr auto CheckContent = &CheckPose;
@@ -134,7 +134,7 @@ Expected<PoseMessage> MessageValidator::DecodeCameraPose(std::string_view channe
   }
   const auto it = std::find(names_.begin(), names_.end(), msg.camera);
   if (it == names_.end()) {  // an empty table accepted the name; the index is needed here
-    lcm_internal::Checker check(channel, "camera_pose_t");
+    internal::Checker check(channel, "camera_pose_t");
     check.Fail(RejectCause::kUnknownCamera, "camera",
                "camera '" + msg.camera + "' is not one of the rig's cameras");
     return Reject(*check.TakeRejection());
@@ -151,4 +151,4 @@ template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const Ca
                                                       camera_pose_t);
 template Expected<camera_pose_t> MessageValidator::Decode(std::string_view, const void*, int64_t);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -5,7 +5,7 @@
 
 #include <fstream>
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 int64_t ResidentSetBytes() {
   std::ifstream statm("/proc/self/statm");
@@ -35,4 +35,4 @@ double CpuMeter::Sample() {
   return percent < 0.0 ? 0.0 : percent;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -2,11 +2,11 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 int SharedBus::Publish(const std::string& channel, const std::vector<uint8_t>& bytes) {
   MutexLock lock(mutex_);
   return bus_->publish(channel, bytes.data(), static_cast<unsigned int>(bytes.size()));
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -11,11 +11,11 @@
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/slave_extrinsics_t.hpp"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 namespace {
 
-using lcm_internal::Checker;
-using lcm_internal::LayoutWalk;
+using internal::Checker;
+using internal::LayoutWalk;
 
 // The rules of one camera_status_t (status_message.h).
 void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* check) {
@@ -122,7 +122,7 @@ void CheckStatus(const CameraNames& names, rig_status_t* msg, Checker* check) {
 }  // namespace
 
 template <>
-struct lcm_internal::MessageTraits<rig_status_t> {
+struct internal::MessageTraits<rig_status_t> {
   static constexpr char kTypeName[] = "rig_status_t";
   static constexpr auto WalkLayout = &WalkStatusLayout;
   static constexpr auto CheckContent = &CheckStatus;
@@ -230,4 +230,4 @@ template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, const Ca
                                                       rig_status_t);
 template Expected<rig_status_t> MessageValidator::Decode(std::string_view, const void*, int64_t);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -5,12 +5,12 @@
 #include <sstream>
 #include <vector>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/result_json.h"
-#include "rigcal/monitor/slave_view.h"
+#include "rigcal/lcm/slave_view.h"
 #include "rigcal/monitor/status_snapshot.h"
 
-namespace rigcal::tools {
+namespace rigcal::monitor {
 namespace {
 
 // -1 (unknown on LCM) as NaN, which SigmaText prints as "unknown".
@@ -105,15 +105,15 @@ std::string ClockOffsetText(const slave_extrinsics_t& s) {
 void AppendSlaves(const rig_extrinsics_t& ex, std::vector<std::string>* lines) {
   const char* unit = ex.distance_unit == rig_extrinsics_t::UNIT_METRE ? "m" : "master units";
   for (const slave_extrinsics_t& s : ex.slaves) {
-    const SlaveView view = ViewOf(s);
+    const lcm::SlaveView view = lcm::ViewOf(s);
     std::string state = SlaveStateName(s.state);
     for (const std::string& fact : view.facts) state += " " + fact;
     lines->push_back(fmt::format("slave {} (master {}): {}  motions {} used, {} rejected", s.name,
                                  ex.master, state, s.motions_used, s.motions_rejected));
-    const AxisAngleDegrees a = AxisAngleDeg(view.q);
+    const io::AxisAngleDegrees a = io::AxisAngleDeg(view.q);
     lines->push_back(fmt::format("  rotation  axis {} angle {} deg  rpy {} deg  sigma {} deg",
                                  VectorText(a.axis, 4), FixedText(a.angle_deg, 3),
-                                 VectorText(RollPitchYawDeg(view.q), 3),
+                                 VectorText(io::RollPitchYawDeg(view.q), 3),
                                  SigmaText(Known(s.rot_std_deg), 3)));
     lines->push_back(fmt::format(
         "  position  C {} {}  sigma {}  scale {} sigma {}  segment {}",
@@ -176,4 +176,4 @@ std::string AnsiFrame(const std::string& text) {
   return out + "\x1b[J";
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::monitor

@@ -3,13 +3,13 @@
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/lcm/bus_exposure.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
 
-namespace rigcal::tools {
+namespace rigcal::monitor {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -18,7 +18,7 @@ double SecondsSince(Clock::time_point t, Clock::time_point now) {
   return std::chrono::duration<double>(now - t).count();
 }
 
-void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel, StatusMonitor* monitor) {
+void OnMessage(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, StatusMonitor* monitor) {
   monitor->Handle(channel, rbuf->data, rbuf->data_size);
 }
 
@@ -26,9 +26,9 @@ void OnMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Statu
 
 struct StatusMonitor::Impl {
   std::string url;
-  lcm::LCM* bus = nullptr;
-  std::unique_ptr<lcm::LCM> owned_bus;
-  MessageValidator validator;  // any camera names: the monitor does not know the rig
+  ::lcm::LCM* bus = nullptr;
+  std::unique_ptr<::lcm::LCM> owned_bus;
+  lcm::MessageValidator validator;  // any camera names: the monitor does not know the rig
   Clock::time_point started = Clock::now();
   std::optional<rig_status_t> status;
   std::optional<rig_extrinsics_t> extrinsics;
@@ -40,7 +40,7 @@ struct StatusMonitor::Impl {
   std::shared_ptr<spdlog::logger> log = ModuleLogger("tools");
 };
 
-StatusMonitor::StatusMonitor(std::string url, lcm::LCM* lcm) : impl_(std::make_unique<Impl>()) {
+StatusMonitor::StatusMonitor(std::string url, ::lcm::LCM* lcm) : impl_(std::make_unique<Impl>()) {
   impl_->url = std::move(url);
   impl_->bus = lcm;
 }
@@ -50,7 +50,7 @@ StatusMonitor::~StatusMonitor() = default;
 Status StatusMonitor::Open() {
   Impl& m = *impl_;
   if (m.bus == nullptr) {
-    m.owned_bus = std::make_unique<lcm::LCM>(m.url);
+    m.owned_bus = std::make_unique<::lcm::LCM>(m.url);
     if (!m.owned_bus->good()) {
       return Error{(m.url.empty() ? std::string("the default LCM URL") : m.url) +
                    ": cannot open LCM (udpm:// needs a multicast route, e.g. on lo: "
@@ -58,8 +58,8 @@ Status StatusMonitor::Open() {
     }
     m.bus = m.owned_bus.get();
   }
-  m.bus->subscribeFunction(kStatusChannel, &OnMessage, this);
-  m.bus->subscribeFunction(kExtrinsicsChannel, &OnMessage, this);
+  m.bus->subscribeFunction(lcm::kStatusChannel, &OnMessage, this);
+  m.bus->subscribeFunction(lcm::kExtrinsicsChannel, &OnMessage, this);
   m.started = Clock::now();
   return {};
 }
@@ -67,7 +67,7 @@ Status StatusMonitor::Open() {
 void StatusMonitor::Handle(const std::string& channel, const void* data, int64_t size) {
   Impl& m = *impl_;
   ++m.handled;
-  if (channel == kStatusChannel) {
+  if (channel == lcm::kStatusChannel) {
     Expected<rig_status_t> msg = m.validator.Decode<rig_status_t>(channel, data, size);
     if (!msg) {
       m.log->warn("{}", msg.error());
@@ -76,7 +76,7 @@ void StatusMonitor::Handle(const std::string& channel, const void* data, int64_t
     m.status = std::move(msg).value();
     m.status_at = Clock::now();
     ++m.status_received;
-  } else if (channel == kExtrinsicsChannel) {
+  } else if (channel == lcm::kExtrinsicsChannel) {
     Expected<rig_extrinsics_t> msg = m.validator.Decode<rig_extrinsics_t>(channel, data, size);
     if (!msg) {
       m.log->warn("{}", msg.error());
@@ -140,11 +140,11 @@ int RunOnce(StatusMonitor& monitor, const StatusRunOptions& options, std::ostrea
 }  // namespace
 
 int RunStatusMonitor(const StatusRunOptions& options, std::ostream& out, std::ostream& err,
-                     const std::atomic<bool>& stop, lcm::LCM* lcm) {
+                     const std::atomic<bool>& stop, ::lcm::LCM* lcm) {
   StatusMonitor monitor(options.url, lcm);
   Status status = monitor.Open();
   if (status.ok() && lcm == nullptr && !options.lcm_network) {
-    status = CheckBusStaysOnHost(options.url);
+    status = lcm::CheckBusStaysOnHost(options.url);
   }
   if (!status.ok()) {
     err << "rigcal status: " << status.message() << "\n";
@@ -183,4 +183,4 @@ int RunStatusMonitor(const StatusRunOptions& options, std::ostream& out, std::os
   return static_cast<int>(HealthOf(last));
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::monitor

@@ -7,10 +7,9 @@
 #include "rigcal/calib/slave_state.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/lcm/extrinsics_message.h"
-#include "rigcal/monitor/slave_view.h"
-#include "rigcal/pipeline/online_replay.h"
+#include "rigcal/lcm/slave_view.h"
 
-namespace rigcal::tools {
+namespace rigcal::monitor {
 namespace {
 
 // -1 (unknown on LCM) and non-finite values as null.
@@ -61,14 +60,14 @@ const char* TimeOffsetSourceName(int8_t source) {
 }
 
 nlohmann::json SlaveJson(const slave_extrinsics_t& s) {
-  const SlaveView view = ViewOf(s);
-  const AxisAngleDegrees a = AxisAngleDeg(view.q);
+  const lcm::SlaveView view = lcm::ViewOf(s);
+  const io::AxisAngleDegrees a = io::AxisAngleDeg(view.q);
   nlohmann::json facts = nlohmann::json::array();
   for (const std::string& fact : view.facts) facts.push_back(fact);
   return {{"name", s.name},
           {"state", SlaveStateName(s.state)},
           {"q_wxyz", {s.q[0], s.q[1], s.q[2], s.q[3]}},
-          {"roll_pitch_yaw_deg", Vec3(RollPitchYawDeg(view.q))},
+          {"roll_pitch_yaw_deg", Vec3(io::RollPitchYawDeg(view.q))},
           {"axis_angle", {{"axis", Vec3(a.axis)}, {"angle_deg", a.angle_deg}}},
           {"C", {s.C[0], s.C[1], s.C[2]}},
           {"scale", s.scale},
@@ -91,27 +90,6 @@ nlohmann::json SlaveJson(const slave_extrinsics_t& s) {
 
 }  // namespace
 
-SlaveView ViewOf(const slave_extrinsics_t& s) {
-  SlaveView view;
-  view.q = Eigen::Quaterniond(s.q[0], s.q[1], s.q[2], s.q[3]);
-  view.state = s.state >= slave_extrinsics_t::STATE_INITIALISING &&
-                       s.state <= slave_extrinsics_t::STATE_DECALIBRATED
-                   ? static_cast<SlaveState>(s.state)
-                   : SlaveState::kInitialising;
-  // StateText (the state's name, then the facts) takes the estimator's flags: the inverse of
-  // EstimateToLcm's mapping.
-  uint32_t facts = 0;
-  if (s.flags & kWireFlagPlanar) facts |= rigcal::kFlagPlanar;
-  if (s.flags & kWireFlagTranslationalOnly) facts |= rigcal::kFlagTranslationalOnly;
-  if (s.flags & kWireFlagRefined) facts |= rigcal::kFlagRefined;
-  std::istringstream words(StateText(view.state, facts));
-  std::string word;
-  words >> word;
-  while (words >> word) view.facts.push_back(word);
-  if (s.flags & kWireFlagAxisFromPrior) view.facts.push_back("axis-from-prior");
-  return view;
-}
-
 Health HealthOf(const MonitorSnapshot& snapshot) {
   RigState state;
   if (snapshot.status) {
@@ -119,7 +97,7 @@ Health HealthOf(const MonitorSnapshot& snapshot) {
   } else if (snapshot.extrinsics) {
     std::vector<SlaveState> slaves;
     for (const slave_extrinsics_t& s : snapshot.extrinsics->slaves) {
-      slaves.push_back(ViewOf(s).state);
+      slaves.push_back(lcm::ViewOf(s).state);
     }
     state = CombineStates(slaves, true);
   } else {
@@ -211,4 +189,4 @@ nlohmann::json SnapshotToJson(const MonitorSnapshot& snapshot) {
   return out;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::monitor

@@ -7,18 +7,18 @@
 #include <sstream>
 
 #include "calib_node_impl.h"
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/estimator_state_file.h"
 #include "rigcal/io/rig_files.h"
-#include "rigcal/io/yaml_fields.h"
+#include "rigcal/io/text_file.h"
 #include "rigcal/lcm/bus_exposure.h"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/online_replay.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -31,7 +31,7 @@ int64_t MonotonicNanos() {
 // First rejections are warnings, later ones debug: a broken publisher must not flood the log.
 constexpr int64_t kLoudRejections = 10;
 
-void OnPoseMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel, CalibNode* node) {
+void OnPoseMessage(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, CalibNode* node) {
   node->HandlePose(channel, rbuf->data, rbuf->data_size);
 }
 
@@ -39,29 +39,7 @@ int64_t PeriodNs(double rate_hz) { return rate_hz > 0.0 ? static_cast<int64_t>(1
 
 }  // namespace
 
-Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t utime) {
-  auto msg = RigCalibrationToLcm(estimate.rig, utime, estimate.t_ns);
-  if (!msg) return msg;
-  for (size_t i = 0; i < msg->slaves.size() && i < estimate.online.size(); ++i) {
-    const uint32_t online = estimate.online[i].flags;
-    int32_t& flags = msg->slaves[i].flags;
-    if (online & rigcal::kFlagPlanar) flags |= tools::kWireFlagPlanar;
-    if (online & rigcal::kFlagTranslationalOnly) flags |= tools::kWireFlagTranslationalOnly;
-    if (online & rigcal::kFlagRefined) flags |= tools::kWireFlagRefined;
-    // Cameras that run free: an offset still being (re)estimated, and the jumps of it.
-    const SlaveOnlineState& state = estimate.online[i];
-    slave_extrinsics_t& slave = msg->slaves[i];
-    slave.clock_jumps = state.clock_jumps;
-    if (state.clock_offset_estimated && !state.clock_offset_known) {
-      slave.time_offset_source = slave_extrinsics_t::TIME_OFFSET_ESTIMATING;
-      slave.time_offset_s = 0.0;
-      slave.time_offset_std_s = -1.0;
-    }
-  }
-  return msg;
-}
-
-CalibNode::Impl::Impl(RigConfig c, CalibNodeOptions o)
+CalibNode::Impl::Impl(io::RigConfig c, CalibNodeOptions o)
     : config(std::move(c)),
       options(std::move(o)),
       names(config.CameraNames()),
@@ -81,7 +59,7 @@ CalibNode::Impl::Impl(RigConfig c, CalibNodeOptions o)
 
 int CalibNode::Impl::CameraOfChannel(const std::string& channel, bool images) const {
   for (size_t i = 0; i < names.size(); ++i) {
-    if (channel == (images ? ImageChannel(names[i]) : PoseChannel(names[i]))) {
+    if (channel == (images ? lcm::ImageChannel(names[i]) : lcm::PoseChannel(names[i]))) {
       return static_cast<int>(i);
     }
   }
@@ -135,18 +113,18 @@ void CalibNode::Impl::Accept(int camera, const CameraPose& pose) {
 
 void CalibNode::Impl::AcceptVoPose(const CameraPose& pose) {
   AdvanceLogTime(pose.t_ns);
-  if (auto msg = CameraPoseToLcm(pose, names, pose.t_ns / 1000)) {
+  if (auto msg = lcm::CameraPoseToLcm(pose, names, pose.t_ns / 1000)) {
     int64_t published = 0;
-    Publish(PoseChannel(names[pose.camera]), *msg, &published);
+    Publish(lcm::PoseChannel(names[pose.camera]), *msg, &published);
   }
   Accept(pose.camera, pose);
 }
 
 template <typename Message>
 void CalibNode::Impl::Publish(const std::string& channel, const Message& msg, int64_t* counter) {
-  lcm::LCM* out = Output();
+  ::lcm::LCM* out = Output();
   if (out == nullptr) return;
-  auto bytes = EncodeMessage(channel, names, msg);
+  auto bytes = lcm::EncodeMessage(channel, names, msg);
   if (!bytes) {
     summary.errors.push_back(bytes.error());
     log->error("not published: {}", bytes.error());
@@ -168,24 +146,24 @@ void CalibNode::Impl::RunJob(int job, int64_t utime) {
 }
 
 void CalibNode::Impl::PublishExtrinsics(const RigEstimate& estimate, int64_t utime) {
-  auto msg = EstimateToLcm(estimate, utime);
+  auto msg = lcm::EstimateToLcm(estimate, utime);
   if (!msg) {
     log->error("RIGCAL_EXTRINSICS not published: {}", msg.error());
     summary.errors.push_back(msg.error());
     return;
   }
-  Publish(kExtrinsicsChannel, *msg, &summary.extrinsics_published);
+  Publish(lcm::kExtrinsicsChannel, *msg, &summary.extrinsics_published);
 }
 
-std::vector<CameraStatusInput> CalibNode::Impl::CameraInputs() {
-  std::vector<CameraStatusInput> cameras;
+std::vector<lcm::CameraStatusInput> CalibNode::Impl::CameraInputs() {
+  std::vector<lcm::CameraStatusInput> cameras;
   const int64_t start = first_stamp_ns;
   if (pipeline) {
     // Image replay: the VO's view of every camera, rates from the frame stamps.
     const PipelineSnapshot snapshot = pipeline->Snapshot();
     for (size_t i = 0; i < names.size(); ++i) {
       const CameraHealth& h = snapshot.cameras[i];
-      CameraStatusInput cam = StatusInputOf(h);
+      lcm::CameraStatusInput cam = StatusInputOf(h);
       cam.name = names[i];
       cam.fps = rates[i].Update(h.frames_processed, h.last_frame_t_ns, start);
       cam.dropped_invalid = images_invalid[i].load();
@@ -195,7 +173,7 @@ std::vector<CameraStatusInput> CalibNode::Impl::CameraInputs() {
   }
   const Clock::time_point now = Clock::now();
   for (size_t i = 0; i < names.size(); ++i) {
-    CameraStatusInput cam;
+    lcm::CameraStatusInput cam;
     const CameraInputStats& input = summary.cameras[i];
     cam.name = names[i];
     cam.frames_received = input.received;
@@ -219,10 +197,10 @@ std::vector<CameraStatusInput> CalibNode::Impl::CameraInputs() {
 
 void CalibNode::Impl::PublishStatus(const RigEstimate& estimate, int64_t utime) {
   const rig_status_t msg =
-      MakeRigStatus(CameraInputs(), calibrator.sync_stats(),
+      lcm::MakeRigStatus(CameraInputs(), calibrator.sync_stats(),
                     config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
                     cpu.Sample(), utime);
-  Publish(kStatusChannel, msg, &summary.status_published);
+  Publish(lcm::kStatusChannel, msg, &summary.status_published);
 }
 
 bool CalibNode::Impl::CalibratedNothing() {
@@ -234,7 +212,7 @@ void CalibNode::Impl::SaveState() {
   // An empty state never replaces the one a previous run saved.
   if (CalibratedNothing() && std::filesystem::exists(state_path)) return;
   if (const Status status =
-          WriteFileAtomically(state_path, FormatEstimatorState(calibrator.SaveState()));
+          io::WriteFileAtomically(state_path, io::FormatEstimatorState(calibrator.SaveState()));
       !status.ok()) {
     summary.errors.push_back(status.message());
     log->error("state not saved: {}", status.message());
@@ -245,7 +223,7 @@ void CalibNode::Impl::SaveState() {
 
 void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
   std::string state_message;
-  EstimatorState(estimate, &state_message);
+  lcm::EstimatorState(estimate, &state_message);
   std::ostringstream line;
   line << "sets " << estimate.sets << " | " << state_message;
   for (size_t i = 0; i < estimate.rig.slaves.size(); ++i) {
@@ -274,9 +252,9 @@ void CalibNode::Impl::RestoreState() {
     log->warn("--resume: no state file '{}' yet; starting afresh", state_path);
     return;
   }
-  auto text = ReadWholeFile(state_path);
+  auto text = io::ReadWholeFile(state_path);
   const Expected<RigEstimatorState> state =
-      text ? ParseEstimatorState(*text) : Expected<RigEstimatorState>(text.status());
+      text ? io::ParseEstimatorState(*text) : Expected<RigEstimatorState>(text.status());
   const Status restored = state ? calibrator.RestoreState(*state) : state.status();
   if (restored.ok()) {
     summary.resumed = true;
@@ -294,7 +272,7 @@ void CalibNode::Impl::RestoreState() {
     return;
   }
   // A rejected state (corrupt, newer version, other rig) is kept for a look, never overwritten.
-  const Expected<std::string> aside = KeepAside(state_path, "rejected");
+  const Expected<std::string> aside = io::KeepAside(state_path, "rejected");
   if (!aside) {
     summary.errors.push_back("--resume: " + state_path + ": " + restored.message() + "; " +
                              aside.error() + "; the state is not saved in this run");
@@ -327,7 +305,7 @@ void CalibNode::Impl::Finish(int64_t utime) {
   }
   if (!options.result_path.empty() &&
       !(CalibratedNothing() && std::filesystem::exists(options.result_path))) {
-    if (const Status status = WriteResultYaml(options.result_path, estimate.rig); !status.ok()) {
+    if (const Status status = io::WriteResultYaml(options.result_path, estimate.rig); !status.ok()) {
       summary.errors.push_back(status.message());
       log->error("result not written: {}", status.message());
     } else {
@@ -340,7 +318,7 @@ void CalibNode::Impl::Finish(int64_t utime) {
   summary.decode = validator.stats();
 }
 
-CalibNode::CalibNode(RigConfig config, CalibNodeOptions options, lcm::LCM* lcm)
+CalibNode::CalibNode(io::RigConfig config, CalibNodeOptions options, ::lcm::LCM* lcm)
     : impl_(std::make_unique<Impl>(std::move(config), std::move(options))) {
   impl_->bus = lcm;
 }
@@ -362,7 +340,7 @@ Status CalibNode::Open() {
   if (m.replaying()) {
     if (const Status status = m.OpenLog(); !status.ok()) return status;
   } else if (m.bus == nullptr) {
-    m.owned_bus = std::make_unique<lcm::LCM>(m.options.lcm_url);
+    m.owned_bus = std::make_unique<::lcm::LCM>(m.options.lcm_url);
     if (!m.owned_bus->good()) {
       return Error{
           (m.options.lcm_url.empty() ? std::string("the default LCM URL") : m.options.lcm_url) +
@@ -370,7 +348,7 @@ Status CalibNode::Open() {
           "ip route add 224.0.0.0/4 dev lo)"};
     }
     if (!m.options.lcm_network) {
-      if (Status status = CheckBusStaysOnHost(m.options.lcm_url); !status.ok()) return status;
+      if (Status status = lcm::CheckBusStaysOnHost(m.options.lcm_url); !status.ok()) return status;
     }
     m.bus = m.owned_bus.get();
   }
@@ -423,4 +401,4 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
   return m.summary;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

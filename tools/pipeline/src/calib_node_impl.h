@@ -17,27 +17,27 @@
 
 #include "frame_feed_device.h"
 #include "periodic_schedule.h"
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
 #include "rigcal/pipeline/pipeline.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 struct CalibNode::Impl {
   using Clock = std::chrono::steady_clock;
 
-  RigConfig config;
+  io::RigConfig config;
   CalibNodeOptions options;
-  CameraNames names;
+  lcm::CameraNames names;
   std::shared_ptr<spdlog::logger> log = ModuleLogger("tools");
-  lcm::LCM* bus = nullptr;  // input + output for live runs (owned or external)
-  std::unique_ptr<lcm::LCM> owned_bus;
-  std::unique_ptr<lcm::LCM> output;  // replay: optional output
+  ::lcm::LCM* bus = nullptr;  // input + output for live runs (owned or external)
+  std::unique_ptr<::lcm::LCM> owned_bus;
+  std::unique_ptr<::lcm::LCM> output;  // replay: optional output
   OnlineCalibrator calibrator;
-  MessageValidator validator;
+  lcm::MessageValidator validator;
   CalibNodeSummary summary;
   std::string state_path;
   bool opened = false;
@@ -48,12 +48,12 @@ struct CalibNode::Impl {
   int job_extrinsics = -1, job_status = -1, job_state = -1, job_report = -1;
 
   // Status bookkeeping (the thread that publishes).
-  std::vector<StampRate> rates;
+  std::vector<lcm::StampRate> rates;
   std::vector<Clock::time_point> last_pose_wall;  // live
-  CpuMeter cpu;
+  lcm::CpuMeter cpu;
 
   // Replay (log_replay.cc).
-  std::unique_ptr<LogReader> reader;
+  std::unique_ptr<lcm::LogReader> reader;
   int64_t first_stamp_ns = -1;  // first message stamp of the log
   int64_t clock_ns = -1;        // log time: the newest stamp handed on
   Clock::time_point pace_wall_start;
@@ -63,10 +63,10 @@ struct CalibNode::Impl {
   std::unique_ptr<std::atomic<int64_t>[]> images_invalid;
   std::unique_ptr<Pipeline> pipeline;
 
-  Impl(RigConfig c, CalibNodeOptions o);
+  Impl(io::RigConfig c, CalibNodeOptions o);
 
   bool replaying() const { return !options.log_path.empty(); }
-  lcm::LCM* Output() { return replaying() ? output.get() : bus; }
+  ::lcm::LCM* Output() { return replaying() ? output.get() : bus; }
   // Index of the camera of a pose / image channel, -1 when none of the rig's.
   int CameraOfChannel(const std::string& channel, bool images) const;
   void Reject(const std::string& what);
@@ -82,7 +82,7 @@ struct CalibNode::Impl {
   void RunJob(int job, int64_t utime);
   void PublishExtrinsics(const RigEstimate& estimate, int64_t utime);
   void PublishStatus(const RigEstimate& estimate, int64_t utime);
-  std::vector<CameraStatusInput> CameraInputs();
+  std::vector<lcm::CameraStatusInput> CameraInputs();
   // No set reached the estimator in this run and no state was resumed.
   bool CalibratedNothing();
   // Saves the state, unless that would replace a saved state with an empty one.
@@ -102,4 +102,4 @@ struct CalibNode::Impl {
   ReplayProgress Progress() const;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

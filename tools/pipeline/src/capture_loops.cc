@@ -2,9 +2,9 @@
 
 #include <utility>
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
-CaptureLoops::CaptureLoops(std::vector<std::unique_ptr<drivers::CameraDevice>> devices)
+CaptureLoops::CaptureLoops(std::vector<std::unique_ptr<capture::CameraDevice>> devices)
     : devices_(std::move(devices)), running_(static_cast<int>(devices_.size())) {}
 
 CaptureLoops::~CaptureLoops() { Stop(); }
@@ -15,9 +15,9 @@ void CaptureLoops::Start() {
 }
 
 void CaptureLoops::Loop(size_t index) {
-  drivers::CameraDevice& device = *devices_[index];
+  capture::CameraDevice& device = *devices_[index];
   while (true) {
-    Expected<std::optional<drivers::Frame>> grabbed = device.Grab();
+    Expected<std::optional<capture::Frame>> grabbed = device.Grab();
     if (!grabbed) {
       MutexLock lock(mutex_);
       problems_.push_back("camera '" + device.name() + "' died: " + grabbed.error());
@@ -40,4 +40,4 @@ std::vector<std::string> CaptureLoops::Problems() const {
   return problems_;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

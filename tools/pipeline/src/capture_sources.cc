@@ -5,10 +5,11 @@
 
 #include "paced_replay_device.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/triggered_camera.h"
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/v4l2_timestamp.h"
+#include "rigcal/sim/simulated_trigger_timeline.h"
+#include "rigcal/trigger/triggered_camera.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 // Frame 0 of a source paced from a live trigger (a simulated rig, an image-folder replay): the
@@ -16,37 +17,37 @@ namespace {
 constexpr int64_t kPacedStartLeadNs = 300'000'000;
 constexpr int64_t kTriggerSyncTimeoutNs = 5'000'000'000;
 
-Expected<int64_t> PacedStart(const drivers::LiveTriggerTimeline& trigger) {
-  return trigger.NextTickAt(drivers::MonotonicNowNs() + kPacedStartLeadNs, kTriggerSyncTimeoutNs);
+Expected<int64_t> PacedStart(const trigger::LiveTriggerTimeline& trigger) {
+  return trigger.NextTickAt(capture::MonotonicNowNs() + kPacedStartLeadNs, kTriggerSyncTimeoutNs);
 }
 
 // The devices of the source; `live` is the started trigger generator (may be null).
-Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const std::string& prefix,
+Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast, const std::string& prefix,
                                      std::ostream& progress,
-                                     const drivers::LiveTriggerTimeline* live) {
+                                     const trigger::LiveTriggerTimeline* live) {
   CaptureSources sources;
   const std::vector<std::string> names = config.CameraNames();
   if (config.simulated_source) {
-    drivers::SimulatedRigSpec spec = *config.simulated_source;
+    sim::SimulatedRigSpec spec = *config.simulated_source;
     if (fast) spec.realtime = false;
     sources.realtime = spec.realtime;
     // `source.trigger`: a simulated trigger generator whose first pulse is frame 0.
-    std::shared_ptr<drivers::SimulatedTriggerTimeline> trigger;
+    std::shared_ptr<sim::SimulatedTriggerTimeline> trigger;
     if (spec.trigger.enabled) {
       const int64_t start_ns = spec.realtime
                                    ? std::chrono::duration_cast<std::chrono::nanoseconds>(
                                          std::chrono::steady_clock::now().time_since_epoch())
                                          .count()
                                    : spec.start_time_ns;
-      auto made_trigger = drivers::MakeSimulatedRigTrigger(spec, start_ns);
+      auto made_trigger = sim::MakeSimulatedRigTrigger(spec, start_ns);
       if (!made_trigger) return Error{config.path + ": source.trigger: " + made_trigger.error()};
       trigger = std::move(*made_trigger);
       if (!spec.realtime) spec.start_time_ns = trigger->first_tick_ns();
     }
     progress << prefix << "building the simulated rig (" << spec.names.size() << " cameras, "
-             << drivers::ToString(spec.scene.type) << " scene)...\n";
+             << sim::ToString(spec.scene.type) << " scene)...\n";
     if (live) spec.realtime = sources.realtime = true;  // paced by the generator's pulses
-    auto made = drivers::MakeSimulatedRig(spec);
+    auto made = sim::MakeSimulatedRig(spec);
     if (!made) return Error{config.path + ": " + made.error()};
     sources.rig = std::move(*made);
     sources.devices = sources.rig->MakeDevices();
@@ -60,9 +61,9 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
     if (trigger) {
       if (spec.realtime) sources.rig->StartAt(trigger->first_tick_ns());
       for (size_t i = 0; i < sources.devices.size(); ++i) {
-        sources.devices[i] = std::make_unique<drivers::TriggeredCamera>(
+        sources.devices[i] = std::make_unique<trigger::TriggeredCamera>(
             std::move(sources.devices[i]), trigger,
-            drivers::CameraTriggerSpec{static_cast<int>(i), 0, 0});
+            trigger::CameraTriggerSpec{static_cast<int>(i), 0, 0});
       }
       progress << prefix << "simulated hardware trigger: camera i on line i, frames carry the "
                << "pulse sequence and its mapped exposure centre\n";
@@ -76,13 +77,13 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
     sources.realtime = true;  // live cameras: never wait for the VO
     for (size_t i = 0; i < names.size(); ++i) {
       auto device =
-          drivers::V4l2Device::Open(names[i], static_cast<int>(i), config.v4l2_devices[i]);
+          capture::V4l2Device::Open(names[i], static_cast<int>(i), config.v4l2_devices[i]);
       if (!device) return Error{config.path + ": " + device.error()};
       auto model = camera::MakeCameraModel(*config.cameras[i].spec);
       if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
-      const drivers::V4l2Negotiated& n = (*device)->negotiated();
+      const capture::V4l2Negotiated& n = (*device)->negotiated();
       progress << prefix << "camera '" << names[i] << "': " << n.node << " (" << n.card << ", "
-               << n.bus_info << ") " << drivers::FourccText(n.fourcc) << " " << n.layout.width
+               << n.bus_info << ") " << capture::FourccText(n.fourcc) << " " << n.layout.width
                << "x" << n.layout.height << " at " << (*device)->frame_rate_hz() << " Hz\n";
       sources.v4l2.push_back(device->get());
       sources.devices.push_back(std::move(*device));
@@ -93,7 +94,7 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
   if (!config.libcamera_devices.empty()) {
     sources.realtime = true;
     for (size_t i = 0; i < names.size(); ++i) {
-      auto device = drivers::LibcameraDevice::Open(names[i], static_cast<int>(i),
+      auto device = capture::LibcameraDevice::Open(names[i], static_cast<int>(i),
                                                    config.libcamera_devices[i]);
       if (!device) return Error{config.path + ": " + device.error()};
       auto model = camera::MakeCameraModel(*config.cameras[i].spec);
@@ -119,10 +120,10 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
     progress << prefix << "image folders replayed in real time from the trigger's next pulse\n";
   }
   for (size_t i = 0; i < names.size(); ++i) {
-    const drivers::ImageFolderOptions options = i < config.image_folder_options.size()
+    const capture::ImageFolderOptions options = i < config.image_folder_options.size()
                                                     ? config.image_folder_options[i]
-                                                    : drivers::ImageFolderOptions{};
-    auto device = drivers::ImageFolderDevice::Open(config.image_folders[i], names[i],
+                                                    : capture::ImageFolderOptions{};
+    auto device = capture::ImageFolderDevice::Open(config.image_folders[i], names[i],
                                                    static_cast<int>(i), options);
     if (!device) {
       return Error{config.path + ": camera '" + names[i] + "': " + device.error()};
@@ -151,16 +152,16 @@ Expected<CaptureSources> OpenDevices(const RigConfig& config, bool fast, const s
 
 }  // namespace
 
-Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
+Expected<CaptureSources> OpenCaptureSources(const io::RigConfig& config, bool fast,
                                             const std::string& prefix, std::ostream& progress) {
-  std::shared_ptr<drivers::LiveTriggerTimeline> live;
+  std::shared_ptr<trigger::LiveTriggerTimeline> live;
   if (config.trigger && config.simulated_source && fast) {
     return Error{config.path +
                  ": trigger: a live generator paces the simulated rig: not with --fast"};
   }
   if (config.trigger) {
     // Started before the cameras: an externally triggered camera sees no frame without it.
-    auto started = drivers::LiveTriggerTimeline::Start(*config.trigger);
+    auto started = trigger::LiveTriggerTimeline::Start(*config.trigger);
     if (!started) return Error{config.path + ": trigger: " + started.error()};
     live = std::move(*started);
     progress << prefix << "trigger generator on " << live->port() << ": "
@@ -173,7 +174,7 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
     const std::vector<std::string> names = config.CameraNames();
     for (size_t i = 0; i < sources->devices.size(); ++i) {
       if (!config.camera_triggers[i]) continue;
-      auto camera = std::make_unique<drivers::TriggeredCamera>(std::move(sources->devices[i]), live,
+      auto camera = std::make_unique<trigger::TriggeredCamera>(std::move(sources->devices[i]), live,
                                                                *config.camera_triggers[i]);
       sources->triggered.push_back(camera.get());
       sources->devices[i] = std::move(camera);
@@ -187,7 +188,7 @@ Expected<CaptureSources> OpenCaptureSources(const RigConfig& config, bool fast,
 
 void ReportTrigger(const CaptureSources& sources, const std::string& prefix, std::ostream& out) {
   if (!sources.trigger) return;
-  const drivers::TriggerMatcherStats s = sources.trigger->matcher().stats();
+  const trigger::TriggerMatcherStats s = sources.trigger->matcher().stats();
   out << prefix << "trigger generator on " << sources.trigger->port() << ": " << s.pulses
       << " pulses, " << s.heartbeats << " heartbeats, " << s.seq_gaps << " missing pulses, "
       << s.mcu_resets << " MCU resets, " << s.map_restarts << " clock-map restarts, clock drift "
@@ -195,15 +196,15 @@ void ReportTrigger(const CaptureSources& sources, const std::string& prefix, std
   if (const std::string problem = sources.trigger->problem(); !problem.empty()) {
     out << prefix << "trigger link failed: " << problem << "\n";
   }
-  for (const drivers::TriggeredCamera* camera : sources.triggered) {
+  for (const trigger::TriggeredCamera* camera : sources.triggered) {
     out << prefix << "camera '" << camera->name() << "': " << camera->matched()
         << " frames with their trigger pulse, " << camera->unmatched() << " without\n";
   }
 }
 
-void ReportFolderProblems(const std::vector<drivers::ImageFolderDevice*>& folders,
+void ReportFolderProblems(const std::vector<capture::ImageFolderDevice*>& folders,
                           const std::string& prefix, std::ostream& out) {
-  for (const drivers::ImageFolderDevice* folder : folders) {
+  for (const capture::ImageFolderDevice* folder : folders) {
     const std::vector<std::string> skipped = folder->skipped_files();
     if (!skipped.empty()) {
       out << prefix << "camera '" << folder->name() << "': " << skipped.size()
@@ -214,10 +215,10 @@ void ReportFolderProblems(const std::vector<drivers::ImageFolderDevice*>& folder
   }
 }
 
-void ReportCaptureStats(const std::vector<drivers::V4l2Device*>& devices, const std::string& prefix,
+void ReportCaptureStats(const std::vector<capture::V4l2Device*>& devices, const std::string& prefix,
                         std::ostream& out) {
-  for (const drivers::V4l2Device* device : devices) {
-    const drivers::V4l2Stats s = device->stats();
+  for (const capture::V4l2Device* device : devices) {
+    const capture::V4l2Stats s = device->stats();
     out << prefix << "camera '" << device->name() << "': " << s.frames << " frames, "
         << s.sequence_drops << " dropped by the driver, " << s.error_buffers
         << " erroneous buffers, " << s.device_losses << " device losses, " << s.reconnections
@@ -226,4 +227,4 @@ void ReportCaptureStats(const std::vector<drivers::V4l2Device*>& devices, const 
   }
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

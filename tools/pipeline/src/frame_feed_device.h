@@ -8,30 +8,30 @@
 
 #include <string>
 
-#include "rigcal/calib/bounded_queue.h"
-#include "rigcal/drivers/capture_device.h"
+#include "rigcal/base/bounded_queue.h"
+#include "rigcal/capture/capture_device.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
-class FrameFeedDevice : public drivers::CameraDevice {
+class FrameFeedDevice : public capture::CameraDevice {
  public:
   FrameFeedDevice(std::string name, double frame_rate_hz, size_t capacity)
       : name_(std::move(name)), frame_rate_hz_(frame_rate_hz), frames_(capacity) {}
 
   const std::string& name() const override { return name_; }
   double frame_rate_hz() const override { return frame_rate_hz_; }
-  Expected<std::optional<drivers::Frame>> Grab() override { return frames_.Pop(); }
+  Expected<std::optional<capture::Frame>> Grab() override { return frames_.Pop(); }
   void Interrupt() override { frames_.Stop(); }
 
   // Hands a frame over, waiting for room; false after Interrupt/End.
-  bool Feed(drivers::Frame frame) { return frames_.PushWait(std::move(frame)); }
+  bool Feed(capture::Frame frame) { return frames_.PushWait(std::move(frame)); }
   // End of stream: Grab returns the queued frames, then nullopt.
   void End() { frames_.Stop(); }
 
  private:
   const std::string name_;
   const double frame_rate_hz_;
-  BoundedQueue<drivers::Frame> frames_;
+  BoundedQueue<capture::Frame> frames_;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

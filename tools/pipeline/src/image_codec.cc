@@ -8,7 +8,7 @@
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/image_message.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 const char* ToString(ImageEncoding encoding) {
   switch (encoding) {
@@ -35,7 +35,7 @@ Status ImageEncodeOptions::Check() const {
   return Status::Ok();
 }
 
-Expected<image_t> FrameToImageMessage(const drivers::Frame& frame, const std::string& camera,
+Expected<image_t> FrameToImageMessage(const capture::Frame& frame, const std::string& camera,
                                       int64_t utime, const ImageEncodeOptions& options) {
   if (const Status status = options.Check(); !status.ok()) {
     return Error{"ImageEncodeOptions: " + status.message()};
@@ -84,13 +84,13 @@ Expected<image_t> FrameToImageMessage(const drivers::Frame& frame, const std::st
   return msg;
 }
 
-Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
-                                                const CameraNames& names, int camera,
+Expected<std::vector<uint8_t>> EncodeImageEvent(const capture::Frame& frame,
+                                                const lcm::CameraNames& names, int camera,
                                                 const ImageEncodeOptions& options) {
   const std::string& name = names.at(static_cast<size_t>(camera));
   Expected<image_t> msg = FrameToImageMessage(frame, name, frame.t_ns / 1000, options);
   if (!msg) return msg.status();
-  return EncodeMessage(ImageChannel(name), names, std::move(*msg));
+  return lcm::EncodeMessage(lcm::ImageChannel(name), names, std::move(*msg));
 }
 
 namespace {
@@ -142,7 +142,7 @@ Expected<cv::Mat> GreyPixels(const image_t& msg, const std::string& who) {
 
 }  // namespace
 
-Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera) {
+Expected<capture::Frame> FrameFromImage(const image_t& msg, int camera) {
   const std::string who = "camera '" + msg.camera + "' image at t_ns " + std::to_string(msg.t_ns);
   // A 0-pixel image passes image_t's checks; it gave an empty frame, not width x height (found by
   // the lcm_image fuzz target).
@@ -152,7 +152,7 @@ Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera) {
   }
   Expected<cv::Mat> grey = GreyPixels(msg, who);
   if (!grey) return grey.status();
-  drivers::Frame frame;
+  capture::Frame frame;
   frame.camera = camera;
   frame.t_ns = msg.t_ns;
   frame.seq = msg.trigger_seq;
@@ -160,4 +160,4 @@ Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera) {
   return frame;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

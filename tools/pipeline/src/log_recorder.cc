@@ -6,25 +6,25 @@
 
 #include "rigcal/lcm/channels.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 // A device whose frames are also recorded.
-class RecordingDevice final : public drivers::CameraDevice {
+class RecordingDevice final : public capture::CameraDevice {
  public:
-  RecordingDevice(std::unique_ptr<drivers::CameraDevice> device, int camera, LogRecorder* recorder)
+  RecordingDevice(std::unique_ptr<capture::CameraDevice> device, int camera, LogRecorder* recorder)
       : device_(std::move(device)), camera_(camera), recorder_(recorder) {}
   const std::string& name() const override { return device_->name(); }
   double frame_rate_hz() const override { return device_->frame_rate_hz(); }
-  Expected<std::optional<drivers::Frame>> Grab() override {
-    Expected<std::optional<drivers::Frame>> grabbed = device_->Grab();
+  Expected<std::optional<capture::Frame>> Grab() override {
+    Expected<std::optional<capture::Frame>> grabbed = device_->Grab();
     if (grabbed.ok() && grabbed->has_value()) recorder_->RecordFrame(camera_, **grabbed);
     return grabbed;
   }
   void Interrupt() override { device_->Interrupt(); }
 
  private:
-  std::unique_ptr<drivers::CameraDevice> device_;
+  std::unique_ptr<capture::CameraDevice> device_;
   int camera_;
   LogRecorder* recorder_;
 };
@@ -51,7 +51,7 @@ int64_t RecorderStats::DroppedTotal() const {
 }
 
 LogRecorder::LogRecorder(std::vector<std::string> names, const RecorderOptions& options,
-                         std::unique_ptr<LogWriter> writer)
+                         std::unique_ptr<lcm::LogWriter> writer)
     : names_(std::move(names)),
       options_(options),
       writer_(std::move(writer)),
@@ -69,7 +69,7 @@ Expected<std::unique_ptr<LogRecorder>> LogRecorder::Open(const std::string& path
   if (const Status status = options.Check(); !status.ok()) {
     return Error{"RecorderOptions: " + status.message()};
   }
-  auto writer = LogWriter::Open(path, options.log);
+  auto writer = lcm::LogWriter::Open(path, options.log);
   if (!writer) return writer.status();
   std::unique_ptr<LogRecorder> recorder(
       new LogRecorder(std::move(names), options, std::move(*writer)));
@@ -79,15 +79,15 @@ Expected<std::unique_ptr<LogRecorder>> LogRecorder::Open(const std::string& path
 
 LogRecorder::~LogRecorder() { (void)Stop(); }
 
-std::unique_ptr<drivers::CameraDevice> LogRecorder::Tap(
-    std::unique_ptr<drivers::CameraDevice> device, int camera) {
+std::unique_ptr<capture::CameraDevice> LogRecorder::Tap(
+    std::unique_ptr<capture::CameraDevice> device, int camera) {
   if (camera < 0 || static_cast<size_t>(camera) >= names_.size()) {
     throw std::invalid_argument("LogRecorder::Tap: camera index out of range");
   }
   return std::make_unique<RecordingDevice>(std::move(device), camera, this);
 }
 
-void LogRecorder::RecordFrame(int camera, const drivers::Frame& frame) {
+void LogRecorder::RecordFrame(int camera, const capture::Frame& frame) {
   if (stopped_.load()) return;
   const auto index = static_cast<size_t>(camera);
   {
@@ -99,7 +99,7 @@ void LogRecorder::RecordFrame(int camera, const drivers::Frame& frame) {
   }
   Expected<std::vector<uint8_t>> bytes = EncodeImageEvent(frame, names_, camera, options_.image);
   if (!bytes) return Fail(bytes.error());
-  Enqueue(Event{camera, ImageChannel(names_[index]), frame.t_ns / 1000, std::move(*bytes)});
+  Enqueue(Event{camera, lcm::ImageChannel(names_[index]), frame.t_ns / 1000, std::move(*bytes)});
 }
 
 void LogRecorder::Record(std::string channel, int64_t utime, std::vector<uint8_t> data) {
@@ -166,4 +166,4 @@ RecorderStats LogRecorder::Stats() const {
   return stats_;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -12,21 +12,21 @@
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/pipeline/image_codec.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 constexpr char kImagePrefix[] = "RIGCAL_IMAGE_";
 
 // Whether the log holds images of one of `names` (headers only: a quick scan).
-Expected<bool> LogHasImages(const std::string& path, const CameraNames& names,
-                            const LogReaderOptions& options) {
-  auto scan = LogReader::Open(path, options);
+Expected<bool> LogHasImages(const std::string& path, const lcm::CameraNames& names,
+                            const lcm::LogReaderOptions& options) {
+  auto scan = lcm::LogReader::Open(path, options);
   if (!scan) return scan.status();
-  LogEvent event;
-  while ((*scan)->NextHeader(&event) == LogReader::Outcome::kEvent) {
+  lcm::LogEvent event;
+  while ((*scan)->NextHeader(&event) == lcm::LogReader::Outcome::kEvent) {
     if (event.channel.rfind(kImagePrefix, 0) != 0) continue;
     for (const std::string& name : names) {
-      if (event.channel == ImageChannel(name)) return true;
+      if (event.channel == lcm::ImageChannel(name)) return true;
     }
   }
   return false;
@@ -35,10 +35,10 @@ Expected<bool> LogHasImages(const std::string& path, const CameraNames& names,
 // The camera models VO needs for an image replay: cameras[].model of the config, or the
 // simulated source's.
 Expected<std::vector<std::shared_ptr<const camera::CameraModel>>> CameraModels(
-    const RigConfig& config) {
+    const io::RigConfig& config) {
   std::vector<std::shared_ptr<const camera::CameraModel>> models;
   for (size_t i = 0; i < config.cameras.size(); ++i) {
-    const CameraConfig& camera = config.cameras[i];
+    const io::CameraConfig& camera = config.cameras[i];
     if (camera.spec) {
       auto model = camera::MakeCameraModel(*camera.spec);
       if (!model) return Error{config.path + ": camera '" + camera.name + "': " + model.error()};
@@ -69,13 +69,13 @@ Status CalibNode::Impl::OpenLog() {
   if (const Status status = options.replay.Check(); !status.ok()) {
     return Error{"replay options: " + status.message()};
   }
-  LogReaderOptions reader_options;
+  lcm::LogReaderOptions reader_options;
   reader_options.max_event_bytes = options.replay.max_event_bytes;
-  auto opened = LogReader::Open(options.log_path, reader_options);
+  auto opened = lcm::LogReader::Open(options.log_path, reader_options);
   if (!opened) return opened.status();
   reader = std::move(*opened);
   if (!options.publish_url.empty()) {
-    output = std::make_unique<lcm::LCM>(options.publish_url);
+    output = std::make_unique<::lcm::LCM>(options.publish_url);
     if (!output->good()) return Error{options.publish_url + ": cannot open the LCM URL"};
   }
   if (options.replay.poses_only) return Status::Ok();
@@ -86,7 +86,7 @@ Status CalibNode::Impl::OpenLog() {
   auto models = CameraModels(config);
   if (!models) return models.status();
   const double rate_hz = 1e9 / static_cast<double>(config.online.sync.frame_period_ns);
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices;
   for (const std::string& name : names) {
     auto feed = std::make_unique<FrameFeedDevice>(
         name, rate_hz, static_cast<size_t>(options.replay.frame_feed_capacity));
@@ -133,7 +133,7 @@ ReplayProgress CalibNode::Impl::Progress() const {
 void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
   const ReplayOptions& replay = options.replay;
   if (pipeline) pipeline->Start();
-  LogEvent event;
+  lcm::LogEvent event;
   int64_t window_start = -1;  // first stamp of the log: the origin of --from / --to
   const auto from_ns = static_cast<int64_t>(std::llround(replay.from_s * 1e9));
   const int64_t to_ns =
@@ -142,12 +142,12 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
   const auto progress_period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(options.progress_every_s));
   while (!stop.load()) {
-    const LogReader::Outcome outcome = reader->Next(&event);
-    if (outcome == LogReader::Outcome::kEnd) {
+    const lcm::LogReader::Outcome outcome = reader->Next(&event);
+    if (outcome == lcm::LogReader::Outcome::kEnd) {
       summary.end_of_log = true;
       break;
     }
-    if (outcome == LogReader::Outcome::kDamaged) {
+    if (outcome == lcm::LogReader::Outcome::kDamaged) {
       summary.end_of_log = true;
       summary.log_problem = reader->problem() + "; replayed the " +
                             std::to_string(summary.log_events) + " events before it";
@@ -168,7 +168,7 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
     // The message's stamp decides the window and the pacing.
     int camera = -1;
     std::optional<CameraPose> pose;
-    std::optional<drivers::Frame> frame;
+    std::optional<capture::Frame> frame;
     if (images) {
       camera = CameraOfChannel(event.channel, /*images=*/true);
       if (camera < 0) {
@@ -178,7 +178,7 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
       auto image = validator.Decode<image_t>(event.channel, event.data.data(),
                                              static_cast<int64_t>(event.data.size()));
       auto decoded =
-          image ? FrameFromImage(*image, camera) : Expected<drivers::Frame>(image.status());
+          image ? FrameFromImage(*image, camera) : Expected<capture::Frame>(image.status());
       if (!decoded) {
         ++summary.cameras[camera].invalid;
         images_invalid[camera].fetch_add(1);
@@ -240,4 +240,4 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
   }
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/robust_statistics.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/robust_statistics.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 int64_t MedianStep(const std::vector<int64_t>& t) {
@@ -19,17 +19,6 @@ int64_t MedianStep(const std::vector<int64_t>& t) {
 }
 
 }  // namespace
-
-std::string StateText(SlaveState state, uint32_t facts) {
-  std::string s(ToString(state));
-  auto add = [&](uint32_t bit, const char* word) {
-    if (facts & bit) s += std::string(" ") + word;
-  };
-  add(kFlagTranslationalOnly, "translational-only");
-  add(kFlagPlanar, "planar");
-  add(kFlagRefined, "refined");
-  return s;
-}
 
 OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineReplayOptions& options,
                                 const std::map<std::string, Similarity>* truth) {
@@ -116,4 +105,4 @@ std::string FormatConvergence(const std::vector<ConvergencePoint>& history) {
   return s.str();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -4,9 +4,9 @@
 #include <chrono>
 #include <thread>
 
-#include "rigcal/drivers/v4l2_timestamp.h"
+#include "rigcal/capture/v4l2_timestamp.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 int64_t ReplayClock::HostNs(int64_t t_ns) {
   MutexLock lock(mutex_);
@@ -14,18 +14,18 @@ int64_t ReplayClock::HostNs(int64_t t_ns) {
   return epoch_ns_ + (t_ns - *origin_ns_);
 }
 
-Expected<std::optional<drivers::Frame>> PacedReplayDevice::Grab() {
-  Expected<std::optional<drivers::Frame>> grabbed = device_->Grab();
+Expected<std::optional<capture::Frame>> PacedReplayDevice::Grab() {
+  Expected<std::optional<capture::Frame>> grabbed = device_->Grab();
   if (!grabbed || !grabbed->has_value()) return grabbed;
-  drivers::Frame& frame = **grabbed;
+  capture::Frame& frame = **grabbed;
   frame.t_ns = clock_->HostNs(frame.t_ns);
   // Wait for the frame's time in short steps, so Interrupt is prompt.
   while (!interrupted_.load()) {
-    const int64_t left = frame.t_ns - drivers::MonotonicNowNs();
+    const int64_t left = frame.t_ns - capture::MonotonicNowNs();
     if (left <= 0) break;
     std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<int64_t>(left, 20'000'000)));
   }
-  if (interrupted_.load()) return std::optional<drivers::Frame>();
+  if (interrupted_.load()) return std::optional<capture::Frame>();
   return grabbed;
 }
 
@@ -34,4 +34,4 @@ void PacedReplayDevice::Interrupt() {
   device_->Interrupt();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

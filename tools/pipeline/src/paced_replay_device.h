@@ -13,10 +13,10 @@
 #include <memory>
 #include <optional>
 
-#include "rigcal/calib/thread_annotations.h"
-#include "rigcal/drivers/capture_device.h"
+#include "rigcal/base/thread_annotations.h"
+#include "rigcal/capture/capture_device.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 class ReplayClock {
  public:
@@ -30,21 +30,21 @@ class ReplayClock {
   std::optional<int64_t> origin_ns_ RIGCAL_GUARDED_BY(mutex_);
 };
 
-class PacedReplayDevice final : public drivers::CameraDevice {
+class PacedReplayDevice final : public capture::CameraDevice {
  public:
-  PacedReplayDevice(std::unique_ptr<drivers::CameraDevice> device,
+  PacedReplayDevice(std::unique_ptr<capture::CameraDevice> device,
                     std::shared_ptr<ReplayClock> clock)
       : device_(std::move(device)), clock_(std::move(clock)) {}
 
   const std::string& name() const override { return device_->name(); }
   double frame_rate_hz() const override { return device_->frame_rate_hz(); }
-  Expected<std::optional<drivers::Frame>> Grab() override;
+  Expected<std::optional<capture::Frame>> Grab() override;
   void Interrupt() override;
 
  private:
-  std::unique_ptr<drivers::CameraDevice> device_;
+  std::unique_ptr<capture::CameraDevice> device_;
   std::shared_ptr<ReplayClock> clock_;
   std::atomic<bool> interrupted_{false};
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -11,7 +11,7 @@
 #include <limits>
 #include <vector>
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 class PeriodicSchedule {
  public:
@@ -57,4 +57,4 @@ class PeriodicSchedule {
   std::vector<Job> jobs_;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -4,15 +4,15 @@
 #include <array>
 #include <stdexcept>
 
-#include "rigcal/calib/logging.h"
+#include "rigcal/base/logging.h"
+#include "rigcal/base/robust_statistics.h"
 #include "rigcal/calib/pose_merge.h"
-#include "rigcal/calib/robust_statistics.h"
 #include "rigcal/camera_status_t.hpp"
 #include "rigcal/lcm/channels.h"
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/shared_bus.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 constexpr size_t kTimingWindow = 64;
@@ -41,8 +41,8 @@ int8_t CameraStatusVoState(const CameraHealth& health) {
   }
 }
 
-CameraStatusInput StatusInputOf(const CameraHealth& health) {
-  CameraStatusInput c;
+lcm::CameraStatusInput StatusInputOf(const CameraHealth& health) {
+  lcm::CameraStatusInput c;
   c.name = health.name;
   c.frames_received = health.frames_captured;
   c.dropped_backlog = health.dropped_backlog;
@@ -70,9 +70,9 @@ Status PipelineOptions::Check() const {
 // the rest under `mutex`.
 struct Pipeline::Camera {
   int index = 0;
-  std::unique_ptr<drivers::CameraDevice> device;
+  std::unique_ptr<capture::CameraDevice> device;
   vo::MonocularVo vo;
-  BoundedQueue<drivers::Frame> frames;
+  BoundedQueue<capture::Frame> frames;
   std::thread capture_thread;
   std::thread vo_thread;
 
@@ -82,7 +82,7 @@ struct Pipeline::Camera {
   size_t timing_count RIGCAL_GUARDED_BY(mutex) = 0;
   std::vector<CameraPose> recorded RIGCAL_GUARDED_BY(mutex);
 
-  Camera(int i, std::string name, std::unique_ptr<drivers::CameraDevice> d,
+  Camera(int i, std::string name, std::unique_ptr<capture::CameraDevice> d,
          std::shared_ptr<const camera::CameraModel> model, const PipelineOptions& options)
       : index(i),
         device(std::move(d)),
@@ -93,9 +93,9 @@ struct Pipeline::Camera {
 };
 
 Pipeline::Pipeline(std::vector<std::string> names,
-                   std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
+                   std::vector<std::unique_ptr<capture::CameraDevice>> devices,
                    std::vector<std::shared_ptr<const camera::CameraModel>> cameras,
-                   OnlineOptions online, PipelineOptions options, SharedBus* bus)
+                   OnlineOptions online, PipelineOptions options, lcm::SharedBus* bus)
     : names_(std::move(names)),
       options_(std::move(options)),
       bus_(bus),
@@ -141,7 +141,7 @@ void Pipeline::CaptureLoop(int index) {
   Camera& camera = *cameras_[static_cast<size_t>(index)];
   auto log = ModuleLogger("drivers");
   while (true) {
-    Expected<std::optional<drivers::Frame>> grabbed = camera.device->Grab();
+    Expected<std::optional<capture::Frame>> grabbed = camera.device->Grab();
     if (!grabbed) {
       {
         MutexLock lock(camera.mutex);
@@ -156,7 +156,7 @@ void Pipeline::CaptureLoop(int index) {
       camera.health.ended = true;
       break;
     }
-    drivers::Frame frame = std::move(**grabbed);
+    capture::Frame frame = std::move(**grabbed);
     frame.camera = index;
     {
       MutexLock lock(camera.mutex);
@@ -189,10 +189,10 @@ void Pipeline::Forward(const CameraPose& pose) {
     ++camera.health.sync_rejected;
   }
   if (bus_ != nullptr) {
-    auto msg = CameraPoseToLcm(pose, names_, pose.t_ns / 1000);
+    auto msg = lcm::CameraPoseToLcm(pose, names_, pose.t_ns / 1000);
     if (msg) {
-      const std::string channel = PoseChannel(names_[index]);
-      auto bytes = EncodeMessage(channel, names_, *msg);
+      const std::string channel = lcm::PoseChannel(names_[index]);
+      auto bytes = lcm::EncodeMessage(channel, names_, *msg);
       if (bytes) bus_->Publish(channel, *bytes);
     }
   }
@@ -200,7 +200,7 @@ void Pipeline::Forward(const CameraPose& pose) {
 
 void Pipeline::VoLoop(int index) {
   Camera& camera = *cameras_[static_cast<size_t>(index)];
-  while (std::optional<drivers::Frame> frame = camera.frames.Pop()) {
+  while (std::optional<capture::Frame> frame = camera.frames.Pop()) {
     const vo::VoResult result = camera.vo.Process(frame->t_ns, frame->image);
     std::vector<CameraPose> poses;
     if (result.segment_start) poses.push_back(*result.segment_start);
@@ -280,4 +280,4 @@ std::vector<CameraPose> Pipeline::RecordedPoses(int camera) const {
   return c.recorded;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

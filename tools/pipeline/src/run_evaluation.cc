@@ -5,14 +5,14 @@
 #include <map>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/truth_alignment.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 namespace {
 
 // Unit of every VO segment of camera `camera`.
-std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int camera,
+std::vector<SegmentUnit> SegmentUnits(const sim::SimulatedRig& rig, int camera,
                                       const std::vector<CameraPose>& poses) {
   std::map<int, std::vector<const CameraPose*>> by_segment;
   for (const CameraPose& pose : poses) by_segment[pose.segment].push_back(&pose);
@@ -23,14 +23,14 @@ std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int came
     // Positions relative to the segment's first pose, in its frame, on both sides: the VO's
     // origin need not be its first pose written (an initialisation frame before it, a pose
     // dropped on the way), and a wrong origin shrinks the fitted unit.
-    const Pose reference = rig.CameraPoseAt(camera, stream_time(members.front()->t_ns));
+    const Pose reference = rig.WorldFromCameraAt(camera, stream_time(members.front()->t_ns));
     const Pose& first = members.front()->pose;
     std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;
     for (const CameraPose* pose : members) {
-      const Pose truth = reference.Between(rig.CameraPoseAt(camera, stream_time(pose->t_ns)));
+      const Pose truth = reference.Between(rig.WorldFromCameraAt(camera, stream_time(pose->t_ns)));
       pairs.emplace_back(truth.C, first.Between(pose->pose).C);
     }
-    const UnitFit fit = FitUnit(pairs);
+    const io::UnitFit fit = io::FitUnit(pairs);
     SegmentUnit unit;
     unit.segment = segment;
     unit.poses = static_cast<int>(members.size());
@@ -43,7 +43,7 @@ std::vector<SegmentUnit> SegmentUnits(const drivers::SimulatedRig& rig, int came
 
 }  // namespace
 
-Expected<RunEvaluation> EvaluateRun(const drivers::SimulatedRig& rig,
+Expected<RunEvaluation> EvaluateRun(const sim::SimulatedRig& rig,
                                     const std::vector<std::vector<CameraPose>>& poses,
                                     const RigCalibration& result) {
   if (poses.size() != static_cast<size_t>(rig.num_cameras())) {
@@ -122,9 +122,9 @@ void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveE
   }
 }
 
-TruthAlignment AlignmentOf(const RunEvaluation& evaluation) {
-  TruthAlignment a;
-  a.mode = TruthUnit::kMetric;
+io::TruthAlignment AlignmentOf(const RunEvaluation& evaluation) {
+  io::TruthAlignment a;
+  a.mode = io::TruthUnit::kMetric;
   a.applied = true;
   a.metres_per_unit = evaluation.master_metres_per_unit;
   for (const SegmentUnit& unit :
@@ -178,4 +178,4 @@ std::string FormatEvaluation(const RunEvaluation& evaluation) {
   return out.str();
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

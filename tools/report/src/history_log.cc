@@ -10,13 +10,13 @@
 #include "rigcal/lcm/pose_message.h"
 #include "rigcal/lcm/status_message.h"
 
-namespace rigcal::tools::report_internal {
+namespace rigcal::report::internal {
 namespace {
 
 constexpr unsigned char kLcmSyncWord[4] = {0xED, 0xA1, 0xDA, 0x01};  // big-endian 0xEDA1DA01
 
 template <typename Message>
-void Collect(MessageValidator* validator, const lcm::LogEvent& event, std::vector<Message>* out,
+void Collect(lcm::MessageValidator* validator, const ::lcm::LogEvent& event, std::vector<Message>* out,
              LogContents* contents) {
   Expected<Message> msg = validator->Decode<Message>(event.channel, event.data, event.datalen);
   if (!msg) {
@@ -36,18 +36,18 @@ bool IsLcmLog(const std::string& path) {
 }
 
 Expected<LogContents> ReadLogContents(const std::string& path) {
-  lcm::LogFile log(path, "r");
+  ::lcm::LogFile log(path, "r");
   if (!log.good()) return Error{path + ": cannot open the LCM log"};
   LogContents contents;
-  MessageValidator validator;  // any camera names: the rig is known from the messages
-  const std::string pose_prefix = PoseChannel("");
+  lcm::MessageValidator validator;  // any camera names: the rig is known from the messages
+  const std::string pose_prefix = lcm::PoseChannel("");
   int64_t good_end = 0;
-  while (const lcm::LogEvent* event = log.readNextEvent()) {
+  while (const ::lcm::LogEvent* event = log.readNextEvent()) {
     ++contents.events;
     if (FILE* file = log.getFilePtr()) good_end = std::ftell(file);
-    if (event->channel == kExtrinsicsChannel) {
+    if (event->channel == lcm::kExtrinsicsChannel) {
       Collect(&validator, *event, &contents.extrinsics, &contents);
-    } else if (event->channel == kStatusChannel) {
+    } else if (event->channel == lcm::kStatusChannel) {
       Collect(&validator, *event, &contents.status, &contents);
     } else if (event->channel.rfind(pose_prefix, 0) == 0) {
       std::vector<camera_pose_t> pose;
@@ -74,4 +74,4 @@ Expected<LogContents> ReadLogContents(const std::string& path) {
   return contents;
 }
 
-}  // namespace rigcal::tools::report_internal
+}  // namespace rigcal::report::internal

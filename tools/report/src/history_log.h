@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/rig_extrinsics_t.hpp"
 #include "rigcal/rig_status_t.hpp"
 
-namespace rigcal::tools::report_internal {
+namespace rigcal::report::internal {
 
 // The poses of one camera as they arrived (time order of the log).
 struct CameraPoses {
@@ -37,4 +37,4 @@ bool IsLcmLog(const std::string& path);
 // Reads every event of the log. Errors: the file cannot be opened.
 Expected<LogContents> ReadLogContents(const std::string& path);
 
-}  // namespace rigcal::tools::report_internal
+}  // namespace rigcal::report::internal

@@ -7,7 +7,7 @@
 #include "rigcal/calib/pair_selection.h"
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools::report_internal {
+namespace rigcal::report::internal {
 namespace {
 
 // The camera's poses in time order with one pose per stamp (the first of duplicates).
@@ -64,7 +64,7 @@ Expected<MotionAnalysis> AnalyseMotions(const std::map<std::string, CameraPoses>
     slaves.push_back(std::move(*slave));
   }
   auto recording =
-      MatchTrajectories(*master, slaves, std::max<int64_t>(1, MedianStep(master->t_ns) / 2));
+      io::MatchTrajectories(*master, slaves, std::max<int64_t>(1, MedianStep(master->t_ns) / 2));
   if (!recording) return Error{source + ": " + recording.error()};
 
   MotionAnalysis analysis;
@@ -103,4 +103,4 @@ Expected<MotionAnalysis> AnalyseMotions(const std::map<std::string, CameraPoses>
   return analysis;
 }
 
-}  // namespace rigcal::tools::report_internal
+}  // namespace rigcal::report::internal

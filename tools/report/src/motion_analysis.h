@@ -6,10 +6,10 @@
 #include <string>
 
 #include "history_log.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/report/report_data.h"
 
-namespace rigcal::tools::report_internal {
+namespace rigcal::report::internal {
 
 // Matches the poses of data.master and data.slaves by time (nearest stamps within half the
 // master's median step), forms the motions of the walk pairs and evaluates ResidualOf against
@@ -19,4 +19,4 @@ namespace rigcal::tools::report_internal {
 Expected<MotionAnalysis> AnalyseMotions(const std::map<std::string, CameraPoses>& poses,
                                         const ReportData& data, const std::string& source);
 
-}  // namespace rigcal::tools::report_internal
+}  // namespace rigcal::report::internal

@@ -7,15 +7,15 @@
 
 #include "report_plots.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/result_json.h"
-#include "rigcal/report/svg_plot.h"
+#include "rigcal/plot/svg_plot.h"
 
-namespace rigcal::tools {
+namespace rigcal::report {
 namespace {
 
-using report_internal::ReportFigure;
+using internal::ReportFigure;
 
 constexpr const char* kStyle = R"(
 body { font-family: "DejaVu Sans", Arial, Helvetica, sans-serif; font-size: 14px; margin: 24px;
@@ -68,7 +68,7 @@ constexpr const char* kScript = R"(
 })();
 )";
 
-std::string Html(const std::string& text) { return XmlEscape(text); }
+std::string Html(const std::string& text) { return plot::XmlEscape(text); }
 
 std::string Number(double v, int digits) {
   return std::isfinite(v) ? SignificantText(v, digits) : "unknown";
@@ -81,7 +81,7 @@ std::string QuaternionText(const Eigen::Quaterniond& q) {
 }
 
 std::string AxisAngleCell(const Eigen::Quaterniond& q) {
-  const AxisAngleDegrees a = AxisAngleDeg(q);
+  const io::AxisAngleDegrees a = io::AxisAngleDeg(q);
   return FixedText(a.angle_deg, 3) + "° about " + VectorText(a.axis, 4);
 }
 
@@ -156,7 +156,7 @@ void RenderTable(const ReportData& data, std::ostringstream& out) {
 }  // namespace
 
 std::string RenderReportHtml(const ReportData& data) {
-  using namespace report_internal;
+  using namespace internal;
   std::ostringstream out;
   out << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       << "<title>rigcal report: " << Html(data.input) << "</title>\n<style>" << kStyle
@@ -192,7 +192,7 @@ std::string RenderReportHtml(const ReportData& data) {
 }
 
 Status WriteReportHtml(const std::string& path, const ReportData& data) {
-  return WriteFileAtomically(path, RenderReportHtml(data));
+  return io::WriteFileAtomically(path, RenderReportHtml(data));
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::report

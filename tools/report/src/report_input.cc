@@ -8,13 +8,13 @@
 #include "rigcal/io/result_file.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/truth_alignment.h"
-#include "rigcal/monitor/slave_view.h"
+#include "rigcal/lcm/slave_view.h"
 #include "rigcal/slave_extrinsics_t.hpp"
 
-namespace rigcal::tools {
+namespace rigcal::report {
 namespace {
 
-using report_internal::LogContents;
+using internal::LogContents;
 
 // -1 (unknown on LCM) as NaN.
 double Known(double sigma) { return sigma >= 0.0 ? sigma : kUnknown; }
@@ -22,7 +22,7 @@ double Known(double sigma) { return sigma >= 0.0 ? sigma : kUnknown; }
 SlaveCalibration FinalSlave(const slave_extrinsics_t& s) {
   SlaveCalibration slave;
   slave.name = s.name;
-  slave.estimate.q = ViewOf(s).q;
+  slave.estimate.q = lcm::ViewOf(s).q;
   slave.estimate.C = Eigen::Vector3d(s.C[0], s.C[1], s.C[2]);
   slave.estimate.scale = s.scale;
   SegmentScale segment;
@@ -36,7 +36,7 @@ SlaveCalibration FinalSlave(const slave_extrinsics_t& s) {
   slave.motions.used = s.motions_used;
   slave.motions.residual_outlier = s.motions_rejected;
   slave.motions.total = s.motions_used + s.motions_rejected;
-  slave.state = ViewOf(s).state;
+  slave.state = lcm::ViewOf(s).state;
   slave.termination =
       IsUsable(slave.state) ? Termination::kSolved : Termination::kInsufficientMotion;
   slave.message = s.message;
@@ -70,7 +70,7 @@ Status FillFromLog(const LogContents& log, ReportData* data) {
       }
       EstimateSample sample;
       sample.t_s = 1e-9 * static_cast<double>(msg.t_ns - data->t0_ns);
-      sample.estimate.q = ViewOf(s).q;
+      sample.estimate.q = lcm::ViewOf(s).q;
       sample.estimate.C = Eigen::Vector3d(s.C[0], s.C[1], s.C[2]);
       sample.estimate.scale = s.scale;
       sample.rot_std_deg = Known(s.rot_std_deg);
@@ -78,7 +78,7 @@ Status FillFromLog(const LogContents& log, ReportData* data) {
           Eigen::Vector3d(Known(s.pos_std[0]), Known(s.pos_std[1]), Known(s.pos_std[2]));
       sample.scale_std = Known(s.scale_std);
       sample.motions_used = s.motions_used;
-      sample.state = ViewOf(s).state;
+      sample.state = lcm::ViewOf(s).state;
       data->estimates[s.name].push_back(sample);
     }
   }
@@ -133,15 +133,15 @@ void AddLogNotes(const LogContents& log, ReportData* data) {
 }
 
 Status AddTruth(const std::string& path, ReportData* data) {
-  auto truth = ReadTrueMountings(path);
+  auto truth = io::ReadTrueMountings(path);
   if (!truth) return truth.status();
   for (const std::string& slave : data->slaves) {
     if (truth->count(slave) == 0) {
       return Error{path + ": no truth for slave '" + slave + "'"};
     }
   }
-  const TruthAlignment alignment = AlignTruthUnit(data->final_result, *truth, TruthUnit::kAuto);
-  data->truth = TruthInMasterUnits(*truth, alignment);
+  const io::TruthAlignment alignment = io::AlignTruthUnit(data->final_result, *truth, io::TruthUnit::kAuto);
+  data->truth = io::TruthInMasterUnits(*truth, alignment);
   data->notes.push_back("truth from " + path + ": " + alignment.message);
   return {};
 }
@@ -152,15 +152,15 @@ Expected<ReportData> LoadReport(const ReportOptions& options) {
   ReportData data;
   data.input = options.input;
   std::optional<LogContents> log;
-  if (report_internal::IsLcmLog(options.input)) {
-    auto contents = report_internal::ReadLogContents(options.input);
+  if (internal::IsLcmLog(options.input)) {
+    auto contents = internal::ReadLogContents(options.input);
     if (!contents) return contents.status();
     data.from_log = true;
     if (Status s = FillFromLog(*contents, &data); !s.ok()) return s;
     AddLogNotes(*contents, &data);
     log = std::move(*contents);
   } else {
-    auto result = ReadResultFile(options.input);
+    auto result = io::ReadResultFile(options.input);
     if (!result) {
       return Error{result.error() + " (" + options.input +
                    " is neither a result file nor an LCM log, which starts with LCM's sync "
@@ -175,7 +175,7 @@ Expected<ReportData> LoadReport(const ReportOptions& options) {
   }
 
   if (!options.poses_log.empty()) {
-    auto contents = report_internal::ReadLogContents(options.poses_log);
+    auto contents = internal::ReadLogContents(options.poses_log);
     if (!contents) return contents.status();
     if (contents->poses.empty()) {
       return Error{options.poses_log + ": no valid RIGCAL_POSE_<camera> event in the log"};
@@ -191,7 +191,7 @@ Expected<ReportData> LoadReport(const ReportOptions& options) {
   }
   const std::string pose_source = options.poses_log.empty() ? options.input : options.poses_log;
   if (log && !log->poses.empty()) {
-    auto motions = report_internal::AnalyseMotions(log->poses, data, pose_source);
+    auto motions = internal::AnalyseMotions(log->poses, data, pose_source);
     if (motions) {
       data.motions = std::move(*motions);
     } else {
@@ -209,4 +209,4 @@ Expected<ReportData> LoadReport(const ReportOptions& options) {
   return data;
 }
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::report

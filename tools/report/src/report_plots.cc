@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rigcal/calib/format.h"
-#include "rigcal/calib/quaternion.h"
-#include "rigcal/calib/robust_statistics.h"
-#include "rigcal/report/svg_plot.h"
+#include "rigcal/base/format.h"
+#include "rigcal/base/quaternion.h"
+#include "rigcal/base/robust_statistics.h"
+#include "rigcal/plot/svg_plot.h"
 
-namespace rigcal::tools::report_internal {
+namespace rigcal::report::internal {
 namespace {
 
 constexpr const char* kAxisColors[] = {"#D55E00", "#009E73", "#0072B2"};  // x, y, z
@@ -39,11 +39,11 @@ ReportFigure Missing(const std::string& name, const std::string& title, const st
 // Points of a line series are marked when there are few of them (a single point has no line).
 constexpr size_t kMarkBelowPoints = 30;
 
-ReportFigure Drawn(const std::string& name, const std::string& title, PlotFigure figure,
+ReportFigure Drawn(const std::string& name, const std::string& title, plot::PlotFigure figure,
                    const std::string& note = "") {
   figure.id_prefix = Slug(name) + "-";
-  for (PlotPanel& panel : figure.panels) {
-    for (PlotSeries& series : panel.series) {
+  for (plot::PlotPanel& panel : figure.panels) {
+    for (plot::PlotSeries& series : panel.series) {
       if (series.x.size() < kMarkBelowPoints) series.markers = true;
     }
   }
@@ -51,13 +51,13 @@ ReportFigure Drawn(const std::string& name, const std::string& title, PlotFigure
   f.name = name;
   f.title = title;
   f.note = note;
-  f.svg = RenderSvgElement(figure);
+  f.svg = plot::RenderSvgElement(figure);
   return f;
 }
 
 // A line (markers only when few points, see Drawn) or, with `scatter`, markers only.
-PlotSeries Series(const std::string& label, const std::string& color, bool scatter = false) {
-  PlotSeries s;
+plot::PlotSeries Series(const std::string& label, const std::string& color, bool scatter = false) {
+  plot::PlotSeries s;
   s.label = label;
   s.color = color;
   s.lines = !scatter;
@@ -65,25 +65,25 @@ PlotSeries Series(const std::string& label, const std::string& color, bool scatt
   return s;
 }
 
-PlotSeries Scatter(const std::string& label, const std::string& color) {
+plot::PlotSeries Scatter(const std::string& label, const std::string& color) {
   return Series(label, color, true);
 }
 
 // Three components over time with ±σ bands and the truth as dashed lines in their colours.
 // values[k] and sigmas[k] belong to samples[k].
-PlotPanel VectorPanel(const std::string& title, const std::string& y_label,
+plot::PlotPanel VectorPanel(const std::string& title, const std::string& y_label,
                       const std::vector<EstimateSample>& samples,
                       const std::vector<Eigen::Vector3d>& values,
                       const std::vector<Eigen::Vector3d>& sigmas,
                       const std::optional<Eigen::Vector3d>& truth) {
-  PlotPanel panel;
+  plot::PlotPanel panel;
   panel.title = title;
   panel.x_label = "time [s]";
   panel.y_label = y_label;
   panel.y_from_zero = false;
-  panel.legend = LegendPosition::kOutsideRight;
+  panel.legend = plot::LegendPosition::kOutsideRight;
   for (int i = 0; i < 3; ++i) {
-    PlotSeries s = Series(kAxisNames[i], kAxisColors[i]);
+    plot::PlotSeries s = Series(kAxisNames[i], kAxisColors[i]);
     for (size_t k = 0; k < samples.size(); ++k) {
       const double v = values[k][i];
       const double sd = sigmas[k][i];
@@ -130,25 +130,25 @@ std::pair<double, double> RobustRange(std::vector<double> values, double centre)
 
 ReportFigure ScaleFigure(const ReportData& data, const std::string& slave,
                          const SlaveMotions& motions) {
-  PlotPanel scales;
+  plot::PlotPanel scales;
   scales.title = "measured scales λ^k (4.18) per motion";
   scales.x_label = "time [s]";
   scales.y_label = "scale";
   scales.y_from_zero = false;
-  scales.legend = LegendPosition::kOutsideRight;
-  PlotSeries used = Scatter("used", "#0072B2");
-  PlotSeries rejected = Scatter("rejected", "#D55E00");
+  scales.legend = plot::LegendPosition::kOutsideRight;
+  plot::PlotSeries used = Scatter("used", "#0072B2");
+  plot::PlotSeries rejected = Scatter("rejected", "#D55E00");
   std::vector<double> used_values;
   int outside = 0;
   for (const MotionSample& m : motions.samples) {
     if (!std::isfinite(m.measured_scale)) continue;
-    PlotSeries& s = m.scale_used ? used : rejected;
+    plot::PlotSeries& s = m.scale_used ? used : rejected;
     s.x.push_back(m.t_s);
     s.y.push_back(m.measured_scale);
     if (m.scale_used) used_values.push_back(m.measured_scale);
   }
   const auto [lo, hi] = RobustRange(used_values, motions.reference_scale);
-  for (const PlotSeries* s : {&used, &rejected}) {
+  for (const plot::PlotSeries* s : {&used, &rejected}) {
     for (double v : s->y) outside += v < lo || v > hi;
   }
   scales.y_min = lo;
@@ -165,14 +165,14 @@ ReportFigure ScaleFigure(const ReportData& data, const std::string& slave,
     scales.reference_lines.push_back({truth->scale, "truth", "#009E73", true});
   }
 
-  PlotPanel dots;
+  plot::PlotPanel dots;
   dots.title = "C₀ᵀr₀ and Cᵢᵀrᵢ per motion";
   dots.x_label = "time [s]";
   dots.y_label = "scalar product [units]";
   dots.y_from_zero = true;
-  dots.legend = LegendPosition::kOutsideRight;
-  PlotSeries master = Scatter("C₀ᵀr₀", "#999999");
-  PlotSeries slave_dot = Scatter("Cᵢᵀrᵢ", "#0072B2");
+  dots.legend = plot::LegendPosition::kOutsideRight;
+  plot::PlotSeries master = Scatter("C₀ᵀr₀", "#999999");
+  plot::PlotSeries slave_dot = Scatter("Cᵢᵀrᵢ", "#0072B2");
   for (const MotionSample& m : motions.samples) {
     master.x.push_back(m.t_s);
     master.y.push_back(m.master_axis_dot);
@@ -183,7 +183,7 @@ ReportFigure ScaleFigure(const ReportData& data, const std::string& slave,
   dots.reference_lines.push_back({motions.scale_threshold, "±δ (4.23)", "#D55E00", true});
   dots.reference_lines.push_back({-motions.scale_threshold, "", "#D55E00", true});
 
-  PlotFigure figure;
+  plot::PlotFigure figure;
   figure.panels = {scales, dots};
   figure.columns = 2;
   figure.panel_width = 560;
@@ -198,11 +198,11 @@ ReportFigure ScaleFigure(const ReportData& data, const std::string& slave,
 ReportFigure ResidualFigure(const std::string& slave, const SlaveMotions& motions) {
   auto panel = [&](const std::string& title, const std::string& y_label,
                    double MotionSample::*field) {
-    PlotPanel p;
+    plot::PlotPanel p;
     p.title = title;
     p.x_label = "time [s]";
     p.y_label = y_label;
-    PlotSeries s = Scatter("", "#0072B2");
+    plot::PlotSeries s = Scatter("", "#0072B2");
     for (const MotionSample& m : motions.samples) {
       s.x.push_back(m.t_s);
       s.y.push_back(m.*field);
@@ -210,7 +210,7 @@ ReportFigure ResidualFigure(const std::string& slave, const SlaveMotions& motion
     p.series = {s};
     return p;
   };
-  PlotFigure figure;
+  plot::PlotFigure figure;
   figure.panels = {
       panel("rotation constraint residuum", "angle [deg]", &MotionSample::rotation_deg),
       panel("position constraint residuum (direction)", "angle [deg]",
@@ -243,7 +243,7 @@ std::vector<ReportFigure> HistoryFigures(const ReportData& data) {
     }
     const Similarity* truth = TruthOf(data, slave);
     const Eigen::Quaterniond final_q = samples.back().estimate.q;
-    PlotFigure figure;
+    plot::PlotFigure figure;
     figure.columns = 2;
     figure.panel_width = 560;
     figure.panel_height = 280;
@@ -262,22 +262,22 @@ std::vector<ReportFigure> HistoryFigures(const ReportData& data) {
         VectorPanel("position C", "[" + data.distance_unit + "]", samples, position, position_sigma,
                     truth ? std::optional<Eigen::Vector3d>(truth->C) : std::nullopt));
     auto time_panel = [](const std::string& t, const std::string& y_label, bool from_zero) {
-      PlotPanel p;
+      plot::PlotPanel p;
       p.title = t;
       p.x_label = "time [s]";
       p.y_label = y_label;
       p.y_from_zero = from_zero;
-      p.legend = LegendPosition::kOutsideRight;
+      p.legend = plot::LegendPosition::kOutsideRight;
       return p;
     };
-    PlotPanel scale = time_panel("scale (current segment)", "slave → master units", false);
-    PlotPanel used = time_panel("motions used", "motions", true);
-    PlotPanel rot_sigma = time_panel("σ rotation", "[deg]", true);
-    PlotPanel pos_sigma = time_panel("σ C", "[" + data.distance_unit + "]", true);
-    PlotSeries s = Series("scale", "#0072B2");
-    PlotSeries n = Series("used", "#0072B2");
-    PlotSeries r = Series("σ rot", "#0072B2");
-    std::vector<PlotSeries> c;
+    plot::PlotPanel scale = time_panel("scale (current segment)", "slave → master units", false);
+    plot::PlotPanel used = time_panel("motions used", "motions", true);
+    plot::PlotPanel rot_sigma = time_panel("σ rotation", "[deg]", true);
+    plot::PlotPanel pos_sigma = time_panel("σ C", "[" + data.distance_unit + "]", true);
+    plot::PlotSeries s = Series("scale", "#0072B2");
+    plot::PlotSeries n = Series("used", "#0072B2");
+    plot::PlotSeries r = Series("σ rot", "#0072B2");
+    std::vector<plot::PlotSeries> c;
     for (int i = 0; i < 3; ++i)
       c.push_back(Series(std::string("σ ") + kAxisNames[i], kAxisColors[i]));
     for (const EstimateSample& e : samples) {
@@ -348,13 +348,13 @@ ReportFigure HealthFigure(const ReportData& data) {
   }
   auto panel = [&](const std::string& t, const std::string& y_label,
                    double (*value)(const CameraHealthSample&), bool clocks = false) {
-    PlotPanel p;
+    plot::PlotPanel p;
     p.title = t;
     p.x_label = "time [s]";
     p.y_label = y_label;
-    p.legend = LegendPosition::kOutsideRight;
+    p.legend = plot::LegendPosition::kOutsideRight;
     for (const std::string& camera : clocks ? free_running : data.cameras) {
-      PlotSeries s;
+      plot::PlotSeries s;
       s.label = camera;
       s.markers = false;
       for (const CameraHealthSample& h : data.health.at(camera)) {
@@ -365,13 +365,13 @@ ReportFigure HealthFigure(const ReportData& data) {
     }
     return p;
   };
-  PlotPanel vo_state =
+  plot::PlotPanel vo_state =
       panel("VO state", "0 init · 1 tracking · 2 lost · 3 dead",
             [](const CameraHealthSample& h) { return static_cast<double>(h.vo_state); });
   vo_state.y_min = 0.0;
   vo_state.y_max = 3.0;
   vo_state.y_tick_count = 4;
-  PlotFigure figure;
+  plot::PlotFigure figure;
   figure.columns = 2;
   figure.panel_width = 560;
   figure.panel_height = 280;
@@ -398,4 +398,4 @@ ReportFigure HealthFigure(const ReportData& data) {
                    "first one");
 }
 
-}  // namespace rigcal::tools::report_internal
+}  // namespace rigcal::report::internal

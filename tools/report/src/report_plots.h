@@ -6,7 +6,7 @@
 
 #include "rigcal/report/report_data.h"
 
-namespace rigcal::tools::report_internal {
+namespace rigcal::report::internal {
 
 // One figure of the page: its SVG, or why there is none.
 struct ReportFigure {
@@ -27,4 +27,4 @@ ReportFigure HealthFigure(const ReportData& data);
 // The rig from the top and from the side with camera frusta.
 ReportFigure RigViewFigure(const ReportData& data);
 
-}  // namespace rigcal::tools::report_internal
+}  // namespace rigcal::report::internal

@@ -5,10 +5,10 @@
 #include <sstream>
 
 #include "report_plots.h"
-#include "rigcal/calib/format.h"
-#include "rigcal/report/svg_plot.h"
+#include "rigcal/base/format.h"
+#include "rigcal/plot/svg_plot.h"
 
-namespace rigcal::tools::report_internal {
+namespace rigcal::report::internal {
 namespace {
 
 constexpr double kPanelSize = 420;
@@ -67,7 +67,7 @@ void RenderView(const View& view, const std::vector<Camera>& cameras, double dep
   out << "<rect x=\"" << num(x0 + 4) << "\" y=\"24\" width=\"" << num(kPanelSize - 8)
       << "\" height=\"" << num(kPanelSize - 12) << "\" fill=\"#ffffff\" stroke=\"#333333\"/>\n";
   out << "<text x=\"" << num(x0 + kPanelSize / 2) << "\" y=\"17\" text-anchor=\"middle\" "
-      << "font-weight=\"bold\">" << XmlEscape(view.title) << "</text>\n";
+      << "font-weight=\"bold\">" << plot::XmlEscape(view.title) << "</text>\n";
   // The view's axes as a glyph in the lower left corner.
   const double gx = x0 + 22, gy = kPanelSize - 8;
   out << "<g class=\"axes\" stroke=\"#999999\"><line x1=\"" << num(gx) << "\" y1=\"" << num(gy)
@@ -75,12 +75,12 @@ void RenderView(const View& view, const std::vector<Camera>& cameras, double dep
       << "\" y1=\"" << num(gy) << "\" x2=\"" << num(gx) << "\" y2=\"" << num(gy - 30)
       << "\"/></g>\n";
   out << "<text x=\"" << num(gx + 34) << "\" y=\"" << num(gy + 4) << "\" fill=\"#777777\">"
-      << XmlEscape(view.h_label) << "</text>\n";
+      << plot::XmlEscape(view.h_label) << "</text>\n";
   out << "<text x=\"" << num(gx - 4) << "\" y=\"" << num(gy - 34) << "\" fill=\"#777777\">"
-      << XmlEscape(view.v_label) << "</text>\n";
+      << plot::XmlEscape(view.v_label) << "</text>\n";
   for (const Camera& c : cameras) {
     const std::vector<Eigen::Vector3d> f = Frustum(c, depth);
-    out << "<g class=\"frustum\" data-camera=\"" << XmlEscape(c.name) << "\" stroke=\"" << c.color
+    out << "<g class=\"frustum\" data-camera=\"" << plot::XmlEscape(c.name) << "\" stroke=\"" << c.color
         << "\" fill=\"none\" stroke-width=\"1.5\"" << (c.dashed ? " stroke-dasharray=\"5 3\"" : "")
         << ">\n";
     std::string corners;
@@ -96,7 +96,7 @@ void RenderView(const View& view, const std::vector<Camera>& cameras, double dep
         << c.color << "\"/>\n";
     if (!c.dashed) {
       out << "<text x=\"" << num(px(f[0]) + 6) << "\" y=\"" << num(py(f[0]) + 14)
-          << "\" stroke=\"none\" fill=\"" << c.color << "\">" << XmlEscape(c.name) << "</text>\n";
+          << "\" stroke=\"none\" fill=\"" << c.color << "\">" << plot::XmlEscape(c.name) << "</text>\n";
     }
     out << "</g>\n";
   }
@@ -145,4 +145,4 @@ ReportFigure RigViewFigure(const ReportData& data) {
   return figure;
 }
 
-}  // namespace rigcal::tools::report_internal
+}  // namespace rigcal::report::internal

@@ -8,9 +8,9 @@
 #include <cmath>
 #include <limits>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -297,4 +297,4 @@ ThesisBound ThesisCramerRaoBound(const std::vector<Pose>& master_poses, const Si
   return bound;
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

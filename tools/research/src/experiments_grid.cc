@@ -9,14 +9,14 @@
 
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/rig_calibrator.h"
-#include "rigcal/calib/robust_statistics.h"
-#include "rigcal/calib/thread_annotations.h"
+#include "rigcal/base/robust_statistics.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/research/cramer_rao.h"
 #include "rigcal/research/experiments.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 uint64_t SplitMix64(uint64_t x) {
@@ -349,4 +349,4 @@ BoundStats AverageThesisBound(int num_poses, const ExperimentOptions& options) {
   return stats;
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

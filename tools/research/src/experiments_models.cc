@@ -6,7 +6,7 @@
 
 #include "rigcal/research/experiments.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 constexpr uint64_t kMotionModelStream = 3;
@@ -168,4 +168,4 @@ ExperimentResult RunExperiment(ExperimentKind kind, const ExperimentOptions& opt
   return result;
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

@@ -6,11 +6,11 @@
 #include <map>
 #include <sstream>
 
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/research/experiments.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 std::string CsvNumber(double v) { return std::isfinite(v) ? SignificantText(v, 6) : ""; }
@@ -51,7 +51,7 @@ int SampleCount(const ExperimentResult& r) {
   return r.rows.empty() ? 0 : r.rows.front().errors.usable + r.rows.front().errors.failed;
 }
 
-PlotFigure StabilityFigure(const ExperimentResult& r, const std::string& series,
+plot::PlotFigure StabilityFigure(const ExperimentResult& r, const std::string& series,
                            const std::string& title) {
   struct Measure {
     const char* title;
@@ -72,20 +72,20 @@ PlotFigure StabilityFigure(const ExperimentResult& r, const std::string& series,
        &ErrorStats::scale_median_pct, &BoundStats::scale_pct},
   };
   const auto rows = RowsOf(r, series);
-  PlotFigure figure;
+  plot::PlotFigure figure;
   figure.title = title;
   figure.columns = 2;
   for (const Measure& m : measures) {
-    PlotPanel panel;
+    plot::PlotPanel panel;
     panel.title = m.title;
     panel.x_label = SweepsPoses(r) ? "number of poses K" : "orientation error level eps [deg]";
     panel.y_label = std::string("error [") + m.unit + "]";
     // Errors grow with eps and fall with K: keep the legend where the curves are low.
-    panel.legend = SweepsPoses(r) ? LegendPosition::kTopRight : LegendPosition::kTopLeft;
-    PlotSeries mean{"mean", {}, {}, "#0072B2", false, true};
-    PlotSeries rms{"RMS", {}, {}, "#D55E00", false, false};
-    PlotSeries median{"median", {}, {}, "#009E73", false, false};
-    PlotSeries bound{"Cramer-Rao bound (RMS)", {}, {}, "#000000", true, false};
+    panel.legend = SweepsPoses(r) ? plot::LegendPosition::kTopRight : plot::LegendPosition::kTopLeft;
+    plot::PlotSeries mean{"mean", {}, {}, "#0072B2", false, true};
+    plot::PlotSeries rms{"RMS", {}, {}, "#D55E00", false, false};
+    plot::PlotSeries median{"median", {}, {}, "#009E73", false, false};
+    plot::PlotSeries bound{"Cramer-Rao bound (RMS)", {}, {}, "#000000", true, false};
     for (const ExperimentRow* row : rows) {
       const double x = StabilityX(r, *row);
       mean.x.push_back(x);
@@ -107,7 +107,7 @@ PlotFigure StabilityFigure(const ExperimentResult& r, const std::string& series,
 }
 
 // Errors of both models per eps (solid: alternative, dashed: simple) and the boundary.
-PlotFigure ComparisonFigure(const ExperimentResult& r, const std::string& title) {
+plot::PlotFigure ComparisonFigure(const ExperimentResult& r, const std::string& title) {
   const bool motion = r.kind == ExperimentKind::kMotionModel;
   const std::string simple = motion ? "translational" : "fixed";
   const std::string alternative = motion ? "general" : "time-dependent";
@@ -119,17 +119,17 @@ PlotFigure ComparisonFigure(const ExperimentResult& r, const std::string& title)
   };
   const char* palette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9"};
 
-  PlotPanel errors;
+  plot::PlotPanel errors;
   errors.title = motion ? "rotation orientation error" : "position orientation error";
   errors.x_label = motion ? "maximal rig rotation alpha_max [deg]" : "maximal scale error [%]";
   errors.y_label = "mean error [deg]";
-  errors.legend = LegendPosition::kOutsideRight;
+  errors.legend = plot::LegendPosition::kOutsideRight;
   std::map<double, size_t> color_of_eps;
   double simple_max = 0.0;
   for (const std::string& series : {alternative, simple}) {
-    std::map<double, PlotSeries> by_eps;
+    std::map<double, plot::PlotSeries> by_eps;
     for (const ExperimentRow* row : RowsOf(r, series)) {
-      PlotSeries& s = by_eps[row->eps_deg];
+      plot::PlotSeries& s = by_eps[row->eps_deg];
       s.x.push_back(swept(*row));
       s.y.push_back(metric(*row));
       if (series == simple && std::isfinite(metric(*row))) {
@@ -149,7 +149,7 @@ PlotFigure ComparisonFigure(const ExperimentResult& r, const std::string& title)
   }
   // The general model's error explodes at small rotations; keep the interesting range visible.
   if (motion && simple_max > 0.0) {
-    for (PlotSeries& s : errors.series) {
+    for (plot::PlotSeries& s : errors.series) {
       for (double& y : s.y) {
         if (y > 3.0 * simple_max) y = std::nan("");
       }
@@ -157,18 +157,18 @@ PlotFigure ComparisonFigure(const ExperimentResult& r, const std::string& title)
     errors.title += " (values above 3x the translational maximum not drawn)";
   }
 
-  PlotPanel boundary;
+  plot::PlotPanel boundary;
   boundary.title = "equal-error boundary (" + alternative + " better above)";
   boundary.x_label = "orientation error level eps [deg]";
   boundary.y_label = motion ? "alpha_max [deg]" : "maximal scale error [%]";
-  PlotSeries line{"boundary", {}, {}, "#000000", false, true};
+  plot::PlotSeries line{"boundary", {}, {}, "#000000", false, true};
   for (const EqualErrorBoundary& b : r.boundary) {
     line.x.push_back(b.eps_deg);
     line.y.push_back(b.value);
   }
   boundary.series.push_back(line);
 
-  PlotFigure figure;
+  plot::PlotFigure figure;
   figure.title = title;
   figure.panels = {errors, boundary};
   figure.columns = 1;
@@ -379,12 +379,12 @@ Expected<std::vector<std::string>> WriteExperimentOutputs(const ExperimentResult
       {name + ".csv", ExperimentCsv(result)}, {name + "_summary.txt", FormatSummary(result)}};
   for (const auto& [file, content] : texts) {
     const std::string path = (dir / file).string();
-    if (Status status = tools::WriteFileAtomically(path, content); !status.ok()) return status;
+    if (Status status = io::WriteFileAtomically(path, content); !status.ok()) return status;
     written.push_back(path);
   }
   for (const NamedFigure& figure : ExperimentFigures(result)) {
     const std::string path = (dir / figure.file_name).string();
-    if (Status status = WriteSvg(figure.figure, path); !status.ok()) return status;
+    if (Status status = plot::WriteSvg(figure.figure, path); !status.ok()) return status;
     written.push_back(path);
   }
   return written;
@@ -397,4 +397,4 @@ ExperimentResult NewExperimentResult(ExperimentKind kind, const ExperimentOption
   return result;
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

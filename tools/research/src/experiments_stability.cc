@@ -4,7 +4,7 @@
 
 #include "rigcal/research/experiments.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 constexpr uint64_t kStabilityStream = 1;
@@ -108,4 +108,4 @@ ExperimentResult RunPoses(const ExperimentOptions& options) {
   return result;
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

@@ -10,11 +10,11 @@
 #include <thread>
 
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/format.h"
+#include "rigcal/base/format.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/pipeline/online_replay.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 // Sums of squares of one policy over the draws of a scenario.
@@ -113,9 +113,9 @@ void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOp
   if (options.online) {
     std::map<std::string, Similarity> truth;
     for (size_t i = 0; i < scenario.rig.size(); ++i) truth[scenario.names[i + 1]] = scenario.rig[i];
-    tools::OnlineReplayOptions replay;
+    pipeline::OnlineReplayOptions replay;
     replay.report_every_s = 0.0;
-    results.push_back(tools::ReplayOnline(rec, replay, &truth).estimate.rig);
+    results.push_back(pipeline::ReplayOnline(rec, replay, &truth).estimate.rig);
   }
   const std::lock_guard<std::mutex> lock(*mutex);
   for (size_t p = 0; p < results.size(); ++p) {
@@ -424,4 +424,4 @@ std::string PairCsv(const std::vector<PairScenarioResult>& results) {
   return s.str();
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

@@ -3,12 +3,12 @@
 #include <filesystem>
 #include <random>
 
-#include "rigcal/calib/quaternion.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/synthetic_car.h"
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/research/pair_evaluation.h"
 
-namespace rigcal {
+namespace rigcal::research {
 namespace {
 
 Eigen::Vector3d Gauss3(std::mt19937_64& rng) {
@@ -58,10 +58,10 @@ std::optional<SampledTrajectory> Load(const std::string& path, const std::string
     notes->push_back(path + " not found: its scenarios are left out");
     return std::nullopt;
   }
-  tools::TrajectoryReadOptions read;
+  io::TrajectoryReadOptions read;
   read.max_quaternion_norm_error = 1e-3;  // printed ground truths have 6-7 digits
   auto loaded =
-      times.empty() ? tools::ReadTrajectory(path, read) : tools::ReadKittiTrajectory(path, times);
+      times.empty() ? io::ReadTrajectory(path, read) : io::ReadKittiTrajectory(path, times);
   if (!loaded) {
     notes->push_back(loaded.error() + ": its scenarios are left out");
     return std::nullopt;
@@ -147,4 +147,4 @@ std::vector<PairScenario> PairScenarios(const std::string& trajectory_dir,
   return out;
 }
 
-}  // namespace rigcal
+}  // namespace rigcal::research

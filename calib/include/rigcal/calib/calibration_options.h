@@ -4,9 +4,10 @@
 #include <map>
 #include <string>
 
-#include "rigcal/calib/pair_selection.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
+#include "rigcal/calib/model_selection_options.h"
+#include "rigcal/calib/pair_options.h"
 
 namespace rigcal {
 
@@ -34,14 +35,11 @@ struct CalibrationOptions {
   // Motions whose master rotation is below this angle are not used by the general model
   // (thesis alpha_threshold, 4.3.1).
   double alpha_threshold_deg = 2.0;
-  // Purely translational model (thesis 4.5) when every motion rotates less than the
-  // equal-error boundary of thesis 5.2 (fig. 5.5): alpha_maxrot_deg at an orientation error of
-  // alpha_maxrot_noise_deg of the input poses (the thesis's 10 deg at the 1 deg it expects),
-  // scaled by sqrt(eps / alpha_maxrot_noise_deg) for the rotation noise eps measured from the
-  // motions (robust σ of the master-minus-slave rotation angle differences); never below
-  // alpha_threshold_deg. alpha_maxrot_noise_deg = 0: the fixed alpha_maxrot_deg.
-  double alpha_maxrot_deg = 10.0;
-  double alpha_maxrot_noise_deg = 1.0;
+  // The motion-model decision (motion_model kAuto): purely translational below the
+  // equal-error boundary, else general or planar (model_selection_options.h). The general
+  // model, forced (kGeneral), reports planar motion (axes that do not tilt by these figures)
+  // as degenerate.
+  ModelSelectionOptions model_selection;
   // Time-dependent scales when measured scales deviate by more than this fraction (5.5).
   double scale_deviation_threshold = 0.03;
   // Auto partition count: each partition keeps at least this many motions.
@@ -68,19 +66,6 @@ struct CalibrationOptions {
   // time blocks, errors independent between blocks only (needs 4 motions per block; 0 = off).
   int covariance_time_blocks = 20;
 
-  // General or planar (kAuto, rotating rig): the general model needs the master's rotation
-  // axes to tilt by at least min_tilt_snr times what rotation noise alone explains (or to
-  // spread by general_axis_spread_deg: noisy rotations about clearly different axes), and
-  // the σ of C along the mean rotation axis within max_axis_std_ratio times its in-plane σ;
-  // otherwise the planar model is used. Spread: RMS angle of the rotation vectors about their
-  // principal axis. Master axes whose spread is below planar_axis_spread_deg count as one
-  // axis whatever the other figures (0 = decided by the figures alone). The general model,
-  // forced, reports planar motion (axes that do not tilt) as degenerate.
-  double min_tilt_snr = 10.0;
-  double max_axis_std_ratio = 100.0;
-  double general_axis_spread_deg = 10.0;
-  double planar_axis_spread_deg = 0.0;
-
   // Nominal mounting per slave name (CAD, a rig config's cameras[].nominal), master frame.
   // Used for what the motions do not determine: C along the rotation axis of planar motion.
   std::map<std::string, Similarity> nominal;
@@ -92,7 +77,8 @@ struct CalibrationOptions {
   // Needs at least this many usable motions per slave.
   int min_motions = 2;
 
-  // The first violated constraint as "<field>: <constraint>" (pairs: PairOptions's message).
+  // The first violated constraint as "<field>: <constraint>" (pairs: PairOptions's message;
+  // model_selection: ModelSelectionOptions's).
   Status Check() const;
 };
 

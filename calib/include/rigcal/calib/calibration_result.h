@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/slave_state.h"
-#include "rigcal/calib/types.h"
 
 namespace rigcal {
 
@@ -80,7 +80,7 @@ struct Observability {
   // The motion-model decision (thesis 5.2): the rotation noise ε of the motions (robust σ of
   // the master-minus-slave rotation angle differences, which are zero whatever the
   // extrinsics), and the largest rotation below which the purely translational model is used
-  // (the equal-error boundary at ε, see CalibrationOptions::alpha_maxrot_noise_deg). Degrees.
+  // (the equal-error boundary at ε, see ModelSelectionOptions::alpha_maxrot_noise_deg). Degrees.
   double rotation_noise_deg = 0.0;
   double translational_below_deg = 0.0;
   bool planar = false;  // planar model: C along planar_axis is not determined
@@ -121,10 +121,10 @@ struct SlaveCalibration {
   Observability observability;
 
   // How the solve ended, and what a caller may do with the estimate (slave_state.h: one
-  // meaning per state; batch: usable when the data support the estimate (batch_acceptance in
-  // calib/src: enough independent motions, residuals consistent with the measured noise,
-  // every parameter determined; else initialising and the message says what is missing),
-  // converged when usable with σ computed from the covariance).
+  // meaning per state; batch: usable when the data support the estimate
+  // (calib/src/batch/batch_acceptance.h: enough independent motions, residuals consistent with
+  // the measured noise, every parameter determined; else initialising and the message says
+  // what is missing), converged when usable with σ computed from the covariance).
   Termination termination = Termination::kInsufficientMotion;
   SlaveState state = SlaveState::kInitialising;
   std::string message;

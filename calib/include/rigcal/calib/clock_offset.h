@@ -6,17 +6,17 @@
 //    relative motions per second) is the same whatever the extrinsics and scales. Both are
 //    sampled on a common grid and cross-correlated over a search window; the peak is refined
 //    to sub-sample by a parabola through it and its neighbours.
-// 2. Refined with the extrinsic rotation X (slave orientation in the master frame) of a
-//    calibration: the hand-eye rotation residuals angle(A X, X B(τ)) of the motions between
-//    master instants, B(τ) interpolated from the slave at the master instants + τ, are
-//    minimised over τ (golden-section search around the correlation peak); σ from the
-//    curvature of that cost (Gauss-Newton: σ² = s² / Σ |∂r/∂τ|², s² the residual variance).
+// 2. Refined with the extrinsic rotation X = master_from_slave (the slave's orientation in the
+//    master frame) of a calibration: the hand-eye rotation residuals angle(A X, X B(τ)) of the
+//    motions between master instants, B(τ) interpolated from the slave at the master instants + τ,
+//    are minimised over τ (golden-section search around the correlation peak); σ from the curvature
+//    of that cost (Gauss-Newton: σ² = s² / Σ |∂r/∂τ|², s² the residual variance).
 
 #include <Eigen/Geometry>
 #include <limits>
 #include <optional>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/calib/timed_trajectory.h"
 
 namespace rigcal {
@@ -41,11 +41,12 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
                                                    const TimedTrajectory& slave,
                                                    const TimeOffsetOptions& options = {});
 
-// Step 2, around `initial` (searched within ± one slave frame interval), with `x` the slave's
-// orientation in the master frame. Returns `initial` unchanged when fewer than 5 motions can
-// be formed.
+// Step 2, around `initial` (searched within ± one slave frame interval), with X =
+// `master_from_slave` the slave's orientation in the master frame. Returns `initial` unchanged
+// when fewer than 5 motions can be formed.
 TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTrajectory& slave,
-                                    const Eigen::Quaterniond& x, const TimeOffsetEstimate& initial,
+                                    const Eigen::Quaterniond& master_from_slave,
+                                    const TimeOffsetEstimate& initial,
                                     const TimeOffsetOptions& options = {});
 
 // Online refinement (ClockOffsetTracker), needing no extrinsics: the rotation angle of a rig

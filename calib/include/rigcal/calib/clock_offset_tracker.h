@@ -39,9 +39,9 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
 
 namespace rigcal {
 

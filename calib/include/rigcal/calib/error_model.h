@@ -4,7 +4,7 @@
 #include <limits>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 

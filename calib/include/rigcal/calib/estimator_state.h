@@ -31,7 +31,7 @@ struct RunningMeanSquare {
   }
 };
 
-// Sums of the planar solver (calib/src/planar_solver.h) over motions with weights w, not per
+// Sums of the planar solver (calib/src/models/planar_solver.h) over motions with weights w, not per
 // scale segment.
 struct PlanarMotionSums {
   // Rotation vector parts v = sin(θ/2) r of the sign-aligned master and slave quaternions.
@@ -61,7 +61,7 @@ struct SegmentSums {
 };
 
 // The fixed-size sufficient statistics of one slave's linear rig equations (the sums of
-// calib/src/motion_statistics.h, which documents them), over the motions since the start or
+// calib/src/models/motion_statistics.h, which documents them), over the motions since the start or
 // the last reset, forgotten alike.
 struct MotionSums {
   Eigen::Matrix4d rotation = Eigen::Matrix4d::Zero();  // M = sum w A^T A (4.10)

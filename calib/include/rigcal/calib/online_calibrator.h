@@ -17,11 +17,11 @@
 #include <thread>
 #include <vector>
 
+#include "rigcal/base/status.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/rig_estimator.h"
-#include "rigcal/calib/status.h"
 #include "rigcal/calib/sync_buffer.h"
-#include "rigcal/calib/thread_annotations.h"
 
 namespace rigcal {
 

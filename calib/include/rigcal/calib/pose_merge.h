@@ -22,8 +22,8 @@
 #include <functional>
 #include <vector>
 
-#include "rigcal/calib/thread_annotations.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/thread_annotations.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 

@@ -4,9 +4,9 @@
 
 #include <vector>
 
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
 
 namespace rigcal {
 
@@ -18,7 +18,7 @@ namespace rigcal {
 RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOptions& options);
 
 // The recording CalibrateRig calibrates: `recording` without the times at which some camera's
-// pose is a glitch (a jump, a rotated pose; calib/src/pose_glitches.h). `dropped`, when not
+// pose is a glitch (a jump, a rotated pose; calib/src/motions/pose_glitches.h). `dropped`, when not
 // null, gets the indices of those times in `recording`, ascending.
 RigRecording WithoutGlitches(const RigRecording& recording, std::vector<int>* dropped = nullptr);
 

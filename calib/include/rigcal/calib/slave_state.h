@@ -9,7 +9,7 @@
 //                  parameters, or the data do not support the
 //                  estimate (residuals beyond the measured noise,
 //                  unrelated trajectories, a model the data
-//                  contradict; calib/src/batch_acceptance.h)
+//                  contradict; calib/src/batch/batch_acceptance.h)
 //   usable         an estimate the data support; its σ has not settled 1    usable         0
 //                  (online) or could not be computed (batch)
 //   converged      usable, and σ has settled: below the thresholds and 2    converged      0
@@ -26,6 +26,7 @@
 // refinement.
 
 #include <cstdint>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -40,6 +41,22 @@ enum class SlaveState : uint8_t {
 
 // "initialising", "usable", "converged", "decalibrated".
 std::string_view ToString(SlaveState state);
+
+// Facts about a slave's published estimate (bitmask): what the motion determines, and where the
+// value comes from. How far the estimate has got is not a fact but its state.
+enum SlaveFlags : uint32_t {
+  kFlagTranslationalOnly = 1u << 0,  // rotation and scale only (thesis 4.5)
+  kFlagPlanar = 1u << 1,             // C along the rotation axis is unobservable
+  kFlagRefined = 1u << 2,  // the published value comes from the non-linear window refinement
+};
+
+// The words of the facts set in `facts`, in this order: "translational-only", "planar",
+// "refined". The one place these words are spelt (status lines, `rigcal status`, the report).
+std::vector<std::string_view> FactNames(uint32_t facts);
+
+// A slave's state and facts as words for status lines: the state's name, then FactNames
+// ("converged planar refined").
+std::string StateText(SlaveState state, uint32_t facts);
 
 // Whether the estimate may be used: usable or converged.
 constexpr bool IsUsable(SlaveState state) {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 
@@ -104,14 +104,14 @@ struct SyntheticDrive {
 SyntheticDrive GenerateDrive(const std::vector<std::string>& names,
                              const std::vector<Similarity>& rigs, const DriveOptions& options);
 
-// The same along a given master trajectory: `master_world[k]` is world_from_master at stamp
+// The same along a given master trajectory: `world_from_master[k]` is the master's pose at stamp
 // t_ns[k] (any world frame; the poses are made camera-local, pose 0 the identity). Uses the
 // noise, drift, seed, change_frame/changed_rigs and segment_period_s of `options`; its motion,
 // num_frames, frame_rate_hz and amplitudes are ignored.
 SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
                                   const std::vector<Similarity>& rigs,
-                                  const std::vector<int64_t>& t_ns, std::vector<Pose> master_world,
-                                  const DriveOptions& options);
+                                  const std::vector<int64_t>& t_ns,
+                                  std::vector<Pose> world_from_master, const DriveOptions& options);
 // The same along `master` (master.t_ns, master.poses).
 SyntheticDrive GenerateDriveAlong(const std::vector<std::string>& names,
                                   const std::vector<Similarity>& rigs,

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/base/types.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/calib/types.h"
 
 namespace rigcal {
 

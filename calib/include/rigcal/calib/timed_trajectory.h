@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
 namespace rigcal {
 

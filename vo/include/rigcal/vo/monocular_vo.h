@@ -31,8 +31,8 @@
 #include <optional>
 #include <string>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera/camera_model.h"
 
 namespace rigcal::vo {

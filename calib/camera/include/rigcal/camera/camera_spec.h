@@ -47,7 +47,7 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/camera/camera_model.h"
 
 namespace rigcal::camera {

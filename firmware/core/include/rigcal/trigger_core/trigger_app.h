@@ -1,10 +1,13 @@
 #pragma once
 // TriggerApp: the trigger generator's firmware logic without the board: command parsing and
-// answers, the scheduler, heartbeats and the outgoing byte queue. The board port feeds it
-// received bytes and the time, drains its transmit queue into the UART and drives the lines.
+// answers, the scheduler, the exposure meter, heartbeats and the outgoing byte queue. The board
+// port feeds it received bytes and the time, drains its transmit queue into the UART, and calls
+// it from its timer interrupts; the lines are the board's timer channels (LineTimers).
 //
-//   boot:       Boot(now)                      queues a Hello (the host detects the restart)
+//   boot:       Boot(now, board)              queues a Hello (the host detects the restart)
 //   main loop:  OnRxByte(b, now) for every received byte; Poll(now); PopTx() into the UART
+//   compare:    OnCompare(line)               a line's armed edge happened (timer interrupt)
+//   capture:    OnCapture(line, count)        a wired line's exposure input changed
 //
 // Commands (messages.h) are answered in the order received: Ack when applied, Nack with the
 // reason and field otherwise. Range rules: trigger_config.h. The configuration (rate, lines,
@@ -16,37 +19,46 @@
 // Outgoing frames go into a fixed ring of kTxCapacity bytes; a frame that does not fit whole is
 // dropped and counted (heartbeat tx_dropped), so the host never sees half a frame.
 //
-// No heap, no exceptions; not thread-safe (the board calls it from its main loop only).
+// No heap, no exceptions. Threads: the main-loop calls and the interrupt calls share only the
+// scheduler's and the meter's queues and counters (see scheduler.h); the commands that start or
+// stop a run change the timers' state before enabling / after disabling their interrupts.
 
 #include <cstddef>
 #include <cstdint>
 
+#include "rigcal/trigger_core/exposure_meter.h"
+#include "rigcal/trigger_core/ideal_line_timers.h"
+#include "rigcal/trigger_core/line_timers.h"
 #include "rigcal/trigger_core/scheduler.h"
 #include "rigcal/trigger_core/trigger_config.h"
 #include "rigcal/trigger_protocol/frame_codec.h"
 
 namespace rigcal::trigger_core {
 
-inline constexpr uint16_t kFirmwareVersion = 1;
+inline constexpr uint16_t kFirmwareVersion = 2;
 
-// Drives the physical trigger lines (board: GPIO; tests: a recorder).
-class LineDriver {
- public:
-  virtual void SetLines(uint8_t high_mask) = 0;
-
- protected:
-  ~LineDriver() = default;
+// What the board tells the host in its Hello (messages.h ClockStatusBit).
+struct BoardInfo {
+  uint8_t clock_status = 0;
+  uint8_t hse_mhz = 0;
 };
 
-class TriggerApp final : private SchedulerListener {
+class TriggerApp final : public CompareHandler {
  public:
   static constexpr size_t kTxCapacity = 1024;
 
-  explicit TriggerApp(LineDriver* lines) : lines_(lines) {}
+  explicit TriggerApp(LineTimers* timers) : timers_(timers) {}
 
-  void Boot(uint64_t now_us);
+  void Boot(uint64_t now_us, BoardInfo board = {});
   void OnRxByte(uint8_t byte, uint64_t now_us);
+  // Sends the reports whose time has come, and a heartbeat when due.
   void Poll(uint64_t now_us);
+  // Compare context.
+  void OnCompare(int line) override { scheduler_.OnCompare(line, timers_); }
+  // Capture context: a wired line's input made the edge it waited for, at count `count32`.
+  void OnCapture(int line, uint32_t count32) { meter_.OnCapture(line, count32, scheduler_); }
+  void OnOvercapture(int line) { meter_.OnOvercapture(line); }
+  const ExposureMeter& meter() const { return meter_; }
   // Next byte to transmit; false when the queue is empty.
   bool PopTx(uint8_t* byte);
   size_t tx_pending() const { return tx_size_; }
@@ -54,19 +66,23 @@ class TriggerApp final : private SchedulerListener {
   const Scheduler& scheduler() const { return scheduler_; }
   const TriggerConfig& config() const { return config_; }
   uint32_t rx_errors() const { return decoder_.stats().Errors(); }
-  uint32_t tx_dropped() const { return tx_dropped_; }
+  // Frames dropped for a full transmit queue, and reports dropped for a full report queue.
+  uint32_t tx_dropped() const {
+    return tx_dropped_ + scheduler_.dropped_reports() + meter_.dropped();
+  }
 
  private:
-  void OnLines(uint8_t high_mask) override;
-  void OnPulse(const proto::PulseReport& report) override;
   void HandleCommand(const proto::Message& m, uint64_t now_us);
   void Answer(uint16_t id, uint8_t type, ConfigProblem problem);
+  void StartRun(uint64_t now_us);
   void SendHeartbeat(uint64_t now_us);
   void SendHello(uint64_t now_us);
   void Send(const proto::Message& m);
 
-  LineDriver* lines_;
+  LineTimers* timers_;
+  BoardInfo board_;
   Scheduler scheduler_;
+  ExposureMeter meter_;
   TriggerConfig config_;
   proto::MessageDecoder decoder_;
   uint64_t next_heartbeat_us_ = 0;

@@ -65,7 +65,8 @@ class MessageDecoder {
  public:
   // Feeds one byte. After kMessage, message() is valid until the next Push. After a rejection
   // (kUnsupportedVersion, kUnknownType, kBadLength), raw_type() and command_id() describe the
-  // refused frame (command_id() is 0 when its body was shorter than 2 bytes).
+  // refused frame (command_id() is 0 when its body was shorter than 2 bytes) and raw_version()
+  // its version byte (a peer built for another protocol version: update its firmware or host).
   DecodeEvent Push(uint8_t byte) {
     if (byte != 0) {
       if (size_ < sizeof(buffer_)) {
@@ -96,6 +97,7 @@ class MessageDecoder {
       ++stats_.crc_errors;
       return DecodeEvent::kCrcError;
     }
+    raw_version_ = buffer_[0];
     raw_type_ = buffer_[1];
     command_id_ = 0;
     switch (ParsePayload(buffer_, payload, &message_, &command_id_)) {
@@ -120,6 +122,7 @@ class MessageDecoder {
 
   const Message& message() const { return message_; }
   uint8_t raw_type() const { return raw_type_; }
+  uint8_t raw_version() const { return raw_version_; }
   uint16_t command_id() const { return command_id_; }
   const DecoderStats& stats() const { return stats_; }
   // Forgets a partial frame (e.g. after the port was reopened).
@@ -133,6 +136,7 @@ class MessageDecoder {
   size_t size_ = 0;
   bool overflowed_ = false;
   Message message_;
+  uint8_t raw_version_ = 0;
   uint8_t raw_type_ = 0;
   uint16_t command_id_ = 0;
   DecoderStats stats_;

@@ -1,6 +1,14 @@
 #pragma once
 // The messages of the trigger protocol between the trigger-generator MCU (firmware/) and the
-// host (drivers/ trigger link), version 1. One definition for both sides, so they cannot drift.
+// host (drivers/ trigger link), version 2. One definition for both sides, so they cannot drift.
+//
+// Version history (a receiver speaks exactly one version, see below):
+//   1  Hello {firmware_version, max_lines, mcu_time_us}; SetLine without exposure_input.
+//   2  Hello gains clock_status (ClockStatus bits: HSE fallback, PLL, timer clock, test image)
+//      and hse_mhz; SetLine gains exposure_input; new ExposureReport (measured exposure of a
+//      wired line, from the board's input capture); widths and gaps of at least kMinWidthUs
+//      (edges are timer output compares re-armed by an interrupt); a link budget
+//      (LinkBytesPerSecond) that every configuration must fit.
 //
 // Payload of every frame (before CRC and COBS, see frame_codec.h):
 //   u8 version (kProtocolVersion) | u8 MessageType | body (little-endian fields below)
@@ -10,6 +18,9 @@
 //
 // Time on the MCU: `mcu_time_us`, microseconds since the MCU booted (its own crystal; the host
 // maps it to CLOCK_MONOTONIC). Sequence numbers count trigger ticks from boot, wrap at 2^32.
+//
+// Edges: the board drives every line from a timer output-compare channel armed ahead of the
+// edge, so an edge happens at its scheduled µs whatever the main loop does (docs/firmware.md).
 //
 // Exposure-centred pulses: tick k has the nominal time T_k = t_start + k * period. Line L with
 // exposure e_L and phase offset p_L rises at T_k + p_L - e_L / 2 and falls width_L later, so the
@@ -27,16 +38,17 @@
 
 namespace rigcal::trigger_protocol {
 
-inline constexpr uint8_t kProtocolVersion = 1;
+inline constexpr uint8_t kProtocolVersion = 2;
 inline constexpr int kMaxLines = 8;  // trigger lines of the generator (bits of a line mask)
 
 enum class MessageType : uint8_t {
   // MCU -> host
-  kHello = 0x01,        // at boot and on GetInfo: the MCU (re)started or identifies itself
-  kPulseReport = 0x02,  // one per trigger tick
-  kHeartbeat = 0x03,    // periodic, also while stopped (a clock sample and health counters)
-  kAck = 0x04,          // a command was applied
-  kNack = 0x05,         // a command was refused, with the reason and the field at fault
+  kHello = 0x01,           // at boot and on GetInfo: the MCU (re)started or identifies itself
+  kPulseReport = 0x02,     // one per trigger tick
+  kHeartbeat = 0x03,       // periodic, also while stopped (a clock sample and health counters)
+  kAck = 0x04,             // a command was applied
+  kNack = 0x05,            // a command was refused, with the reason and the field at fault
+  kExposureReport = 0x06,  // measured exposure of a wired line for one tick (version 2)
   // host -> MCU (every command carries a host-chosen command_id, echoed by Ack/Nack)
   kSetRate = 0x10,
   kSetLine = 0x11,
@@ -66,12 +78,40 @@ enum class Field : uint8_t {
   kPhaseOffset = 4,
   kExposure = 5,
   kHeartbeatPeriod = 6,
+  kExposureInput = 7,  // SetLine.exposure_input unknown, or the link budget cannot carry it
+};
+
+// Whether a line's camera reports its exposure back (its strobe / exposure-active output wired to
+// the line's input-capture pin), and at which level it is active.
+enum class ExposureInput : uint8_t {
+  kNone = 0,        // not wired: the host uses the scheduled exposure centre
+  kActiveHigh = 1,  // the input is high while the camera exposes
+  kActiveLow = 2,   // the input is low while the camera exposes (open-collector / opto outputs)
+};
+
+// Hello.clock_status bits: how the board's clocks came up (docs/firmware.md "Clock tree").
+enum ClockStatusBit : uint8_t {
+  // The crystal (HSE) did not report ready within its start-up timeout: the PLL runs from the
+  // 16 MHz internal RC oscillator (HSI, +-1 % over temperature): the MCU clock is that far off.
+  kClockHseFallback = 1u << 0,
+  // The PLL did not lock, or the switch to it was not confirmed (SWS): the core may run at
+  // 16 MHz, and every derived rate (baud, µs) would be wrong. QEMU reports it (no RCC model).
+  kClockPllFailed = 1u << 1,
+  // The µs timer's input clock, measured against the core clock at boot, differs from the
+  // configured one by more than 2 %: its prescaler was set from the measurement (QEMU: 1 GHz).
+  kClockTimerMeasured = 1u << 2,
+  // A test image (its µs counter was preset near 2^32, CMake TRIGGER_TEST_COUNTER_PRESET):
+  // mcu_time_us does not start at 0. Never flash it for use.
+  kClockTestImage = 1u << 7,
 };
 
 // Ranges the MCU enforces (the host checks them too, to give a better message first).
-inline constexpr uint32_t kMinRateMilliHz = 100;       // 0.1 Hz
-inline constexpr uint32_t kMaxRateMilliHz = 400'000;   // 400 Hz (reports fit 115200 baud)
-inline constexpr uint32_t kMinWidthUs = 1;             // and width < period
+inline constexpr uint32_t kMinRateMilliHz = 100;      // 0.1 Hz
+inline constexpr uint32_t kMaxRateMilliHz = 400'000;  // 400 Hz (reports fit 115200 baud)
+// Width and the gap to the next rise (period - width): the board re-arms a line's compare for
+// its next edge in an interrupt, whose worst-case response (every line's edge at the same µs:
+// eight services of ~2-2.6 µs, docs/firmware.md "Timing") stays below this.
+inline constexpr uint32_t kMinWidthUs = 25;
 inline constexpr uint32_t kMaxExposureUs = 1'000'000;  // and |offset| + exposure / 2 < period
 inline constexpr uint16_t kMinHeartbeatMs = 10;        // 0 = heartbeats off
 inline constexpr uint16_t kMaxHeartbeatMs = 10'000;
@@ -86,11 +126,23 @@ struct Hello {
   uint16_t firmware_version = 0;
   uint8_t max_lines = kMaxLines;
   uint64_t mcu_time_us = 0;
+  uint8_t clock_status = 0;  // ClockStatusBit flags; 0: crystal, PLL and timers as configured
+  uint8_t hse_mhz = 0;       // the crystal the image was built for (CMake TRIGGER_HSE_HZ), MHz
 };
 struct PulseReport {
   uint8_t line_mask = 0;     // lines that pulsed for this tick (bit L = line L)
   uint32_t seq = 0;          // tick number since boot
   uint64_t mcu_time_us = 0;  // T_k: exposure centre of the lines with phase offset 0
+};
+// The exposure of line `line`'s camera for tick `seq`, as its exposure-active output showed it
+// (input capture of both edges, µs). Sent when the exposure ends, for wired lines only
+// (SetLine.exposure_input); centre = start_us + duration_us / 2.
+struct ExposureReport {
+  uint32_t seq = 0;
+  uint8_t line = 0;
+  uint64_t start_us = 0;     // MCU time the input went active
+  uint32_t duration_us = 0;  // until it went inactive
+  uint64_t CentreUs() const { return start_us + duration_us / 2; }
 };
 struct Heartbeat {
   uint64_t mcu_time_us = 0;    // when the heartbeat was queued
@@ -122,6 +174,7 @@ struct SetLine {
   uint32_t width_us = 0;
   int32_t phase_offset_us = 0;  // exposure centre relative to the tick
   uint32_t exposure_us = 0;     // the camera's exposure: the rise leads the centre by half of it
+  ExposureInput exposure_input = ExposureInput::kNone;
 };
 struct SetHeartbeat {
   uint16_t command_id = 0;
@@ -140,6 +193,7 @@ struct Message {
   Heartbeat heartbeat;
   Ack ack;
   Nack nack;
+  ExposureReport exposure;
   SetRate set_rate;
   SetLine set_line;
   SetHeartbeat set_heartbeat;
@@ -150,7 +204,7 @@ struct Message {
 constexpr int BodySize(uint8_t type) {
   switch (static_cast<MessageType>(type)) {
     case MessageType::kHello:
-      return 11;
+      return 13;
     case MessageType::kPulseReport:
       return 13;
     case MessageType::kHeartbeat:
@@ -159,10 +213,12 @@ constexpr int BodySize(uint8_t type) {
       return 3;
     case MessageType::kNack:
       return 5;
+    case MessageType::kExposureReport:
+      return 17;
     case MessageType::kSetRate:
       return 6;
     case MessageType::kSetLine:
-      return 16;
+      return 17;
     case MessageType::kSetHeartbeat:
       return 4;
     case MessageType::kStart:
@@ -179,6 +235,31 @@ inline constexpr size_t kMaxPayloadSize = kHeaderSize + kMaxBodySize;
 
 constexpr bool IsCommand(uint8_t type) { return type >= 0x10 && BodySize(type) >= 0; }
 
+// The link's capacity: 115200 baud, 8N1 (10 bits a byte), as the board's USART runs it.
+inline constexpr uint32_t kLinkBaud = 115'200;
+inline constexpr uint32_t kLinkBytesPerSecond = kLinkBaud / 10;
+// Encoded frame of a message type: payload (header + body) + CRC, COBS's one overhead byte (every
+// payload here is below 254 bytes) and the delimiter.
+constexpr uint32_t FrameBytes(MessageType type) {
+  return static_cast<uint32_t>(kHeaderSize + BodySize(static_cast<uint8_t>(type)) + 2 + 1 + 1);
+}
+// What a configuration sends per second at most: a PulseReport per tick, an ExposureReport per
+// tick and wired line, a Heartbeat per period (0 = off). Every configuration must keep it within
+// 90 % of kLinkBytesPerSecond, so reports never queue up (the MCU refuses one that does not).
+constexpr uint64_t LinkMilliBytesPerSecond(uint32_t rate_mhz, int wired_lines,
+                                           uint16_t heartbeat_ms) {
+  const uint64_t per_tick =
+      FrameBytes(MessageType::kPulseReport) +
+      static_cast<uint64_t>(wired_lines) * FrameBytes(MessageType::kExposureReport);
+  const uint64_t heartbeat =
+      heartbeat_ms == 0 ? 0 : 1'000'000ull * FrameBytes(MessageType::kHeartbeat) / heartbeat_ms;
+  return per_tick * rate_mhz + heartbeat;
+}
+constexpr bool FitsLink(uint32_t rate_mhz, int wired_lines, uint16_t heartbeat_ms) {
+  return LinkMilliBytesPerSecond(rate_mhz, wired_lines, heartbeat_ms) * 10 <=
+         9ull * kLinkBytesPerSecond * 1000;
+}
+
 // Writes the payload of `m` (version, type, body) into `out`. Returns its size, or 0 when `out`
 // is too small or the type is unknown.
 inline size_t EncodePayload(const Message& m, uint8_t* out, size_t capacity) {
@@ -192,6 +273,8 @@ inline size_t EncodePayload(const Message& m, uint8_t* out, size_t capacity) {
       w.U16(m.hello.firmware_version);
       w.U8(m.hello.max_lines);
       w.U64(m.hello.mcu_time_us);
+      w.U8(m.hello.clock_status);
+      w.U8(m.hello.hse_mhz);
       break;
     case MessageType::kPulseReport:
       w.U8(m.pulse.line_mask);
@@ -217,6 +300,12 @@ inline size_t EncodePayload(const Message& m, uint8_t* out, size_t capacity) {
       w.U8(static_cast<uint8_t>(m.nack.reason));
       w.U8(static_cast<uint8_t>(m.nack.field));
       break;
+    case MessageType::kExposureReport:
+      w.U32(m.exposure.seq);
+      w.U8(m.exposure.line);
+      w.U64(m.exposure.start_us);
+      w.U32(m.exposure.duration_us);
+      break;
     case MessageType::kSetRate:
       w.U16(m.set_rate.command_id);
       w.U32(m.set_rate.rate_mhz);
@@ -228,6 +317,7 @@ inline size_t EncodePayload(const Message& m, uint8_t* out, size_t capacity) {
       w.U32(m.set_line.width_us);
       w.I32(m.set_line.phase_offset_us);
       w.U32(m.set_line.exposure_us);
+      w.U8(static_cast<uint8_t>(m.set_line.exposure_input));
       break;
     case MessageType::kSetHeartbeat:
       w.U16(m.set_heartbeat.command_id);
@@ -272,6 +362,8 @@ inline ParseStatus ParsePayload(const uint8_t* payload, size_t size, Message* ou
       m.hello.firmware_version = r.U16();
       m.hello.max_lines = r.U8();
       m.hello.mcu_time_us = r.U64();
+      m.hello.clock_status = r.U8();
+      m.hello.hse_mhz = r.U8();
       break;
     case MessageType::kPulseReport:
       m.pulse.line_mask = r.U8();
@@ -297,6 +389,12 @@ inline ParseStatus ParsePayload(const uint8_t* payload, size_t size, Message* ou
       m.nack.reason = static_cast<NackReason>(r.U8());
       m.nack.field = static_cast<Field>(r.U8());
       break;
+    case MessageType::kExposureReport:
+      m.exposure.seq = r.U32();
+      m.exposure.line = r.U8();
+      m.exposure.start_us = r.U64();
+      m.exposure.duration_us = r.U32();
+      break;
     case MessageType::kSetRate:
       m.set_rate.command_id = r.U16();
       m.set_rate.rate_mhz = r.U32();
@@ -308,6 +406,7 @@ inline ParseStatus ParsePayload(const uint8_t* payload, size_t size, Message* ou
       m.set_line.width_us = r.U32();
       m.set_line.phase_offset_us = r.I32();
       m.set_line.exposure_us = r.U32();
+      m.set_line.exposure_input = static_cast<ExposureInput>(r.U8());
       break;
     case MessageType::kSetHeartbeat:
       m.set_heartbeat.command_id = r.U16();
@@ -360,6 +459,8 @@ constexpr const char* FieldName(Field field) {
       return "exposure";
     case Field::kHeartbeatPeriod:
       return "heartbeat_period";
+    case Field::kExposureInput:
+      return "exposure_input";
   }
   return "unknown field";
 }

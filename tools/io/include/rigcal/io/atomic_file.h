@@ -6,9 +6,9 @@
 #include <string>
 #include <string_view>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // Writes `contents` to `path` atomically: writes a temporary file in the same directory,
 // fsyncs it, renames it over `path` and fsyncs the directory. Only a regular file is replaced:
@@ -29,7 +29,7 @@ int WriteAllBytes(int fd, std::string_view data);
 // overwritten. The new path, or the error naming `path`.
 Expected<std::string> KeepAside(const std::string& path, const std::string& tag);
 
-// A file that is written by name by someone else (e.g. lcm::LogFile) and replaces `path`
+// A file that is written by name by someone else (e.g. ::lcm::LogFile) and replaces `path`
 // atomically: Create() makes an empty temporary file next to `path` (the mode and the refusal
 // of anything but a regular file as WriteFileAtomically's; checked again by Commit()); the caller
 // writes temp_path() and closes it; Commit() fsyncs it, renames it over `path` and fsyncs the
@@ -72,4 +72,4 @@ class AtomicFile {
   int fd_ = -1;  // open on temp_path_ until Commit(); -1 when committed or failed
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -5,9 +5,9 @@
 
 #include <string>
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // Why `name` cannot name a camera, or "" when it can.
 std::string CameraNameProblem(const std::string& name);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

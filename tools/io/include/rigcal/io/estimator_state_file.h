@@ -23,9 +23,9 @@
 #include <string_view>
 
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 inline constexpr int kEstimatorStateVersion = 5;        // written
 inline constexpr int kOldestEstimatorStateVersion = 2;  // oldest read
@@ -46,4 +46,4 @@ Expected<RigEstimatorState> ParseEstimatorState(std::string_view text);
 // for the fuzz target, which reaches the parser behind the checksum with it.
 std::string WithEstimatorStateChecksum(std::string_view text);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

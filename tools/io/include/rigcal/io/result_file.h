@@ -6,9 +6,9 @@
 #include <string>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // Reads a result file; JSON when its first non-blank character is '{', else the result YAML.
 // Filled: master, pairs_selected (YAML), and per slave name, estimate (q, C, scale), scales (with
@@ -19,4 +19,4 @@ namespace rigcal::tools {
 // syntax, a missing or malformed field, an unknown state / termination / model, no slaves.
 Expected<RigCalibration> ReadResultFile(const std::string& path);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -6,10 +6,10 @@
 #include <string>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 #include "rigcal/io/truth_alignment.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // The result as JSON. Schema (shared by every command that prints results):
 //   {"master": name,
@@ -82,4 +82,4 @@ std::string FormatResultTable(const RigCalibration& result,
                               const std::map<std::string, Similarity>* truth,
                               const TruthAlignment* alignment = nullptr);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -7,21 +7,18 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
 #include "rigcal/camera/camera_spec.h"
-#include "rigcal/drivers/image_folder_device.h"
-#include "rigcal/drivers/libcamera_device.h"
-#include "rigcal/drivers/live_trigger_timeline.h"
-#include "rigcal/drivers/simulated_rig.h"
+#include "rigcal/capture/image_folder_device.h"
+#include "rigcal/capture/libcamera_device.h"
+#include "rigcal/sim/simulated_rig.h"
+#include "rigcal/trigger/live_trigger_timeline.h"
 
-namespace YAML {
-class Node;
-}  // namespace YAML
-#include "rigcal/drivers/v4l2_options.h"
+#include "rigcal/capture/v4l2_options.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 struct PublishOptions {
   double extrinsics_rate_hz = 2.0;  // RIGCAL_EXTRINSICS messages per second, in (0, 1000]
@@ -55,25 +52,25 @@ struct RigConfig {
   OnlineOptions online;  // estimator options incl. nominal per slave; sync.num_cameras set
   PublishOptions publish;
   StateOptions state;
-  std::optional<drivers::SimulatedRigSpec> simulated_source;  // `source: {type: simulated}`
+  std::optional<sim::SimulatedRigSpec> simulated_source;  // `source: {type: simulated}`
   // `source: {type: image_folders}`: one folder per camera (its `device`, resolved against the
   // config file's directory; an ASL camera folder or a plain folder of images), camera index
   // order, and its options (`source:` keys rate_hz, timestamps, overridden by the camera's
   // `capture:`).
   std::vector<std::string> image_folders;
-  std::vector<drivers::ImageFolderOptions> image_folder_options;
+  std::vector<capture::ImageFolderOptions> image_folder_options;
   // `source: {type: v4l2}`: one device per camera (camera index order): the source's keys,
   // the camera's `device`, its resolution and its `capture:` keys.
-  std::vector<drivers::V4l2Options> v4l2_devices;
+  std::vector<capture::V4l2Options> v4l2_devices;
   // `source: {type: libcamera}`: the same with the camera's `device` as the libcamera camera.
-  std::vector<drivers::LibcameraOptions> libcamera_devices;
+  std::vector<capture::LibcameraOptions> libcamera_devices;
   // `trigger:`: a trigger generator on a serial port, with one line per line named by the
   // cameras' `trigger:` entries (config/README.md "Hardware trigger"); unset without one.
-  std::optional<drivers::LiveTriggerOptions> trigger;
+  std::optional<trigger::LiveTriggerOptions> trigger;
   // With `trigger:`, camera index order: how each camera hangs on the generator (its line, that
   // line's phase offset, where its source stamps a frame relative to the exposure centre);
   // nullopt for a camera without a `trigger:` entry (free-running).
-  std::vector<std::optional<drivers::CameraTriggerSpec>> camera_triggers;
+  std::vector<std::optional<trigger::CameraTriggerSpec>> camera_triggers;
 
   std::vector<std::string> CameraNames() const;
   const std::string& master() const { return cameras.front().name; }
@@ -83,8 +80,6 @@ struct RigConfig {
 // wrong types, out-of-range values, unknown master, duplicate camera names, a nominal on the
 // master, a simulated source with cameras lacking intrinsics or truth, ...).
 Expected<RigConfig> LoadRigConfig(const std::string& path);
-// The same for a file already loaded (LoadYaml, yaml_fields.h), `path` naming it in errors.
-Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string& path);
 
 // Writes a rig config that LoadRigConfig reads back: `rig: {name, master: cameras[0].name}` and
 // per camera its name and, when it has a spec, model, resolution, the model's parameters
@@ -96,4 +91,4 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
                                     const std::vector<CameraConfig>& cameras,
                                     const std::string& comment);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -16,13 +16,14 @@
 #include <Eigen/Core>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // Reads a rig YAML file (truth or result). Quaternions are normalised when their norm is
 // within 1e-3 of 1 (hand-typed values with 4 decimals), else rejected. Errors start with
@@ -43,6 +44,11 @@ Expected<std::map<std::string, Similarity>> ReadTrueMountings(const std::string&
 
 // The rig YAML text of `rig` (slave name -> similarity), numbers in shortest round-trip form.
 std::string RigToYaml(const std::map<std::string, Similarity>& rig);
+
+// The rig YAML text of `slaves` (name, similarity) in their order, after `comment` (each line
+// written as "# <line>") and, unless `master` is empty, the metadata `master: <master>`.
+std::string RigToYaml(const std::vector<std::pair<std::string, Similarity>>& slaves,
+                      const std::string& master, const std::string& comment);
 
 // Writes RigToYaml(rig) atomically. The error names the path.
 [[nodiscard]] Status WriteRigYaml(const std::string& path,
@@ -85,4 +91,4 @@ struct CamchainCamera {
 // 0 0 0 1, rotation block not orthonormal within 1e-6).
 Expected<std::vector<CamchainCamera>> ReadCamchain(const std::string& path);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -7,15 +7,11 @@
 
 #include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/clock_offset.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
-using rigcal::CorrelateAngularSpeed;
-using rigcal::RefineTimeOffset;
-using rigcal::TimeOffsetEstimate;
-using rigcal::TimeOffsetOptions;
 
 // The recording of a rig whose cameras may run free, matched at the slaves' time offsets
 // (MatchFreeRunning), and those offsets.
@@ -42,4 +38,4 @@ Expected<OffsetMatch> MatchWithTimeOffsets(
     const std::vector<std::optional<double>>& given_offsets_s, int64_t tolerance_ns,
     const CalibrationOptions& options, const TimeOffsetOptions& offset_options = {});
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "rigcal/calib/pose_interpolation.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 struct InterpolationOptions {
   // Two neighbouring poses further apart than this many median frame intervals of their
@@ -25,9 +25,6 @@ struct InterpolationOptions {
 };
 
 // MedianInterval, InterpolatedPose and InterpolatePose: calib/pose_interpolation.h.
-using rigcal::InterpolatedPose;
-using rigcal::InterpolatePose;
-using rigcal::MedianInterval;
 
 // The slave's poses at the master's stamps `master_t_ns`, where the slave clock reads
 // t_master + offset_ns (time offset = slave stamp - master clock). Stamps where no pose can be
@@ -56,4 +53,4 @@ Expected<RigRecording> MatchFreeRunning(const TimedTrajectory& master,
                                         const InterpolationOptions& options = {},
                                         std::vector<bool>* interpolated = nullptr);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

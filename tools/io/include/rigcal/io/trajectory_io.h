@@ -30,15 +30,12 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/time_format.h"  // FormatNsAsSeconds, used with these files
+#include "rigcal/base/status.h"
+#include "rigcal/base/time_format.h"  // FormatNsAsSeconds, used with these files
+#include "rigcal/base/types.h"
 #include "rigcal/calib/timed_trajectory.h"
-#include "rigcal/calib/types.h"
 
-namespace rigcal::tools {
-
-// The poses of one camera with their time stamps (calib/timed_trajectory.h).
-using TimedTrajectory = rigcal::TimedTrajectory;
+namespace rigcal::io {
 
 enum class TrajectoryFormat { kTum, kEurocCsv, kNative };
 std::string ToString(TrajectoryFormat format);  // "TUM", "EuRoC CSV", "rigcal native"
@@ -85,8 +82,10 @@ Expected<TimedTrajectory> ReadKittiTrajectory(const std::string& poses_path,
 
 // Writes `trajectory` in TUM format (seconds with 9 decimals, so stamps round-trip exactly;
 // doubles in shortest round-trip form), with the segment as 9th column when any segment id is
-// not 0. Atomic (WriteFileAtomically). The error names the path.
-[[nodiscard]] Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory);
+// not 0. `comment`, when not empty, is written instead of the column legend, each line as
+// "# <line>". Atomic (WriteFileAtomically). The error names the path.
+[[nodiscard]] Status WriteTrajectoryTum(const std::string& path, const TimedTrajectory& trajectory,
+                                        const std::string& comment = "");
 
 // Writes `trajectory` in the native format with its `# rigcal poses` header and the segment
 // column. Atomic. The error names the path.
@@ -109,4 +108,4 @@ Expected<RigRecording> MatchTrajectories(const TimedTrajectory& master,
                                          const std::vector<TimedTrajectory>& slaves,
                                          int64_t tolerance_ns);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
-namespace rigcal::tools {
+namespace rigcal::io {
 
 // k minimising sum_i |metric_i - k * in_unit_i|^2 (metres per odometry unit; 0 when every
 // in_unit vector is zero) and the RMS length of the residuals metric_i - k * in_unit_i.
@@ -67,4 +67,4 @@ TruthAlignment AlignTruthUnit(const RigCalibration& result,
 std::map<std::string, Similarity> TruthInMasterUnits(const std::map<std::string, Similarity>& truth,
                                                      const TruthAlignment& alignment);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::io

@@ -11,9 +11,9 @@
 
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 // Ok when `url` stays on this host; else the error names the URL, what reaches beyond the host
 // (the TTL, the link the route goes through, the host) and the two ways out: a loopback route,
@@ -23,4 +23,4 @@ namespace rigcal::tools {
 Status CheckBusStaysOnHost(const std::string& url,
                            const std::string& route_table = "/proc/net/route");
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

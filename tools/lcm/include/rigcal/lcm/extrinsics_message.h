@@ -8,16 +8,18 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/calib/rig_estimator.h"
+#include "rigcal/base/status.h"
 #include "rigcal/lcm/message_validation.h"
 #include "rigcal/rig_extrinsics_t.hpp"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 // slave_extrinsics_t::FLAG_* as int32_t: lcm-gen emits every constant as its own anonymous enum,
 // and C++20 deprecates `|` between different enums. Combine these instead. The flags are facts
 // about what the motions determine; the state is slave_extrinsics_t::state. The bits differ from
-// the estimator's rigcal::kFlag* (rig_estimator.h), hence their own names.
+// the estimator's SlaveFlags (slave_state.h), hence their own names; WireFlagsOfFacts and
+// FactsOfWireFlags are the one mapping between them.
 inline constexpr int32_t kWireFlagTranslationalOnly = slave_extrinsics_t::FLAG_TRANSLATIONAL_ONLY;
 inline constexpr int32_t kWireFlagPlanar = slave_extrinsics_t::FLAG_PLANAR_UNOBSERVABLE_AXIS;
 inline constexpr int32_t kWireFlagAxisFromPrior = slave_extrinsics_t::FLAG_AXIS_FROM_PRIOR;
@@ -52,7 +54,12 @@ extern template Expected<rig_extrinsics_t> MessageValidator::Decode(std::string_
 //   PLANAR_UNOBSERVABLE_AXIS when observability.planar, with AXIS_FROM_PRIOR when C along the
 //                            axis is the nominal mounting's.
 // REFINED is never set here: only the online estimator knows it (SlaveOnlineState::flags).
-int32_t SlaveFlags(const SlaveCalibration& slave);
+int32_t WireFlagsOf(const SlaveCalibration& slave);
+
+// The wire flags of the estimator's facts (SlaveFlags: translational-only, planar, refined), and
+// back. FLAG_AXIS_FROM_PRIOR has no estimator fact (it comes from the result, WireFlagsOf).
+int32_t WireFlagsOfFacts(uint32_t facts);
+uint32_t FactsOfWireFlags(int32_t wire_flags);
 
 // slave_extrinsics_t of one slave. scale/segment/scale_std are those of the current segment
 // (the entry of slave.scales with the largest segment id; estimate.scale and segment 0 when
@@ -75,4 +82,9 @@ Expected<rig_extrinsics_t> RigCalibrationToLcm(
     const RigCalibration& result, int64_t utime, int64_t t_ns = 0,
     int8_t distance_unit = rig_extrinsics_t::UNIT_MASTER_ODOMETRY);
 
-}  // namespace rigcal::tools
+// The rig_extrinsics_t of an online estimate: the batch conversion plus the estimator's online
+// facts (WireFlagsOfFacts) and, for cameras that run free, an offset still being (re)estimated and
+// its jumps. Fails as RigCalibrationToLcm does.
+Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t utime);
+
+}  // namespace rigcal::lcm

@@ -6,11 +6,11 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/image_t.hpp"
 #include "rigcal/lcm/message_validation.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 // The rules of image_t (beyond message_validation.h), checked by CheckMessage, EncodeMessage and
 // MessageValidator::Decode: size agrees with data, a known camera, utime and t_ns >= 0, trigger_seq
@@ -23,4 +23,4 @@ extern template Expected<std::vector<uint8_t>> EncodeMessage(std::string_view, c
                                                              image_t);
 extern template Expected<image_t> MessageValidator::Decode(std::string_view, const void*, int64_t);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -3,7 +3,7 @@
 // stops at the first damage with its byte offset instead of skipping ahead.
 //
 // Event layout (big-endian): sync word 0xEDA1DA01, int64 event number, int64 timestamp [µs],
-// int32 channel length, int32 data length, channel bytes, data bytes. lcm::LogFile of LCM 1.3
+// int32 channel length, int32 data length, channel bytes, data bytes. ::lcm::LogFile of LCM 1.3
 // resynchronises silently on the next sync word after damage and allocates the data length
 // read from the header before reading the data; this reader checks every length against
 // limits and against the bytes left in the file BEFORE allocating.
@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 struct LogEvent {
   int64_t event_number = 0;
@@ -90,4 +90,4 @@ class LogReader {
   int64_t total_size_ = 0;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

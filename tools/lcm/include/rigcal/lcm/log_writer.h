@@ -1,5 +1,5 @@
 #pragma once
-// LogWriter: writes LCM log files in the format of lcm-logger (read by lcm-logplayer, lcm::LogFile
+// LogWriter: writes LCM log files in the format of lcm-logger (read by lcm-logplayer, ::lcm::LogFile
 // and `rigcal calib --log`). Every event is, big-endian:
 //
 //   uint32 sync word 0xEDA1DA01 | int64 event number | int64 timestamp (µs) |
@@ -24,9 +24,9 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 inline constexpr uint32_t kLcmLogSyncWord = 0xEDA1DA01;
 // LCM's longest channel name (LCM_MAX_CHANNEL_NAME_LENGTH).
@@ -87,4 +87,4 @@ class LogWriter {
   bool failed_ = false;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -7,10 +7,10 @@
 // (image_t); channels.h names the channels.
 //
 // Receiving: subscribe with LCM's raw-buffer form, subscribeFunction(channel, handler, context)
-// with `void handler(const lcm::ReceiveBuffer*, const std::string& channel, Context*)`, and
+// with `void handler(const ::lcm::ReceiveBuffer*, const std::string& channel, Context*)`, and
 // decode with a MessageValidator. Do not use LCM's typed subscribe: the generated decode()
 // trusts the array lengths in the buffer (a corrupt length allocates gigabytes or throws from
-// inside lcm::LCM::handle()) and checks nothing of the content. Avoid LCM 1.3.1's
+// inside ::lcm::LCM::handle()) and checks nothing of the content. Avoid LCM 1.3.1's
 // member-function subscribe too: built with GCC 12 and -fsanitize=vptr (RIGCAL_ASAN_ENABLED) its
 // pointer-to-member call in lcm-cpp-impl.hpp crashes (a GCC bug; plain builds work).
 // Sending: build messages with the *ToLcm functions (they return only messages that pass
@@ -39,9 +39,9 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 // The rig's camera names; the index is the camera id of CameraPose (0 = master, 1..N = slaves).
 using CameraNames = std::vector<std::string>;
@@ -94,7 +94,7 @@ std::optional<Rejection> CheckMessage(std::string_view channel, const CameraName
                                       Message* msg);
 
 // Checks `msg` (CheckMessage) and encodes it into LCM's wire format, ready for
-// lcm::LCM::publish(channel, data, size) or lcm::LogFile. Never calls LCM's encode on an
+// ::lcm::LCM::publish(channel, data, size) or ::lcm::LogFile. Never calls LCM's encode on an
 // inconsistent message (LCM indexes the vectors with the num_* fields unchecked).
 template <typename Message>
 Expected<std::vector<uint8_t>> EncodeMessage(std::string_view channel, const CameraNames& names,
@@ -102,7 +102,7 @@ Expected<std::vector<uint8_t>> EncodeMessage(std::string_view channel, const Cam
 
 struct PoseMessage;  // pose_message.h
 
-// Decodes raw LCM buffers (lcm::ReceiveBuffer data/size, lcm::LogEvent data/datalen) into
+// Decodes raw LCM buffers (::lcm::ReceiveBuffer data/size, ::lcm::LogEvent data/datalen) into
 // checked messages and counts what it rejects, by cause.
 // Thread-safety: not thread-safe; use one validator per receiving thread (LCM dispatches
 // handlers on the thread that calls handle()).
@@ -137,4 +137,4 @@ class MessageValidator {
   DecodeStats stats_;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

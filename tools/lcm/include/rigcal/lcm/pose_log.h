@@ -5,11 +5,11 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/lcm/message_validation.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 // Writes every pose of `recording` as a camera_pose_t event on RIGCAL_POSE_<name>, in time
 // order (master first at equal stamps), event timestamps = t_ns / 1000 µs. Slave segment ids
@@ -23,4 +23,4 @@ namespace rigcal::tools {
 [[nodiscard]] Status WritePoseEvents(const std::string& path, const CameraNames& names,
                                      std::vector<CameraPose> poses);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

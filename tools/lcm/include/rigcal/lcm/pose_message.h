@@ -8,12 +8,12 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/camera_pose_t.hpp"
 #include "rigcal/lcm/message_validation.h"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
@@ -50,4 +50,4 @@ Expected<camera_pose_t> CameraPoseToLcm(const CameraPose& pose, const CameraName
 Expected<PoseMessage> CameraPoseFromLcm(std::string_view channel, const camera_pose_t& msg,
                                         const CameraNames& names);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

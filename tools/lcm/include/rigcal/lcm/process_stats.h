@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cstdint>
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 // Resident set size in bytes (/proc/self/statm), 0 when unavailable.
 int64_t ResidentSetBytes();
@@ -24,4 +24,4 @@ class CpuMeter {
   std::chrono::steady_clock::time_point last_wall_;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -10,12 +10,12 @@
 #include <vector>
 
 #include "rigcal/calib/rig_estimator.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/calib/sync_buffer.h"
 #include "rigcal/lcm/message_validation.h"
 #include "rigcal/rig_status_t.hpp"
 
-namespace rigcal::tools {
+namespace rigcal::lcm {
 
 // The rules of rig_status_t (beyond message_validation.h), checked by CheckMessage, EncodeMessage
 // and MessageValidator::Decode: num_cameras agrees with cameras, finite cpu_percent >= 0, utime,
@@ -72,4 +72,4 @@ static_assert(rig_status_t::ESTIMATOR_CONVERGED == static_cast<int>(RigState::kC
 static_assert(rig_status_t::ESTIMATOR_DECALIBRATED == static_cast<int>(RigState::kDecalibrated));
 int8_t EstimatorState(const RigEstimate& estimate, std::string* message);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::lcm

@@ -12,21 +12,21 @@
 #include <ostream>
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/monitor/status_snapshot.h"
 
 namespace lcm {
 class LCM;
 }
 
-namespace rigcal::tools {
+namespace rigcal::monitor {
 
 class StatusMonitor {
  public:
   // `url`: the LCM URL ("" = LCM's default udpm URL; file:///log?speed=0 reads a log). `lcm`
   // (optional, not owned, must outlive the monitor): listen on this instance instead (memq://
   // tests).
-  explicit StatusMonitor(std::string url, lcm::LCM* lcm = nullptr);
+  explicit StatusMonitor(std::string url, ::lcm::LCM* lcm = nullptr);
   ~StatusMonitor();
   StatusMonitor(const StatusMonitor&) = delete;
   StatusMonitor& operator=(const StatusMonitor&) = delete;
@@ -66,6 +66,6 @@ struct StatusRunOptions {
 // "---" line; returns the last Health code. An LCM that cannot be opened: the message on `err`
 // and 3 (no data can arrive; 1 would read as "converging" to a health check).
 int RunStatusMonitor(const StatusRunOptions& options, std::ostream& out, std::ostream& err,
-                     const std::atomic<bool>& stop, lcm::LCM* lcm = nullptr);
+                     const std::atomic<bool>& stop, ::lcm::LCM* lcm = nullptr);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::monitor

@@ -13,7 +13,7 @@
 #include "rigcal/rig_extrinsics_t.hpp"
 #include "rigcal/rig_status_t.hpp"
 
-namespace rigcal::tools {
+namespace rigcal::monitor {
 
 struct MonitorSnapshot {
   std::string source;  // the LCM URL listened on, for the header ("" = LCM's default)
@@ -25,7 +25,7 @@ struct MonitorSnapshot {
   double extrinsics_age_s = -1.0;
   int64_t status_received = 0;  // messages accepted since the monitor started
   int64_t extrinsics_received = 0;
-  DecodeStats decode;        // accepted and rejected messages (a rejected one is never shown)
+  lcm::DecodeStats decode;        // accepted and rejected messages (a rejected one is never shown)
   double listening_s = 0.0;  // seconds since the monitor started listening
 };
 
@@ -86,4 +86,4 @@ std::string FormatDashboard(const MonitorSnapshot& snapshot, int width = 0);
 // end of the line", then "clear to the end of the screen" (ANSI/VT100, works over SSH).
 std::string AnsiFrame(const std::string& text);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::monitor

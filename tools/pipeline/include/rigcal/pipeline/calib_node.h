@@ -31,7 +31,7 @@
 #include <vector>
 
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
@@ -40,7 +40,7 @@ namespace lcm {
 class LCM;
 }
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 // How a log is replayed.
 struct ReplayOptions {
@@ -111,7 +111,7 @@ struct CameraInputStats {
 struct CalibNodeSummary {
   RigEstimate estimate;
   SyncStats sync;
-  DecodeStats decode;
+  lcm::DecodeStats decode;
   std::vector<CameraInputStats> cameras;  // camera index order
   int64_t unknown_channel = 0;            // RIGCAL_POSE_* messages for cameras not in the rig
   // Replay: events on channels the replay does not use (other channels, the image channels of
@@ -137,7 +137,7 @@ class CalibNode {
  public:
   // `lcm` (optional, not owned): use this LCM instance for input and output instead of opening
   // options.lcm_url (in-process memq:// tests). It must outlive the node.
-  CalibNode(RigConfig config, CalibNodeOptions options, lcm::LCM* lcm = nullptr);
+  CalibNode(io::RigConfig config, CalibNodeOptions options, ::lcm::LCM* lcm = nullptr);
   ~CalibNode();
   CalibNode(const CalibNode&) = delete;
   CalibNode& operator=(const CalibNode&) = delete;
@@ -163,8 +163,4 @@ class CalibNode {
   std::unique_ptr<Impl> impl_;
 };
 
-// The rig_extrinsics_t of an online estimate: the batch conversion plus the estimator's online
-// flags (decalibrated, ...). Fails as RigCalibrationToLcm does.
-Expected<rig_extrinsics_t> EstimateToLcm(const RigEstimate& estimate, int64_t utime);
-
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -12,14 +12,14 @@
 #include <thread>
 #include <vector>
 
-#include "rigcal/calib/thread_annotations.h"
-#include "rigcal/drivers/capture_device.h"
+#include "rigcal/base/thread_annotations.h"
+#include "rigcal/capture/capture_device.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 class CaptureLoops {
  public:
-  explicit CaptureLoops(std::vector<std::unique_ptr<drivers::CameraDevice>> devices);
+  explicit CaptureLoops(std::vector<std::unique_ptr<capture::CameraDevice>> devices);
   ~CaptureLoops();
   CaptureLoops(const CaptureLoops&) = delete;
   CaptureLoops& operator=(const CaptureLoops&) = delete;
@@ -34,11 +34,11 @@ class CaptureLoops {
  private:
   void Loop(size_t index);
 
-  std::vector<std::unique_ptr<drivers::CameraDevice>> devices_;
+  std::vector<std::unique_ptr<capture::CameraDevice>> devices_;
   std::vector<std::thread> threads_;
   std::atomic<int> running_;
   mutable Mutex mutex_;
   std::vector<std::string> problems_ RIGCAL_GUARDED_BY(mutex_);
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

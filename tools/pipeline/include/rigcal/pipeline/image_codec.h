@@ -9,12 +9,12 @@
 #include <string_view>
 #include <vector>
 
-#include "rigcal/calib/status.h"
-#include "rigcal/drivers/frame.h"
+#include "rigcal/base/status.h"
+#include "rigcal/capture/frame.h"
 #include "rigcal/image_t.hpp"
 #include "rigcal/lcm/message_validation.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 // How image_t.data holds the pixels: raw rows (no CPU, largest), PNG (lossless, ~2x smaller,
 // slowest) or JPEG (lossy, smallest).
@@ -33,13 +33,13 @@ struct ImageEncodeOptions {
 // The image_t of a CV_8UC1 frame of camera `camera`: t_ns and trigger_seq from the frame, utime
 // = `utime`, pixel_format "GREY", stride = width for raw images and 0 for PNG/JPEG. Errors: an
 // image that is empty or not CV_8UC1, an encoder failure, invalid options.
-Expected<image_t> FrameToImageMessage(const drivers::Frame& frame, const std::string& camera,
+Expected<image_t> FrameToImageMessage(const capture::Frame& frame, const std::string& camera,
                                       int64_t utime, const ImageEncodeOptions& options);
 
 // FrameToImageMessage at utime = t_ns / 1000 for camera names[camera], checked and encoded for
 // RIGCAL_IMAGE_<name> (EncodeMessage): the data of one log event.
-Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
-                                                const CameraNames& names, int camera,
+Expected<std::vector<uint8_t>> EncodeImageEvent(const capture::Frame& frame,
+                                                const lcm::CameraNames& names, int camera,
                                                 const ImageEncodeOptions& options);
 
 // The frame of a (checked, see image_message.h) image_t for camera index `camera`: t_ns and seq
@@ -47,6 +47,6 @@ Expected<std::vector<uint8_t>> EncodeImageEvent(const drivers::Frame& frame,
 // "Y16 " (the high byte), "YUYV" (the luma), "RGB3"/"BGR3" (converted to grey), or a PNG/JPEG
 // file decoded to grey. Errors name the camera and say what is wrong: an unsupported pixel
 // format, data that does not decode, a decoded size other than width x height.
-Expected<drivers::Frame> FrameFromImage(const image_t& msg, int camera);
+Expected<capture::Frame> FrameFromImage(const image_t& msg, int camera);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

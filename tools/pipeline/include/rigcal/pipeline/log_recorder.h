@@ -27,18 +27,18 @@
 #include <thread>
 #include <vector>
 
-#include "rigcal/calib/bounded_queue.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/thread_annotations.h"
-#include "rigcal/drivers/capture_device.h"
+#include "rigcal/base/bounded_queue.h"
+#include "rigcal/base/status.h"
+#include "rigcal/base/thread_annotations.h"
+#include "rigcal/capture/capture_device.h"
 #include "rigcal/lcm/log_writer.h"
 #include "rigcal/pipeline/image_codec.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 struct RecorderOptions {
   ImageEncodeOptions image;  // how frames are stored
-  LogWriterOptions log;      // splitting, sync interval, overwrite
+  lcm::LogWriterOptions log;      // splitting, sync interval, overwrite
   int queue_events = 64;     // >= 1: events waiting for the disk (64 raw 752x480 frames: 23 MB)
   bool lossless = false;     // capture waits for the disk instead of dropping
   // Success, or "<field>: <constraint>".
@@ -72,7 +72,7 @@ class LogRecorder {
   // `device` (camera index `camera`) wrapped so that every frame its Grab returns is also
   // encoded (on the grabbing thread) and queued on RIGCAL_IMAGE_<name>. The frames are returned
   // unchanged. The recorder must outlive the returned device's Grab calls.
-  std::unique_ptr<drivers::CameraDevice> Tap(std::unique_ptr<drivers::CameraDevice> device,
+  std::unique_ptr<capture::CameraDevice> Tap(std::unique_ptr<capture::CameraDevice> device,
                                              int camera);
 
   // Queues an encoded message on `channel` at `utime` (µs). Any thread. Ignored after Stop.
@@ -86,7 +86,7 @@ class LogRecorder {
   const std::vector<std::string>& names() const { return names_; }
 
   // Called by Tap'ed devices: encodes and queues one frame of camera `camera`.
-  void RecordFrame(int camera, const drivers::Frame& frame) RIGCAL_EXCLUDES(mutex_);
+  void RecordFrame(int camera, const capture::Frame& frame) RIGCAL_EXCLUDES(mutex_);
 
  private:
   struct Event {
@@ -96,14 +96,14 @@ class LogRecorder {
     std::vector<uint8_t> data;
   };
   LogRecorder(std::vector<std::string> names, const RecorderOptions& options,
-              std::unique_ptr<LogWriter> writer);
+              std::unique_ptr<lcm::LogWriter> writer);
   void Enqueue(Event event) RIGCAL_EXCLUDES(mutex_);
   void WriterLoop();
   void Fail(const std::string& error) RIGCAL_EXCLUDES(mutex_);
 
   const std::vector<std::string> names_;
   const RecorderOptions options_;
-  std::unique_ptr<LogWriter> writer_;  // the writer thread's until it is joined
+  std::unique_ptr<lcm::LogWriter> writer_;  // the writer thread's until it is joined
   BoundedQueue<Event> queue_;
   std::thread writer_thread_;
   std::atomic<bool> stopped_{false};
@@ -112,4 +112,4 @@ class LogRecorder {
   std::vector<int64_t> last_seq_ RIGCAL_GUARDED_BY(mutex_);  // per camera, -1 before a frame
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -12,7 +12,7 @@
 #include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/sync_buffer.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 struct OnlineReplayOptions {
   RigEstimatorOptions estimator;
@@ -47,8 +47,4 @@ OnlineReplayResult ReplayOnline(const RigRecording& recording, const OnlineRepla
 // One line per history point: time, slave, flags, motions, σ, and the errors when known.
 std::string FormatConvergence(const std::vector<ConvergencePoint>& history);
 
-// A slave's state and facts as words for status lines: the state's name (slave_state.h), then
-// "translational-only", "planar", "refined" ("converged planar refined").
-std::string StateText(SlaveState state, uint32_t facts);
-
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -1,5 +1,5 @@
 #pragma once
-// Pipeline: the live data flow of `rigcal run` (DESIGN.md "Data flow"):
+// Pipeline: the live data flow of `rigcal run` (docs/architecture.md):
 //
 //   capture thread per device --(bounded frame queue, drop-oldest)--> VO thread per camera
 //   --(CameraPose)--> OnlineCalibrator (SyncBuffer -> RigEstimator, refinement thread)
@@ -26,10 +26,10 @@
 #include <thread>
 #include <vector>
 
-#include "rigcal/calib/bounded_queue.h"
+#include "rigcal/base/bounded_queue.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/calib/thread_annotations.h"
-#include "rigcal/drivers/capture_device.h"
+#include "rigcal/capture/capture_device.h"
 #include "rigcal/lcm/shared_bus.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/vo/monocular_vo.h"
@@ -38,7 +38,7 @@ namespace rigcal {
 class PoseMerge;
 }
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 struct PipelineOptions {
   vo::VoOptions vo;
@@ -82,7 +82,7 @@ struct CameraHealth {
 int8_t CameraStatusVoState(const CameraHealth& health);
 // The STATUS view of a camera's health (name, frames, backlog drops, VO state and segment, pose
 // age in stream time); the caller adds fps and the drops it counts itself.
-CameraStatusInput StatusInputOf(const CameraHealth& health);
+lcm::CameraStatusInput StatusInputOf(const CameraHealth& health);
 
 struct PipelineSnapshot {
   std::vector<CameraHealth> cameras;
@@ -106,9 +106,9 @@ class Pipeline {
   // RIGCAL_POSE_<camera>, from the VO threads; the process's other publishers share `bus`. Throws
   // std::invalid_argument on inconsistent arguments.
   Pipeline(std::vector<std::string> names,
-           std::vector<std::unique_ptr<drivers::CameraDevice>> devices,
+           std::vector<std::unique_ptr<capture::CameraDevice>> devices,
            std::vector<std::shared_ptr<const camera::CameraModel>> cameras, OnlineOptions online,
-           PipelineOptions options, SharedBus* bus = nullptr);
+           PipelineOptions options, lcm::SharedBus* bus = nullptr);
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
@@ -137,7 +137,7 @@ class Pipeline {
 
   std::vector<std::string> names_;
   PipelineOptions options_;
-  SharedBus* bus_ = nullptr;
+  lcm::SharedBus* bus_ = nullptr;
   std::unique_ptr<OnlineCalibrator> calibrator_;
   std::vector<std::unique_ptr<Camera>> cameras_;
   std::unique_ptr<PoseMerge> merge_;  // lossless runs only
@@ -149,4 +149,4 @@ class Pipeline {
   bool stopped_ RIGCAL_GUARDED_BY(stop_mutex_) = false;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -10,14 +10,14 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/base/status.h"
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/calib/status.h"
-#include "rigcal/calib/types.h"
-#include "rigcal/drivers/simulated_rig.h"
 #include "rigcal/io/truth_alignment.h"
+#include "rigcal/sim/simulated_rig.h"
 
-namespace rigcal::tools {
+namespace rigcal::pipeline {
 
 struct SegmentUnit {
   int segment = 0;
@@ -51,7 +51,7 @@ struct RunEvaluation {
 
 // `poses[i]`: every pose camera i's VO produced (Pipeline::RecordedPoses). Fails when the
 // master has no segment with at least 3 poses.
-Expected<RunEvaluation> EvaluateRun(const drivers::SimulatedRig& rig,
+Expected<RunEvaluation> EvaluateRun(const sim::SimulatedRig& rig,
                                     const std::vector<std::vector<CameraPose>>& poses,
                                     const RigCalibration& result);
 
@@ -61,11 +61,11 @@ void ScoreEstimate(const SlaveCalibration& slave, double estimated_scale, SlaveE
 
 // The master unit of the run as a truth alignment (for ResultToJson): applied, the unit of
 // the master's scored VO segment (FitUnit of its poses against the true trajectory).
-TruthAlignment AlignmentOf(const RunEvaluation& evaluation);
+io::TruthAlignment AlignmentOf(const RunEvaluation& evaluation);
 
 // A table: slave, rotation error (deg), position direction error (deg), distance error (%),
 // scale error (%), position error in the plane and along the axis of planar motion (mm), and
 // the master unit. Figures the estimate does not determine are shown as "unobs".
 std::string FormatEvaluation(const RunEvaluation& evaluation);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::pipeline

@@ -14,9 +14,9 @@
 
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/slave_state.h"
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
-namespace rigcal::tools {
+namespace rigcal::report {
 
 inline constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
 
@@ -98,4 +98,4 @@ struct ReportData {
   std::vector<std::string> notes;
 };
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::report

@@ -16,14 +16,14 @@
 
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/report/report_data.h"
 
-namespace rigcal::tools {
+namespace rigcal::report {
 
 std::string RenderReportHtml(const ReportData& data);
 
 // Renders and writes the page atomically (WriteFileAtomically). The error names the path.
 [[nodiscard]] Status WriteReportHtml(const std::string& path, const ReportData& data);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::report

@@ -16,10 +16,10 @@
 
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/report/report_data.h"
 
-namespace rigcal::tools {
+namespace rigcal::report {
 
 struct ReportOptions {
   std::string input;      // LCM log or result file
@@ -33,4 +33,4 @@ struct ReportOptions {
 // offset; rejected messages are counted in a note.
 Expected<ReportData> LoadReport(const ReportOptions& options);
 
-}  // namespace rigcal::tools
+}  // namespace rigcal::report

@@ -16,9 +16,9 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "rigcal/calib/types.h"
+#include "rigcal/base/types.h"
 
-namespace rigcal {
+namespace rigcal::research {
 
 // ---- Fisher information algebra (generic) ----
 
@@ -92,4 +92,4 @@ ThesisFisherSystem ThesisFisher(const std::vector<Pose>& master_poses, const Sim
 ThesisBound ThesisCramerRaoBound(const std::vector<Pose>& master_poses, const Similarity& rig,
                                  double eps_rad, const ThesisNoiseModel& noise = {});
 
-}  // namespace rigcal
+}  // namespace rigcal::research

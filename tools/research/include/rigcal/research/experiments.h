@@ -18,11 +18,11 @@
 #include <vector>
 
 #include "rigcal/calib/calibration_options.h"
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/calib/synthetic.h"
-#include "rigcal/report/svg_plot.h"
+#include "rigcal/plot/svg_plot.h"
 
-namespace rigcal {
+namespace rigcal::research {
 
 enum class ExperimentKind { kStability, kPoses, kMotionModel, kScaleModel };
 
@@ -160,7 +160,7 @@ std::string ExperimentCsv(const ExperimentResult& result);
 
 struct NamedFigure {
   std::string file_name;  // e.g. "fig5_1_lls.svg"
-  PlotFigure figure;
+  plot::PlotFigure figure;
 };
 
 // The figures of an experiment: stability fig5_1_lls.svg and fig5_2_nl.svg, poses
@@ -199,4 +199,4 @@ std::vector<std::vector<ErrorStats>> RunGrid(const std::vector<ThesisSampleOptio
 // Bound of K-pose thesis problems at eps = 1 deg, averaged over options.crb_samples geometries.
 BoundStats AverageThesisBound(int num_poses, const ExperimentOptions& options);
 
-}  // namespace rigcal
+}  // namespace rigcal::research

@@ -14,7 +14,7 @@
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/research/experiments.h"
 
-namespace rigcal {
+namespace rigcal::research {
 
 // Pose errors of one camera's odometry. White: independent per pose (motion capture, PnP).
 // Drift: every relative motion between consecutive poses is perturbed and the poses are their
@@ -114,4 +114,4 @@ std::string FormatPairTable(const std::vector<PairScenarioResult>& results);
 // Every policy of every scenario, one CSV row each.
 std::string PairCsv(const std::vector<PairScenarioResult>& results);
 
-}  // namespace rigcal
+}  // namespace rigcal::research

@@ -1,0 +1,43 @@
+#pragma once
+// Renderer of the simulated rig: per-camera bearing tables and ray-casting node grids, and the
+// rendering of one view of the scene (ray casting at the nodes, texture blocks between them).
+// Private to rigcal_sim.
+
+#include <memory>
+#include <vector>
+
+#include "rigcal/base/types.h"
+#include "rigcal/camera/camera_model.h"
+#include "sim_scene.h"
+
+namespace rigcal::sim::internal {
+
+// Per camera: the unit bearing of every pixel (camera frame, NaN x when the pixel has none)
+// and the local pixel angle, computed once.
+struct CameraTables {
+  std::shared_ptr<const camera::CameraModel> model;
+  int width = 0;
+  int height = 0;
+  std::vector<float> bearings;  // 3 per pixel, row-major
+};
+CameraTables MakeCameraTables(std::shared_ptr<const camera::CameraModel> model);
+
+// Ray-casting nodes every `block` pixels (block >= 2): node (i, j) sits at pixel
+// (i * block, j * block); nodes just beyond the right/bottom edge close the last blocks.
+struct NodeGrid {
+  int block = 0;
+  int nodes_x = 0;
+  int nodes_y = 0;
+  std::vector<float> bearings;     // 3 per node, NaN x when invalid
+  std::vector<float> pixel_angle;  // per node, radians per pixel
+};
+NodeGrid MakeNodeGrid(const CameraTables& camera, int block);
+
+// Renders the view of `camera` at world_from_camera and adds weight * intensity to acc
+// (width * height floats). `grid` null or block < 2: every pixel is cast. `hits`: scratch.
+// `kernel`: the texture-block kernels to use.
+void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
+                      const Pose& world_from_camera, float weight, float* acc,
+                      std::vector<Hit>* hits, RenderKernel kernel);
+
+}  // namespace rigcal::sim::internal

@@ -1,0 +1,57 @@
+#pragma once
+// The immutable data of a simulated rig, shared by the rig and its devices (scene, trajectory,
+// render tables, noise table), and the production of its frames: rendering with motion blur,
+// image noise, quantisation, drops and stamp jitter. Private to rigcal_sim.
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
+
+#include "rigcal/base/types.h"
+#include "rigcal/sim/simulated_rig.h"
+#include "sim_render.h"
+#include "sim_scene.h"
+#include "sim_trajectory.h"
+
+namespace rigcal::sim::internal {
+
+// Standard normal samples in the noise table (rows of image noise start at random offsets).
+inline constexpr size_t kNoiseTableSize = 1 << 18;
+
+struct SimulatedRigData {
+  SimulatedRigSpec spec;
+  int64_t num_frames = 0;
+  Trajectory trajectory;
+  Scene scene;
+  std::vector<CameraTables> cameras;
+  std::vector<NodeGrid> grids;  // per camera, for spec.render_block (unused when 1)
+  std::vector<float> noise;     // standard normal samples
+  std::vector<std::optional<double>> fail_after_s;  // per camera
+
+  // Stream time of frame k, seconds (frame 0 at 0).
+  double StreamTime(int64_t k) const { return static_cast<double>(k) / spec.frame_rate_hz; }
+  // Nominal stamp of frame k after frame 0's, nanoseconds.
+  int64_t OffsetNs(int64_t k) const {
+    return std::llround(static_cast<double>(k) * 1e9 / spec.frame_rate_hz);
+  }
+  // world_from_camera of `camera` at stream time t_s.
+  Pose WorldFromCamera(int camera, double t_s) const {
+    return trajectory.At(t_s) * spec.master_from_camera[camera];
+  }
+  // Whether frame k of `camera` is dropped (spec.drop_probability).
+  bool Dropped(int camera, int64_t k) const;
+  // Stamp noise of frame k of `camera`, nanoseconds (spec.timestamp_jitter_s, clipped at 3 sigma).
+  int64_t JitterNs(int camera, int64_t k) const;
+  // Frame k of `camera`: renders (with motion blur), adds noise, quantises. `acc`, `hits`:
+  // scratch buffers.
+  cv::Mat Render(int camera, int64_t k, std::vector<float>* acc, std::vector<Hit>* hits,
+                 RenderKernel kernel) const;
+
+ private:
+  // Adds frame k's noise to `acc` (width x height), rounds and saturates to 8 bit.
+  cv::Mat Quantise(int camera, int64_t k, const std::vector<float>& acc, int width,
+                   int height) const;
+};
+
+}  // namespace rigcal::sim::internal

@@ -1,1 +1,0 @@
-#include "rigcal/drivers/frame.h"

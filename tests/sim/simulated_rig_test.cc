@@ -1,0 +1,589 @@
+// The simulated rig: rendering geometry against the camera model, determinism, noise, blur,
+// device behaviour (frame times, drops, jitter, failures, interrupt), spec checks, speed report.
+// The cameras are rigcal_camera's ideal pinhole and equidistant models (support/ideal_cameras.h),
+// whose projections tests/camera/ checks against their equations: here they are the reference
+// the renderer must agree with.
+#include "rigcal/sim/simulated_rig.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <functional>
+#include <opencv2/imgproc.hpp>
+#include <thread>
+
+#include "support/ideal_cameras.h"
+
+namespace rigcal::sim {
+namespace {
+
+using support::IdealEquidistant;
+using support::IdealPinhole;
+using support::PinholeWithFov;
+
+Pose Mounting(const Eigen::Quaterniond& q, const Eigen::Vector3d& c) {
+  Pose p;
+  p.q = q;
+  p.C = c;
+  return p;
+}
+
+SimulatedRigSpec::Waypoint Waypoint(const Eigen::Vector3d& p, double yaw, double pitch = 0,
+                                    double roll = 0) {
+  SimulatedRigSpec::Waypoint w;
+  w.position = p;
+  w.world_from_master = WaypointOrientationFromYpr(yaw, pitch, roll);
+  return w;
+}
+
+// Two cameras (a pinhole master and a slave looking right, 0.5 m to its left) moving and
+// turning gently in the default room.
+SimulatedRigSpec TwoCameraSpec(int width = 160, int height = 120) {
+  SimulatedRigSpec spec;
+  spec.names = {"cam0", "cam1"};
+  spec.cameras = {PinholeWithFov(width, height, 60), PinholeWithFov(width, height, 60)};
+  spec.master_from_camera = {
+      Pose(), Mounting(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY())),
+                       Eigen::Vector3d(-0.5, 0, 0))};
+  spec.waypoints = {Waypoint({-2, 0, 3}, 0), Waypoint({0, 1, 3.2}, 20, 10, -5),
+                    Waypoint({2, 0, 2.8}, -15, -5, 10), Waypoint({0, -1, 3}, 30)};
+  spec.waypoint_interval_s = 2.0;
+  spec.frame_rate_hz = 20;
+  spec.noise_sigma = 0;
+  spec.seed = 7;
+  return spec;
+}
+
+SimulatedRig Make(SimulatedRigSpec spec) {
+  auto rig = MakeSimulatedRig(std::move(spec));
+  EXPECT_TRUE(rig) << rig.error();
+  return std::move(rig).value();
+}
+
+Pose LookingAlongX(const Eigen::Vector3d& position, double yaw = 0, double pitch = 0) {
+  return Mounting(WaypointOrientationFromYpr(yaw, pitch, 0), position);
+}
+
+double SampleBilinear(const cv::Mat& image, const Eigen::Vector2d& p) {
+  const int x = static_cast<int>(std::floor(p.x()));
+  const int y = static_cast<int>(std::floor(p.y()));
+  const double ax = p.x() - x, ay = p.y() - y;
+  auto at = [&](int xx, int yy) { return static_cast<double>(image.at<uint8_t>(yy, xx)); };
+  return (1 - ay) * ((1 - ax) * at(x, y) + ax * at(x + 1, y)) +
+         ay * ((1 - ax) * at(x, y + 1) + ax * at(x + 1, y + 1));
+}
+
+TEST(SimulatedRigSpec, CheckNamesTheField) {
+  ASSERT_TRUE(MakeSimulatedRig(TwoCameraSpec()));
+  struct Case {
+    std::function<void(SimulatedRigSpec*)> change;
+    std::string field;
+  };
+  const std::vector<Case> cases = {
+      {[](SimulatedRigSpec* s) { s->frame_rate_hz = 0; }, "frame_rate_hz"},
+      {[](SimulatedRigSpec* s) { s->num_frames = 1000; }, "num_frames: 1000 frames at 20 Hz"},
+      {[](SimulatedRigSpec* s) {
+         s->num_frames = 10;
+         s->duration_s = 1;
+       },
+       "num_frames, duration_s"},
+      {[](SimulatedRigSpec* s) { s->waypoints.resize(1); }, "trajectory.waypoints"},
+      {[](SimulatedRigSpec* s) { s->waypoints.clear(); }, "trajectory"},
+      {[](SimulatedRigSpec* s) { s->noise_sigma = -1; }, "noise_sigma"},
+      {[](SimulatedRigSpec* s) { s->blur_exposure_s = 0.06; }, "motion_blur.exposure_ms"},
+      {[](SimulatedRigSpec* s) { s->drop_probability = 1; }, "drop_probability"},
+      {[](SimulatedRigSpec* s) { s->timestamp_jitter_s = 0.01; }, "timestamp_jitter_ms"},
+      {[](SimulatedRigSpec* s) { s->fail_after_s["cam7"] = 1; }, "fail_after_s.cam7"},
+      {[](SimulatedRigSpec* s) { s->render_block = 0; }, "render_block"},
+      {[](SimulatedRigSpec* s) { s->scene.boxes = 100; }, "scene.boxes"},
+      {[](SimulatedRigSpec* s) { s->names[1] = "cam0"; }, "duplicate camera name"},
+      {[](SimulatedRigSpec* s) { s->cameras.pop_back(); }, "cameras"},
+      {[](SimulatedRigSpec* s) { s->master_from_camera[0].C.x() = 1; }, "cam0.truth"},
+      {[](SimulatedRigSpec* s) { s->master_from_camera[1].q.coeffs() *= 2; }, "cam1.truth"},
+  };
+  for (const Case& c : cases) {
+    SimulatedRigSpec spec = TwoCameraSpec();
+    c.change(&spec);
+    const Status status = spec.Check();
+    EXPECT_FALSE(status.ok()) << c.field;
+    EXPECT_NE(status.message().find(c.field), std::string::npos)
+        << "'" << c.field << "' not in: " << status.message();
+    EXPECT_FALSE(MakeSimulatedRig(spec)) << c.field;
+  }
+}
+
+TEST(SimulatedRig, CameraLeavingTheFreeSpaceIsAnError) {
+  SimulatedRigSpec spec = TwoCameraSpec();
+  spec.waypoints.back().position = Eigen::Vector3d(0, 0, 5.99);  // ceiling at 6 m
+  auto rig = MakeSimulatedRig(spec);
+  ASSERT_FALSE(rig);
+  EXPECT_NE(rig.error().find("trajectory: camera cam"), std::string::npos) << rig.error();
+  EXPECT_NE(rig.error().find("leaves the room"), std::string::npos) << rig.error();
+}
+
+TEST(SimulatedRig, TrajectoryStartsAndEndsAtTheWaypointsAndIsSmooth) {
+  const SimulatedRigSpec spec = TwoCameraSpec();
+  const SimulatedRig rig = Make(spec);
+  EXPECT_EQ(rig.num_frames(), 121);  // 6 s at 20 Hz, both ends included
+  const Pose start = rig.WorldFromMasterAt(0.0);
+  const Pose end = rig.WorldFromMasterAt(6.0);
+  EXPECT_LT((start.C - spec.waypoints.front().position).norm(), 1e-12);
+  EXPECT_LT((end.C - spec.waypoints.back().position).norm(), 1e-12);
+  EXPECT_LT(start.q.angularDistance(spec.waypoints.front().world_from_master), 1e-9);
+  EXPECT_LT(end.q.angularDistance(spec.waypoints.back().world_from_master), 1e-9);
+  // Velocity and angular velocity are continuous (C2 spline): no jump at the knots.
+  const double h = 1e-4;
+  for (double knot : {2.0, 4.0}) {
+    const Eigen::Vector3d v_before =
+        (rig.WorldFromMasterAt(knot).C - rig.WorldFromMasterAt(knot - h).C) / h;
+    const Eigen::Vector3d v_after =
+        (rig.WorldFromMasterAt(knot + h).C - rig.WorldFromMasterAt(knot).C) / h;
+    EXPECT_LT((v_before - v_after).norm(), 1e-3) << knot;
+    const double w_before =
+        rig.WorldFromMasterAt(knot).q.angularDistance(rig.WorldFromMasterAt(knot - h).q) / h;
+    const double w_after =
+        rig.WorldFromMasterAt(knot + h).q.angularDistance(rig.WorldFromMasterAt(knot).q) / h;
+    EXPECT_NEAR(w_before, w_after, 1e-3) << knot;
+  }
+  // The slave follows its mounting.
+  const Pose slave = rig.WorldFromCameraAt(1, 3.3);
+  const Pose expected = rig.WorldFromMasterAt(3.3) * spec.master_from_camera[1];
+  EXPECT_LT((slave.C - expected.C).norm(), 1e-12);
+}
+
+TEST(SimulatedRig, RayDistanceToRoomWallIsAnalytic) {
+  const SimulatedRig rig = Make(TwoCameraSpec());  // room [-10, 10] x [-8, 8] x [0, 6]
+  const Eigen::Vector3d o(1.5, -0.5, 3.0);
+  ASSERT_TRUE(rig.CastRay(o, Eigen::Vector3d::UnitZ()));
+  EXPECT_NEAR(*rig.CastRay(o, Eigen::Vector3d::UnitZ()), 3.0, 1e-12);   // ceiling
+  EXPECT_NEAR(*rig.CastRay(o, -Eigen::Vector3d::UnitZ()), 3.0, 1e-12);  // floor
+  // Obliquely up to the ceiling: 3 m up along a 60-degree ray is 6 m.
+  const Eigen::Vector3d d(std::cos(M_PI / 6), 0, 0.5);
+  EXPECT_NEAR(*rig.CastRay(o, d), 6.0, 1e-9);
+  // The centre pixel of the master looking along +y at the +y wall (y = 8), when no box is in
+  // between: distance 8.5 m.
+  const Pose view = LookingAlongX(o, 90);
+  const Eigen::Vector3d centre_ray = view.R() * Eigen::Vector3d::UnitZ();
+  const auto t = rig.CastRay(o, centre_ray);
+  ASSERT_TRUE(t);
+  EXPECT_LE(*t, 8.5 + 1e-9);  // a box along the wall may be nearer
+  SimulatedRigSpec no_boxes = TwoCameraSpec();
+  no_boxes.scene.boxes = 0;
+  EXPECT_NEAR(*Make(no_boxes).CastRay(o, centre_ray), 8.5, 1e-9);
+}
+
+TEST(SimulatedRig, PipeRayDistances) {
+  SimulatedRigSpec spec = TwoCameraSpec();
+  spec.scene.type = SimulatedRigSpec::SceneType::kPipe;
+  spec.master_from_camera[1].C = Eigen::Vector3d(0, 0, -0.2);
+  spec.waypoints = {Waypoint({1, 0.05, 0}, 0), Waypoint({2, 0.05, 0}, 0)};
+  const SimulatedRig rig = Make(spec);
+  const Eigen::Vector3d o(1.5, 0.1, 0.0);
+  EXPECT_NEAR(*rig.CastRay(o, Eigen::Vector3d::UnitY()), 0.2, 1e-12);
+  EXPECT_NEAR(*rig.CastRay(o, -Eigen::Vector3d::UnitY()), 0.4, 1e-12);
+  EXPECT_NEAR(*rig.CastRay(o, Eigen::Vector3d::UnitZ()), std::sqrt(0.09 - 0.01), 1e-12);
+  EXPECT_NEAR(*rig.CastRay(o, Eigen::Vector3d::UnitX()), 40.0 - 1.5, 1e-12);  // end cap
+}
+
+// The top edge of a yard wall against the smooth sky: every column of a noise-free image turns
+// from sky to wall exactly at the first pixel row below the edge's projection.
+void ExpectWallTopAtProjection(int block) {
+  SimulatedRigSpec spec = TwoCameraSpec(320, 240);
+  spec.scene.type = SimulatedRigSpec::SceneType::kYard;  // walls at x = +-30, 8 m high
+  spec.scene.boxes = 0;
+  spec.waypoints = {Waypoint({10, 0, 6}, 0), Waypoint({11, 0, 6}, 0)};
+  const SimulatedRig rig = Make(spec);
+  const auto& camera = spec.cameras[0];
+  const Pose view = LookingAlongX({14, 0.3, 6.0}, 4.0, 1.0);  // slight yaw and pitch
+  const cv::Mat image = rig.RenderView(0, view, block);
+  int checked = 0, exact = 0;
+  for (int x = 0; x < image.cols; ++x) {
+    // The wall's top edge (30, y, 8) as seen by this column: intersect the column's plane.
+    const Eigen::Vector3d top_row = view.R() * *camera->Unproject({double(x), 0.0}, nullptr);
+    const Eigen::Vector3d bottom_row =
+        view.R() * *camera->Unproject({double(x), image.rows - 1.0}, nullptr);
+    const Eigen::Vector3d normal = top_row.cross(bottom_row);  // column plane through the centre
+    // Point on the edge line p(s) = (30, s, 8) in that plane: normal . (p(s) - C) = 0.
+    const Eigen::Vector3d c = view.C;
+    const double s = -(normal.x() * (30 - c.x()) + normal.z() * (8 - c.z())) / normal.y() + c.y();
+    const Eigen::Vector3d edge_cam = view.R().transpose() * (Eigen::Vector3d(30, s, 8) - c);
+    const auto px = camera->Project(edge_cam, nullptr);
+    ASSERT_TRUE(px);
+    ASSERT_NEAR(px->x(), x, 1e-6);
+    const int first_wall_row = static_cast<int>(std::ceil(px->y()));
+    if (first_wall_row < 2 || first_wall_row >= image.rows - 2) continue;
+    // The sky's intensity is a smooth function of direction; the wall is textured.
+    int found = -1;
+    for (int y = 0; y < image.rows && found < 0; ++y) {
+      const Eigen::Vector3d d = view.R() * *camera->Unproject({double(x), double(y)}, nullptr);
+      const double sky = 160.0 + 60.0 * d.normalized().z();
+      if (std::abs(image.at<uint8_t>(y, x) - sky) > 1.01) found = y;
+    }
+    ++checked;
+    exact += found == first_wall_row;
+  }
+  ASSERT_GT(checked, 300);
+  // A wall texel may match the sky's grey by chance, which delays the detected edge.
+  EXPECT_GE(exact, 0.97 * checked) << "block " << block << ": " << exact << " of " << checked;
+}
+
+TEST(SimulatedRig, WallEdgeAppearsWhereTheModelProjectsIt) {
+  ExpectWallTopAtProjection(1);
+  ExpectWallTopAtProjection(4);
+}
+
+// Renders two views of the room; a pixel of view A and the projection into view B of the 3D
+// point that A's pixel sees must show the same texture.
+double RegistrationError(const SimulatedRig& rig, int cam_a, const Pose& a, int cam_b,
+                         const Pose& b, const camera::CameraModel& model_a,
+                         const camera::CameraModel& model_b, const Eigen::Vector2d& shift,
+                         int* count) {
+  const cv::Mat image_a = rig.RenderView(cam_a, a, 1);
+  const cv::Mat image_b = rig.RenderView(cam_b, b, 1);
+  double sum = 0;
+  *count = 0;
+  for (int y = 8; y < image_a.rows - 8; y += 3) {
+    for (int x = 8; x < image_a.cols - 8; x += 3) {
+      const auto bearing = model_a.Unproject({double(x), double(y)}, nullptr);
+      if (!bearing) continue;
+      const Eigen::Vector3d d = a.R() * *bearing;
+      const auto t = rig.CastRay(a.C, d);
+      if (!t) continue;
+      const Eigen::Vector3d point = a.C + *t * d;
+      // Skip points near a depth edge of view A or hidden in view B.
+      const Eigen::Vector3d to_point = point - b.C;
+      const auto t_b = rig.CastRay(b.C, to_point);
+      if (!t_b || std::abs(*t_b - 1.0) > 1e-6) continue;
+      const auto px = model_b.Project(b.R().transpose() * to_point, nullptr);
+      if (!px) continue;
+      const Eigen::Vector2d q = *px + shift;
+      if (q.x() < 1 || q.y() < 1 || q.x() > image_b.cols - 3 || q.y() > image_b.rows - 3) {
+        continue;
+      }
+      sum += std::abs(image_a.at<uint8_t>(y, x) - SampleBilinear(image_b, q));
+      ++*count;
+    }
+  }
+  return *count > 0 ? sum / *count : 1e9;
+}
+
+TEST(SimulatedRig, TwoViewsAgreeThroughProjection) {
+  const SimulatedRigSpec spec = TwoCameraSpec(320, 240);
+  const SimulatedRig rig = Make(spec);
+  const Pose a = LookingAlongX({0, 0, 3}, 10, 5);
+  const Pose b = LookingAlongX({0.3, 0.4, 3.1}, 14, 2);
+  int n = 0, n_shifted = 0;
+  const double error = RegistrationError(rig, 0, a, 0, b, *spec.cameras[0], *spec.cameras[0],
+                                         Eigen::Vector2d::Zero(), &n);
+  const double shifted = RegistrationError(rig, 0, a, 0, b, *spec.cameras[0], *spec.cameras[0],
+                                           Eigen::Vector2d(1.5, 0), &n_shifted);
+  std::printf("pinhole two-view registration: %.2f grey levels (%d points); 1.5 px off: %.2f\n",
+              error, n, shifted);
+  EXPECT_GT(n, 3000);
+  EXPECT_LT(error, 4.0);
+  EXPECT_LT(error, 0.5 * shifted);
+}
+
+TEST(SimulatedRig, FisheyeBeyond180DegreesAgreesWithPinhole) {
+  // A 200-degree fisheye master and a pinhole looking 95 degrees to its side and slightly
+  // back, from the same centre: the pinhole's pixels are seen by the fisheye at bearings with
+  // z < 0.
+  SimulatedRigSpec spec = TwoCameraSpec();
+  const double f = 100.0;  // px / rad: 0.01 rad per pixel on both cameras
+  spec.cameras = {IdealEquidistant(360, 360, f, 100.0), IdealPinhole(160, 120, f, f, 79.5, 59.5)};
+  const SimulatedRig rig = Make(spec);
+  const Pose a = LookingAlongX({0, 0, 3}, 0);
+  const Pose b = LookingAlongX({0, 0, 3}, 95);
+  int n = 0, n_shifted = 0;
+  const double error = RegistrationError(rig, 1, b, 0, a, *spec.cameras[1], *spec.cameras[0],
+                                         Eigen::Vector2d::Zero(), &n);
+  const double shifted = RegistrationError(rig, 1, b, 0, a, *spec.cameras[1], *spec.cameras[0],
+                                           Eigen::Vector2d(0, 2.0), &n_shifted);
+  std::printf(
+      "fisheye (z < 0) vs pinhole registration: %.2f grey levels (%d points); 2 px off: "
+      "%.2f\n",
+      error, n, shifted);
+  EXPECT_GT(n, 500);
+  EXPECT_LT(error, 6.0);
+  EXPECT_LT(error, 0.6 * shifted);
+  // Outside the 200-degree image circle the image is black.
+  const cv::Mat image = rig.RenderView(0, a);
+  EXPECT_EQ(image.at<uint8_t>(0, 0), 0);
+  EXPECT_GT(cv::mean(image(cv::Rect(150, 150, 60, 60)))[0], 20.0);
+}
+
+TEST(SimulatedRig, BlockInterpolationMatchesExactRendering) {
+  SimulatedRigSpec spec = TwoCameraSpec(752, 480);
+  const SimulatedRig rig = Make(spec);
+  for (const Pose& view : {LookingAlongX({-2, 0, 3}, 10, 5), LookingAlongX({1, 2, 1.0}, -60, 30),
+                           LookingAlongX({0, 0, 5.5}, 30, -40)}) {
+    const cv::Mat exact = rig.RenderView(0, view, 1);
+    const cv::Mat fast = rig.RenderView(0, view, 4);
+    cv::Mat diff;
+    cv::absdiff(exact, fast, diff);
+    const double mean = cv::mean(diff)[0];
+    double max_diff = 0;
+    cv::minMaxLoc(diff, nullptr, &max_diff);
+    const double above2 = cv::countNonZero(diff > 2) / static_cast<double>(diff.total());
+    std::printf("block 4 vs exact: mean |diff| %.3f, max %.0f grey levels, %.2f%% of pixels > 2\n",
+                mean, max_diff, 100 * above2);
+    EXPECT_LT(mean, 0.25);
+    EXPECT_LT(above2, 0.01);
+  }
+}
+
+TEST(SimulatedRig, DeterministicForASeed) {
+  SimulatedRigSpec spec = TwoCameraSpec();
+  spec.noise_sigma = 3;
+  spec.blur_exposure_s = 0.01;
+  spec.blur_samples = 3;
+  const SimulatedRig a = Make(spec);
+  const SimulatedRig b = Make(spec);
+  for (int64_t k : {0, 17, 60}) {
+    for (int c = 0; c < 2; ++c) {
+      EXPECT_EQ(cv::norm(a.RenderFrame(c, k), b.RenderFrame(c, k), cv::NORM_INF), 0.0);
+    }
+  }
+  // Devices render the same frames as RenderFrame, whichever thread runs them.
+  auto device = a.MakeDevice(1);
+  std::vector<cv::Mat> grabbed;
+  std::thread thread([&] {
+    for (int i = 0; i < 3; ++i) grabbed.push_back((*device->Grab())->image);
+  });
+  thread.join();
+  for (int k = 0; k < 3; ++k)
+    EXPECT_EQ(cv::norm(grabbed[k], b.RenderFrame(1, k), cv::NORM_INF), 0.0);
+  // Another seed: other textures and noise.
+  spec.seed = 8;
+  const SimulatedRig c = Make(spec);
+  EXPECT_GT(cv::norm(a.RenderFrame(0, 0), c.RenderFrame(0, 0), cv::NORM_L1) / (160 * 120), 10.0);
+}
+
+TEST(SimulatedRig, NoiseHasTheConfiguredSigma) {
+  SimulatedRigSpec spec = TwoCameraSpec(320, 240);
+  spec.noise_sigma = 4;
+  const SimulatedRig rig = Make(spec);
+  const cv::Mat noisy = rig.RenderFrame(0, 10);
+  const cv::Mat clean = rig.RenderView(0, rig.WorldFromCameraAt(0, rig.FrameStreamTime(10)));
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  for (int y = 0; y < noisy.rows; ++y) {
+    for (int x = 0; x < noisy.cols; ++x) {
+      const int c = clean.at<uint8_t>(y, x);
+      if (c < 20 || c > 235) continue;  // away from saturation
+      const double d = noisy.at<uint8_t>(y, x) - c;
+      sum += d;
+      sum2 += d * d;
+      ++n;
+    }
+  }
+  const double mean = sum / n;
+  const double sigma = std::sqrt(sum2 / n - mean * mean);
+  // Quantisation of both images adds about 1/12 + 1/12 grey levels^2 of variance.
+  const double expected = std::sqrt(16.0 + 2.0 / 12.0);
+  std::printf("noise: mean %.3f, sigma %.3f (expected %.3f), %d pixels\n", mean, sigma, expected,
+              n);
+  EXPECT_NEAR(mean, 0.0, 0.1);
+  EXPECT_NEAR(sigma, expected, 0.1);
+}
+
+double GradientEnergy(const cv::Mat& image) {
+  cv::Mat gx;
+  cv::Sobel(image, gx, CV_32F, 1, 0);
+  return cv::mean(cv::abs(gx))[0];
+}
+
+TEST(SimulatedRig, MotionBlurSmoothsMovingImages) {
+  SimulatedRigSpec spec = TwoCameraSpec(320, 240);
+  // A fast pan: 40 degrees in 0.5 s.
+  spec.waypoints = {Waypoint({0, 0, 3}, 0), Waypoint({0, 0, 3}, 40)};
+  spec.waypoint_interval_s = 0.5;
+  const SimulatedRig sharp = Make(spec);
+  spec.blur_exposure_s = 0.02;
+  spec.blur_samples = 8;
+  const SimulatedRig blurred = Make(spec);
+  const double e_sharp = GradientEnergy(sharp.RenderFrame(0, 5));
+  const double e_blur = GradientEnergy(blurred.RenderFrame(0, 5));
+  std::printf("horizontal gradient energy: sharp %.2f, blurred %.2f\n", e_sharp, e_blur);
+  EXPECT_LT(e_blur, 0.7 * e_sharp);
+  // A camera at rest is not blurred.
+  spec.waypoints = {Waypoint({0, 0, 3}, 0), Waypoint({0, 0, 3}, 0)};
+  spec.blur_exposure_s = 0;
+  const SimulatedRig still = Make(spec);
+  spec.blur_exposure_s = 0.02;
+  const SimulatedRig still_blurred = Make(spec);
+  EXPECT_LE(cv::norm(still.RenderFrame(0, 3), still_blurred.RenderFrame(0, 3), cv::NORM_INF), 1.0);
+}
+
+TEST(SimulatedCamera, FrameTimesDropsAndJitterMatchTheSpec) {
+  SimulatedRigSpec spec = TwoCameraSpec(16, 12);
+  spec.waypoint_interval_s = 40.0;  // 120 s: 2401 frames at 20 Hz
+  spec.drop_probability = 0.2;
+  spec.timestamp_jitter_s = 0.002;
+  spec.start_time_ns = 1'000'000'000'000;
+  const SimulatedRig rig = Make(spec);
+  const int64_t frames = rig.num_frames();
+  ASSERT_EQ(frames, 2401);
+  for (int c = 0; c < 2; ++c) {
+    auto device = rig.MakeDevice(c);
+    EXPECT_EQ(device->name(), spec.names[c]);
+    EXPECT_EQ(device->frame_rate_hz(), 20.0);
+    int64_t received = 0, last_seq = -1, last_t = 0;
+    double sum = 0, sum2 = 0, max_abs = 0;
+    for (;;) {
+      auto frame = device->Grab();
+      ASSERT_TRUE(frame) << frame.error();
+      if (!frame->has_value()) break;
+      const capture::Frame& f = **frame;
+      EXPECT_EQ(f.camera, c);
+      EXPECT_GT(f.seq, last_seq);
+      EXPECT_GT(f.t_ns, last_t);
+      EXPECT_EQ(f.image.type(), CV_8UC1);
+      last_seq = f.seq;
+      last_t = f.t_ns;
+      const double jitter = static_cast<double>(f.t_ns - rig.FrameTimeNs(f.seq)) * 1e-9;
+      sum += jitter;
+      sum2 += jitter * jitter;
+      max_abs = std::max(max_abs, std::abs(jitter));
+      ++received;
+    }
+    EXPECT_FALSE(*device->Grab());  // stays at the end
+    EXPECT_EQ(received + device->dropped(), frames);
+    const double p = static_cast<double>(device->dropped()) / frames;
+    const double p_tolerance = 4.0 * std::sqrt(0.2 * 0.8 / frames);
+    const double mean = sum / received;
+    const double sigma = std::sqrt(sum2 / received - mean * mean);
+    // Clipping a normal at 3 sigma leaves 98.6% of its standard deviation.
+    const double expected_sigma = 0.002 * 0.9865;
+    const double sigma_tolerance = 4.0 * expected_sigma / std::sqrt(2.0 * received);
+    std::printf(
+        "%s: %ld frames, drop rate %.4f (0.2 +- %.4f), jitter mean %.2f us, sigma %.4f "
+        "ms (%.4f +- %.4f), max %.3f ms\n",
+        spec.names[c].c_str(), static_cast<long>(received), p, p_tolerance, mean * 1e6, sigma * 1e3,
+        expected_sigma * 1e3, sigma_tolerance * 1e3, max_abs * 1e3);
+    EXPECT_NEAR(p, 0.2, p_tolerance);
+    EXPECT_NEAR(mean, 0.0, 4.0 * 0.002 / std::sqrt(received));
+    EXPECT_NEAR(sigma, expected_sigma, sigma_tolerance);
+    EXPECT_LE(max_abs, 3 * 0.002 + 1e-9);
+  }
+  // Drops are independent per camera.
+  EXPECT_EQ(rig.FrameTimeNs(0), spec.start_time_ns);
+  EXPECT_EQ(rig.FrameTimeNs(3), spec.start_time_ns + 150'000'000);
+}
+
+TEST(SimulatedCamera, FailingCameraReturnsAnErrorAfterItsTime) {
+  SimulatedRigSpec spec = TwoCameraSpec(16, 12);
+  spec.fail_after_s["cam1"] = 0.5;
+  const SimulatedRig rig = Make(spec);
+  auto master = rig.MakeDevice(0);
+  auto slave = rig.MakeDevice(1);
+  int slave_frames = 0;
+  for (;;) {
+    auto frame = slave->Grab();
+    if (!frame) {
+      EXPECT_NE(frame.error().find("cam1"), std::string::npos) << frame.error();
+      EXPECT_NE(frame.error().find("0.5"), std::string::npos) << frame.error();
+      break;
+    }
+    ASSERT_TRUE(frame->has_value()) << "stream ended without the failure";
+    EXPECT_LT(rig.FrameStreamTime((*frame)->seq), 0.5);
+    ++slave_frames;
+  }
+  EXPECT_EQ(slave_frames, 10);  // frames at 0, 0.05, ..., 0.45 s
+  EXPECT_FALSE(slave->Grab());  // stays failed
+  int master_frames = 0;
+  for (;;) {
+    auto frame = master->Grab();
+    ASSERT_TRUE(frame) << frame.error();
+    if (!frame->has_value()) break;
+    ++master_frames;
+  }
+  EXPECT_EQ(master_frames, rig.num_frames());
+}
+
+TEST(SimulatedCamera, RealtimeStampsAndInterrupt) {
+  SimulatedRigSpec spec = TwoCameraSpec(16, 12);
+  spec.realtime = true;
+  spec.frame_rate_hz = 100;
+  spec.num_frames = 5;
+  const SimulatedRig rig = Make(spec);
+  EXPECT_EQ(rig.epoch_ns(), 0);  // not started yet
+  auto device = rig.MakeDevice(0);
+  std::vector<int64_t> stamps;
+  for (;;) {
+    auto frame = device->Grab();
+    ASSERT_TRUE(frame) << frame.error();
+    if (!frame->has_value()) break;
+    stamps.push_back((*frame)->t_ns);
+  }
+  ASSERT_GT(rig.epoch_ns(), 0);
+  ASSERT_EQ(stamps.size() + device->late_skipped(), 5u);
+  for (int64_t t : stamps) {
+    EXPECT_EQ((t - rig.epoch_ns()) % 10'000'000, 0);  // on the 100 Hz grid, no jitter
+  }
+  // Interrupt before Grab: end of stream at once.
+  auto other = rig.MakeDevice(1);
+  other->Interrupt();
+  auto frame = other->Grab();
+  ASSERT_TRUE(frame);
+  EXPECT_FALSE(frame->has_value());
+  // Interrupt while Grab waits for a frame due in 10 s.
+  spec.frame_rate_hz = 0.1;
+  spec.num_frames = 0;
+  spec.waypoint_interval_s = 20;
+  const SimulatedRig slow = Make(spec);
+  auto waiting = slow.MakeDevice(0);
+  ASSERT_TRUE(*waiting->Grab());  // frame 0 is due at once
+  std::optional<Expected<std::optional<capture::Frame>>> result;
+  std::thread grabber([&] { result.emplace(waiting->Grab()); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  waiting->Interrupt();
+  grabber.join();
+  ASSERT_TRUE(result && *result);
+  EXPECT_FALSE((*result)->has_value());
+}
+
+double ThreadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+TEST(SimulatedRig, RenderSpeedReport) {
+  // Not an assertion on time: prints the cost per frame for the record.
+  struct Case {
+    const char* name;
+    SimulatedRigSpec spec;
+  };
+  SimulatedRigSpec pinhole = TwoCameraSpec(752, 480);
+  SimulatedRigSpec fisheye = TwoCameraSpec();
+  fisheye.cameras = {IdealEquidistant(640, 640, 191.0, 93.0),
+                     IdealEquidistant(640, 640, 191.0, 93.0)};
+  SimulatedRigSpec pipe = fisheye;
+  pipe.scene.type = SimulatedRigSpec::SceneType::kPipe;
+  pipe.master_from_camera[1] =
+      Mounting(Eigen::Quaterniond(0, 0, 1, 0), Eigen::Vector3d(0, 0, -0.35));
+  pipe.waypoints = {Waypoint({1, 0, 0}, 0), Waypoint({2, 0.02, 0.01}, 3, 2, 1),
+                    Waypoint({3, 0, 0}, 0), Waypoint({4, 0, 0}, 0)};
+  for (const auto& [name, spec] : std::vector<Case>{{"pinhole 752x480 room", pinhole},
+                                                    {"fisheye 640x640 room", fisheye},
+                                                    {"fisheye 640x640 pipe", pipe}}) {
+    for (int block : {4, 1}) {
+      SimulatedRigSpec s = spec;
+      s.render_block = block;
+      s.noise_sigma = 2;
+      const SimulatedRig rig = Make(s);
+      const int frames = block == 1 ? 5 : 30;
+      // CPU time of this thread (other processes on the machine do not count).
+      const double start = ThreadCpuSeconds();
+      for (int k = 0; k < frames; ++k) (void)rig.RenderFrame(k % 2, k * 2);
+      const double ms = (ThreadCpuSeconds() - start) * 1e3 / frames;
+      std::printf("render %-22s block %d: %.2f ms CPU per frame\n", name, block, ms);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace rigcal::sim
