@@ -76,9 +76,10 @@ VoRun RunVo(const RealMonoSequence& s, const std::vector<int>& frames,
     run.cpu_ms.push_back(ThreadCpuMs() - cpu0);
     run.wall_ms.push_back(r.processing_ms);
     if (verbose) {
-      std::printf("%s frame %d: %s tracks %d inliers %d%s %.2f ms %s\n", s.name.c_str(), k,
-                  ToString(r.state).c_str(), r.tracked_features, r.inliers,
-                  r.keyframe ? " keyframe" : "", r.processing_ms, r.message.c_str());
+      std::printf("%s frame %d: %s tracks %d inliers %d%s noise %.2f px %.2f ms %s\n",
+                  s.name.c_str(), k, ToString(r.state).c_str(), r.tracked_features, r.inliers,
+                  r.keyframe ? " keyframe" : "", r.track_noise_px, r.processing_ms,
+                  r.message.c_str());
     }
     if (r.segment_start) {
       run.segments[r.segment_start->segment][frame_of.at(r.segment_start->t_ns)] =

@@ -64,18 +64,23 @@ bool MonocularVo::Impl::EstimateInitialMotion(const InitialViews& views,
   ransac.min_inliers = options_.min_init_inliers;
   *motion = EstimateRelativePose(views.reference, views.current, ransac, &rng_);
   result->inliers = motion->num_inliers;
+  // The epipolar distances of every track to the best model measure the noise the gates are
+  // made of, also when the gate was too tight for enough inliers: the median of the distances
+  // is robust to the tracks that do not fit (moving objects), and a gate set from the noise of
+  // still frames opens once the hand-held camera moves and blurs.
+  if (!motion->E.isZero()) {
+    std::vector<double> distances_px;
+    distances_px.reserve(views.reference.size());
+    for (size_t i = 0; i < views.reference.size(); ++i) {
+      distances_px.push_back(EpipolarAngle(motion->E, views.reference[i], views.current[i]) /
+                             pixel_angle_);
+    }
+    noise_.AddEpipolarDistances(distances_px);
+  }
   if (!motion->success || motion->num_inliers < options_.min_init_inliers) {
     result->message = "essential matrix: too few inliers";
     return false;
   }
-  // The epipolar distances of every track measure the noise the gates are made of.
-  std::vector<double> distances_px;
-  distances_px.reserve(views.reference.size());
-  for (size_t i = 0; i < views.reference.size(); ++i) {
-    distances_px.push_back(EpipolarAngle(motion->E, views.reference[i], views.current[i]) /
-                           pixel_angle_);
-  }
-  noise_.AddEpipolarDistances(distances_px);
   if (motion->num_in_front < options_.min_init_cheirality_fraction * motion->num_inliers) {
     result->message = "essential matrix: degenerate geometry (points behind the cameras)";
     return false;
