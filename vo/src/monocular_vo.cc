@@ -63,13 +63,15 @@ VoResult MonocularVo::Impl::Process(int64_t t_ns, const cv::Mat& image) {
     }
     result.message = problem;
   } else {
-    klt_.AddImage(grey);
+    // Exposure steps scaled back: the tracked patches keep their grey levels.
+    const cv::Mat tracked = exposure_.Apply(grey);
+    klt_.AddImage(tracked);
     if (state_ == VoState::kTracking) {
-      TrackFrame(t_ns, grey, &result);
+      TrackFrame(t_ns, tracked, &result);
     } else if (state_ == VoState::kLost) {
-      Relocalise(t_ns, grey, &result);
+      Relocalise(t_ns, tracked, &result);
     } else {
-      Initialise(t_ns, grey, &result);
+      Initialise(t_ns, tracked, &result);
     }
   }
   result.tracked_features = static_cast<int>(tracks_.size());

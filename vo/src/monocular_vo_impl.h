@@ -14,6 +14,7 @@
 
 #include "absolute_pose.h"
 #include "affine_patch.h"
+#include "exposure_compensation.h"
 #include "feature_grid.h"
 #include "klt_tracker.h"
 #include "map_descriptors.h"
@@ -175,6 +176,7 @@ class MonocularVo::Impl {
   double pixel_angle_ = 1e-3;
   cv::Mat valid_mask_;  // CV_8UC1: where tracks may live
   KltTracker klt_;
+  ExposureCompensation exposure_;
   std::unique_ptr<FeatureGrid> grid_;
   std::unique_ptr<OrbDescriber> describer_;
   TrackNoise noise_;

@@ -13,6 +13,7 @@ MonocularVo::Impl::Impl(std::shared_ptr<const camera::CameraModel> camera, int c
     : options_(options),
       camera_(std::move(camera)),
       camera_index_(camera_index),
+      exposure_(options.inlier_sigmas, options.noise_window_frames),
       noise_(options.noise_floor_px, options.inlier_sigmas, options.noise_window_frames) {
   RequireValid(options_.Check(), "VoOptions");
   describer_ = std::make_unique<OrbDescriber>(options_.relocalisation_features);
