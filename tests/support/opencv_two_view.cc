@@ -13,8 +13,8 @@ namespace rigcal::support {
 namespace {
 
 // Relative pose from point correspondences (pixels) by the 5-point RANSAC and recoverPose.
-std::optional<Pose> FivePoint(const std::vector<cv::Point2d>& pa, const std::vector<cv::Point2d>& pb,
-                              const cv::Matx33d& K) {
+std::optional<Pose> FivePoint(const std::vector<cv::Point2d>& pa,
+                              const std::vector<cv::Point2d>& pb, const cv::Matx33d& K) {
   if (pa.size() < 8) return std::nullopt;
   cv::Mat inliers;
   const cv::Mat E = cv::findEssentialMat(pa, pb, cv::Mat(K), cv::RANSAC, 0.999, 1.0, inliers);

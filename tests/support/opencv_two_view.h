@@ -19,7 +19,6 @@ std::optional<Pose> OpenCvRelativePose(const cv::Mat& grey_a, const cv::Mat& gre
 // The same from KLT tracks instead of ORB matches: Shi-Tomasi corners of `frames.front()`
 // tracked frame to frame (cv::calcOpticalFlowPyrLK, forward-backward checked) to
 // `frames.back()`, then the 5-point RANSAC and cv::recoverPose.
-std::optional<Pose> OpenCvKltRelativePose(const std::vector<cv::Mat>& frames,
-                                          const cv::Matx33d& K);
+std::optional<Pose> OpenCvKltRelativePose(const std::vector<cv::Mat>& frames, const cv::Matx33d& K);
 
 }  // namespace rigcal::support

@@ -32,8 +32,8 @@ std::optional<double> XmlNumber(const std::string& xml, const std::string& tag) 
   return std::stod(match[1].str());
 }
 
-Expected<std::shared_ptr<const camera::CameraModel>> Pinhole640x480(double px, double py,
-                                                                    double u0, double v0) {
+Expected<std::shared_ptr<const camera::CameraModel>> Pinhole640x480(double px, double py, double u0,
+                                                                    double v0) {
   camera::CameraSpec spec;
   spec.model = camera::CameraSpec::Model::kPinhole;
   spec.width = 640;

@@ -38,7 +38,8 @@ std::vector<RelativePoseError> RelativePoseErrors(const std::map<int, Pose>& est
     const auto ref_a = reference.find(a);
     const auto ref_b = reference.find(b);
     if (est_b == estimate.end() || ref_a == reference.end() || ref_b == reference.end()) continue;
-    RelativePoseError e = CompareRelativeMotion(pose_a, est_b->second, ref_a->second, ref_b->second);
+    RelativePoseError e =
+        CompareRelativeMotion(pose_a, est_b->second, ref_a->second, ref_b->second);
     e.a = a;
     e.b = b;
     out.push_back(e);
@@ -52,8 +53,8 @@ ErrorStats Stats(std::vector<double> values) {
   if (values.empty()) return s;
   std::sort(values.begin(), values.end());
   s.median = values[(values.size() - 1) / 2];
-  s.p90 = values[std::min(values.size() - 1,
-                          static_cast<size_t>(std::ceil(0.9 * values.size())) - 1)];
+  s.p90 =
+      values[std::min(values.size() - 1, static_cast<size_t>(std::ceil(0.9 * values.size())) - 1)];
   return s;
 }
 

@@ -16,8 +16,7 @@ TEST(BearingCost, ResidualAndJacobiansMatchNumericDifferentiation) {
   std::mt19937 rng(11);
   std::normal_distribution<double> g(0.0, 1.0);
   for (int trial = 0; trial < 50; ++trial) {
-    const Eigen::Quaterniond q =
-        Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized();
+    const Eigen::Quaterniond q = Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized();
     const Eigen::Vector3d centre(g(rng), g(rng), g(rng));
     const Eigen::Vector3d point = centre + 3.0 * Eigen::Vector3d(g(rng), g(rng), g(rng));
     const Eigen::Vector3d f = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();

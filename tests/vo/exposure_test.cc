@@ -24,7 +24,7 @@ struct ExposureRun {
   int segments = 0;
   int poses = 0;
   int first_pose = -1;
-  double max_rotation_deg = 0.0;  // frame-to-frame relative rotation error
+  double max_rotation_deg = 0.0;      // frame-to-frame relative rotation error
   double aligned_rms_fraction = 0.0;  // Sim(3)-aligned centre RMS / path length
 };
 

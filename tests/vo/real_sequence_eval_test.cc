@@ -104,7 +104,8 @@ std::vector<int> AllFrames(const RealMonoSequence& s) {
 
 std::map<int, Pose> Truth(const RealMonoSequence& s) {
   std::map<int, Pose> truth;
-  for (size_t k = 0; k < s.grid_from_cam.size(); ++k) truth[static_cast<int>(k)] = s.grid_from_cam[k];
+  for (size_t k = 0; k < s.grid_from_cam.size(); ++k)
+    truth[static_cast<int>(k)] = s.grid_from_cam[k];
   return truth;
 }
 
@@ -122,8 +123,9 @@ std::vector<RelativePoseError> RunErrors(const VoRun& run, const std::map<int, P
 void PrintTiming(const std::string& label, const VoRun& run) {
   const auto wall = support::Stats(run.wall_ms);
   const auto cpu = support::Stats(run.cpu_ms);
-  std::printf("%s: VO per frame wall clock median %.2f p90 %.2f ms, thread CPU median %.2f p90 %.2f ms\n",
-              label.c_str(), wall.median, wall.p90, cpu.median, cpu.p90);
+  std::printf(
+      "%s: VO per frame wall clock median %.2f p90 %.2f ms, thread CPU median %.2f p90 %.2f ms\n",
+      label.c_str(), wall.median, wall.p90, cpu.median, cpu.p90);
 }
 
 // The tag poses' noise floor at `step` frames: every tag's own relative motion (the pose of the
@@ -235,9 +237,10 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
   ASSERT_EQ(s.grid_from_cam.size(), s.grey.size());
   const VoRun run = RunVo(s, AllFrames(s));
   const std::map<int, Pose> truth = Truth(s);
-  std::printf("visp_rbt_sequence: first pose at frame %d, %d of %zu frames with a pose, %zu "
-              "segment(s)\n",
-              run.first_pose, run.frames_with_pose, s.grey.size(), run.segments.size());
+  std::printf(
+      "visp_rbt_sequence: first pose at frame %d, %d of %zu frames with a pose, %zu "
+      "segment(s)\n",
+      run.first_pose, run.frames_with_pose, s.grey.size(), run.segments.size());
   PrintTiming("visp_rbt_sequence", run);
   ASSERT_GE(run.first_pose, 0);
   EXPECT_LE(run.first_pose, 10);
@@ -255,9 +258,10 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
   for (const auto& [k, pose] : truth) {
     if (tag_rms[static_cast<size_t>(k)] <= rms_gate) sharp_truth[k] = pose;
   }
-  std::printf("tag corners vs grid pose: RMS median %.2f px, p90 %.2f px; %zu of %zu frames within "
-              "%.2f px\n",
-              rms_median, support::Stats(tag_rms).p90, sharp_truth.size(), truth.size(), rms_gate);
+  std::printf(
+      "tag corners vs grid pose: RMS median %.2f px, p90 %.2f px; %zu of %zu frames within "
+      "%.2f px\n",
+      rms_median, support::Stats(tag_rms).p90, sharp_truth.size(), truth.size(), rms_gate);
   for (const int step : {1, 5, 10}) {
     std::printf("step %2d: VO (well-measured frames) %s\n", step,
                 support::Describe(RunErrors(run, sharp_truth, step)).c_str());
@@ -277,7 +281,8 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
         "(/sqrt n) rotation %.3f deg, direction %.1f deg, position %.2f mm; true motion median "
         "%.1f mm\n",
         step, floor.tag_rotation_deg, floor.tag_direction_deg, floor.grid_rotation_deg,
-        floor.grid_direction_deg, 1e3 * floor.grid_position_m, 1e3 * support::Stats(lengths).median);
+        floor.grid_direction_deg, 1e3 * floor.grid_position_m,
+        1e3 * support::Stats(lengths).median);
     std::printf("step %2d: VO     %s, scale spread %.1f %% (pairs moving >= %.1f mm)\n", step,
                 support::Describe(vo).c_str(), 100.0 * support::ScaleSpread(vo, min_length),
                 1e3 * min_length);
@@ -326,10 +331,11 @@ TEST(RealSequenceVo, LowTextureCubeWithAMovingArm) {
   const RealMonoSequence& s = *loaded;
   const int motion_start = MotionStart(s);
   const VoRun run = RunVo(s, AllFrames(s));
-  std::printf("visp_mbt_cube: motion from frame %d, first pose at frame %d, %d of %d frames "
-              "after it with a pose, %zu segment(s)\n",
-              motion_start, run.first_pose, run.frames_with_pose, run.frames_after_first,
-              run.segments.size());
+  std::printf(
+      "visp_mbt_cube: motion from frame %d, first pose at frame %d, %d of %d frames "
+      "after it with a pose, %zu segment(s)\n",
+      motion_start, run.first_pose, run.frames_with_pose, run.frames_after_first,
+      run.segments.size());
   PrintTiming("visp_mbt_cube", run);
   ASSERT_GE(motion_start, 0);
   ASSERT_GE(run.first_pose, 0);

@@ -31,8 +31,8 @@ std::optional<Error> ParseImageFolders(const FieldReader& r, const YAML::Node& s
                                                          : (base / folder).string());
     capture::ImageFolderOptions options = defaults;
     if (const YAML::Node capture = entries[i]["capture"]) {
-      if (auto e = ParseImageFolderKeys(r, capture, camera.name + ".capture", false,
-                                        base.string(), &options)) {
+      if (auto e = ParseImageFolderKeys(r, capture, camera.name + ".capture", false, base.string(),
+                                        &options)) {
         return *e;
       }
     }
