@@ -301,6 +301,41 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
   }
 }
 
+// Frames removed from visp_rbt_sequence after frame kGapStart - 1 (gaps of 1, 5, 10 and 30
+// frames: 1/30 s to 1 s of hand-held motion): the VO stays in one scale segment, and the motion
+// across the gap (frame kGapStart - 1 to the first frame after it) against the tags'.
+TEST(RealSequenceVo, AprilTagSequenceWithGaps) {
+  if (!support::RealMonoAvailable("visp_rbt_sequence")) {
+    RIGCAL_SKIP_MISSING() << "no " << support::RealMonoFolder("visp_rbt_sequence");
+  }
+  auto loaded = support::LoadRealMono("visp_rbt_sequence");
+  ASSERT_TRUE(loaded.ok()) << loaded.error();
+  const RealMonoSequence& s = *loaded;
+  constexpr int kGapStart = 50;
+  const std::map<int, Pose> truth = Truth(s);
+  for (const int gap : {1, 5, 10, 30}) {
+    std::vector<int> frames;
+    for (int k = 0; k < static_cast<int>(s.grey.size()); ++k) {
+      if (k < kGapStart || k >= kGapStart + gap) frames.push_back(k);
+    }
+    const VoRun run = RunVo(s, frames);
+    const int before = kGapStart - 1;
+    const int after = kGapStart + gap;
+    std::printf("gap %2d frames: %zu segment(s), %d of %zu frames with a pose", gap,
+                run.segments.size(), run.frames_with_pose, frames.size());
+    for (const auto& [segment, poses] : run.segments) {
+      if (poses.count(before) && poses.count(after)) {
+        const RelativePoseError e = support::CompareRelativeMotion(
+            poses.at(before), poses.at(after), truth.at(before), truth.at(after));
+        std::printf("; across frames %d-%d rotation error %.3f deg, direction error %.1f deg",
+                    before, after, e.rotation_deg, e.direction_deg);
+      }
+    }
+    std::printf("\n");
+    EXPECT_EQ(run.segments.size(), 1u) << "gap " << gap;
+  }
+}
+
 // The first frame whose corners (of frame 0) moved by a median of more than 2 pixels: where the
 // hand-held camera starts moving. Measured with OpenCV alone, independently of the VO.
 int MotionStart(const RealMonoSequence& s) {
