@@ -1,7 +1,9 @@
-// The live capture sources of a rig config (source.type v4l2 / libcamera): defaults at the
-// source, overrides per camera, the camera's size, and errors that name the line and field.
+// The capture sources of a rig config (source.type v4l2 / libcamera / image_folders): defaults
+// at the source, overrides per camera, the camera's size, and errors that name the line and
+// field.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 
 #include "rigcal/io/rig_config.h"
@@ -120,6 +122,36 @@ TEST(CaptureSourceYaml, LibcameraCameraByModel) {
   EXPECT_EQ(config->libcamera_devices[1].buffers, 3);
   EXPECT_EQ(config->libcamera_devices[1].width, 320);
   EXPECT_EQ(config->libcamera_devices[1].formats.size(), 2u);
+}
+
+// Plain image folders: the source's rate and timestamps file (resolved against the config's
+// folder) are every camera's defaults; a camera's `capture:` overrides them.
+TEST(CaptureSourceYaml, ImageFolderRateAndTimestamps) {
+  const std::string path = Write("folders", std::string(kCameras) +
+                                                "    capture: {timestamps: left_stamps.txt}\n"
+                                                "source: {type: image_folders, rate_hz: 30}\n");
+  auto config = LoadRigConfig(path);
+  ASSERT_TRUE(config.ok()) << config.error();
+  ASSERT_EQ(config->image_folders.size(), 2u);
+  ASSERT_EQ(config->image_folder_options.size(), 2u);
+  EXPECT_DOUBLE_EQ(config->image_folder_options[0].rate_hz, 30.0);
+  EXPECT_TRUE(config->image_folder_options[0].timestamps_file.empty());
+  EXPECT_DOUBLE_EQ(config->image_folder_options[1].rate_hz, 30.0);
+  EXPECT_EQ(config->image_folder_options[1].timestamps_file,
+            (std::filesystem::path(path).parent_path() / "left_stamps.txt").string());
+
+  const std::string bad =
+      Write("folders_bad", std::string(kCameras) + "source: {type: image_folders, rate_hz: 0}\n");
+  auto rejected = LoadRigConfig(bad);
+  ASSERT_FALSE(rejected.ok());
+  EXPECT_NE(rejected.error().find("source.rate_hz: must be in (0, 10000]"), std::string::npos)
+      << rejected.error();
+  const std::string typo = Write("folders_typo", std::string(kCameras) +
+                                                     "    capture: {rate: 30}\n"
+                                                     "source: {type: image_folders}\n");
+  auto unknown = LoadRigConfig(typo);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().find("left.capture.rate"), std::string::npos) << unknown.error();
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// MonocularVo on the simulated rig's rendered sequences (rigcal/sim/simulated_rig.h) of the
+// MonocularVo on the simulated rig's rendered sequences (sim/simulated_rig.h) of the
 // example configs, one camera at a time in one thread (deterministic, no pipeline): the thesis
 // 5.4 virtual scene (two 60-degree pinhole cameras, 468 frames), the spherical rig of thesis 5.7
 // (two 186-degree fisheyes back to back), the sewer of thesis 5.6 (two fisheyes in a 60 cm
@@ -27,6 +27,7 @@
 #include "rigcal/io/trajectory_io.h"
 #include "rigcal/sim/simulated_rig.h"
 #include "rigcal/vo/monocular_vo.h"
+#include "vo_eval_options.h"
 
 namespace rigcal::vo {
 namespace {
@@ -37,50 +38,6 @@ struct CameraRun {
   int tracked = 0;
   double median_ms = 0.0;
 };
-
-// VoOptions with the overrides of RIGCAL_VO_EVAL_OPTIONS ("field=value,field=value"; integer
-// and floating-point fields by name), to measure what an option changes.
-VoOptions EvalOptions() {
-  VoOptions o;
-  const char* text = std::getenv("RIGCAL_VO_EVAL_OPTIONS");
-  if (text == nullptr) return o;
-  const std::map<std::string, int*> ints = {{"grid_cell_px", &o.grid_cell_px},
-                                            {"max_features", &o.max_features},
-                                            {"fast_threshold", &o.fast_threshold},
-                                            {"klt_window_px", &o.klt_window_px},
-                                            {"klt_pyramid_levels", &o.klt_pyramid_levels},
-                                            {"ba_window", &o.ba_window},
-                                            {"ba_max_iterations", &o.ba_max_iterations},
-                                            {"keyframe_max_frames", &o.keyframe_max_frames},
-                                            {"min_tracking_inliers", &o.min_tracking_inliers},
-                                            {"affine_half_size", &o.affine_half_size}};
-  const std::map<std::string, double*> doubles = {
-      {"klt_max_fb_error_px", &o.klt_max_fb_error_px},
-      {"ransac_threshold_px", &o.ransac_threshold_px},
-      {"keyframe_parallax_deg", &o.keyframe_parallax_deg},
-      {"keyframe_track_ratio", &o.keyframe_track_ratio},
-      {"min_triangulation_angle_deg", &o.min_triangulation_angle_deg},
-      {"ba_huber_px", &o.ba_huber_px},
-      {"affine_max_shift_px", &o.affine_max_shift_px},
-      {"affine_min_area", &o.affine_min_area},
-      {"affine_max_area", &o.affine_max_area},
-      {"normal_fov_sr", &o.normal_fov_sr}};
-  std::string all(text);
-  size_t start = 0;
-  while (start < all.size()) {
-    const size_t end = std::min(all.find(',', start), all.size());
-    const std::string item = all.substr(start, end - start);
-    const size_t eq = item.find('=');
-    if (eq != std::string::npos) {
-      const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
-      if (ints.count(key)) *ints.at(key) = std::stoi(value);
-      if (doubles.count(key)) *doubles.at(key) = std::stod(value);
-      if (!ints.count(key) && !doubles.count(key)) ADD_FAILURE() << "unknown option " << key;
-    }
-    start = end + 1;
-  }
-  return o;
-}
 
 CameraRun RunCamera(const sim::SimulatedRig& rig, int camera, int64_t frames) {
   CameraRun run;

@@ -21,5 +21,6 @@ void RegisterImport(CLI::App& app, int* exit_code);
 void RegisterIntrinsics(CLI::App& app, int* exit_code);
 void RegisterReferenceCompare(CLI::App& app, int* exit_code);
 void RegisterTrigger(CLI::App& app, int* exit_code);
+void RegisterVo(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

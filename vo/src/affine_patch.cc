@@ -85,25 +85,43 @@ bool AlignPatch(const PatchTemplate& patch, const cv::Mat& grey, const AffinePat
   double offset = 0.0;
   double sum2 = 0.0;
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    Eigen::Matrix<double, 7, 1> g = Eigen::Matrix<double, 7, 1>::Zero();
-    sum2 = 0.0;
     const Eigen::Matrix2d& a = *warp;
+    // The warped patch is a parallelogram: inside the image when its four corners are.
+    for (const double cu : {-h, h}) {
+      for (const double cv : {-h, h}) {
+        const double x = centre->x() + a(0, 0) * cu + a(0, 1) * cv;
+        const double y = centre->y() + a(1, 0) * cu + a(1, 1) * cv;
+        if (!(x >= 0.0 && y >= 0.0 && x < grey.cols - 1 && y < grey.rows - 1)) return false;
+      }
+    }
+    float g[7] = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+    float sum2_f = 0.f;
+    const float step_x = static_cast<float>(a(0, 0)), step_y = static_cast<float>(a(1, 0));
+    const float offset_f = static_cast<float>(offset);
     for (int v = 0; v < n; ++v) {
       const double y = v - h;
       // Row start and step of the warped coordinates.
-      double px = centre->x() + a(0, 0) * (-h) + a(0, 1) * y;
-      double py = centre->y() + a(1, 0) * (-h) + a(1, 1) * y;
-      for (int u = 0; u < n; ++u, px += a(0, 0), py += a(1, 0)) {
-        float value;
-        if (!Sample(grey, px, py, &value)) return false;
-        const size_t k = static_cast<size_t>(v) * n + u;
-        const double e = value - patch.values[k] - offset;
-        sum2 += e * e;
-        const float* sd = &patch.sd[7 * k];
+      float px = static_cast<float>(centre->x() + a(0, 0) * (-h) + a(0, 1) * y);
+      float py = static_cast<float>(centre->y() + a(1, 0) * (-h) + a(1, 1) * y);
+      const float* values = &patch.values[static_cast<size_t>(v) * n];
+      const float* sd = &patch.sd[static_cast<size_t>(v) * n * 7];
+      for (int u = 0; u < n; ++u, px += step_x, py += step_y, sd += 7) {
+        const int x0 = static_cast<int>(px);
+        const int y0 = static_cast<int>(py);
+        const float ax = px - static_cast<float>(x0);
+        const float ay = py - static_cast<float>(y0);
+        const uint8_t* row0 = grey.ptr<uint8_t>(y0) + x0;
+        const uint8_t* row1 = row0 + grey.step[0];
+        const float top = row0[0] + ax * static_cast<float>(row0[1] - row0[0]);
+        const float bottom = row1[0] + ax * static_cast<float>(row1[1] - row1[0]);
+        const float e = top + ay * (bottom - top) - values[u] - offset_f;
+        sum2_f += e * e;
         for (int i = 0; i < 7; ++i) g[i] += sd[i] * e;
       }
     }
-    const Eigen::Matrix<double, 7, 1> dq = patch.inverse_hessian * g;
+    sum2 = sum2_f;
+    const Eigen::Matrix<double, 7, 1> dq =
+        patch.inverse_hessian * Eigen::Map<const Eigen::Matrix<float, 7, 1>>(g).cast<double>();
     Eigen::Matrix2d increment;
     increment << 1.0 + dq[0], dq[1], dq[2], 1.0 + dq[3];
     const double det = increment.determinant();

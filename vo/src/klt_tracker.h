@@ -27,9 +27,11 @@ class KltTracker {
 
   // Tracks `previous` points of the previous image into the current one. `guesses` (empty or
   // one per point) are predicted positions. Sets (*tracked)[i] and (*ok)[i] = 1 for points
-  // that were tracked, lie inside the image and pass the forward-backward check.
+  // that were tracked, lie inside the image and pass the forward-backward check. `fb_px` (may
+  // be null) receives the forward-backward distances of the points tracked both ways, pixels.
   void Track(const std::vector<cv::Point2f>& previous, const std::vector<cv::Point2f>& guesses,
-             std::vector<cv::Point2f>* tracked, std::vector<unsigned char>* ok) const;
+             std::vector<cv::Point2f>* tracked, std::vector<unsigned char>* ok,
+             std::vector<double>* fb_px = nullptr) const;
 
  private:
   KltOptions options_;

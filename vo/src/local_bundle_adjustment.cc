@@ -8,33 +8,11 @@
 #include <set>
 #include <unordered_set>
 
+#include "bearing_cost.h"
 #include "triangulation.h"
 
 namespace rigcal::vo {
 namespace {
-
-// r = direction(R^T (X - C)) - f, three components (chord between the unit vectors).
-struct BearingResidual {
-  explicit BearingResidual(const Eigen::Vector3d& f) : f_(f) {}
-
-  template <typename T>
-  bool operator()(const T* q_world_from_cam, const T* centre, const T* point, T* residual) const {
-    Eigen::Map<const Eigen::Quaternion<T>> q(q_world_from_cam);
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> c(centre);
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> x(point);
-    const Eigen::Matrix<T, 3, 1> p = q.conjugate() * (x - c);
-    const T norm = p.norm();
-    if (!(norm > T(1e-12))) return false;
-    for (int i = 0; i < 3; ++i) residual[i] = p[i] / norm - T(f_[i]);
-    return true;
-  }
-
-  static ceres::CostFunction* Create(const Eigen::Vector3d& f) {
-    return new ceres::AutoDiffCostFunction<BearingResidual, 3, 4, 3, 3>(new BearingResidual(f));
-  }
-
-  Eigen::Vector3d f_;
-};
 
 double ObservationAngle(const Keyframe& kf, const Landmark& lm, const Observation& obs) {
   return VectorAngle(obs.bearing, kf.q_world_from_cam.conjugate() * (lm.point - kf.C));
@@ -70,7 +48,7 @@ LocalBaSummary LocalBundleAdjust(const std::vector<int>& window, const LocalBaOp
     for (const Observation& obs : lm.observations) {
       if (!in_window.count(obs.keyframe_id)) continue;
       Keyframe* kf = map->keyframe(obs.keyframe_id);
-      problem.AddResidualBlock(BearingResidual::Create(obs.bearing), loss,
+      problem.AddResidualBlock(new BearingCost(obs.bearing), loss,
                                kf->q_world_from_cam.coeffs().data(), kf->C.data(), lm.point.data());
       used_keyframes.insert(obs.keyframe_id);
       ++summary.num_residuals;

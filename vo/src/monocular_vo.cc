@@ -1,5 +1,6 @@
-// MonocularVo: the public object and the per-frame dispatch (image checks, initialisation or
-// tracking by state). The stages are in monocular_vo_*.cc, the state in monocular_vo_impl.h.
+// MonocularVo: the public object and the per-frame dispatch (image checks, initialisation,
+// tracking or relocalisation by state). The stages are in monocular_vo_*.cc, the state in
+// monocular_vo_impl.h.
 
 #include "rigcal/vo/monocular_vo.h"
 
@@ -53,21 +54,29 @@ VoResult MonocularVo::Impl::Process(int64_t t_ns, const cv::Mat& image) {
     klt_.Reset();
     if (state_ == VoState::kTracking) {
       Lose(problem, t_ns, cv::Mat(), &result);
+    } else if (state_ == VoState::kLost) {
+      Relocalise(t_ns, cv::Mat(), &result);
     } else {
       tracks_.clear();
       has_reference_ = false;
       result.state = state_;
-      result.message = problem;
     }
+    result.message = problem;
   } else {
-    klt_.AddImage(grey);
+    // Exposure steps scaled back: the tracked patches keep their grey levels.
+    const cv::Mat tracked = exposure_.Apply(grey);
+    klt_.AddImage(tracked);
     if (state_ == VoState::kTracking) {
-      TrackFrame(t_ns, grey, &result);
+      TrackFrame(t_ns, tracked, &result);
+    } else if (state_ == VoState::kLost) {
+      Relocalise(t_ns, tracked, &result);
     } else {
-      Initialise(t_ns, grey, &result);
+      Initialise(t_ns, tracked, &result);
     }
   }
   result.tracked_features = static_cast<int>(tracks_.size());
+  result.relocalisations = relocalisations_;
+  result.track_noise_px = noise_.sigma_px();
   result.processing_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   log_->debug("camera {} frame {}: {} tracks {} inliers {} kf {} {:.2f} ms {}", camera_index_,
@@ -89,6 +98,7 @@ VoResult MonocularVo::Process(int64_t t_ns, const cv::Mat& grey) {
 VoState MonocularVo::state() const { return impl_->state_; }
 int MonocularVo::segment() const { return impl_->segment_; }
 int64_t MonocularVo::frames_processed() const { return impl_->frames_; }
+int MonocularVo::relocalisations() const { return impl_->relocalisations_; }
 const VoOptions& MonocularVo::options() const { return impl_->options_; }
 double MonocularVo::field_of_view_sr() const { return impl_->fov_sr_; }
 int MonocularVo::feature_budget() const { return impl_->max_tracks_; }

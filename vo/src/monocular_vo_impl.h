@@ -1,6 +1,7 @@
 #pragma once
 // Private to vo/: the state of one camera's MonocularVo (MonocularVo::Impl) and its feature
-// tracks. The stages are in monocular_vo_*.cc: setup, tracks, initialise, tracking, keyframe.
+// tracks. The stages are in monocular_vo_*.cc: setup, tracks, initialise, tracking, keyframe,
+// relocalise.
 
 #include <Eigen/Core>
 #include <cmath>
@@ -13,10 +14,14 @@
 
 #include "absolute_pose.h"
 #include "affine_patch.h"
+#include "exposure_compensation.h"
 #include "feature_grid.h"
 #include "klt_tracker.h"
+#include "map_descriptors.h"
+#include "relative_pose.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/vo/monocular_vo.h"
+#include "track_noise.h"
 #include "vo_map.h"
 
 namespace rigcal::vo {
@@ -37,17 +42,32 @@ struct Track {
   Eigen::Matrix2d warp = Eigen::Matrix2d::Identity();
 };
 
+// The tracks that see a landmark in the current frame: track index, bearing, landmark point.
+struct MapMatches {
+  std::vector<int> track;
+  std::vector<Eigen::Vector3d> bearing;
+  std::vector<Eigen::Vector3d> point;
+  size_t size() const { return track.size(); }
+};
+
+// The bearings of the tracks to the reference frame of an initialisation.
+struct InitialViews {
+  std::vector<Eigen::Vector3d> reference;
+  std::vector<Eigen::Vector3d> current;
+};
+
 class MonocularVo::Impl {
  public:
   // Checks `options` (InvalidOptions when invalid), then measures the lens: its valid image area,
   // field of view and feature budget (monocular_vo_setup.cc).
   Impl(std::shared_ptr<const camera::CameraModel> camera, int camera_index, VoOptions options);
-  // One frame: initialisation or tracking, by state (monocular_vo.cc).
+  // One frame: initialisation, tracking or relocalisation, by state (monocular_vo.cc).
   VoResult Process(int64_t t_ns, const cv::Mat& image);
 
   VoState state_ = VoState::kInitialising;
   int segment_ = 0;
   int64_t frames_ = 0;
+  int relocalisations_ = 0;
   VoOptions options_;
   double fov_sr_ = 0.0;  // solid angle of the valid image area
   int max_tracks_ = 0;   // feature budget for this lens
@@ -58,34 +78,97 @@ class MonocularVo::Impl {
   // `anchor_keyframe` (-1: the reference frame of an initialisation).
   void AddNewTracks(const cv::Mat& grey, int anchor_keyframe);
   // KLT of every track into `grey` (guided by the landmarks' projections at `predicted` when
-  // not null), refined by RefineTrack; tracks that leave the valid area are dropped.
+  // not null), refined by RefineTrack; tracks that leave the valid area are dropped. Feeds the
+  // forward-backward errors to the noise estimate.
   void TrackFeatures(const cv::Mat& grey, const CameraPoseRC* predicted);
   // Refines the KLT position of `track` by aligning its reference patch (affine) in `grey`;
   // renews the patch where it cannot be aligned or has deformed too much.
   void RefineTrack(const cv::Mat& grey, Track* track) const;
   std::shared_ptr<const PatchTemplate> MakePatch(const cv::Mat& grey, const cv::Point2f& px) const;
+  // Keeps the tracks with keep[i] != 0.
+  void KeepTracks(const std::vector<char>& keep);
 
   // --- Initialisation (monocular_vo_initialise.cc) ---
   // Makes `grey` the reference frame when it has enough features.
   void StartReference(int64_t t_ns, const cv::Mat& grey);
   // Two-view initialisation against the reference frame: opens a segment when it succeeds.
   void Initialise(int64_t t_ns, const cv::Mat& grey, VoResult* result);
+  // False (and the reason in *result) while a pure rotation explains the median track.
+  bool HasTranslation(const InitialViews& views, VoResult* result) const;
+  // The essential matrix of the two views (RANSAC, refined, gates from the measured noise);
+  // updates the noise from its epipolar distances. False (and why) when it fails.
+  bool EstimateInitialMotion(const InitialViews& views, RelativePoseRansacResult* motion,
+                             VoResult* result);
+  // False (and why) while the inliers' parallax does not fix their depths.
+  bool HasInitialParallax(const InitialViews& views, const RelativePoseRansacResult& motion,
+                          VoResult* result) const;
+  // The first keyframes and landmarks (||C^1|| = 1) and their bundle adjustment; false (map
+  // cleared) when too few points survive.
+  bool BuildInitialMap(int64_t t_ns, const InitialViews& views,
+                       const RelativePoseRansacResult& motion, VoResult* result);
+  // Opens the new segment at the second keyframe.
+  void OpenSegment(int64_t t_ns, const cv::Mat& grey, int inliers, VoResult* result);
 
   // --- Tracking and loss (monocular_vo_tracking.cc) ---
   // PnP of the tracked landmarks, the keyframe decision, the pose of the frame.
   void TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* result);
-  // Tracking failed: clears the map and starts a new reference from `grey` (if not empty).
+  // The pose at `t_ns` from the last motion (constant velocity, scaled to the time step).
+  CameraPoseRC PredictPose(int64_t t_ns) const;
+  MapMatches CollectMapMatches() const;
+  // PnP RANSAC + refinement of `matches`; updates the noise from the residuals. False when no
+  // pose is found.
+  bool EstimateFramePose(const MapMatches& matches, const CameraPoseRC& predicted,
+                         CameraPoseRC* pose);
+  // Classifies the tracks under `pose`: map matches within the pose gate are inliers (their
+  // number is returned, their rotation-free angles to the last keyframe go to *parallax), those
+  // within the two-view gate keep their landmark (counted in *linked), the others lose it;
+  // tracks without a landmark that contradict their anchor's epipolar geometry (moving
+  // objects, KLT slips) are dropped.
+  int ClassifyTracks(const MapMatches& matches, const CameraPoseRC& pose,
+                     std::vector<double>* parallax, int* linked);
+  bool NeedKeyframe(int inliers, int linked, const std::vector<double>& parallax) const;
+  // Tracking failed: starts relocalising against the map (at once with `grey` if not empty).
   void Lose(const std::string& reason, int64_t t_ns, const cv::Mat& grey, VoResult* result);
   // Tracks whose landmark was removed from the map lose it.
   void UnlinkRemovedLandmarks();
 
+  // --- Relocalisation (monocular_vo_relocalise.cc) ---
+  // One attempt to find the pose of `grey` in the map; after relocalisation_timeout_s of
+  // failures the map is dropped and a new initialisation starts.
+  void Relocalise(int64_t t_ns, const cv::Mat& grey, VoResult* result);
+  // The map's landmark descriptors.
+  std::vector<LandmarkDescriptor> MapDescriptors() const;
+  // Tracks for the relocalisation's inliers (placed on their landmarks' patches), the pose
+  // refined on them, then a keyframe; the pose is reported.
+  void ResumeTracking(int64_t t_ns, const cv::Mat& grey, const std::vector<OrbFeature>& features,
+                      const std::vector<DescriptorMatch>& matches, const std::vector<char>& inliers,
+                      CameraPoseRC pose, VoResult* result);
+  // Aligns the landmark's reference patch at the track's ORB position (found at pyramid level
+  // `octave`); on success the track takes the aligned position, the patch and its warp.
+  bool PlaceOnLandmarkPatch(const cv::Mat& grey, const Landmark& landmark, int octave,
+                            Track* track) const;
+  // Relocalisation failed for too long: the map is dropped, the next initialisation opens a
+  // new segment.
+  void GiveUpSegment(int64_t t_ns, const cv::Mat& grey, VoResult* result);
+
   // --- Keyframes and local bundle adjustment (monocular_vo_keyframe.cc) ---
   void CreateKeyframe(int64_t t_ns, const cv::Mat& grey);
+  // New landmarks from the tracks without one (anchor keyframe to keyframe `kf`).
+  void TriangulateTracks(int kf);
+  // Descriptors of the landmarks that keyframe `kf` (image `grey`) observes.
+  void DescribeLandmarks(const cv::Mat& grey);
 
   // --- Helpers (monocular_vo.cc, monocular_vo_setup.cc) ---
   CameraPose MakePose(int64_t t_ns, const CameraPoseRC& pose, double quality) const;
   bool Unproject(const cv::Point2f& px, Eigen::Vector3d* bearing) const;
   bool InMask(const cv::Point2f& px) const;
+  // Gates, radians: a 2-D residual of one view (PnP, triangulation), one involving both views'
+  // noise (epipolar distance, rotation residual), and the bundle adjustment's Huber scale.
+  double PoseGateRad() const;
+  double PairGateRad() const;
+  double HuberRad() const;
+  // The measured noise as an angle, radians.
+  double NoiseRad() const;
 
   std::shared_ptr<const camera::CameraModel> camera_;
   int camera_index_ = 0;
@@ -93,7 +176,10 @@ class MonocularVo::Impl {
   double pixel_angle_ = 1e-3;
   cv::Mat valid_mask_;  // CV_8UC1: where tracks may live
   KltTracker klt_;
+  ExposureCompensation exposure_;
   std::unique_ptr<FeatureGrid> grid_;
+  std::unique_ptr<OrbDescriber> describer_;
+  TrackNoise noise_;
   std::mt19937 rng_;
 
   std::vector<Track> tracks_;
@@ -106,11 +192,16 @@ class MonocularVo::Impl {
   // Tracking.
   VoMap map_;
   CameraPoseRC pose_;
-  CameraPoseRC velocity_;  // last frame-to-frame motion
+  int64_t pose_t_ns_ = 0;
+  CameraPoseRC velocity_;       // last frame-to-frame motion ...
+  int64_t velocity_dt_ns_ = 0;  // ... over this time
   bool has_velocity_ = false;
   int last_keyframe_ = -1;
   int frames_since_keyframe_ = 0;
   int keyframe_landmarks_ = 0;
+
+  // Relocalisation: stream time of the first failed attempt of the current loss (-1: none).
+  int64_t lost_since_ns_ = -1;
 };
 
 }  // namespace rigcal::vo

@@ -1,6 +1,8 @@
 // MonocularVo initialisation: reference frame, two-view geometry, triangulation, first BA.
+// Every threshold is a multiple of the measured track noise (monocular_vo_impl.h, gates).
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 #include <vector>
 
@@ -11,6 +13,25 @@
 #include "triangulation.h"
 
 namespace rigcal::vo {
+namespace {
+
+// Median angle between the reference bearings and the current ones rotated by the best
+// rotation (all tracks, or those with mask[i]), radians.
+double RotationResidual(const InitialViews& views, const std::vector<char>* mask) {
+  std::vector<Eigen::Vector3d> a, b;
+  for (size_t i = 0; i < views.reference.size(); ++i) {
+    if (mask != nullptr && !(*mask)[i]) continue;
+    a.push_back(views.reference[i]);
+    b.push_back(views.current[i]);
+  }
+  const Eigen::Matrix3d r = BestRotation(a, b);
+  std::vector<double> residual;
+  residual.reserve(a.size());
+  for (size_t i = 0; i < a.size(); ++i) residual.push_back(VectorAngle(a[i], r * b[i]));
+  return UpperMedian(residual);
+}
+
+}  // namespace
 
 void MonocularVo::Impl::StartReference(int64_t t_ns, const cv::Mat& grey) {
   tracks_.clear();
@@ -24,6 +45,147 @@ void MonocularVo::Impl::StartReference(int64_t t_ns, const cv::Mat& grey) {
   } else {
     tracks_.clear();
   }
+}
+
+bool MonocularVo::Impl::HasTranslation(const InitialViews& views, VoResult* result) const {
+  // With a pure rotation every translation fits the epipolar constraint: no parallax to
+  // initialise from, whatever an essential matrix would say.
+  if (RotationResidual(views, nullptr) > PairGateRad()) return true;
+  result->message = "insufficient parallax (rotation only)";
+  return false;
+}
+
+bool MonocularVo::Impl::EstimateInitialMotion(const InitialViews& views,
+                                              RelativePoseRansacResult* motion, VoResult* result) {
+  RelativePoseRansacOptions ransac;
+  ransac.max_epipolar_angle_rad = PairGateRad();
+  ransac.max_iterations = options_.ransac_max_iterations;
+  ransac.confidence = options_.ransac_confidence;
+  ransac.min_inliers = options_.min_init_inliers;
+  *motion = EstimateRelativePose(views.reference, views.current, ransac, &rng_);
+  result->inliers = motion->num_inliers;
+  // The epipolar distances of every track to the best model measure the noise the gates are
+  // made of, also when the gate was too tight for enough inliers: the median of the distances
+  // is robust to the tracks that do not fit (moving objects), and a gate set from the noise of
+  // still frames opens once the hand-held camera moves and blurs.
+  if (!motion->E.isZero()) {
+    std::vector<double> distances_px;
+    distances_px.reserve(views.reference.size());
+    for (size_t i = 0; i < views.reference.size(); ++i) {
+      distances_px.push_back(EpipolarAngle(motion->E, views.reference[i], views.current[i]) /
+                             pixel_angle_);
+    }
+    noise_.AddEpipolarDistances(distances_px);
+  }
+  if (!motion->success || motion->num_inliers < options_.min_init_inliers) {
+    result->message = "essential matrix: too few inliers";
+    return false;
+  }
+  if (motion->num_in_front < options_.min_init_cheirality_fraction * motion->num_inliers) {
+    result->message = "essential matrix: degenerate geometry (points behind the cameras)";
+    return false;
+  }
+  if (RotationResidual(views, &motion->inliers) <= PairGateRad()) {
+    result->message = "insufficient parallax (rotation only)";
+    return false;
+  }
+  return true;
+}
+
+bool MonocularVo::Impl::HasInitialParallax(const InitialViews& views,
+                                           const RelativePoseRansacResult& motion,
+                                           VoResult* result) const {
+  // The median angle between the rays of the inliers once the rotation is removed fixes their
+  // depths to a relative σ of √2 σ_angle / parallax.
+  std::vector<double> parallax;
+  for (size_t i = 0; i < views.reference.size(); ++i) {
+    if (motion.inliers[i]) {
+      parallax.push_back(
+          VectorAngle(views.reference[i], motion.pose.R_1_from_2 * views.current[i]));
+    }
+  }
+  const double needed = std::max(options_.min_init_parallax_deg * kDegToRad,
+                                 std::sqrt(2.0) * NoiseRad() / options_.init_depth_precision);
+  if (UpperMedian(parallax) >= needed) return true;
+  result->message = "insufficient parallax";
+  return false;
+}
+
+bool MonocularVo::Impl::BuildInitialMap(int64_t t_ns, const InitialViews& views,
+                                        const RelativePoseRansacResult& motion, VoResult* result) {
+  // Triangulate the inliers in the reference frame, ||C^1|| = 1.
+  const Eigen::Matrix3d& r1 = motion.pose.R_1_from_2;
+  const Eigen::Vector3d c1 = motion.pose.C2_in_1.normalized();
+  const double min_angle = options_.min_triangulation_angle_deg * kDegToRad;
+  const double gate = PoseGateRad();
+  map_.Clear();
+  const int kf0 =
+      map_.AddKeyframe(reference_t_ns_, Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero());
+  const int kf1 = map_.AddKeyframe(t_ns, Eigen::Quaterniond(r1), c1);
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    tracks_[i].anchor_keyframe = kf0;
+    if (!motion.inliers[i]) continue;
+    const Eigen::Vector3d& f0 = views.reference[i];
+    const Eigen::Vector3d& f1 = views.current[i];
+    const auto tri = TriangulateMidpoint(Eigen::Vector3d::Zero(), f0, c1, r1 * f1);
+    if (!tri || tri->ray_angle_rad < min_angle ||
+        BearingAngle(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), f0, tri->point) > gate ||
+        BearingAngle(r1, c1, f1, tri->point) > gate) {
+      continue;
+    }
+    const int lm = map_.AddLandmark(tri->point);
+    map_.AddObservation(lm, kf0, f0);
+    map_.AddObservation(lm, kf1, f1);
+    tracks_[i].landmark = lm;
+  }
+  if (static_cast<int>(map_.landmarks().size()) < options_.min_init_inliers) {
+    result->message = "too few triangulated points";
+  } else {
+    LocalBaOptions ba;
+    ba.num_fixed = 1;
+    ba.unit_baseline = true;
+    ba.max_iterations = std::max(10, options_.ba_max_iterations);
+    ba.huber_rad = HuberRad();
+    ba.outlier_rad = gate;
+    LocalBundleAdjust({kf0, kf1}, ba, &map_);
+    UnlinkRemovedLandmarks();
+    keyframe_landmarks_ = 0;
+    for (const Track& t : tracks_) keyframe_landmarks_ += t.landmark >= 0;
+    if (keyframe_landmarks_ >= options_.min_init_inliers / 2) return true;
+    result->message = "initial bundle adjustment rejected the points";
+  }
+  map_.Clear();
+  for (Track& t : tracks_) {
+    t.landmark = -1;
+    t.anchor_keyframe = -1;
+  }
+  return false;
+}
+
+void MonocularVo::Impl::OpenSegment(int64_t t_ns, const cv::Mat& grey, int inliers,
+                                    VoResult* result) {
+  const int kf1 = map_.NewestKeyframes(1).front();
+  const Keyframe* k1 = map_.keyframe(kf1);
+  pose_.R_world_from_cam = k1->R();
+  pose_.C = k1->C;
+  pose_t_ns_ = t_ns;
+  has_velocity_ = false;
+  last_keyframe_ = kf1;
+  frames_since_keyframe_ = 0;
+  DescribeLandmarks(grey);
+  AddNewTracks(grey, kf1);
+
+  segment_ = next_segment_++;
+  state_ = VoState::kTracking;
+  lost_since_ns_ = -1;
+  const double quality = std::min(1.0, static_cast<double>(keyframe_landmarks_) / 100.0);
+  result->state = state_;
+  result->keyframe = true;
+  result->message.clear();
+  result->pose = MakePose(t_ns, pose_, quality);
+  result->segment_start = MakePose(reference_t_ns_, CameraPoseRC{}, 1.0);
+  log_->info("camera {}: initialised segment {} ({} points, {} inliers, noise {:.2f} px)",
+             camera_index_, segment_, keyframe_landmarks_, inliers, noise_.sigma_px());
 }
 
 void MonocularVo::Impl::Initialise(int64_t t_ns, const cv::Mat& grey, VoResult* result) {
@@ -41,138 +203,17 @@ void MonocularVo::Impl::Initialise(int64_t t_ns, const cv::Mat& grey, VoResult* 
     result->message = "too few tracks to the reference frame; reference renewed";
     return;
   }
-
-  const double threshold = options_.ransac_threshold_px * pixel_angle_;
-  const double min_parallax = options_.min_init_parallax_deg * kDegToRad;
-  std::vector<Eigen::Vector3d> f_ref, f_cur;
-  f_ref.reserve(tracks_.size());
-  f_cur.reserve(tracks_.size());
+  InitialViews views;
   for (const Track& t : tracks_) {
-    f_ref.push_back(t.anchor_bearing);
-    f_cur.push_back(t.bearing);
+    views.reference.push_back(t.anchor_bearing);
+    views.current.push_back(t.bearing);
   }
-  // Cheap test first: when a pure rotation explains the tracks to within a few pixels there is
-  // no parallax to initialise from, whatever an essential matrix would say (with a pure
-  // rotation every translation fits the epipolar constraint).
-  auto rotation_residual = [&](const std::vector<char>* mask) {
-    std::vector<Eigen::Vector3d> a, b;
-    for (size_t i = 0; i < f_ref.size(); ++i) {
-      if (mask != nullptr && !(*mask)[i]) continue;
-      a.push_back(f_ref[i]);
-      b.push_back(f_cur[i]);
-    }
-    const Eigen::Matrix3d r = BestRotation(a, b);
-    std::vector<double> residual;
-    residual.reserve(a.size());
-    for (size_t i = 0; i < a.size(); ++i) residual.push_back(VectorAngle(a[i], r * b[i]));
-    return UpperMedian(residual);
-  };
-  const double min_rotation_residual = options_.min_init_rotation_residual_px * pixel_angle_;
-  if (rotation_residual(nullptr) < min_rotation_residual) {
-    result->message = "insufficient parallax (rotation only)";
+  RelativePoseRansacResult motion;
+  if (!HasTranslation(views, result) || !EstimateInitialMotion(views, &motion, result) ||
+      !HasInitialParallax(views, motion, result) || !BuildInitialMap(t_ns, views, motion, result)) {
     return;
   }
-
-  RelativePoseRansacOptions ransac;
-  ransac.max_epipolar_angle_rad = threshold;
-  ransac.max_iterations = options_.ransac_max_iterations;
-  ransac.confidence = options_.ransac_confidence;
-  ransac.min_inliers = options_.min_init_inliers;
-  const RelativePoseRansacResult rel = EstimateRelativePose(f_ref, f_cur, ransac, &rng_);
-  result->inliers = rel.num_inliers;
-  if (!rel.success || rel.num_inliers < options_.min_init_inliers) {
-    result->message = "essential matrix: too few inliers";
-    return;
-  }
-  if (rel.num_in_front < options_.min_init_cheirality_fraction * rel.num_inliers) {
-    result->message = "essential matrix: degenerate geometry (points behind the cameras)";
-    return;
-  }
-  if (rotation_residual(&rel.inliers) < min_rotation_residual) {
-    result->message = "insufficient parallax (rotation only)";
-    return;
-  }
-  // Parallax: median angle between the rays of the inliers once the rotation is removed.
-  std::vector<double> parallax;
-  for (size_t i = 0; i < f_ref.size(); ++i) {
-    if (rel.inliers[i]) parallax.push_back(VectorAngle(f_ref[i], rel.pose.R_1_from_2 * f_cur[i]));
-  }
-  const double median_parallax = UpperMedian(parallax);
-  if (median_parallax < min_parallax) {
-    result->message = "insufficient parallax";
-    return;
-  }
-
-  // Triangulate the inliers in the reference frame, ||C^1|| = 1.
-  const Eigen::Matrix3d& r1 = rel.pose.R_1_from_2;
-  const Eigen::Vector3d c1 = rel.pose.C2_in_1.normalized();
-  const double min_angle = options_.min_triangulation_angle_deg * kDegToRad;
-  std::vector<std::pair<size_t, Eigen::Vector3d>> points;
-  for (size_t i = 0; i < tracks_.size(); ++i) {
-    if (!rel.inliers[i]) continue;
-    const auto tri = TriangulateMidpoint(Eigen::Vector3d::Zero(), f_ref[i], c1, r1 * f_cur[i]);
-    if (!tri || tri->ray_angle_rad < min_angle) continue;
-    if (BearingAngle(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), f_ref[i], tri->point) >
-            2.0 * threshold ||
-        BearingAngle(r1, c1, f_cur[i], tri->point) > 2.0 * threshold) {
-      continue;
-    }
-    points.emplace_back(i, tri->point);
-  }
-  if (static_cast<int>(points.size()) < options_.min_init_inliers) {
-    result->message = "too few triangulated points";
-    return;
-  }
-
-  map_.Clear();
-  const int kf0 =
-      map_.AddKeyframe(reference_t_ns_, Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero());
-  const int kf1 = map_.AddKeyframe(t_ns, Eigen::Quaterniond(r1), c1);
-  for (Track& t : tracks_) t.anchor_keyframe = kf0;
-  for (const auto& [i, point] : points) {
-    const int lm = map_.AddLandmark(point);
-    map_.AddObservation(lm, kf0, f_ref[i]);
-    map_.AddObservation(lm, kf1, f_cur[i]);
-    tracks_[i].landmark = lm;
-  }
-  LocalBaOptions ba;
-  ba.num_fixed = 1;
-  ba.unit_baseline = true;
-  ba.max_iterations = std::max(10, options_.ba_max_iterations);
-  ba.huber_rad = options_.ba_huber_px * pixel_angle_;
-  ba.outlier_rad = 3.0 * threshold;
-  LocalBundleAdjust({kf0, kf1}, ba, &map_);
-  UnlinkRemovedLandmarks();
-  const Keyframe* k1 = map_.keyframe(kf1);
-  pose_.R_world_from_cam = k1->R();
-  pose_.C = k1->C;
-  has_velocity_ = false;
-  last_keyframe_ = kf1;
-  frames_since_keyframe_ = 0;
-  keyframe_landmarks_ = 0;
-  for (const Track& t : tracks_) keyframe_landmarks_ += t.landmark >= 0;
-  if (keyframe_landmarks_ < options_.min_init_inliers / 2) {
-    map_.Clear();
-    for (Track& t : tracks_) {
-      t.landmark = -1;
-      t.anchor_keyframe = -1;
-    }
-    result->message = "initial bundle adjustment rejected the points";
-    return;
-  }
-  AddNewTracks(grey, kf1);
-
-  segment_ = next_segment_++;
-  state_ = VoState::kTracking;
-  const double quality = std::min(1.0, static_cast<double>(keyframe_landmarks_) / 100.0);
-  result->state = state_;
-  result->keyframe = true;
-  result->message.clear();
-  result->pose = MakePose(t_ns, pose_, quality);
-  result->segment_start = MakePose(reference_t_ns_, CameraPoseRC{}, 1.0);
-  log_->info("camera {}: initialised segment {} ({} points, {} inliers, parallax {:.2f} deg)",
-             camera_index_, segment_, keyframe_landmarks_, rel.num_inliers,
-             median_parallax / kDegToRad);
+  OpenSegment(t_ns, grey, motion.num_inliers, result);
 }
 
 }  // namespace rigcal::vo

@@ -1,4 +1,5 @@
-// MonocularVo keyframes: new landmarks by triangulation, windowed local bundle adjustment.
+// MonocularVo keyframes: new landmarks by triangulation, windowed local bundle adjustment,
+// the landmarks' descriptors for relocalisation.
 
 #include <algorithm>
 #include <unordered_set>
@@ -10,28 +11,19 @@
 
 namespace rigcal::vo {
 
-void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
-  const int kf = map_.AddKeyframe(t_ns, Eigen::Quaterniond(pose_.R_world_from_cam), pose_.C);
-  const double threshold = options_.ransac_threshold_px * pixel_angle_;
+void MonocularVo::Impl::TriangulateTracks(int kf) {
+  const double gate = PoseGateRad();
   const double min_angle = options_.min_triangulation_angle_deg * kDegToRad;
   const Eigen::Matrix3d r = pose_.R_world_from_cam;
   for (Track& t : tracks_) {
-    if (t.landmark >= 0 && map_.landmark(t.landmark) != nullptr) {
-      map_.AddObservation(t.landmark, kf, t.bearing);
-      continue;
-    }
-    t.landmark = -1;
+    if (t.landmark >= 0) continue;
     const Keyframe* anchor = map_.keyframe(t.anchor_keyframe);
-    if (anchor == nullptr) {  // the anchor left the window: restart the track's baseline here
-      t.anchor_keyframe = kf;
-      t.anchor_bearing = t.bearing;
-      continue;
-    }
+    if (anchor == nullptr || t.anchor_keyframe == kf) continue;
     const Eigen::Matrix3d ra = anchor->R();
     const auto tri = TriangulateMidpoint(anchor->C, ra * t.anchor_bearing, pose_.C, r * t.bearing);
-    if (!tri || tri->ray_angle_rad < min_angle) continue;
-    if (BearingAngle(ra, anchor->C, t.anchor_bearing, tri->point) > 2.0 * threshold ||
-        BearingAngle(r, pose_.C, t.bearing, tri->point) > 2.0 * threshold) {
+    if (!tri || tri->ray_angle_rad < min_angle ||
+        BearingAngle(ra, anchor->C, t.anchor_bearing, tri->point) > gate ||
+        BearingAngle(r, pose_.C, t.bearing, tri->point) > gate) {
       continue;
     }
     const int lm = map_.AddLandmark(tri->point);
@@ -39,13 +31,49 @@ void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
     map_.AddObservation(lm, kf, t.bearing);
     t.landmark = lm;
   }
+}
+
+void MonocularVo::Impl::DescribeLandmarks(const cv::Mat& grey) {
+  std::vector<cv::Point2f> points;
+  std::vector<int> landmarks;
+  for (const Track& t : tracks_) {
+    Landmark* lm = t.landmark >= 0 ? map_.landmark(t.landmark) : nullptr;
+    if (lm == nullptr) continue;
+    points.push_back(t.px);
+    landmarks.push_back(t.landmark);
+    if (t.patch != nullptr) {
+      lm->patch = t.patch;
+      lm->warp = t.warp;
+    }
+  }
+  std::vector<Descriptor> descriptors;
+  std::vector<char> ok;
+  describer_->Describe(grey, points, &descriptors, &ok);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (ok[i]) map_.landmark(landmarks[i])->AddDescriptor(descriptors[i]);
+  }
+}
+
+void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
+  const int kf = map_.AddKeyframe(t_ns, Eigen::Quaterniond(pose_.R_world_from_cam), pose_.C);
+  for (Track& t : tracks_) {
+    if (t.landmark >= 0 && map_.landmark(t.landmark) != nullptr) {
+      map_.AddObservation(t.landmark, kf, t.bearing);
+    } else if (map_.keyframe(t.anchor_keyframe) == nullptr) {
+      // No anchor (it left the window, or a relocalised track): the baseline starts here.
+      t.landmark = -1;
+      t.anchor_keyframe = kf;
+      t.anchor_bearing = t.bearing;
+    }
+  }
+  TriangulateTracks(kf);
 
   const std::vector<int> window = map_.NewestKeyframes(options_.ba_window);
   LocalBaOptions ba;
   ba.num_fixed = std::min<int>(2, static_cast<int>(window.size()) - 1);
   ba.max_iterations = options_.ba_max_iterations;
-  ba.huber_rad = options_.ba_huber_px * pixel_angle_;
-  ba.outlier_rad = 3.0 * threshold;
+  ba.huber_rad = HuberRad();
+  ba.outlier_rad = PoseGateRad();
   if (ba.max_iterations > 0) {
     const LocalBaSummary summary = LocalBundleAdjust(window, ba, &map_);
     if (summary.success) {
@@ -67,6 +95,7 @@ void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
       t.anchor_bearing = t.bearing;
     }
   }
+  DescribeLandmarks(grey);
   AddNewTracks(grey, kf);
   last_keyframe_ = kf;
   frames_since_keyframe_ = 0;

@@ -10,8 +10,13 @@ namespace rigcal::vo {
 
 MonocularVo::Impl::Impl(std::shared_ptr<const camera::CameraModel> camera, int camera_index,
                         VoOptions options)
-    : options_(options), camera_(std::move(camera)), camera_index_(camera_index) {
+    : options_(options),
+      camera_(std::move(camera)),
+      camera_index_(camera_index),
+      exposure_(options.inlier_sigmas, options.noise_window_frames),
+      noise_(options.noise_floor_px, options.inlier_sigmas, options.noise_window_frames) {
   RequireValid(options_.Check(), "VoOptions");
+  describer_ = std::make_unique<OrbDescriber>(options_.relocalisation_features);
   log_ = ModuleLogger("vo");
   max_tracks_ = options_.max_features;
   rng_.seed(options_.seed);
@@ -90,6 +95,14 @@ bool MonocularVo::Impl::InMask(const cv::Point2f& px) const {
   if (x < 0 || y < 0 || x >= valid_mask_.cols || y >= valid_mask_.rows) return false;
   return valid_mask_.at<unsigned char>(y, x) != 0;
 }
+
+double MonocularVo::Impl::NoiseRad() const { return noise_.sigma_px() * pixel_angle_; }
+
+double MonocularVo::Impl::PoseGateRad() const { return options_.inlier_sigmas * NoiseRad(); }
+
+double MonocularVo::Impl::PairGateRad() const { return std::sqrt(2.0) * PoseGateRad(); }
+
+double MonocularVo::Impl::HuberRad() const { return options_.huber_sigmas * NoiseRad(); }
 
 bool MonocularVo::Impl::Unproject(const cv::Point2f& px, Eigen::Vector3d* bearing) const {
   const auto f = camera_->Unproject(Eigen::Vector2d(px.x, px.y));

@@ -1,4 +1,5 @@
-// MonocularVo tracking: PnP against the map, the keyframe decision, loss of tracking.
+// MonocularVo tracking: PnP against the map, the classification of the tracks, the keyframe
+// decision, loss of tracking.
 
 #include <algorithm>
 #include <string>
@@ -11,18 +12,27 @@
 namespace rigcal::vo {
 namespace {
 
-// Frame-to-frame motion of two poses (previous^-1 * current) and its application.
-CameraPoseRC Between(const CameraPoseRC& a, const CameraPoseRC& b) {
+// The motion from pose a to pose b (a^-1 b), and its application to a pose.
+CameraPoseRC MotionBetween(const CameraPoseRC& a, const CameraPoseRC& b) {
   CameraPoseRC d;
   d.R_world_from_cam = a.R_world_from_cam.transpose() * b.R_world_from_cam;
   d.C = a.R_world_from_cam.transpose() * (b.C - a.C);
   return d;
 }
 
-CameraPoseRC Compose(const CameraPoseRC& a, const CameraPoseRC& d) {
+CameraPoseRC ApplyMotion(const CameraPoseRC& a, const CameraPoseRC& d) {
   CameraPoseRC out;
   out.R_world_from_cam = a.R_world_from_cam * d.R_world_from_cam;
   out.C = a.C + a.R_world_from_cam * d.C;
+  return out;
+}
+
+// A motion scaled in time: its rotation angle and translation times `factor`.
+CameraPoseRC ScaleMotion(const CameraPoseRC& d, double factor) {
+  const Eigen::AngleAxisd rotation(d.R_world_from_cam);
+  CameraPoseRC out;
+  out.R_world_from_cam = ExpSO3(rotation.axis() * rotation.angle() * factor);
+  out.C = d.C * factor;
   return out;
 }
 
@@ -36,101 +46,155 @@ void MonocularVo::Impl::UnlinkRemovedLandmarks() {
 
 void MonocularVo::Impl::Lose(const std::string& reason, int64_t t_ns, const cv::Mat& grey,
                              VoResult* result) {
-  log_->warn("camera {}: tracking lost in segment {}: {}", camera_index_, segment_, reason);
-  map_.Clear();
+  log_->warn("camera {}: tracking lost in segment {}: {}; relocalising", camera_index_, segment_,
+             reason);
   tracks_.clear();
   has_velocity_ = false;
   has_reference_ = false;
   state_ = VoState::kLost;
-  // The frame may still be good (e.g. a sudden motion): start the next reference from it.
-  if (!grey.empty()) StartReference(t_ns, grey);
-  if (!has_reference_) state_ = VoState::kLost;
+  lost_since_ns_ = -1;
   result->state = VoState::kLost;
-  result->message = reason;
+  result->message = "tracking lost: " + reason;
+  // The frame may still show the map (a jolt, a gap in the frames): relocalise at once.
+  if (!grey.empty()) Relocalise(t_ns, grey, result);
 }
 
-void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* result) {
-  const CameraPoseRC predicted = has_velocity_ ? Compose(pose_, velocity_) : pose_;
-  TrackFeatures(grey, &predicted);
-  ++frames_since_keyframe_;
+CameraPoseRC MonocularVo::Impl::PredictPose(int64_t t_ns) const {
+  if (!has_velocity_ || velocity_dt_ns_ <= 0) return pose_;
+  const double factor = static_cast<double>(t_ns - pose_t_ns_) / velocity_dt_ns_;
+  return ApplyMotion(pose_, ScaleMotion(velocity_, factor));
+}
 
-  std::vector<int> index;
-  std::vector<Eigen::Vector3d> f, X;
+MapMatches MonocularVo::Impl::CollectMapMatches() const {
+  MapMatches matches;
   for (int i = 0; i < static_cast<int>(tracks_.size()); ++i) {
     const Landmark* lm = tracks_[i].landmark >= 0 ? map_.landmark(tracks_[i].landmark) : nullptr;
     if (lm == nullptr) continue;
-    index.push_back(i);
-    f.push_back(tracks_[i].bearing);
-    X.push_back(lm->point);
+    matches.track.push_back(i);
+    matches.bearing.push_back(tracks_[i].bearing);
+    matches.point.push_back(lm->point);
   }
-  if (static_cast<int>(f.size()) < options_.min_tracking_inliers) {
-    Lose("too few tracked map points (" + std::to_string(f.size()) + ")", t_ns, grey, result);
-    return;
-  }
-  const double threshold = options_.ransac_threshold_px * pixel_angle_;
+  return matches;
+}
+
+bool MonocularVo::Impl::EstimateFramePose(const MapMatches& matches, const CameraPoseRC& predicted,
+                                          CameraPoseRC* pose) {
   PnpRansacOptions ransac;
-  ransac.max_angle_rad = threshold;
+  ransac.max_angle_rad = PoseGateRad();
   ransac.max_iterations = options_.ransac_max_iterations;
   ransac.confidence = options_.ransac_confidence;
   ransac.min_inliers = options_.min_tracking_inliers;
-  PnpRansacResult pnp = EstimateAbsolutePose(f, X, ransac, &predicted, &rng_);
-  const double ratio = pnp.success ? static_cast<double>(pnp.num_inliers) / f.size() : 0.0;
-  if (!pnp.success || ratio < options_.min_inlier_ratio) {
-    Lose("PnP: too few inliers (" + std::to_string(pnp.num_inliers) + " of " +
-             std::to_string(f.size()) + ")",
-         t_ns, grey, result);
-    return;
+  const PnpRansacResult pnp =
+      EstimateAbsolutePose(matches.bearing, matches.point, ransac, &predicted, &rng_);
+  if (!pnp.success) return false;
+  *pose = pnp.pose;
+  if (!RefineAbsolutePose(matches.bearing, matches.point, pnp.inliers, HuberRad(), 10, pose)) {
+    return false;
   }
-  CameraPoseRC pose = pnp.pose;
-  if (!RefineAbsolutePose(f, X, pnp.inliers, options_.ba_huber_px * pixel_angle_, 10, &pose) ||
-      !pose.R_world_from_cam.allFinite() || !pose.C.allFinite()) {
-    Lose("PnP refinement failed (degenerate geometry)", t_ns, grey, result);
-    return;
+  // Every match's residual measures the noise; the pose is refined again within the new gate.
+  std::vector<double> residuals_px(matches.size());
+  for (size_t k = 0; k < matches.size(); ++k) {
+    residuals_px[k] = AngularResidual(*pose, matches.bearing[k], matches.point[k]) / pixel_angle_;
   }
-  // Final inliers; outlier tracks are dropped (KLT drift or a bad point).
-  std::vector<char> drop(tracks_.size(), 0);
-  int inliers = 0;
-  std::vector<double> parallax;
+  noise_.AddPoseResiduals(residuals_px);
+  const double gate_px = PoseGateRad() / pixel_angle_;
+  std::vector<char> inliers(matches.size());
+  for (size_t k = 0; k < matches.size(); ++k) inliers[k] = residuals_px[k] <= gate_px;
+  return RefineAbsolutePose(matches.bearing, matches.point, inliers, HuberRad(), 10, pose) &&
+         pose->R_world_from_cam.allFinite() && pose->C.allFinite();
+}
+
+int MonocularVo::Impl::ClassifyTracks(const MapMatches& matches, const CameraPoseRC& pose,
+                                      std::vector<double>* parallax, int* linked) {
+  // A landmark's residual against a pose estimated from the others carries the track's noise,
+  // the landmark's own position error (it was triangulated from tracks as noisy) and the
+  // pose's: about twice the variance of the noise alone. Within the pose gate it is an inlier;
+  // within the two-view gate it keeps its landmark; beyond it the landmark is wrong or the track
+  // slipped, and the track is judged below as one without a map point.
+  const double inlier_gate = PoseGateRad();
+  const double link_gate = PairGateRad();
   const Keyframe* last_kf = map_.keyframe(last_keyframe_);
-  for (size_t k = 0; k < f.size(); ++k) {
-    if (AngularResidual(pose, f[k], X[k]) > threshold) {
-      drop[index[k]] = 1;
+  int inliers = 0;
+  *linked = 0;
+  for (size_t k = 0; k < matches.size(); ++k) {
+    const double residual = AngularResidual(pose, matches.bearing[k], matches.point[k]);
+    if (residual > link_gate) {
+      tracks_[matches.track[k]].landmark = -1;
       continue;
     }
+    ++*linked;
+    if (residual > inlier_gate) continue;
     ++inliers;
-    if (last_kf != nullptr) parallax.push_back(VectorAngle(X[k] - last_kf->C, X[k] - pose.C));
+    if (last_kf != nullptr) {
+      parallax->push_back(VectorAngle(matches.point[k] - last_kf->C, matches.point[k] - pose.C));
+    }
   }
-  if (inliers < options_.min_tracking_inliers) {
-    Lose("too few inliers after refinement (" + std::to_string(inliers) + ")", t_ns, grey, result);
-    return;
-  }
-  std::vector<Track> kept;
-  kept.reserve(tracks_.size());
+  // Tracks without a map point must stay on the epipolar plane of their anchor's ray and the
+  // baseline: a moving object or a track that slipped to another corner leaves it.
+  const double plane_gate = PairGateRad();
+  std::vector<char> keep(tracks_.size(), 1);
   for (size_t i = 0; i < tracks_.size(); ++i) {
-    if (!drop[i]) kept.push_back(tracks_[i]);
+    const Track& t = tracks_[i];
+    const Keyframe* anchor = t.landmark < 0 ? map_.keyframe(t.anchor_keyframe) : nullptr;
+    if (anchor == nullptr) continue;
+    const Eigen::Vector3d normal = (pose.C - anchor->C).cross(anchor->R() * t.anchor_bearing);
+    if (normal.norm() < 1e-12) continue;  // no baseline yet
+    const double off_plane = std::asin(
+        std::min(1.0, std::abs(normal.normalized().dot(pose.R_world_from_cam * t.bearing))));
+    keep[i] = off_plane <= plane_gate;
   }
-  tracks_.swap(kept);
+  KeepTracks(keep);
+  return inliers;
+}
 
-  velocity_ = Between(pose_, pose);
-  has_velocity_ = true;
-  pose_ = pose;
-
-  // Keyframe decision.
+bool MonocularVo::Impl::NeedKeyframe(int inliers, int linked,
+                                     const std::vector<double>& parallax) const {
   const double median_parallax = UpperMedian(parallax);
   const double kf_parallax = options_.keyframe_parallax_deg * kDegToRad;
-  const bool need_keyframe = inliers < options_.keyframe_track_ratio * keyframe_landmarks_ ||
-                             median_parallax >= kf_parallax ||
-                             (frames_since_keyframe_ >= options_.keyframe_max_frames &&
-                              median_parallax >= 0.5 * kf_parallax) ||
-                             inliers < 2 * options_.min_tracking_inliers;
-  if (need_keyframe) {
+  return linked < options_.keyframe_track_ratio * keyframe_landmarks_ ||
+         median_parallax >= kf_parallax ||
+         (frames_since_keyframe_ >= options_.keyframe_max_frames &&
+          median_parallax >= 0.5 * kf_parallax) ||
+         inliers < 2 * options_.min_tracking_inliers;
+}
+
+void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* result) {
+  const CameraPoseRC predicted = PredictPose(t_ns);
+  TrackFeatures(grey, &predicted);
+  ++frames_since_keyframe_;
+  const MapMatches matches = CollectMapMatches();
+  const std::string matched = std::to_string(matches.size());
+  if (static_cast<int>(matches.size()) < options_.min_tracking_inliers) {
+    Lose("too few tracked map points (" + matched + ")", t_ns, grey, result);
+    return;
+  }
+  CameraPoseRC pose;
+  if (!EstimateFramePose(matches, predicted, &pose)) {
+    Lose("PnP: no pose from " + matched + " map points", t_ns, grey, result);
+    return;
+  }
+  std::vector<double> parallax;
+  int linked = 0;
+  const int inliers = ClassifyTracks(matches, pose, &parallax, &linked);
+  if (inliers < options_.min_tracking_inliers ||
+      inliers < options_.min_inlier_ratio * static_cast<double>(matches.size())) {
+    Lose("PnP: too few inliers (" + std::to_string(inliers) + " of " + matched + ")", t_ns, grey,
+         result);
+    return;
+  }
+  velocity_ = MotionBetween(pose_, pose);
+  velocity_dt_ns_ = t_ns - pose_t_ns_;
+  has_velocity_ = true;
+  pose_ = pose;
+  pose_t_ns_ = t_ns;
+  if (NeedKeyframe(inliers, linked, parallax)) {
     CreateKeyframe(t_ns, grey);
     result->keyframe = true;
   }
   result->state = state_;
   result->inliers = inliers;
-  const double quality = ratio * std::min(1.0, inliers / 100.0);
-  result->pose = MakePose(t_ns, pose_, quality);
+  const double ratio = static_cast<double>(inliers) / static_cast<double>(matches.size());
+  result->pose = MakePose(t_ns, pose_, ratio * std::min(1.0, inliers / 100.0));
 }
 
 }  // namespace rigcal::vo

@@ -57,6 +57,15 @@ void MonocularVo::Impl::RefineTrack(const cv::Mat& grey, Track* track) const {
   track->warp.setIdentity();
 }
 
+void MonocularVo::Impl::KeepTracks(const std::vector<char>& keep) {
+  std::vector<Track> kept;
+  kept.reserve(tracks_.size());
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    if (keep[i]) kept.push_back(std::move(tracks_[i]));
+  }
+  tracks_.swap(kept);
+}
+
 void MonocularVo::Impl::TrackFeatures(const cv::Mat& grey, const CameraPoseRC* predicted) {
   std::vector<cv::Point2f> previous, guesses, tracked;
   std::vector<unsigned char> ok;
@@ -75,7 +84,9 @@ void MonocularVo::Impl::TrackFeatures(const cv::Mat& grey, const CameraPoseRC* p
       }
     }
   }
-  klt_.Track(previous, guesses, &tracked, &ok);
+  std::vector<double> fb_px;
+  klt_.Track(previous, guesses, &tracked, &ok, &fb_px);
+  noise_.AddForwardBackward(fb_px);
   std::vector<Track> kept;
   kept.reserve(tracks_.size());
   for (size_t i = 0; i < tracks_.size(); ++i) {

@@ -360,9 +360,12 @@ RelativePoseRansacResult EstimateRelativePose(const std::vector<Eigen::Vector3d>
     }
   }
   result.iterations = iteration;
-  if (best_count < options.min_inliers) return result;
-
   result.E = best_E;
+  if (best_count < options.min_inliers) {
+    result.num_inliers = std::max(best_count, 0);
+    return result;
+  }
+
   result.inliers.assign(n, 0);
   result.num_inliers = count_inliers(best_E, &result.inliers);
 

@@ -57,6 +57,8 @@ struct RelativePoseRansacOptions {
 struct RelativePoseRansacResult {
   bool success = false;
   RelativePose pose;  // the decomposition with most points in front of both views
+  // The best model found (also when too few inliers support it: its epipolar distances still
+  // measure the noise; zero when no sample gave a model).
   Eigen::Matrix3d E = Eigen::Matrix3d::Zero();
   std::vector<char> inliers;  // epipolar inliers of E
   int num_inliers = 0;

@@ -4,6 +4,11 @@
 
 namespace rigcal::vo {
 
+void Landmark::AddDescriptor(const Descriptor& descriptor) {
+  if (descriptors.size() >= kMaxDescriptors) descriptors.erase(descriptors.begin() + 1);
+  descriptors.push_back(descriptor);
+}
+
 void VoMap::Clear() {
   keyframes_.clear();
   landmarks_.clear();

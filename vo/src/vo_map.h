@@ -6,8 +6,12 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <unordered_map>
 #include <vector>
+
+#include "affine_patch.h"
+#include "map_descriptors.h"
 
 namespace rigcal::vo {
 
@@ -27,9 +31,21 @@ struct Observation {
 };
 
 struct Landmark {
+  // At most this many descriptors: the first keyframe's and the newest ones.
+  static constexpr size_t kMaxDescriptors = 4;
+
   int id = -1;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  // world (segment reference) frame
   std::vector<Observation> observations;
+  // Its appearance at the keyframes that observed it, for relocalisation: descriptors to find
+  // it, and the reference patch of the track that observed it at the newest of them with the
+  // warp into that keyframe, to place it to a fraction of a pixel once found.
+  std::vector<Descriptor> descriptors;
+  std::shared_ptr<const PatchTemplate> patch;
+  Eigen::Matrix2d warp = Eigen::Matrix2d::Identity();
+
+  // Keeps the first descriptor and the newest ones.
+  void AddDescriptor(const Descriptor& descriptor);
 };
 
 class VoMap {

@@ -1,99 +1,60 @@
 #include "rigcal/capture/image_folder_device.h"
 
 #include <algorithm>
-#include <cerrno>
-#include <charconv>
-#include <cstring>
+#include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "image_folder_listing.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/base/robust_statistics.h"
 
 namespace rigcal::capture {
-namespace {
-
-std::string Trim(const std::string& s) {
-  const auto first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = s.find_last_not_of(" \t\r\n");
-  return s.substr(first, last - first + 1);
-}
-
-}  // namespace
 
 Expected<std::unique_ptr<ImageFolderDevice>> ImageFolderDevice::Open(const std::string& folder,
                                                                      std::string name,
                                                                      int camera_index,
                                                                      double frame_rate_hz) {
+  ImageFolderOptions options;
+  options.rate_hz = frame_rate_hz;
+  return Open(folder, std::move(name), camera_index, options);
+}
+
+Expected<std::unique_ptr<ImageFolderDevice>> ImageFolderDevice::Open(
+    const std::string& folder, std::string name, int camera_index,
+    const ImageFolderOptions& options) {
   auto log = ModuleLogger("capture");
-  const std::filesystem::path dir(folder);
-  const std::filesystem::path csv = dir / "data.csv";
-  std::ifstream in(csv);
-  if (!in) {
-    return Error{"camera " + name + ": cannot open " + csv.string() + ": " + std::strerror(errno)};
+  std::error_code ec;
+  const bool asl = std::filesystem::exists(std::filesystem::path(folder) / "data.csv", ec) ||
+                   !std::filesystem::is_directory(folder, ec);
+  auto listing = asl ? internal::ListAslFolder(folder, name)
+                     : internal::ListPlainFolder(folder, options.rate_hz, options.timestamps_file);
+  if (!listing) {
+    return asl ? Error{listing.error()} : Error{"camera " + name + ": " + listing.error()};
   }
   std::unique_ptr<ImageFolderDevice> device(new ImageFolderDevice());
   device->name_ = std::move(name);
   device->camera_index_ = camera_index;
-
-  std::vector<std::string> missing;  // skipped_ from the start (the device is not shared yet)
-  std::string line;
-  int line_number = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string text = Trim(line);
-    if (text.empty() || text[0] == '#') continue;
-    auto problem = [&](const std::string& reason) {
-      const std::string message = csv.string() + ":" + std::to_string(line_number) + ": " + reason;
-      log->warn("camera {}: skipping line: {}", device->name_, message);
-      device->csv_problems_.push_back(message);
-    };
-    const auto comma = text.find(',');
-    if (comma == std::string::npos) {
-      problem("expected \"timestamp_ns,filename\"");
-      continue;
-    }
-    const std::string stamp = Trim(text.substr(0, comma));
-    const std::string file = Trim(text.substr(comma + 1));
-    int64_t t_ns = 0;
-    const auto [end, ec] = std::from_chars(stamp.data(), stamp.data() + stamp.size(), t_ns);
-    if (ec != std::errc() || end != stamp.data() + stamp.size() || t_ns < 0) {
-      problem("bad timestamp \"" + stamp + "\"");
-      continue;
-    }
-    if (file.empty() || file.find(',') != std::string::npos) {
-      problem("bad file name \"" + file + "\"");
-      continue;
-    }
-    if (!device->entries_.empty() && t_ns <= device->entries_.back().t_ns) {
-      problem("timestamp " + stamp + " not after the previous one");
-      continue;
-    }
-    Entry entry;
-    entry.t_ns = t_ns;
-    entry.path = (dir / "data" / file).string();
-    std::error_code exists_error;
-    entry.exists = std::filesystem::is_regular_file(entry.path, exists_error);
-    if (!entry.exists) missing.push_back(entry.path);
-    device->entries_.push_back(std::move(entry));
+  device->layout_ = listing->layout;
+  device->csv_problems_ = std::move(listing->problems);
+  for (const std::string& problem : device->csv_problems_) {
+    log->warn("camera {}: skipping line: {}", device->name_, problem);
   }
-  if (device->entries_.empty()) {
-    return Error{"camera " + device->name_ + ": " + csv.string() + " lists no valid image"};
+  for (internal::FolderEntry& entry : listing->entries) {
+    device->entries_.push_back({entry.t_ns, std::move(entry.path), entry.exists});
   }
-  if (!missing.empty()) {
+  if (!listing->missing.empty()) {
     log->warn("camera {}: {} of {} images listed in {} are missing (first: {})", device->name_,
-              missing.size(), device->entries_.size(), csv.string(), missing.front());
+              listing->missing.size(), device->entries_.size(), folder, listing->missing.front());
   }
   {
     MutexLock lock(device->mutex_);
-    device->skipped_ = std::move(missing);
+    device->skipped_ = std::move(listing->missing);
   }
 
-  if (frame_rate_hz > 0.0) {
-    device->frame_rate_hz_ = frame_rate_hz;
+  if (options.rate_hz > 0.0 && (asl || options.timestamps_file.empty())) {
+    device->frame_rate_hz_ = options.rate_hz;
   } else if (device->entries_.size() >= 2) {
     std::vector<int64_t> dt;
     for (size_t i = 1; i < device->entries_.size(); ++i) {
@@ -101,9 +62,32 @@ Expected<std::unique_ptr<ImageFolderDevice>> ImageFolderDevice::Open(const std::
     }
     device->frame_rate_hz_ = 1e9 / static_cast<double>(UpperMedian(std::move(dt)));
   }
-  log->info("camera {}: {} images from {} at {:.2f} Hz", device->name_, device->entries_.size(),
-            folder, device->frame_rate_hz_);
+  log->info("camera {}: {} images from {} ({}) at {:.2f} Hz", device->name_,
+            device->entries_.size(), folder, device->layout_, device->frame_rate_hz_);
   return device;
+}
+
+cv::Mat ImageFolderDevice::ToGrey8(cv::Mat image) {
+  if (image.empty()) return image;
+  if (image.channels() == 3) {
+    cv::cvtColor(image, image, cv::COLOR_BGR2GRAY);
+  } else if (image.channels() == 4) {
+    cv::cvtColor(image, image, cv::COLOR_BGRA2GRAY);
+  }
+  if (image.depth() == CV_16U) {
+    if (!(sixteen_bit_scale_ > 0.0)) {
+      // The bit depth the first 16-bit image uses (at least 8 bits): a 10- or 12-bit sensor's
+      // values in 16-bit words keep their full contrast, and every frame gets the same scale.
+      double max_value = 0.0;
+      cv::minMaxLoc(image, nullptr, &max_value);
+      const int bits = std::clamp(static_cast<int>(std::ceil(std::log2(max_value + 1.0))), 8, 16);
+      sixteen_bit_scale_ = 255.0 / ((1 << bits) - 1);
+      ModuleLogger("capture")->info("camera {}: 16-bit images use {} bits", name_, bits);
+    }
+    image.convertTo(image, CV_8U, sixteen_bit_scale_);
+  }
+  if (image.type() != CV_8UC1) return cv::Mat();
+  return image;
 }
 
 Expected<std::optional<Frame>> ImageFolderDevice::Grab() {
@@ -111,14 +95,8 @@ Expected<std::optional<Frame>> ImageFolderDevice::Grab() {
     const size_t index = next_++;
     const Entry& entry = entries_[index];
     if (!entry.exists) continue;  // reported at Open
-    cv::Mat image = cv::imread(entry.path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-    if (!image.empty() && image.channels() == 3) {
-      cv::cvtColor(image, image, cv::COLOR_BGR2GRAY);
-    } else if (!image.empty() && image.channels() == 4) {
-      cv::cvtColor(image, image, cv::COLOR_BGRA2GRAY);
-    }
-    if (!image.empty() && image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);
-    if (image.empty() || image.type() != CV_8UC1) {
+    cv::Mat image = ToGrey8(cv::imread(entry.path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR));
+    if (image.empty()) {
       ModuleLogger("capture")->warn("camera {}: cannot read image {}; skipped", name_, entry.path);
       MutexLock lock(mutex_);
       skipped_.push_back(entry.path);

@@ -1,6 +1,7 @@
 #include "capture_source_yaml.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <initializer_list>
 #include <set>
 #include <vector>
@@ -155,6 +156,32 @@ std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& 
       return r.Fail(n, p + "reconnect_max_backoff_s", "must be in (0, 3600]");
     }
     options->reconnect_max_backoff_s = *v;
+  }
+  return std::nullopt;
+}
+
+std::optional<Error> ParseImageFolderKeys(const FieldReader& r, const YAML::Node& node,
+                                          const std::string& field, bool is_source,
+                                          const std::string& base_dir,
+                                          capture::ImageFolderOptions* options) {
+  if (!node.IsMap()) return r.Fail(node, field, "expected a map");
+  std::set<std::string> known = {"rate_hz", "timestamps"};
+  if (is_source) known.insert("type");
+  if (auto e = r.CheckKeys(node, field + ".", known)) return e;
+  const std::string p = field + ".";
+  if (const YAML::Node n = node["rate_hz"]) {
+    auto v = r.Number(n, p + "rate_hz");
+    if (!v) return Error{v.error()};
+    if (!(*v > 0.0 && *v <= 10000.0)) return r.Fail(n, p + "rate_hz", "must be in (0, 10000]");
+    options->rate_hz = *v;
+  }
+  if (const YAML::Node n = node["timestamps"]) {
+    auto v = r.String(n, p + "timestamps");
+    if (!v) return Error{v.error()};
+    if (v->empty()) return r.Fail(n, p + "timestamps", "must name a file");
+    const std::filesystem::path file(*v);
+    options->timestamps_file =
+        file.is_absolute() ? file.string() : (std::filesystem::path(base_dir) / file).string();
   }
   return std::nullopt;
 }

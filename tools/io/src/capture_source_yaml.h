@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rigcal/base/status.h"
+#include "rigcal/capture/image_folder_device.h"
 #include "rigcal/capture/libcamera_device.h"
 #include "rigcal/capture/v4l2_options.h"
 #include "yaml_fields.h"
@@ -31,5 +32,13 @@ std::optional<Error> ParseV4l2Keys(const FieldReader& r, const YAML::Node& node,
 std::optional<Error> ParseLibcameraKeys(const FieldReader& r, const YAML::Node& node,
                                         const std::string& field, bool is_source,
                                         capture::LibcameraOptions* options);
+
+// The same for `source: {type: image_folders}` and a camera's `capture:` (the camera's `device`
+// is its folder). Keys: rate_hz, timestamps (a file, resolved against `base_dir` when
+// relative); both only matter for plain folders (ImageFolderOptions).
+std::optional<Error> ParseImageFolderKeys(const FieldReader& r, const YAML::Node& node,
+                                          const std::string& field, bool is_source,
+                                          const std::string& base_dir,
+                                          capture::ImageFolderOptions* options);
 
 }  // namespace rigcal::io

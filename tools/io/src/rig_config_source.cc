@@ -11,8 +11,11 @@ namespace {
 
 std::optional<Error> ParseImageFolders(const FieldReader& r, const YAML::Node& source,
                                        const std::vector<YAML::Node>& entries, RigConfig* config) {
-  if (auto e = r.CheckKeys(source, "source.", {"type"})) return *e;
   const std::filesystem::path base = std::filesystem::path(config->path).parent_path();
+  capture::ImageFolderOptions defaults;
+  if (auto e = ParseImageFolderKeys(r, source, "source", true, base.string(), &defaults)) {
+    return *e;
+  }
   for (size_t i = 0; i < config->cameras.size(); ++i) {
     const CameraConfig& camera = config->cameras[i];
     if (camera.device.empty()) {
@@ -26,6 +29,14 @@ std::optional<Error> ParseImageFolders(const FieldReader& r, const YAML::Node& s
     const std::filesystem::path folder(camera.device);
     config->image_folders.push_back(folder.is_absolute() ? folder.string()
                                                          : (base / folder).string());
+    capture::ImageFolderOptions options = defaults;
+    if (const YAML::Node capture = entries[i]["capture"]) {
+      if (auto e = ParseImageFolderKeys(r, capture, camera.name + ".capture", false, base.string(),
+                                        &options)) {
+        return *e;
+      }
+    }
+    config->image_folder_options.push_back(std::move(options));
   }
   return std::nullopt;
 }

@@ -22,8 +22,8 @@ Expected<int64_t> PacedStart(const trigger::LiveTriggerTimeline& trigger) {
 }
 
 // The devices of the source; `live` is the started trigger generator (may be null).
-Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast, const std::string& prefix,
-                                     std::ostream& progress,
+Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast,
+                                     const std::string& prefix, std::ostream& progress,
                                      const trigger::LiveTriggerTimeline* live) {
   CaptureSources sources;
   const std::vector<std::string> names = config.CameraNames();
@@ -120,15 +120,18 @@ Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast, con
     progress << prefix << "image folders replayed in real time from the trigger's next pulse\n";
   }
   for (size_t i = 0; i < names.size(); ++i) {
-    auto device =
-        capture::ImageFolderDevice::Open(config.image_folders[i], names[i], static_cast<int>(i));
+    const capture::ImageFolderOptions options = i < config.image_folder_options.size()
+                                                    ? config.image_folder_options[i]
+                                                    : capture::ImageFolderOptions{};
+    auto device = capture::ImageFolderDevice::Open(config.image_folders[i], names[i],
+                                                   static_cast<int>(i), options);
     if (!device) {
       return Error{config.path + ": camera '" + names[i] + "': " + device.error()};
     }
     auto model = camera::MakeCameraModel(*config.cameras[i].spec);
     if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
-    progress << prefix << "camera '" << names[i] << "': " << (*device)->size()
-             << " images listed in " << config.image_folders[i] << "\n";
+    progress << prefix << "camera '" << names[i] << "': " << (*device)->size() << " images in "
+             << config.image_folders[i] << " (" << (*device)->layout() << ")\n";
     const double rate = (*device)->frame_rate_hz();
     if (live && std::abs(rate - live->options().settings.rate_hz) > 0.01 * rate) {
       return Error{config.path + ": camera '" + names[i] + "': its images come at " +

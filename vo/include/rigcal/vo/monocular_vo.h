@@ -13,9 +13,14 @@
 //    best pure rotation is removed; triangulation; two-view bundle adjustment; ||C^1|| = 1.
 //  - Tracking: P3P RANSAC on bearings (angular residuals) + motion-only refinement; keyframes;
 //    new points triangulated at keyframes; a windowed local bundle adjustment (Ceres).
-//  - Failure (too few inliers, degenerate geometry, blank images) -> state kLost, then a new
-//    initialisation that opens a new scale segment whose reference frame is again the
-//    identity.
+//  - Gates from measured noise: σ of the track positions is measured on the images (KLT
+//    forward-backward errors, epipolar and pose residuals) and every threshold is a multiple
+//    of it, so real blurred frames and rendered ones share one set of options.
+//  - Failure (too few inliers, degenerate geometry, blank images, a gap in the frames) ->
+//    state kLost: the VO relocalises against its own map (ORB descriptors of the landmarks at
+//    keyframes, P3P RANSAC) and goes on in the same scale segment; only when relocalisation
+//    has failed for VoOptions::relocalisation_timeout_s does a new initialisation open a new
+//    scale segment whose reference frame is again the identity.
 //
 // Thread: a MonocularVo is used by one thread at a time (the pipeline's VO thread of its
 // camera); it starts no thread itself.
@@ -70,12 +75,19 @@ struct VoOptions {
   double affine_min_area = 0.9;
   double affine_max_area = 1.7;
 
-  // --- Robust estimation (angles in pixels of the camera's centre resolution) ---
-  // RANSAC inlier threshold of the essential matrix (epipolar angle) and of PnP (angle
-  // between observed and predicted bearings), in pixels (converted with PixelAngle()).
-  // (1 px: affine-refined tracks agree with the projection to a few hundredths of a pixel,
-  // so a wider gate only lets slightly wrong tracks in.)
-  double ransac_threshold_px = 1.0;
+  // --- Measurement noise and gates ---
+  // The VO measures the per-axis standard deviation σ of its track positions in pixels of the
+  // camera's centre resolution (KLT forward-backward errors, then the residuals of its own
+  // epipolar geometry and poses; a running robust estimate over about noise_window_frames
+  // frames, never below noise_floor_px). Every gate is inlier_sigmas σ: the inliers of the
+  // essential matrix, of PnP and of triangulation, the observations the bundle adjustment
+  // keeps (3.03: 99 % of a 2-D Gaussian error), and the Huber scale of the bundle adjustment is
+  // huber_sigmas σ (1.345: 95 % efficiency on Gaussian errors). So the same options gate
+  // rendered frames (σ ~0.05 px) and blurred real ones (σ ~0.3 px).
+  double inlier_sigmas = 3.03;
+  double huber_sigmas = 1.345;
+  double noise_floor_px = 0.1;
+  int noise_window_frames = 10;
   int ransac_max_iterations = 200;
   double ransac_confidence = 0.999;
 
@@ -84,12 +96,14 @@ struct VoOptions {
   int min_init_tracks = 60;
   // Minimum essential-matrix inliers and triangulated points to accept an initialisation.
   int min_init_inliers = 50;
-  // Parallax needed before the two views are accepted: median angle between the rays of the
-  // inlier tracks once the essential matrix's rotation is removed, degrees.
-  double min_init_parallax_deg = 1.5;
-  // The views are not even tried while the best pure rotation explains the tracks to within
-  // this median residual, pixels: pure rotation or no motion never produces a translation.
-  double min_init_rotation_residual_px = 3.0;
+  // The two views are accepted once the median angle between the rays of the inlier tracks
+  // (the essential matrix's rotation removed) fixes the depths to init_depth_precision
+  // (relative σ of a depth: √2 σ_angle / parallax, σ_angle the measured noise as an angle),
+  // and is at least min_init_parallax_deg. They are not even tried while the best pure
+  // rotation explains the median track within the noise gate: pure rotation or no motion never
+  // produces a translation.
+  double init_depth_precision = 0.05;
+  double min_init_parallax_deg = 0.5;
   // Fraction of essential-matrix inliers that must triangulate in front of both views.
   double min_init_cheirality_fraction = 0.9;
 
@@ -99,6 +113,21 @@ struct VoOptions {
   double min_inlier_ratio = 0.3;
   // Smallest angle between the two rays of a new triangulated point, degrees.
   double min_triangulation_angle_deg = 1.0;
+
+  // --- Relocalisation ---
+  // After a tracking loss (a gap in the frames, a covered lens, a jolt) the VO relocalises
+  // against its map: ORB descriptors of the landmarks, taken at keyframes, are matched with
+  // the ORB features of the new frame (at most relocalisation_features; a match's Hamming
+  // distance within relocalisation_max_bits of 256, and below relocalisation_ratio times the
+  // second best landmark's), then P3P RANSAC on bearings and a refinement; at least
+  // relocalisation_min_inliers inliers continue the same scale segment. A new segment opens
+  // only once relocalisation has failed for relocalisation_timeout_s of stream time (the log
+  // says why).
+  double relocalisation_timeout_s = 2.0;
+  int relocalisation_features = 1000;
+  int relocalisation_max_bits = 64;
+  double relocalisation_ratio = 0.8;
+  int relocalisation_min_inliers = 20;
 
   // --- Keyframes and local bundle adjustment ---
   // A new keyframe when the tracked map points fall below this fraction of those the last
@@ -110,9 +139,7 @@ struct VoOptions {
   // Keyframes in the local bundle adjustment window (the two oldest are held fixed, which
   // fixes the gauge and the scale), and its iteration limit.
   int ba_window = 6;
-  int ba_max_iterations = 8;
-  // Huber loss scale of bearing residuals, pixels.
-  double ba_huber_px = 1.0;
+  int ba_max_iterations = 5;
 
   // Seed of the RANSAC sampling (the VO is deterministic for a given input).
   uint32_t seed = 42;
@@ -124,7 +151,7 @@ struct VoOptions {
 enum class VoState {
   kInitialising,  // waiting for enough parallax to the reference frame
   kTracking,      // poses are reported
-  kLost,          // tracking failed; the next initialisation opens a new segment
+  kLost,          // tracking failed: relocalising (then, after the timeout, a new segment)
 };
 
 std::string ToString(VoState state);
@@ -142,6 +169,12 @@ struct VoResult {
   int tracked_features = 0;  // KLT tracks alive after this frame
   int inliers = 0;           // PnP (tracking) or essential-matrix (initialisation) inliers
   bool keyframe = false;     // this frame became a keyframe
+  // This frame's pose came from relocalising against the map after a loss (same segment).
+  bool relocalised = false;
+  // Relocalisations since the VO was made (all segments), this one included.
+  int relocalisations = 0;
+  // The measured per-axis noise of the track positions, pixels (see VoOptions::inlier_sigmas).
+  double track_noise_px = 0.0;
   double processing_ms = 0.0;
   std::string message;  // why the VO is initialising or lost (empty when tracking)
 };
@@ -165,10 +198,11 @@ class MonocularVo {
   VoResult Process(int64_t t_ns, const cv::Mat& grey);
 
   // Current state, scale segment id (0 for the first; incremented by every initialisation
-  // after a loss) and number of frames processed.
+  // after relocalisation gave up), number of frames processed and of relocalisations.
   VoState state() const;
   int segment() const;
   int64_t frames_processed() const;
+  int relocalisations() const;
   const VoOptions& options() const;
   // The camera's field of view (solid angle of its valid image area, steradians) and the
   // number of features tracked at most for it (see VoOptions::max_features).

@@ -11,6 +11,7 @@
 #include "rigcal/base/types.h"
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/camera/camera_spec.h"
+#include "rigcal/capture/image_folder_device.h"
 #include "rigcal/capture/libcamera_device.h"
 #include "rigcal/sim/simulated_rig.h"
 #include "rigcal/trigger/live_trigger_timeline.h"
@@ -52,9 +53,12 @@ struct RigConfig {
   PublishOptions publish;
   StateOptions state;
   std::optional<sim::SimulatedRigSpec> simulated_source;  // `source: {type: simulated}`
-  // `source: {type: image_folders}`: one EuRoC-format camera folder per camera (its `device`,
-  // resolved against the config file's directory), camera index order.
+  // `source: {type: image_folders}`: one folder per camera (its `device`, resolved against the
+  // config file's directory; an ASL camera folder or a plain folder of images), camera index
+  // order, and its options (`source:` keys rate_hz, timestamps, overridden by the camera's
+  // `capture:`).
   std::vector<std::string> image_folders;
+  std::vector<capture::ImageFolderOptions> image_folder_options;
   // `source: {type: v4l2}`: one device per camera (camera index order): the source's keys,
   // the camera's `device`, its resolution and its `capture:` keys.
   std::vector<capture::V4l2Options> v4l2_devices;

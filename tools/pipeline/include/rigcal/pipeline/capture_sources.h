@@ -41,7 +41,7 @@ struct CaptureSources {
 // sequence and mapped exposure centre); a simulated rig then runs in real time with frame 0 at
 // the next pulse (not with `fast`; its frame rate must be the trigger's).
 // What is opened goes to `progress` as lines starting with `prefix` ("rigcal run: camera 'cam0':
-// 95 images listed in ..."). Errors name the config file and the camera; a config without a
+// 95 images in ... (ASL data.csv)"). Errors name the config file and the camera; a config without a
 // source says which sources exist.
 Expected<CaptureSources> OpenCaptureSources(const io::RigConfig& config, bool fast,
                                             const std::string& prefix, std::ostream& progress);
