@@ -1,12 +1,16 @@
 #pragma once
 // CalibNode::Impl, private to rigcal_pipeline:
-//   calib_node.cc    construction, Open, the live loop, pose hand-over, publishing, state, result
-//   log_replay.cc    the replay of a log: reading, time window, pacing, log-time timers, images
+//   calib_node.cc     construction, Open, the bus loop, pose hand-over, publishing, result
+//   node_state.cc     state saves and --resume
+//   log_replay.cc     the replay of a log: reading, time window, pacing, log-time timers, images
+//   capture_input.cc  live capture: the config's source through the pipeline, the capture loop
 //
-// Threads (calib_node.h): the LCM/reader thread runs Run; in an image replay the pose sink, the
-// timers and the publishing run on the VO thread that releases a pose (one at a time, the
-// PoseMerge serialises them), and the reader thread touches only the reader, the feeds and the
-// replay counters until the pipeline has finished.
+// Threads (calib_node.h): the LCM/reader/capture-owner thread runs Run; in an image replay and a
+// lossless capture the pose sink, the timers and the publishing run on the VO thread that
+// releases a pose (one at a time, the PoseMerge serialises them), and Run's thread touches only
+// the reader, the feeds and the replay counters until the pipeline has finished. In a live
+// capture every VO thread runs the pose sink for its own camera (per-camera counters) and Run's
+// thread the timers; output_mutex serialises what they publish and the errors they record.
 
 #include <atomic>
 #include <chrono>
@@ -18,10 +22,12 @@
 #include "frame_feed_device.h"
 #include "periodic_schedule.h"
 #include "rigcal/base/logging.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
+#include "rigcal/pipeline/capture_sources.h"
 #include "rigcal/pipeline/pipeline.h"
 
 namespace rigcal::pipeline {
@@ -36,7 +42,8 @@ struct CalibNode::Impl {
   ::lcm::LCM* bus = nullptr;  // input + output for live runs (owned or external)
   std::unique_ptr<::lcm::LCM> owned_bus;
   std::unique_ptr<::lcm::LCM> output;  // replay: optional output
-  OnlineCalibrator calibrator;
+  // Built with the node, or by OpenCapture once the source says whether it is lossless.
+  std::unique_ptr<OnlineCalibrator> calibrator;
   lcm::MessageValidator validator;
   CalibNodeSummary summary;
   std::string state_path;
@@ -46,6 +53,8 @@ struct CalibNode::Impl {
   // Timers: wall clock (live) or log time (replay).
   PeriodicSchedule schedule;
   int job_extrinsics = -1, job_status = -1, job_state = -1, job_report = -1;
+  // The config's publish / state periods and the status lines as jobs of `schedule`.
+  void AddJobs();
 
   // Status bookkeeping (the thread that publishes).
   std::vector<lcm::StampRate> rates;
@@ -63,10 +72,27 @@ struct CalibNode::Impl {
   std::unique_ptr<std::atomic<int64_t>[]> images_invalid;
   std::unique_ptr<Pipeline> pipeline;
 
+  // Live capture (capture_input.cc).
+  std::unique_ptr<CaptureSources> sources;
+  bool lossless_capture = false;  // the source waits for the VO: timers on pose stamps
+  // Resumed with our own VO: its segments restart at 0, so every camera's segment ids are moved
+  // past the saved ones (a VO restart is a new scale segment). Empty: none.
+  std::vector<int> segment_offset;
+
+  // Serialises publishing and error recording between the VO threads and Run's thread.
+  Mutex output_mutex;
+  std::vector<std::string> errors RIGCAL_GUARDED_BY(output_mutex);
+
   Impl(io::RigConfig c, CalibNodeOptions o);
 
   bool replaying() const { return !options.log_path.empty(); }
-  ::lcm::LCM* Output() { return replaying() ? output.get() : bus; }
+  bool capturing() const { return options.capture; }
+  // Timers on stream time (pose / log stamps) rather than the wall clock of a live bus.
+  bool stream_timers() const { return replaying() || lossless_capture; }
+  // Live bus: the input bus; a replay or a capture: the output (or a bus given to the node).
+  ::lcm::LCM* Output() { return replaying() || bus == nullptr ? output.get() : bus; }
+  // Records an error of the run (any thread) and logs it.
+  void AddError(const std::string& error) RIGCAL_EXCLUDES(output_mutex);
   // Index of the camera of a pose / image channel, -1 when none of the rig's.
   int CameraOfChannel(const std::string& channel, bool images) const;
   void Reject(const std::string& what);
@@ -92,6 +118,14 @@ struct CalibNode::Impl {
   void RestoreState();
   // Flush, final refinement, last publication, state and result.
   void Finish(int64_t utime);
+  // Moves pose segments past the resumed state's (our own VO restarted).
+  void SetSegmentOffsets(const RigEstimatorState& state);
+
+  // capture_input.cc.
+  Status OpenCapture();
+  void RunCapture(const std::atomic<bool>& stop);
+  // End-of-run reports of the devices, the trigger, evaluation and pose / truth files.
+  void FinishCapture();
 
   // log_replay.cc.
   Status OpenLog();

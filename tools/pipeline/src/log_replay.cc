@@ -114,7 +114,7 @@ void CalibNode::Impl::AdvanceLogTime(int64_t t_ns) {
   int64_t deadline = 0;
   while (schedule.NextDue(clock_ns, &job, &deadline)) {
     if (!caught_up) {
-      calibrator.Drain();
+      calibrator->Drain();
       caught_up = true;
     }
     RunJob(job, deadline / 1000);
@@ -126,7 +126,7 @@ ReplayProgress CalibNode::Impl::Progress() const {
   p.bytes_read = reader ? reader->position() : 0;
   p.log_bytes = reader ? reader->size() : 0;
   p.log_time_s = summary.log_span_s;
-  p.sets = calibrator.sync_stats().sets_popped;
+  p.sets = calibrator->sync_stats().sets_popped;
   return p;
 }
 
