@@ -161,20 +161,24 @@ void CalibNode::Impl::AcceptVoPose(const CameraPose& pose) {
   if (stream_timers()) AdvanceLogTime(pose.t_ns);
   if (auto msg = lcm::CameraPoseToLcm(pose, names, pose.t_ns / 1000)) {
     int64_t published = 0;
-    Publish(lcm::PoseChannel(names[pose.camera]), *msg, &published);
+    Publish(lcm::PoseChannel(names[pose.camera]), *msg, &published, /*record=*/true);
   }
   Accept(pose.camera, pose);
 }
 
 template <typename Message>
-void CalibNode::Impl::Publish(const std::string& channel, const Message& msg, int64_t* counter) {
+void CalibNode::Impl::Publish(const std::string& channel, const Message& msg, int64_t* counter,
+                              bool record) {
   ::lcm::LCM* out = Output();
-  if (out == nullptr) return;
+  record = record && recorder != nullptr;
+  if (out == nullptr && !record) return;
   auto bytes = lcm::EncodeMessage(channel, names, msg);
   if (!bytes) {
     AddError("not published: " + bytes.error());
     return;
   }
+  if (record) recorder->Record(channel, msg.utime, *bytes);
+  if (out == nullptr) return;
   int rc = 0;
   {
     MutexLock lock(output_mutex);
@@ -200,7 +204,9 @@ void CalibNode::Impl::PublishExtrinsics(const RigEstimate& estimate, int64_t uti
     AddError("RIGCAL_EXTRINSICS not published: " + msg.error());
     return;
   }
-  Publish(lcm::kExtrinsicsChannel, *msg, &summary.extrinsics_published);
+  // A recording holds the estimate once there is one.
+  Publish(lcm::kExtrinsicsChannel, *msg, &summary.extrinsics_published,
+          /*record=*/estimate.sets > 0);
 }
 
 std::vector<lcm::CameraStatusInput> CalibNode::Impl::CameraInputs() {
@@ -255,7 +261,7 @@ void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
   std::string state_message;
   lcm::EstimatorState(estimate, &state_message);
   std::ostringstream line;
-  if (capturing()) line << CameraLine(pipeline->Snapshot()) << " | ";
+  if (capturing() && pipeline) line << CameraLine(pipeline->Snapshot()) << " | ";
   line << "sets " << estimate.sets << " | " << state_message;
   for (size_t i = 0; i < estimate.rig.slaves.size(); ++i) {
     const SlaveCalibration& slave = estimate.rig.slaves[i];

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "flow_watch.h"
 #include "frame_feed_device.h"
 #include "periodic_schedule.h"
 #include "rigcal/base/logging.h"
@@ -27,7 +28,9 @@
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
+#include "rigcal/pipeline/capture_loops.h"
 #include "rigcal/pipeline/capture_sources.h"
+#include "rigcal/pipeline/log_recorder.h"
 #include "rigcal/pipeline/pipeline.h"
 
 namespace rigcal::pipeline {
@@ -78,6 +81,12 @@ struct CalibNode::Impl {
   // Resumed with our own VO: its segments restart at 0, so every camera's segment ids are moved
   // past the saved ones (a VO restart is a new scale segment). Empty: none.
   std::vector<int> segment_offset;
+  // `rigcal record`: the log every frame is tapped into (with the poses and estimates), and the
+  // capture threads when there is no VO (record_no_vo).
+  std::unique_ptr<LogRecorder> recorder;
+  std::unique_ptr<CaptureLoops> capture_loops;
+  bool trigger_failure_told = false;  // the trigger link's failure was logged
+  bool flow_healthy = true;           // FlowWatch's verdict at the last pass
 
   // Serialises publishing and error recording between the VO threads and Run's thread.
   Mutex output_mutex;
@@ -104,7 +113,9 @@ struct CalibNode::Impl {
   // The pose sink of an image replay (a VO thread): log time, publish the pose, Accept.
   void AcceptVoPose(const CameraPose& pose);
   template <typename Message>
-  void Publish(const std::string& channel, const Message& msg, int64_t* counter);
+  // Publishes on Output(); `record`: also into the recording (a pose, an estimate).
+  void Publish(const std::string& channel, const Message& msg, int64_t* counter,
+               bool record = false);
   void RunJob(int job, int64_t utime);
   void PublishExtrinsics(const RigEstimate& estimate, int64_t utime);
   void PublishStatus(const RigEstimate& estimate, int64_t utime);
@@ -124,6 +135,16 @@ struct CalibNode::Impl {
   // capture_input.cc.
   Status OpenCapture();
   void RunCapture(const std::atomic<bool>& stop);
+  // The recorder tapped into every device (options.record_path); the devices without VO go to
+  // CaptureLoops.
+  Status OpenRecording(std::vector<std::unique_ptr<capture::CameraDevice>>* devices);
+  // One pass of the capture loop at now_ns: a live source's timers, the trigger's health, the
+  // recording's progress, the watchdog when frames flow. False: stop (the disk failed).
+  bool CapturePass(int64_t now_ns, FlowWatch* flow);
+  // Every camera ended or died (through its VO, or its capture loop without VO).
+  bool CaptureFinished() const;
+  // The capture's threads stopped and joined: the cameras (and VO), then the trigger.
+  void StopCapture();
   // End-of-run reports of the devices, the trigger, evaluation and pose / truth files.
   void FinishCapture();
 

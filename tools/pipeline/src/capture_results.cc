@@ -57,8 +57,20 @@ std::vector<std::string> CaptureReport(const std::vector<CameraHealth>& cameras,
 }  // namespace
 
 void CalibNode::Impl::FinishCapture() {
-  summary.camera_health = pipeline->Snapshot().cameras;
+  if (recorder) {
+    // After the last estimate went in (Finish).
+    const Status stopped = recorder->Stop();
+    summary.recording = recorder->Stats();
+    if (!stopped.ok()) summary.recording_error = stopped.message();
+  }
+  if (pipeline) summary.camera_health = pipeline->Snapshot().cameras;
   summary.capture_report = CaptureReport(summary.camera_health, *sources);
+  if (capture_loops) {
+    for (const std::string& problem : capture_loops->Problems()) {
+      summary.capture_report.push_back(problem);
+    }
+  }
+  if (!pipeline) return;
   if (!options.poses_dir.empty()) {
     if (Status status = WriteRecordedPoses(options.poses_dir, names, *pipeline); !status.ok()) {
       summary.errors.push_back(status.message());

@@ -22,8 +22,8 @@ Expected<int64_t> PacedStart(const trigger::LiveTriggerTimeline& trigger) {
 }
 
 // The devices of the source; `live` is the started trigger generator (may be null).
-Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast, const std::string& prefix,
-                                     std::ostream& progress,
+Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast,
+                                     const std::string& prefix, std::ostream& progress,
                                      const trigger::LiveTriggerTimeline* live) {
   CaptureSources sources;
   const std::vector<std::string> names = config.CameraNames();

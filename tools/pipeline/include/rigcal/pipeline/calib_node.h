@@ -49,6 +49,7 @@
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
+#include "rigcal/pipeline/log_recorder.h"
 #include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/run_evaluation.h"
 
@@ -109,10 +110,18 @@ struct CalibNodeOptions {
   // Capture input instead of a bus or a log: the config's `source:` (see above). Publishes on
   // publish_url (empty = nothing), which must stay on this host unless lcm_network.
   bool capture = false;
-  bool fast = false;        // capture: a simulated source not paced in real time (lossless)
-  std::string poses_dir;    // capture: every VO pose to DIR/<camera>.txt at the end
-  std::string truth_dir;    // capture, simulated source: its ground truth (TUM, truth.yaml)
-  bool evaluate = false;    // capture, simulated source: the errors against its truth
+  bool fast = false;      // capture: a simulated source not paced in real time (lossless)
+  std::string poses_dir;  // capture: every VO pose to DIR/<camera>.txt at the end
+  std::string truth_dir;  // capture, simulated source: its ground truth (TUM, truth.yaml)
+  bool evaluate = false;  // capture, simulated source: the errors against its truth
+  // Capture: record every frame (RIGCAL_IMAGE_<camera>), the VO poses and RIGCAL_EXTRINSICS into
+  // this LCM log (`rigcal record`; LogRecorder); empty = no recording. `recorder.lossless` is
+  // set from the source.
+  std::string record_path;
+  RecorderOptions recorder;
+  bool record_no_vo = false;  // record the images only: no VO, no estimator input
+  // Recording: called on Run's thread after every pass of the capture loop (about every 20 ms).
+  std::function<void(const RecorderStats&)> on_recording;
   std::string result_path;  // result YAML written on exit (atomically); empty = none
   std::string state_path;   // overrides the config's state.path when not empty
   bool resume = false;      // continue from the state file (ignored with a warning if unusable)
@@ -162,6 +171,9 @@ struct CalibNodeSummary {
   std::vector<CameraHealth> camera_health;
   std::vector<std::string> capture_report;
   std::optional<RunEvaluation> evaluation;
+  // Recording: what was written, and the recorder's final status (empty when it closed well).
+  std::optional<RecorderStats> recording;
+  std::string recording_error;
 };
 
 class CalibNode {
