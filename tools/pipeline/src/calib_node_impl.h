@@ -16,6 +16,7 @@
 #include <chrono>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -151,6 +152,17 @@ struct CalibNode::Impl {
   // log_replay.cc.
   Status OpenLog();
   void ReplayLog(const std::atomic<bool>& stop);
+  // One event of the log for the replay: a frame of a camera or a pose, at its stamp.
+  struct ReplayItem {
+    int camera = -1;
+    int64_t t_ns = 0;
+    std::optional<CameraPose> pose;
+    std::optional<capture::Frame> frame;
+  };
+  bool ReadReplayEvent(lcm::LogEvent* event);
+  bool DecodeReplayEvent(const lcm::LogEvent& event, ReplayItem* item);
+  // Waits until the wall clock reaches t_ns at options.replay.speed (no wait when 0).
+  void PaceReplay(int64_t t_ns, const std::atomic<bool>& stop);
   // Log time moves on to t_ns: the timers due until then run (after the estimator has caught
   // up, so what they publish does not depend on thread timing).
   void AdvanceLogTime(int64_t t_ns);
