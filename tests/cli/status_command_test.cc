@@ -19,6 +19,8 @@ namespace rigcal {
 namespace {
 
 using cli_test::Quote;
+using monitor::MakeExtrinsics;
+using monitor::MakeStatus;
 using cli_test::RunResult;
 using ::testing::HasSubstr;
 

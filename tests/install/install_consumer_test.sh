@@ -20,12 +20,14 @@ check() {  # check NAME EXPR
 }
 check "bin/rigcal installed" '[ -x "$prefix/bin/rigcal" ]'
 check "installed rigcal --version" '"$prefix/bin/rigcal" --version | grep -q "^rigcal [0-9]"'
-for header in calib/types.h camera/camera_model.h capture/frame.h vo/monocular_vo.h io/rig_config.h \
-              lcm/message_validation.h pipeline/pipeline.h camera_pose_t.hpp rig_status_t.hpp; do
+for header in base/types.h calib/rig_calibrator.h camera/camera_model.h capture/frame.h \
+              vo/monocular_vo.h io/rig_config.h lcm/message_validation.h pipeline/pipeline.h \
+              camera_pose_t.hpp rig_status_t.hpp; do
   check "include/rigcal/$header" '[ -f "$prefix/include/rigcal/$header" ]'
 done
 check "no private header installed" '[ -z "$(find "$prefix/include" -path "*/src/*")" ]'
-check "static libraries" '[ -f "$prefix/lib/librigcal_calib.a" ] && [ -f "$prefix/lib/librigcal_vo.a" ]'
+check "static libraries" '[ -f "$prefix/lib/librigcal_base.a" ] && [ -f "$prefix/lib/librigcal_calib.a" ] &&
+                          [ -f "$prefix/lib/librigcal_vo.a" ]'
 check "CMake package" '[ -f "$prefix/lib/cmake/rigcal/rigcalConfig.cmake" ] &&
                        [ -f "$prefix/lib/cmake/rigcal/rigcalTargets.cmake" ]'
 check "LCM definitions" '[ -f "$prefix/share/rigcal/lcmtypes/rig_status_t.lcm" ]'

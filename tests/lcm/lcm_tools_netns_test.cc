@@ -25,7 +25,7 @@ using cli_test::Quote;
 
 // Plays each log (argument triples IN OUT SPEED) with lcm-logplayer while lcm-logger records the
 // bus. A receive buffer of 4 MB keeps the kernel from dropping datagrams of image bursts.
-constexpr char kPlayAndRecordScript[] = R"(set -euo pipefail
+constexpr char kPlayAndRecordScript[] = R"sh(set -euo pipefail
 links=$(ip -o link show | awk -F': ' '{print $2}' | tr '\n' ' ')
 if [ "$links" != "lo " ]; then echo "FAIL: not a private namespace, links: $links"; exit 1; fi
 ip link set lo up
@@ -36,14 +36,17 @@ url='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'
 while [ $# -ge 3 ]; do
   lcm-logger --lcm-url="$url" --quiet --force "$2" &
   logger=$!
+  # Play once the logger's socket is bound (and at least half a second, for its subscription).
   sleep 0.5
+  for _ in $(seq 1 100); do ss -uln | grep -q ':7667 ' && break; sleep 0.1; done
   lcm-logplayer --lcm-url="$url" --speed="$3" "$1"
-  sleep 0.5
+  # Time for the logger to receive and write the last events on a busy machine.
+  sleep 2
   kill -INT "$logger"
   wait "$logger" || true
   shift 3
 done
-)";
+)sh";
 
 using LcmToolsNetnsTest = cli_test::CommandTest;
 
