@@ -35,8 +35,8 @@ set(CPACK_COMPONENT_RUNTIME_DESCRIPTION "rigcal estimates, while a vehicle drive
 relative to a master camera (rotation, position and odometry scale) from the
 cameras' monocular visual odometry, and publishes the estimate over LCM. This
 package holds the rigcal command, example rig configurations,
-/etc/rigcal/rig.yaml and systemd units for the calibrator (on the bus or on this
-computer's cameras) and its health check.")
+/etc/rigcal/rig.yaml and systemd units for the calibrator (on the bus, or on
+this computer's cameras) and its health check.")
 # /etc/rigcal/rig.yaml is a conffile: dpkg keeps the edited one across upgrades and removals.
 file(WRITE ${PROJECT_BINARY_DIR}/deb/conffiles "/etc/rigcal/rig.yaml\n")
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_CONTROL_EXTRA ${PROJECT_BINARY_DIR}/deb/conffiles)
