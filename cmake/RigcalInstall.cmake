@@ -45,15 +45,35 @@ install(FILES ${PROJECT_BINARY_DIR}/rigcalConfig.cmake ${PROJECT_BINARY_DIR}/rig
 
 # Example rig configurations (share/rigcal/config) and the service units (config/systemd).
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rigcal/config
-        COMPONENT runtime FILES_MATCHING PATTERN "*.yaml" PATTERN "README.md" PATTERN "systemd" EXCLUDE)
+        COMPONENT runtime FILES_MATCHING PATTERN "*.yaml" PATTERN "README.md" PATTERN "systemd" EXCLUDE
+        PATTERN "examples" EXCLUDE)
+# Rigs of real cameras to start from (share/rigcal/examples): the triggered stereo pair, a
+# 4-camera surround rig on v4l2, a libcamera pair. The stereo pair is also /etc/rigcal/rig.yaml,
+# the config both units read (a conffile of the .deb: an edited one survives upgrades).
+set(rigcal_examples ${PROJECT_SOURCE_DIR}/config/stereo_v4l2_trigger.yaml
+    ${PROJECT_SOURCE_DIR}/config/examples/surround4_v4l2.yaml
+    ${PROJECT_SOURCE_DIR}/config/examples/libcamera_stereo.yaml)
+install(FILES ${rigcal_examples} DESTINATION ${CMAKE_INSTALL_DATADIR}/rigcal/examples
+        COMPONENT runtime)
+# /etc for the /usr prefix (the .deb), <prefix>/etc otherwise; decided at install time, when the
+# prefix is known (as GNUInstallDirs does for SYSCONFDIR).
+install(CODE "
+  if(CMAKE_INSTALL_PREFIX STREQUAL \"/usr\")
+    set(etc \"/etc\")
+  else()
+    set(etc \"\${CMAKE_INSTALL_PREFIX}/etc\")
+  endif()
+  file(INSTALL \"${PROJECT_SOURCE_DIR}/config/stereo_v4l2_trigger.yaml\"
+       DESTINATION \"\${etc}/rigcal\" RENAME rig.yaml)"
+  COMPONENT runtime)
 
 # systemd units (config/systemd, README "Deployment"): rigcal.service runs `rigcal calib` with
-# the watchdog, rigcal-health.timer runs `rigcal status --once` every minute. The units name
+# the watchdog, rigcal-run.service `rigcal run` on this computer's cameras, rigcal-health.timer runs `rigcal status --once` every minute. The units name
 # the installed rigcal, whose path is known only at install time (cmake --install --prefix,
 # CPack's /usr): @bindir@ and @datadir@ are filled in then, straight into the destination.
 set(RIGCAL_SYSTEMD_UNIT_DIR "lib/systemd/system" CACHE STRING
     "Where `cmake --install` puts the systemd units (relative to the prefix)")
-foreach(unit rigcal.service rigcal-health.service)
+foreach(unit rigcal.service rigcal-run.service rigcal-health.service)
   install(CODE "
     set(bindir \"\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_BINDIR}\")
     set(datadir \"\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_DATADIR}\")

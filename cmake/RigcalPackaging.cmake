@@ -34,8 +34,12 @@ set(CPACK_DEBIAN_RUNTIME_PACKAGE_SECTION science)
 set(CPACK_COMPONENT_RUNTIME_DESCRIPTION "rigcal estimates, while a vehicle drives, where every camera of a rig sits
 relative to a master camera (rotation, position and odometry scale) from the
 cameras' monocular visual odometry, and publishes the estimate over LCM. This
-package holds the rigcal command, example rig configurations and systemd units
-for the calibrator and its health check.")
+package holds the rigcal command, example rig configurations,
+/etc/rigcal/rig.yaml and systemd units for the calibrator (on the bus, or on
+this computer's cameras) and its health check.")
+# /etc/rigcal/rig.yaml is a conffile: dpkg keeps the edited one across upgrades and removals.
+file(WRITE ${PROJECT_BINARY_DIR}/deb/conffiles "/etc/rigcal/rig.yaml\n")
+set(CPACK_DEBIAN_RUNTIME_PACKAGE_CONTROL_EXTRA ${PROJECT_BINARY_DIR}/deb/conffiles)
 set(RIGCAL_DEB_DEPENDS "" CACHE STRING
     "Debian Depends of the rigcal package; empty = dpkg-shlibdeps (native builds)")
 if(RIGCAL_DEB_DEPENDS)

@@ -35,7 +35,8 @@ verify() {  # verify UNIT...: systemd-analyze's remarks on stdout, its exit code
   systemd-analyze verify --root="$root" --man=no "$@" 2>&1
 }
 rc=0
-out=$(verify $units/rigcal.service $units/rigcal-health.service $units/rigcal-health.timer) || rc=$?
+out=$(verify $units/rigcal.service $units/rigcal-run.service $units/rigcal-health.service \
+  $units/rigcal-health.timer) || rc=$?
 [ -n "$out" ] && echo "$out"
 check "systemd-analyze verify: exit 0 (got $rc)" '[ "$rc" -eq 0 ]'
 check "systemd-analyze verify: no remark" '[ -z "$out" ]'
@@ -53,6 +54,19 @@ for setting in Type=notify WatchdogSec= Restart=on-failure StateDirectory=rigcal
                "ExecStart=/usr/bin/rigcal calib"; do
   check "rigcal.service: $setting" 'grep -q "^$setting" "$unit"'
 done
+unit="$root$units/rigcal-run.service"
+for setting in Type=notify WatchdogSec= Restart=on-failure StateDirectory=rigcal DynamicUser=yes \
+               "SupplementaryGroups=video dialout" ProtectSystem=strict ProtectHome=yes \
+               NoNewPrivileges=yes CapabilityBoundingSet= DevicePolicy=closed \
+               "DeviceAllow=char-video4linux rw" "DeviceAllow=char-media rw" \
+               "DeviceAllow=char-ttyUSB rw" "ExecStart=/usr/bin/rigcal run .*--state /var/lib/rigcal/.* --resume"; do
+  check "rigcal-run.service: $setting" 'grep -q "^$setting" "$unit"'
+done
+check "rigcal-run.service: no root" '! grep -q "^User=root" "$unit"'
+check "examples installed" '[ -f "$root/usr/share/rigcal/examples/surround4_v4l2.yaml" ] &&
+  [ -f "$root/usr/share/rigcal/examples/libcamera_stereo.yaml" ] &&
+  [ -f "$root/usr/share/rigcal/examples/stereo_v4l2_trigger.yaml" ]'
+check "/etc/rigcal/rig.yaml installed" '[ -f "$root/etc/rigcal/rig.yaml" ]'
 check "health check runs rigcal status --once" \
   'grep -q "^ExecStart=/usr/bin/rigcal status .*--once" "$root$units/rigcal-health.service"'
 check "health timer repeats" 'grep -q "^OnUnitActiveSec=" "$root$units/rigcal-health.timer"'

@@ -2,6 +2,7 @@
 
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "exit_codes.h"
@@ -72,67 +73,80 @@ void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, pipeline::CalibNodeOptions*
                 "ignored");
 }
 
-int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
+namespace {
+
+// What the run did, for the journal: signals, sync, decoder, the log, the devices.
+void LogSummary(const NodeRunArgs& args, const pipeline::CalibNodeOptions& options,
+                const pipeline::CalibNodeSummary& summary, int signal) {
   auto log = ModuleLogger("tools");
   const std::string prefix = "rigcal " + args.command + ": ";
-  auto config = io::LoadRigConfig(args.config);
-  if (!config) {
-    std::cerr << prefix << config.error() << "\n";
-    return kExitError;
-  }
-  const std::vector<std::string> names = config->CameraNames();
-  // With true mountings in the config (simulations), the result also shows the errors.
-  std::map<std::string, Similarity> truth;
-  for (const io::CameraConfig& camera : config->cameras) {
-    if (camera.truth) truth[camera.name] = *camera.truth;
-  }
-  const std::map<std::string, Similarity>* truth_ptr = truth.empty() ? nullptr : &truth;
-  std::unique_ptr<ReplayProgressDisplay> display;
-  if (args.progress && !options.log_path.empty()) {
-    display = std::make_unique<ReplayProgressDisplay>("rigcal " + args.command);
-    options.on_progress = [&display](const pipeline::ReplayProgress& p) { display->Update(p); };
-  }
-  // Under systemd (config/systemd/rigcal.service): READY=1 once listening, the watchdog from
-  // the receive loop.
-  ServiceNotifier service;
-  const bool live = options.log_path.empty();
-  if (live) options.on_tick = [&service] { service.Tick(); };
-  pipeline::CalibNode node(std::move(*config), options);
-  if (const Status status = node.Open(); !status.ok()) {
-    std::cerr << prefix << status.message() << "\n";
-    return kExitError;
-  }
-  StopSignal stop_signal;
-  if (live) {
-    log->info("listening for RIGCAL_POSE_<camera>; stop with Ctrl-C (SIGINT), SIGTERM or SIGHUP");
-    service.Ready("listening for RIGCAL_POSE_<camera>");
-  }
-  const pipeline::CalibNodeSummary summary = node.Run(stop_signal.flag());
-  if (live) service.Stopping();
-  if (stop_signal.received() != 0) {
-    log->info("signal {} received: stopped cleanly", stop_signal.received());
-  }
+  if (signal != 0) log->info("signal {} received: stopped cleanly", signal);
   log->info("sync: {}", summary.sync.BriefReport());
-  log->info("decoder: {}; unknown cameras: {}", summary.decode.Summary(), summary.unknown_channel);
+  if (!options.capture) {
+    log->info("decoder: {}; unknown cameras: {}", summary.decode.Summary(),
+              summary.unknown_channel);
+  }
+  for (const std::string& line : summary.capture_report) std::cerr << prefix << line << "\n";
   if (!options.log_path.empty()) {
     log->info("log: {} events, {:.1f} s of log time, replayed from its {}", summary.log_events,
               summary.log_span_s, summary.image_replay ? "images through VO" : "poses");
     if (!summary.skipped_channels.empty()) {
       log->info("channels not replayed: {}", ChannelList(summary.skipped_channels));
     }
-    if (!options.publish_url.empty()) {
-      log->info("published {} RIGCAL_EXTRINSICS, {} RIGCAL_STATUS on {}",
-                summary.extrinsics_published, summary.status_published, options.publish_url);
-    }
+  }
+  if (!options.publish_url.empty()) {
+    log->info("published {} RIGCAL_EXTRINSICS, {} RIGCAL_STATUS on {}",
+              summary.extrinsics_published, summary.status_published, options.publish_url);
   }
   if (!summary.log_problem.empty()) std::cerr << prefix << summary.log_problem << "\n";
+}
+
+// The result on stdout: JSON or the table (with the errors against a truth when known).
+void PrintResult(const NodeRunArgs& args, const io::RigConfig& config,
+                 const pipeline::CalibNodeSummary& summary) {
   const RigCalibration& result = summary.estimate.rig;
+  // With true mountings in the config (simulations), calib and replay show the errors; a
+  // capture of a simulated source compares with its truth (--eval, --json).
+  std::map<std::string, Similarity> truth;
+  std::optional<io::TruthAlignment> alignment;
+  if (summary.evaluation) {
+    for (const pipeline::SlaveEvaluation& e : summary.evaluation->slaves) {
+      truth[e.name] = e.truth_master_units;
+    }
+    alignment = pipeline::AlignmentOf(*summary.evaluation);
+  } else if (args.command != "run") {
+    for (const io::CameraConfig& camera : config.cameras) {
+      if (camera.truth) truth[camera.name] = *camera.truth;
+    }
+  }
+  const std::map<std::string, Similarity>* truth_ptr = truth.empty() ? nullptr : &truth;
   if (args.json) {
-    std::cout << io::ResultToJson(result, truth_ptr).dump(2) << "\n";
+    std::cout << io::ResultToJson(result, truth_ptr, alignment ? &*alignment : nullptr).dump(2)
+              << "\n";
+  } else if (args.command == "run") {
+    std::cout << io::FormatResultTable(result, nullptr);
+    bool any_usable = false;
+    for (const SlaveCalibration& slave : result.slaves) any_usable |= slave.usable();
+    if (!any_usable) {
+      std::cout << "insufficient motion: no slave could be calibrated (see the messages above; "
+                   "the rig must rotate about at least two axes, or move, while the cameras "
+                   "track)\n";
+    }
+    if (args.eval && summary.evaluation) {
+      std::cout << pipeline::FormatEvaluation(*summary.evaluation);
+    }
   } else {
     std::cout << io::FormatResultTable(result, truth_ptr);
   }
   std::cout.flush();
+}
+
+// Files, errors and states after the result: the exit code.
+int ExitCode(const NodeRunArgs& args, const pipeline::CalibNodeOptions& options,
+             const std::vector<std::string>& names, const pipeline::CalibNodeSummary& summary) {
+  auto log = ModuleLogger("tools");
+  const std::string prefix = "rigcal " + args.command + ": ";
+  const RigCalibration& result = summary.estimate.rig;
   if (summary.result_written) log->info("result written to {}", options.result_path);
   for (const std::string& kept : summary.kept_files) {
     std::cerr << prefix << "calibrated nothing: " << kept << " left as it was\n";
@@ -148,8 +162,9 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
     for (const std::string& error : summary.errors) std::cerr << prefix << error << "\n";
     return kExitError;
   }
-  if (summary.estimate.sets == 0)
+  if (summary.estimate.sets == 0 && !options.capture) {
     std::cerr << prefix << NoSetsMessage(options, names, summary) << "\n";
+  }
   std::vector<SlaveState> states;
   for (const SlaveCalibration& slave : result.slaves) {
     states.push_back(slave.state);
@@ -159,6 +174,48 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
     }
   }
   return ExitCodeFor(states);  // 0 every slave usable, 3 otherwise (slave_state.h)
+}
+
+}  // namespace
+
+int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
+  auto log = ModuleLogger("tools");
+  const std::string prefix = "rigcal " + args.command + ": ";
+  auto config = io::LoadRigConfig(args.config);
+  if (!config) {
+    std::cerr << prefix << config.error() << "\n";
+    return kExitError;
+  }
+  const io::RigConfig loaded = *config;
+  if (args.eval && !loaded.simulated_source) {
+    std::cerr << prefix << "--eval needs a simulated source (ground truth)\n";
+    return kExitError;
+  }
+  std::unique_ptr<ReplayProgressDisplay> display;
+  if (args.progress && !options.log_path.empty()) {
+    display = std::make_unique<ReplayProgressDisplay>("rigcal " + args.command);
+    options.on_progress = [&display](const pipeline::ReplayProgress& p) { display->Update(p); };
+  }
+  // Under systemd (config/systemd/rigcal.service, rigcal-run.service): READY=1 once listening
+  // or capturing, the watchdog from the receive loop or while frames flow.
+  ServiceNotifier service;
+  const bool live = options.log_path.empty();
+  if (live) options.on_tick = [&service] { service.Tick(); };
+  pipeline::CalibNode node(std::move(*config), options);
+  if (const Status status = node.Open(); !status.ok()) {
+    std::cerr << prefix << status.message() << "\n";
+    return kExitError;
+  }
+  StopSignal stop_signal;
+  if (live && !options.capture) {
+    log->info("listening for RIGCAL_POSE_<camera>; stop with Ctrl-C (SIGINT), SIGTERM or SIGHUP");
+  }
+  if (live) service.Ready(options.capture ? "capturing" : "listening for RIGCAL_POSE_<camera>");
+  const pipeline::CalibNodeSummary summary = node.Run(stop_signal.flag());
+  if (live) service.Stopping();
+  LogSummary(args, options, summary, stop_signal.received());
+  PrintResult(args, loaded, summary);
+  return ExitCode(args, options, loaded.CameraNames(), summary);
 }
 
 }  // namespace rigcal::cli

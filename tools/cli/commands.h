@@ -22,5 +22,7 @@ void RegisterIntrinsics(CLI::App& app, int* exit_code);
 void RegisterReferenceCompare(CLI::App& app, int* exit_code);
 void RegisterTrigger(CLI::App& app, int* exit_code);
 void RegisterVo(CLI::App& app, int* exit_code);
+void RegisterDevices(CLI::App& app, int* exit_code);
+void RegisterCheckConfig(CLI::App& app, int* exit_code);
 
 }  // namespace rigcal::cli

@@ -64,6 +64,8 @@ int main(int argc, char** argv) {
   rigcal::cli::RegisterReferenceCompare(app, &exit_code);
   rigcal::cli::RegisterTrigger(app, &exit_code);
   rigcal::cli::RegisterVo(app, &exit_code);
+  rigcal::cli::RegisterDevices(app, &exit_code);
+  rigcal::cli::RegisterCheckConfig(app, &exit_code);
 
   try {
     app.parse(argc, argv);

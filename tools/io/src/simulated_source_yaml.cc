@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/base/format.h"
 #include "config_sections.h"
+#include "rigcal/base/format.h"
 #include "rigcal/io/trajectory_io.h"
 #include "yaml_fields.h"
 
@@ -216,26 +216,16 @@ std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& no
   return std::nullopt;
 }
 
-}  // namespace
-
-Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
-                                                     const std::string& path) {
-  const FieldReader r(path);
-  if (auto e = r.CheckKeys(source, "source.", kSourceKeys)) return *e;
-  SimulatedRigSpec spec;
-  if (const YAML::Node n = source["type"]) {
-    auto type = r.String(n, "source.type");
-    if (!type) return Error{type.error()};
-    if (*type != "simulated") return r.Fail(n, "source.type", "expected 'simulated'");
-  }
+// frame_rate_hz, num_frames / duration_s, seed, realtime.
+std::optional<Error> ReadTiming(const FieldReader& r, const YAML::Node& source,
+                                SimulatedRigSpec* spec) {
   if (const YAML::Node n = source["frame_rate_hz"]) {
     auto v = NumberIn(
         r, n, "source.frame_rate_hz", [](double x) { return x > 0 && x <= 1000; },
         "in (0, 1000] Hz");
     if (!v) return Error{v.error()};
-    spec.frame_rate_hz = *v;
+    spec->frame_rate_hz = *v;
   }
-  const double period_s = 1.0 / spec.frame_rate_hz;
   if (source["num_frames"] && source["duration_s"]) {
     return r.Fail(KeyOf(source, "duration_s"), "source.duration_s",
                   "give either num_frames or duration_s, not both");
@@ -244,37 +234,38 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
     auto v = r.Integer64(n, "source.num_frames");
     if (!v) return Error{v.error()};
     if (*v < 1) return r.Fail(n, "source.num_frames", "must be >= 1");
-    spec.num_frames = *v;
+    spec->num_frames = *v;
   }
   if (const YAML::Node n = source["duration_s"]) {
     auto v = NumberIn(
         r, n, "source.duration_s", [](double x) { return x > 0; }, "> 0 s");
     if (!v) return Error{v.error()};
-    spec.duration_s = *v;
+    spec->duration_s = *v;
   }
   if (const YAML::Node n = source["seed"]) {
     auto v = r.Integer64(n, "source.seed");
     if (!v) return Error{v.error()};
     if (*v < 0) return r.Fail(n, "source.seed", "must be >= 0");
-    spec.seed = static_cast<uint64_t>(*v);
+    spec->seed = static_cast<uint64_t>(*v);
   }
   if (const YAML::Node n = source["realtime"]) {
     auto v = r.Bool(n, "source.realtime");
     if (!v) return Error{v.error()};
-    spec.realtime = *v;
+    spec->realtime = *v;
   }
-  const YAML::Node trajectory = source["trajectory"];
-  if (!trajectory) return r.Fail(source, "source.trajectory", "missing (waypoints or a file)");
-  if (auto e = ReadTrajectorySection(r, trajectory, path, &spec)) return *e;
-  if (const YAML::Node n = source["scene"]) {
-    if (auto e = ReadSceneSection(r, n, &spec)) return *e;
-  }
+  return std::nullopt;
+}
+
+// noise_sigma, motion_blur, drop_probability, timestamp_jitter_ms.
+std::optional<Error> ReadImageEffects(const FieldReader& r, const YAML::Node& source,
+                                      SimulatedRigSpec* spec) {
+  const double period_s = 1.0 / spec->frame_rate_hz;
   if (const YAML::Node n = source["noise_sigma"]) {
     auto v = NumberIn(
         r, n, "source.noise_sigma", [](double x) { return x >= 0 && x <= 100; },
         "in [0, 100] grey levels");
     if (!v) return Error{v.error()};
-    spec.noise_sigma = *v;
+    spec->noise_sigma = *v;
   }
   if (const YAML::Node n = source["motion_blur"]) {
     if (n.IsScalar()) {
@@ -292,14 +283,14 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
           [&](double x) { return x > 0 && x * 1e-3 < period_s; },
           "in (0, " + PlainNumber(period_s * 1e3) + ") ms (shorter than a frame period)");
       if (!exposure) return Error{exposure.error()};
-      spec.blur_exposure_s = *exposure * 1e-3;
+      spec->blur_exposure_s = *exposure * 1e-3;
       if (const YAML::Node s = n["samples"]) {
         auto samples = r.Integer(s, "source.motion_blur.samples");
         if (!samples) return Error{samples.error()};
         if (*samples < 2 || *samples > 32) {
           return r.Fail(s, "source.motion_blur.samples", "must be in [2, 32]");
         }
-        spec.blur_samples = *samples;
+        spec->blur_samples = *samples;
       }
     }
   }
@@ -307,7 +298,7 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
     auto v = NumberIn(
         r, n, "source.drop_probability", [](double x) { return x >= 0 && x < 1; }, "in [0, 1)");
     if (!v) return Error{v.error()};
-    spec.drop_probability = *v;
+    spec->drop_probability = *v;
   }
   if (const YAML::Node n = source["timestamp_jitter_ms"]) {
     auto v = NumberIn(
@@ -316,25 +307,31 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
         ">= 0 with 3 sigma below half a frame period (< " + PlainNumber(period_s * 1e3 / 6) +
             " ms)");
     if (!v) return Error{v.error()};
-    spec.timestamp_jitter_s = *v * 1e-3;
+    spec->timestamp_jitter_s = *v * 1e-3;
   }
+  return std::nullopt;
+}
+
+// `trigger:`: the simulated hardware trigger.
+std::optional<Error> ReadSimulatedTrigger(const FieldReader& r, const YAML::Node& source,
+                                          SimulatedRigSpec* spec) {
   if (const YAML::Node n = source["trigger"]) {  // simulated hardware trigger
     if (auto e =
             r.CheckKeys(n, "source.trigger.",
                         {"drift_ppm", "link_jitter_ms", "exposure_ms", "corrupt_probability"})) {
       return *e;
     }
-    spec.trigger.enabled = true;
+    spec->trigger.enabled = true;
     struct Field {
       const char* key;
       double* value;
       double lo, hi;
     };
     for (const Field& f :
-         {Field{"drift_ppm", &spec.trigger.drift_ppm, -1000, 1000},
-          Field{"link_jitter_ms", &spec.trigger.link_jitter_ms, 0, 20},
-          Field{"exposure_ms", &spec.trigger.exposure_ms, 0, 1000},
-          Field{"corrupt_probability", &spec.trigger.corrupt_probability, 0, 0.01}}) {
+         {Field{"drift_ppm", &spec->trigger.drift_ppm, -1000, 1000},
+          Field{"link_jitter_ms", &spec->trigger.link_jitter_ms, 0, 20},
+          Field{"exposure_ms", &spec->trigger.exposure_ms, 0, 1000},
+          Field{"corrupt_probability", &spec->trigger.corrupt_probability, 0, 0.01}}) {
       if (const YAML::Node v = n[f.key]) {
         auto x = NumberIn(
             r, v, std::string("source.trigger.") + f.key,
@@ -345,6 +342,12 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
       }
     }
   }
+  return std::nullopt;
+}
+
+// fail_after_s, render_block.
+std::optional<Error> ReadFailuresAndRendering(const FieldReader& r, const YAML::Node& source,
+                                              SimulatedRigSpec* spec) {
   if (const YAML::Node n = source["fail_after_s"]) {
     if (!n.IsMap()) return r.Fail(n, "source.fail_after_s", "expected a map camera: seconds");
     for (auto it = n.begin(); it != n.end(); ++it) {
@@ -353,33 +356,66 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
           r, it->second, "source.fail_after_s." + camera, [](double x) { return x >= 0; },
           ">= 0 s");
       if (!v) return Error{v.error()};
-      spec.fail_after_s[camera] = *v;
+      spec->fail_after_s[camera] = *v;
     }
   }
   if (const YAML::Node n = source["render_block"]) {
     auto v = r.Integer(n, "source.render_block");
     if (!v) return Error{v.error()};
     if (*v < 1 || *v > 32) return r.Fail(n, "source.render_block", "must be in [1, 32]");
-    spec.render_block = *v;
+    spec->render_block = *v;
   }
-  // The frames must fit into the trajectory.
+  return std::nullopt;
+}
+
+// The frames must fit into the trajectory.
+std::optional<Error> CheckFramesFitTrajectory(const FieldReader& r, const YAML::Node& source,
+                                              const SimulatedRigSpec* spec) {
+  const double period_s = 1.0 / spec->frame_rate_hz;
   double duration = 0.0;
-  if (!spec.waypoints.empty()) {
-    duration = static_cast<double>(spec.waypoints.size() - 1) * spec.waypoint_interval_s;
+  if (!spec->waypoints.empty()) {
+    duration = static_cast<double>(spec->waypoints.size() - 1) * spec->waypoint_interval_s;
   } else {
     duration =
-        static_cast<double>(spec.trajectory_t_ns.back() - spec.trajectory_t_ns.front()) * 1e-9;
+        static_cast<double>(spec->trajectory_t_ns.back() - spec->trajectory_t_ns.front()) * 1e-9;
   }
-  const int64_t frames = spec.num_frames > 0   ? spec.num_frames
-                         : spec.duration_s > 0 ? std::llround(spec.duration_s * spec.frame_rate_hz)
-                                               : 0;
+  const int64_t frames = spec->num_frames > 0 ? spec->num_frames
+                         : spec->duration_s > 0
+                             ? std::llround(spec->duration_s * spec->frame_rate_hz)
+                             : 0;
   if (frames > 0 && static_cast<double>(frames - 1) * period_s > duration + 1e-6) {
-    const std::string key = spec.num_frames > 0 ? "num_frames" : "duration_s";
+    const std::string key = spec->num_frames > 0 ? "num_frames" : "duration_s";
     return r.Fail(source[key], "source." + key,
-                  std::to_string(frames) + " frames at " + PlainNumber(spec.frame_rate_hz) +
+                  std::to_string(frames) + " frames at " + PlainNumber(spec->frame_rate_hz) +
                       " Hz last " + PlainNumber(static_cast<double>(frames - 1) * period_s) +
                       " s, longer than the trajectory (" + PlainNumber(duration) + " s)");
   }
+  return std::nullopt;
+}
+
+}  // namespace
+
+Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
+                                                     const std::string& path) {
+  const FieldReader r(path);
+  if (auto e = r.CheckKeys(source, "source.", kSourceKeys)) return *e;
+  SimulatedRigSpec spec;
+  if (const YAML::Node n = source["type"]) {
+    auto type = r.String(n, "source.type");
+    if (!type) return Error{type.error()};
+    if (*type != "simulated") return r.Fail(n, "source.type", "expected 'simulated'");
+  }
+  if (auto e = ReadTiming(r, source, &spec)) return *e;
+  const YAML::Node trajectory = source["trajectory"];
+  if (!trajectory) return r.Fail(source, "source.trajectory", "missing (waypoints or a file)");
+  if (auto e = ReadTrajectorySection(r, trajectory, path, &spec)) return *e;
+  if (const YAML::Node n = source["scene"]) {
+    if (auto e = ReadSceneSection(r, n, &spec)) return *e;
+  }
+  if (auto e = ReadImageEffects(r, source, &spec)) return *e;
+  if (auto e = ReadSimulatedTrigger(r, source, &spec)) return *e;
+  if (auto e = ReadFailuresAndRendering(r, source, &spec)) return *e;
+  if (auto e = CheckFramesFitTrajectory(r, source, &spec)) return *e;
   return spec;
 }
 

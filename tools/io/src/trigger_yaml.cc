@@ -132,115 +132,155 @@ Expected<CameraTriggerConfig> ParseCameraTrigger(const FieldReader& r, const YAM
   return c;
 }
 
-}  // namespace rigcal::io
+namespace {
 
-namespace rigcal::io {
-
-std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root,
-                                    const std::vector<YAML::Node>& entries,
-                                    const std::string& source_type, RigConfig* config) {
-  const YAML::Node section = root["trigger"];
-  const size_t n = config->cameras.size();
-  std::vector<std::optional<CameraTriggerConfig>> cameras(n);
-  size_t triggered = 0;
-  for (size_t i = 0; i < n; ++i) {
+// Every camera's `trigger:` entry; one without the top-level section is an error.
+Expected<std::vector<std::optional<CameraTriggerConfig>>> ReadCameraTriggers(
+    const FieldReader& r, const YAML::Node& section, const std::vector<YAML::Node>& entries,
+    const RigConfig& config) {
+  std::vector<std::optional<CameraTriggerConfig>> cameras(config.cameras.size());
+  for (size_t i = 0; i < cameras.size(); ++i) {
     const YAML::Node node = entries[i].IsMap() ? entries[i]["trigger"] : YAML::Node();
     if (!node) continue;
-    const std::string field = config->cameras[i].name + ".trigger";
+    const std::string field = config.cameras[i].name + ".trigger";
     if (!section) {
       return r.Fail(node, field, "needs the top-level `trigger:` section (the generator's port)");
     }
     auto parsed = ParseCameraTrigger(r, node, field);
     if (!parsed) return Error{parsed.error()};
     cameras[i] = *parsed;
-    ++triggered;
   }
-  if (!section) return std::nullopt;
-  trigger::LiveTriggerOptions options;
-  if (auto e = ParseTriggerSection(r, section, &options)) return e;
+  return cameras;
+}
+
+// The generator's section against the cameras and a simulated source.
+std::optional<Error> CheckTriggerWithSource(const FieldReader& r, const YAML::Node& section,
+                                            size_t triggered,
+                                            const trigger::LiveTriggerOptions& options,
+                                            const RigConfig& config) {
   if (triggered == 0) {
     return r.Fail(section, "trigger", "no camera has a `trigger:` entry (its line)");
   }
-  if (config->simulated_source && config->simulated_source->trigger.enabled) {
+  if (config.simulated_source && config.simulated_source->trigger.enabled) {
     return r.Fail(section, "trigger",
                   "not with source.trigger (the simulated generator): give one of them");
   }
-  if (config->simulated_source &&
-      std::abs(config->simulated_source->frame_rate_hz - options.settings.rate_hz) > 1e-9) {
+  if (config.simulated_source &&
+      std::abs(config.simulated_source->frame_rate_hz - options.settings.rate_hz) > 1e-9) {
     return r.Fail(section["rate_hz"] ? section["rate_hz"] : section, "trigger.rate_hz",
                   "must be the simulated source's frame_rate_hz (the rig's frame k is pulse k)");
   }
+  return std::nullopt;
+}
+
+// A camera's exposure [us] for its line: a v4l2 camera's is its capture.exposure_us.
+Expected<int64_t> CameraExposureUs(const FieldReader& r, const YAML::Node& node,
+                                   const std::string& p, const CameraTriggerConfig& c, bool v4l2,
+                                   std::optional<double> v4l2_exposure_us) {
+  if (!v4l2) return c.exposure_us.value_or(0);
+  // The V4L2 source sets the exposure and moves end-of-frame stamps back by it.
+  if (c.exposure_us) {
+    return r.Fail(node["exposure_us"], p + "exposure_us",
+                  "for a v4l2 camera give capture.exposure_us (the camera's exposure "
+                  "control, which also moves end-of-frame stamps back to the exposure start)");
+  }
+  if (c.stamp) {
+    return r.Fail(node["stamp"], p + "stamp",
+                  "a v4l2 camera's stamps follow its buffer flags (start of exposure)");
+  }
+  if (!v4l2_exposure_us) {
+    return r.Fail(node, p + "exposure_us",
+                  "a triggered v4l2 camera needs capture.exposure_us (the generator centres "
+                  "its pulses on the exposure)");
+  }
+  return std::llround(*v4l2_exposure_us);
+}
+
+// The generator line of a camera, checked against the trigger period.
+Expected<trigger::TriggerLineSettings> CameraLine(const FieldReader& r, const YAML::Node& node,
+                                                  const std::string& p,
+                                                  const CameraTriggerConfig& c, int64_t exposure_us,
+                                                  int64_t period_us) {
+  trigger::TriggerLineSettings line;
+  line.line = c.line;
+  line.width_us = c.width_us.value_or(std::min<int64_t>(1000, period_us / 2));
+  line.phase_offset_us = c.phase_us;
+  line.exposure_us = exposure_us;
+  line.exposure_input = c.exposure_input;
+  if (line.width_us >= period_us) {
+    return r.Fail(node["width_us"] ? node["width_us"] : node, p + "width_us",
+                  "must be below the trigger period " + std::to_string(period_us) + " us");
+  }
+  if (std::abs(line.phase_offset_us) + exposure_us / 2 >= period_us) {
+    return r.Fail(node, p + "phase_us",
+                  "|phase_us| + exposure / 2 must be below the trigger period " +
+                      std::to_string(period_us) + " us");
+  }
+  return line;
+}
+
+// Adds a camera's line to the generator's, or checks it against the camera sharing it.
+std::optional<Error> AddLine(const FieldReader& r, const YAML::Node& node, const std::string& p,
+                             const trigger::TriggerLineSettings& line,
+                             trigger::TriggerSettings* settings) {
+  for (const trigger::TriggerLineSettings& other : settings->lines) {
+    if (other.line != line.line) continue;
+    if (other.width_us != line.width_us || other.phase_offset_us != line.phase_offset_us ||
+        other.exposure_us != line.exposure_us || other.exposure_input != line.exposure_input) {
+      return r.Fail(node, p + "line",
+                    "line " + std::to_string(line.line) +
+                        " is shared with another camera whose width, phase, exposure or "
+                        "exposure input differ");
+    }
+    return std::nullopt;
+  }
+  settings->lines.push_back(line);
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<Error> ReadRigTrigger(const FieldReader& r, const YAML::Node& root,
+                                    const std::vector<YAML::Node>& entries,
+                                    const std::string& source_type, RigConfig* config) {
+  const YAML::Node section = root["trigger"];
+  const size_t n = config->cameras.size();
+  auto cameras = ReadCameraTriggers(r, section, entries, *config);
+  if (!cameras) return Error{cameras.error()};
+  if (!section) return std::nullopt;
+  size_t triggered = 0;
+  for (const auto& camera : *cameras) triggered += camera ? 1 : 0;
+  trigger::LiveTriggerOptions options;
+  if (auto e = ParseTriggerSection(r, section, &options)) return e;
+  if (auto e = CheckTriggerWithSource(r, section, triggered, options, *config)) return e;
   const auto period_us = static_cast<int64_t>(1e6 / options.settings.rate_hz);
   const bool v4l2 = source_type == "v4l2";
   const bool start_of_exposure = v4l2 || source_type == "libcamera";
   config->camera_triggers.assign(n, std::nullopt);
   for (size_t i = 0; i < n; ++i) {
-    if (!cameras[i]) continue;
-    const CameraTriggerConfig& c = *cameras[i];
+    if (!(*cameras)[i]) continue;
+    const CameraTriggerConfig& c = *(*cameras)[i];
     const YAML::Node node = entries[i]["trigger"];
     const std::string p = config->cameras[i].name + ".trigger.";
-    int64_t exposure_us = c.exposure_us.value_or(0);
-    if (v4l2) {
-      // The V4L2 source sets the exposure and moves end-of-frame stamps back by it.
-      if (c.exposure_us) {
-        return r.Fail(node["exposure_us"], p + "exposure_us",
-                      "for a v4l2 camera give capture.exposure_us (the camera's exposure "
-                      "control, which also moves end-of-frame stamps back to the exposure start)");
-      }
-      if (c.stamp) {
-        return r.Fail(node["stamp"], p + "stamp",
-                      "a v4l2 camera's stamps follow its buffer flags (start of exposure)");
-      }
-      const std::optional<double> exposure = config->v4l2_devices[i].exposure_us;
-      if (!exposure) {
-        return r.Fail(node, p + "exposure_us",
-                      "a triggered v4l2 camera needs capture.exposure_us (the generator centres "
-                      "its pulses on the exposure)");
-      }
-      exposure_us = std::llround(*exposure);
-    }
+    auto exposure_us = CameraExposureUs(r, node, p, c, v4l2,
+                                        v4l2 ? config->v4l2_devices[i].exposure_us : std::nullopt);
+    if (!exposure_us) return Error{exposure_us.error()};
+    auto line = CameraLine(r, node, p, c, *exposure_us, period_us);
+    if (!line) return Error{line.error()};
+    if (auto e = AddLine(r, node, p, *line, &options.settings)) return e;
     const trigger::FrameStamp stamp =
         c.stamp.value_or(start_of_exposure ? trigger::FrameStamp::kStartOfExposure
                                            : trigger::FrameStamp::kExposureCentre);
-    trigger::TriggerLineSettings line;
-    line.line = c.line;
-    line.width_us = c.width_us.value_or(std::min<int64_t>(1000, period_us / 2));
-    line.phase_offset_us = c.phase_us;
-    line.exposure_us = exposure_us;
-    line.exposure_input = c.exposure_input;
-    if (line.width_us >= period_us) {
-      return r.Fail(node["width_us"] ? node["width_us"] : node, p + "width_us",
-                    "must be below the trigger period " + std::to_string(period_us) + " us");
-    }
-    if (std::abs(line.phase_offset_us) + exposure_us / 2 >= period_us) {
-      return r.Fail(node, p + "phase_us",
-                    "|phase_us| + exposure / 2 must be below the trigger period " +
-                        std::to_string(period_us) + " us");
-    }
-    bool known = false;
-    for (const trigger::TriggerLineSettings& other : options.settings.lines) {
-      if (other.line != line.line) continue;
-      known = true;
-      if (other.width_us != line.width_us || other.phase_offset_us != line.phase_offset_us ||
-          other.exposure_us != line.exposure_us || other.exposure_input != line.exposure_input) {
-        return r.Fail(node, p + "line",
-                      "line " + std::to_string(line.line) +
-                          " is shared with another camera whose width, phase, exposure or "
-                          "exposure input differ");
-      }
-    }
-    if (!known) options.settings.lines.push_back(line);
     config->camera_triggers[i] = trigger::CameraTriggerSpec{
-        c.line, c.phase_us * 1000, trigger::StampOffsetNs(stamp, exposure_us, c.readout_us),
+        c.line, c.phase_us * 1000, trigger::StampOffsetNs(stamp, *exposure_us, c.readout_us),
         c.exposure_input != trigger_protocol::ExposureInput::kNone};
   }
   if (Status s = options.Check(); !s.ok()) return r.Fail(section, "trigger", s.message());
   config->trigger = std::move(options);
-  SyncOptions& sync = config->online.sync;
   const YAML::Node sync_node = root["sync"];
   const bool given = sync_node && sync_node.IsMap() && sync_node["match_by_trigger_seq"];
   if (triggered == n && !given && !config->online.time_offset.enabled) {
-    sync.match_by_trigger_seq = true;
+    config->online.sync.match_by_trigger_seq = true;
   }
   return std::nullopt;
 }

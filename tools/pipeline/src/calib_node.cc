@@ -35,6 +35,37 @@ void OnPoseMessage(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel,
   node->HandlePose(channel, rbuf->data, rbuf->data_size);
 }
 
+const char* VoStateShort(vo::VoState state) {
+  switch (state) {
+    case vo::VoState::kInitialising:
+      return "init";
+    case vo::VoState::kTracking:
+      return "trk";
+    case vo::VoState::kLost:
+      return "lost";
+  }
+  return "?";
+}
+
+// "cam0 trk s0 12.3ms 240f | cam1 DEAD": every camera of a capture, for the status line.
+std::string CameraLine(const PipelineSnapshot& snapshot) {
+  std::ostringstream line;
+  for (const CameraHealth& h : snapshot.cameras) {
+    if (line.tellp() > 0) line << " | ";
+    if (h.dead) {
+      line << h.name << " DEAD";
+      continue;
+    }
+    char buf[128];
+    std::snprintf(buf, sizeof(buf), "%s %s s%d %.1fms %lldf", h.name.c_str(),
+                  VoStateShort(h.vo_state), h.segment, h.vo_ms_median,
+                  static_cast<long long>(h.frames_processed));
+    line << buf;
+    if (h.dropped_backlog > 0) line << " drop" << h.dropped_backlog;
+  }
+  return line.str();
+}
+
 int64_t PeriodNs(double rate_hz) { return rate_hz > 0.0 ? static_cast<int64_t>(1e9 / rate_hz) : 0; }
 
 }  // namespace
@@ -43,14 +74,21 @@ CalibNode::Impl::Impl(io::RigConfig c, CalibNodeOptions o)
     : config(std::move(c)),
       options(std::move(o)),
       names(config.CameraNames()),
-      calibrator(names, ProcessOnlineOptions(config.online, names.size(),
-                                             /*lossless=*/!options.log_path.empty())),
       validator(names),
-      schedule(/*catch_up=*/!options.log_path.empty()) {
+      schedule(/*catch_up=*/!options.log_path.empty() || options.capture) {
+  // A capture's calibrator is built once its source says whether it is lossless (OpenCapture).
+  if (!capturing()) {
+    calibrator = std::make_unique<OnlineCalibrator>(
+        names, ProcessOnlineOptions(config.online, names.size(), /*lossless=*/replaying()));
+  }
   summary.cameras.resize(names.size());
   rates.resize(names.size());
   last_pose_wall.assign(names.size(), Clock::time_point::min());
   state_path = options.state_path.empty() ? config.state.path : options.state_path;
+  AddJobs();
+}
+
+void CalibNode::Impl::AddJobs() {
   job_extrinsics = schedule.Add(PeriodNs(config.publish.extrinsics_rate_hz));
   job_status = schedule.Add(PeriodNs(config.publish.status_rate_hz));
   job_state = schedule.Add(static_cast<int64_t>(config.state.save_interval_s * 1e9));
@@ -97,14 +135,22 @@ void CalibNode::Impl::HandlePose(const std::string& channel, const void* data, i
   Accept(camera, pose->pose);
 }
 
-void CalibNode::Impl::Accept(int camera, const CameraPose& pose) {
+void CalibNode::Impl::AddError(const std::string& error) {
+  log->error("{}", error);
+  MutexLock lock(output_mutex);
+  errors.push_back(error);
+}
+
+void CalibNode::Impl::Accept(int camera, const CameraPose& given) {
+  CameraPose pose = given;
+  if (!segment_offset.empty()) pose.segment += segment_offset[static_cast<size_t>(camera)];
   CameraInputStats& stats = summary.cameras[camera];
   ++stats.received;
   received_total.fetch_add(1);
   stats.last_t_ns = pose.t_ns;
   stats.last_segment = pose.segment;
   last_pose_wall[camera] = Clock::now();
-  const PushResult result = calibrator.Push(pose);
+  const PushResult result = calibrator->Push(pose);
   if (result != PushResult::kAccepted) {
     ++stats.sync_rejected;
     log->debug("{}: pose at {} ns not buffered: {}", names[camera], pose.t_ns, ToString(result));
@@ -112,47 +158,55 @@ void CalibNode::Impl::Accept(int camera, const CameraPose& pose) {
 }
 
 void CalibNode::Impl::AcceptVoPose(const CameraPose& pose) {
-  AdvanceLogTime(pose.t_ns);
+  if (stream_timers()) AdvanceLogTime(pose.t_ns);
   if (auto msg = lcm::CameraPoseToLcm(pose, names, pose.t_ns / 1000)) {
     int64_t published = 0;
-    Publish(lcm::PoseChannel(names[pose.camera]), *msg, &published);
+    Publish(lcm::PoseChannel(names[pose.camera]), *msg, &published, /*record=*/true);
   }
   Accept(pose.camera, pose);
 }
 
 template <typename Message>
-void CalibNode::Impl::Publish(const std::string& channel, const Message& msg, int64_t* counter) {
+void CalibNode::Impl::Publish(const std::string& channel, const Message& msg, int64_t* counter,
+                              bool record) {
   ::lcm::LCM* out = Output();
-  if (out == nullptr) return;
+  record = record && recorder != nullptr;
+  if (out == nullptr && !record) return;
   auto bytes = lcm::EncodeMessage(channel, names, msg);
   if (!bytes) {
-    summary.errors.push_back(bytes.error());
-    log->error("not published: {}", bytes.error());
+    AddError("not published: " + bytes.error());
     return;
   }
-  if (out->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size())) != 0) {
-    summary.errors.push_back(channel + ": LCM publish failed");
-    log->error("{}: LCM publish failed", channel);
+  if (record) recorder->Record(channel, msg.utime, *bytes);
+  if (out == nullptr) return;
+  int rc = 0;
+  {
+    MutexLock lock(output_mutex);
+    rc = out->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
+  }
+  if (rc != 0) {
+    AddError(channel + ": LCM publish failed");
     return;
   }
   ++*counter;
 }
 
 void CalibNode::Impl::RunJob(int job, int64_t utime) {
-  if (job == job_extrinsics) PublishExtrinsics(calibrator.Estimate(), utime);
-  if (job == job_status) PublishStatus(calibrator.Estimate(), utime);
+  if (job == job_extrinsics) PublishExtrinsics(calibrator->Estimate(), utime);
+  if (job == job_status) PublishStatus(calibrator->Estimate(), utime);
   if (job == job_state) SaveState();
-  if (job == job_report) ReportLine(calibrator.Estimate());
+  if (job == job_report) ReportLine(calibrator->Estimate());
 }
 
 void CalibNode::Impl::PublishExtrinsics(const RigEstimate& estimate, int64_t utime) {
   auto msg = lcm::EstimateToLcm(estimate, utime);
   if (!msg) {
-    log->error("RIGCAL_EXTRINSICS not published: {}", msg.error());
-    summary.errors.push_back(msg.error());
+    AddError("RIGCAL_EXTRINSICS not published: " + msg.error());
     return;
   }
-  Publish(lcm::kExtrinsicsChannel, *msg, &summary.extrinsics_published);
+  // A recording holds the estimate once there is one.
+  Publish(lcm::kExtrinsicsChannel, *msg, &summary.extrinsics_published,
+          /*record=*/estimate.sets > 0);
 }
 
 std::vector<lcm::CameraStatusInput> CalibNode::Impl::CameraInputs() {
@@ -166,7 +220,7 @@ std::vector<lcm::CameraStatusInput> CalibNode::Impl::CameraInputs() {
       lcm::CameraStatusInput cam = StatusInputOf(h);
       cam.name = names[i];
       cam.fps = rates[i].Update(h.frames_processed, h.last_frame_t_ns, start);
-      cam.dropped_invalid = images_invalid[i].load();
+      if (images_invalid) cam.dropped_invalid = images_invalid[i].load();
       cameras.push_back(cam);
     }
     return cameras;
@@ -197,34 +251,17 @@ std::vector<lcm::CameraStatusInput> CalibNode::Impl::CameraInputs() {
 
 void CalibNode::Impl::PublishStatus(const RigEstimate& estimate, int64_t utime) {
   const rig_status_t msg =
-      lcm::MakeRigStatus(CameraInputs(), calibrator.sync_stats(),
-                    config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
-                    cpu.Sample(), utime);
+      lcm::MakeRigStatus(CameraInputs(), calibrator->sync_stats(),
+                         config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
+                         cpu.Sample(), utime);
   Publish(lcm::kStatusChannel, msg, &summary.status_published);
-}
-
-bool CalibNode::Impl::CalibratedNothing() {
-  return !summary.resumed && calibrator.sync_stats().sets_emitted == 0;
-}
-
-void CalibNode::Impl::SaveState() {
-  if (state_path.empty()) return;
-  // An empty state never replaces the one a previous run saved.
-  if (CalibratedNothing() && std::filesystem::exists(state_path)) return;
-  if (const Status status =
-          io::WriteFileAtomically(state_path, io::FormatEstimatorState(calibrator.SaveState()));
-      !status.ok()) {
-    summary.errors.push_back(status.message());
-    log->error("state not saved: {}", status.message());
-    return;
-  }
-  ++summary.state_saves;
 }
 
 void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
   std::string state_message;
   lcm::EstimatorState(estimate, &state_message);
   std::ostringstream line;
+  if (capturing() && pipeline) line << CameraLine(pipeline->Snapshot()) << " | ";
   line << "sets " << estimate.sets << " | " << state_message;
   for (size_t i = 0; i < estimate.rig.slaves.size(); ++i) {
     const SlaveCalibration& slave = estimate.rig.slaves[i];
@@ -243,54 +280,12 @@ void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
   log->info("{}", line.str());
 }
 
-void CalibNode::Impl::RestoreState() {
-  if (state_path.empty()) {
-    log->warn("--resume: no state file configured (state.path or --state); starting afresh");
-    return;
-  }
-  if (!std::filesystem::exists(state_path)) {
-    log->warn("--resume: no state file '{}' yet; starting afresh", state_path);
-    return;
-  }
-  auto text = io::ReadWholeFile(state_path);
-  const Expected<RigEstimatorState> state =
-      text ? io::ParseEstimatorState(*text) : Expected<RigEstimatorState>(text.status());
-  const Status restored = state ? calibrator.RestoreState(*state) : state.status();
-  if (restored.ok()) {
-    summary.resumed = true;
-    std::string consumed;
-    for (size_t i = 0; i < state->consumed_t_ns.size() && i < names.size(); ++i) {
-      if (state->consumed_t_ns[i] >= 0) {
-        consumed += (consumed.empty() ? "" : ", ") + names[i] + " " +
-                    std::to_string(state->consumed_t_ns[i]) + " ns";
-      }
-    }
-    log->info("resumed from {}{}", state_path,
-              consumed.empty() ? std::string()
-                               : "; poses up to the stamps consumed there are skipped (" +
-                                     consumed + ", counted consumed)");
-    return;
-  }
-  // A rejected state (corrupt, newer version, other rig) is kept for a look, never overwritten.
-  const Expected<std::string> aside = io::KeepAside(state_path, "rejected");
-  if (!aside) {
-    summary.errors.push_back("--resume: " + state_path + ": " + restored.message() + "; " +
-                             aside.error() + "; the state is not saved in this run");
-    log->error("{}", summary.errors.back());
-    state_path.clear();
-    return;
-  }
-  summary.rejected_state = *aside;
-  log->warn("--resume: {}: {}; kept as {}, starting afresh", state_path, restored.message(),
-            *aside);
-}
-
 void CalibNode::Impl::Finish(int64_t utime) {
   // Clean stop: everything received is estimated, published, saved and written.
-  calibrator.Flush();
-  calibrator.RefineNow(/*final=*/true);
-  calibrator.Stop();
-  const RigEstimate estimate = calibrator.Estimate();
+  calibrator->Flush();
+  calibrator->RefineNow(/*final=*/true);
+  calibrator->Stop();
+  const RigEstimate estimate = calibrator->Estimate();
   PublishExtrinsics(estimate, utime);
   PublishStatus(estimate, utime);
   SaveState();
@@ -305,17 +300,19 @@ void CalibNode::Impl::Finish(int64_t utime) {
   }
   if (!options.result_path.empty() &&
       !(CalibratedNothing() && std::filesystem::exists(options.result_path))) {
-    if (const Status status = io::WriteResultYaml(options.result_path, estimate.rig); !status.ok()) {
-      summary.errors.push_back(status.message());
-      log->error("result not written: {}", status.message());
+    if (const Status status = io::WriteResultYaml(options.result_path, estimate.rig);
+        !status.ok()) {
+      AddError("result not written: " + status.message());
     } else {
       summary.result_written = true;
     }
   }
   ReportLine(estimate);
   summary.estimate = estimate;
-  summary.sync = calibrator.sync_stats();
+  summary.sync = calibrator->sync_stats();
   summary.decode = validator.stats();
+  MutexLock lock(output_mutex);
+  summary.errors.insert(summary.errors.end(), errors.begin(), errors.end());
 }
 
 CalibNode::CalibNode(io::RigConfig config, CalibNodeOptions options, ::lcm::LCM* lcm)
@@ -325,7 +322,8 @@ CalibNode::CalibNode(io::RigConfig config, CalibNodeOptions options, ::lcm::LCM*
 
 CalibNode::~CalibNode() {
   if (impl_->pipeline) impl_->pipeline->Stop();
-  impl_->calibrator.Stop();
+  if (impl_->sources && impl_->sources->trigger) impl_->sources->trigger->Stop();
+  if (impl_->calibrator) impl_->calibrator->Stop();
 }
 
 void CalibNode::HandlePose(const std::string& channel, const void* data, int64_t size) {
@@ -339,6 +337,8 @@ Status CalibNode::Open() {
   if (m.opened) return Error{"CalibNode::Open called twice"};
   if (m.replaying()) {
     if (const Status status = m.OpenLog(); !status.ok()) return status;
+  } else if (m.capturing()) {
+    if (const Status status = m.OpenCapture(); !status.ok()) return status;
   } else if (m.bus == nullptr) {
     m.owned_bus = std::make_unique<::lcm::LCM>(m.options.lcm_url);
     if (!m.owned_bus->good()) {
@@ -352,11 +352,11 @@ Status CalibNode::Open() {
     }
     m.bus = m.owned_bus.get();
   }
-  if (m.bus != nullptr && !m.replaying()) {
+  if (m.bus != nullptr && !m.replaying() && !m.capturing()) {
     m.bus->subscribeFunction("RIGCAL_POSE_.*", &OnPoseMessage, this);
   }
   if (m.options.resume) m.RestoreState();
-  m.calibrator.Start();
+  m.calibrator->Start();
   m.opened = true;
   return Status::Ok();
 }
@@ -365,6 +365,10 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   if (!m.opened) {
     m.summary.errors.push_back("CalibNode::Run before a successful Open");
+    return m.summary;
+  }
+  if (m.capturing()) {
+    m.RunCapture(stop);
     return m.summary;
   }
   if (m.replaying()) {
@@ -383,8 +387,7 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
     const int rc = m.bus->handleTimeout(50);
     // A signal interrupts the wait (EINTR): the loop condition decides.
     if (rc < 0 && errno != EINTR && !stop.load()) {
-      m.summary.errors.push_back("LCM receive failed; stopping");
-      m.log->error("LCM receive failed; stopping");
+      m.AddError("LCM receive failed; stopping");
       break;
     }
     const int64_t now = MonotonicNanos();

@@ -1,27 +1,37 @@
 #pragma once
 // CalibNode::Impl, private to rigcal_pipeline:
-//   calib_node.cc    construction, Open, the live loop, pose hand-over, publishing, state, result
-//   log_replay.cc    the replay of a log: reading, time window, pacing, log-time timers, images
+//   calib_node.cc     construction, Open, the bus loop, pose hand-over, publishing, result
+//   node_state.cc     state saves and --resume
+//   log_replay.cc     the replay of a log: reading, time window, pacing, log-time timers, images
+//   capture_input.cc  live capture: the config's source through the pipeline, the capture loop
 //
-// Threads (calib_node.h): the LCM/reader thread runs Run; in an image replay the pose sink, the
-// timers and the publishing run on the VO thread that releases a pose (one at a time, the
-// PoseMerge serialises them), and the reader thread touches only the reader, the feeds and the
-// replay counters until the pipeline has finished.
+// Threads (calib_node.h): the LCM/reader/capture-owner thread runs Run; in an image replay and a
+// lossless capture the pose sink, the timers and the publishing run on the VO thread that
+// releases a pose (one at a time, the PoseMerge serialises them), and Run's thread touches only
+// the reader, the feeds and the replay counters until the pipeline has finished. In a live
+// capture every VO thread runs the pose sink for its own camera (per-camera counters) and Run's
+// thread the timers; output_mutex serialises what they publish and the errors they record.
 
 #include <atomic>
 #include <chrono>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "flow_watch.h"
 #include "frame_feed_device.h"
 #include "periodic_schedule.h"
 #include "rigcal/base/logging.h"
+#include "rigcal/base/thread_annotations.h"
 #include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/lcm/status_message.h"
 #include "rigcal/pipeline/calib_node.h"
+#include "rigcal/pipeline/capture_loops.h"
+#include "rigcal/pipeline/capture_sources.h"
+#include "rigcal/pipeline/log_recorder.h"
 #include "rigcal/pipeline/pipeline.h"
 
 namespace rigcal::pipeline {
@@ -36,7 +46,8 @@ struct CalibNode::Impl {
   ::lcm::LCM* bus = nullptr;  // input + output for live runs (owned or external)
   std::unique_ptr<::lcm::LCM> owned_bus;
   std::unique_ptr<::lcm::LCM> output;  // replay: optional output
-  OnlineCalibrator calibrator;
+  // Built with the node, or by OpenCapture once the source says whether it is lossless.
+  std::unique_ptr<OnlineCalibrator> calibrator;
   lcm::MessageValidator validator;
   CalibNodeSummary summary;
   std::string state_path;
@@ -46,6 +57,8 @@ struct CalibNode::Impl {
   // Timers: wall clock (live) or log time (replay).
   PeriodicSchedule schedule;
   int job_extrinsics = -1, job_status = -1, job_state = -1, job_report = -1;
+  // The config's publish / state periods and the status lines as jobs of `schedule`.
+  void AddJobs();
 
   // Status bookkeeping (the thread that publishes).
   std::vector<lcm::StampRate> rates;
@@ -63,10 +76,33 @@ struct CalibNode::Impl {
   std::unique_ptr<std::atomic<int64_t>[]> images_invalid;
   std::unique_ptr<Pipeline> pipeline;
 
+  // Live capture (capture_input.cc).
+  std::unique_ptr<CaptureSources> sources;
+  bool lossless_capture = false;  // the source waits for the VO: timers on pose stamps
+  // Resumed with our own VO: its segments restart at 0, so every camera's segment ids are moved
+  // past the saved ones (a VO restart is a new scale segment). Empty: none.
+  std::vector<int> segment_offset;
+  // `rigcal record`: the log every frame is tapped into (with the poses and estimates), and the
+  // capture threads when there is no VO (record_no_vo).
+  std::unique_ptr<LogRecorder> recorder;
+  std::unique_ptr<CaptureLoops> capture_loops;
+  bool trigger_failure_told = false;  // the trigger link's failure was logged
+  bool flow_healthy = true;           // FlowWatch's verdict at the last pass
+
+  // Serialises publishing and error recording between the VO threads and Run's thread.
+  Mutex output_mutex;
+  std::vector<std::string> errors RIGCAL_GUARDED_BY(output_mutex);
+
   Impl(io::RigConfig c, CalibNodeOptions o);
 
   bool replaying() const { return !options.log_path.empty(); }
-  ::lcm::LCM* Output() { return replaying() ? output.get() : bus; }
+  bool capturing() const { return options.capture; }
+  // Timers on stream time (pose / log stamps) rather than the wall clock of a live bus.
+  bool stream_timers() const { return replaying() || lossless_capture; }
+  // Live bus: the input bus; a replay or a capture: the output (or a bus given to the node).
+  ::lcm::LCM* Output() { return replaying() || bus == nullptr ? output.get() : bus; }
+  // Records an error of the run (any thread) and logs it.
+  void AddError(const std::string& error) RIGCAL_EXCLUDES(output_mutex);
   // Index of the camera of a pose / image channel, -1 when none of the rig's.
   int CameraOfChannel(const std::string& channel, bool images) const;
   void Reject(const std::string& what);
@@ -78,7 +114,9 @@ struct CalibNode::Impl {
   // The pose sink of an image replay (a VO thread): log time, publish the pose, Accept.
   void AcceptVoPose(const CameraPose& pose);
   template <typename Message>
-  void Publish(const std::string& channel, const Message& msg, int64_t* counter);
+  // Publishes on Output(); `record`: also into the recording (a pose, an estimate).
+  void Publish(const std::string& channel, const Message& msg, int64_t* counter,
+               bool record = false);
   void RunJob(int job, int64_t utime);
   void PublishExtrinsics(const RigEstimate& estimate, int64_t utime);
   void PublishStatus(const RigEstimate& estimate, int64_t utime);
@@ -92,10 +130,39 @@ struct CalibNode::Impl {
   void RestoreState();
   // Flush, final refinement, last publication, state and result.
   void Finish(int64_t utime);
+  // Moves pose segments past the resumed state's (our own VO restarted).
+  void SetSegmentOffsets(const RigEstimatorState& state);
+
+  // capture_input.cc.
+  Status OpenCapture();
+  void RunCapture(const std::atomic<bool>& stop);
+  // The recorder tapped into every device (options.record_path); the devices without VO go to
+  // CaptureLoops.
+  Status OpenRecording(std::vector<std::unique_ptr<capture::CameraDevice>>* devices);
+  // One pass of the capture loop at now_ns: a live source's timers, the trigger's health, the
+  // recording's progress, the watchdog when frames flow. False: stop (the disk failed).
+  bool CapturePass(int64_t now_ns, FlowWatch* flow);
+  // Every camera ended or died (through its VO, or its capture loop without VO).
+  bool CaptureFinished() const;
+  // The capture's threads stopped and joined: the cameras (and VO), then the trigger.
+  void StopCapture();
+  // End-of-run reports of the devices, the trigger, evaluation and pose / truth files.
+  void FinishCapture();
 
   // log_replay.cc.
   Status OpenLog();
   void ReplayLog(const std::atomic<bool>& stop);
+  // One event of the log for the replay: a frame of a camera or a pose, at its stamp.
+  struct ReplayItem {
+    int camera = -1;
+    int64_t t_ns = 0;
+    std::optional<CameraPose> pose;
+    std::optional<capture::Frame> frame;
+  };
+  bool ReadReplayEvent(lcm::LogEvent* event);
+  bool DecodeReplayEvent(const lcm::LogEvent& event, ReplayItem* item);
+  // Waits until the wall clock reaches t_ns at options.replay.speed (no wait when 0).
+  void PaceReplay(int64_t t_ns, const std::atomic<bool>& stop);
   // Log time moves on to t_ns: the timers due until then run (after the estimator has caught
   // up, so what they publish does not depend on thread timing).
   void AdvanceLogTime(int64_t t_ns);

@@ -21,95 +21,107 @@ Expected<int64_t> PacedStart(const trigger::LiveTriggerTimeline& trigger) {
   return trigger.NextTickAt(capture::MonotonicNowNs() + kPacedStartLeadNs, kTriggerSyncTimeoutNs);
 }
 
-// The devices of the source; `live` is the started trigger generator (may be null).
-Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast,
-                                     const std::string& prefix, std::ostream& progress,
-                                     const trigger::LiveTriggerTimeline* live) {
+// The simulated rig of `source: {type: simulated}` (with its own simulated trigger when
+// `source.trigger` asks for one); `live` is the started trigger generator (may be null).
+Expected<CaptureSources> OpenSimulatedRig(const io::RigConfig& config, bool fast,
+                                          const std::string& prefix, std::ostream& progress,
+                                          const trigger::LiveTriggerTimeline* live) {
+  CaptureSources sources;
+  sim::SimulatedRigSpec spec = *config.simulated_source;
+  if (fast) spec.realtime = false;
+  sources.realtime = spec.realtime;
+  // `source.trigger`: a simulated trigger generator whose first pulse is frame 0.
+  std::shared_ptr<sim::SimulatedTriggerTimeline> trigger;
+  if (spec.trigger.enabled) {
+    const int64_t start_ns = spec.realtime
+                                 ? std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                       std::chrono::steady_clock::now().time_since_epoch())
+                                       .count()
+                                 : spec.start_time_ns;
+    auto made_trigger = sim::MakeSimulatedRigTrigger(spec, start_ns);
+    if (!made_trigger) return Error{config.path + ": source.trigger: " + made_trigger.error()};
+    trigger = std::move(*made_trigger);
+    if (!spec.realtime) spec.start_time_ns = trigger->first_tick_ns();
+  }
+  progress << prefix << "building the simulated rig (" << spec.names.size() << " cameras, "
+           << sim::ToString(spec.scene.type) << " scene)...\n";
+  if (live) spec.realtime = sources.realtime = true;  // paced by the generator's pulses
+  auto made = sim::MakeSimulatedRig(spec);
+  if (!made) return Error{config.path + ": " + made.error()};
+  sources.rig = std::move(*made);
+  sources.devices = sources.rig->MakeDevices();
+  sources.models = spec.cameras;
+  if (live) {
+    auto start = PacedStart(*live);
+    if (!start) return Error{config.path + ": " + start.error()};
+    sources.rig->StartAt(*start);
+    progress << prefix << "simulated rig paced by the trigger generator: frame 0 at its pulse\n";
+  }
+  if (trigger) {
+    if (spec.realtime) sources.rig->StartAt(trigger->first_tick_ns());
+    for (size_t i = 0; i < sources.devices.size(); ++i) {
+      sources.devices[i] = std::make_unique<trigger::TriggeredCamera>(
+          std::move(sources.devices[i]), trigger,
+          trigger::CameraTriggerSpec{static_cast<int>(i), 0, 0});
+    }
+    progress << prefix << "simulated hardware trigger: camera i on line i, frames carry the "
+             << "pulse sequence and its mapped exposure centre\n";
+  }
+  progress << prefix << sources.rig->num_frames() << " frames per camera at "
+           << sources.rig->frame_rate_hz() << " Hz"
+           << (sources.realtime ? " (real time)" : " (as fast as possible)") << "\n";
+  return sources;
+}
+
+// One V4L2 device per camera, live.
+Expected<CaptureSources> OpenV4l2Cameras(const io::RigConfig& config, const std::string& prefix,
+                                         std::ostream& progress) {
   CaptureSources sources;
   const std::vector<std::string> names = config.CameraNames();
-  if (config.simulated_source) {
-    sim::SimulatedRigSpec spec = *config.simulated_source;
-    if (fast) spec.realtime = false;
-    sources.realtime = spec.realtime;
-    // `source.trigger`: a simulated trigger generator whose first pulse is frame 0.
-    std::shared_ptr<sim::SimulatedTriggerTimeline> trigger;
-    if (spec.trigger.enabled) {
-      const int64_t start_ns = spec.realtime
-                                   ? std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                         std::chrono::steady_clock::now().time_since_epoch())
-                                         .count()
-                                   : spec.start_time_ns;
-      auto made_trigger = sim::MakeSimulatedRigTrigger(spec, start_ns);
-      if (!made_trigger) return Error{config.path + ": source.trigger: " + made_trigger.error()};
-      trigger = std::move(*made_trigger);
-      if (!spec.realtime) spec.start_time_ns = trigger->first_tick_ns();
-    }
-    progress << prefix << "building the simulated rig (" << spec.names.size() << " cameras, "
-             << sim::ToString(spec.scene.type) << " scene)...\n";
-    if (live) spec.realtime = sources.realtime = true;  // paced by the generator's pulses
-    auto made = sim::MakeSimulatedRig(spec);
-    if (!made) return Error{config.path + ": " + made.error()};
-    sources.rig = std::move(*made);
-    sources.devices = sources.rig->MakeDevices();
-    sources.models = spec.cameras;
-    if (live) {
-      auto start = PacedStart(*live);
-      if (!start) return Error{config.path + ": " + start.error()};
-      sources.rig->StartAt(*start);
-      progress << prefix << "simulated rig paced by the trigger generator: frame 0 at its pulse\n";
-    }
-    if (trigger) {
-      if (spec.realtime) sources.rig->StartAt(trigger->first_tick_ns());
-      for (size_t i = 0; i < sources.devices.size(); ++i) {
-        sources.devices[i] = std::make_unique<trigger::TriggeredCamera>(
-            std::move(sources.devices[i]), trigger,
-            trigger::CameraTriggerSpec{static_cast<int>(i), 0, 0});
-      }
-      progress << prefix << "simulated hardware trigger: camera i on line i, frames carry the "
-               << "pulse sequence and its mapped exposure centre\n";
-    }
-    progress << prefix << sources.rig->num_frames() << " frames per camera at "
-             << sources.rig->frame_rate_hz() << " Hz"
-             << (sources.realtime ? " (real time)" : " (as fast as possible)") << "\n";
-    return sources;
+  sources.realtime = true;  // live cameras: never wait for the VO
+  for (size_t i = 0; i < names.size(); ++i) {
+    auto device = capture::V4l2Device::Open(names[i], static_cast<int>(i), config.v4l2_devices[i]);
+    if (!device) return Error{config.path + ": " + device.error()};
+    auto model = camera::MakeCameraModel(*config.cameras[i].spec);
+    if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
+    const capture::V4l2Negotiated& n = (*device)->negotiated();
+    progress << prefix << "camera '" << names[i] << "': " << n.node << " (" << n.card << ", "
+             << n.bus_info << ") " << capture::FourccText(n.fourcc) << " " << n.layout.width << "x"
+             << n.layout.height << " at " << (*device)->frame_rate_hz() << " Hz\n";
+    sources.v4l2.push_back(device->get());
+    sources.devices.push_back(std::move(*device));
+    sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
   }
-  if (!config.v4l2_devices.empty()) {
-    sources.realtime = true;  // live cameras: never wait for the VO
-    for (size_t i = 0; i < names.size(); ++i) {
-      auto device =
-          capture::V4l2Device::Open(names[i], static_cast<int>(i), config.v4l2_devices[i]);
-      if (!device) return Error{config.path + ": " + device.error()};
-      auto model = camera::MakeCameraModel(*config.cameras[i].spec);
-      if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
-      const capture::V4l2Negotiated& n = (*device)->negotiated();
-      progress << prefix << "camera '" << names[i] << "': " << n.node << " (" << n.card << ", "
-               << n.bus_info << ") " << capture::FourccText(n.fourcc) << " " << n.layout.width
-               << "x" << n.layout.height << " at " << (*device)->frame_rate_hz() << " Hz\n";
-      sources.v4l2.push_back(device->get());
-      sources.devices.push_back(std::move(*device));
-      sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
-    }
-    return sources;
+  return sources;
+}
+
+// One libcamera camera per camera, live.
+Expected<CaptureSources> OpenLibcameraCameras(const io::RigConfig& config,
+                                              const std::string& prefix, std::ostream& progress) {
+  CaptureSources sources;
+  const std::vector<std::string> names = config.CameraNames();
+  sources.realtime = true;
+  for (size_t i = 0; i < names.size(); ++i) {
+    auto device =
+        capture::LibcameraDevice::Open(names[i], static_cast<int>(i), config.libcamera_devices[i]);
+    if (!device) return Error{config.path + ": " + device.error()};
+    auto model = camera::MakeCameraModel(*config.cameras[i].spec);
+    if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
+    progress << prefix << "camera '" << names[i] << "': libcamera " << (*device)->camera_id() << " "
+             << (*device)->configuration() << " (" << (*device)->validation() << ")\n";
+    sources.devices.push_back(std::move(*device));
+    sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
   }
-  if (!config.libcamera_devices.empty()) {
-    sources.realtime = true;
-    for (size_t i = 0; i < names.size(); ++i) {
-      auto device = capture::LibcameraDevice::Open(names[i], static_cast<int>(i),
-                                                   config.libcamera_devices[i]);
-      if (!device) return Error{config.path + ": " + device.error()};
-      auto model = camera::MakeCameraModel(*config.cameras[i].spec);
-      if (!model) return Error{config.path + ": camera '" + names[i] + "': " + model.error()};
-      progress << prefix << "camera '" << names[i] << "': libcamera " << (*device)->camera_id()
-               << " " << (*device)->configuration() << " (" << (*device)->validation() << ")\n";
-      sources.devices.push_back(std::move(*device));
-      sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
-    }
-    return sources;
-  }
-  if (config.image_folders.empty()) {
-    return Error{config.path +
-                 ": no `source:` section (supported: simulated, image_folders, v4l2, libcamera)"};
-  }
+  return sources;
+}
+
+// One image folder per camera: as fast as the VO takes them, or in real time from the live
+// trigger's next pulse.
+Expected<CaptureSources> OpenImageFolders(const io::RigConfig& config, const std::string& prefix,
+                                          std::ostream& progress,
+                                          const trigger::LiveTriggerTimeline* live) {
+  CaptureSources sources;
+  const std::vector<std::string> names = config.CameraNames();
   // With a live trigger the folders are replayed in real time from its next pulse.
   std::shared_ptr<ReplayClock> replay_clock;
   if (live) {
@@ -148,6 +160,20 @@ Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast,
     sources.models.push_back(std::shared_ptr<const camera::CameraModel>(std::move(*model)));
   }
   return sources;
+}
+
+// The devices of the source; `live` is the started trigger generator (may be null).
+Expected<CaptureSources> OpenDevices(const io::RigConfig& config, bool fast,
+                                     const std::string& prefix, std::ostream& progress,
+                                     const trigger::LiveTriggerTimeline* live) {
+  if (config.simulated_source) return OpenSimulatedRig(config, fast, prefix, progress, live);
+  if (!config.v4l2_devices.empty()) return OpenV4l2Cameras(config, prefix, progress);
+  if (!config.libcamera_devices.empty()) return OpenLibcameraCameras(config, prefix, progress);
+  if (config.image_folders.empty()) {
+    return Error{config.path +
+                 ": no `source:` section (supported: simulated, image_folders, v4l2, libcamera)"};
+  }
+  return OpenImageFolders(config, prefix, progress, live);
 }
 
 }  // namespace

@@ -114,7 +114,7 @@ void CalibNode::Impl::AdvanceLogTime(int64_t t_ns) {
   int64_t deadline = 0;
   while (schedule.NextDue(clock_ns, &job, &deadline)) {
     if (!caught_up) {
-      calibrator.Drain();
+      calibrator->Drain();
       caught_up = true;
     }
     RunJob(job, deadline / 1000);
@@ -126,8 +126,87 @@ ReplayProgress CalibNode::Impl::Progress() const {
   p.bytes_read = reader ? reader->position() : 0;
   p.log_bytes = reader ? reader->size() : 0;
   p.log_time_s = summary.log_span_s;
-  p.sets = calibrator.sync_stats().sets_popped;
+  p.sets = calibrator->sync_stats().sets_popped;
   return p;
+}
+
+// One event of the log decoded for the replay: an image of a rig camera (image replay) or a
+// pose. Skipped and rejected events are counted here; false = nothing to hand on.
+bool CalibNode::Impl::DecodeReplayEvent(const lcm::LogEvent& event, ReplayItem* item) {
+  const bool images = pipeline != nullptr;
+  const bool ours = event.channel.rfind(images ? kImagePrefix : "RIGCAL_POSE_", 0) == 0;
+  if (!ours) {
+    ++summary.skipped_channels[event.channel];
+    return false;
+  }
+  const auto size = static_cast<int64_t>(event.data.size());
+  item->camera = CameraOfChannel(event.channel, images);
+  if (images) {
+    if (item->camera < 0) {
+      ++summary.skipped_channels[event.channel];
+      return false;
+    }
+    auto image = validator.Decode<image_t>(event.channel, event.data.data(), size);
+    auto decoded =
+        image ? FrameFromImage(*image, item->camera) : Expected<capture::Frame>(image.status());
+    if (!decoded) {
+      ++summary.cameras[item->camera].invalid;
+      images_invalid[item->camera].fetch_add(1);
+      Reject(decoded.error());
+      return false;
+    }
+    item->frame = std::move(*decoded);
+    item->t_ns = item->frame->t_ns;
+    return true;
+  }
+  if (item->camera < 0) {
+    HandlePose(event.channel, event.data.data(), size);
+    return false;
+  }
+  auto decoded = validator.DecodeCameraPose(event.channel, event.data.data(), size);
+  if (!decoded || decoded->pose.camera != item->camera) {
+    ++summary.cameras[item->camera].invalid;
+    Reject(decoded ? event.channel + ": camera_pose_t.camera does not match the channel"
+                   : decoded.error());
+    return false;
+  }
+  item->pose = decoded->pose;
+  item->t_ns = item->pose->t_ns;
+  return true;
+}
+
+void CalibNode::Impl::PaceReplay(int64_t t_ns, const std::atomic<bool>& stop) {
+  const double speed = options.replay.speed;
+  if (speed <= 0.0) return;
+  if (pace_stamp_start < 0) {
+    pace_stamp_start = t_ns;
+    pace_wall_start = Clock::now();
+  }
+  const auto due =
+      pace_wall_start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                            static_cast<double>(t_ns - pace_stamp_start) * 1e-9 / speed));
+  while (!stop.load() && Clock::now() < due) {
+    std::this_thread::sleep_for(
+        std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(100)));
+  }
+}
+
+// The next event of the log, false at its end or damage (recorded in the summary).
+bool CalibNode::Impl::ReadReplayEvent(lcm::LogEvent* event) {
+  const lcm::LogReader::Outcome outcome = reader->Next(event);
+  if (outcome == lcm::LogReader::Outcome::kEnd) {
+    summary.end_of_log = true;
+    return false;
+  }
+  if (outcome == lcm::LogReader::Outcome::kDamaged) {
+    summary.end_of_log = true;
+    summary.log_problem = reader->problem() + "; replayed the " +
+                          std::to_string(summary.log_events) + " events before it";
+    log->warn("{}", summary.log_problem);
+    return false;
+  }
+  ++summary.log_events;
+  return true;
 }
 
 void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
@@ -141,93 +220,27 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
   Clock::time_point next_progress = Clock::now();
   const auto progress_period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(options.progress_every_s));
-  while (!stop.load()) {
-    const lcm::LogReader::Outcome outcome = reader->Next(&event);
-    if (outcome == lcm::LogReader::Outcome::kEnd) {
-      summary.end_of_log = true;
-      break;
-    }
-    if (outcome == lcm::LogReader::Outcome::kDamaged) {
-      summary.end_of_log = true;
-      summary.log_problem = reader->problem() + "; replayed the " +
-                            std::to_string(summary.log_events) + " events before it";
-      log->warn("{}", summary.log_problem);
-      break;
-    }
-    ++summary.log_events;
+  while (!stop.load() && ReadReplayEvent(&event)) {
     if (options.on_progress && Clock::now() >= next_progress) {
       options.on_progress(Progress());
       next_progress = Clock::now() + progress_period;
     }
-    const bool images = pipeline != nullptr;
-    const bool ours = event.channel.rfind(images ? kImagePrefix : "RIGCAL_POSE_", 0) == 0;
-    if (!ours) {
-      ++summary.skipped_channels[event.channel];
-      continue;
-    }
+    ReplayItem item;
+    if (!DecodeReplayEvent(event, &item)) continue;
     // The message's stamp decides the window and the pacing.
-    int camera = -1;
-    std::optional<CameraPose> pose;
-    std::optional<capture::Frame> frame;
-    if (images) {
-      camera = CameraOfChannel(event.channel, /*images=*/true);
-      if (camera < 0) {
-        ++summary.skipped_channels[event.channel];
-        continue;
-      }
-      auto image = validator.Decode<image_t>(event.channel, event.data.data(),
-                                             static_cast<int64_t>(event.data.size()));
-      auto decoded =
-          image ? FrameFromImage(*image, camera) : Expected<capture::Frame>(image.status());
-      if (!decoded) {
-        ++summary.cameras[camera].invalid;
-        images_invalid[camera].fetch_add(1);
-        Reject(decoded.error());
-        continue;
-      }
-      frame = std::move(*decoded);
-    } else {
-      camera = CameraOfChannel(event.channel, /*images=*/false);
-      if (camera < 0) {
-        HandlePose(event.channel, event.data.data(), static_cast<int64_t>(event.data.size()));
-        continue;
-      }
-      auto decoded = validator.DecodeCameraPose(event.channel, event.data.data(),
-                                                static_cast<int64_t>(event.data.size()));
-      if (!decoded || decoded->pose.camera != camera) {
-        ++summary.cameras[camera].invalid;
-        Reject(decoded ? event.channel + ": camera_pose_t.camera does not match the channel"
-                       : decoded.error());
-        continue;
-      }
-      pose = decoded->pose;
-    }
-    const int64_t t_ns = images ? frame->t_ns : pose->t_ns;
-    if (window_start < 0) window_start = t_ns;
-    const int64_t since_ns = t_ns - window_start;
+    if (window_start < 0) window_start = item.t_ns;
+    const int64_t since_ns = item.t_ns - window_start;
     if (since_ns < from_ns) continue;
     if (to_ns >= 0 && since_ns > to_ns) break;
     summary.log_span_s =
         std::max(summary.log_span_s, static_cast<double>(since_ns - from_ns) * 1e-9);
-    if (replay.speed > 0.0) {
-      if (pace_stamp_start < 0) {
-        pace_stamp_start = t_ns;
-        pace_wall_start = Clock::now();
-      }
-      const auto due = pace_wall_start +
-                       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                           static_cast<double>(t_ns - pace_stamp_start) * 1e-9 / replay.speed));
-      while (!stop.load() && Clock::now() < due) {
-        std::this_thread::sleep_for(
-            std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(100)));
-      }
-    }
-    if (images) {
-      ++summary.cameras[camera].images;
-      if (!feeds[camera]->Feed(std::move(*frame))) break;
+    PaceReplay(item.t_ns, stop);
+    if (item.frame) {
+      ++summary.cameras[item.camera].images;
+      if (!feeds[item.camera]->Feed(std::move(*item.frame))) break;
     } else {
-      AdvanceLogTime(t_ns);
-      Accept(camera, *pose);
+      AdvanceLogTime(item.t_ns);
+      Accept(item.camera, *item.pose);
     }
   }
   if (pipeline) {

@@ -1,5 +1,9 @@
 #pragma once
-// CalibNode: the `rigcal calib` LCM node and `rigcal replay`. Receives RIGCAL_POSE_<camera>
+// CalibNode: the one owner of a running rig (`rigcal run`, `calib`, `replay`;
+// docs/architecture.md). Its input is one of: poses on a bus, an LCM log, or live capture from the
+// config's source.
+//
+// Bus (`rigcal calib`): receives RIGCAL_POSE_<camera>
 // messages (VO running in other processes or on other computers), feeds them through SyncBuffer +
 // RigEstimator (the OnlineCalibrator threads), publishes RIGCAL_EXTRINSICS and RIGCAL_STATUS at
 // their rates, saves the estimator state atomically at an interval and on stop, and writes the
@@ -16,6 +20,15 @@
 // messages (utime = log time) hold the whole history of the estimate. A damaged log is replayed
 // up to the damage (log_problem names the byte offset).
 //
+// Capture (options.capture, `rigcal run`): the config's `source:` is opened (its trigger
+// generator first), the devices run through the live Pipeline (capture -> VO per camera) whose
+// pose sink feeds the node's estimator; the node publishes the poses, RIGCAL_EXTRINSICS and
+// RIGCAL_STATUS on publish_url, saves the state on the same schedule and stops the cameras, then
+// the trigger that exposes them, then the estimator. A live source's timers run on
+// CLOCK_MONOTONIC (the clock of its frame stamps), a lossless one's (a simulation not paced in
+// real time, image folders) on the pose stamps, as a replay's. A resumed capture moves the VO's
+// scale segments past the saved ones (the restarted VO is a new scale segment).
+//
 // Threads: Run() handles LCM (or reads the log) on the caller's thread; the OnlineCalibrator
 // owned by the node runs the estimator (and, live, the refinement) thread; an image replay adds
 // the pipeline's capture and VO threads, and then the publishing runs on the VO thread that
@@ -27,14 +40,18 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "rigcal/calib/online_calibrator.h"
 #include "rigcal/base/status.h"
+#include "rigcal/calib/online_calibrator.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/extrinsics_message.h"
 #include "rigcal/lcm/status_message.h"
+#include "rigcal/pipeline/log_recorder.h"
+#include "rigcal/pipeline/pipeline.h"
+#include "rigcal/pipeline/run_evaluation.h"
 
 namespace lcm {
 class LCM;
@@ -86,8 +103,25 @@ struct CalibNodeOptions {
   std::function<void(const ReplayProgress&)> on_progress;
   double progress_every_s = 0.2;
   // Live input: called on Run's thread after every pass of its receive loop (at least every
-  // 50 ms while the loop is healthy): the service watchdog (rigcal calib under systemd).
+  // 50 ms while the loop is healthy): the service watchdog (rigcal calib under systemd). A
+  // capture calls it only while every camera delivered a frame and the estimator took a set
+  // within camera_timeout_s (a stalled camera starves the watchdog).
   std::function<void()> on_tick;
+  // Capture input instead of a bus or a log: the config's `source:` (see above). Publishes on
+  // publish_url (empty = nothing), which must stay on this host unless lcm_network.
+  bool capture = false;
+  bool fast = false;      // capture: a simulated source not paced in real time (lossless)
+  std::string poses_dir;  // capture: every VO pose to DIR/<camera>.txt at the end
+  std::string truth_dir;  // capture, simulated source: its ground truth (TUM, truth.yaml)
+  bool evaluate = false;  // capture, simulated source: the errors against its truth
+  // Capture: record every frame (RIGCAL_IMAGE_<camera>), the VO poses and RIGCAL_EXTRINSICS into
+  // this LCM log (`rigcal record`; LogRecorder); empty = no recording. `recorder.lossless` is
+  // set from the source.
+  std::string record_path;
+  RecorderOptions recorder;
+  bool record_no_vo = false;  // record the images only: no VO, no estimator input
+  // Recording: called on Run's thread after every pass of the capture loop (about every 20 ms).
+  std::function<void(const RecorderStats&)> on_recording;
   std::string result_path;  // result YAML written on exit (atomically); empty = none
   std::string state_path;   // overrides the config's state.path when not empty
   bool resume = false;      // continue from the state file (ignored with a warning if unusable)
@@ -131,6 +165,15 @@ struct CalibNodeSummary {
   bool end_of_log = false;          // replay reached the end of the log
   std::string log_problem;          // e.g. a truncated last event; empty when the log was clean
   std::vector<std::string> errors;  // failed state/result writes, publish failures
+  // Capture: every camera's health at the end, the end-of-run lines of the devices and the
+  // trigger ("camera 'cam0': 95 images listed in ..."), and the errors against a simulated
+  // source's truth (options.evaluate).
+  std::vector<CameraHealth> camera_health;
+  std::vector<std::string> capture_report;
+  std::optional<RunEvaluation> evaluation;
+  // Recording: what was written, and the recorder's final status (empty when it closed well).
+  std::optional<RecorderStats> recording;
+  std::string recording_error;
 };
 
 class CalibNode {

@@ -1,0 +1,84 @@
+// CalibNode's estimator state (calib_node.h): atomic saves on the schedule and at the end, and
+// --resume, which sets a state it cannot use aside and never overwrites it.
+#include <filesystem>
+#include <string>
+
+#include "calib_node_impl.h"
+#include "rigcal/io/atomic_file.h"
+#include "rigcal/io/estimator_state_file.h"
+#include "rigcal/io/text_file.h"
+
+namespace rigcal::pipeline {
+
+bool CalibNode::Impl::CalibratedNothing() {
+  return !summary.resumed && calibrator->sync_stats().sets_emitted == 0;
+}
+
+void CalibNode::Impl::SaveState() {
+  if (state_path.empty()) return;
+  // An empty state never replaces the one a previous run saved.
+  if (CalibratedNothing() && std::filesystem::exists(state_path)) return;
+  if (const Status status =
+          io::WriteFileAtomically(state_path, io::FormatEstimatorState(calibrator->SaveState()));
+      !status.ok()) {
+    AddError("state not saved: " + status.message());
+    return;
+  }
+  ++summary.state_saves;
+}
+
+void CalibNode::Impl::RestoreState() {
+  if (state_path.empty()) {
+    log->warn("--resume: no state file configured (state.path or --state); starting afresh");
+    return;
+  }
+  if (!std::filesystem::exists(state_path)) {
+    log->warn("--resume: no state file '{}' yet; starting afresh", state_path);
+    return;
+  }
+  auto text = io::ReadWholeFile(state_path);
+  const Expected<RigEstimatorState> state =
+      text ? io::ParseEstimatorState(*text) : Expected<RigEstimatorState>(text.status());
+  const Status restored = state ? calibrator->RestoreState(*state) : state.status();
+  if (restored.ok()) {
+    summary.resumed = true;
+    if (pipeline) SetSegmentOffsets(*state);  // our own VO restarted with the process
+    std::string consumed;
+    for (size_t i = 0; i < state->consumed_t_ns.size() && i < names.size(); ++i) {
+      if (state->consumed_t_ns[i] >= 0) {
+        consumed += (consumed.empty() ? "" : ", ") + names[i] + " " +
+                    std::to_string(state->consumed_t_ns[i]) + " ns";
+      }
+    }
+    log->info("resumed from {}{}", state_path,
+              consumed.empty() ? std::string()
+                               : "; poses up to the stamps consumed there are skipped (" +
+                                     consumed + ", counted consumed)");
+    return;
+  }
+  // A rejected state (corrupt, newer version, other rig) is kept for a look, never overwritten.
+  const Expected<std::string> aside = io::KeepAside(state_path, "rejected");
+  if (!aside) {
+    AddError("--resume: " + state_path + ": " + restored.message() + "; " + aside.error() +
+             "; the state is not saved in this run");
+    state_path.clear();
+    return;
+  }
+  summary.rejected_state = *aside;
+  log->warn("--resume: {}: {}; kept as {}, starting afresh", state_path, restored.message(),
+            *aside);
+}
+
+void CalibNode::Impl::SetSegmentOffsets(const RigEstimatorState& state) {
+  segment_offset.assign(names.size(), 0);
+  if (state.have_master_segment) segment_offset[0] = state.master_segment + 1;
+  for (size_t i = 0; i < state.slaves.size() && i + 1 < names.size(); ++i) {
+    segment_offset[i + 1] = state.slaves[i].segment + 1;
+  }
+  log->info(
+      "resumed with a restarted VO: its scale segments continue after the saved ones "
+      "(master from segment {})",
+      segment_offset[0]);
+}
+
+}  // namespace rigcal::pipeline
