@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "rigcal/calib/status.h"
+#include "rigcal/base/status.h"
 #include "rigcal/trigger/trigger_link.h"
 
 namespace rigcal::trigger {
