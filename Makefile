@@ -1,5 +1,6 @@
 # The README's entry points. `make demo` and `make test` set up the machine
-# (scripts/install-deps.sh), configure, build and run.
+# (scripts/install-deps.sh: `--runtime` for the demo, everything for the tests), configure, build
+# and run.
 BUILD_DIR ?= build
 ASAN_DIR  ?= build-asan
 ASAN_ALL_DIR ?= build-asan-clang
@@ -9,7 +10,7 @@ CTEST_ARGS ?=
 # ctest, then the number of skipped tests and why (scripts/ctest_with_skips.sh).
 CTEST     = bash scripts/ctest_with_skips.sh
 
-.PHONY: all deps configure build demo test test-suite test-fast test-core test-asan-core test-asan-core-clang test-tsan-core \
+.PHONY: all deps deps-runtime configure demo-configure build demo test test-suite test-fast test-core test-asan-core test-asan-core-clang test-tsan-core \
 	asan-configure test-asan test-asan-gcc \
 	test-fuzz fuzz tsan-configure test-tsan test-arm64 eval bench format tidy clean firmware flash
 
@@ -17,6 +18,9 @@ all: build
 
 deps:
 	@bash scripts/install-deps.sh
+
+deps-runtime:
+	@bash scripts/install-deps.sh --runtime
 
 # Ninja when it is there, else Makefiles.
 define cmake_configure
@@ -28,15 +32,26 @@ endef
 
 # The evaluations and benchmarks are built by `make eval` / `make bench` (not by make test,
 # which does not run them).
+RELEASE_ARGS = -DRIGCAL_BUILD_EVAL_TESTS=OFF -DRIGCAL_BUILD_BENCHMARKS=OFF
+
+# A tree configured by `make demo` (tests off: GoogleTest is not installed by --runtime) gets its
+# tests turned on here.
 configure: deps
-	$(call cmake_configure,$(BUILD_DIR),Release,-DRIGCAL_BUILD_EVAL_TESTS=OFF -DRIGCAL_BUILD_BENCHMARKS=OFF)
+	$(call cmake_configure,$(BUILD_DIR),Release,$(RELEASE_ARGS))
+	@if grep -q '^RIGCAL_BUILD_TESTS:BOOL=OFF' $(BUILD_DIR)/CMakeCache.txt; then \
+	  cmake -S . -B $(BUILD_DIR) -DRIGCAL_BUILD_TESTS=ON; fi
+
+demo-configure: deps-runtime
+	$(call cmake_configure,$(BUILD_DIR),Release,$(RELEASE_ARGS) -DRIGCAL_BUILD_TESTS=OFF)
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
 # The whole live pipeline on the built-in simulated rig (thesis 5.4 virtual scene): rendered
 # images -> VO per camera -> SyncBuffer -> RigEstimator, errors against the truth at the end.
-demo: build
+# Installs only the runtime packages and builds only the `rigcal` target.
+demo: demo-configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
 # Whole suite in the Release tree; then the calib core tests once more under ASan+UBSan with GCC
@@ -61,7 +76,7 @@ test-fast: build
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
 # The calib core tests (label calib_core: they link only the calib library) in the Release tree;
-# builds only them (target rigcal_calib_tests), `make demo` builds the rest of the tree.
+# builds only them (target rigcal_calib_tests), `make build` builds the rest of the tree.
 test-core: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal_calib_tests
 	$(CTEST) $(BUILD_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L calib_core -LE eval $(CTEST_ARGS)
