@@ -1,10 +1,15 @@
 #include "calib_node_run.h"
 
+#include <cmath>
 #include <iostream>
 #include <map>
 #include <sstream>
 
+#include "camchain_args.h"
+#include "command_line.h"
 #include "exit_codes.h"
+#include "no_sets_reason.h"
+#include "provenance_args.h"
 #include "replay_progress.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/io/result_json.h"
@@ -12,6 +17,7 @@
 #include "rigcal/io/rig_files.h"
 #include "service_notifier.h"
 #include "stop_signal.h"
+#include "truth_args.h"
 
 namespace rigcal::cli {
 namespace {
@@ -25,43 +31,17 @@ std::string ChannelList(const std::map<std::string, int64_t>& channels) {
   return text.str();
 }
 
-// Why nothing was calibrated when no set reached the estimator.
-std::string NoSetsMessage(const pipeline::CalibNodeOptions& options,
-                          const std::vector<std::string>& names,
-                          const pipeline::CalibNodeSummary& summary) {
-  std::ostringstream text;
-  text << "no synchronised pose set reached the estimator: ";
-  if (options.log_path.empty()) {
-    text << "no RIGCAL_POSE_<camera> messages of the config's cameras were received";
-  } else if (summary.log_events == 0) {
-    text << options.log_path << " holds no events";
-  } else {
-    text << options.log_path << " holds no usable "
-         << (summary.image_replay ? "RIGCAL_IMAGE_<camera>" : "RIGCAL_POSE_<camera>")
-         << " messages of the config's cameras";
-  }
-  text << " (cameras:";
-  for (const std::string& name : names) text << " " << name;
-  text << ")";
-  if (!summary.skipped_channels.empty()) {
-    text << "; channels in the log: " << ChannelList(summary.skipped_channels);
-  }
-  if (summary.unknown_channel > 0) {
-    text << "; " << summary.unknown_channel << " pose messages of cameras not in the config";
-  }
-  return text.str();
-}
-
 }  // namespace
 
 void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, pipeline::CalibNodeOptions* node) {
   cmd->add_option("--config", run->config,
-                  "Rig config YAML (see config/README.md; camera models for image logs)")
+                  "Rig config YAML (see docs/config.md; camera models for image logs)")
       ->required();
-  cmd->add_option("--out", node->result_path, "Result YAML written at the end (atomically)")
+  cmd->add_option("-o,--out", node->result_path, "Result YAML written at the end (atomically)")
       ->default_val("rigcal_result.yaml");
   cmd->add_option("--camchain", run->camchain,
-                  "Also write a Kalibr-style camchain YAML (as rigcal solve --camchain)");
+                  "Also write a Kalibr camchain YAML: the config's intrinsics, T_cn_cnm1 in\n"
+                  "metres for a metric master, else in master units (rigcal_translation_unit)");
   cmd->add_flag("--json", run->json,
                 "Print the final result as JSON on stdout (rigcal solve --json schema)");
   cmd->add_option("--state", node->state_path,
@@ -81,14 +61,15 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
     return kExitError;
   }
   const std::vector<std::string> names = config->CameraNames();
+  const std::map<std::string, camera::CameraSpec> intrinsics = IntrinsicsOf(*config);
+  const bool master_metric = !config->cameras.empty() && config->cameras.front().metric;
   // With true mountings in the config (simulations), the result also shows the errors.
-  std::map<std::string, Similarity> truth;
+  TruthFiles truth;
   for (const io::CameraConfig& camera : config->cameras) {
-    if (camera.truth) truth[camera.name] = *camera.truth;
+    if (camera.truth) truth.mountings[camera.name] = *camera.truth;
   }
-  const std::map<std::string, Similarity>* truth_ptr = truth.empty() ? nullptr : &truth;
   std::unique_ptr<ReplayProgressDisplay> display;
-  if (args.progress && !options.log_path.empty()) {
+  if (args.progress && !QuietRequested() && !options.log_path.empty()) {
     display = std::make_unique<ReplayProgressDisplay>("rigcal " + args.command);
     options.on_progress = [&display](const pipeline::ReplayProgress& p) { display->Update(p); };
   }
@@ -126,11 +107,28 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
     }
   }
   if (!summary.log_problem.empty()) std::cerr << prefix << summary.log_problem << "\n";
+  if (!options.log_path.empty() && summary.log_events == 0 && !summary.log_problem.empty()) {
+    // Damaged at byte 0: not an LCM log at all, bad input like a missing file.
+    std::cerr << prefix << options.log_path << " is not an LCM log (lcm-logger format)\n";
+    return kExitError;
+  }
   const RigCalibration& result = summary.estimate.rig;
+  // The config's truth is metric: the master unit fitted to it (truth_comparison.h).
+  std::optional<io::TruthComparison> comparison;
+  if (!truth.mountings.empty()) {
+    auto compared = CompareRunWithTruth(result, truth, io::TruthUnit::kAuto, {});
+    if (compared) comparison = std::move(*compared);
+  }
+  const std::map<std::string, Similarity>* truth_ptr =
+      comparison ? &comparison->truth_master_units : nullptr;
+  const io::TruthAlignment* alignment = comparison ? &comparison->alignment : nullptr;
   if (args.json) {
-    std::cout << io::ResultToJson(result, truth_ptr).dump(2) << "\n";
+    nlohmann::json json = io::ResultToJson(result, truth_ptr, alignment);
+    json["provenance"] =
+        io::ProvenanceToJson(ProvenanceOf({options.log_path}, args.config, master_metric));
+    std::cout << json.dump(2) << "\n";
   } else {
-    std::cout << io::FormatResultTable(result, truth_ptr);
+    std::cout << io::FormatResultTable(result, truth_ptr, alignment);
   }
   std::cout.flush();
   if (summary.result_written) log->info("result written to {}", options.result_path);
@@ -138,23 +136,28 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
     std::cerr << prefix << "calibrated nothing: " << kept << " left as it was\n";
   }
   if (!args.camchain.empty()) {
-    if (const Status status = io::WriteCamchain(args.camchain, result); !status.ok()) {
+    if (const Status status =
+            WriteResultCamchain(args.camchain, result, intrinsics,
+                                master_metric ? 1.0 : std::nan(""), "metric master", *log);
+        !status.ok()) {
       std::cerr << prefix << status.message() << "\n";
       return kExitError;
     }
-    log->info("camera chain written to {}", args.camchain);
   }
   if (!summary.errors.empty()) {
     for (const std::string& error : summary.errors) std::cerr << prefix << error << "\n";
     return kExitError;
   }
   if (summary.estimate.sets == 0)
-    std::cerr << prefix << NoSetsMessage(options, names, summary) << "\n";
+    std::cerr << prefix << NoSetsReason(options.log_path, names, summary) << "\n";
   std::vector<SlaveState> states;
   for (const SlaveCalibration& slave : result.slaves) {
     states.push_back(slave.state);
     if (!slave.usable()) {
-      std::cerr << prefix << slave.name << ": " << ToString(slave.state) << ": " << slave.message
+      // The message may start with the state already ("initialising: 3 motions so far").
+      const std::string state(ToString(slave.state));
+      const bool said = slave.message.rfind(state + ":", 0) == 0;
+      std::cerr << prefix << slave.name << ": " << (said ? "" : state + ": ") << slave.message
                 << "\n";
     }
   }

@@ -16,6 +16,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
+#include "progress_line.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/lcm/channels.h"
@@ -64,7 +65,7 @@ void OnPose(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel, PoseTa
 }
 
 // "  12.0 s | 86.4 MB (7.2 MB/s) | frames 240 240 | drops 0 | 1 file".
-std::string ProgressLine(double elapsed_s, const pipeline::RecorderStats& s) {
+std::string ProgressText(double elapsed_s, const pipeline::RecorderStats& s) {
   char buf[256];
   const double mb = static_cast<double>(s.bytes) / 1e6;
   std::snprintf(buf, sizeof(buf), "%7.1f s | %8.1f MB (%.1f MB/s) | frames", elapsed_s, mb,
@@ -84,23 +85,15 @@ std::string ProgressLine(double elapsed_s, const pipeline::RecorderStats& s) {
 }
 
 // Prints the progress line: in place on a terminal, one line per call otherwise.
+// The one progress scheme (progress_line.h): log lines go above the line.
 class Progress {
  public:
-  Progress() : tty_(isatty(STDERR_FILENO) == 1) {}
-  double period_s() const { return tty_ ? 0.25 : 1.0; }
-  void Show(const std::string& line) {
-    if (tty_) {
-      std::cerr << "\r" << kPrefix << line << "\033[K" << std::flush;
-    } else {
-      std::cerr << kPrefix << line << "\n";
-    }
-  }
-  void End() {
-    if (tty_) std::cerr << "\n";
-  }
+  double period_s() const { return line_.tty() ? 0.25 : 1.0; }
+  void Show(const std::string& line) { line_.Show(kPrefix + line); }
+  void End() {}
 
  private:
-  bool tty_;
+  ProgressLine line_;
 };
 
 int RunRecord(const RecordArgs& args) {
@@ -154,7 +147,7 @@ int RunRecord(const RecordArgs& args) {
     pipeline_options.lossless = options.lossless;
     pipeline =
         std::make_unique<pipeline::Pipeline>(names, std::move(devices), sources->models,
-                                          config->online, pipeline_options, shared_bus.get());
+                                             config->online, pipeline_options, shared_bus.get());
   }
   const auto drain_bus = [&bus] {
     if (bus) {
@@ -182,8 +175,8 @@ int RunRecord(const RecordArgs& args) {
   if (pipeline) pipeline->Start();
   if (capture) capture->Start();
   std::cerr << kPrefix << "recording " << names.size() << " cameras ("
-            << ToString(options.image.encoding) << (args.no_vo ? "" : ", with VO poses")
-            << ") to " << args.out << "; Ctrl-C stops cleanly\n";
+            << ToString(options.image.encoding) << (args.no_vo ? "" : ", with VO poses") << ") to "
+            << args.out << "; Ctrl-C stops cleanly\n";
   Progress progress;
   auto last_progress = start;
   auto last_extrinsics = start;
@@ -202,7 +195,7 @@ int RunRecord(const RecordArgs& args) {
       last_extrinsics = now;
     }
     if (std::chrono::duration<double>(now - last_progress).count() >= progress.period_s()) {
-      progress.Show(ProgressLine(elapsed, recorder.Stats()));
+      progress.Show(ProgressText(elapsed, recorder.Stats()));
       last_progress = now;
     }
   }
@@ -217,7 +210,7 @@ int RunRecord(const RecordArgs& args) {
   const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
   const double cpu_percent = 100.0 * (lcm::ProcessCpuSeconds() - cpu_start_s) / elapsed;
   const pipeline::RecorderStats stats = recorder.Stats();
-  progress.Show(ProgressLine(elapsed, stats));
+  progress.Show(ProgressText(elapsed, stats));
   progress.End();
 
   if (capture) {

@@ -14,8 +14,10 @@
 
 #include "commands.h"
 #include "exit_codes.h"
+#include "provenance_args.h"
 #include "rigcal/base/format.h"
 #include "rigcal/base/logging.h"
+#include "rigcal/io/atomic_file.h"
 #include "rigcal/io/ground_truth_files.h"
 #include "rigcal/io/result_json.h"
 #include "rigcal/io/rig_config.h"
@@ -87,8 +89,9 @@ std::string StatusLine(double t_s, const pipeline::PipelineSnapshot& s,
   for (size_t i = 0; i < s.estimate.rig.slaves.size(); ++i) {
     const SlaveCalibration& slave = s.estimate.rig.slaves[i];
     if (slave.solved()) {
-      std::snprintf(buf, sizeof(buf), " | %s C=(%.2f %.2f %.2f) ±%s° %d mot", slave.name.c_str(),
-                    slave.estimate.C.x(), slave.estimate.C.y(), slave.estimate.C.z(),
+      std::snprintf(buf, sizeof(buf), " | %s C=(%.2f %.2f %.2f) u ±%s, rot ±%s° %d mot",
+                    slave.name.c_str(), slave.estimate.C.x(), slave.estimate.C.y(),
+                    slave.estimate.C.z(), SigmaText(slave.pos_std.maxCoeff(), 2).c_str(),
                     SigmaText(slave.rot_std_deg, 2).c_str(), slave.motions.used);
       line << buf;
     } else {
@@ -199,7 +202,7 @@ int RunRun(const RunArgs& args) {
   options.lossless = !realtime;
   options.record_poses = (rig.has_value() && (args.eval || args.json)) || !args.poses_dir.empty();
   pipeline::Pipeline pipeline(names, std::move(sources->devices), sources->models, config->online,
-                           options, shared_bus.get());
+                              options, shared_bus.get());
 
   StopSignal stop_signal;
   const auto start = std::chrono::steady_clock::now();
@@ -262,7 +265,9 @@ int RunRun(const RunArgs& args) {
     // A run that calibrated nothing never replaces an earlier result.
     std::cerr << "rigcal run: calibrated nothing: " << args.out << " left as it was\n";
   } else if (!args.out.empty()) {
-    if (const Status status = io::WriteResultYaml(args.out, result); !status.ok()) {
+    const std::string text =
+        io::ResultToYaml(result) + io::ProvenanceToYaml(ProvenanceOf({}, args.config, false));
+    if (const Status status = io::WriteFileAtomically(args.out, text); !status.ok()) {
       std::cerr << "rigcal run: " << status.message() << "\n";
       return kExitError;
     }
@@ -308,10 +313,10 @@ int RunRun(const RunArgs& args) {
     }
     std::optional<io::TruthAlignment> alignment;
     if (evaluation) alignment = pipeline::AlignmentOf(*evaluation);
-    std::cout << io::ResultToJson(result, evaluation ? &truth : nullptr,
-                                     alignment ? &*alignment : nullptr)
-                     .dump(2)
-              << "\n";
+    nlohmann::json json =
+        io::ResultToJson(result, evaluation ? &truth : nullptr, alignment ? &*alignment : nullptr);
+    json["provenance"] = io::ProvenanceToJson(ProvenanceOf({}, args.config, false));
+    std::cout << json.dump(2) << "\n";
   } else {
     std::cout << io::FormatResultTable(result, nullptr);
     if (!any_usable) {
@@ -352,7 +357,7 @@ void RegisterRun(CLI::App& app, int* exit_code) {
   cmd->add_flag("--fast", args->fast,
                 "Do not pace a simulated source in real time: run as fast as the VO allows, "
                 "without dropping frames");
-  cmd->add_option("--out", args->out, "Result YAML written on exit (atomically)")
+  cmd->add_option("-o,--out", args->out, "Result YAML written on exit (atomically)")
       ->default_val("rigcal_result.yaml");
   cmd->add_option("--truth-out", args->truth_dir,
                   "Simulated source: write the ground truth (TUM per camera, truth.yaml) here");

@@ -198,8 +198,8 @@ std::vector<lcm::CameraStatusInput> CalibNode::Impl::CameraInputs() {
 void CalibNode::Impl::PublishStatus(const RigEstimate& estimate, int64_t utime) {
   const rig_status_t msg =
       lcm::MakeRigStatus(CameraInputs(), calibrator.sync_stats(),
-                    config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
-                    cpu.Sample(), utime);
+                         config.online.sync.capacity * static_cast<int32_t>(names.size()), estimate,
+                         cpu.Sample(), utime);
   Publish(lcm::kStatusChannel, msg, &summary.status_published);
 }
 
@@ -230,9 +230,11 @@ void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
     const SlaveCalibration& slave = estimate.rig.slaves[i];
     line << " | " << slave.name << ": " << slave.motions.used << " motions";
     if (slave.solved()) {
-      char buf[96];
-      std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) ±%s°", slave.estimate.C.x(),
-                    slave.estimate.C.y(), slave.estimate.C.z(),
+      // Each σ beside its quantity; C in the master odometry's unit (u).
+      char buf[128];
+      std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) u ±%s, rotation ±%s°",
+                    slave.estimate.C.x(), slave.estimate.C.y(), slave.estimate.C.z(),
+                    SigmaText(slave.pos_std.maxCoeff(), 2).c_str(),
                     SigmaText(slave.rot_std_deg, 2).c_str());
       line << buf;
     }
@@ -305,7 +307,8 @@ void CalibNode::Impl::Finish(int64_t utime) {
   }
   if (!options.result_path.empty() &&
       !(CalibratedNothing() && std::filesystem::exists(options.result_path))) {
-    if (const Status status = io::WriteResultYaml(options.result_path, estimate.rig); !status.ok()) {
+    if (const Status status = io::WriteResultYaml(options.result_path, estimate.rig);
+        !status.ok()) {
       summary.errors.push_back(status.message());
       log->error("result not written: {}", status.message());
     } else {
