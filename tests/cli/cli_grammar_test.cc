@@ -12,10 +12,10 @@
 namespace rigcal {
 namespace {
 
-using ::testing::HasSubstr;
-using ::testing::Not;
 using cli_test::Quote;
 using cli_test::RunResult;
+using ::testing::HasSubstr;
+using ::testing::Not;
 
 class CliGrammarTest : public cli_test::CommandTest {
  protected:
@@ -40,8 +40,8 @@ TEST_F(CliGrammarTest, UnknownSubcommandIsNamedWithTheNearestOne) {
 
 TEST_F(CliGrammarTest, VerbosityAnywhereOnTheLine) {
   ASSERT_EQ(Run("synth-log --config " + Config() + " -o " + Quote(Path("p.lcmlog"))).exit_code, 0);
-  const std::string args = "replay " + Quote(Path("p.lcmlog")) + " --config " + Config() +
-                           " -o " + Quote(Path("r.yaml"));
+  const std::string args = "replay " + Quote(Path("p.lcmlog")) + " --config " + Config() + " -o " +
+                           Quote(Path("r.yaml"));
   const RunResult plain = Run(args);
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   EXPECT_THAT(plain.err, HasSubstr("[info]"));
@@ -64,8 +64,8 @@ TEST_F(CliGrammarTest, CalibRefusesALossyFileBus) {
 
 TEST_F(CliGrammarTest, ExitCodesAgree) {
   // A missing input is bad input (1) for report as for every other command.
-  const RunResult report = Run("report " + Quote(Path("missing.lcmlog")) + " -o " +
-                               Quote(Path("r.html")));
+  const RunResult report =
+      Run("report " + Quote(Path("missing.lcmlog")) + " -o " + Quote(Path("r.html")));
   EXPECT_EQ(report.exit_code, 1) << report.err;
   // A file that is not an LCM log is bad input (1) for replay.
   std::ofstream(Path("not_a_log.lcmlog")) << "hello, not a log\n";

@@ -13,9 +13,9 @@
 namespace rigcal {
 namespace {
 
-using ::testing::HasSubstr;
 using cli_test::Quote;
 using cli_test::RunResult;
+using ::testing::HasSubstr;
 
 class TruthComparisonTest : public cli_test::CommandTest {};
 
