@@ -12,7 +12,7 @@ CTEST     = bash scripts/ctest_with_skips.sh
 
 .PHONY: all deps deps-runtime configure demo-configure build demo test test-suite test-fast test-core test-asan-core test-asan-core-clang test-tsan-core \
 	asan-configure test-asan test-asan-gcc \
-	test-fuzz fuzz tsan-configure test-tsan test-arm64 eval bench format tidy clean firmware flash
+	test-fuzz fuzz tsan-configure test-tsan test-arm64 eval bench format tidy clean firmware flash docs
 
 all: build
 
@@ -54,6 +54,11 @@ demo: demo-configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
 
+# docs/commands.md from the help texts of the built rigcal (ctest cli/commands_doc checks it).
+docs:
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal
+	bash scripts/gen-command-docs.sh $(BUILD_DIR)/tools/rigcal markdown docs/commands.md
+
 # Whole suite in the Release tree; then the calib core tests once more under ASan+UBSan with GCC
 # (test-asan-core), the threaded calib tests under TSan (test-tsan-core), and the arm64 build under
 # qemu-aarch64 (test-arm64, below; excluded from the suite run). The suite includes the static
@@ -61,7 +66,7 @@ demo: demo-configure
 # tree's compile_commands.json, no extra tree). The whole suite under ASan+UBSan in the clang tree
 # (test-asan), the fuzz runs (test-fuzz) and every threaded test under TSan (test-tsan) are not
 # part of make test: run end to end on a 2-core machine they take ~55 min more (the clang tree's
-# compile alone >= 21 min), beyond make test's budget and CI's time limit; README "Sanitizers and
+# compile alone >= 21 min), beyond make test's budget and CI's time limit; docs/testing.md "Sanitizers and
 # fuzzing".
 # Each stage is timed (scripts/make_stages.sh prints the table at the end).
 test:
@@ -161,7 +166,7 @@ test-tsan-core: tsan-configure
 	  calib_pose_merge_test calib_online_calibrator_lossless_test
 	$(TSAN_ENV) $(CTEST) $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)' $(CTEST_ARGS)
 
-# arm64 (README "Deployment"): ctest install/arm64_qemu (label arm64, registered by
+# arm64 (docs/deployment.md): ctest install/arm64_qemu (label arm64, registered by
 # -DRIGCAL_TEST_ARM64=ON) cross-builds `rigcal` into $(BUILD_DIR)/arm64 against an arm64 sysroot
 # of Debian's -dev packages (kept in $(ARM64_SYSROOT) across builds) and runs it under
 # qemu-aarch64. Skipped with its reason when the arm64 packages cannot be had (a failure under

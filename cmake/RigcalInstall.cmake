@@ -45,9 +45,12 @@ install(FILES ${PROJECT_BINARY_DIR}/rigcalConfig.cmake ${PROJECT_BINARY_DIR}/rig
 
 # Example rig configurations (share/rigcal/config) and the service units (config/systemd).
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rigcal/config
-        COMPONENT runtime FILES_MATCHING PATTERN "*.yaml" PATTERN "README.md" PATTERN "systemd" EXCLUDE)
+        COMPONENT runtime FILES_MATCHING PATTERN "*.yaml" PATTERN "systemd" EXCLUDE)
+# The documentation (docs/*.md: config reference, usage, deployment, ...) beside the licence.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rigcal
+        COMPONENT runtime FILES_MATCHING PATTERN "*.md")
 
-# systemd units (config/systemd, README "Deployment"): rigcal.service runs `rigcal calib` with
+# systemd units (config/systemd, docs/deployment.md): rigcal.service runs `rigcal calib` with
 # the watchdog, rigcal-health.timer runs `rigcal status --once` every minute. The units name
 # the installed rigcal, whose path is known only at install time (cmake --install --prefix,
 # CPack's /usr): @bindir@ and @datadir@ are filled in then, straight into the destination.
