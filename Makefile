@@ -1,5 +1,6 @@
 # The README's entry points. `make demo` and `make test` set up the machine
-# (scripts/install-deps.sh), configure, build and run.
+# (scripts/install-deps.sh: `--runtime` for the demo, everything for the tests), configure, build
+# and run.
 BUILD_DIR ?= build
 ASAN_DIR  ?= build-asan
 ASAN_ALL_DIR ?= build-asan-clang
@@ -9,14 +10,17 @@ CTEST_ARGS ?=
 # ctest, then the number of skipped tests and why (scripts/ctest_with_skips.sh).
 CTEST     = bash scripts/ctest_with_skips.sh
 
-.PHONY: all deps configure build demo test test-suite test-fast test-core test-asan-core test-asan-core-clang test-tsan-core \
+.PHONY: all deps deps-runtime configure demo-configure build demo test test-suite test-fast test-core test-asan-core test-asan-core-clang test-tsan-core \
 	asan-configure test-asan test-asan-gcc \
-	test-fuzz fuzz tsan-configure test-tsan test-arm64 eval bench format tidy clean firmware flash
+	test-fuzz fuzz tsan-configure test-tsan test-arm64 eval bench format tidy clean firmware flash docs
 
 all: build
 
 deps:
 	@bash scripts/install-deps.sh
+
+deps-runtime:
+	@bash scripts/install-deps.sh --runtime
 
 # Ninja when it is there, else Makefiles.
 define cmake_configure
@@ -28,16 +32,32 @@ endef
 
 # The evaluations and benchmarks are built by `make eval` / `make bench` (not by make test,
 # which does not run them).
+RELEASE_ARGS = -DRIGCAL_BUILD_EVAL_TESTS=OFF -DRIGCAL_BUILD_BENCHMARKS=OFF
+
+# A tree configured by `make demo` (tests off: GoogleTest is not installed by --runtime) gets its
+# tests turned on here.
 configure: deps
-	$(call cmake_configure,$(BUILD_DIR),Release,-DRIGCAL_BUILD_EVAL_TESTS=OFF -DRIGCAL_BUILD_BENCHMARKS=OFF)
+	$(call cmake_configure,$(BUILD_DIR),Release,$(RELEASE_ARGS))
+	@if grep -q '^RIGCAL_BUILD_TESTS:BOOL=OFF' $(BUILD_DIR)/CMakeCache.txt; then \
+	  cmake -S . -B $(BUILD_DIR) -DRIGCAL_BUILD_TESTS=ON; fi
+
+demo-configure: deps-runtime
+	$(call cmake_configure,$(BUILD_DIR),Release,$(RELEASE_ARGS) -DRIGCAL_BUILD_TESTS=OFF)
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
 # The whole live pipeline on the built-in simulated rig (thesis 5.4 virtual scene): rendered
 # images -> VO per camera -> SyncBuffer -> RigEstimator, errors against the truth at the end.
-demo: build
+# Installs only the runtime packages and builds only the `rigcal` target.
+demo: demo-configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal
 	./$(BUILD_DIR)/tools/rigcal run --config config/sim_thesis_virtual.yaml --eval --out $(BUILD_DIR)/demo_result.yaml
+
+# docs/commands.md from the help texts of the built rigcal (ctest cli/commands_doc checks it).
+docs:
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal
+	bash scripts/gen-command-docs.sh $(BUILD_DIR)/tools/rigcal markdown docs/commands.md
 
 # Whole suite in the Release tree; then the calib core tests once more under ASan+UBSan with GCC
 # (test-asan-core), the threaded calib tests under TSan (test-tsan-core), and the arm64 build under
@@ -46,7 +66,7 @@ demo: build
 # tree's compile_commands.json, no extra tree). The whole suite under ASan+UBSan in the clang tree
 # (test-asan), the fuzz runs (test-fuzz) and every threaded test under TSan (test-tsan) are not
 # part of make test: run end to end on a 2-core machine they take ~55 min more (the clang tree's
-# compile alone >= 21 min), beyond make test's budget and CI's time limit; README "Sanitizers and
+# compile alone >= 21 min), beyond make test's budget and CI's time limit; docs/testing.md "Sanitizers and
 # fuzzing".
 # Each stage is timed (scripts/make_stages.sh prints the table at the end).
 test:
@@ -61,7 +81,7 @@ test-fast: build
 	$(CTEST) $(BUILD_DIR) --output-on-failure -j $(JOBS) -LE 'eval|soak' $(CTEST_ARGS)
 
 # The calib core tests (label calib_core: they link only the calib library) in the Release tree;
-# builds only them (target rigcal_calib_tests), `make demo` builds the rest of the tree.
+# builds only them (target rigcal_calib_tests), `make build` builds the rest of the tree.
 test-core: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target rigcal_calib_tests
 	$(CTEST) $(BUILD_DIR) --output-on-failure --no-tests=error -j $(JOBS) -L calib_core -LE eval $(CTEST_ARGS)
@@ -146,7 +166,7 @@ test-tsan-core: tsan-configure
 	  calib_pose_merge_test calib_online_calibrator_lossless_test
 	$(TSAN_ENV) $(CTEST) $(TSAN_DIR) --output-on-failure -j $(JOBS) -R 'calib/(sync_buffer_threads|online_calibrator|pose_merge)' $(CTEST_ARGS)
 
-# arm64 (README "Deployment"): ctest install/arm64_qemu (label arm64, registered by
+# arm64 (docs/deployment.md): ctest install/arm64_qemu (label arm64, registered by
 # -DRIGCAL_TEST_ARM64=ON) cross-builds `rigcal` into $(BUILD_DIR)/arm64 against an arm64 sysroot
 # of Debian's -dev packages (kept in $(ARM64_SYSROOT) across builds) and runs it under
 # qemu-aarch64. Skipped with its reason when the arm64 packages cannot be had (a failure under

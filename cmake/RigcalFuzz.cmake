@@ -1,5 +1,5 @@
 # libFuzzer targets (RIGCAL_FUZZ_ENABLED: clang with RIGCAL_ASAN_ENABLED, so every target runs
-# under ASan and UBSan). README "Fuzzing".
+# under ASan and UBSan). docs/testing.md "Sanitizers and fuzzing".
 #
 # rigcal_add_fuzz_target(NAME <name> SOURCES <file>... [LIBS <target>...]
 #                        [INSTRUMENT <target>...] [CORPUS <dir>] [MAX_LEN <bytes>])

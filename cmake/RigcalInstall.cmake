@@ -45,8 +45,11 @@ install(FILES ${PROJECT_BINARY_DIR}/rigcalConfig.cmake ${PROJECT_BINARY_DIR}/rig
 
 # Example rig configurations (share/rigcal/config) and the service units (config/systemd).
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rigcal/config
-        COMPONENT runtime FILES_MATCHING PATTERN "*.yaml" PATTERN "README.md" PATTERN "systemd" EXCLUDE
+        COMPONENT runtime FILES_MATCHING PATTERN "*.yaml" PATTERN "systemd" EXCLUDE
         PATTERN "examples" EXCLUDE)
+# The documentation (docs/*.md: config reference, usage, deployment, ...) beside the licence.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rigcal
+        COMPONENT runtime FILES_MATCHING PATTERN "*.md")
 # Rigs of real cameras to start from (share/rigcal/examples): the triggered stereo pair, a
 # 4-camera surround rig on v4l2, a libcamera pair. The stereo pair is also /etc/rigcal/rig.yaml,
 # the config both units read (a conffile of the .deb: an edited one survives upgrades).
@@ -67,8 +70,9 @@ install(CODE "
        DESTINATION \"\${etc}/rigcal\" RENAME rig.yaml)"
   COMPONENT runtime)
 
-# systemd units (config/systemd, README "Deployment"): rigcal.service runs `rigcal calib` with
-# the watchdog, rigcal-run.service `rigcal run` on this computer's cameras, rigcal-health.timer runs `rigcal status --once` every minute. The units name
+# systemd units (config/systemd, docs/deployment.md): rigcal.service runs `rigcal calib` with
+# the watchdog, rigcal-run.service `rigcal run` on this computer's cameras, rigcal-health.timer
+# runs `rigcal status --once` every minute. The units name
 # the installed rigcal, whose path is known only at install time (cmake --install --prefix,
 # CPack's /usr): @bindir@ and @datadir@ are filled in then, straight into the destination.
 set(RIGCAL_SYSTEMD_UNIT_DIR "lib/systemd/system" CACHE STRING

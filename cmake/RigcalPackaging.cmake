@@ -1,4 +1,4 @@
-# Debian packages through CPack (`cpack -G DEB` in a build tree, README "Deployment"):
+# Debian packages through CPack (`cpack -G DEB` in a build tree, docs/deployment.md):
 #   rigcal      bin/rigcal, example configs, systemd units      (component runtime)
 #   rigcal-dev  headers, static libraries, CMake package, LCM    (component dev)
 #               definitions, generated C++/Python/Java types
@@ -58,5 +58,13 @@ set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS
     "libeigen3-dev, libceres-dev, libspdlog-dev, libyaml-cpp-dev, nlohmann-json3-dev, \
 libopencv-dev, liblcm-dev, libglib2.0-dev, pkg-config, python3")
 set(CPACK_DEBIAN_DEV_PACKAGE_RECOMMENDS "rigcal (= ${PROJECT_VERSION}-1)")
+
+# The licence (Apache-2.0, LICENSE) in Debian's machine-readable copyright format, in each
+# package's doc directory (Debian policy 12.5).
+install(FILES ${PROJECT_SOURCE_DIR}/cmake/debian/copyright
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rigcal COMPONENT runtime)
+install(FILES ${PROJECT_SOURCE_DIR}/cmake/debian/copyright
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rigcal-dev COMPONENT dev)
+set(CPACK_RESOURCE_FILE_LICENSE ${PROJECT_SOURCE_DIR}/LICENSE)
 
 include(CPack)

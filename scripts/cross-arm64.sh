@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Cross-builds the rigcal command for arm64 (aarch64 Debian 12) with Debian's cross compiler
-# and Debian's arm64 libraries (README "Deployment"):
+# and Debian's arm64 libraries (docs/deployment.md):
 #   1. host tools: crossbuild-essential-arm64 (aarch64-linux-gnu-g++), qemu-user (qemu-aarch64,
 #      to run the result here), mmdebstrap (the sysroot); installed when missing (root/sudo);
 #   2. scripts/arm64-sysroot.sh: the arm64 -dev packages of every dependency in a sysroot;

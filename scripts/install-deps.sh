@@ -3,13 +3,17 @@
 # already present are skipped, so a second run changes nothing and needs no network.
 # Works as root, or through sudo for a normal user.
 #   scripts/install-deps.sh           everything rigcal builds and tests with
+#   scripts/install-deps.sh --runtime only what building and running the `rigcal` command needs
+#                                     (`make demo`): the compiler, CMake and the libraries it
+#                                     links; no test, packaging, emulation or cross tools
 #   scripts/install-deps.sh --flash   only what `make flash` needs: the ARM cross toolchain and the
 #                                     flashing tools (st-flash, openocd, dfu-util); they are in no
 #                                     other list (docs/firmware.md "Flashing")
 set -euo pipefail
 
-# One line per package, with why it is there (see README "Dependencies").
-PACKAGES=(
+# One line per package, with why it is there (docs/testing.md "Dependencies").
+# What building and running `rigcal` needs (`make demo`, `--runtime`).
+RUNTIME_PACKAGES=(
   build-essential      # compiler
   cmake                # build system
   ninja-build          # faster builds
@@ -20,17 +24,21 @@ PACKAGES=(
   libcli11-dev         # command line of the rigcal tool
   libspdlog-dev        # logging, one logger per module
   nlohmann-json3-dev   # --json output
-  libopencv-dev        # tests: OpenCV hand-eye peer and PnP on real data
-  libgtest-dev         # unit tests
-  libgmock-dev         # unit tests (matchers)
-  libbenchmark-dev     # benchmarks under tests/bench
+  libopencv-dev        # VO, the simulated renderer's images, calibration patterns (with contrib)
   liblcm-dev           # LCM messaging: RIGCAL_EXTRINSICS/STATUS/POSE/IMAGE (lcmtypes/, tools/)
   liblcm-bin           # lcm-gen (build-time message generation), lcm-logger, lcm-logplayer
   libglib2.0-dev       # lcm.pc requires glib-2.0 and gthread-2.0
+  libcamera-dev        # the libcamera capture source (optional at build time: disabled without it)
+  libsystemd-dev       # sd_notify: READY=1 and the watchdog of rigcal.service (optional at build)
+)
+# What the tests, packaging checks, emulators and cross builds need besides (`make test`).
+TEST_PACKAGES=(
+  libgtest-dev         # unit tests
+  libgmock-dev         # unit tests (matchers)
+  libbenchmark-dev     # benchmarks under tests/bench
   clang                # ctest architecture/threads: clang's -Wthread-safety on the annotated locks
   libclang-rt-14-dev   # make test-tsan/test-asan-clang/test-fuzz: the sanitizer and libFuzzer runtimes of clang
   chromium             # ctest report/report_browser: renders `rigcal report`'s HTML headless
-  libcamera-dev        # the libcamera capture source (optional at build time: disabled without it)
   libcamera-ipa        # ctest device/qemu: libcamera's vimc IPA module, copied into the test VM
   qemu-system-x86      # ctest device/qemu: a Debian kernel with real V4L2 drivers, emulated
   busybox-static       # ctest device/qemu: the test VM's userland
@@ -42,19 +50,26 @@ PACKAGES=(
   libnewlib-arm-none-eabi          # its C library (nano specs)
   libstdc++-arm-none-eabi-newlib   # its freestanding C++ headers
   qemu-system-arm      # ctest label firmware: runs the firmware on an emulated STM32F405
-  libsystemd-dev       # sd_notify: READY=1 and the watchdog of rigcal.service (optional at build)
   default-jdk-headless # javac: rigcal_lcmtypes.jar for lcm-spy (install, deb tests)
   liblcm-java          # lcm.jar (javac classpath) and lcm-spy
   libjchart2d-java     # lcm-spy's charts (its start script names the jar; liblcm-java lacks it)
   lintian              # ctest install/deb_package: lints the rigcal .deb packages
   systemd              # ctest install/systemd_units: systemd-analyze verify of config/systemd
   python3              # ctest install/sd_notify: stands in for systemd's notify socket
+  python3-yaml         # ctest io/camchain_kalibr: reads --camchain as Kalibr's camchain schema
   crossbuild-essential-arm64  # ctest install/arm64_qemu: the arm64 cross compiler
   qemu-user            # ctest install/arm64_qemu: qemu-aarch64 runs the arm64 build here
   mmdebstrap           # scripts/arm64-sysroot.sh: Debian's arm64 -dev packages in a sysroot
 )
+PACKAGES=("${RUNTIME_PACKAGES[@]}" "${TEST_PACKAGES[@]}")
 
-if [ "${1:-}" = "--flash" ]; then
+case "${1:-}" in
+  "" | --runtime | --flash) ;;
+  *) echo "usage: scripts/install-deps.sh [--runtime | --flash]" >&2; exit 2 ;;
+esac
+if [ "${1:-}" = "--runtime" ]; then
+  PACKAGES=("${RUNTIME_PACKAGES[@]}")
+elif [ "${1:-}" = "--flash" ]; then
   PACKAGES=(
     gcc-arm-none-eabi                # cross-builds the trigger firmware
     libnewlib-arm-none-eabi          # its C library (nano specs)

@@ -43,6 +43,20 @@ inline std::string Slurp(const std::filesystem::path& path) {
 
 inline std::string Quote(const std::string& s) { return "'" + s + "'"; }
 
+// A result without its provenance (io/provenance.h), which names the date and the command line:
+// what the determinism checks compare. YAML: the trailing `provenance:` block cut; JSON: the
+// top-level "provenance" object removed (the rest keeps its dump(2) layout).
+inline std::string YamlWithoutProvenance(const std::string& yaml) {
+  const size_t at = yaml.find("\nprovenance:\n");
+  return at == std::string::npos ? yaml : yaml.substr(0, at + 1);
+}
+inline std::string JsonWithoutProvenance(const std::string& json) {
+  const size_t start = json.find("\n  \"provenance\": {");
+  if (start == std::string::npos) return json;
+  const size_t end = json.find("\n  },", start);  // the object's closing line at depth 1
+  return end == std::string::npos ? json : json.substr(0, start) + json.substr(end + 5);
+}
+
 // Runs `command` (a shell command line) with stdin from /dev/null, stdout and stderr captured in
 // files of `dir`.
 inline RunResult RunShell(const std::string& command, const std::filesystem::path& dir) {

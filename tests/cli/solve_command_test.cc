@@ -18,6 +18,7 @@
 #include "rigcal/calib/synthetic_car.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
+#include "support/skip.h"
 
 namespace rigcal {
 namespace {
@@ -145,6 +146,40 @@ TEST_F(SolveCommandTest, SolvesDemoRigWithJsonOutAndCamchain) {
   EXPECT_LT(RotationDifferenceDeg((*chain)[2].cn_from_cnm1, r2.transpose() * r1), 1.0);
 }
 
+// --camchain with a config holding the cameras' intrinsics and a metric master: a camchain
+// Kalibr's config reader loads (tests/io/kalibr_camchain_reader.py follows its schema), in
+// metres; without the unit the file says the translations are in master units.
+TEST_F(SolveCommandTest, CamchainLoadsAsKalibrCamchain) {
+  if (std::system("python3 -c 'import yaml' 2>/dev/null") != 0) {
+    RIGCAL_SKIP_MISSING() << "python3 with yaml (python3-yaml) not installed";
+  }
+  WriteDemoDrive();
+  std::string config = "rig: {name: demo, master: cam0}\ncameras:\n";
+  for (const std::string name : {"cam0", "cam1", "cam2"}) {
+    config += "  - name: " + name +
+              "\n    model: pinhole\n    resolution: [752, 480]\n"
+              "    intrinsics: [458.654, 457.296, 367.215, 248.375]\n"
+              "    distortion: [-0.28, 0.07, 0.0002, 0.00002]\n";
+  }
+  std::ofstream(Path("rig.yaml")) << config;
+  const std::string reader = std::string(RIGCAL_SOURCE_DIR) + "/tests/io/kalibr_camchain_reader.py";
+  const RunResult metric = Run(DemoArgs() + " --master-metric --config " + Quote(Path("rig.yaml")) +
+                               " --camchain " + Quote(Path("metric.yaml")));
+  ASSERT_EQ(metric.exit_code, 0) << Explain(metric);
+  const RunResult loaded = cli_test::RunShell(
+      "python3 " + Quote(reader) + " " + Quote(Path("metric.yaml")) + " --metric", dir_);
+  EXPECT_EQ(loaded.exit_code, 0) << Explain(loaded);
+
+  const RunResult plain = Run(DemoArgs() + " --camchain " + Quote(Path("plain.yaml")));
+  ASSERT_EQ(plain.exit_code, 0) << Explain(plain);
+  EXPECT_THAT(plain.err, HasSubstr("translations in the master odometry's unit, not metres"));
+  EXPECT_THAT(plain.err, HasSubstr("no intrinsics for cam0, cam1, cam2"));
+  const RunResult refused =
+      cli_test::RunShell("python3 " + Quote(reader) + " " + Quote(Path("plain.yaml")), dir_);
+  EXPECT_EQ(refused.exit_code, 1) << Explain(refused);  // the reader can fail
+  EXPECT_THAT(refused.err, HasSubstr("cam0: no camera_model"));
+}
+
 TEST_F(SolveCommandTest, TextOutputShowsErrorsAgainstTruth) {
   WriteDemoDrive();
   const RunResult r = Run(DemoArgs() + " --truth " + Quote(Path("truth.yaml")));
@@ -200,7 +235,9 @@ TEST_F(SolveCommandTest, MetricTruthIsComparedAfterAligningTheMasterUnit) {
     EXPECT_LT(e.value("trans_err", 1e9), c_tolerance) << s.dump(2);
     EXPECT_NEAR(e.value("trans_err_m", 1e9), e.value("trans_err", 0.0) * k, 1e-12);
     EXPECT_LT(e.value("dist_pct", 1e9), 100.0 * c_tolerance / c_true) << s.dump(2);
-    EXPECT_LT(e.value("scale_pct", 1e9), 100.0 * 4.0 * k_std / k + 0.1) << s.dump(2);
+    // Aligned from the mountings alone, a slave's odometry unit is not known: no scale error
+    // (truth_comparison.h; with the true trajectories it is, per segment).
+    EXPECT_TRUE(e["scale_pct"].is_null()) << s.dump(2);
   }
 
   // Text: the alignment line with the unit, the truth columns in master units, C errors in m.

@@ -5,8 +5,8 @@
 # records the package there, while this machine's own /usr and dpkg database stay untouched
 # (no `dpkg -i` into the host, nothing to remove afterwards). Then the installed rigcal runs
 # from DIR: --version and `rigcal demo`. Also: a database without one of the Depends makes
-# dpkg refuse the package (the Depends are real), and lintian's remarks are only those README
-# "Deployment" explains (tests/install/lintian-explained.txt), when lintian is installed.
+# dpkg refuse the package (the Depends are real), and lintian's remarks are only those docs/deployment.md
+# explains (tests/install/lintian-explained.txt), when lintian is installed.
 # usage: deb_package_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 build=$(readlink -f "$1")
@@ -87,7 +87,7 @@ if command -v lintian >/dev/null; then
   explained="$source_dir/tests/install/lintian-explained.txt"
   unexplained=$(awk '{print $3}' "$work/lintian.txt" | sort -u |
                 grep -vxF -f <(grep -v '^#' "$explained" | awk 'NF{print $1}') || true)
-  check "lintian: every remark explained in README (unexplained: ${unexplained:-none})" '[ -z "$unexplained" ]'
+  check "lintian: every remark explained in docs/deployment.md (unexplained: ${unexplained:-none})" '[ -z "$unexplained" ]'
 else
   echo "note: lintian not installed, packages not linted"
 fi

@@ -34,7 +34,7 @@ check "LCM definitions" '[ -f "$prefix/share/rigcal/lcmtypes/rig_status_t.lcm" ]
 check "Python LCM types" '[ -f "$prefix/lib/python3/dist-packages/rigcal/rig_status_t.py" ]'
 if [ -f "$build/lcmtypes/rigcal_lcmtypes.jar" ]; then
   check "Java LCM types jar" '[ -f "$prefix/share/java/rigcal-lcmtypes.jar" ]'
-  # lcm-spy with the installed jar, as README "Deployment" invokes it (headless: it lists the
+  # lcm-spy with the installed jar, as docs/deployment.md invokes it (headless: it lists the
   # types it found on the class path, then cannot open its window).
   ntypes=$(ls "$source_dir"/lcmtypes/*.lcm | wc -l)
   if command -v java >/dev/null && [ -f /usr/share/java/lcm.jar ]; then

@@ -3,7 +3,7 @@
 # into a private root next to a copy of this machine's system units, then
 # `systemd-analyze verify --root` must accept them without a single remark; a copy with an
 # unknown key must be flagged (the check can fail). Also prints the offline security exposure
-# (`systemd-analyze security`) and checks the least-privilege settings README "Deployment"
+# (`systemd-analyze security`) and checks the least-privilege settings docs/deployment.md
 # promises. Skipped without systemd-analyze (a failure under CI=true).
 # usage: systemd_units_test.sh BUILD_DIR
 set -euo pipefail

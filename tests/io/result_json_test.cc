@@ -8,8 +8,8 @@
 #include <limits>
 #include <set>
 
-#include "rigcal/calib/error_model.h"
 #include "rigcal/base/quaternion.h"
+#include "rigcal/calib/error_model.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 
@@ -357,7 +357,8 @@ TEST(TruthAlignmentTest, AppliedAlignmentInJsonAndTable) {
   // left and road (in the plane) have positions; back is translational, still not usable.
   EXPECT_EQ(a.slaves_used, std::vector<std::string>({"left", "road"}));
   const std::map<std::string, Similarity> aligned = TruthInMasterUnits(metric, a);
-  EXPECT_NEAR(aligned.at("left").scale, 0.5 * 0.37 / a.metres_per_unit, 1e-12);
+  // Aligned from the mountings alone, a slave's odometry unit is unknown: no true scale.
+  EXPECT_TRUE(std::isnan(aligned.at("left").scale));
 
   const nlohmann::json j = ResultToJson(f.result, &aligned, &a);
   ASSERT_TRUE(j.contains("truth_alignment")) << j.dump(2);
@@ -377,6 +378,8 @@ TEST(TruthAlignmentTest, AppliedAlignmentInJsonAndTable) {
   EXPECT_THAT(table, HasSubstr("truth: positions compared after aligning the master unit to the "
                                "truth: 1 master unit = 0.3"));
   EXPECT_THAT(table, ::testing::ContainsRegex("C error [0-9.e-]+ master units \\([0-9.e-]+ m\\)"));
+  EXPECT_THAT(table, HasSubstr("scale not compared (the slave's odometry unit is unknown)"));
+  EXPECT_TRUE(errors["scale_pct"].is_null()) << errors.dump();
 
   // Without an alignment: no truth_alignment, no trans_err_m (the schema as before).
   const nlohmann::json plain = ResultToJson(f.result, &f.truth);

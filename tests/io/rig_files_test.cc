@@ -11,6 +11,7 @@
 
 #include "rigcal/base/quaternion.h"
 #include "rigcal/io/atomic_file.h"
+#include "rigcal/io/result_camchain.h"
 
 namespace rigcal::io {
 namespace {
@@ -361,11 +362,18 @@ TEST_F(RigFilesTest, NominalMountingsFromRigYamlOrRigConfig) {
   EXPECT_THAT(bad.error(), HasSubstr("left.q_wxyz"));
 }
 
+CamchainOptions Cameras(std::vector<std::string> order) {
+  CamchainOptions options;
+  options.camera_order = std::move(order);
+  return options;
+}
+
 // Independent check of T_cn_cnm1: it must take a point from camera n-1 to camera n, where
 // p_master = R_n p_cam_n + C_n.
 TEST_F(RigFilesTest, CamchainTransformsPointsBetweenNeighbours) {
   const RigCalibration result = MakeResult();
-  ASSERT_TRUE(WriteCamchain(Path("camchain.yaml"), result, {"front", "back", "left"}).ok());
+  ASSERT_TRUE(
+      WriteCamchain(Path("camchain.yaml"), result, Cameras({"front", "back", "left"})).ok());
   const auto chain = ReadCamchain(Path("camchain.yaml"));
   ASSERT_TRUE(chain.ok()) << chain.error();
   ASSERT_EQ(chain->size(), 3u);
@@ -401,18 +409,55 @@ TEST_F(RigFilesTest, CamchainDefaultOrderSkipsUnusableSlaves) {
   std::ifstream in(Path("c.yaml"));
   std::stringstream text;
   text << in.rdbuf();
-  EXPECT_THAT(text.str(), HasSubstr("# Kalibr-style"));
-  EXPECT_THAT(text.str(), HasSubstr("intrinsics"));  // the comment says they are not written
+  EXPECT_THAT(text.str(), HasSubstr("# Kalibr camchain written by rigcal"));
+  // Neither intrinsics nor a unit known: extrinsics only, in master units, and said so.
+  EXPECT_THAT(text.str(), HasSubstr("No intrinsics in the rig config for front, left, back"));
+  EXPECT_THAT(text.str(), HasSubstr("rigcal_translation_unit: master_odometry_unit"));
+  EXPECT_THAT(text.str(), ::testing::Not(HasSubstr("camera_model")));
   EXPECT_THAT(text.str(), ::testing::Not(HasSubstr("still")));
+}
+
+// With the intrinsics of the rig config and a known unit: complete Kalibr entries, translations
+// in metres.
+TEST_F(RigFilesTest, CamchainInMetresWithIntrinsics) {
+  const RigCalibration result = MakeResult();
+  CamchainOptions options;
+  options.metres_per_unit = 2.0;
+  options.unit_source = "test unit";
+  camera::CameraSpec spec;
+  spec.width = 640;
+  spec.height = 480;
+  spec.intrinsics = {500, 501, 320, 240};
+  spec.distortion = {0.1, -0.01, 0.001, 0.002};
+  options.intrinsics["front"] = spec;
+  options.intrinsics["left"] = spec;
+  const auto written = WriteCamchain(Path("m.yaml"), result, options);
+  ASSERT_TRUE(written.ok()) << written.error();
+  EXPECT_TRUE(written->metric);
+  EXPECT_EQ(written->no_intrinsics, std::vector<std::string>({"back"}));
+  const auto chain = ReadCamchain(Path("m.yaml"));
+  ASSERT_TRUE(chain.ok()) << chain.error();
+  // cam1 = left: T_cn_cnm1 = left_from_front, its translation -R^T C in metres.
+  const Similarity& left = result.slaves[0].estimate;
+  const Eigen::Vector3d t = -(left.q.toRotationMatrix().transpose() * left.C) * 2.0;
+  EXPECT_LT(((*chain)[1].cn_from_cnm1.topRightCorner<3, 1>() - t).norm(), 1e-12);
+  std::ifstream in(Path("m.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_THAT(text.str(), HasSubstr("rigcal_translation_unit: m\n"));
+  EXPECT_THAT(text.str(), HasSubstr("camera_model: pinhole"));
+  EXPECT_THAT(text.str(), HasSubstr("distortion_model: radtan"));
+  EXPECT_THAT(text.str(), HasSubstr("resolution: [640, 480]"));
+  EXPECT_THAT(text.str(), HasSubstr("No intrinsics in the rig config for back"));
 }
 
 TEST_F(RigFilesTest, CamchainOrderErrors) {
   const RigCalibration result = MakeResult();
-  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"left", "front"}).message(),
+  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, Cameras({"left", "front"})).error(),
               HasSubstr("the first camera must be the master 'front'"));
-  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"front", "right"}).message(),
+  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, Cameras({"front", "right"})).error(),
               HasSubstr("unknown camera 'right'"));
-  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, {"front", "still"}).message(),
+  EXPECT_THAT(WriteCamchain(Path("c.yaml"), result, Cameras({"front", "still"})).error(),
               HasSubstr("camera 'still' has no usable estimate (insufficient_motion)"));
   EXPECT_FALSE(fs::exists(Path("c.yaml")));
 }

@@ -167,11 +167,26 @@ TEST_F(TrajectoryIoTest, NormalisesNearUnitQuaternionsWithOneWarning) {
 }
 
 TEST_F(TrajectoryIoTest, QuaternionToleranceIsAnOption) {
-  const std::string contents = "0 0 0 0 0 0 0 1.0005\n";
+  const std::string contents = "0 0 0 0 0 0 0 1.005\n";
   EXPECT_FALSE(ReadTrajectory(Write("q.txt", contents)).ok());
   TrajectoryReadOptions loose;
-  loose.max_quaternion_norm_error = 1e-3;
+  loose.max_quaternion_norm_error = 1e-2;
   EXPECT_TRUE(ReadTrajectory(Write("q.txt", contents), loose).ok());
+}
+
+// Beyond the tolerance but within what the printed digits explain: 2 decimals round each
+// component by up to 0.005 (0.0071 for two), so |q| of "0.71 0 0 0.71" (1.0041) is a unit
+// quaternion printed; "0 0 0 1.01" is not (one rounded component, 0.005).
+TEST_F(TrajectoryIoTest, PrintedDigitsBoundTheNormError) {
+  TrajectoryReadOptions strict;
+  strict.max_quaternion_norm_error = 1e-6;
+  EXPECT_TRUE(ReadTrajectory(Write("two.txt", "0 0 0 0 0.71 0 0 0.71\n"), strict).ok());
+  EXPECT_FALSE(ReadTrajectory(Write("one.txt", "0 0 0 0 0 0 0 1.01\n"), strict).ok());
+  // The same norm error with 9 printed decimals is not rounding.
+  const auto nine =
+      ReadTrajectory(Write("nine.txt", "0 0 0 0 0.710000000 0 0 0.710000000\n"), strict);
+  ASSERT_FALSE(nine.ok());
+  EXPECT_THAT(nine.error(), HasSubstr("the rounding of its printed digits"));
 }
 
 // Every rejected input: the message names the file, the line and what is wrong.
@@ -219,8 +234,8 @@ TEST_F(TrajectoryIoTest, NonUnitQuaternion) {
   const std::string e = ErrorOf("q.txt", "0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1.01\n");
   EXPECT_THAT(e, HasSubstr("q.txt:2:"));
   EXPECT_THAT(e, HasSubstr("has norm 1.01"));
-  // Just beyond the 1e-6 tolerance.
-  EXPECT_THAT(ErrorOf("q2.txt", "0 0 0 0 0 0 0 1.0000011\n"), HasSubstr("q2.txt:1:"));
+  // Just beyond the 1e-3 tolerance (and the 2e-7 rounding of 7 decimals).
+  EXPECT_THAT(ErrorOf("q2.txt", "0 0 0 0 0 0 0 1.0010011\n"), HasSubstr("q2.txt:1:"));
   EXPECT_THAT(ErrorOf("zero.txt", "0 0 0 0 0 0 0 0\n"), HasSubstr("zero.txt:1:"));
 }
 
@@ -259,17 +274,18 @@ TEST_F(TrajectoryIoTest, WriterReportsUnwritablePath) {
   EXPECT_THAT(error, HasSubstr("No such file or directory"));
 }
 
-// Real EuRoC ground truth prints quaternions whose norms are off by up to 1.5e-4: rejected at
-// the default tolerance (naming the line), read with a loose one.
+// Real EuRoC ground truth prints quaternions whose norms are off by up to 1.5e-4 (more than
+// the rounding of its 6 decimals): read at the default tolerance (1e-3), rejected at a strict
+// one naming the line.
 TEST(TrajectoryIoDataTest, EurocGroundTruth) {
   const fs::path path = fs::path(RIGCAL_SHARED_DATA_DIR) / "trajectories" / "V102_groundtruth.csv";
   if (!fs::exists(path)) RIGCAL_SKIP_MISSING() << path << " not present";
-  const auto strict = ReadTrajectory(path.string());
-  ASSERT_FALSE(strict.ok());
-  EXPECT_THAT(strict.error(), ::testing::MatchesRegex(".*V102_groundtruth.csv:[0-9]+: .*norm.*"));
-  TrajectoryReadOptions loose;
-  loose.max_quaternion_norm_error = 1e-3;
-  const auto t = ReadTrajectory(path.string(), loose);
+  TrajectoryReadOptions strict;
+  strict.max_quaternion_norm_error = 1e-6;
+  const auto rejected = ReadTrajectory(path.string(), strict);
+  ASSERT_FALSE(rejected.ok());
+  EXPECT_THAT(rejected.error(), ::testing::MatchesRegex(".*V102_groundtruth.csv:[0-9]+: .*norm.*"));
+  const auto t = ReadTrajectory(path.string());
   ASSERT_TRUE(t.ok()) << t.error();
   EXPECT_EQ(t->size(), 16702u);
   EXPECT_EQ(t->t_ns.front(), 1403715524907143168LL);

@@ -29,9 +29,9 @@
 #pragma GCC diagnostic pop
 
 #include "rigcal/io/camera_files.h"
+#include "rigcal/io/kalibr_camchain.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/pattern/intrinsics.h"
-#include "rigcal/pattern/kalibr_camchain.h"
 #include "rigcal/pattern/metric_scale.h"
 #include "rigcal/pattern/reference_calibration.h"
 #include "rigcal/pattern/target_poses.h"
@@ -72,13 +72,13 @@ Pose CamFromTarget(std::mt19937& rng) {
 }
 
 pattern::TargetView Project(const CameraSpec& spec, const Pose& cam_from_target, std::mt19937& rng,
-                   double noise_px, int64_t t_ns) {
+                            double noise_px, int64_t t_ns) {
   return test_support::ProjectBoard(spec, cam_from_target, rng, noise_px, t_ns,
                                     "view" + std::to_string(t_ns / 1000000000) + ".png");
 }
 
 pattern::CameraViews SyntheticViews(const CameraSpec& spec, int n, unsigned seed,
-                           double noise_px = kNoisePx) {
+                                    double noise_px = kNoisePx) {
   std::mt19937 rng(seed);
   pattern::CameraViews views;
   views.camera = spec.name;
@@ -312,10 +312,10 @@ TEST(TargetPoses, PnpRecoversThePosesAndTheGlobalReferenceTheRig) {
 
 TEST(KalibrCamchain, WrittenCompleteAndReadBack) {
   const auto dir = support::FreshTempDir("target_camchain");
-  pattern::CamchainEntry cam0;
+  io::CamchainEntry cam0;
   cam0.spec = TrueCamera(CameraSpec::Model::kPinhole);
   cam0.spec.name = "left";
-  pattern::CamchainEntry cam1;
+  io::CamchainEntry cam1;
   cam1.spec = TrueCamera(CameraSpec::Model::kFisheye);
   cam1.spec.name = "right";
   Similarity cam0_from_cam1;
@@ -323,7 +323,7 @@ TEST(KalibrCamchain, WrittenCompleteAndReadBack) {
   cam0_from_cam1.C = Eigen::Vector3d(0.11, -0.02, 0.03);
   cam1.cam0_from_cam = cam0_from_cam1;
   const std::string path = (dir / "camchain.yaml").string();
-  ASSERT_TRUE(pattern::WriteKalibrCamchain(path, {cam0, cam1}, "test").ok());
+  ASSERT_TRUE(io::WriteKalibrCamchain(path, {cam0, cam1}, "test").ok());
 
   auto specs = io::ReadKalibrIntrinsics(path);
   ASSERT_TRUE(specs.ok()) << specs.error();
@@ -342,9 +342,9 @@ TEST(KalibrCamchain, WrittenCompleteAndReadBack) {
   const Eigen::Vector3d p1 = cam0_from_cam1.q.conjugate() * (p0 - cam0_from_cam1.C);
   EXPECT_LT((T.topLeftCorner<3, 3>() * p0 + T.topRightCorner<3, 1>() - p1).norm(), 1e-12);
 
-  pattern::CamchainEntry missing = cam1;
+  io::CamchainEntry missing = cam1;
   missing.cam0_from_cam.reset();
-  const Status s = pattern::WriteKalibrCamchain(path, {cam0, missing}, "");
+  const Status s = io::WriteKalibrCamchain(path, {cam0, missing}, "");
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("right: no extrinsics"), std::string::npos) << s.message();
 }

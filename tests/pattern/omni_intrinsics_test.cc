@@ -23,7 +23,7 @@
 #include <opencv2/ccalib/omnidir.hpp>
 #pragma GCC diagnostic pop
 
-#include "rigcal/pattern/kalibr_camchain.h"
+#include "rigcal/io/kalibr_camchain.h"
 #include "rigcal/pattern/omni_intrinsics.h"
 #include "support/temp_dir.h"
 
@@ -135,7 +135,7 @@ TEST(OmniIntrinsics, RecoversTheProjectionAndWritesKalibrOmni) {
 
   // Kalibr's camchain: camera_model omni, intrinsics [xi, fu, fv, pu, pv], radtan.
   const std::string path = (support::FreshTempDir("omni") / "camchain.yaml").string();
-  ASSERT_TRUE(pattern::WriteKalibrCamchain(path, {omni->ToCamchainEntry()}, "test").ok());
+  ASSERT_TRUE(io::WriteKalibrCamchain(path, {omni->ToCamchainEntry()}, "test").ok());
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();

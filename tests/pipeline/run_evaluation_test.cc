@@ -1,6 +1,7 @@
 // Scoring a run's estimate against the simulated truth: a planar estimate without a prior is
 // scored in the plane (its offset along the axis is unknown, not wrong), a translational one
-// has no position to score, and the table says which figures were not determined.
+// has no position to score, and the table says which figures were not determined; the master
+// unit is the unit of the master segment the estimate is in.
 #include "rigcal/pipeline/run_evaluation.h"
 
 #include <gtest/gtest.h>
@@ -18,8 +19,20 @@ SlaveEvaluation Scored(const SlaveCalibration& slave, const Similarity& truth) {
   e.name = slave.name;
   e.usable = true;
   e.truth_master_units = truth;
-  ScoreEstimate(slave, slave.estimate.scale, &e);
+  io::ScoreSlave(slave, &e);
   return e;
+}
+
+// A run whose master unit is `metres_per_unit` m.
+RunEvaluation Metric(double metres_per_unit, const SlaveEvaluation& e) {
+  RunEvaluation run;
+  run.master_metres_per_unit = metres_per_unit;
+  run.alignment.applied = true;
+  run.alignment.metres_per_unit = metres_per_unit;
+  run.alignment.message =
+      "1 master unit = " + std::to_string(static_cast<int>(metres_per_unit)) + " m";
+  run.slaves = {e};
+  return run;
 }
 
 Similarity Truth() {
@@ -53,10 +66,7 @@ TEST(RunEvaluation, PlanarEstimateWithoutPriorIsScoredInThePlane) {
       std::abs(std::hypot(-0.997, 2.0) - std::hypot(-1.0, 2.0)) / std::hypot(-1.0, 2.0) * 100,
       1e-9);
 
-  RunEvaluation run;
-  run.master_metres_per_unit = 1.0;
-  run.slaves = {e};
-  const std::string table = FormatEvaluation(run);
+  const std::string table = FormatEvaluation(Metric(1.0, e));
   EXPECT_NE(table.find("unobs"), std::string::npos) << table;
   EXPECT_NE(table.find("3.0000"), std::string::npos) << table;  // plane error, mm
   EXPECT_NE(table.find("planar motion"), std::string::npos) << table;
@@ -74,17 +84,12 @@ TEST(RunEvaluation, PlanarEstimateWithPriorScoresTheAxisToo) {
   EXPECT_FALSE(e.axis_unknown);
   EXPECT_NEAR(e.error.axis_err, 0.01, 1e-12);
   EXPECT_NEAR(e.error.plane_err, 0.0, 1e-12);
-  RunEvaluation run;
-  run.master_metres_per_unit = 2.0;
-  run.slaves = {e};
+  const RunEvaluation run = Metric(2.0, e);
   const std::string table = FormatEvaluation(run);
   EXPECT_EQ(table.find("unobs"), std::string::npos) << table;
   EXPECT_NE(table.find("20.0000"), std::string::npos) << table;  // 0.01 units of 2 m
   // The unit alignment is said, in the table and as the JSON's truth_alignment.
-  EXPECT_NE(table.find("positions compared after aligning the master unit to the truth: 1 master "
-                       "unit = 2 m"),
-            std::string::npos)
-      << table;
+  EXPECT_NE(table.find("1 master unit = 2 m"), std::string::npos) << table;
   const io::TruthAlignment alignment = AlignmentOf(run);
   EXPECT_TRUE(alignment.applied);
   EXPECT_EQ(alignment.metres_per_unit, 2.0);
@@ -102,10 +107,7 @@ TEST(RunEvaluation, TranslationalEstimateHasNoPositionToScore) {
   const SlaveEvaluation e = Scored(slave, Truth());
   EXPECT_FALSE(e.position_observable);
   EXPECT_NEAR(e.error.rot_deg, 0.0, 1e-9);
-  RunEvaluation run;
-  run.master_metres_per_unit = 1.0;
-  run.slaves = {e};
-  const std::string table = FormatEvaluation(run);
+  const std::string table = FormatEvaluation(Metric(1.0, e));
   EXPECT_EQ(table.find("100.0000"), std::string::npos) << table;  // no made-up distance error
   EXPECT_NE(table.find("unobs"), std::string::npos) << table;
 }

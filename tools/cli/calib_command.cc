@@ -1,5 +1,6 @@
 // `rigcal calib`: the online calibration node on an LCM bus (or replaying an LCM log, as
 // `rigcal replay` does).
+#include <iostream>
 #include <memory>
 #include <string>
 
@@ -50,7 +51,18 @@ void RegisterCalib(CLI::App& app, int* exit_code) {
                   "Seconds between status lines on stderr (log time with --log; 0 = none)")
       ->check(CLI::NonNegativeNumber)
       ->default_val(10.0);
-  cmd->callback([args, exit_code]() { *exit_code = RunCalibNode(args->run, args->node); });
+  cmd->callback([args, exit_code]() {
+    // LCM's file provider plays a log at its own pace and drops what the estimator has not
+    // taken: a replay must wait for it.
+    if (args->node.lcm_url.rfind("file://", 0) == 0) {
+      std::cerr << "rigcal calib: --lcm file://... would drop the sets the estimator is not "
+                   "ready for; replay a log losslessly with `rigcal replay LOG --config ...` "
+                   "(or `rigcal calib --log LOG`)\n";
+      *exit_code = 2;
+      return;
+    }
+    *exit_code = RunCalibNode(args->run, args->node);
+  });
 }
 
 }  // namespace rigcal::cli

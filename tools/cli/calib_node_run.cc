@@ -1,11 +1,16 @@
 #include "calib_node_run.h"
 
+#include <cmath>
 #include <iostream>
 #include <map>
 #include <optional>
 #include <sstream>
 
+#include "camchain_args.h"
+#include "command_line.h"
 #include "exit_codes.h"
+#include "no_sets_reason.h"
+#include "provenance_args.h"
 #include "replay_progress.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/io/result_json.h"
@@ -13,6 +18,7 @@
 #include "rigcal/io/rig_files.h"
 #include "service_notifier.h"
 #include "stop_signal.h"
+#include "truth_args.h"
 
 namespace rigcal::cli {
 namespace {
@@ -26,43 +32,17 @@ std::string ChannelList(const std::map<std::string, int64_t>& channels) {
   return text.str();
 }
 
-// Why nothing was calibrated when no set reached the estimator.
-std::string NoSetsMessage(const pipeline::CalibNodeOptions& options,
-                          const std::vector<std::string>& names,
-                          const pipeline::CalibNodeSummary& summary) {
-  std::ostringstream text;
-  text << "no synchronised pose set reached the estimator: ";
-  if (options.log_path.empty()) {
-    text << "no RIGCAL_POSE_<camera> messages of the config's cameras were received";
-  } else if (summary.log_events == 0) {
-    text << options.log_path << " holds no events";
-  } else {
-    text << options.log_path << " holds no usable "
-         << (summary.image_replay ? "RIGCAL_IMAGE_<camera>" : "RIGCAL_POSE_<camera>")
-         << " messages of the config's cameras";
-  }
-  text << " (cameras:";
-  for (const std::string& name : names) text << " " << name;
-  text << ")";
-  if (!summary.skipped_channels.empty()) {
-    text << "; channels in the log: " << ChannelList(summary.skipped_channels);
-  }
-  if (summary.unknown_channel > 0) {
-    text << "; " << summary.unknown_channel << " pose messages of cameras not in the config";
-  }
-  return text.str();
-}
-
 }  // namespace
 
 void AddNodeOptions(CLI::App* cmd, NodeRunArgs* run, pipeline::CalibNodeOptions* node) {
   cmd->add_option("--config", run->config,
-                  "Rig config YAML (see config/README.md; camera models for image logs)")
+                  "Rig config YAML (see docs/config.md; camera models for image logs)")
       ->required();
-  cmd->add_option("--out", node->result_path, "Result YAML written at the end (atomically)")
+  cmd->add_option("-o,--out", node->result_path, "Result YAML written at the end (atomically)")
       ->default_val("rigcal_result.yaml");
   cmd->add_option("--camchain", run->camchain,
-                  "Also write a Kalibr-style camchain YAML (as rigcal solve --camchain)");
+                  "Also write a Kalibr camchain YAML: the config's intrinsics, T_cn_cnm1 in\n"
+                  "metres for a metric master, else in master units (rigcal_translation_unit)");
   cmd->add_flag("--json", run->json,
                 "Print the final result as JSON on stdout (rigcal solve --json schema)");
   cmd->add_option("--state", node->state_path,
@@ -101,28 +81,58 @@ void LogSummary(const NodeRunArgs& args, const pipeline::CalibNodeOptions& optio
   if (!summary.log_problem.empty()) std::cerr << prefix << summary.log_problem << "\n";
 }
 
-// The result on stdout: JSON or the table (with the errors against a truth when known).
-void PrintResult(const NodeRunArgs& args, const io::RigConfig& config,
-                 const pipeline::CalibNodeSummary& summary) {
-  const RigCalibration& result = summary.estimate.rig;
-  // With true mountings in the config (simulations), calib and replay show the errors; a
-  // capture of a simulated source compares with its truth (--eval, --json).
+// The errors against a truth when one is known: the simulated source's evaluation (run), or
+// the config's true mountings with the master unit fitted to them (calib, replay;
+// truth_comparison.h).
+struct TruthView {
   std::map<std::string, Similarity> truth;
   std::optional<io::TruthAlignment> alignment;
+};
+
+TruthView TruthOf(const NodeRunArgs& args, const io::RigConfig& config,
+                  const pipeline::CalibNodeSummary& summary) {
+  TruthView view;
   if (summary.evaluation) {
     for (const pipeline::SlaveEvaluation& e : summary.evaluation->slaves) {
-      truth[e.name] = e.truth_master_units;
+      view.truth[e.name] = e.truth_master_units;
     }
-    alignment = pipeline::AlignmentOf(*summary.evaluation);
-  } else if (args.command != "run") {
-    for (const io::CameraConfig& camera : config.cameras) {
-      if (camera.truth) truth[camera.name] = *camera.truth;
-    }
+    view.alignment = pipeline::AlignmentOf(*summary.evaluation);
+    return view;
   }
-  const std::map<std::string, Similarity>* truth_ptr = truth.empty() ? nullptr : &truth;
+  if (args.command == "run") return view;
+  TruthFiles files;
+  for (const io::CameraConfig& camera : config.cameras) {
+    if (camera.truth) files.mountings[camera.name] = *camera.truth;
+  }
+  if (files.mountings.empty()) return view;
+  auto compared = CompareRunWithTruth(summary.estimate.rig, files, io::TruthUnit::kAuto, {});
+  if (compared) {
+    view.truth = compared->truth_master_units;
+    view.alignment = compared->alignment;
+  }
+  return view;
+}
+
+bool MasterIsMetric(const io::RigConfig& config) {
+  return !config.cameras.empty() && config.cameras.front().metric;
+}
+
+// The result on stdout: JSON (with its provenance) or the table (with the errors against a
+// truth when known).
+void PrintResult(const NodeRunArgs& args, const io::RigConfig& config,
+                 const pipeline::CalibNodeOptions& options,
+                 const pipeline::CalibNodeSummary& summary) {
+  const RigCalibration& result = summary.estimate.rig;
+  const TruthView view = TruthOf(args, config, summary);
+  const std::map<std::string, Similarity>* truth_ptr = view.truth.empty() ? nullptr : &view.truth;
+  const io::TruthAlignment* alignment = view.alignment ? &*view.alignment : nullptr;
   if (args.json) {
-    std::cout << io::ResultToJson(result, truth_ptr, alignment ? &*alignment : nullptr).dump(2)
-              << "\n";
+    nlohmann::json json = io::ResultToJson(result, truth_ptr, alignment);
+    const std::vector<std::string> inputs =
+        options.log_path.empty() ? std::vector<std::string>{} : std::vector{options.log_path};
+    json["provenance"] =
+        io::ProvenanceToJson(ProvenanceOf(inputs, args.config, MasterIsMetric(config)));
+    std::cout << json.dump(2) << "\n";
   } else if (args.command == "run") {
     std::cout << io::FormatResultTable(result, nullptr);
     bool any_usable = false;
@@ -136,14 +146,14 @@ void PrintResult(const NodeRunArgs& args, const io::RigConfig& config,
       std::cout << pipeline::FormatEvaluation(*summary.evaluation);
     }
   } else {
-    std::cout << io::FormatResultTable(result, truth_ptr);
+    std::cout << io::FormatResultTable(result, truth_ptr, alignment);
   }
   std::cout.flush();
 }
 
 // Files, errors and states after the result: the exit code.
-int ExitCode(const NodeRunArgs& args, const pipeline::CalibNodeOptions& options,
-             const std::vector<std::string>& names, const pipeline::CalibNodeSummary& summary) {
+int ExitCode(const NodeRunArgs& args, const io::RigConfig& config,
+             const pipeline::CalibNodeOptions& options, const pipeline::CalibNodeSummary& summary) {
   auto log = ModuleLogger("tools");
   const std::string prefix = "rigcal " + args.command + ": ";
   const RigCalibration& result = summary.estimate.rig;
@@ -152,24 +162,29 @@ int ExitCode(const NodeRunArgs& args, const pipeline::CalibNodeOptions& options,
     std::cerr << prefix << "calibrated nothing: " << kept << " left as it was\n";
   }
   if (!args.camchain.empty()) {
-    if (const Status status = io::WriteCamchain(args.camchain, result); !status.ok()) {
+    if (const Status status = WriteResultCamchain(args.camchain, result, IntrinsicsOf(config),
+                                                  MasterIsMetric(config) ? 1.0 : std::nan(""),
+                                                  "metric master", *log);
+        !status.ok()) {
       std::cerr << prefix << status.message() << "\n";
       return kExitError;
     }
-    log->info("camera chain written to {}", args.camchain);
   }
   if (!summary.errors.empty()) {
     for (const std::string& error : summary.errors) std::cerr << prefix << error << "\n";
     return kExitError;
   }
   if (summary.estimate.sets == 0 && !options.capture) {
-    std::cerr << prefix << NoSetsMessage(options, names, summary) << "\n";
+    std::cerr << prefix << NoSetsReason(options.log_path, config.CameraNames(), summary) << "\n";
   }
   std::vector<SlaveState> states;
   for (const SlaveCalibration& slave : result.slaves) {
     states.push_back(slave.state);
     if (!slave.usable()) {
-      std::cerr << prefix << slave.name << ": " << ToString(slave.state) << ": " << slave.message
+      // The message may start with the state already ("initialising: 3 motions so far").
+      const std::string state(ToString(slave.state));
+      const bool said = slave.message.rfind(state + ":", 0) == 0;
+      std::cerr << prefix << slave.name << ": " << (said ? "" : state + ": ") << slave.message
                 << "\n";
     }
   }
@@ -192,7 +207,7 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
     return kExitError;
   }
   std::unique_ptr<ReplayProgressDisplay> display;
-  if (args.progress && !options.log_path.empty()) {
+  if (args.progress && !QuietRequested() && !options.log_path.empty()) {
     display = std::make_unique<ReplayProgressDisplay>("rigcal " + args.command);
     options.on_progress = [&display](const pipeline::ReplayProgress& p) { display->Update(p); };
   }
@@ -214,8 +229,13 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
   const pipeline::CalibNodeSummary summary = node.Run(stop_signal.flag());
   if (live) service.Stopping();
   LogSummary(args, options, summary, stop_signal.received());
-  PrintResult(args, loaded, summary);
-  return ExitCode(args, options, loaded.CameraNames(), summary);
+  if (!options.log_path.empty() && summary.log_events == 0 && !summary.log_problem.empty()) {
+    // Damaged at byte 0: not an LCM log at all, bad input like a missing file.
+    std::cerr << prefix << options.log_path << " is not an LCM log (lcm-logger format)\n";
+    return kExitError;
+  }
+  PrintResult(args, loaded, options, summary);
+  return ExitCode(args, loaded, options, summary);
 }
 
 }  // namespace rigcal::cli

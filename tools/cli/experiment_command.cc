@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "command_line.h"
 #include "commands.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/io/atomic_file.h"
@@ -25,7 +26,6 @@ struct ExperimentArgs {
   int crb_samples = 200;
   int partitions = 0;
   std::string out_dir = "experiments";
-  bool quiet = false;
   // pairs
   std::string data_dir;
   std::string only;
@@ -55,7 +55,8 @@ int RunPairs(const ExperimentArgs& args) {
   // Hundreds of solves and replays: their per-slave log lines would drown the table.
   ModuleLogger("calib")->set_level(spdlog::level::err);
   std::vector<std::string> notes;
-  const std::vector<research::PairScenario> scenarios = research::PairScenarios(args.data_dir, &notes);
+  const std::vector<research::PairScenario> scenarios =
+      research::PairScenarios(args.data_dir, &notes);
   for (const auto& note : notes) std::cerr << "rigcal experiment pairs: " << note << "\n";
   research::PairEvaluationOptions options;
   options.repeats = args.repeats;
@@ -63,7 +64,7 @@ int RunPairs(const ExperimentArgs& args) {
   options.threads = args.threads;
   options.online = !args.no_online;
   options.only = args.only;
-  options.progress = StderrProgress("pairs", args.quiet);
+  options.progress = StderrProgress("pairs", QuietRequested());
   const auto start = std::chrono::steady_clock::now();
   const auto results = research::RunPairEvaluation(scenarios, options);
   if (results.empty()) {
@@ -76,7 +77,8 @@ int RunPairs(const ExperimentArgs& args) {
   std::filesystem::create_directories(args.out_dir, ec);
   const std::string csv = args.out_dir + "/pairs.csv";
   const std::string txt = args.out_dir + "/pairs_summary.txt";
-  for (const auto& [path, text] : {std::pair{csv, research::PairCsv(results)}, std::pair{txt, table}}) {
+  for (const auto& [path, text] :
+       {std::pair{csv, research::PairCsv(results)}, std::pair{txt, table}}) {
     if (const Status written = io::WriteFileAtomically(path, text); !written.ok()) {
       std::cerr << "rigcal experiment pairs: " << written.message() << "\n";
       return 1;
@@ -92,8 +94,8 @@ int Run(const ExperimentArgs& args) {
   if (args.name == "pairs") return RunPairs(args);
   std::vector<research::ExperimentKind> kinds;
   if (args.name == "all") {
-    kinds = {research::ExperimentKind::kStability, research::ExperimentKind::kPoses, research::ExperimentKind::kMotionModel,
-             research::ExperimentKind::kScaleModel};
+    kinds = {research::ExperimentKind::kStability, research::ExperimentKind::kPoses,
+             research::ExperimentKind::kMotionModel, research::ExperimentKind::kScaleModel};
   } else {
     research::ExperimentKind kind;
     if (!research::ParseExperimentKind(args.name, &kind)) {
@@ -113,7 +115,7 @@ int Run(const ExperimentArgs& args) {
     return 2;
   }
   for (research::ExperimentKind kind : kinds) {
-    options.progress = StderrProgress(ToString(kind), args.quiet);
+    options.progress = StderrProgress(ToString(kind), QuietRequested());
     const auto start = std::chrono::steady_clock::now();
     const research::ExperimentResult result = research::RunExperiment(kind, options);
     if (!result.error.empty()) {
@@ -180,9 +182,8 @@ void RegisterExperiment(CLI::App& app, int* exit_code) {
                   "scale-model: scales of the time-dependent model (0 = one per pose)")
       ->default_val(0)
       ->check(CLI::Range(0, 1000));
-  cmd->add_option("--out-dir", args->out_dir, "output directory (created if missing)")
+  cmd->add_option("-o,--out-dir", args->out_dir, "output directory (created if missing)")
       ->default_val("experiments");
-  cmd->add_flag("--quiet", args->quiet, "no progress lines on stderr");
   cmd->callback([args, exit_code]() { *exit_code = Run(*args); });
 }
 

@@ -8,9 +8,9 @@
 #include "commands.h"
 #include "exit_codes.h"
 #include "rigcal/base/logging.h"
+#include "rigcal/io/kalibr_camchain.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/trajectory_io.h"
-#include "rigcal/pattern/kalibr_camchain.h"
 #include "rigcal/pattern/omni_intrinsics.h"
 #include "rigcal/pattern/reference_calibration.h"
 #include "rigcal/pattern/target_poses.h"
@@ -70,78 +70,72 @@ nlohmann::json ToJson(const CameraCalibration& c) {
   return out;
 }
 
-int RunIntrinsics(const IntrinsicsArgs& args) {
-  const auto log = ModuleLogger("tools");
-  if (!args.config_out.empty() && args.target.cameras.size() < 2) {
-    return PrintCommandError("intrinsics",
-                             "--config-out: a rig config has at least two cameras; give every "
-                             "camera of the rig with --camera (--json and --camchain hold one "
-                             "camera's intrinsics)");
-  }
-  auto cameras = CalibrateCameras(args.target);
-  if (!cameras) return PrintCommandError("intrinsics", cameras.error());
-
-  // Per camera its kept target poses; cameras after the first get their pose in cam0's frame
-  // from the target reference (needs shared instants).
-  std::vector<TimedTrajectory> poses;
-  for (const CameraCalibration& c : *cameras) {
-    poses.push_back(pattern::PosesAsTrajectory(c.views.camera, c.intrinsics.views,
-                                              c.intrinsics.rejection_threshold_px));
-  }
-  std::vector<pattern::CamchainEntry> chain;
-  std::string chain_error;
-  std::string model_error;
+// The camchain entries of the cameras and their extrinsics (JSON), with the first problem of
+// each kind; the outputs that do not need the chain are written regardless.
+struct Chain {
+  std::vector<io::CamchainEntry> entries;
   nlohmann::json extrinsics = nlohmann::json::array();
-  for (size_t i = 0; i < cameras->size(); ++i) {
-    pattern::CamchainEntry entry;
-    entry.spec = (*cameras)[i].intrinsics.spec;
-    if (entry.spec.model == camera::CameraSpec::Model::kScaramuzza && !args.camchain.empty()) {
-      // Kalibr has no polynomial model: its omni (unified) model from the same views.
-      // A failure is reported when the camchain is written, after the other outputs.
-      auto omni = pattern::CalibrateOmni((*cameras)[i].views, args.target.max_views);
-      if (omni) {
-        if (!args.json) std::cout << pattern::FormatOmni(*omni);
-        entry = omni->ToCamchainEntry();
-      } else if (model_error.empty()) {
-        model_error = "Kalibr's omni model for " + entry.spec.name + ": " + omni.error();
-      }
-    }
-    if (i > 0) {
-      auto reference = pattern::EstimateGlobalReference(poses[0], poses[i], args.tolerance_ns);
-      if (reference) {
-        entry.cam0_from_cam = reference->master_from_slave;
-        extrinsics.push_back(
-            {{"camera", reference->slave},
-             {"q_wxyz",
-              {reference->master_from_slave.q.w(), reference->master_from_slave.q.x(),
-               reference->master_from_slave.q.y(), reference->master_from_slave.q.z()}},
-             {"C",
-              {reference->master_from_slave.C.x(), reference->master_from_slave.C.y(),
-               reference->master_from_slave.C.z()}},
-             {"rot_std_deg", reference->rot_std_deg},
-             {"instants", reference->instants}});
-        if (!args.json) std::cout << pattern::FormatReference(*reference, "units");
-      } else if (chain_error.empty()) {
-        chain_error = reference.error();
-      }
-    }
-    chain.push_back(std::move(entry));
-  }
+  std::string chain_error;  // no extrinsics between two cameras
+  std::string model_error;  // no Kalibr model for a camera
+};
 
+// Camera i's entry: its intrinsics (Kalibr's omni model for a scaramuzza camera when a camchain
+// is asked for) and, after the first, its pose in camera 0's frame from the target reference.
+void AddToChain(const IntrinsicsArgs& args, const std::vector<CameraCalibration>& cameras,
+                const std::vector<TimedTrajectory>& poses, size_t i, Chain* chain) {
+  io::CamchainEntry entry;
+  entry.spec = cameras[i].intrinsics.spec;
+  entry.translation_unit = "m";  // the target's unit: --square in metres
+  if (entry.spec.model == camera::CameraSpec::Model::kScaramuzza && !args.camchain.empty()) {
+    auto omni = pattern::CalibrateOmni(cameras[i].views, args.target.max_views);
+    if (omni) {
+      if (!args.json) std::cout << pattern::FormatOmni(*omni);
+      entry = omni->ToCamchainEntry();
+      entry.translation_unit = "m";
+    } else if (chain->model_error.empty()) {
+      chain->model_error = "Kalibr's omni model for " + entry.spec.name + ": " + omni.error();
+    }
+  }
+  if (i > 0) {
+    auto reference = pattern::EstimateGlobalReference(poses[0], poses[i], args.tolerance_ns);
+    if (reference) {
+      const Similarity& s = reference->master_from_slave;
+      entry.cam0_from_cam = s;
+      chain->extrinsics.push_back({{"camera", reference->slave},
+                                   {"q_wxyz", {s.q.w(), s.q.x(), s.q.y(), s.q.z()}},
+                                   {"C", {s.C.x(), s.C.y(), s.C.z()}},
+                                   {"rot_std_deg", reference->rot_std_deg},
+                                   {"instants", reference->instants}});
+      if (!args.json) std::cout << pattern::FormatReference(*reference, "units");
+    } else if (chain->chain_error.empty()) {
+      chain->chain_error = reference.error();
+    }
+  }
+  chain->entries.push_back(std::move(entry));
+}
+
+void PrintIntrinsics(const IntrinsicsArgs& args, const std::vector<CameraCalibration>& cameras,
+                     const Chain& chain) {
   if (args.json) {
-    nlohmann::json out = {{"cameras", nlohmann::json::array()}, {"extrinsics", extrinsics}};
-    for (const CameraCalibration& c : *cameras) out["cameras"].push_back(ToJson(c));
+    nlohmann::json out = {{"cameras", nlohmann::json::array()}, {"extrinsics", chain.extrinsics}};
+    for (const CameraCalibration& c : cameras) out["cameras"].push_back(ToJson(c));
     std::cout << out.dump(2) << "\n";
   } else {
-    for (const CameraCalibration& c : *cameras) {
+    for (const CameraCalibration& c : cameras) {
       std::cout << pattern::FormatIntrinsics(c.intrinsics, args.per_view);
     }
   }
   std::cout.flush();
+}
 
+// --config-out and --poses-out.
+Status WriteConfigAndPoses(const IntrinsicsArgs& args,
+                           const std::vector<CameraCalibration>& cameras,
+                           const std::vector<TimedTrajectory>& poses) {
+  const auto log = ModuleLogger("tools");
   if (!args.config_out.empty()) {
     std::vector<io::CameraConfig> configs;
-    for (const CameraCalibration& c : *cameras) {
+    for (const CameraCalibration& c : cameras) {
       io::CameraConfig config;
       config.name = c.intrinsics.spec.name;
       config.spec = c.intrinsics.spec;
@@ -150,36 +144,59 @@ int RunIntrinsics(const IntrinsicsArgs& args) {
     const Status s = io::WriteRigConfig(
         args.config_out, "calibrated", configs,
         "rig config written by rigcal intrinsics: intrinsics calibrated from target views");
-    if (!s.ok()) return PrintCommandError("intrinsics", s.message());
+    if (!s.ok()) return s;
     log->info("wrote the intrinsics into the rig config {}", args.config_out);
   }
-  if (!args.poses_out.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(args.poses_out, ec);
-    if (ec) {
-      return PrintCommandError(
-          "intrinsics", "--poses-out: cannot create '" + args.poses_out + "': " + ec.message());
-    }
-    for (const TimedTrajectory& t : poses) {
-      const std::string path = args.poses_out + "/" + t.name + ".tum";
-      if (Status s = io::WriteTrajectoryTum(path, t); !s.ok()) {
-        return PrintCommandError("intrinsics", s.message());
-      }
-      log->info("{}: {} target poses written to {}", t.name, t.size(), path);
-    }
+  if (args.poses_out.empty()) return Status::Ok();
+  std::error_code ec;
+  std::filesystem::create_directories(args.poses_out, ec);
+  if (ec) return Error{"--poses-out: cannot create '" + args.poses_out + "': " + ec.message()};
+  for (const TimedTrajectory& t : poses) {
+    const std::string path = args.poses_out + "/" + t.name + ".tum";
+    if (Status s = io::WriteTrajectoryTum(path, t); !s.ok()) return s;
+    log->info("{}: {} target poses written to {}", t.name, t.size(), path);
   }
-  if (!args.camchain.empty()) {  // last: its errors leave the other outputs written
-    if (!model_error.empty()) return PrintCommandError("intrinsics", "--camchain: " + model_error);
-    if (!chain_error.empty()) {
-      return PrintCommandError("intrinsics",
-                               "--camchain: no extrinsics between the cameras: " + chain_error);
-    }
-    const Status s = pattern::WriteKalibrCamchain(
-        args.camchain, chain,
-        "Kalibr camchain written by rigcal intrinsics: intrinsics from target views (OpenCV);\n"
-        "T_cn_cnm1 from the target poses (global reference model), in the target's unit.");
-    if (!s.ok()) return PrintCommandError("intrinsics", s.message());
-    log->info("wrote the Kalibr camchain {}", args.camchain);
+  return Status::Ok();
+}
+
+// --camchain, last: its errors leave the other outputs written.
+Status WriteChain(const IntrinsicsArgs& args, const Chain& chain) {
+  if (args.camchain.empty()) return Status::Ok();
+  if (!chain.model_error.empty()) return Error{"--camchain: " + chain.model_error};
+  if (!chain.chain_error.empty()) {
+    return Error{"--camchain: no extrinsics between the cameras: " + chain.chain_error};
+  }
+  const Status s = io::WriteKalibrCamchain(
+      args.camchain, chain.entries,
+      "Kalibr camchain written by rigcal intrinsics: intrinsics from target views (OpenCV);\n"
+      "T_cn_cnm1 from the target poses (global reference model), in the target's unit (--square).");
+  if (s.ok()) ModuleLogger("tools")->info("wrote the Kalibr camchain {}", args.camchain);
+  return s;
+}
+
+int RunIntrinsics(const IntrinsicsArgs& args) {
+  if (!args.config_out.empty() && args.target.cameras.size() < 2) {
+    return PrintCommandError("intrinsics",
+                             "--config-out: a rig config has at least two cameras; give every "
+                             "camera of the rig with --camera (--json and --camchain hold one "
+                             "camera's intrinsics)");
+  }
+  auto cameras = CalibrateCameras(args.target);
+  if (!cameras) return PrintCommandError("intrinsics", cameras.error());
+  // Per camera its kept target poses.
+  std::vector<TimedTrajectory> poses;
+  for (const CameraCalibration& c : *cameras) {
+    poses.push_back(pattern::PosesAsTrajectory(c.views.camera, c.intrinsics.views,
+                                               c.intrinsics.rejection_threshold_px));
+  }
+  Chain chain;
+  for (size_t i = 0; i < cameras->size(); ++i) AddToChain(args, *cameras, poses, i, &chain);
+  PrintIntrinsics(args, *cameras, chain);
+  if (Status s = WriteConfigAndPoses(args, *cameras, poses); !s.ok()) {
+    return PrintCommandError("intrinsics", s.message());
+  }
+  if (Status s = WriteChain(args, chain); !s.ok()) {
+    return PrintCommandError("intrinsics", s.message());
   }
   return kExitOk;
 }

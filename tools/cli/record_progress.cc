@@ -1,9 +1,6 @@
 #include "record_progress.h"
 
-#include <unistd.h>
-
 #include <cstdio>
-#include <iostream>
 
 namespace rigcal::cli {
 namespace {
@@ -11,7 +8,7 @@ namespace {
 constexpr char kProgressPrefix[] = "rigcal record: ";
 
 // "  12.0 s | 86.4 MB (7.2 MB/s) | frames 240 240 | drops 0 | 1 file".
-std::string ProgressLine(double elapsed_s, const pipeline::RecorderStats& s) {
+std::string ProgressText(double elapsed_s, const pipeline::RecorderStats& s) {
   char buf[256];
   const double mb = static_cast<double>(s.bytes) / 1e6;
   std::snprintf(buf, sizeof(buf), "%7.1f s | %8.1f MB (%.1f MB/s) | frames", elapsed_s, mb,
@@ -33,7 +30,7 @@ std::string ProgressLine(double elapsed_s, const pipeline::RecorderStats& s) {
 }  // namespace
 
 RecordProgress::RecordProgress()
-    : tty_(isatty(STDERR_FILENO) == 1), start_(std::chrono::steady_clock::now()), last_(start_) {}
+    : start_(std::chrono::steady_clock::now()), last_(start_) {}
 
 double RecordProgress::elapsed_s() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
@@ -41,20 +38,13 @@ double RecordProgress::elapsed_s() const {
 
 void RecordProgress::Update(const pipeline::RecorderStats& stats, bool force) {
   const auto now = std::chrono::steady_clock::now();
-  const double period_s = tty_ ? 0.25 : 1.0;
+  const double period_s = line_.tty() ? 0.25 : 1.0;
   if (!force && std::chrono::duration<double>(now - last_).count() < period_s) return;
   last_ = now;
-  const std::string line = ProgressLine(elapsed_s(), stats);
-  if (tty_) {
-    std::cerr << "\r" << kProgressPrefix << line << "\033[K" << std::flush;
-  } else {
-    std::cerr << kProgressPrefix << line << "\n";
-  }
+  line_.Show(std::string(kProgressPrefix) + ProgressText(elapsed_s(), stats), force);
 }
 
-void RecordProgress::End() {
-  if (tty_) std::cerr << "\n";
-}
+void RecordProgress::End() {}
 
 void PrintRecordingSummary(const pipeline::RecorderStats& stats, double elapsed_s,
                            double cpu_percent) {

@@ -1,11 +1,13 @@
 #pragma once
 // The progress and the summary of `rigcal record`: "  12.0 s | 86.4 MB (7.2 MB/s) | frames
-// 240 240 | drops 0 | 1 file", refreshed in place on a terminal (every 0.25 s), one line per
-// second otherwise (stderr); the summary of a finished recording on stdout.
+// 240 240 | drops 0 | 1 file" through the one progress scheme (progress_line.h: in place on a
+// terminal every 0.25 s, log lines above it; one line per second otherwise); the summary of a
+// finished recording on stdout.
 
 #include <chrono>
 #include <string>
 
+#include "progress_line.h"
 #include "rigcal/pipeline/log_recorder.h"
 
 namespace rigcal::cli {
@@ -20,7 +22,7 @@ class RecordProgress {
   double elapsed_s() const;
 
  private:
-  bool tty_;
+  ProgressLine line_;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_;
 };

@@ -1,7 +1,5 @@
 #include "replay_progress.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -27,10 +25,7 @@ std::string ClockText(double seconds) {
 }
 
 ReplayProgressDisplay::ReplayProgressDisplay(std::string label)
-    : label_(std::move(label)),
-      tty_(::isatty(STDERR_FILENO) == 1),
-      start_(Clock::now()),
-      next_line_(start_ + kLinePeriod) {}
+    : label_(std::move(label)), start_(Clock::now()), next_line_(start_ + kLinePeriod) {}
 
 void ReplayProgressDisplay::Update(const pipeline::ReplayProgress& p) {
   const double fraction =
@@ -48,17 +43,15 @@ void ReplayProgressDisplay::Update(const pipeline::ReplayProgress& p) {
                 100.0 * fraction, p.bytes_read / 1e6, p.log_bytes / 1e6,
                 ClockText(p.log_time_s).c_str(), static_cast<unsigned long long>(p.sets),
                 ClockText(elapsed).c_str(), eta.c_str());
-  if (tty_) {
+  if (line_.tty()) {
     const int filled = static_cast<int>(fraction * kBarWidth);
     std::string bar(static_cast<size_t>(filled), '#');
     bar.resize(kBarWidth, '.');
-    std::fprintf(stderr, "\r%s [%s] %s\033[K%s", label_.c_str(), bar.c_str(), figures,
-                 p.done ? "\n" : "");
-    std::fflush(stderr);
+    line_.Show(label_ + " [" + bar + "] " + figures, p.done);
     return;
   }
   if (p.done || Clock::now() >= next_line_) {
-    std::fprintf(stderr, "%s: %s\n", label_.c_str(), figures);
+    line_.Show(label_ + ": " + figures, p.done);
     next_line_ = Clock::now() + kLinePeriod;
   }
 }

@@ -1,10 +1,11 @@
 #pragma once
 // Progress of a replay on stderr: a bar redrawn in place with the ETA on a terminal, a plain
-// line every few seconds otherwise (logs, CI).
+// line every few seconds otherwise (logs, CI); log lines go above the bar (progress_line.h).
 
 #include <chrono>
 #include <string>
 
+#include "progress_line.h"
 #include "rigcal/pipeline/calib_node.h"
 
 namespace rigcal::cli {
@@ -18,7 +19,7 @@ class ReplayProgressDisplay {
 
  private:
   std::string label_;
-  bool tty_;
+  ProgressLine line_;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point next_line_;
 };

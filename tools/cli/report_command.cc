@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
+#include "provenance_args.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/report/report_html.h"
 #include "rigcal/report/report_input.h"
@@ -25,6 +26,14 @@ int RunReport(const ReportArgs& args) {
   if (!data) {
     std::cerr << "rigcal report: " << data.error() << "\n";
     return kExitBadInput;
+  }
+  const io::Provenance provenance =
+      ProvenanceOf({args.input.input, args.input.poses_log, args.input.truth}, "", false);
+  data->provenance.push_back("rigcal " + provenance.rigcal_version + ", " + provenance.date_utc);
+  data->provenance.push_back("command: " + provenance.command);
+  for (const io::InputFile& f : provenance.inputs) {
+    data->provenance.push_back("input: " + f.path + " (" + std::to_string(f.bytes) +
+                               " bytes, FNV-1a 64 " + f.fnv1a64 + ")");
   }
   if (Status written = report::WriteReportHtml(args.out, *data); !written.ok()) {
     std::cerr << "rigcal report: " << written.message() << "\n";
@@ -54,16 +63,13 @@ void RegisterReport(CLI::App& app, int* exit_code) {
       "Exit codes: 0 written, 1 bad input (unreadable or unknown input, no history, a truth\n"
       "without the slaves, the output not writable), 2 usage.");
   cmd->add_option("INPUT", args->input.input, "LCM log with the history, or a result YAML/JSON")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();
   cmd->add_option("-o,--out", args->out, "HTML file to write (atomically)")->required();
   cmd->add_option("--poses", args->input.poses_log,
                   "LCM log with RIGCAL_POSE_<camera> events (e.g. the input of `rigcal calib "
-                  "--log`) for the per-motion residua and measured scales")
-      ->check(CLI::ExistingFile);
+                  "--log`) for the per-motion residua and measured scales");
   cmd->add_option("--truth", args->input.truth,
-                  "True mountings: a rig YAML, or a rig config whose cameras carry `truth`")
-      ->check(CLI::ExistingFile);
+                  "True mountings: a rig YAML, or a rig config whose cameras carry `truth`");
   cmd->callback([args, exit_code]() { *exit_code = RunReport(*args); });
 }
 

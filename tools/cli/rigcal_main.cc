@@ -1,33 +1,15 @@
 // The rigcal command: parses the command line and hands over to a subcommand.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <string>
+#include <vector>
 
+#include "command_line.h"
 #include "commands.h"
+#include "progress_line.h"
 #include "rigcal/base/logging.h"
-
-namespace {
-
-// The first word of the command line that is not an option (nor --log-level's value) when it
-// names no subcommand, else null.
-const char* UnknownSubcommand(const CLI::App& app, int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string word = argv[i];
-    if (word == "--log-level") {
-      ++i;
-      continue;
-    }
-    if (word.empty() || word[0] == '-') continue;
-    for (const CLI::App* sub : app.get_subcommands({})) {
-      if (sub->check_name(word)) return nullptr;
-    }
-    return argv[i];
-  }
-  return nullptr;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -36,10 +18,18 @@ int main(int argc, char** argv) {
       "master camera (hand-eye calibration with scale)."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("rigcal ") + RIGCAL_VERSION);
+  // Verbosity is accepted anywhere on the line (command_line.h): main() takes it out of the
+  // arguments before parsing; these options only document it in --help.
   std::string log_level = "info";
-  app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
+  app.add_option("--log-level", log_level,
+                 "trace, debug, info, warn, error or off (anywhere on the line)")
       ->default_val("info")
       ->envname("RIGCAL_LOG_LEVEL");
+  bool documented_only = false;
+  app.add_flag("-q,--quiet", documented_only,
+               "Warnings and errors only, no progress display (anywhere on the line)");
+  app.add_flag("-v,--verbose", documented_only,
+               "Debug messages (anywhere on the line; --log-level trace for more)");
   app.parse_complete_callback([&log_level]() {
     if (!rigcal::SetLogLevel(log_level)) {
       throw CLI::ValidationError("--log-level", "unknown level '" + log_level + "'");
@@ -67,14 +57,26 @@ int main(int argc, char** argv) {
   rigcal::cli::RegisterDevices(app, &exit_code);
   rigcal::cli::RegisterCheckConfig(app, &exit_code);
 
+  rigcal::cli::SetInvocation(RIGCAL_VERSION, argc, argv);
+  // Every module logger writes above a progress line (progress_line.h).
+  rigcal::cli::InstallProgressAwareLogging({"calib", "capture", "drivers", "sim", "target", "tools",
+                                            "trigger", "vo", "pipeline", "io", "lcm", "monitor",
+                                            "report", "research", "pattern", "plot", "camera"});
+  std::vector<std::string> args(argv + 1, argv + argc);
+  const rigcal::cli::Verbosity verbosity = rigcal::cli::ExtractVerbosity(&args);
+  if (verbosity.log_level) args.insert(args.begin(), "--log-level=" + *verbosity.log_level);
+  rigcal::cli::SetQuietRequested(verbosity.quiet);
+  const bool help = std::find(args.begin(), args.end(), "--help") != args.end() ||
+                    std::find(args.begin(), args.end(), "-h") != args.end();
+  if (const std::string error = rigcal::cli::UnknownWordError(app, args); !error.empty() && !help) {
+    std::cerr << error << "\n";
+    return 2;
+  }
   try {
-    app.parse(argc, argv);
+    std::reverse(args.begin(), args.end());  // CLI11 takes the words last first
+    app.parse(args);
   } catch (const CLI::ParseError& e) {
     // --help and --version exit 0; every other parse error is a usage error (2).
-    if (const char* unknown = UnknownSubcommand(app, argc, argv)) {
-      std::cerr << "rigcal: unknown subcommand '" << unknown << "' (rigcal --help lists them)\n";
-      return 2;
-    }
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const std::exception& e) {
     std::cerr << "rigcal: error: " << e.what() << "\n";

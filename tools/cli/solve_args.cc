@@ -170,7 +170,7 @@ void AddSolveModelOptions(CLI::App* cmd, SolveArgs* args) {
                   "auto's result refined by GLS on chains of auto's span, whitened\n"
                   "by the pose noise fitted to them; when one span determines the\n"
                   "rotation best and another C, the rotation from the first's\n"
-                  "chains and C and scale from the second's (README); auto: per slave the\n"
+                  "chains and C and scale from the second's (docs/method.md); auto: per slave the\n"
                   "span N of (k, k + N) whose estimate has the smallest σ (spans\n"
                   "1, 2, 3, 5, 8, ... up to 1/8 of the recording are solved);\n"
                   "start: (first pose, k) for every k; relative:STEP: (k, k + STEP)\n"
@@ -229,9 +229,10 @@ void AddSolveTimingOptions(CLI::App* cmd, SolveArgs* args) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--max-quaternion-norm-error", args->max_quaternion_norm_error,
-                  "Quaternions whose norm differs from 1 by at most this are\n"
-                  "normalised (with a warning); larger deviations are an error.\n"
-                  "Printed ground truth such as EuRoC's needs about 1e-3.")
+                  "Quaternions whose norm differs from 1 by at most this, or by\n"
+                  "at most the rounding of their printed digits, are normalised\n"
+                  "(with a warning); larger deviations are an error. EuRoC's\n"
+                  "ground truth is off by up to 1.5e-4.")
       ->type_name("X")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -289,14 +290,16 @@ void AddSolveOutputOptions(CLI::App* cmd, SolveArgs* args) {
       ->type_name("N")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
-  cmd->add_option("--out", args->out,
+  cmd->add_option("-o,--out", args->out,
                   "Write the result YAML here (atomically): the rig entries plus\n"
                   "standard deviations, motion counts, models and termination.")
       ->type_name("FILE");
   cmd->add_option("--camchain", args->camchain,
-                  "Write a Kalibr-style camchain YAML here: cam0 = master, cam1.. =\n"
-                  "the usable slaves in --slave order, each with T_cn_cnm1\n"
-                  "(extrinsics only, no intrinsics).")
+                  "Write a Kalibr camchain YAML here: cam0 = master, cam1.. = the usable\n"
+                  "slaves in --slave order, each with T_cn_cnm1 and, with --config, its\n"
+                  "camera_model, intrinsics, distortion and resolution. Translations in\n"
+                  "metres when the unit is known (--master-metric, --metric-*, a target\n"
+                  "reference), else in master units (rigcal_translation_unit says which).")
       ->type_name("FILE");
 }
 
@@ -353,7 +356,6 @@ void AddSolveModeOptions(CLI::App* cmd, SolveArgs* args) {
   cmd->add_flag("--json", args->json,
                 "Print only the result, as one JSON object, on stdout (logs stay\n"
                 "on stderr).");
-
 }
 
 // The formats of the files, and the exit status.

@@ -24,7 +24,7 @@ struct SolveArgs {
   bool time_offset_given = false;  // --time-offset on the command line (overrides --config)
   std::string config;              // rig config: estimator.time_offset
   double time_offset_window_s = TimeOffsetOptions{}.search_window_s;
-  double max_quaternion_norm_error = 1e-6;
+  double max_quaternion_norm_error = 1e-3;  // io::TrajectoryReadOptions
   std::string truth;
   std::string truth_unit = "auto";
   std::string prior;

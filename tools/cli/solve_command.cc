@@ -11,10 +11,12 @@
 #include <string>
 #include <vector>
 
+#include "camchain_args.h"
 #include "commands.h"
 #include "exit_codes.h"
-#include "rigcal/calib/calibration_options.h"
+#include "provenance_args.h"
 #include "rigcal/base/logging.h"
+#include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/result_json.h"
@@ -26,6 +28,7 @@
 #include "rigcal/pipeline/online_replay.h"
 #include "solve_args.h"
 #include "solve_target.h"
+#include "truth_args.h"
 
 namespace rigcal::cli {
 namespace {
@@ -80,7 +83,7 @@ Expected<CalibrationOptions> SolveOptionsOf(const SolveArgs& args) {
 struct SolveInput {
   TimedTrajectory master;
   std::vector<TimedTrajectory> slaves;
-  std::map<std::string, Similarity> truth;  // empty without --truth
+  TruthFiles truth;  // empty without --truth
 };
 
 Expected<SolveInput> ReadSolveInput(const SolveArgs& args, spdlog::logger& log) {
@@ -90,9 +93,8 @@ Expected<SolveInput> ReadSolveInput(const SolveArgs& args, spdlog::logger& log) 
     io::TrajectoryFormat format = io::TrajectoryFormat::kTum;
     auto trajectory = io::ReadNamedTrajectory(argument, read_options, &format);
     if (trajectory) {
-      log.info("{}: {} poses ({} format), camera '{}'",
-               io::ParseNamedTrajectoryPath(argument).path, trajectory->size(), ToString(format),
-               trajectory->name);
+      log.info("{}: {} poses ({} format), camera '{}'", io::ParseNamedTrajectoryPath(argument).path,
+               trajectory->size(), ToString(format), trajectory->name);
     }
     return trajectory;
   };
@@ -106,15 +108,19 @@ Expected<SolveInput> ReadSolveInput(const SolveArgs& args, spdlog::logger& log) 
     input.slaves.push_back(std::move(*slave));
   }
   if (args.truth.empty()) return input;
-  auto loaded = io::ReadRigYaml(args.truth);
+  std::vector<std::string> cameras = {input.master.name};
+  for (const auto& slave : input.slaves) cameras.push_back(slave.name);
+  auto loaded = ReadTruthFiles(args.truth, cameras);
   if (!loaded) return Error{loaded.error()};
   input.truth = std::move(*loaded);
   for (const auto& slave : input.slaves) {
-    if (input.truth.count(slave.name) == 0) {
+    if (input.truth.mountings.count(slave.name) == 0) {
       std::string known;
-      for (const auto& [name, rig] : input.truth) known += (known.empty() ? "" : ", ") + name;
-      return Error{args.truth + ": no entry for slave '" + slave.name + "' (the file has: " +
-                   known + ")"};
+      for (const auto& [name, rig] : input.truth.mountings) {
+        known += (known.empty() ? "" : ", ") + name;
+      }
+      return Error{args.truth + ": no entry for slave '" + slave.name +
+                   "' (the file has: " + known + ")"};
     }
   }
   return input;
@@ -171,8 +177,8 @@ Expected<SolveOutcome> SolveFromMotion(const SolveArgs& args, const SolveInput& 
   offset_options.search_window_s = args.time_offset_window_s;
   auto given_offsets = GivenTimeOffsets(args, input.slaves, log);
   if (!given_offsets) return Error{given_offsets.error()};
-  auto matched = io::MatchWithTimeOffsets(input.master, input.slaves, *given_offsets,
-                                          tolerance_ns, options, offset_options);
+  auto matched = io::MatchWithTimeOffsets(input.master, input.slaves, *given_offsets, tolerance_ns,
+                                          options, offset_options);
   if (!matched) return Error{matched.error()};
   const RigRecording* recording = &matched->recording;
   log.info("{} stamps matched in all {} cameras (tolerance {} ms)", recording->size(),
@@ -188,8 +194,8 @@ Expected<SolveOutcome> SolveFromMotion(const SolveArgs& args, const SolveInput& 
         replay.estimator.nominal.push_back(
             it == options.nominal.end() ? std::nullopt : std::optional<Similarity>(it->second));
       }
-      const pipeline::OnlineReplayResult online =
-          pipeline::ReplayOnline(*recording, replay, args.truth.empty() ? nullptr : &input.truth);
+      const pipeline::OnlineReplayResult online = pipeline::ReplayOnline(
+          *recording, replay, args.truth.empty() ? nullptr : &input.truth.mountings);
       log.info("sync buffer: {}", online.sync.BriefReport());
       outcome.history = online.history;
       outcome.result = online.estimate.rig;
@@ -229,21 +235,26 @@ Status ApplyMetricUnit(const SolveArgs& args, const SolveInput& input, int64_t t
   return Status::Ok();
 }
 
-// The truth in the estimate's unit (a metric truth against monocular odometry: the master unit
-// fitted to the truth's C), also for the convergence history's errors.
+// The truth in the estimate's unit (truth_args.h: per master segment with the true
+// trajectories of a --truth-out directory, else fitted to the truth's C), also for the
+// convergence history's errors.
 struct AlignedTruth {
   std::optional<io::TruthAlignment> alignment;
   std::map<std::string, Similarity> in_master_units;
 };
 
-AlignedTruth AlignSolveTruth(const SolveArgs& args, const SolveInput& input,
-                             SolveOutcome* outcome, spdlog::logger& log) {
+Expected<AlignedTruth> AlignSolveTruth(const SolveArgs& args, const SolveInput& input,
+                                       SolveOutcome* outcome, spdlog::logger& log) {
   AlignedTruth aligned;
   if (args.truth.empty()) return aligned;
   io::TruthUnit unit = io::TruthUnit::kAuto;
   io::ParseTruthUnit(args.truth_unit, &unit);
-  aligned.alignment = io::AlignTruthUnit(outcome->result, input.truth, unit);
-  aligned.in_master_units = io::TruthInMasterUnits(input.truth, *aligned.alignment);
+  std::vector<TimedTrajectory> odometry = {input.master};
+  odometry.insert(odometry.end(), input.slaves.begin(), input.slaves.end());
+  auto comparison = CompareRunWithTruth(outcome->result, input.truth, unit, odometry);
+  if (!comparison) return Error{"--truth: " + comparison.error()};
+  aligned.alignment = comparison->alignment;
+  aligned.in_master_units = comparison->truth_master_units;
   log.info("--truth: {}", aligned.alignment->message);
   for (pipeline::ConvergencePoint& p : outcome->history) {
     const auto it = aligned.in_master_units.find(p.slave);
@@ -252,6 +263,21 @@ AlignedTruth AlignSolveTruth(const SolveArgs& args, const SolveInput& input,
     }
   }
   return aligned;
+}
+
+// C in metres: a metric unit applied (metric master, --metric-*) or a target reference.
+bool MetricResult(const SolveOutcome& outcome) {
+  return outcome.unit && (outcome.unit->metric || outcome.unit->source == "target reference");
+}
+
+io::Provenance SolveProvenance(const SolveArgs& args, const SolveOutcome& outcome) {
+  std::vector<std::string> inputs = {io::ParseNamedTrajectoryPath(args.master).path};
+  for (const std::string& slave : args.slaves) {
+    inputs.push_back(io::ParseNamedTrajectoryPath(slave).path);
+  }
+  inputs.push_back(args.truth);
+  inputs.push_back(args.prior);
+  return ProvenanceOf(inputs, args.config, MetricResult(outcome));
 }
 
 // The convergence (--online), then the result as a table or JSON on stdout.
@@ -273,6 +299,7 @@ void PrintSolveResult(const SolveArgs& args, const SolveOutcome& outcome,
   if (args.json) {
     nlohmann::json json = io::ResultToJson(outcome.result, truth_ptr, alignment_ptr);
     if (outcome.unit) json["unit"] = outcome.unit->ToJson();
+    json["provenance"] = io::ProvenanceToJson(SolveProvenance(args, outcome));
     std::cout << json.dump(2) << "\n";
   } else {
     std::cout << io::FormatResultTable(outcome.result, truth_ptr, alignment_ptr);
@@ -283,16 +310,24 @@ void PrintSolveResult(const SolveArgs& args, const SolveOutcome& outcome,
 // --out and --camchain.
 Status WriteSolveFiles(const SolveArgs& args, const SolveOutcome& outcome, spdlog::logger& log) {
   if (!args.out.empty()) {
+    const std::string units = outcome.unit ? "# units: " + outcome.unit->message + "\n" : "";
     const Status s =
-        outcome.unit ? io::WriteFileAtomically(args.out, "# units: " + outcome.unit->message +
-                                                             "\n" + io::ResultToYaml(outcome.result))
-                     : io::WriteResultYaml(args.out, outcome.result);
+        io::WriteFileAtomically(args.out, units + io::ResultToYaml(outcome.result) +
+                                              io::ProvenanceToYaml(SolveProvenance(args, outcome)));
     if (!s.ok()) return s;
     log.info("wrote result to {}", args.out);
   }
   if (!args.camchain.empty()) {
-    if (Status s = io::WriteCamchain(args.camchain, outcome.result); !s.ok()) return s;
-    log.info("wrote camera chain to {}", args.camchain);
+    std::map<std::string, camera::CameraSpec> intrinsics;
+    if (!args.config.empty()) {
+      auto config = io::LoadRigConfig(args.config);
+      if (!config) return Error{config.error()};
+      intrinsics = IntrinsicsOf(*config);
+    }
+    const bool metres = MetricResult(outcome);
+    return WriteResultCamchain(args.camchain, outcome.result, intrinsics,
+                               metres ? 1.0 : std::nan(""), metres ? outcome.unit->source : "",
+                               log);
   }
   return Status::Ok();
 }
@@ -325,7 +360,8 @@ int RunSolve(const SolveArgs& args) {
     auto reference = TargetReferenceResult(input->master, input->slaves, tolerance_ns,
                                            args.pose_model == "individual");
     if (!reference) return PrintCommandError("solve", reference.error());
-    outcome = SolveOutcome{std::move(*reference), {},
+    outcome = SolveOutcome{std::move(*reference),
+                           {},
                            ResultUnit{false, 1.0, 0.0, "target reference",
                                       "target reference: positions in the target's unit (metres "
                                       "for a metric target), scale 1 by definition"}};
@@ -336,8 +372,9 @@ int RunSolve(const SolveArgs& args) {
   if (Status s = ApplyMetricUnit(args, *input, tolerance_ns, &*outcome); !s.ok()) {
     return PrintCommandError("solve", s.message());
   }
-  const AlignedTruth truth = AlignSolveTruth(args, *input, &*outcome, *log);
-  PrintSolveResult(args, *outcome, truth);
+  const Expected<AlignedTruth> truth = AlignSolveTruth(args, *input, &*outcome, *log);
+  if (!truth) return PrintCommandError("solve", truth.error());
+  PrintSolveResult(args, *outcome, *truth);
   if (Status s = WriteSolveFiles(args, *outcome, *log); !s.ok()) {
     return PrintCommandError("solve", s.message());
   }

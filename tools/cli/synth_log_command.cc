@@ -72,7 +72,7 @@ void RegisterSynthLog(CLI::App& app, int* exit_code) {
       "LCM log of RIGCAL_POSE_<camera> events, to try `rigcal calib`.");
   cmd->add_option("--config", args->config, "Rig config YAML with `truth` for every slave")
       ->required();
-  cmd->add_option("--out", args->out, "LCM log file to write")->required();
+  cmd->add_option("-o,--out", args->out, "LCM log file to write")->required();
   cmd->add_option("--truth-out", args->truth_out, "Also write the true rig as a rig YAML");
   cmd->add_option("--motion", args->motion, "general, planar (car-like yaw) or translation")
       ->check(CLI::IsMember({"general", "planar", "translation"}))

@@ -1,6 +1,7 @@
 // Shared options and first step of the target subcommands.
 #include "target_args.h"
 
+#include <chrono>
 #include <set>
 #include <sstream>
 
@@ -138,16 +139,24 @@ Expected<std::vector<CameraCalibration>> CalibrateCameras(const TargetArgs& args
     const bool from_log = IsLcmImageLog(source);
     const pattern::ImageStream images =
         from_log ? LcmImageStream(source, name) : pattern::ImageStream{};
+    // Progress: detection and calibration take seconds per camera.
+    const auto started = std::chrono::steady_clock::now();
+    auto seconds = [&started] {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    };
+    log->info("{}: detecting the pattern in {} ...", name, source);
     auto views = !args.charuco.empty() && (from_log || !pattern::IsDetectionFolder(source))
                      ? pattern::DetectCharucoViews(name, source, charuco, images)
                  : from_log ? pattern::DetectChessboardViews(name, source, board, images)
                             : pattern::LoadCameraViews(name, source, board, width, height);
     if (!views) return Error{name + ": " + views.error()};
     camera.views = std::move(*views);
-    log->info("{}: {} files, {} with a target ({}x{})", name, camera.views.files,
-              camera.views.views.size(), camera.views.width, camera.views.height);
+    log->info("{}: {} files, {} with a target ({}x{}) in {:.1f} s; calibrating ...", name,
+              camera.views.files, camera.views.views.size(), camera.views.width,
+              camera.views.height, seconds());
     auto intrinsics = pattern::CalibrateIntrinsics(camera.views, options);
     if (!intrinsics) return Error{intrinsics.error()};
+    log->info("{}: calibrated in {:.1f} s", name, seconds());
     camera.intrinsics = std::move(*intrinsics);
     out.push_back(std::move(camera));
   }

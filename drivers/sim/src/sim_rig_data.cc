@@ -15,6 +15,12 @@ bool SimulatedRigData::Dropped(int camera, int64_t k) const {
       HashKey(spec.seed, kPurposeDrop, static_cast<uint64_t>(camera), static_cast<uint64_t>(k)));
   return rng.Uniform() < spec.drop_probability;
 }
+bool SimulatedRigData::Blackout(int camera, int64_t k) const {
+  if (spec.blackout_s.empty()) return false;
+  const auto it = spec.blackout_s.find(spec.names[static_cast<size_t>(camera)]);
+  const double t = StreamTime(k);
+  return it != spec.blackout_s.end() && t >= it->second.first && t < it->second.second;
+}
 int64_t SimulatedRigData::JitterNs(int camera, int64_t k) const {
   if (spec.timestamp_jitter_s <= 0.0) return 0;
   Rng rng(

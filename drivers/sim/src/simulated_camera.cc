@@ -110,6 +110,7 @@ Expected<std::optional<capture::Frame>> SimulatedCamera::Grab() {
     frame.seq = k;
     frame.t_ns = epoch + d.OffsetNs(k) + d.JitterNs(camera_, k);
     frame.image = d.Render(camera_, k, &state_->acc, &state_->hits, RenderKernel::kSimd);
+    if (d.Blackout(camera_, k)) frame.image.setTo(0);
     if (spec.realtime && !wait_until(epoch + d.OffsetNs(k))) return std::optional<capture::Frame>();
     return std::optional<capture::Frame>(std::move(frame));
   }

@@ -204,6 +204,16 @@ Status CheckDevices(const SimulatedRigSpec& spec) {
       << " must be >= 0 with 3 sigma below half a frame period (" << period * 0.5e3 << " ms)";
     return Error{e.str()};
   }
+  for (const auto& [name, span] : spec.blackout_s) {
+    if (std::find(spec.names.begin(), spec.names.end(), name) == spec.names.end()) {
+      e << "blackout_s." << name << ": no camera of that name";
+      return Error{e.str()};
+    }
+    if (!(span.first >= 0 && span.first < span.second && std::isfinite(span.second))) {
+      e << "blackout_s." << name << ": must be [from, to) with 0 <= from < to (s)";
+      return Error{e.str()};
+    }
+  }
   for (const auto& [name, t] : spec.fail_after_s) {
     if (std::find(spec.names.begin(), spec.names.end(), name) == spec.names.end()) {
       e << "fail_after_s." << name << ": no camera of that name";

@@ -1,4 +1,4 @@
-// Camera intrinsics from YAML: one `cameras:` entry of a rig config (config/README.md), and the
+// Camera intrinsics from YAML: one `cameras:` entry of a rig config (docs/config.md), and the
 // cameras of a Kalibr camchain file. Both fill camera::CameraSpec and check it, so that every error
 // points at the line of the offending key.
 #include <algorithm>
@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "rigcal/io/camera_files.h"
 #include "config_sections.h"
+#include "rigcal/io/camera_files.h"
 #include "yaml_fields.h"
 
 namespace rigcal::io {

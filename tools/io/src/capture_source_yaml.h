@@ -1,5 +1,5 @@
 #pragma once
-// The `source:` sections of live capture devices (config/README.md "Live sources"):
+// The `source:` sections of live capture devices (docs/config.md "Live sources"):
 //   source: {type: v4l2 | libcamera, <defaults for every camera>}   and per camera
 //   cameras[i]: {device: <path | bus:<bus info> | card:<card>>, capture: {<overrides>}}
 // Keys (source level and `capture:`): pixel_formats, frame_rate_hz, buffers, exposure_us, gain,

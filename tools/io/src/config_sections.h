@@ -1,5 +1,5 @@
 #pragma once
-// Parsers of the sections of a rig config file (config/README.md). yaml-cpp stays inside
+// Parsers of the sections of a rig config file (docs/config.md). yaml-cpp stays inside
 // tools/: each parser fills a plain options struct of its module. Errors read
 // "<path>:<line>: <key>: <what is wrong>" (line is 1-based, from the node's mark).
 

@@ -240,6 +240,7 @@ Expected<RigCalibration> ReadResultFile(const std::string& path) {
     for (auto it = root->begin(); it != root->end(); ++it) {
       const std::string key = it->first.Scalar();
       if (kYamlMetadataKeys.count(key) && it->second.IsScalar()) continue;
+      if (key == "provenance" && it->second.IsMap()) continue;  // provenance.h
       auto slave = ReadResultSlave(r, it->second, key, false);
       if (!slave) return Error{slave.error()};
       result.slaves.push_back(std::move(*slave));

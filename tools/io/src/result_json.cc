@@ -6,9 +6,10 @@
 #include <cmath>
 #include <limits>
 
-#include "rigcal/calib/error_model.h"
 #include "rigcal/base/format.h"
 #include "rigcal/base/quaternion.h"
+#include "rigcal/calib/error_model.h"
+#include "rigcal/io/truth_comparison.h"
 
 namespace rigcal::io {
 namespace {
@@ -66,6 +67,15 @@ nlohmann::json AxisAngleJson(const Eigen::Quaterniond& q) {
   return {{"axis", Vec(a.axis)}, {"angle_deg", JsonNumber(a.angle_deg)}};
 }
 
+// The errors of `s` against `truth` (in master units), scored as every truth comparison does
+// (truth_comparison.h: the newest segment's scale, C in the plane when its axis is unknown).
+CalibrationError ScoreAgainst(const SlaveCalibration& s, const Similarity& truth) {
+  SlaveScore score;
+  score.truth_master_units = truth;
+  ScoreSlave(s, &score);
+  return score.error;
+}
+
 std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
                         const TruthAlignment* alignment) {
   std::string out = fmt::format("{}: {} ({}){}\n", s.name, ToString(s.state),
@@ -84,6 +94,11 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
   out += Row("C [master units]",
              s.position_observable ? Vec3(s.estimate.C) : "not observable with this motion",
              truth ? Vec3(truth->C) : "");
+  if (alignment != nullptr && alignment->applied && s.position_observable) {
+    // The same in metres, beside it rather than only in the alignment line.
+    const double k = alignment->metres_per_unit;
+    out += Row("C [m], aligned unit", Vec3(s.estimate.C * k), truth ? Vec3(truth->C * k) : "");
+  }
   if (s.scales.size() > 1) {
     for (const SegmentScale& seg : s.scales) {
       out += Row(fmt::format("scale segment {}", seg.segment),
@@ -92,8 +107,10 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
   } else {
     const double std =
         s.scales.empty() ? std::numeric_limits<double>::quiet_NaN() : s.scales.front().std;
-    out += Row("scale", fmt::format("{:.6g} (std {})", s.estimate.scale, SigmaText(std, 2)),
-               truth ? fmt::format("{:.6g}", truth->scale) : "");
+    out +=
+        Row("scale", fmt::format("{:.6g} (std {})", s.estimate.scale, SigmaText(std, 2)),
+            truth ? (std::isfinite(truth->scale) ? fmt::format("{:.6g}", truth->scale) : "unknown")
+                  : "");
   }
   const bool rotating = s.observability.planar_axis.norm() > 0.0;
   if (rotating && s.position_observable) {
@@ -143,16 +160,18 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
     out += Row("unobservable along", Vec3(d));
   }
   if (truth != nullptr && s.usable()) {
-    const CalibrationError e = CompareToTruth(s.estimate, *truth, s.observability.planar_axis);
+    const CalibrationError e = ScoreAgainst(s, *truth);
     out += Row("errors vs truth",
                fmt::format("rotation {:.3g} deg, C direction {:.3g} deg, C distance {:.3g} %,",
                            e.rot_deg, e.dir_deg, e.dist_pct));
     const bool metric = alignment != nullptr && alignment->applied;
     out += Row(
-        "", fmt::format(
-                "C error {:.3g} master units{}, scale {:.3g} %", e.trans_err,
-                metric ? fmt::format(" ({:.3g} m)", e.trans_err * alignment->metres_per_unit) : "",
-                e.scale_pct));
+        "",
+        fmt::format(
+            "C error {:.3g} master units{}, scale {}", e.trans_err,
+            metric ? fmt::format(" ({:.3g} m)", e.trans_err * alignment->metres_per_unit) : "",
+            std::isfinite(e.scale_pct) ? fmt::format("{:.3g} %", e.scale_pct)
+                                       : "not compared (the slave's odometry unit is unknown)"));
     if (std::isfinite(e.plane_err)) {
       out += Row("", fmt::format("C error in the plane {:.3g}, along the mean axis {:.3g}",
                                  e.plane_err, e.axis_err));
@@ -248,7 +267,7 @@ nlohmann::json ResultToJson(const RigCalibration& result,
         {"planar", o.planar},
         {"mean_axis", Vec(o.planar_axis)}};
     if (const Similarity* t = TruthOf(truth, s.name); t != nullptr && s.usable()) {
-      const CalibrationError e = CompareToTruth(s.estimate, *t, o.planar_axis);
+      const CalibrationError e = ScoreAgainst(s, *t);
       j["errors"] = {{"rot_deg", JsonNumber(e.rot_deg)},     {"dir_deg", JsonNumber(e.dir_deg)},
                      {"dist_pct", JsonNumber(e.dist_pct)},   {"trans_err", JsonNumber(e.trans_err)},
                      {"scale_pct", JsonNumber(e.scale_pct)}, {"plane_err", JsonNumber(e.plane_err)},
@@ -279,10 +298,11 @@ nlohmann::json ResultToJson(const RigCalibration& result,
 std::string FormatResultTable(const RigCalibration& result,
                               const std::map<std::string, Similarity>* truth,
                               const TruthAlignment* alignment) {
+  // pairs_selected is the batch solve's; an online estimate has none (it pairs keyframes).
   std::string out = fmt::format(
-      "master: {}  (pairs of times used: {}; C in master units, scale = slave unit -> master "
-      "unit)\n",
-      result.master, result.pairs_selected);
+      "master: {}  ({}C in master units, scale = slave unit -> master unit)\n", result.master,
+      result.pairs_selected > 0 ? fmt::format("pairs of times used: {}; ", result.pairs_selected)
+                                : std::string());
   if (alignment != nullptr && truth != nullptr) {
     out += "truth: " + alignment->message + "\n";
     if (alignment->applied) out += "truth columns: in master units (divided by the fitted unit)\n";

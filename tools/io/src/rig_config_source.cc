@@ -1,4 +1,4 @@
-// The `source:` section of a rig config (config/README.md "source"): which devices `rigcal run`
+// The `source:` section of a rig config (docs/config.md "source"): which devices `rigcal run`
 // captures from, or the simulated rig it renders.
 #include <filesystem>
 

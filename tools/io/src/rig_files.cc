@@ -11,10 +11,10 @@
 #include <set>
 #include <sstream>
 
+#include "rig_config_yaml.h"
 #include "rigcal/base/format.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/rig_config.h"
-#include "rig_config_yaml.h"
 #include "yaml_fields.h"
 
 namespace rigcal::io {
@@ -92,21 +92,6 @@ Expected<Similarity> ReadRigSlave(const FieldReader& r, const std::string& name,
   return rig;
 }
 
-Eigen::Matrix4d MasterFromCam(const Similarity& rig) {
-  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m.topLeftCorner<3, 3>() = rig.q.normalized().toRotationMatrix();
-  m.topRightCorner<3, 1>() = rig.C;
-  return m;
-}
-
-Eigen::Matrix4d InverseRigid(const Eigen::Matrix4d& m) {
-  Eigen::Matrix4d inv = Eigen::Matrix4d::Identity();
-  const Eigen::Matrix3d rt = m.topLeftCorner<3, 3>().transpose();
-  inv.topLeftCorner<3, 3>() = rt;
-  inv.topRightCorner<3, 1>() = -rt * m.topRightCorner<3, 1>();
-  return inv;
-}
-
 // ReadRigYaml of a loaded file.
 Expected<std::map<std::string, Similarity>> RigFromYaml(const YAML::Node& root,
                                                         const std::string& path) {
@@ -119,6 +104,7 @@ Expected<std::map<std::string, Similarity>> RigFromYaml(const YAML::Node& root,
     if (!it->first.IsScalar()) return Error{r.At(it->first) + "slave names must be scalars"};
     const std::string name = it->first.Scalar();
     if (kMetadataKeys.count(name) && it->second.IsScalar()) continue;
+    if (name == "provenance" && it->second.IsMap()) continue;  // provenance.h
     if (auto checked = r.CameraName(it->first, "slave name"); !checked) {
       return Error{checked.error()};
     }
@@ -287,60 +273,6 @@ std::string ResultToYaml(const RigCalibration& result) {
 
 Status WriteResultYaml(const std::string& path, const RigCalibration& result) {
   return WriteFileAtomically(path, ResultToYaml(result));
-}
-
-Status WriteCamchain(const std::string& path, const RigCalibration& result,
-                     const std::vector<std::string>& camera_order) {
-  const std::string where = "cannot write camchain '" + path + "': ";
-  std::vector<std::string> order = camera_order;
-  if (order.empty()) {
-    order.push_back(result.master);
-    for (const SlaveCalibration& s : result.slaves) {
-      if (s.usable()) order.push_back(s.name);
-    }
-  }
-  if (order.front() != result.master) {
-    return Error{where + "the first camera must be the master '" + result.master + "', got '" +
-                 order.front() + "'"};
-  }
-  std::vector<Similarity> master_from_cam = {Similarity{}};
-  for (size_t n = 1; n < order.size(); ++n) {
-    const auto it = std::find_if(result.slaves.begin(), result.slaves.end(),
-                                 [&](const SlaveCalibration& s) { return s.name == order[n]; });
-    if (it == result.slaves.end()) return Error{where + "unknown camera '" + order[n] + "'"};
-    if (!it->usable()) {
-      return Error{where + "camera '" + order[n] + "' has no usable estimate (" +
-                   ToString(it->termination) + ")"};
-    }
-    master_from_cam.push_back(it->estimate);
-  }
-
-  YAML::Emitter out;
-  out << YAML::BeginMap;
-  for (size_t n = 0; n < order.size(); ++n) {
-    out << YAML::Key << "cam" + std::to_string(n) << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "rigcal_name" << YAML::Value << order[n];
-    if (n > 0) {
-      const Eigen::Matrix4d cn_from_cnm1 =
-          InverseRigid(MasterFromCam(master_from_cam[n])) * MasterFromCam(master_from_cam[n - 1]);
-      out << YAML::Key << "T_cn_cnm1" << YAML::Value << YAML::BeginSeq;
-      for (int row = 0; row < 4; ++row) {
-        const std::array<double, 4> values = {cn_from_cnm1(row, 0), cn_from_cnm1(row, 1),
-                                              cn_from_cnm1(row, 2), cn_from_cnm1(row, 3)};
-        EmitVector(out, values.data(), 4);
-      }
-      out << YAML::EndSeq;
-    }
-    out << YAML::EndMap;
-  }
-  out << YAML::EndMap;
-  const std::string text =
-      "# Kalibr-style camera chain written by rigcal solve. rigcal estimates extrinsics only:\n"
-      "# camera_model, intrinsics, distortion, resolution and rostopic are unknown here and\n"
-      "# not written. T_cn_cnm1 takes points from camera n-1 to camera n; translations are in\n"
-      "# the master camera's odometry units (metric only if the master odometry is metric).\n" +
-      std::string(out.c_str()) + "\n";
-  return WriteFileAtomically(path, text);
 }
 
 Expected<std::vector<CamchainCamera>> ReadCamchain(const std::string& path) {

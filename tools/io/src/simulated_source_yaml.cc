@@ -23,7 +23,7 @@ const std::set<std::string> kSourceKeys = {
     "type",         "frame_rate_hz", "num_frames",       "duration_s",
     "seed",         "realtime",      "trajectory",       "scene",
     "noise_sigma",  "motion_blur",   "drop_probability", "timestamp_jitter_ms",
-    "fail_after_s", "render_block",  "trigger"};
+    "fail_after_s", "blackout_s",    "render_block",     "trigger"};
 
 // A number as people write it: "20", "9.95", "8.33333".
 std::string PlainNumber(double v) { return SignificantText(v, 6); }
@@ -357,6 +357,22 @@ std::optional<Error> ReadFailuresAndRendering(const FieldReader& r, const YAML::
           ">= 0 s");
       if (!v) return Error{v.error()};
       spec->fail_after_s[camera] = *v;
+    }
+  }
+  if (const YAML::Node n = source["blackout_s"]) {
+    if (!n.IsMap()) return r.Fail(n, "source.blackout_s", "expected a map camera: [from, to]");
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      const std::string key = "source.blackout_s." + it->first.Scalar();
+      if (!it->second.IsSequence() || it->second.size() != 2) {
+        return r.Fail(it->second, key, "expected [from, to] in seconds");
+      }
+      auto from = NumberIn(
+          r, it->second[0], key, [](double x) { return x >= 0; }, ">= 0 s");
+      if (!from) return Error{from.error()};
+      auto to = NumberIn(
+          r, it->second[1], key, [&](double x) { return x > *from; }, "> from");
+      if (!to) return Error{to.error()};
+      spec.blackout_s[it->first.Scalar()] = {*from, *to};
     }
   }
   if (const YAML::Node n = source["render_block"]) {

@@ -1,5 +1,5 @@
 #pragma once
-// The hardware trigger of a rig config (config/README.md "Hardware trigger"): the top-level
+// The hardware trigger of a rig config (docs/config.md "Hardware trigger"): the top-level
 // `trigger:` section (the generator on a serial port) and each triggered camera's `trigger:`
 // entry (its line and exposure). Errors read "<path>:<line>: <field>: <what>".
 //

@@ -194,7 +194,7 @@ TruthAlignment AlignTruthUnit(const RigCalibration& result,
   }
   a.applied = true;
   a.message = "positions compared after aligning the master unit to the truth: 1 master unit = " +
-              fitted_with(" m") + "; the truth's C and scales divided by it";
+              fitted_with(" m") + "; the truth's C divided by it";
   if (used.size() == 1) {
     a.message +=
         " (one slave: the fit absorbs its distance error; its direction, rotation and "
@@ -209,7 +209,7 @@ std::map<std::string, Similarity> TruthInMasterUnits(const std::map<std::string,
   std::map<std::string, Similarity> out = truth;
   for (auto& [name, rig] : out) {
     rig.C /= alignment.metres_per_unit;
-    rig.scale /= alignment.metres_per_unit;
+    rig.scale = std::numeric_limits<double>::quiet_NaN();  // the slave's unit is unknown
   }
   return out;
 }

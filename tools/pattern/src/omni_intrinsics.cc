@@ -12,8 +12,8 @@
 
 namespace rigcal::pattern {
 
-CamchainEntry OmniIntrinsics::ToCamchainEntry() const {
-  CamchainEntry entry;
+io::CamchainEntry OmniIntrinsics::ToCamchainEntry() const {
+  io::CamchainEntry entry;
   entry.spec.name = camera;
   entry.spec.model = camera::CameraSpec::Model::kPinhole;
   entry.spec.width = width;

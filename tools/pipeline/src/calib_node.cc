@@ -267,9 +267,11 @@ void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
     const SlaveCalibration& slave = estimate.rig.slaves[i];
     line << " | " << slave.name << ": " << slave.motions.used << " motions";
     if (slave.solved()) {
-      char buf[96];
-      std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) ±%s°", slave.estimate.C.x(),
-                    slave.estimate.C.y(), slave.estimate.C.z(),
+      // Each σ beside its quantity; C in the master odometry's unit (u).
+      char buf[128];
+      std::snprintf(buf, sizeof(buf), ", C=(%.3f %.3f %.3f) u ±%s, rotation ±%s°",
+                    slave.estimate.C.x(), slave.estimate.C.y(), slave.estimate.C.z(),
+                    SigmaText(slave.pos_std.maxCoeff(), 2).c_str(),
                     SigmaText(slave.rot_std_deg, 2).c_str());
       line << buf;
     }

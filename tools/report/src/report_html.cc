@@ -6,10 +6,11 @@
 #include <sstream>
 
 #include "report_plots.h"
-#include "rigcal/calib/error_model.h"
 #include "rigcal/base/format.h"
+#include "rigcal/calib/error_model.h"
 #include "rigcal/io/atomic_file.h"
 #include "rigcal/io/result_json.h"
+#include "rigcal/io/truth_comparison.h"
 #include "rigcal/plot/svg_plot.h"
 
 namespace rigcal::report {
@@ -145,10 +146,14 @@ void RenderTable(const ReportData& data, std::ostringstream& out) {
           << "</td></tr>\n";
       continue;
     }
-    const CalibrationError e = CompareToTruth(s.estimate, t->second);
+    io::SlaveScore score;  // scored as every truth comparison (io/truth_comparison.h)
+    score.truth_master_units = t->second;
+    io::ScoreSlave(s, &score);
+    const CalibrationError& e = score.error;
     out << "<td>" << Number(e.rot_deg, 3) << "</td><td>" << Number(e.dir_deg, 3) << "</td><td>"
         << Number(e.dist_pct, 3) << "</td><td>" << Number(e.trans_err, 3) << "</td><td>"
-        << Number(e.scale_pct, 3) << "</td></tr>\n";
+        << (std::isfinite(e.scale_pct) ? Number(e.scale_pct, 3) : std::string("unknown slave unit"))
+        << "</td></tr>\n";
   }
   out << "</table></div>\n";
 }
@@ -167,6 +172,11 @@ std::string RenderReportHtml(const ReportData& data) {
                         : std::string("a result file"))
       << "; master " << Html(data.master) << ", distances in " << Html(data.distance_unit)
       << "</p>\n";
+  if (!data.provenance.empty()) {
+    out << "<ul class=\"provenance\">\n";
+    for (const std::string& line : data.provenance) out << "<li>" << Html(line) << "</li>\n";
+    out << "</ul>\n";
+  }
   if (!data.notes.empty()) {
     out << "<ul class=\"notes\">\n";
     for (const std::string& note : data.notes) out << "<li>" << Html(note) << "</li>\n";

@@ -7,7 +7,7 @@
 #include "motion_analysis.h"
 #include "rigcal/io/result_file.h"
 #include "rigcal/io/rig_files.h"
-#include "rigcal/io/truth_alignment.h"
+#include "rigcal/io/truth_comparison.h"
 #include "rigcal/lcm/slave_view.h"
 #include "rigcal/slave_extrinsics_t.hpp"
 
@@ -140,9 +140,12 @@ Status AddTruth(const std::string& path, ReportData* data) {
       return Error{path + ": no truth for slave '" + slave + "'"};
     }
   }
-  const io::TruthAlignment alignment = io::AlignTruthUnit(data->final_result, *truth, io::TruthUnit::kAuto);
-  data->truth = io::TruthInMasterUnits(*truth, alignment);
-  data->notes.push_back("truth from " + path + ": " + alignment.message);
+  io::TruthInput input;
+  input.mountings = *truth;
+  auto comparison = io::CompareWithTruth(data->final_result, input);
+  if (!comparison) return Error{path + ": " + comparison.error()};
+  data->truth = comparison->truth_master_units;
+  data->notes.push_back("truth from " + path + ": " + comparison->alignment.message);
   return {};
 }
 

@@ -72,10 +72,10 @@ plot::PlotSeries Scatter(const std::string& label, const std::string& color) {
 // Three components over time with ±σ bands and the truth as dashed lines in their colours.
 // values[k] and sigmas[k] belong to samples[k].
 plot::PlotPanel VectorPanel(const std::string& title, const std::string& y_label,
-                      const std::vector<EstimateSample>& samples,
-                      const std::vector<Eigen::Vector3d>& values,
-                      const std::vector<Eigen::Vector3d>& sigmas,
-                      const std::optional<Eigen::Vector3d>& truth) {
+                            const std::vector<EstimateSample>& samples,
+                            const std::vector<Eigen::Vector3d>& values,
+                            const std::vector<Eigen::Vector3d>& sigmas,
+                            const std::optional<Eigen::Vector3d>& truth) {
   plot::PlotPanel panel;
   panel.title = title;
   panel.x_label = "time [s]";
@@ -161,7 +161,7 @@ ReportFigure ScaleFigure(const ReportData& data, const std::string& slave,
     mean /= static_cast<double>(used_values.size());
     scales.reference_lines.push_back({mean, "mean of used", "#0072B2", true});
   }
-  if (const Similarity* truth = TruthOf(data, slave)) {
+  if (const Similarity* truth = TruthOf(data, slave); truth && std::isfinite(truth->scale)) {
     scales.reference_lines.push_back({truth->scale, "truth", "#009E73", true});
   }
 
@@ -295,7 +295,8 @@ std::vector<ReportFigure> HistoryFigures(const ReportData& data) {
       }
     }
     scale.series = {s};
-    if (truth) scale.reference_lines.push_back({truth->scale, "truth", "#009E73", true});
+    if (truth && std::isfinite(truth->scale))
+      scale.reference_lines.push_back({truth->scale, "truth", "#009E73", true});
     used.series = {n};
     rot_sigma.series = {r};
     pos_sigma.series = c;

@@ -86,7 +86,7 @@ std::string_view ToString(RigState state);
 RigState CombineStates(const std::vector<SlaveState>& slaves, bool any_motion);
 
 // Exit code of a command that produced these slaves: 0 when every one is usable, 3 otherwise
-// (README "Exit codes": 1 bad input and 2 usage are decided before any estimate exists).
+// (docs/commands.md "Exit codes": 1 bad input and 2 usage are decided before any estimate exists).
 int ExitCodeFor(const std::vector<SlaveState>& slaves);
 
 }  // namespace rigcal

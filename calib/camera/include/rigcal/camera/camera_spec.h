@@ -1,5 +1,5 @@
 #pragma once
-// CameraSpec: a plain description of one camera as written in the rig config (config/README.md,
+// CameraSpec: a plain description of one camera as written in the rig config (docs/config.md,
 // `cameras:`), and the factory that turns it into a CameraModel. yaml-cpp never gets here: the
 // config loader of tools/ fills this struct (tools/include/rigcal/io/config_sections.h).
 //

@@ -16,7 +16,7 @@
 // MakeSimulatedRig checks that every camera stays in the free space for the whole run (inside
 // the room/pipe, outside every box, at least kMinClearance from any surface).
 //
-// `source:` section of a rig config (config/README.md) for `type: simulated`. Every key is
+// `source:` section of a rig config (docs/config.md) for `type: simulated`. Every key is
 // optional except `trajectory`; unknown keys are errors.
 //
 //   source:
@@ -63,6 +63,9 @@
 //                                 # must stay below half a frame period)
 //     fail_after_s: {cam1: 5.0}   # the camera dies: Grab returns an error for every frame at
 //                                 # or after this stream time (seconds since frame 0)
+//     blackout_s: {cam0: [8, 9]}  # the camera sees nothing (lens covered): its images are black
+//                                 # for stream times in [from, to) s; its VO loses tracking and
+//                                 # re-initialises in a new scale segment afterwards
 //     render_block: 4             # 1: ray cast every pixel (exact, ~5x slower). N > 1: cast
 //                                 # every Nth pixel and interpolate texture coordinates and
 //                                 # mip level inside N x N blocks whose corners see the same
@@ -77,6 +80,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rigcal/base/status.h"
@@ -134,7 +138,9 @@ struct SimulatedRigSpec {
   double drop_probability = 0.0;               // [0, 1)
   double timestamp_jitter_s = 0.0;             // sigma; 3 sigma < half a frame period
   std::map<std::string, double> fail_after_s;  // camera name -> stream time of failure, >= 0
-  int render_block = 4;                        // [1, 32]
+  // camera name -> [from, to) stream seconds of black images, 0 <= from < to
+  std::map<std::string, std::pair<double, double>> blackout_s;
+  int render_block = 4;  // [1, 32]
 
   // --- Hardware trigger (`source.trigger`, simulated_trigger_timeline.h) ---------------------
   // Camera i hangs on line i of a simulated trigger generator (the firmware core on a drifting

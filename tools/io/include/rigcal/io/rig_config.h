@@ -1,5 +1,5 @@
 #pragma once
-// The rig configuration file (schema: config/README.md): cameras, nominal mounting, estimator,
+// The rig configuration file (schema: docs/config.md): cameras, nominal mounting, estimator,
 // sync, publishing and state options, and the capture source of `rigcal run`. This is the one
 // place where a rig config YAML is read; every module gets plain option structs.
 
@@ -13,10 +13,9 @@
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/capture/image_folder_device.h"
 #include "rigcal/capture/libcamera_device.h"
+#include "rigcal/capture/v4l2_options.h"
 #include "rigcal/sim/simulated_rig.h"
 #include "rigcal/trigger/live_trigger_timeline.h"
-
-#include "rigcal/capture/v4l2_options.h"
 
 namespace rigcal::io {
 
@@ -65,7 +64,7 @@ struct RigConfig {
   // `source: {type: libcamera}`: the same with the camera's `device` as the libcamera camera.
   std::vector<capture::LibcameraOptions> libcamera_devices;
   // `trigger:`: a trigger generator on a serial port, with one line per line named by the
-  // cameras' `trigger:` entries (config/README.md "Hardware trigger"); unset without one.
+  // cameras' `trigger:` entries (docs/config.md "Hardware trigger"); unset without one.
   std::optional<trigger::LiveTriggerOptions> trigger;
   // With `trigger:`, camera index order: how each camera hangs on the generator (its line, that
   // line's phase offset, where its source stamps a frame relative to the exposure centre);

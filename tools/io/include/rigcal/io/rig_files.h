@@ -33,7 +33,7 @@ namespace rigcal::io {
 Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path);
 
 // Nominal mountings (CAD values) for `rigcal solve --prior`: a rig YAML as above (a truth or
-// result file), or a rig config (config/README.md; recognised by its `cameras` key) whose
+// result file), or a rig config (docs/config.md; recognised by its `cameras` key) whose
 // cameras[].nominal are taken, by camera name. Errors as ReadRigYaml / LoadRigConfig, or no
 // camera with a nominal mounting.
 Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::string& path);
@@ -68,17 +68,7 @@ std::string ResultToYaml(const RigCalibration& result);
 // Writes ResultToYaml(result) atomically. The error names the path.
 [[nodiscard]] Status WriteResultYaml(const std::string& path, const RigCalibration& result);
 
-// Writes a Kalibr-style camchain YAML: cam0 is the master, cam1..camN the slaves in
-// `camera_order`, which lists every camera to write, master first; empty = the master and then
-// every usable slave in the result's order. Each camN (N >= 1) gets `T_cn_cnm1`, the 4x4
-// row-major rigid transform taking points from camera N-1 to camera N:
-//   T_cn_cnm1 = inv(master_from_cam_N) * master_from_cam_{N-1},
-// built from q and C only (no scale), so translations are in master odometry units. Every
-// camera also gets `rigcal_name` (a rigcal extension). Intrinsics, distortion, resolution and
-// rostopic are not known to rigcal and are not written. Atomic. The error names the path, an
-// unknown camera, a master not listed first, or a slave without a usable estimate.
-[[nodiscard]] Status WriteCamchain(const std::string& path, const RigCalibration& result,
-                                   const std::vector<std::string>& camera_order = {});
+// Writing a camchain of a result: result_camchain.h.
 
 struct CamchainCamera {
   std::string name;  // rigcal_name, empty when absent

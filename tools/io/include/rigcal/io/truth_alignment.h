@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "rigcal/calib/calibration_result.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/calibration_result.h"
 
 namespace rigcal::io {
 
@@ -62,8 +62,9 @@ struct TruthAlignment {
 TruthAlignment AlignTruthUnit(const RigCalibration& result,
                               const std::map<std::string, Similarity>& truth, TruthUnit mode);
 
-// The truth in the estimate's unit: C / metres_per_unit and scale / metres_per_unit (the truth's
-// scale maps slave units to truth units) when the alignment is applied, else as given.
+// The truth in the estimate's unit: C / metres_per_unit when the alignment is applied, the
+// scale then NaN (a slave's odometry unit is not known from the mountings alone: the per-segment
+// comparison of truth_comparison.h knows it from the true trajectories); else as given.
 std::map<std::string, Similarity> TruthInMasterUnits(const std::map<std::string, Similarity>& truth,
                                                      const TruthAlignment& alignment);
 

@@ -5,7 +5,7 @@
 //     (x, y) = (X / (Z + xi |X|), Y / (Z + xi |X|)),
 // then distorted (k1, k2, p1, p2, as pinhole radtan) and mapped by fu, fv, pu, pv (no skew).
 // Kalibr's camchain writes it as camera_model omni, intrinsics [xi, fu, fv, pu, pv]
-// (kalibr_camchain.h, CamchainEntry::omni_xi). rigcal's own camera models (camera_spec.h) have
+// (io/kalibr_camchain.h, CamchainEntry::omni_xi). rigcal's own camera models (camera_spec.h) have
 // no unified model: the result is the camchain entry and the statistics below. `rigcal
 // intrinsics --model scaramuzza` puts rigcal's polynomial model into the rig config and this one
 // into the camchain (Kalibr has no polynomial model).
@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "rigcal/base/status.h"
-#include "rigcal/pattern/kalibr_camchain.h"
+#include "rigcal/io/kalibr_camchain.h"
 #include "rigcal/pattern/target_views.h"
 
 namespace rigcal::pattern {
@@ -33,7 +33,7 @@ struct OmniIntrinsics {
 
   // The camchain entry of this camera (spec: pinhole-shaped intrinsics and radtan
   // distortion, omni_xi set).
-  CamchainEntry ToCamchainEntry() const;
+  io::CamchainEntry ToCamchainEntry() const;
 };
 
 // cv::omnidir::calibrate on at most `max_views` views spread over `views` (>= 4). Errors: fewer

@@ -96,6 +96,9 @@ struct ReportData {
   // What is missing and why, how the truth was aligned, problems of the inputs: one sentence
   // each, shown at the top of the report.
   std::vector<std::string> notes;
+  // Where the report came from, one line each (which rigcal and when, the command line, every
+  // input with its size and hash); filled by the command, shown under the title.
+  std::vector<std::string> provenance;
 };
 
 }  // namespace rigcal::report

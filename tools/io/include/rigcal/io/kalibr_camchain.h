@@ -15,7 +15,7 @@
 #include "rigcal/base/types.h"
 #include "rigcal/camera/camera_spec.h"
 
-namespace rigcal::pattern {
+namespace rigcal::io {
 
 struct CamchainEntry {
   camera::CameraSpec spec;
@@ -26,6 +26,12 @@ struct CamchainEntry {
   // [xi, fu, fv, pu, pv] with fu..pv from spec.intrinsics, distortion radtan from
   // spec.distortion (k1, k2, p1, p2). Unset: the model of spec.
   std::optional<double> omni_xi;
+  // False: spec holds only the name; camera_model, intrinsics, distortion, resolution and
+  // rostopic are left out (not a complete Kalibr camera).
+  bool intrinsics_known = true;
+  // Unless empty, written as `rigcal_translation_unit` (a rigcal extension): "m", or
+  // "master_odometry_unit" when T_cn_cnm1's translation is not metric.
+  std::string translation_unit;
 };
 
 // Writes `cameras` atomically to `path`, `comment` first as "# " lines. Errors: no camera, a
@@ -35,4 +41,4 @@ struct CamchainEntry {
                                          const std::vector<CamchainEntry>& cameras,
                                          const std::string& comment);
 
-}  // namespace rigcal::pattern
+}  // namespace rigcal::io

@@ -1,5 +1,5 @@
 // The complete Kalibr camchain: intrinsics of every camera and the chain of extrinsics.
-#include "rigcal/pattern/kalibr_camchain.h"
+#include "rigcal/io/kalibr_camchain.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -7,7 +7,7 @@
 
 #include "rigcal/io/atomic_file.h"
 
-namespace rigcal::pattern {
+namespace rigcal::io {
 namespace {
 
 using camera::CameraSpec;
@@ -26,6 +26,30 @@ void EmitNumbers(YAML::Emitter& out, const double* values, int n) {
   out << YAML::EndSeq;
 }
 
+// camera_model, intrinsics, distortion_model, distortion_coeffs, resolution, rostopic.
+void EmitIntrinsics(YAML::Emitter& out, const CamchainEntry& camera) {
+  const CameraSpec& spec = camera.spec;
+  const std::optional<double>& xi = camera.omni_xi;
+  out << YAML::Key << "camera_model" << YAML::Value << (xi ? "omni" : "pinhole");
+  out << YAML::Key << "intrinsics" << YAML::Value;
+  if (xi) {
+    const double omni[5] = {*xi, spec.intrinsics[0], spec.intrinsics[1], spec.intrinsics[2],
+                            spec.intrinsics[3]};
+    EmitNumbers(out, omni, 5);
+  } else {
+    EmitNumbers(out, spec.intrinsics.data(), 4);
+  }
+  out << YAML::Key << "distortion_model" << YAML::Value
+      << (spec.model == CameraSpec::Model::kFisheye ? "equidistant"
+          : spec.distortion.empty()                 ? "none"
+                                                    : "radtan");
+  out << YAML::Key << "distortion_coeffs" << YAML::Value;
+  EmitNumbers(out, spec.distortion.data(), static_cast<int>(spec.distortion.size()));
+  out << YAML::Key << "resolution" << YAML::Value << YAML::Flow << YAML::BeginSeq << spec.width
+      << spec.height << YAML::EndSeq;
+  out << YAML::Key << "rostopic" << YAML::Value << "/" + spec.name + "/image_raw";
+}
+
 }  // namespace
 
 Status WriteKalibrCamchain(const std::string& path, const std::vector<CamchainEntry>& cameras,
@@ -38,10 +62,10 @@ Status WriteKalibrCamchain(const std::string& path, const std::vector<CamchainEn
   Eigen::Matrix4d previous_from_cam0 = Eigen::Matrix4d::Identity();
   for (size_t n = 0; n < cameras.size(); ++n) {
     const CameraSpec& spec = cameras[n].spec;
-    if (spec.model == CameraSpec::Model::kScaramuzza) {
+    if (cameras[n].intrinsics_known && spec.model == CameraSpec::Model::kScaramuzza) {
       return Error{where + spec.name + ": the scaramuzza model has no Kalibr equivalent here"};
     }
-    if (spec.distortion.size() != 4 && !spec.distortion.empty()) {
+    if (cameras[n].intrinsics_known && spec.distortion.size() != 4 && !spec.distortion.empty()) {
       return Error{where + spec.name + ": Kalibr's " +
                    (spec.model == CameraSpec::Model::kFisheye ? "equidistant" : "radtan") +
                    " model has 4 distortion coefficients, the camera has " +
@@ -63,25 +87,10 @@ Status WriteKalibrCamchain(const std::string& path, const std::vector<CamchainEn
       out << YAML::EndSeq;
       previous_from_cam0 = cam_from_cam0;
     }
-    const std::optional<double>& xi = cameras[n].omni_xi;
-    out << YAML::Key << "camera_model" << YAML::Value << (xi ? "omni" : "pinhole");
-    out << YAML::Key << "intrinsics" << YAML::Value;
-    if (xi) {
-      const double omni[5] = {*xi, spec.intrinsics[0], spec.intrinsics[1], spec.intrinsics[2],
-                              spec.intrinsics[3]};
-      EmitNumbers(out, omni, 5);
-    } else {
-      EmitNumbers(out, spec.intrinsics.data(), 4);
+    if (!cameras[n].translation_unit.empty()) {
+      out << YAML::Key << "rigcal_translation_unit" << YAML::Value << cameras[n].translation_unit;
     }
-    out << YAML::Key << "distortion_model" << YAML::Value
-        << (spec.model == CameraSpec::Model::kFisheye ? "equidistant"
-            : spec.distortion.empty()                 ? "none"
-                                                      : "radtan");
-    out << YAML::Key << "distortion_coeffs" << YAML::Value;
-    EmitNumbers(out, spec.distortion.data(), static_cast<int>(spec.distortion.size()));
-    out << YAML::Key << "resolution" << YAML::Value << YAML::Flow << YAML::BeginSeq << spec.width
-        << spec.height << YAML::EndSeq;
-    out << YAML::Key << "rostopic" << YAML::Value << "/" + spec.name + "/image_raw";
+    if (cameras[n].intrinsics_known) EmitIntrinsics(out, cameras[n]);
     out << YAML::Key << "rigcal_name" << YAML::Value << spec.name;
     out << YAML::EndMap;
   }
@@ -91,7 +100,7 @@ Status WriteKalibrCamchain(const std::string& path, const std::vector<CamchainEn
   for (std::string line; std::getline(lines, line);) text += "# " + line + "\n";
   text += out.c_str();
   text += "\n";
-  return io::WriteFileAtomically(path, text);
+  return WriteFileAtomically(path, text);
 }
 
-}  // namespace rigcal::pattern
+}  // namespace rigcal::io

@@ -1,0 +1,65 @@
+#include "truth_args.h"
+
+#include <filesystem>
+
+#include "rigcal/io/rig_files.h"
+#include "rigcal/io/trajectory_io.h"
+
+namespace rigcal::cli {
+namespace {
+
+std::vector<CameraPose> CameraPoses(const TimedTrajectory& trajectory, int camera) {
+  std::vector<CameraPose> poses;
+  for (size_t k = 0; k < trajectory.size(); ++k) {
+    CameraPose p;
+    p.camera = camera;
+    p.t_ns = trajectory.t_ns[k];
+    p.pose = trajectory.poses[k];
+    p.segment = k < trajectory.segment.size() ? trajectory.segment[k] : 0;
+    poses.push_back(p);
+  }
+  return poses;
+}
+
+}  // namespace
+
+Expected<TruthFiles> ReadTruthFiles(const std::string& path,
+                                    const std::vector<std::string>& cameras) {
+  TruthFiles files;
+  std::error_code ec;
+  const bool directory = std::filesystem::is_directory(path, ec);
+  const std::string rig = directory ? (std::filesystem::path(path) / "truth.yaml").string() : path;
+  auto mountings = io::ReadTrueMountings(rig);
+  if (!mountings) return Error{mountings.error()};
+  files.mountings = std::move(*mountings);
+  if (!directory) return files;
+  for (const std::string& camera : cameras) {
+    const std::string file = (std::filesystem::path(path) / (camera + ".txt")).string();
+    if (!std::filesystem::exists(file, ec)) {
+      return Error{path + ": no true trajectory " + camera + ".txt for camera '" + camera + "'"};
+    }
+    auto trajectory = io::ReadTrajectory(file);
+    if (!trajectory) return Error{trajectory.error()};
+    files.trajectories[camera] = io::SampledTrajectory(std::move(*trajectory));
+  }
+  return files;
+}
+
+Expected<io::TruthComparison> CompareRunWithTruth(const RigCalibration& result,
+                                                  const TruthFiles& truth, io::TruthUnit unit,
+                                                  const std::vector<TimedTrajectory>& odometry) {
+  io::TruthInput input;
+  input.mountings = truth.mountings;
+  input.unit = unit;
+  if (!truth.trajectories.empty()) {
+    for (size_t i = 0; i < odometry.size(); ++i) {
+      const auto it = truth.trajectories.find(odometry[i].name);
+      input.poses.push_back(CameraPoses(odometry[i], static_cast<int>(i)));
+      input.trajectories.push_back(it == truth.trajectories.end() ? io::TrueTrajectory{}
+                                                                  : it->second);
+    }
+  }
+  return io::CompareWithTruth(result, input);
+}
+
+}  // namespace rigcal::cli
