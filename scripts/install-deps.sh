@@ -57,6 +57,7 @@ TEST_PACKAGES=(
   systemd              # ctest install/systemd_units: systemd-analyze verify of config/systemd
   python3              # ctest install/sd_notify: stands in for systemd's notify socket
   python3-yaml         # ctest io/camchain_kalibr: reads --camchain as Kalibr's camchain schema
+  universal-ctags      # ctest architecture/function_length: each function's first and last line
   crossbuild-essential-arm64  # ctest install/arm64_qemu: the arm64 cross compiler
   qemu-user            # ctest install/arm64_qemu: qemu-aarch64 runs the arm64 build here
   mmdebstrap           # scripts/arm64-sysroot.sh: Debian's arm64 -dev packages in a sysroot
