@@ -345,20 +345,9 @@ std::optional<Error> ReadSimulatedTrigger(const FieldReader& r, const YAML::Node
   return std::nullopt;
 }
 
-// fail_after_s, render_block.
-std::optional<Error> ReadFailuresAndRendering(const FieldReader& r, const YAML::Node& source,
-                                              SimulatedRigSpec* spec) {
-  if (const YAML::Node n = source["fail_after_s"]) {
-    if (!n.IsMap()) return r.Fail(n, "source.fail_after_s", "expected a map camera: seconds");
-    for (auto it = n.begin(); it != n.end(); ++it) {
-      const std::string camera = it->first.Scalar();
-      auto v = NumberIn(
-          r, it->second, "source.fail_after_s." + camera, [](double x) { return x >= 0; },
-          ">= 0 s");
-      if (!v) return Error{v.error()};
-      spec->fail_after_s[camera] = *v;
-    }
-  }
+// blackout_s: per camera, a span of stream time [from, to) in which it sees nothing.
+std::optional<Error> ReadBlackouts(const FieldReader& r, const YAML::Node& source,
+                                   SimulatedRigSpec* spec) {
   if (const YAML::Node n = source["blackout_s"]) {
     if (!n.IsMap()) return r.Fail(n, "source.blackout_s", "expected a map camera: [from, to]");
     for (auto it = n.begin(); it != n.end(); ++it) {
@@ -372,7 +361,24 @@ std::optional<Error> ReadFailuresAndRendering(const FieldReader& r, const YAML::
       auto to = NumberIn(
           r, it->second[1], key, [&](double x) { return x > *from; }, "> from");
       if (!to) return Error{to.error()};
-      spec.blackout_s[it->first.Scalar()] = {*from, *to};
+      spec->blackout_s[it->first.Scalar()] = {*from, *to};
+    }
+  }
+  return std::nullopt;
+}
+
+// fail_after_s, render_block.
+std::optional<Error> ReadFailuresAndRendering(const FieldReader& r, const YAML::Node& source,
+                                              SimulatedRigSpec* spec) {
+  if (const YAML::Node n = source["fail_after_s"]) {
+    if (!n.IsMap()) return r.Fail(n, "source.fail_after_s", "expected a map camera: seconds");
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      const std::string camera = it->first.Scalar();
+      auto v = NumberIn(
+          r, it->second, "source.fail_after_s." + camera, [](double x) { return x >= 0; },
+          ">= 0 s");
+      if (!v) return Error{v.error()};
+      spec->fail_after_s[camera] = *v;
     }
   }
   if (const YAML::Node n = source["render_block"]) {
@@ -431,6 +437,7 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
   if (auto e = ReadImageEffects(r, source, &spec)) return *e;
   if (auto e = ReadSimulatedTrigger(r, source, &spec)) return *e;
   if (auto e = ReadFailuresAndRendering(r, source, &spec)) return *e;
+  if (auto e = ReadBlackouts(r, source, &spec)) return *e;
   if (auto e = CheckFramesFitTrajectory(r, source, &spec)) return *e;
   return spec;
 }
