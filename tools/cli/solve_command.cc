@@ -106,7 +106,7 @@ Expected<SolveInput> ReadSolveInput(const SolveArgs& args, spdlog::logger& log) 
     input.slaves.push_back(std::move(*slave));
   }
   if (args.truth.empty()) return input;
-  auto loaded = io::ReadRigYaml(args.truth);
+  auto loaded = io::ReadRigYaml(args.truth, input.master.name);
   if (!loaded) return Error{loaded.error()};
   input.truth = std::move(*loaded);
   for (const auto& slave : input.slaves) {
@@ -195,9 +195,20 @@ Expected<SolveOutcome> SolveFromMotion(const SolveArgs& args, const SolveInput& 
       outcome.result = online.estimate.rig;
     } else {
       outcome.result = CalibrateRig(*recording, options);
+      // The estimated offsets' σ in the extrinsics' and scales' σ.
+      if (const Status propagated = io::PropagateTimeOffsetSigma(
+              input.master, input.slaves, *matched, tolerance_ns, options, &outcome.result);
+          !propagated.ok()) {
+        return Error{propagated.message()};
+      }
     }
   } catch (const std::exception& e) {
     return Error{std::string("calibration failed: ") + e.what()};
+  }
+  // Timing checked where the offsets were given (0 for synchronised cameras).
+  for (const std::string& found : io::CheckGivenTimeOffsets(
+           input.master, input.slaves, *given_offsets, offset_options, &outcome.result)) {
+    log.warn("{}", found);
   }
   if (outcome.result.master.empty()) outcome.result.master = input.master.name;
   for (size_t i = 0; i < outcome.result.slaves.size() && i < matched->offsets.size(); ++i) {
