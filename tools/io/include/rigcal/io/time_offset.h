@@ -52,10 +52,12 @@ Status PropagateTimeOffsetSigma(const TimedTrajectory& master,
                                 const CalibrationOptions& options, RigCalibration* result);
 
 // Timing checked when the offsets are given (0: synchronised cameras): per slave whose offset
-// is given and whose rotation `result` solved, the offset the data prefer (CorrelateAngularSpeed
-// within ±offset_options.search_window_s of the given offset, RefineTimeOffset with the solved
-// rotation), nullopt when it cannot be measured. When it lies beyond 3σ of the given offset the
-// slave's stamps are off (a frame late, a shifted clock): the slave's state becomes
+// is given and whose estimate in `result` is usable, the offset the data prefer
+// (CorrelateAngularSpeed within ±offset_options.search_window_s of the given offset,
+// RefineTimeOffset with the solved rotation), nullopt when it cannot be measured. When it lies
+// beyond 3σ and beyond 0.75 of the slave's frame interval from the given offset (the interpolated
+// measure is biased towards the middle between frames by up to half an interval on synchronised
+// data) the slave's stamps are off (a frame late, a shifted clock): the slave's state becomes
 // initialising, its `contradiction` and message say so and suggest --time-offset auto, and the
 // text is returned for the log. One entry per slave of `result`.
 std::vector<std::string> CheckGivenTimeOffsets(const TimedTrajectory& master,
