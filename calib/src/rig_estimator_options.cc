@@ -66,4 +66,12 @@ Status RigEstimatorOptions::Check() const {
   return Error{e.str()};
 }
 
+CalibrationOptions HistoryCalibrationOptions(const RigEstimatorOptions& options) {
+  CalibrationOptions history;
+  history.model_selection = options.model_selection;
+  history.alpha_threshold_deg = options.pair_min_angle_deg;
+  history.nominal_sigma = options.nominal_sigma;
+  return history;
+}
+
 }  // namespace rigcal

@@ -59,6 +59,61 @@ TEST(OnlineCalibrator, ThreadedProducersConverge) {
   EXPECT_EQ(other.Estimate().rig.slaves[0].motions.used, e.rig.slaves[0].motions.used);
 }
 
+// Resumed on poses stamped at or before what the state consumed: the same data again keeps the
+// state's estimate usable; another drive on a restarted clock (the slave moved: other poses at
+// the same stamps) is skipped too, and then no slave is usable with the old values: the
+// message says what happened.
+TEST(OnlineCalibrator, AResumedDriveOnARestartedClockIsNotUsableWithTheOldValues) {
+  DriveOptions d;
+  d.num_frames = 800;
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {DemoRig()[0]}, d);
+  OnlineOptions options;
+  options.lossless = true;
+  auto feed = [](OnlineCalibrator* c, const RigRecording& rec) {
+    for (size_t k = 0; k < rec.size(); ++k) {
+      for (int cam = 0; cam < 2; ++cam) c->Push(rec.PoseAt(cam, k));
+    }
+    c->Flush();
+  };
+  OnlineCalibrator first({"front", "left"}, options);
+  first.Start();
+  feed(&first, drive.recording);
+  first.Stop();
+  ASSERT_TRUE(first.Estimate().rig.slaves[0].usable());
+  const RigEstimatorState state = first.SaveState();
+
+  OnlineCalibrator again({"front", "left"}, options);
+  ASSERT_TRUE(again.RestoreState(state).ok());
+  again.Start();
+  feed(&again, drive.recording);
+  again.Stop();
+  EXPECT_TRUE(again.Estimate().rig.slaves[0].usable()) << again.Estimate().rig.slaves[0].message;
+
+  Similarity moved = DemoRig()[0];
+  moved.q = (moved.q * Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())).normalized();
+  const SyntheticDrive other = GenerateDrive({"front", "left"}, {moved}, d);
+  OnlineCalibrator restarted({"front", "left"}, options);
+  ASSERT_TRUE(restarted.RestoreState(state).ok());
+  restarted.Start();
+  feed(&restarted, other.recording);
+  restarted.Stop();
+  const SlaveCalibration& s = restarted.Estimate().rig.slaves[0];
+  EXPECT_FALSE(s.usable()) << s.message;
+  EXPECT_NE(s.message.find("another drive on a restarted clock"), std::string::npos) << s.message;
+
+  // Stamps the state never took, all before its own: not confirmed either.
+  RigRecording shifted = other.recording;
+  for (int64_t& t : shifted.t_ns) t -= 1'000'000;
+  OnlineCalibrator unmatched({"front", "left"}, options);
+  ASSERT_TRUE(unmatched.RestoreState(state).ok());
+  unmatched.Start();
+  feed(&unmatched, shifted);
+  unmatched.Stop();
+  const SlaveCalibration& u = unmatched.Estimate().rig.slaves[0];
+  EXPECT_FALSE(u.usable()) << u.message;
+  EXPECT_NE(u.message.find("none is a pose the state took"), std::string::npos) << u.message;
+}
+
 TEST(OnlineCalibrator, RejectsInvalidOptions) {
   OnlineOptions options;
   options.estimator.window_size = 0;

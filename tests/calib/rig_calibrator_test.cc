@@ -410,6 +410,31 @@ double NormalisedRotationErrorRms(const DriveOptions& base, const CalibrationOpt
   return std::sqrt(sum_sq / trials);
 }
 
+// The data's own scale and noise set every threshold: a drive in millionths or millions of the
+// usual unit, or with no rotation noise at all, is the same calibration (rotating 69° and more,
+// never "translations all parallel").
+TEST(CalibrateSlave, ScaleAndNoiseFreeDataAreSolvedAlike) {
+  for (const double unit : {1e-6, 1.0, 1e6}) {
+    for (const double rotation_noise_deg : {0.0, 0.05}) {
+      DriveOptions d;
+      d.num_frames = 600;
+      d.rotation_noise_deg = rotation_noise_deg;
+      d.position_noise = 0.002;
+      SyntheticDrive drive = GenerateDrive({"front", "left"}, {DemoRig()[0]}, d);
+      for (Pose& p : drive.recording.master.poses) p.C *= unit;
+      for (Pose& p : drive.recording.slaves[0].poses) p.C *= unit;
+      const SlaveCalibration r = CalibrateRig(drive.recording, CalibrationOptions{}).slaves[0];
+      SCOPED_TRACE("unit " + std::to_string(unit) + ", rotation noise " +
+                   std::to_string(rotation_noise_deg));
+      ASSERT_TRUE(r.usable()) << r.message;
+      EXPECT_EQ(r.motion_model, MotionModel::kGeneral) << r.message;
+      EXPECT_GT(r.observability.max_rotation_deg, 10.0);
+      EXPECT_LT(CompareToTruth(r.estimate, drive.truth[0]).rot_deg, 0.1) << r.message;
+      EXPECT_LT((r.estimate.C / unit - drive.truth[0].C).norm(), 0.01) << r.message;
+    }
+  }
+}
+
 TEST(CalibrateSlave, UncertaintyMatchesObservedError) {
   // The reported sigma must describe the actual error: over 60 noisy drives the normalised
   // rotation error (error / sigma) has an RMS near 1 (chi with 3 dof / sqrt(3)); accept

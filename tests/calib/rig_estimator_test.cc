@@ -610,6 +610,31 @@ namespace {
 // calibrator on those sets (its pair choice and time-block σ, not inflated again), so the
 // online estimate ends exactly where the batch one does; when it has dropped sets, the window
 // refinement of the statistics; between due times, no job.
+// The history refinement (the published value) decides the motion model with the online
+// options' model selection: a planar drive is planar by default, and general online and in the
+// history refinement when the config asks for little axis tilt (min_tilt_snr).
+TEST(RigEstimatorHistory, ConfigModelSelectionReachesTheHistoryRefinement) {
+  DriveOptions d;
+  d.motion = DriveOptions::Motion::kPlanarYaw;
+  d.num_frames = 1200;
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.001;
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {DemoRig()[0]}, d);
+  auto published_model = [&](const RigEstimatorOptions& o) {
+    RigEstimator est(Names(drive.recording), o);
+    Feed(&est, drive.recording);
+    const RefinementJob job = est.MakeRefinementJob(0, /*final=*/true);
+    EXPECT_FALSE(job.history.t_ns.empty());
+    EXPECT_TRUE(est.ApplyRefinement(job, RefineWindow(job)));
+    return est.Estimate().rig.slaves[0].motion_model;
+  };
+  EXPECT_EQ(published_model(RigEstimatorOptions{}), MotionModel::kPlanar);
+  RigEstimatorOptions general;
+  general.model_selection.min_tilt_snr = 1e-3;
+  general.model_selection.max_axis_std_ratio = 1e12;
+  EXPECT_EQ(published_model(general), MotionModel::kGeneral);
+}
+
 TEST(RigEstimatorHistory, FinalRefinementIsTheBatchOnTheSameSets) {
   const SyntheticDrive drive = NoisyDrive(1200, 5, 1);
   RigEstimatorOptions o;

@@ -19,6 +19,7 @@ namespace {
 using cli_test::Quote;
 using cli_test::RunResult;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 constexpr double kSigmas = 4.0;
 
@@ -73,6 +74,30 @@ TEST_F(SolveTimeOffsetTest, AutoEstimatesEverySlavesOffsetWithItsSigma) {
   EXPECT_THAT(cli_test::Slurp(Path("out.yaml")), HasSubstr("time_offset_std_s:"));
 }
 
+// Timing checked without --time-offset: a slave one frame late, or its clock 40 ms shifted, is
+// not silently interpolated into a "converged" result: the data's preferred offset is named
+// with its σ, --time-offset auto suggested, the slave not usable (exit 3). Synchronised slaves
+// pass the check (exit 0).
+TEST_F(SolveTimeOffsetTest, StampsOffWithoutTimeOffsetAreReportedNotConverged) {
+  std::string args = WriteRig({{20.0, 0.0, 0.0}, {20.0, 0.0, 0.0}});
+  RunResult r = Run(args + " --json");
+  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  EXPECT_THAT(r.err, Not(HasSubstr("timing:")));
+  for (const double late_s : {0.05, 0.04}) {
+    args = WriteRig({{20.0, 0.0, 0.0}, {20.0, 0.0, late_s}});
+    r = Run(args + " --json");
+    SCOPED_TRACE(late_s);
+    EXPECT_EQ(r.exit_code, 3) << Explain(r);
+    EXPECT_THAT(r.err, HasSubstr("timing: the data prefer a time offset of"));
+    EXPECT_THAT(r.err, HasSubstr("for 'cam2'"));
+    EXPECT_THAT(r.err, HasSubstr("--time-offset auto"));
+    EXPECT_THAT(r.err, Not(HasSubstr("for 'cam1'")));
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_NE(j["slaves"][1]["state"].get<std::string>(), "converged");
+    EXPECT_NE(j["slaves"][1]["state"].get<std::string>(), "usable");
+  }
+}
+
 TEST_F(SolveTimeOffsetTest, GivenOffsetIsAppliedAndReportedWithoutSigma) {
   const std::string args = WriteRig({{20.0, 0.0, 0.050}, {20.0, 0.0, 0.050}});
   const RunResult r = Run(args + " --time-offset 0.05 --json");
@@ -123,9 +148,10 @@ TEST_F(SolveTimeOffsetTest, RigConfigTimeOffsetIsReadAndTheFlagOverridesIt) {
   EXPECT_LE(std::abs(offset + 0.030), kSigmas * std) << offset;
   EXPECT_THAT(r.err, HasSubstr("time offsets from"));
 
-  // The flag overrides the config.
+  // The flag overrides the config (0.02 s is wrong for both: the timing check says so, exit 3).
   r = Run(args + " --config " + Quote(Path("rig.yaml")) + " --time-offset 0.02 --json");
-  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  ASSERT_EQ(r.exit_code, 3) << Explain(r);
+  EXPECT_THAT(r.err, HasSubstr("timing: the data prefer a time offset of -29.9"));
   j = nlohmann::json::parse(r.out);
   EXPECT_DOUBLE_EQ(j["slaves"][0]["time_offset_s"].get<double>(), 0.02);
   EXPECT_DOUBLE_EQ(j["slaves"][1]["time_offset_s"].get<double>(), 0.02);
@@ -133,7 +159,8 @@ TEST_F(SolveTimeOffsetTest, RigConfigTimeOffsetIsReadAndTheFlagOverridesIt) {
   // A config without time_offset: synchronised stamps (offset 0), as without --config.
   std::ofstream(Path("plain.yaml")) << (rig);
   r = Run(args + " --config " + Quote(Path("plain.yaml")) + " --json");
-  ASSERT_EQ(r.exit_code, 0) << Explain(r);
+  ASSERT_EQ(r.exit_code, 3) << Explain(r);  // cam1 runs a frame (50 ms) off: timing check
+  EXPECT_THAT(r.err, HasSubstr("for 'cam1'"));
   EXPECT_DOUBLE_EQ(nlohmann::json::parse(r.out)["slaves"][0]["time_offset_s"].get<double>(), 0.0);
 
   // A slave the config does not have; a broken config.

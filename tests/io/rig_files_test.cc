@@ -141,6 +141,28 @@ TEST_F(RigFilesTest, ReadsHandWrittenFileWithMetadataAndScales) {
   EXPECT_EQ(rig->at("cam2").scale, 2.0);
 }
 
+// A segment given two scales, and a truth relative to another master: errors naming the file,
+// the line and the field.
+TEST_F(RigFilesTest, TwoScalesForOneSegmentAndAnotherMasterAreErrors) {
+  EXPECT_THAT(ReadRigError("dup.yaml",
+                           "cam1:\n  q_wxyz: [1, 0, 0, 0]\n  C: [0, 0, 0]\n  scale: 1\n"
+                           "  scales:\n  - {segment: 0, scale: 1}\n  - {segment: 0, scale: 2}\n"),
+              HasSubstr("dup.yaml:7: cam1.scales[1].segment: segment 0 appears twice"));
+  const std::string other = Write("other.yaml",
+                                  "master: back\n"
+                                  "cam1: {q_wxyz: [1, 0, 0, 0], C: [0, 0, -1], scale: 2}\n");
+  const auto rig = ReadRigYaml(other, "front");
+  ASSERT_FALSE(rig.ok());
+  EXPECT_THAT(rig.error(),
+              HasSubstr("other.yaml:1: master: the file is relative to master 'back', the "
+                        "rig's master is 'front'"));
+  EXPECT_TRUE(ReadRigYaml(other, "back").ok());
+  EXPECT_TRUE(ReadRigYaml(other).ok());
+  const auto truth = ReadTrueMountings(other, "front");
+  ASSERT_FALSE(truth.ok());
+  EXPECT_THAT(truth.error(), HasSubstr("other.yaml:1: master:"));
+}
+
 // Every rejected rig file: the message names the file, the line and the field.
 TEST_F(RigFilesTest, RigYamlMissingFile) {
   const auto rig = ReadRigYaml(Path("absent.yaml"));

@@ -73,6 +73,79 @@ TEST(TimeOffsetEval, OffsetAndExtrinsicErrorsAgainstTheTruth) {
               std::sqrt(sum_z2 / n), n);
 }
 
+// A rig nobody tuned the offset estimate on: three slaves at 15, 25 and 30 Hz with random
+// phases, offsets 0, +37 and -21 ms, a 20 Hz master, 40 s, over many draws. The offsets must be
+// unbiased (the mean normalised error near 0) and their σ honest (normalised errors ~N(0,1));
+// the extrinsics' and scales' σ include the offset's (io::PropagateTimeOffsetSigma).
+TEST(TimeOffsetEval, HeldOutThreeSlaveRigIsUnbiasedWithHonestSigma) {
+  Similarity up;  // looking up, a fifth of the master's unit
+  up.q = Eigen::Quaterniond(Eigen::AngleAxisd(-80.0 * kRadPerDeg, Eigen::Vector3d::UnitX()));
+  up.C = Eigen::Vector3d(0.4, -0.6, 0.3);
+  up.scale = 0.2;
+  const std::vector<Similarity> rigs = {DemoRig()[0], DemoRig()[1], up};
+  const double offsets_s[] = {0.0, 0.037, -0.021};
+  const double rates_hz[] = {15.0, 25.0, 30.0};
+  constexpr int kDraws = 12;
+  std::vector<double> z_offset[3], z_rot, z_pos, z_scale;
+  std::printf("%5s %6s %10s %9s %7s\n", "draw", "slave", "error ms", "std ms", "z");
+  for (int draw = 0; draw < kDraws; ++draw) {
+    DriveOptions options;
+    options.seed = 500 + 7 * draw;
+    std::vector<CameraClock> clocks;
+    for (int i = 0; i < 3; ++i) {
+      const double phase = std::fmod(0.37 * (draw + 1) * (i + 2), 1.0);
+      clocks.push_back({rates_hz[i], phase / rates_hz[i], offsets_s[i]});
+    }
+    const auto rig = free_running::MakeFreeRunningRig({}, clocks, rigs, 40.0, options);
+    const auto matched =
+        MatchWithTimeOffsets(rig.master, rig.slaves, std::nullopt, 5'000'000, CalibrationOptions{});
+    ASSERT_TRUE(matched) << matched.error();
+    RigCalibration result = CalibrateRig(matched->recording, CalibrationOptions{});
+    ASSERT_TRUE(PropagateTimeOffsetSigma(rig.master, rig.slaves, *matched, 5'000'000,
+                                         CalibrationOptions{}, &result)
+                    .ok());
+    for (int i = 0; i < 3; ++i) {
+      const TimeOffsetEstimate& o = matched->offsets[i];
+      const double z = (o.offset_s - offsets_s[i]) / o.std_s;
+      z_offset[i].push_back(z);
+      std::printf("%5d %6d %+10.4f %9.4f %+7.2f\n", draw, i + 1, (o.offset_s - offsets_s[i]) * 1e3,
+                  o.std_s * 1e3, z);
+      const SlaveCalibration& s = result.slaves[i];
+      const CalibrationError e = CompareToTruth(s.estimate, rigs[i]);
+      z_rot.push_back(e.rot_deg / s.rot_std_deg);
+      z_pos.push_back((s.estimate.C - rigs[i].C).cwiseQuotient(s.pos_std).norm() / std::sqrt(3.0));
+      z_scale.push_back((s.estimate.scale - rigs[i].scale) / s.scales[0].std);
+    }
+  }
+  auto mean = [](const std::vector<double>& v) {
+    double m = 0.0;
+    for (double x : v) m += x;
+    return m / static_cast<double>(v.size());
+  };
+  auto rms = [](const std::vector<double>& v) {
+    double m = 0.0;
+    for (double x : v) m += x * x;
+    return std::sqrt(m / static_cast<double>(v.size()));
+  };
+  for (int i = 0; i < 3; ++i) {
+    const double n = static_cast<double>(z_offset[i].size());
+    std::printf("slave %d (%.0f Hz, %+.0f ms): mean z %+.2f (±%.2f for no bias), rms z %.2f\n",
+                i + 1, rates_hz[i], offsets_s[i] * 1e3, mean(z_offset[i]), 3.0 / std::sqrt(n),
+                rms(z_offset[i]));
+    // Unbiased: the mean normalised error within 3 standard errors of 0.
+    EXPECT_LT(std::abs(mean(z_offset[i])), 3.0 / std::sqrt(n)) << "slave " << i + 1;
+    EXPECT_GT(rms(z_offset[i]), 0.5) << "slave " << i + 1;
+    EXPECT_LT(rms(z_offset[i]), 1.6) << "slave " << i + 1;
+  }
+  // Rotation error / σ: the largest-axis σ against the total angle (χ with 3 dof, rms ≈ 1.7 when
+  // σ is the same on every axis); C: per-axis rms; scale: rms.
+  std::printf("extrinsics: rms rotation error/σ %.2f, rms C error/σ %.2f, rms scale error/σ %.2f\n",
+              rms(z_rot), rms(z_pos), rms(z_scale));
+  EXPECT_LT(rms(z_rot), 2.0);
+  EXPECT_LT(rms(z_pos), 1.6);
+  EXPECT_LT(rms(z_scale), 1.6);
+}
+
 TEST(TimeOffsetEval, InterpolationCostPerPose) {
   DriveOptions options;
   const auto rig =

@@ -31,6 +31,7 @@ struct ExperimentArgs {
   std::string only;
   int repeats = 3;
   bool no_online = false;
+  bool held_out = false;  // pairs: the held-out rigs (HeldOutPairScenarios) instead
 };
 
 // Progress on stderr at every 10 % of the work, once the run has taken more than 2 s.
@@ -56,7 +57,8 @@ int RunPairs(const ExperimentArgs& args) {
   ModuleLogger("calib")->set_level(spdlog::level::err);
   std::vector<std::string> notes;
   const std::vector<research::PairScenario> scenarios =
-      research::PairScenarios(args.data_dir, &notes);
+      args.held_out ? research::HeldOutPairScenarios(args.data_dir, &notes)
+                    : research::PairScenarios(args.data_dir, &notes);
   for (const auto& note : notes) std::cerr << "rigcal experiment pairs: " << note << "\n";
   research::PairEvaluationOptions options;
   options.repeats = args.repeats;
@@ -165,6 +167,9 @@ void RegisterExperiment(CLI::App& app, int* exit_code) {
       ->default_val(3)
       ->check(CLI::Range(1, 1000));
   cmd->add_flag("--no-online", args->no_online, "pairs: skip the online estimator");
+  cmd->add_flag("--held-out", args->held_out,
+                "pairs: the held-out rigs (a four-camera layout, scales 0.1-4, 5-50 Hz, 40-600 s)\n"
+                "instead of the evaluation set");
   cmd->add_option("--samples", args->samples,
                   "random problem instances per grid point (the thesis used 100000)")
       ->default_val(200)

@@ -201,9 +201,20 @@ Expected<SolveOutcome> SolveFromMotion(const SolveArgs& args, const SolveInput& 
       outcome.result = online.estimate.rig;
     } else {
       outcome.result = CalibrateRig(*recording, options);
+      // The estimated offsets' σ in the extrinsics' and scales' σ.
+      if (const Status propagated = io::PropagateTimeOffsetSigma(
+              input.master, input.slaves, *matched, tolerance_ns, options, &outcome.result);
+          !propagated.ok()) {
+        return Error{propagated.message()};
+      }
     }
   } catch (const std::exception& e) {
     return Error{std::string("calibration failed: ") + e.what()};
+  }
+  // Timing checked where the offsets were given (0 for synchronised cameras).
+  for (const std::string& found : io::CheckGivenTimeOffsets(
+           input.master, input.slaves, *given_offsets, offset_options, &outcome.result)) {
+    log.warn("{}", found);
   }
   if (outcome.result.master.empty()) outcome.result.master = input.master.name;
   for (size_t i = 0; i < outcome.result.slaves.size() && i < matched->offsets.size(); ++i) {

@@ -29,7 +29,8 @@ Expected<TruthFiles> ReadTruthFiles(const std::string& path,
   std::error_code ec;
   const bool directory = std::filesystem::is_directory(path, ec);
   const std::string rig = directory ? (std::filesystem::path(path) / "truth.yaml").string() : path;
-  auto mountings = io::ReadTrueMountings(rig);
+  // The first camera is the master: a truth naming another one is an error (rig_files.h).
+  auto mountings = io::ReadTrueMountings(rig, cameras.empty() ? "" : cameras.front());
   if (!mountings) return Error{mountings.error()};
   files.mountings = std::move(*mountings);
   if (!directory) return files;

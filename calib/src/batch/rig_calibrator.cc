@@ -19,6 +19,7 @@
 #include "batch/batch_refinement.h"
 #include "batch/batch_result.h"
 #include "batch/batch_solve_details.h"
+#include "batch/batch_units.h"
 #include "motions/motion_data.h"
 #include "motions/pose_glitches.h"
 #include "rigcal/base/logging.h"
@@ -169,13 +170,18 @@ SlaveCalibration CalibratePrepared(const RigPreparation& p, const CalibrationOpt
 
 }  // namespace
 
-RigCalibration CalibrateRig(const RigRecording& input, const CalibrationOptions& options) {
+RigCalibration CalibrateRig(const RigRecording& recording, const CalibrationOptions& given) {
+  // In the data's own length unit (batch_units.h).
+  const double unit = internal::LengthUnitOf(recording);
+  const RigRecording input = internal::InLengthUnit(recording, unit);
+  const CalibrationOptions options = internal::InLengthUnit(given, unit);
   const RigPreparation p = Prepare(input, options);
   RigCalibration out;
   out.master = p.recording.master.name;
   out.pairs_selected = static_cast<int>(p.pairs.size());
   for (size_t i = 0; i < p.recording.slaves.size(); ++i) {
     SlaveCalibration r = CalibratePrepared(p, options, static_cast<int>(i));
+    internal::FromLengthUnit(unit, &r);
     if (p.solvable && p.auto_pairs) {
       out.pairs_selected = std::max(out.pairs_selected, r.motions.total);
     }
@@ -193,9 +199,14 @@ RigRecording WithoutGlitches(const RigRecording& recording, std::vector<int>* dr
 
 namespace internal {
 
-SlaveCalibration CalibrateRigSlave(const RigRecording& recording, const CalibrationOptions& options,
+SlaveCalibration CalibrateRigSlave(const RigRecording& recording, const CalibrationOptions& given,
                                    int slave) {
-  return CalibratePrepared(Prepare(recording, options), options, slave);
+  const double unit = LengthUnitOf(recording);
+  const CalibrationOptions options = InLengthUnit(given, unit);
+  SlaveCalibration r = CalibratePrepared(Prepare(InLengthUnit(recording, unit), options), options,
+                                         slave);
+  FromLengthUnit(unit, &r);
+  return r;
 }
 
 }  // namespace internal

@@ -29,6 +29,23 @@ void RotationBlocks::Add(int64_t t_ns, const Eigen::Matrix4d& weighted_ata, doub
   blocks_.back().weight += weight;
 }
 
+std::vector<RotationBlockState> RotationBlocks::Save() const {
+  std::vector<RotationBlockState> saved;
+  for (const Block& b : blocks_) saved.push_back({b.start_ns, b.ata, b.weight});
+  return saved;
+}
+
+void RotationBlocks::Restore(int64_t block_ns, const std::vector<RotationBlockState>& blocks) {
+  if (block_ns > 0) block_ns_ = block_ns;
+  blocks_.clear();
+  const size_t first = blocks.size() > static_cast<size_t>(std::max(max_blocks_, 0))
+                           ? blocks.size() - static_cast<size_t>(std::max(max_blocks_, 0))
+                           : 0;
+  for (size_t k = first; k < blocks.size(); ++k) {
+    blocks_.push_back({blocks[k].start_ns, blocks[k].ata, blocks[k].weight});
+  }
+}
+
 void RotationBlocks::Decay(double factor) {
   for (Block& b : blocks_) {
     b.ata *= factor;

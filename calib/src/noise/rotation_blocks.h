@@ -8,6 +8,9 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <deque>
+#include <vector>
+
+#include "rigcal/calib/estimator_state.h"
 
 namespace rigcal::internal {
 
@@ -22,6 +25,12 @@ class RotationBlocks {
   void Decay(double factor);
   void Clear() { blocks_.clear(); }
   int size() const { return static_cast<int>(blocks_.size()); }
+  // The blocks and their current length, to continue after a restart (estimator_state.h).
+  std::vector<RotationBlockState> Save() const;
+  int64_t block_ns() const { return block_ns_; }
+  // Continues from saved blocks (at most max_blocks kept, the newest); block_ns <= 0 keeps the
+  // current length.
+  void Restore(int64_t block_ns, const std::vector<RotationBlockState>& blocks);
 
   // How much larger the cluster-robust rotation variance is than that of independent motions,
   // at the smallest eigenvector q of M = the sum of the blocks (4.11): the largest generalised

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "online/resume_check.h"
 #include "rigcal/base/logging.h"
 
 namespace rigcal {
@@ -58,7 +59,8 @@ OnlineCalibrator::OnlineCalibrator(std::vector<std::string> camera_names, Online
     : names_(std::move(camera_names)),
       options_(CheckedOnlineOptions(std::move(options), names_.size())),
       sync_(options_.sync),
-      estimator_(names_, options_.estimator) {
+      estimator_(names_, options_.estimator),
+      resume_check_(std::make_unique<internal::ResumeCheck>()) {
   if (options_.time_offset.enabled) {
     clock_ = std::make_unique<ClockOffsetTracker>(names_, options_.time_offset);
     clock_jumps_seen_.assign(clock_->num_slaves(), 0);
@@ -87,6 +89,7 @@ PushResult OnlineCalibrator::Push(const CameraPose& pose) {
     result = sync_.Push(pose);
   }
   if (result == PushResult::kAccepted && options_.time_offset.enabled) TrackClock(pose);
+  if (result == PushResult::kConsumed && resume_check_) resume_check_->Skipped(pose);
   return result;
 }
 
@@ -181,6 +184,7 @@ RigEstimate OnlineCalibrator::Estimate() const {
     MutexLock lock(estimator_mutex_);
     estimate = estimator_.Estimate();
   }
+  MarkUnconfirmedResume(&estimate);
   if (!options_.time_offset.enabled) return estimate;
   estimate.master_clock_jumps = static_cast<int>(sync_.ClockJumps(0).count);
   MutexLock lock(offset_mutex_);
@@ -200,6 +204,21 @@ RigEstimate OnlineCalibrator::Estimate() const {
     }
   }
   return estimate;
+}
+
+void OnlineCalibrator::MarkUnconfirmedResume(RigEstimate* estimate) const {
+  for (size_t i = 0; i < estimate->rig.slaves.size(); ++i) {
+    // An interpolated slave's poses reach the estimator at the master's instants, not as
+    // received: only the master's are compared then.
+    std::optional<std::string> why = resume_check_->Verdict(0);
+    if (!why && !options_.sync.interpolate) why = resume_check_->Verdict(static_cast<int>(i) + 1);
+    if (!why) continue;
+    SlaveCalibration& s = estimate->rig.slaves[i];
+    if (s.state == SlaveState::kUsable || s.state == SlaveState::kConverged) {
+      s.state = SlaveState::kInitialising;
+    }
+    s.message = "not usable: " + *why + "; " + s.message;
+  }
 }
 
 RigEstimatorState OnlineCalibrator::SaveState() const {
@@ -226,8 +245,10 @@ Status OnlineCalibrator::RestoreState(const RigEstimatorState& state) {
     MutexLock lock(estimator_mutex_);
     const Status restored = estimator_.RestoreState(state);
     if (!restored.ok()) return restored;
-    // The poses the estimator took before the restart are not taken twice.
+    // The poses the estimator took before the restart are not taken twice; those skipped are
+    // checked to be the same data.
     sync_.SkipConsumed(state.consumed_t_ns);
+    resume_check_->Start(names_, state.first_consumed, state.last_consumed);
   }
   if (!options_.time_offset.enabled) {
     if (!state.clock_offsets.empty()) {

@@ -99,6 +99,9 @@ struct RigEstimator::Slave {
   bool history_complete = true;
   int64_t last_history_refine_ns = std::numeric_limits<int64_t>::min();
   bool refined_from_history = false;  // `refined` is the batch calibrator's on the history
+  // Restored from a state and no motion accepted since: the published estimate is the saved
+  // one, and no refinement replaces it (it would refine the same information differently).
+  bool restored_unchanged = false;
   // The window's acceptance test (batch_acceptance.h) costs O(window) per update: its outcome
   // is kept for kAcceptanceEvery updates of the same generation and state.
   std::optional<std::string> unsupported;
@@ -120,6 +123,37 @@ struct RigEstimator::Slave {
     history_complete = true;
     last_history_refine_ns = std::numeric_limits<int64_t>::min();
     refined_from_history = false;
+  }
+
+  // What the published estimate rests on beyond the statistics (SlavePublishedState).
+  void SavePublished(const SlaveCalibration& published, const SlaveOnlineState& published_online,
+                     SlavePublishedState* out) const {
+    out->present = true;
+    out->published = published;
+    out->online = published_online;
+    out->refined = refined;
+    out->refined_from_history = refined_from_history;
+    out->consecutive_angle_var = drift.consecutive_angle_var;
+    out->pair_span = drift.pair_span;
+    out->block_ns = stats.rotation_blocks.block_ns();
+    out->blocks = stats.rotation_blocks.Save();
+    out->log_decay = stats.log_decay;
+    out->last_decay_ns = stats.last_decay_ns;
+    out->stable = convergence.stable;
+    out->last_q = convergence.last_q;
+    out->glitches = glitches;
+  }
+
+  // The σ inflation's inputs, the forgetting clock and the glitch counts of a saved state (the
+  // published estimate itself is set after the restored statistics are solved).
+  void RestoreInflation(const SlavePublishedState& r) {
+    if (!r.present) return;
+    drift.consecutive_angle_var = r.consecutive_angle_var;
+    drift.pair_span = r.pair_span;
+    stats.rotation_blocks.Restore(r.block_ns, r.blocks);
+    stats.log_decay = r.log_decay;
+    stats.last_decay_ns = r.last_decay_ns;
+    glitches = r.glitches;
   }
 
   // Publish's steps.
@@ -161,11 +195,11 @@ struct RigEstimator::Slave {
         &decalibration);
   }
 
-  // A confirmed decalibration: the estimate re-converges on the recent motions (the short
-  // window), without the refinement and the pose history of the old mounting.
+  // A confirmed decalibration: the estimate re-converges on the motions since the windows began
+  // to disagree, without the refinement and the pose history of the old mounting.
   void FollowShortWindow(const RigEstimatorOptions& o, const std::optional<Similarity>& nominal,
                          const internal::MotionModelChoice& choice) {
-    internal::RestartFromShortWindow(&stats);
+    internal::RestartFromMotionsSince(o, decalibration.disagree_since_ns, &stats);
     refined.reset();
     RestartHistory();
     convergence.stable = 0;
@@ -221,6 +255,8 @@ RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOp
   RequireValid(options_.Check(), "RigEstimatorOptions");
   glitch_gate_ = std::make_unique<internal::PoseGlitchGate>(static_cast<int>(names_.size()));
   consumed_t_ns_.assign(names_.size(), -1);
+  first_consumed_.assign(names_.size(), PoseFingerprint{});
+  last_consumed_.assign(names_.size(), PoseFingerprint{});
   estimate_.rig.master = names_.empty() ? "" : names_[0];
   for (size_t i = 1; i < names_.size(); ++i) {
     slaves_.push_back(std::make_unique<Slave>(options_));
@@ -249,7 +285,12 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
   estimate_.t_ns = t_ns;
   ++estimate_.sets;
   for (size_t c = 0; c < poses.size() && c < consumed_t_ns_.size(); ++c) {
-    if (poses[c]) consumed_t_ns_[c] = std::max(consumed_t_ns_[c], poses[c]->t_ns);
+    if (!poses[c]) continue;
+    const CameraPose& p = *poses[c];
+    const PoseFingerprint taken{p.t_ns, p.pose.q, p.pose.C};
+    if (first_consumed_[c].t_ns < 0) first_consumed_[c] = taken;
+    if (p.t_ns >= consumed_t_ns_[c]) last_consumed_[c] = taken;
+    consumed_t_ns_[c] = std::max(consumed_t_ns_[c], p.t_ns);
   }
   const CameraPose& master = *poses[0];
   if (have_master_segment_ && master.segment != master_segment_ && options_.master_metric) {
@@ -355,6 +396,7 @@ void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master
       have_estimate ? s.linear.estimate.q : Eigen::Quaterniond::Identity();
   internal::AccumulateMotion(o, m, md, gate.weight, marginalise_at, &s.stats);
   ++s.counts.used;
+  s.restored_unchanged = false;
   s.online.last_update_ns = m.t_b_ns;
   Publish(index);
 }
@@ -456,9 +498,9 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
       if (camera.poses.size() == h.t_ns.size()) h.slaves.push_back(std::move(camera));
     }
     job.history_t_ns = newest;
+    job.history_options = HistoryCalibrationOptions(options_);
     if (const std::optional<Similarity> nominal = NominalOf(slave)) {
       job.history_options.nominal[names_[slave + 1]] = *nominal;
-      job.history_options.nominal_sigma = options_.nominal_sigma;
     }
     // The window too: the refinement falls back to it when the batch cannot solve.
   }
@@ -475,6 +517,9 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
 bool RigEstimator::ApplyRefinement(const RefinementJob& job, const SlaveCalibration& refined) {
   if (job.generation != generation_ || !refined.solved()) return false;
   Slave& s = *slaves_.at(job.slave);
+  // Nothing new since a restart: the saved estimate stays (a refinement of the statistics
+  // alone is another minimum, not what was published before the restart).
+  if (s.restored_unchanged) return false;
   s.refined = refined;
   // A batch result names its pairs; the window refinement (also the fallback of a history
   // job) keeps the online estimate's empty ones.
@@ -490,6 +535,8 @@ RigEstimatorState RigEstimator::SaveState() const {
   state.master_segment = master_segment_;
   state.have_master_segment = have_master_segment_;
   state.consumed_t_ns = consumed_t_ns_;
+  state.first_consumed = first_consumed_;
+  state.last_consumed = last_consumed_;
   for (const auto& slave : slaves_) {
     const Slave& s = *slave;
     SlaveEstimatorState& saved = state.slaves.emplace_back();
@@ -503,6 +550,8 @@ RigEstimatorState RigEstimator::SaveState() const {
     saved.general_model = s.general_model;
     saved.long_stats = s.stats.long_stats.Sums();
     saved.short_stats = s.stats.short_stats.Sums();
+    const size_t i = state.slaves.size() - 1;
+    s.SavePublished(estimate_.rig.slaves[i], estimate_.online[i], &saved.resume);
   }
   return state;
 }
@@ -536,6 +585,7 @@ Status RigEstimator::RestoreState(const RigEstimatorState& state) {
     s->stats.short_stats = internal::MotionStatistics::FromSums(saved.short_stats);
     s->stats.outside = s->stats.long_stats;
     s->history_complete = false;  // the saved motions are not in any history
+    s->RestoreInflation(saved.resume);
     restored.push_back(std::move(s));
   }
   slaves_ = std::move(restored);
@@ -543,8 +593,28 @@ Status RigEstimator::RestoreState(const RigEstimatorState& state) {
   have_master_segment_ = state.have_master_segment;
   consumed_t_ns_.assign(names_.size(), -1);
   if (state.consumed_t_ns.size() == names_.size()) consumed_t_ns_ = state.consumed_t_ns;
+  first_consumed_.assign(names_.size(), PoseFingerprint{});
+  last_consumed_.assign(names_.size(), PoseFingerprint{});
+  if (state.first_consumed.size() == names_.size()) first_consumed_ = state.first_consumed;
+  if (state.last_consumed.size() == names_.size()) last_consumed_ = state.last_consumed;
   ++generation_;
-  for (size_t i = 0; i < slaves_.size(); ++i) Publish(static_cast<int>(i));
+  for (size_t i = 0; i < slaves_.size(); ++i) {
+    Publish(static_cast<int>(i));
+    const SlavePublishedState& r = state.slaves[i].resume;
+    if (!r.present) continue;
+    // Without new data the estimate is the one published before the restart, exactly: the
+    // refinement it may rest on (the batch calibrator's on a pose history the state does not
+    // hold) cannot be recomputed from the statistics.
+    Slave& s = *slaves_[i];
+    s.convergence.stable = r.stable;
+    s.convergence.last_q = r.last_q;
+    s.online = r.online;
+    s.refined = r.refined;
+    s.refined_from_history = r.refined_from_history;
+    s.restored_unchanged = true;
+    estimate_.rig.slaves[i] = r.published;
+    estimate_.online[i] = r.online;
+  }
   return Status::Ok();
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <iterator>
 
 #include "models/linear_solvers.h"
@@ -86,11 +87,26 @@ void RestartPositions(SlaveStatistics* s) {
   s->outside = s->long_stats;
 }
 
-void RestartFromShortWindow(SlaveStatistics* s) {
-  s->long_stats = s->short_stats;
+void RestartFromMotionsSince(const RigEstimatorOptions& o, int64_t since_ns, SlaveStatistics* s) {
+  std::deque<WindowEntry> kept;
+  for (const WindowEntry& e : s->window) {
+    if (e.motion.t_a_ns >= since_ns) kept.push_back(e);
+  }
+  s->long_stats = MotionStatistics{};
+  s->short_stats = MotionStatistics{};
+  s->outside = MotionStatistics{};
   s->rotation_blocks.Clear();
-  s->window.clear();
-  s->outside = s->long_stats;
+  for (const WindowEntry& e : kept) {
+    // As much of each as the statistics held (forgetting since it was added).
+    const double w = e.weight * std::exp(s->log_decay - e.log_decay);
+    s->long_stats.Add(e.data, e.data.segment, w);
+    s->short_stats.Add(e.data, e.data.segment, w);
+    if (o.sigma_block_s > 0.0) {
+      const Eigen::Matrix4d a = RotationConstraintMatrix(e.data);
+      s->rotation_blocks.Add(e.motion.t_b_ns, w * a.transpose() * a, w);
+    }
+  }
+  s->window = std::move(kept);
 }
 
 void CopyWindow(const SlaveStatistics& s, RefinementJob* job) {

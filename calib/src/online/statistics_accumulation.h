@@ -54,8 +54,13 @@ void AccumulateMotion(const RigEstimatorOptions& options, const RigMotion& motio
 // unit-free rotation information stays; the window is dropped into the prior.
 void RestartPositions(SlaveStatistics* stats);
 
-// Decalibration: the long statistics become the short ones (re-converge on the recent motions).
-void RestartFromShortWindow(SlaveStatistics* stats);
+// Decalibration: the statistics restart from the window's motions that began at or after
+// `since_ns` (the first disagreement of the windows, after the camera moved), the others
+// dropped. The short window is not enough: its older motions, of the old mounting, keep
+// their forgotten weight for ever in the long statistics (half_life_s 0) and bias the new
+// estimate (measured: 16σ off at the end of a drive after a camera moved).
+void RestartFromMotionsSince(const RigEstimatorOptions& options, int64_t since_ns,
+                             SlaveStatistics* stats);
 
 // The window (motions and how much of each the statistics still hold) and the prior of the
 // motions before it, for a refinement job.

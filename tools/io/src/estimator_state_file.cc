@@ -7,6 +7,7 @@
 #include <iterator>
 #include <sstream>
 
+#include "estimator_state_published.h"
 #include "estimator_state_ranges.h"
 
 namespace rigcal::io {
@@ -176,10 +177,20 @@ Status ReadSlaves(std::string rest, RigEstimatorState* state) {
     }
     const size_t next = remaining.find("\nslave ", short_pos);
     const std::string long_text = remaining.substr(long_pos + 5, short_pos - long_pos - 5);
-    const std::string short_text = remaining.substr(
+    std::string short_text = remaining.substr(
         short_pos + 6, next == std::string::npos ? std::string::npos : next + 1 - short_pos - 6);
+    // Version 6: the published estimate follows the short statistics.
+    const size_t published = short_text.find("\npublished\n");
+    const std::string published_text =
+        published == std::string::npos ? std::string() : short_text.substr(published + 1);
+    if (published != std::string::npos) short_text.resize(published + 1);
     if (!ReadSums(long_text, &s.long_stats) || !ReadSums(short_text, &s.short_stats)) {
       return Error{"malformed statistics of slave " + name};
+    }
+    if (!published_text.empty()) {
+      if (const Status read = internal::ReadPublished(published_text, &s.resume); !read.ok()) {
+        return Error{"slave " + name + ": " + read.message()};
+      }
     }
     rest = next == std::string::npos ? "" : remaining.substr(next + 1);
   }
@@ -211,6 +222,49 @@ Status ReadClockOffsets(std::istream& b, RigEstimatorState* state) {
   return Status::Ok();
 }
 
+// Version 6: "fingerprints <n>" and n lines "fingerprint <camera> <t_ns> <q wxyz> <C>" of the
+// first then "... " of the newest pose taken, n 0 or one per camera.
+void WriteFingerprints(std::ostream& out, const RigEstimatorState& state) {
+  const size_t n = state.first_consumed.size() == state.cameras.size() &&
+                           state.last_consumed.size() == state.cameras.size()
+                       ? state.cameras.size()
+                       : 0;
+  out << "fingerprints " << n << '\n';
+  for (size_t c = 0; c < n; ++c) {
+    out << "fingerprint " << c;
+    for (const PoseFingerprint* f : {&state.first_consumed[c], &state.last_consumed[c]}) {
+      out << ' ' << f->t_ns << ' ' << f->q.w() << ' ' << f->q.x() << ' ' << f->q.y() << ' '
+          << f->q.z() << ' ' << f->C.x() << ' ' << f->C.y() << ' ' << f->C.z();
+    }
+    out << '\n';
+  }
+}
+
+Status ReadFingerprints(std::istream& b, RigEstimatorState* state) {
+  std::string word;
+  size_t n = 0;
+  if (!(b >> word >> n) || word != "fingerprints" || (n != 0 && n != state->cameras.size())) {
+    return Error{"malformed pose fingerprints (none, or one per camera)"};
+  }
+  for (size_t c = 0; c < n; ++c) {
+    size_t index = 0;
+    if (!(b >> word >> index) || word != "fingerprint" || index != c) {
+      return Error{"malformed pose fingerprint of camera " + std::to_string(c)};
+    }
+    for (auto* list : {&state->first_consumed, &state->last_consumed}) {
+      PoseFingerprint f;
+      double w = 0, x = 0, y = 0, z = 0;
+      if (!(b >> f.t_ns >> w >> x >> y >> z >> f.C.x() >> f.C.y() >> f.C.z()) || f.t_ns < -1 ||
+          !f.C.allFinite() || !std::isfinite(w + x + y + z)) {
+        return Error{"malformed pose fingerprint of camera '" + state->cameras[c] + "'"};
+      }
+      f.q = Eigen::Quaterniond(w, x, y, z);
+      list->push_back(f);
+    }
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 std::string FormatEstimatorState(const RigEstimatorState& state) {
@@ -229,6 +283,7 @@ std::string FormatEstimatorState(const RigEstimatorState& state) {
          << ' ' << c.covariance(0, 0) << ' ' << c.covariance(0, 1) << ' ' << c.covariance(1, 1)
          << ' ' << c.t_ns << ' ' << c.measurements << ' ' << c.jumps << '\n';
   }
+  WriteFingerprints(body, state);
   for (size_t i = 0; i < state.slaves.size(); ++i) {
     const SlaveEstimatorState& s = state.slaves[i];
     const MotionCounts& c = s.counts;
@@ -241,6 +296,7 @@ std::string FormatEstimatorState(const RigEstimatorState& state) {
     WriteSums(body, s.long_stats);
     body << "short\n";
     WriteSums(body, s.short_stats);
+    if (s.resume.present) internal::WritePublished(body, s.resume);
   }
   const std::string text = body.str();
   std::ostringstream out;
@@ -281,6 +337,15 @@ Expected<RigEstimatorState> ParseEstimatorState(std::string_view view) {
   if (!(sum_in >> std::hex >> stored) || stored != Fnv1a(body)) {
     return Error{"checksum mismatch (file corrupt or truncated)"};
   }
+  // The checksum line ends the file: anything after it is not covered by the checksum.
+  const std::string after((std::istreambuf_iterator<char>(sum_in)),
+                          std::istreambuf_iterator<char>());
+  if (const size_t garbage = after.find_first_not_of(" \t\r\n"); garbage != std::string::npos) {
+    const size_t at = text.size() - after.size() + garbage;
+    const auto line =
+        1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+    return Error{"line " + std::to_string(line) + ": text after the checksum line"};
+  }
   RigEstimatorState state;
   std::istringstream b(body);
   std::string word;
@@ -312,6 +377,9 @@ Expected<RigEstimatorState> ParseEstimatorState(std::string_view view) {
   }
   if (version >= 5) {
     if (const Status read = ReadClockOffsets(b, &state); !read.ok()) return read;
+  }
+  if (version >= 6) {
+    if (const Status read = ReadFingerprints(b, &state); !read.ok()) return read;
   }
   const std::string rest((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
   if (const Status read = ReadSlaves(rest, &state); !read.ok()) return read;

@@ -73,6 +73,7 @@ Expected<Similarity> ReadRigSlave(const FieldReader& r, const std::string& name,
     if (!scales.IsSequence()) {
       return r.Fail(scales, name + ".scales", "expected a list of {segment, scale}");
     }
+    std::map<int64_t, double> seen;  // segment -> scale
     for (size_t i = 0; i < scales.size(); ++i) {
       const std::string field = name + ".scales[" + std::to_string(i) + "]";
       const YAML::Node entry = scales[i];
@@ -87,6 +88,12 @@ Expected<Similarity> ReadRigSlave(const FieldReader& r, const std::string& name,
       auto value = r.Number(entry["scale"], field + ".scale");
       if (!value) return Error{value.error()};
       if (!(*value > 0.0)) return r.Fail(entry["scale"], field + ".scale", "must be > 0");
+      // One scale per segment: a second entry (another value or the same) is an error.
+      if (const auto [it, fresh] = seen.emplace(*id, *value); !fresh) {
+        return r.Fail(entry["segment"], field + ".segment",
+                      "segment " + std::to_string(*id) + " appears twice (scales " +
+                          entry["scale"].Scalar() + " and " + YamlNumber(it->second) + ")");
+      }
     }
   }
   return rig;
@@ -94,7 +101,8 @@ Expected<Similarity> ReadRigSlave(const FieldReader& r, const std::string& name,
 
 // ReadRigYaml of a loaded file.
 Expected<std::map<std::string, Similarity>> RigFromYaml(const YAML::Node& root,
-                                                        const std::string& path) {
+                                                        const std::string& path,
+                                                        const std::string& expected_master) {
   const FieldReader r(path);
   if (!root.IsMap()) {
     return Error{r.At(root) + "expected a map from slave name to {q_wxyz, C, scale}"};
@@ -103,6 +111,12 @@ Expected<std::map<std::string, Similarity>> RigFromYaml(const YAML::Node& root,
   for (auto it = root.begin(); it != root.end(); ++it) {
     if (!it->first.IsScalar()) return Error{r.At(it->first) + "slave names must be scalars"};
     const std::string name = it->first.Scalar();
+    if (name == "master" && it->second.IsScalar() && !expected_master.empty() &&
+        it->second.Scalar() != expected_master) {
+      return r.Fail(it->second, "master",
+                    "the file is relative to master '" + it->second.Scalar() +
+                        "', the rig's master is '" + expected_master + "'");
+    }
     if (kMetadataKeys.count(name) && it->second.IsScalar()) continue;
     if (name == "provenance" && it->second.IsMap()) continue;  // provenance.h
     if (auto checked = r.CameraName(it->first, "slave name"); !checked) {
@@ -119,10 +133,11 @@ Expected<std::map<std::string, Similarity>> RigFromYaml(const YAML::Node& root,
 
 }  // namespace
 
-Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path) {
+Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path,
+                                                        const std::string& expected_master) {
   auto root = LoadYaml(path);
   if (!root) return Error{root.error()};
-  return RigFromYaml(*root, path);
+  return RigFromYaml(*root, path, expected_master);
 }
 
 namespace {
@@ -130,11 +145,12 @@ namespace {
 // A rig YAML, or the mountings `field` (named `key`) of a rig config's cameras; the file is read
 // and parsed once.
 Expected<std::map<std::string, Similarity>> ReadMountings(
-    const std::string& path, std::optional<Similarity> CameraConfig::*field, const char* key) {
+    const std::string& path, std::optional<Similarity> CameraConfig::*field, const char* key,
+    const std::string& expected_master) {
   auto root = LoadYaml(path);
   if (!root) return Error{root.error()};
   const YAML::Node& loaded = *root;
-  if (!loaded.IsMap() || !loaded["cameras"]) return RigFromYaml(loaded, path);
+  if (!loaded.IsMap() || !loaded["cameras"]) return RigFromYaml(loaded, path, expected_master);
   auto config = RigConfigFromYaml(loaded, path);
   if (!config) return Error{config.error()};
   std::map<std::string, Similarity> mountings;
@@ -148,11 +164,12 @@ Expected<std::map<std::string, Similarity>> ReadMountings(
 }  // namespace
 
 Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::string& path) {
-  return ReadMountings(path, &CameraConfig::nominal, "nominal");
+  return ReadMountings(path, &CameraConfig::nominal, "nominal", "");
 }
 
-Expected<std::map<std::string, Similarity>> ReadTrueMountings(const std::string& path) {
-  return ReadMountings(path, &CameraConfig::truth, "truth");
+Expected<std::map<std::string, Similarity>> ReadTrueMountings(const std::string& path,
+                                                              const std::string& expected_master) {
+  return ReadMountings(path, &CameraConfig::truth, "truth", expected_master);
 }
 
 std::string RigToYaml(const std::map<std::string, Similarity>& rig) {

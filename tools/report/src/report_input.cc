@@ -133,7 +133,7 @@ void AddLogNotes(const LogContents& log, ReportData* data) {
 }
 
 Status AddTruth(const std::string& path, ReportData* data) {
-  auto truth = io::ReadTrueMountings(path);
+  auto truth = io::ReadTrueMountings(path, data->final_result.master);
   if (!truth) return truth.status();
   for (const std::string& slave : data->slaves) {
     if (truth->count(slave) == 0) {

@@ -84,6 +84,40 @@ void Add(std::vector<PairScenario>* out, const std::string& name, const std::str
   }
 }
 
+// A rig laid out unlike the demo and car rigs: four cameras, one looking up, one down and
+// back, one sideways on a long boom; odometry scales from a tenth to four times the master's.
+std::vector<Similarity> HeldOutRig() {
+  auto rot = [](const Eigen::Vector3d& axis, double deg) {
+    return Eigen::Quaterniond(Eigen::AngleAxisd(deg * kRadPerDeg, axis.normalized()));
+  };
+  Similarity up{rot(Eigen::Vector3d::UnitX(), -80.0), Eigen::Vector3d(0.1, -0.35, 0.2), 0.1};
+  Similarity down_back{rot(Eigen::Vector3d(0.2, 1.0, 0.1), 150.0), Eigen::Vector3d(-0.3, 0.4, -0.9),
+                       4.0};
+  Similarity boom{rot(Eigen::Vector3d::UnitY(), 75.0), Eigen::Vector3d(1.6, 0.05, 0.3), 1.3};
+  return {up, down_back, boom};
+}
+
+void AddHeldOut(std::vector<PairScenario>* out, const std::string& name, const std::string& source,
+                const SampledTrajectory& master, bool planar,
+                const std::vector<PoseNoiseModel>& noises) {
+  for (const auto& noise : noises) {
+    PairScenario s;
+    s.name = name + "-" + noise.name;
+    s.source = source;
+    s.master = master;
+    s.names = {"main", "up", "downback", "boom"};
+    s.rig = HeldOutRig();
+    s.noise = noise;
+    s.planar = planar;
+    out->push_back(std::move(s));
+  }
+}
+
+// White pose noise only, at the level of a good PnP and of a poor one.
+PoseNoiseModel White(double length) { return {"white", 0.1, 0.002 * length, 0.0, 0.0}; }
+PoseNoiseModel WhiteStrong(double length) { return {"white-strong", 0.5, 0.01 * length, 0.0, 0.0}; }
+PoseNoiseModel DriftOnly() { return {"drift", 0.0, 0.0, 0.03, 0.02}; }
+
 }  // namespace
 
 CameraTrack AddPoseNoise(const CameraTrack& exact, const PoseNoiseModel& noise, double unit,
@@ -143,6 +177,29 @@ std::vector<PairScenario> PairScenarios(const std::string& trajectory_dir,
         false, {Mocap(1), Vo(1)});
     Add(&out, "euroc-v102-10Hz-short", "EuRoC V1_02 ground truth, 10 Hz, first 30 s",
         Subsample(*euroc, 20, 30.0), false, {Pnp(1), Vo(1)});
+  }
+  return out;
+}
+
+std::vector<PairScenario> HeldOutPairScenarios(const std::string& trajectory_dir,
+                                               std::vector<std::string>* notes) {
+  std::vector<PairScenario> out;
+  AddHeldOut(&out, "held-sim-5Hz-long", "simulated 6-DoF, 25 deg amplitude, 5 Hz, 600 s",
+             SimulatedMaster(3000, 5.0, 25.0), false, {White(1), DriftOnly()});
+  AddHeldOut(&out, "held-sim-50Hz-40s", "simulated 6-DoF, 50 deg amplitude, 50 Hz, 40 s",
+             SimulatedMaster(2000, 50.0, 50.0), false, {White(1), WhiteStrong(1)});
+  const std::string dir = trajectory_dir.empty() ? "" : trajectory_dir + "/";
+  if (trajectory_dir.empty()) {
+    notes->push_back("no trajectory directory given (--data): real trajectories left out");
+    return out;
+  }
+  if (auto euroc = Load(dir + "V102_groundtruth.csv", "", notes)) {
+    AddHeldOut(&out, "held-euroc-v102-40Hz", "EuRoC V1_02 ground truth at 40 Hz",
+               Subsample(*euroc, 5, 0.0), false, {White(1), WhiteStrong(1), DriftOnly()});
+  }
+  if (auto kitti = Load(dir + "KITTI_00_gt.txt", dir + "KITTI_00_gt_times.txt", notes)) {
+    AddHeldOut(&out, "held-kitti00-5Hz", "KITTI 00 ground truth at 5 Hz, first 200 s",
+               Subsample(*kitti, 2, 200.0), true, {White(10)});
   }
   return out;
 }

@@ -9,13 +9,16 @@
 // blocks (rebuilt from new motions).
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "rigcal/calib/calibration_result.h"
+#include "rigcal/calib/rig_estimate.h"
 
 namespace rigcal {
 
@@ -82,6 +85,36 @@ struct MotionSums {
   std::map<int, double> closed_scales;  // last scale of each marginalised segment
 };
 
+// One contiguous time block of a slave's rotation information (calib/src/noise/rotation_blocks.h).
+struct RotationBlockState {
+  int64_t start_ns = 0;
+  Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();  // sum w A^T A of the block's motions (4.10)
+  double weight = 0.0;
+};
+
+// What a slave's published estimate rests on beyond its statistics (state version 6): the
+// estimate as last published (a refinement's, with its σ), the inputs of the σ inflation
+// (calib/src/online/online_uncertainty.h: the drift of the pairs, the rotation time blocks), the
+// forgetting clock, the convergence count and the glitches skipped. A resume without new data
+// publishes `published` as it is; new data go on from all of it.
+struct SlavePublishedState {
+  bool present = false;  // false: a state file before version 6 (re-solved from the statistics)
+  SlaveCalibration published;  // name, state and message included
+  SlaveOnlineState online;     // the facts published with it
+  // The background refinement kept beside the linear solution (published while they agree),
+  // and whether it is the batch calibrator's on the pose history.
+  std::optional<SlaveCalibration> refined;
+  bool refined_from_history = false;
+  RunningMeanSquare consecutive_angle_var, pair_span;  // online_uncertainty's DriftState
+  int64_t block_ns = 0;                                // current length of a rotation block
+  std::vector<RotationBlockState> blocks;
+  double log_decay = 0.0;      // forgetting applied to the long statistics so far (log)
+  int64_t last_decay_ns = -1;  // stream time they were last forgotten to (-1: never)
+  int stable = 0;              // convergence_check's stable count
+  Eigen::Quaterniond last_q = Eigen::Quaterniond::Identity();  // ... and the rotation then
+  GlitchCounts glitches;
+};
+
 // One slave's saved state.
 struct SlaveEstimatorState {
   MotionCounts counts;  // motions formed, used and rejected (by reason)
@@ -93,6 +126,7 @@ struct SlaveEstimatorState {
   bool general_model = false;  // rotating rig: the general (not planar) model, with hysteresis
   MotionSums long_stats;       // all the information (forgotten by half_life_s)
   MotionSums short_stats;      // the short-window twin (decalibration detection)
+  SlavePublishedState resume;  // version 6
 };
 
 // One free-running slave's clock offset as the online tracker knows it
@@ -108,6 +142,13 @@ struct ClockOffsetState {
   int jumps = 0;         // jumps detected so far
 };
 
+// A pose the estimator took: a resume recognises the same data again by it (ResumeCheck).
+struct PoseFingerprint {
+  int64_t t_ns = -1;  // -1: none taken
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d C = Eigen::Vector3d::Zero();
+};
+
 struct RigEstimatorState {
   std::vector<std::string> cameras;         // camera names, [0] the master
   int master_segment = 0;                   // the master's current odometry segment
@@ -117,6 +158,10 @@ struct RigEstimatorState {
   // far each input was consumed, so that the same poses after a resume are skipped. Empty when
   // unknown (state files before version 4).
   std::vector<int64_t> consumed_t_ns;
+  // Per camera, the first and the newest pose the estimator took (state version 6; empty
+  // before): a resumed run whose poses are stamped at or before consumed_t_ns is the same data
+  // again only when it holds these poses at their stamps.
+  std::vector<PoseFingerprint> first_consumed, last_consumed;
   // Per slave, the online clock offset when the cameras run free (OnlineOptions::time_offset);
   // empty when they do not, and in state files before version 5.
   std::vector<ClockOffsetState> clock_offsets;

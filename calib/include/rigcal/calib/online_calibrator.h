@@ -24,6 +24,9 @@
 #include "rigcal/calib/sync_buffer.h"
 
 namespace rigcal {
+namespace internal {
+class ResumeCheck;
+}
 
 struct OnlineOptions {
   SyncOptions sync;
@@ -110,6 +113,9 @@ class OnlineCalibrator {
   // SyncBuffer; leaves out of `set` the slaves whose offset is not known.
   void TrackClock(const CameraPose& pose) RIGCAL_EXCLUDES(offset_mutex_);
   void WithholdUnknownClocks(MatchedSet* set) const RIGCAL_EXCLUDES(offset_mutex_);
+  // After a resume whose input is not the state's data (ResumeCheck): every slave's estimate is
+  // the state's, not this input's, and not usable.
+  void MarkUnconfirmedResume(RigEstimate* estimate) const;
 
   std::vector<std::string> names_;
   OnlineOptions options_;
@@ -135,6 +141,8 @@ class OnlineCalibrator {
   // sum then.
   uint64_t master_jumps_seen_ RIGCAL_GUARDED_BY(offset_mutex_) = 0;
   int64_t master_step_seen_ns_ RIGCAL_GUARDED_BY(offset_mutex_) = 0;
+  // After RestoreState: whether the skipped poses are the state's own data.
+  std::unique_ptr<internal::ResumeCheck> resume_check_;
   std::thread estimator_thread_;
   std::thread refinement_thread_;
 };

@@ -81,6 +81,8 @@ class RigEstimator {
   bool have_master_segment_ = false;
   uint64_t generation_ = 0;
   std::vector<int64_t> consumed_t_ns_;  // RigEstimatorState::consumed_t_ns, per camera
+  // RigEstimatorState::first_consumed / last_consumed, per camera.
+  std::vector<PoseFingerprint> first_consumed_, last_consumed_;
 };
 
 }  // namespace rigcal

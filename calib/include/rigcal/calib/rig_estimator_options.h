@@ -8,6 +8,7 @@
 
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
+#include "rigcal/calib/calibration_options.h"
 #include "rigcal/calib/model_selection_options.h"
 
 namespace rigcal {
@@ -114,5 +115,11 @@ struct RigEstimatorOptions {
   // The first violated constraint as "<field>: <constraint>".
   Status Check() const;
 };
+
+// The batch calibrator's options of the history refinement (RefinementJob::history_options,
+// whose result is published): the online estimator's model selection, its smallest rotation of
+// the general model (pair_min_angle_deg as alpha_threshold_deg) and nominal σ, so that the
+// config's options decide the published model as they decide the online one.
+CalibrationOptions HistoryCalibrationOptions(const RigEstimatorOptions& options);
 
 }  // namespace rigcal

@@ -8,8 +8,12 @@
 //   consumed <count> <t_ns>...   (version 4: per camera the newest stamp consumed, -1 none)
 //   clocks <count>               (version 5: 0, or one line per slave when the cameras run free)
 //   clock <i> <initialised 0|1> <offset_s> <drift> <P00> <P01> <P11> <t_ns> <measurements> <jumps>
+//   fingerprints <count>         (version 6: 0, or one line per camera)
+//   fingerprint <c> <t_ns> <qw qx qy qz> <Cx Cy Cz> <t_ns> <q> <C>   (first, newest pose taken)
 //   slave <i>            then its counts, noise levels, segment, model and the long and short
-//   ...                  statistics (every sum, 17 significant digits: exact round trip)
+//   ...                  statistics (every sum, 17 significant digits: exact round trip), and
+//                        (version 6) the published estimate and what its σ rest on
+//                        (SlavePublishedState; src/estimator_state_published.h)
 //   checksum <FNV-1a 64 of the lines between the header and this one, hex>
 //
 // Version 3 holds the translation-direction moments (Ddir, the translational model's σ);
@@ -17,7 +21,10 @@
 // (DirectionMomentsFromCrossMoments). Version 4 adds the consumed stamps (how far each input
 // was consumed: a resume skips those poses); older files resume without them. Version 5 adds
 // the clock offsets of free-running slaves (ClockOffsetState); a version-4 file resumes with
-// them estimated afresh.
+// them estimated afresh. Version 6 adds per slave the published estimate (a refinement the
+// statistics cannot reproduce: the batch calibrator's on the pose history), the inputs of its σ
+// inflation and the convergence count, so that a resume without new data publishes the same
+// estimate; an older file resumes with the estimate re-solved from the statistics.
 
 #include <string>
 #include <string_view>
@@ -27,7 +34,7 @@
 
 namespace rigcal::io {
 
-inline constexpr int kEstimatorStateVersion = 5;        // written
+inline constexpr int kEstimatorStateVersion = 6;        // written
 inline constexpr int kOldestEstimatorStateVersion = 2;  // oldest read
 
 // The state as the text of a state file (version kEstimatorStateVersion).

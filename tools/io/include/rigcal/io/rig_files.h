@@ -30,7 +30,10 @@ namespace rigcal::io {
 // `<path>:<line>: <slave>.<field>` and say what is wrong: unreadable file, YAML syntax,
 // missing q_wxyz / C / scale, wrong length, non-numeric or non-finite entry, scale <= 0,
 // malformed `scales` entries, no slaves.
-Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path);
+// `expected_master` (when not empty): a file whose `master:` names another camera is an error
+// naming the file and line (its poses are relative to another camera).
+Expected<std::map<std::string, Similarity>> ReadRigYaml(const std::string& path,
+                                                        const std::string& expected_master = "");
 
 // Nominal mountings (CAD values) for `rigcal solve --prior`: a rig YAML as above (a truth or
 // result file), or a rig config (docs/config.md; recognised by its `cameras` key) whose
@@ -40,7 +43,8 @@ Expected<std::map<std::string, Similarity>> ReadNominalMountings(const std::stri
 
 // True mountings (`rigcal report --truth`): a rig YAML, or a rig config whose cameras[].truth are
 // taken (simulated rigs). Errors as ReadNominalMountings.
-Expected<std::map<std::string, Similarity>> ReadTrueMountings(const std::string& path);
+Expected<std::map<std::string, Similarity>> ReadTrueMountings(
+    const std::string& path, const std::string& expected_master = "");
 
 // The rig YAML text of `rig` (slave name -> similarity), numbers in shortest round-trip form.
 std::string RigToYaml(const std::map<std::string, Similarity>& rig);
