@@ -5,6 +5,7 @@
 #include <array>
 #include <cctype>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -166,6 +167,107 @@ Expected<CameraSpec> ParseCameraSection(const YAML::Node& camera, const std::str
   return spec;
 }
 
+namespace {
+
+// The Kalibr model pair (camera_model, distortion_model) as rigcal's model, with the number of
+// distortion coefficients it takes.
+Expected<size_t> ReadKalibrModel(const FieldReader& r, const YAML::Node& camera,
+                                 const YAML::Node& key_node, const std::string& prefix,
+                                 CameraSpec* spec) {
+  const auto missing = [&](const std::string& key) {
+    return r.Fail(key_node, prefix + key, "missing");
+  };
+  const YAML::Node model_node = camera["camera_model"];
+  if (!model_node) return missing("camera_model");
+  auto model = r.String(model_node, prefix + "camera_model");
+  if (!model) return Error{model.error()};
+  const YAML::Node distortion_node = camera["distortion_model"];
+  if (!distortion_node) return missing("distortion_model");
+  auto distortion_model = r.String(distortion_node, prefix + "distortion_model");
+  if (!distortion_model) return Error{distortion_model.error()};
+  const std::string supported =
+      "rigcal reads Kalibr camera_model pinhole with distortion_model radtan (as pinhole), "
+      "equidistant (as fisheye) or none";
+  if (*model != "pinhole") {
+    return r.Fail(model_node, prefix + "camera_model",
+                  "camera " + spec->name + ": Kalibr model '" + *model + "' (with " +
+                      *distortion_model + ") is not supported; " + supported);
+  }
+  if (*distortion_model == "radtan") {
+    spec->model = CameraSpec::Model::kPinhole;
+    return size_t{4};
+  }
+  if (*distortion_model == "equidistant") {
+    spec->model = CameraSpec::Model::kFisheye;
+    return size_t{4};
+  }
+  if (*distortion_model == "none") {
+    spec->model = CameraSpec::Model::kPinhole;
+    return size_t{0};
+  }
+  return r.Fail(distortion_node, prefix + "distortion_model",
+                "camera " + spec->name + ": Kalibr model pinhole-" + *distortion_model +
+                    " is not supported; " + supported);
+}
+
+// resolution, intrinsics and distortion_coeffs (`coefficients` of them) of one camera.
+std::optional<Error> ReadKalibrNumbers(const FieldReader& r, const YAML::Node& camera,
+                                       const YAML::Node& key_node, const std::string& prefix,
+                                       size_t coefficients, CameraSpec* spec) {
+  const auto missing = [&](const std::string& key, const std::string& expected) {
+    return r.Fail(key_node, prefix + key, "missing" + expected);
+  };
+  auto resolution = ReadResolution(r, camera, key_node, "resolution", prefix + "resolution");
+  if (!resolution) return Error{resolution.error()};
+  spec->width = (*resolution)[0];
+  spec->height = (*resolution)[1];
+  if (!camera["intrinsics"]) return missing("intrinsics", " (expected [fu, fv, pu, pv])");
+  auto intrinsics = r.NumbersOf(camera["intrinsics"], prefix + "intrinsics", 4);
+  if (!intrinsics) return Error{intrinsics.error()};
+  std::copy(intrinsics->begin(), intrinsics->end(), spec->intrinsics.begin());
+  const YAML::Node coeffs = camera["distortion_coeffs"];
+  if (coefficients > 0) {
+    if (!coeffs) return missing("distortion_coeffs", " (expected 4 numbers)");
+    auto values = r.NumbersOf(coeffs, prefix + "distortion_coeffs", coefficients);
+    if (!values) return Error{values.error()};
+    spec->distortion = std::move(*values);
+  } else if (coeffs && !(coeffs.IsSequence() && coeffs.size() == 0)) {
+    return r.Fail(coeffs, prefix + "distortion_coeffs",
+                  "expected [] or nothing with distortion_model none");
+  }
+  return std::nullopt;
+}
+
+// One camera `camN` of the camchain (its key node for errors about it as a whole); `names`
+// collects the names taken so far.
+Expected<CameraSpec> ReadKalibrCamera(const FieldReader& r, const YAML::Node& key_node,
+                                      const YAML::Node& camera, const std::string& cam,
+                                      std::set<std::string>* names) {
+  const std::string prefix = cam + ".";
+  if (!camera.IsMap()) return r.Fail(key_node, cam, "expected a map");
+  CameraSpec spec;
+  spec.name = cam;
+  if (const YAML::Node node = camera["rigcal_name"]) {
+    auto name = r.CameraName(node, prefix + "rigcal_name");
+    if (!name) return Error{name.error()};
+    spec.name = *name;
+  }
+  if (!names->insert(spec.name).second) {
+    return r.Fail(camera["rigcal_name"] ? KeyNode(camera, "rigcal_name") : key_node,
+                  prefix + "rigcal_name", "duplicate camera name '" + spec.name + "'");
+  }
+  auto coefficients = ReadKalibrModel(r, camera, key_node, prefix, &spec);
+  if (!coefficients) return Error{coefficients.error()};
+  if (auto e = ReadKalibrNumbers(r, camera, key_node, prefix, *coefficients, &spec)) return *e;
+  if (auto e =
+          CheckSpec(r, spec, camera, key_node, prefix, {{"distortion", "distortion_coeffs"}})) {
+    return *e;
+  }
+  return spec;
+}
+
+}  // namespace
+
 Expected<std::vector<CameraSpec>> ReadKalibrIntrinsics(const std::string& path) {
   auto root = LoadYaml(path);
   if (!root) return Error{root.error()};
@@ -189,87 +291,15 @@ Expected<std::vector<CameraSpec>> ReadKalibrIntrinsics(const std::string& path) 
   std::vector<CameraSpec> specs;
   std::set<std::string> names;
   for (const auto& [index, entry] : cameras) {
-    // Named references, not a structured binding: the lambda below captures key_node, which
-    // clang before 16 does not allow for a binding.
-    const YAML::Node& key_node = entry.first;
-    const YAML::Node& camera = entry.second;
     const std::string cam = "cam" + std::to_string(index);
     if (index != static_cast<int>(specs.size())) {
-      return r.Fail(key_node, cam,
+      return r.Fail(entry.first, cam,
                     "cameras must be numbered cam0, cam1, ... without gaps (cam" +
                         std::to_string(specs.size()) + " is missing)");
     }
-    const std::string prefix = cam + ".";
-    if (!camera.IsMap()) return r.Fail(key_node, cam, "expected a map");
-    const auto missing = [&](const std::string& key, const std::string& expected) {
-      return r.Fail(key_node, prefix + key, "missing" + expected);
-    };
-    CameraSpec spec;
-    spec.name = cam;
-    if (const YAML::Node node = camera["rigcal_name"]) {
-      auto name = r.CameraName(node, prefix + "rigcal_name");
-      if (!name) return Error{name.error()};
-      spec.name = *name;
-    }
-    if (!names.insert(spec.name).second) {
-      return r.Fail(camera["rigcal_name"] ? KeyNode(camera, "rigcal_name") : key_node,
-                    prefix + "rigcal_name", "duplicate camera name '" + spec.name + "'");
-    }
-
-    const YAML::Node model_node = camera["camera_model"];
-    if (!model_node) return missing("camera_model", "");
-    auto model = r.String(model_node, prefix + "camera_model");
-    if (!model) return Error{model.error()};
-    const YAML::Node distortion_node = camera["distortion_model"];
-    if (!distortion_node) return missing("distortion_model", "");
-    auto distortion_model = r.String(distortion_node, prefix + "distortion_model");
-    if (!distortion_model) return Error{distortion_model.error()};
-    const std::string supported =
-        "rigcal reads Kalibr camera_model pinhole with distortion_model radtan (as pinhole), "
-        "equidistant (as fisheye) or none";
-    if (*model != "pinhole") {
-      return r.Fail(model_node, prefix + "camera_model",
-                    "camera " + spec.name + ": Kalibr model '" + *model + "' (with " +
-                        *distortion_model + ") is not supported; " + supported);
-    }
-    size_t coefficients = 0;
-    if (*distortion_model == "radtan") {
-      spec.model = CameraSpec::Model::kPinhole;
-      coefficients = 4;
-    } else if (*distortion_model == "equidistant") {
-      spec.model = CameraSpec::Model::kFisheye;
-      coefficients = 4;
-    } else if (*distortion_model == "none") {
-      spec.model = CameraSpec::Model::kPinhole;
-    } else {
-      return r.Fail(distortion_node, prefix + "distortion_model",
-                    "camera " + spec.name + ": Kalibr model pinhole-" + *distortion_model +
-                        " is not supported; " + supported);
-    }
-
-    auto resolution = ReadResolution(r, camera, key_node, "resolution", prefix + "resolution");
-    if (!resolution) return Error{resolution.error()};
-    spec.width = (*resolution)[0];
-    spec.height = (*resolution)[1];
-    if (!camera["intrinsics"]) return missing("intrinsics", " (expected [fu, fv, pu, pv])");
-    auto intrinsics = r.NumbersOf(camera["intrinsics"], prefix + "intrinsics", 4);
-    if (!intrinsics) return Error{intrinsics.error()};
-    std::copy(intrinsics->begin(), intrinsics->end(), spec.intrinsics.begin());
-    const YAML::Node coeffs = camera["distortion_coeffs"];
-    if (coefficients > 0) {
-      if (!coeffs) return missing("distortion_coeffs", " (expected 4 numbers)");
-      auto values = r.NumbersOf(coeffs, prefix + "distortion_coeffs", coefficients);
-      if (!values) return Error{values.error()};
-      spec.distortion = std::move(*values);
-    } else if (coeffs && !(coeffs.IsSequence() && coeffs.size() == 0)) {
-      return r.Fail(coeffs, prefix + "distortion_coeffs",
-                    "expected [] or nothing with distortion_model none");
-    }
-    if (auto e =
-            CheckSpec(r, spec, camera, key_node, prefix, {{"distortion", "distortion_coeffs"}})) {
-      return *e;
-    }
-    specs.push_back(std::move(spec));
+    auto spec = ReadKalibrCamera(r, entry.first, entry.second, cam, &names);
+    if (!spec) return Error{spec.error()};
+    specs.push_back(std::move(*spec));
   }
   return specs;
 }

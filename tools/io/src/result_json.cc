@@ -76,11 +76,10 @@ CalibrationError ScoreAgainst(const SlaveCalibration& s, const Similarity& truth
   return score.error;
 }
 
-std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
-                        const TruthAlignment* alignment) {
-  std::string out = fmt::format("{}: {} ({}){}\n", s.name, ToString(s.state),
-                                ToString(s.termination), s.usable() ? "" : " (NOT USABLE)");
-  if (!s.message.empty()) out += fmt::format("  {}\n", s.message);
+// Rotation and position, beside the truth when known.
+std::string SlaveMountingRows(const SlaveCalibration& s, const Similarity* truth,
+                              const TruthAlignment* alignment) {
+  std::string out;
   out += Row("", "estimate", truth ? "truth" : "");
   out += Row("q (w, x, y, z)", Quat(s.estimate.q), truth ? Quat(truth->q) : "");
   out += Row("roll pitch yaw [deg]", Vec3(RollPitchYawDeg(s.estimate.q), 3),
@@ -99,6 +98,12 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
     const double k = alignment->metres_per_unit;
     out += Row("C [m], aligned unit", Vec3(s.estimate.C * k), truth ? Vec3(truth->C * k) : "");
   }
+  return out;
+}
+
+// The scale of every odometry segment.
+std::string SlaveScaleRows(const SlaveCalibration& s, const Similarity* truth) {
+  std::string out;
   if (s.scales.size() > 1) {
     for (const SegmentScale& seg : s.scales) {
       out += Row(fmt::format("scale segment {}", seg.segment),
@@ -112,6 +117,12 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
             truth ? (std::isfinite(truth->scale) ? fmt::format("{:.6g}", truth->scale) : "unknown")
                   : "");
   }
+  return out;
+}
+
+// The mean rotation axis, the σ and the observability.
+std::string SlaveObservabilityRows(const SlaveCalibration& s) {
+  std::string out;
   const bool rotating = s.observability.planar_axis.norm() > 0.0;
   if (rotating && s.position_observable) {
     std::string along;
@@ -136,6 +147,12 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
                         "std {:.3g}",
                         o.axis_spread_deg, o.slave_axis_spread_deg, o.tilt_snr, o.axis_std_ratio));
   }
+  return out;
+}
+
+// Motions, glitches, time offset, models and unobservable directions.
+std::string SlaveCountRows(const SlaveCalibration& s) {
+  std::string out;
   const MotionCounts& m = s.motions;
   out += Row("motions",
              fmt::format("used {} of {}, rejected {} (small rotation {}, angle mismatch {}, "
@@ -159,24 +176,41 @@ std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
   for (const Eigen::Vector3d& d : s.unobservable) {
     out += Row("unobservable along", Vec3(d));
   }
-  if (truth != nullptr && s.usable()) {
-    const CalibrationError e = ScoreAgainst(s, *truth);
-    out += Row("errors vs truth",
-               fmt::format("rotation {:.3g} deg, C direction {:.3g} deg, C distance {:.3g} %,",
-                           e.rot_deg, e.dir_deg, e.dist_pct));
-    const bool metric = alignment != nullptr && alignment->applied;
-    out += Row(
-        "",
-        fmt::format(
-            "C error {:.3g} master units{}, scale {}", e.trans_err,
-            metric ? fmt::format(" ({:.3g} m)", e.trans_err * alignment->metres_per_unit) : "",
-            std::isfinite(e.scale_pct) ? fmt::format("{:.3g} %", e.scale_pct)
-                                       : "not compared (the slave's odometry unit is unknown)"));
-    if (std::isfinite(e.plane_err)) {
-      out += Row("", fmt::format("C error in the plane {:.3g}, along the mean axis {:.3g}",
-                                 e.plane_err, e.axis_err));
-    }
+  return out;
+}
+
+// The errors against the truth (in master units, and metres when the unit is aligned).
+std::string SlaveErrorRows(const SlaveCalibration& s, const Similarity& truth,
+                           const TruthAlignment* alignment) {
+  std::string out;
+  const CalibrationError e = ScoreAgainst(s, truth);
+  out += Row("errors vs truth",
+             fmt::format("rotation {:.3g} deg, C direction {:.3g} deg, C distance {:.3g} %,",
+                         e.rot_deg, e.dir_deg, e.dist_pct));
+  const bool metric = alignment != nullptr && alignment->applied;
+  out += Row(
+      "", fmt::format(
+              "C error {:.3g} master units{}, scale {}", e.trans_err,
+              metric ? fmt::format(" ({:.3g} m)", e.trans_err * alignment->metres_per_unit) : "",
+              std::isfinite(e.scale_pct) ? fmt::format("{:.3g} %", e.scale_pct)
+                                         : "not compared (the slave's odometry unit is unknown)"));
+  if (std::isfinite(e.plane_err)) {
+    out += Row("", fmt::format("C error in the plane {:.3g}, along the mean axis {:.3g}",
+                               e.plane_err, e.axis_err));
   }
+  return out;
+}
+
+std::string FormatSlave(const SlaveCalibration& s, const Similarity* truth,
+                        const TruthAlignment* alignment) {
+  std::string out = fmt::format("{}: {} ({}){}\n", s.name, ToString(s.state),
+                                ToString(s.termination), s.usable() ? "" : " (NOT USABLE)");
+  if (!s.message.empty()) out += fmt::format("  {}\n", s.message);
+  out += SlaveMountingRows(s, truth, alignment);
+  out += SlaveScaleRows(s, truth);
+  out += SlaveObservabilityRows(s);
+  out += SlaveCountRows(s);
+  if (truth != nullptr && s.usable()) out += SlaveErrorRows(s, *truth, alignment);
   return out;
 }
 

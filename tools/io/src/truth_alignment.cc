@@ -77,15 +77,16 @@ bool ParseTruthUnit(const std::string& text, TruthUnit* unit) {
   return false;
 }
 
-TruthAlignment AlignTruthUnit(const RigCalibration& result,
-                              const std::map<std::string, Similarity>& truth, TruthUnit mode) {
-  TruthAlignment a;
-  a.mode = mode;
+namespace {
+
+// Per usable slave with a true mounting: its true and estimated C on the directions the data
+// determined (C along an unobservable direction is 0 or the nominal's).
+std::vector<Sample> ObservableSamples(const RigCalibration& result,
+                                      const std::map<std::string, Similarity>& truth) {
   std::vector<Sample> samples;
   for (const SlaveCalibration& s : result.slaves) {
     const auto it = truth.find(s.name);
     if (it == truth.end() || !s.usable() || !s.position_observable) continue;
-    // Only what the data determined: C along an unobservable direction is 0 or the nominal's.
     Eigen::Matrix3d keep = Eigen::Matrix3d::Identity();
     for (const Eigen::Vector3d& d : s.unobservable) {
       const Eigen::Vector3d u = d.normalized();
@@ -99,23 +100,108 @@ TruthAlignment AlignTruthUnit(const RigCalibration& result,
     sample.dims = 3 - static_cast<int>(std::min<size_t>(s.unobservable.size(), 3));
     if (sample.dims > 0 && sample.estimate.squaredNorm() > 0.0) samples.push_back(sample);
   }
+  return samples;
+}
 
-  // Robust to one slave: with 3 or more, the slave whose C disagrees most with the unit the
-  // others give is left out when it disagrees by far more than the others scatter.
+// Robust to one slave: with 3 or more, the index of the slave whose C disagrees most with the
+// unit the others give, when it disagrees by far more than the others scatter; else size().
+size_t OutlyingSample(const std::vector<Sample>& samples) {
   size_t excluded = samples.size();
-  if (samples.size() >= 3) {
-    double worst_ratio = 0.0;
-    for (size_t i = 0; i < samples.size(); ++i) {
-      const UnitFit others = FitUnit(Pairs(samples, i));
-      const double off = (samples[i].truth - others.metres_per_unit * samples[i].estimate).norm();
-      const double ratio = off / std::max(others.fit_rms_m, 1e-300);
-      if (off > 5.0 * others.fit_rms_m && off > 0.01 * samples[i].truth.norm() &&
-          ratio > worst_ratio) {
-        worst_ratio = ratio;
-        excluded = i;
-      }
+  if (samples.size() < 3) return excluded;
+  double worst_ratio = 0.0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const UnitFit others = FitUnit(Pairs(samples, i));
+    const double off = (samples[i].truth - others.metres_per_unit * samples[i].estimate).norm();
+    const double ratio = off / std::max(others.fit_rms_m, 1e-300);
+    if (off > 5.0 * others.fit_rms_m && off > 0.01 * samples[i].truth.norm() &&
+        ratio > worst_ratio) {
+      worst_ratio = ratio;
+      excluded = i;
     }
   }
+  return excluded;
+}
+
+// Fits the unit on `used` into `a` (metres_per_unit, fit_rms_m, std); returns "<k>\t(± <σ>,
+// how)", the tab where the unit ("m") goes.
+std::string FitUnitInto(const std::vector<Sample>& used, TruthAlignment* a) {
+  const UnitFit fit = FitUnit(Pairs(used, used.size()));
+  const double k = fit.metres_per_unit;
+  a->metres_per_unit = k;
+  a->fit_rms_m = fit.fit_rms_m;
+  // σ of k = Σ t·v / Σ v·v: the estimate's position σ propagated (dk ≈ -k Σ v·dv / Σ v·v),
+  // and the scatter of the fit (residual variance over the components minus one).
+  double den = 0.0;
+  double var_num = 0.0;
+  int components = 0;
+  for (const Sample& s : used) {
+    den += s.estimate.squaredNorm();
+    var_num += s.estimate.cwiseProduct(s.std).squaredNorm();
+    components += s.dims;
+  }
+  const double propagated = std::abs(k) * std::sqrt(var_num) / den;
+  const double scatter =
+      components > 1 ? std::sqrt(fit.fit_rms_m * fit.fit_rms_m * static_cast<double>(used.size()) /
+                                 static_cast<double>(components - 1) / den)
+                     : std::numeric_limits<double>::quiet_NaN();
+  a->std = std::isfinite(propagated) ? std::max(propagated, std::isfinite(scatter) ? scatter : 0.0)
+                                     : scatter;
+  return fmt::format(
+      "{:.6g}\t(± {:.2g}, least squares of the truth's C on the estimated C of {}{})", k, a->std,
+      Names(a->slaves_used),
+      a->slave_excluded.empty()
+          ? ""
+          : "; " + a->slave_excluded + " left out: its C disagrees with the others' unit");
+}
+
+// What was done with the fitted unit, and whether it is applied.
+void DecideAlignment(const std::string& fitted, size_t slaves_used, TruthAlignment* a) {
+  auto fitted_with = [&fitted](const std::string& unit) {
+    std::string text = fitted;
+    return text.replace(text.find('\t'), 1, unit + " ");
+  };
+  const double k = a->metres_per_unit;
+  if (a->mode == TruthUnit::kMaster) {
+    a->message =
+        "the truth is taken to be in master units (--truth-unit master); truth C / "
+        "estimated C: " +
+        fitted_with("");
+    return;
+  }
+  if (!(k > 0.0)) {
+    a->message =
+        "the truth is compared as given: the estimated C do not point where the truth's "
+        "do (fitted unit not positive)";
+    return;
+  }
+  if (a->mode == TruthUnit::kAuto) {
+    const double tolerance = std::max(std::isfinite(a->std) ? 3.0 * a->std : 0.0, 0.02);
+    if (std::abs(k - 1.0) <= tolerance) {
+      a->message = fmt::format(
+          "the truth is in master units (no alignment): truth C / estimated C = {}, 1 within "
+          "{:.2g}",
+          fitted_with(""), tolerance);
+      return;
+    }
+  }
+  a->applied = true;
+  a->message = "positions compared after aligning the master unit to the truth: 1 master unit = " +
+               fitted_with(" m") + "; the truth's C divided by it";
+  if (slaves_used == 1) {
+    a->message +=
+        " (one slave: the fit absorbs its distance error; its direction, rotation and "
+        "scale errors remain)";
+  }
+}
+
+}  // namespace
+
+TruthAlignment AlignTruthUnit(const RigCalibration& result,
+                              const std::map<std::string, Similarity>& truth, TruthUnit mode) {
+  TruthAlignment a;
+  a.mode = mode;
+  const std::vector<Sample> samples = ObservableSamples(result, truth);
+  const size_t excluded = OutlyingSample(samples);
   std::vector<Sample> used;
   for (size_t i = 0; i < samples.size(); ++i) {
     if (i == excluded) {
@@ -125,81 +211,14 @@ TruthAlignment AlignTruthUnit(const RigCalibration& result,
       a.slaves_used.push_back(samples[i].name);
     }
   }
-
-  std::string fitted;
-  if (!used.empty()) {
-    const UnitFit fit = FitUnit(Pairs(used, used.size()));
-    const double k = fit.metres_per_unit;
-    a.metres_per_unit = k;
-    a.fit_rms_m = fit.fit_rms_m;
-    // σ of k = Σ t·v / Σ v·v: the estimate's position σ propagated (dk ≈ -k Σ v·dv / Σ v·v),
-    // and the scatter of the fit (residual variance over the components minus one).
-    double den = 0.0;
-    double var_num = 0.0;
-    int components = 0;
-    for (const Sample& s : used) {
-      den += s.estimate.squaredNorm();
-      var_num += s.estimate.cwiseProduct(s.std).squaredNorm();
-      components += s.dims;
-    }
-    const double propagated = std::abs(k) * std::sqrt(var_num) / den;
-    const double scatter = components > 1 ? std::sqrt(fit.fit_rms_m * fit.fit_rms_m *
-                                                      static_cast<double>(used.size()) /
-                                                      static_cast<double>(components - 1) / den)
-                                          : std::numeric_limits<double>::quiet_NaN();
-    a.std = std::isfinite(propagated) ? std::max(propagated, std::isfinite(scatter) ? scatter : 0.0)
-                                      : scatter;
-    // "<k> (± <σ>, how)"; the unit ("m") goes after <k> where it applies.
-    fitted = fmt::format(
-        "{:.6g}\t(± {:.2g}, least squares of the truth's C on the estimated C of {}{})", k, a.std,
-        Names(a.slaves_used),
-        a.slave_excluded.empty()
-            ? ""
-            : "; " + a.slave_excluded + " left out: its C disagrees with the others' unit");
-  }
-
-  auto fitted_with = [&fitted](const std::string& unit) {
-    std::string text = fitted;
-    return text.replace(text.find('\t'), 1, unit + " ");
-  };
   if (used.empty()) {
     a.message =
         "the truth is compared as given: no usable slave has an estimated position to fit the "
         "master unit to";
     return a;
   }
-  const double k = a.metres_per_unit;
-  if (mode == TruthUnit::kMaster) {
-    a.message =
-        "the truth is taken to be in master units (--truth-unit master); truth C / "
-        "estimated C: " +
-        fitted_with("");
-    return a;
-  }
-  if (!(k > 0.0)) {
-    a.message =
-        "the truth is compared as given: the estimated C do not point where the truth's "
-        "do (fitted unit not positive)";
-    return a;
-  }
-  if (mode == TruthUnit::kAuto) {
-    const double tolerance = std::max(std::isfinite(a.std) ? 3.0 * a.std : 0.0, 0.02);
-    if (std::abs(k - 1.0) <= tolerance) {
-      a.message = fmt::format(
-          "the truth is in master units (no alignment): truth C / estimated C = {}, 1 within "
-          "{:.2g}",
-          fitted_with(""), tolerance);
-      return a;
-    }
-  }
-  a.applied = true;
-  a.message = "positions compared after aligning the master unit to the truth: 1 master unit = " +
-              fitted_with(" m") + "; the truth's C divided by it";
-  if (used.size() == 1) {
-    a.message +=
-        " (one slave: the fit absorbs its distance error; its direction, rotation and "
-        "scale errors remain)";
-  }
+  const std::string fitted = FitUnitInto(used, &a);
+  DecideAlignment(fitted, used.size(), &a);
   return a;
 }
 

@@ -82,106 +82,144 @@ Status IntrinsicsOptions::Check() const {
   return {};
 }
 
-Expected<IntrinsicsResult> CalibrateIntrinsics(const CameraViews& views,
-                                               const IntrinsicsOptions& options) {
-  if (Status s = options.Check(); !s.ok()) return Error{s.message()};
-  const auto log = ModuleLogger("target");
-  const size_t n = views.views.size();
-  if (n < static_cast<size_t>(options.min_views)) {
-    return Error{views.camera + ": " + std::to_string(n) + " views with a target, need at least " +
-                 std::to_string(options.min_views)};
-  }
-  // The views given to the solver: all, or max_views spread evenly.
+namespace {
+
+// The views given to the solver: all, or max_views spread evenly.
+std::vector<size_t> CandidateViews(size_t n, int max_views) {
   std::vector<size_t> candidates;
-  const size_t m = std::min(n, static_cast<size_t>(options.max_views));
+  const size_t m = std::min(n, static_cast<size_t>(max_views));
   for (size_t i = 0; i < m; ++i) candidates.push_back(m == n ? i : (i * (n - 1)) / (m - 1));
   candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  return candidates;
+}
 
+// Per-view RMS of the `used` views under `spec` (an unfitted view counts as the largest).
+Expected<std::vector<double>> UsedViewRms(const CameraViews& views, const std::vector<size_t>& used,
+                                          const CameraSpec& spec) {
+  CameraViews subset;
+  subset.camera = views.camera;
+  subset.width = views.width;
+  subset.height = views.height;
+  for (size_t i : used) subset.views.push_back(views.views[i]);
+  auto stats = EstimateTargetPoses(subset, spec, std::numeric_limits<double>::infinity());
+  if (!stats) return Error{stats.error()};
+  std::vector<double> view_rms;
+  for (const ViewStatistics& v : *stats) {
+    view_rms.push_back(std::isfinite(v.rms_px) ? v.rms_px : std::numeric_limits<double>::max());
+  }
+  return view_rms;
+}
+
+// Far above the others' spread and twice their median, and never under a hundredth of a
+// pixel: sub-pixel corner detectors reach a few hundredths at best, so a view fitted better
+// is not an outlier (on noiseless views the RMS is the solver's rounding or the model's
+// own approximation, and its spread means nothing).
+double RejectionThresholdPx(const std::vector<double>& view_rms) {
+  const double median = Median(view_rms);
+  std::vector<double> deviation;
+  deviation.reserve(view_rms.size());
+  for (double r : view_rms) deviation.push_back(std::abs(r - median));
+  constexpr double kPerfectFitPx = 0.01;
+  return std::max({median + 5.0 * 1.4826 * Median(deviation), 2.0 * median, kPerfectFitPx});
+}
+
+// The views used and rejected, the intrinsics fitted on the used ones, the last threshold.
+struct FittedViews {
   CameraSpec spec;
-  spec.name = views.camera;
-  spec.model = options.model;
-  spec.width = views.width;
-  spec.height = views.height;
-  std::vector<size_t> used = candidates;
+  std::vector<size_t> used;
   std::vector<size_t> rejected;
+  double threshold_px = std::numeric_limits<double>::quiet_NaN();
+};
+
+// Solves, then (options.reject_outliers) drops the views whose RMS is far above the others' and
+// solves again, up to four rounds.
+Status FitRejectingOutliers(const CameraViews& views, const IntrinsicsOptions& options,
+                            FittedViews* fitted) {
+  const auto log = ModuleLogger("target");
   double rms = 0.0;
-  double threshold = std::numeric_limits<double>::quiet_NaN();
   for (int round = 0; round < 4; ++round) {
-    if (used.size() < static_cast<size_t>(options.min_views)) {
-      return Error{views.camera + ": only " + std::to_string(used.size()) +
+    if (fitted->used.size() < static_cast<size_t>(options.min_views)) {
+      return Error{views.camera + ": only " + std::to_string(fitted->used.size()) +
                    " views left after rejecting outliers, need " +
                    std::to_string(options.min_views)};
     }
-    if (Status s = Solve(views, used, &spec, &rms); !s.ok()) return Error{s.message()};
-    if (Status s = spec.Check(); !s.ok()) {
+    if (Status s = Solve(views, fitted->used, &fitted->spec, &rms); !s.ok()) return s;
+    if (Status s = fitted->spec.Check(); !s.ok()) {
       return Error{views.camera +
                    ": the calibrated intrinsics are not a valid camera: " + s.message()};
     }
     if (!options.reject_outliers || round == 3) break;
-    // Per-view RMS of the used views under these intrinsics.
-    CameraViews subset;
-    subset.camera = views.camera;
-    subset.width = views.width;
-    subset.height = views.height;
-    for (size_t i : used) subset.views.push_back(views.views[i]);
-    auto stats = EstimateTargetPoses(subset, spec, std::numeric_limits<double>::infinity());
-    if (!stats) return Error{stats.error()};
-    std::vector<double> view_rms;
-    for (const ViewStatistics& v : *stats) {
-      view_rms.push_back(std::isfinite(v.rms_px) ? v.rms_px : std::numeric_limits<double>::max());
-    }
-    const double median = Median(view_rms);
-    std::vector<double> deviation;
-    deviation.reserve(view_rms.size());
-    for (double r : view_rms) deviation.push_back(std::abs(r - median));
-    // Far above the others' spread and twice their median, and never under a hundredth of a
-    // pixel: sub-pixel corner detectors reach a few hundredths at best, so a view fitted better
-    // is not an outlier (on noiseless views the RMS is the solver's rounding or the model's
-    // own approximation, and its spread means nothing).
-    constexpr double kPerfectFitPx = 0.01;
-    threshold = std::max({median + 5.0 * 1.4826 * Median(deviation), 2.0 * median, kPerfectFitPx});
+    auto view_rms = UsedViewRms(views, fitted->used, fitted->spec);
+    if (!view_rms) return Error{view_rms.error()};
+    fitted->threshold_px = RejectionThresholdPx(*view_rms);
     std::vector<size_t> keep;
-    for (size_t k = 0; k < used.size(); ++k) {
-      if (view_rms[k] <= threshold) {
-        keep.push_back(used[k]);
+    for (size_t k = 0; k < fitted->used.size(); ++k) {
+      if ((*view_rms)[k] <= fitted->threshold_px) {
+        keep.push_back(fitted->used[k]);
       } else {
-        rejected.push_back(used[k]);
+        fitted->rejected.push_back(fitted->used[k]);
         log->info("{}: view {} rejected: RMS {:.3f} px > {:.3f} px", views.camera,
-                  views.views[used[k]].file, view_rms[k], threshold);
+                  views.views[fitted->used[k]].file, (*view_rms)[k], fitted->threshold_px);
       }
     }
-    if (keep.size() == used.size()) break;
-    used = std::move(keep);
+    if (keep.size() == fitted->used.size()) break;
+    fitted->used = std::move(keep);
   }
+  return {};
+}
 
+// Every view's statistics under the fitted intrinsics, the RMS over the used views' corners and
+// the parameters' σ.
+Expected<IntrinsicsResult> ResultOf(const CameraViews& views, const FittedViews& fitted) {
   IntrinsicsResult result;
-  result.spec = spec;
-  result.rejection_threshold_px = threshold;
-  auto stats = EstimateTargetPoses(views, spec, std::numeric_limits<double>::infinity());
+  result.spec = fitted.spec;
+  result.rejection_threshold_px = fitted.threshold_px;
+  auto stats = EstimateTargetPoses(views, fitted.spec, std::numeric_limits<double>::infinity());
   if (!stats) return Error{stats.error()};
   result.views = std::move(*stats);
   double sum_sq = 0.0;
   size_t points = 0;
   for (ViewStatistics& v : result.views) v.used = false;
-  for (size_t i : used) {
+  for (size_t i : fitted.used) {
     ViewStatistics& v = result.views[i];
     v.used = true;
     sum_sq += v.rms_px * v.rms_px * v.corners;
     points += static_cast<size_t>(v.corners);
   }
-  for (size_t i : rejected) result.views[i].rejected = true;
-  result.views_used = static_cast<int>(used.size());
-  result.views_rejected = static_cast<int>(rejected.size());
+  for (size_t i : fitted.rejected) result.views[i].rejected = true;
+  result.views_used = static_cast<int>(fitted.used.size());
+  result.views_rejected = static_cast<int>(fitted.rejected.size());
   result.rms_px = points > 0 ? std::sqrt(sum_sq / static_cast<double>(points)) : 0.0;
-  (void)rms;
-  if (auto sigma = internal::ParameterStdDev(spec, views, result.views, used)) {
-    result.parameter_names = internal::ParameterNames(spec);
+  if (auto sigma = internal::ParameterStdDev(fitted.spec, views, result.views, fitted.used)) {
+    result.parameter_names = internal::ParameterNames(fitted.spec);
     result.parameter_std = std::move(*sigma);
   } else {
     result.parameter_std_error = sigma.error();
-    log->debug("{}: parameter sigma unknown: {}", views.camera, sigma.error());
+    ModuleLogger("target")->debug("{}: parameter sigma unknown: {}", views.camera, sigma.error());
   }
   return result;
+}
+
+}  // namespace
+
+Expected<IntrinsicsResult> CalibrateIntrinsics(const CameraViews& views,
+                                               const IntrinsicsOptions& options) {
+  if (Status s = options.Check(); !s.ok()) return Error{s.message()};
+  const size_t n = views.views.size();
+  if (n < static_cast<size_t>(options.min_views)) {
+    return Error{views.camera + ": " + std::to_string(n) + " views with a target, need at least " +
+                 std::to_string(options.min_views)};
+  }
+  FittedViews fitted;
+  fitted.spec.name = views.camera;
+  fitted.spec.model = options.model;
+  fitted.spec.width = views.width;
+  fitted.spec.height = views.height;
+  fitted.used = CandidateViews(n, options.max_views);
+  if (Status s = FitRejectingOutliers(views, options, &fitted); !s.ok()) {
+    return Error{s.message()};
+  }
+  return ResultOf(views, fitted);
 }
 
 std::string FormatIntrinsics(const IntrinsicsResult& result, bool per_view) {
