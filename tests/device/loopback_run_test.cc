@@ -124,7 +124,8 @@ std::string V4l2RigYaml(const std::string& simulated) {
 class StatusReader {
  public:
   void Parse(const std::string& line) {
-    static const std::regex camera(R"(\| (cam\d) +[0-9.]+fps (\w+) s\d+ ([0-9.]+)ms( drop(\d+))?)");
+    // "cam0 trk s0 12.3ms 240f drop2 | cam1 ...": state, segment, VO median, frames, drops.
+    static const std::regex camera(R"(\b(cam\d) (\w+) s\d+ ([0-9.]+)ms \d+f( drop(\d+))?)");
     std::lock_guard<std::mutex> lock(mutex_);
     for (auto it = std::sregex_iterator(line.begin(), line.end(), camera);
          it != std::sregex_iterator(); ++it) {
