@@ -83,11 +83,13 @@ TEST(Pipeline, DeadCameraLeavesOthersCalibrating) {
 // the same sets and the same estimate, however far one thread gets ahead of another.
 // Issue 35 §5: when the master VO re-initialises, the estimator restarts positions and scales
 // in the new master unit; the evaluation must score the estimate in that segment's unit. The
-// master's lens is covered for 1 s (source.blackout_s) after 12 s of a 22 s drive: its first
-// segment is the longer one, so scoring in the longest segment (as before) fails here.
+// master's lens is covered for 3 s (source.blackout_s) after 11 s of a 22 s drive, longer than
+// the VO's relocalisation timeout (VoOptions::relocalisation_timeout_s, 2 s; a shorter cover is
+// relocalised in the same segment): its first segment is the longer one, so scoring in the
+// longest segment (as before) fails here.
 TEST(Pipeline, MasterReinitialisationIsScoredInTheEstimatesSegment) {
   sim::SimulatedRigSpec spec = RoomRigSpec(22.0);
-  spec.blackout_s["front"] = {12.0, 13.0};
+  spec.blackout_s["front"] = {11.0, 14.0};
   auto rig = sim::MakeSimulatedRig(spec);
   ASSERT_TRUE(rig) << rig.error();
   PipelineOptions options;

@@ -116,9 +116,15 @@ std::string UnknownWordError(const CLI::App& app, const std::vector<std::string>
   for (const std::string& word : args) {
     if (word == "--") break;
     if (word.empty() || word[0] != '-' || word == "-") {
-      if (sub != nullptr) continue;  // a positional argument or an option's value
-      for (const CLI::App* s : app.get_subcommands({})) {
-        if (s->check_name(word)) sub = s;
+      // A subcommand of the current one (`import euroc`), else a positional argument or an
+      // option's value once a subcommand is known.
+      const CLI::App* next = nullptr;
+      for (const CLI::App* s : (sub != nullptr ? sub : &app)->get_subcommands({})) {
+        if (s->check_name(word)) next = s;
+      }
+      if (next != nullptr) {
+        sub = next;
+        continue;
       }
       if (sub == nullptr) {
         return "rigcal: unknown subcommand '" + word + "'" + Suggestion(word, subcommands) +

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <ostream>
 #include <sstream>
 #include <string>
@@ -89,9 +90,13 @@ class Tokens {
     return std::isfinite(v) && std::abs(v) <= 1e100 ? v : (Fail(field), 0.0);
   }
   // A σ: unknown (NaN) or finite and not negative.
+  // A σ: unknown (NaN), not determined (+inf, e.g. the rotation of a slave whose motions are
+  // all parallel), or within the physical bounds.
   double Sigma(const char* field) {
     const double v = Number(field);
-    return std::isnan(v) || (v >= 0.0 && v <= 1e100) ? v : (Fail(field), 0.0);
+    return std::isnan(v) || v == std::numeric_limits<double>::infinity() || (v >= 0.0 && v <= 1e100)
+               ? v
+               : (Fail(field), 0.0);
   }
   int64_t Integer(const char* field, int64_t lo, int64_t hi) {
     int64_t v = 0;
