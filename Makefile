@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The README's entry points. `make demo` and `make test` set up the machine
 # (scripts/install-deps.sh: `--runtime` for the demo, everything for the tests), configure, build
 # and run.

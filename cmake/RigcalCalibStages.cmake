@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The stages of the calibration method in calib/src/<stage>/, lowest first: a stage uses only
 # itself and the stages before it, so calib's include drawing has no arrow running back up.
 # Checked by tests/architecture/check_stages.cmake:

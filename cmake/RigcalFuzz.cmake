@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # libFuzzer targets (RIGCAL_FUZZ_ENABLED: clang with RIGCAL_ASAN_ENABLED, so every target runs
 # under ASan and UBSan). docs/testing.md "Sanitizers and fuzzing".
 #

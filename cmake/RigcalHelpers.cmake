@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Helpers that give every module the same shape (one library target per folder,
 # tests registered as <module>/<name>).
 include(GNUInstallDirs)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # `cmake --install`: the rigcal command, the libraries with their public headers and a CMake
 # package, so that another project writes
 #   find_package(rigcal REQUIRED)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The modules of rigcal and what each may use (docs/architecture.md "Layers"). One table for
 # the build (the link graph written for the check), the layer check
 # (tests/architecture/check_layers.cmake) and the docs (the check compares their layer table

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Debian packages through CPack (`cpack -G DEB` in a build tree, docs/deployment.md):
 #   rigcal      bin/rigcal, example configs, systemd units      (component runtime)
 #   rigcal-dev  headers, static libraries, CMake package, LCM    (component dev)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cross build for arm64 (aarch64) Debian with Debian's cross compiler (crossbuild-essential-arm64)
 # against an arm64 sysroot of Debian's own -dev packages (scripts/arm64-sysroot.sh). Used by
 # scripts/cross-arm64.sh:

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Puts the licence's SPDX line first in every source file of the repository (after a `#!` line):
 #   // SPDX-License-Identifier: Apache-2.0    .h .hpp .cc .cpp .c .lcm
 #   # SPDX-License-Identifier: Apache-2.0     .cmake .cmake.in CMakeLists.txt .sh .py Makefile

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Creates the arm64 sysroot the cross build links against (cmake/toolchain-arm64.cmake):
 # Debian's own arm64 -dev packages of every rigcal dependency and their closure, unpacked by
 # mmdebstrap (variant extract, apt resolving the arm64 dependencies) into a directory with the

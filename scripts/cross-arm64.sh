@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Cross-builds the rigcal command for arm64 (aarch64 Debian 12) with Debian's cross compiler
 # and Debian's arm64 libraries (docs/deployment.md):
 #   1. host tools: crossbuild-essential-arm64 (aarch64-linux-gnu-g++), qemu-user (qemu-aarch64,

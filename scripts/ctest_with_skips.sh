@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs ctest and then says how many tests were skipped and why, so that a suite that "passes"
 # by skipping is visible (make test, test-fast, test-asan, test-tsan, eval).
 #   scripts/ctest_with_skips.sh <build dir> [ctest arguments...]

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The command reference from the help texts of a built rigcal, so it cannot drift from them:
 #   scripts/gen-command-docs.sh RIGCAL markdown [docs/commands.md]  (ctest cli/commands_doc
 #                                                                   checks that it is current)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs the Debian packages rigcal needs to build and test. Idempotent: packages
 # already present are skipped, so a second run changes nothing and needs no network.
 # Works as root, or through sudo for a normal user.

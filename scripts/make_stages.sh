@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs make targets one after the other and says how long each took, so that a slow `make test`
 # shows where its time goes (the CI log ends with the table, also when a stage fails).
 #   scripts/make_stages.sh TARGET...

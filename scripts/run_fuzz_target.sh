@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs one libFuzzer target (ctest label `fuzz`, `make fuzz`) for a fixed time and says how many
 # inputs it tried.
 #   scripts/run_fuzz_target.sh <fuzz binary> <seed corpus dir> <work dir> <seconds> [max_len]

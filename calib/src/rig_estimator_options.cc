@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Check() of the recursive estimator's options.
 #include "rigcal/calib/rig_estimator_options.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The synthetic car rig and its car-like trajectories (synthetic_car.h).
 #include "rigcal/calib/synthetic_car.h"
 

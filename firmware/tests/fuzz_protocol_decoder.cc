@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer entry for the trigger protocol's receiving side (firmware/protocol): arbitrary bytes
 // through MessageDecoder, as both the MCU (commands) and the host (reports) receive them.
 // Properties checked on every input (a violation aborts, which the fuzzer reports):

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the assets of the device tests (scripts/vm/run-device-tests.sh) under OUT (default
 # build/vm), once: they are kept and reused while the kernel version does not change.
 #   OUT/<V>/vmlinuz           the Debian kernel (apt-get download linux-image-<V>, unpacked)

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # /init of the device-test VM (scripts/vm/build-assets.sh puts it in base.cpio.gz): loads the
 # media drivers, starts udevd (Debian's, without rules: it records the devices for libudev and
 # forwards add/remove events to libudev's monitors; without it the devices are marked

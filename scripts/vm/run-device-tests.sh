@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs the device tests (a GoogleTest binary, tests/device/) inside QEMU on a Debian kernel with
 # real V4L2 drivers: two vivid devices, two v4l2loopback devices, vimc for libcamera.
 #   run-device-tests.sh <test binary> [gtest filter, default: all but the long VividLongRun.* and

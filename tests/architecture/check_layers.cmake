@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Checks rigcal's layers (docs/architecture.md "Layers"): a module includes (rigcal/<module>/...)
 # and links only itself and the modules it uses (cmake/RigcalModules.cmake, transitively), the
 # modules marked NO_OPENCV never see OpenCV, and every source folder belongs to a module.

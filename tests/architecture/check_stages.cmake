@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Checks the stages of calib/src (cmake/RigcalCalibStages.cmake, which states the rules): every
 # include of calib's sources and public headers points to its own stage or a lower one.
 #   cmake -DSOURCE_DIR=<tree> [-DSTAGES_FILE=<cmake/RigcalCalibStages.cmake>] -P check_stages.cmake

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Functions short enough to read at once: every function definition in the given source folders
 # is at most LIMIT lines long (Universal Ctags finds each definition's first and last line),
 # unless the comment directly above it says why, with a line containing "long because".

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Skipped tests are reported as skipped, never as passed, and under CI=true a skip for a missing
 # input fails (tests/support/skip.h, tests/support/main). Runs the fixture binary
 # (fixtures/skips) on one outcome at a time and checks its exit code and output.

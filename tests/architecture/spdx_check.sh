@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # ctest architecture/spdx: every source file starts with the licence's SPDX line
 # (scripts/add-spdx.sh --check). The lines are added by running scripts/add-spdx.sh over the
 # whole tree once, after the parallel branches are merged; until that run no file has one, and

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # ctest architecture/spdx_fixture: scripts/add-spdx.sh --check fails on a repository with a
 # source file without the SPDX line, adds the line (after a shebang, nothing else changed) and
 # then passes; a fixture, a config and a README are left alone.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Clang's thread-safety analysis (-Wthread-safety, rigcal/base/thread_annotations.h) over every
 # source file of rigcal that uses threads or locks, with the flags of the normal (GCC) build
 # tree from its compile_commands.json, syntax-only (no objects, no second build tree); the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tests of format.h: numbers as text.
 #include "rigcal/base/format.h"
 

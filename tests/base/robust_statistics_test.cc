@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tests of robust_statistics.h: medians, quantiles, the MAD-based sigma and RMS.
 #include "rigcal/base/robust_statistics.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The error vocabulary: Status, Expected<T> with a checked value(), RequireValid.
 #include "rigcal/base/status.h"
 

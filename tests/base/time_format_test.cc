@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tests of time_format.h: stamps as text.
 #include "rigcal/base/time_format.h"
 

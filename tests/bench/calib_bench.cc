@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Timing of the batch rig calibrator against OpenCV's hand-eye calibration.
 //
 //   BM_RigcalLinear/K/N             CalibrateRig, Method::kLinear, K motions per slave, N slaves

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cost of the online estimator (issue "Online": targets in the README).
 //
 //   BM_EstimatorUpdate/K/N     RigEstimator::AddSet after K sets already consumed, N slaves;

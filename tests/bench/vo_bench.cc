@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Speed of the monocular VO per 752x480 frame on one core (issue 4: <= 4 ms median).
 // A 60-degree pinhole camera moves through the textured room of the VO tests, rendered by the
 // simulated rig (support/room_sequence.h); every benchmark iteration processes one frame (frames

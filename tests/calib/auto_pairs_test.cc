@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The auto pair policy (PairOptions::Policy::kAuto, batch_pair_choice.h): per slave, the span
 // whose solve reports the most certain estimate.
 #include <gtest/gtest.h>

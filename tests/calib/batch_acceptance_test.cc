@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Honest states: a result is usable only when the data support it (batch_acceptance in
 // calib/src/batch), σ is never silently 0, and an estimate with unknown σ is never converged.
 #include <gtest/gtest.h>

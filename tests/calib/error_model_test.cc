@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Constraint residua and the direct scale measurement of one motion (thesis 5.1.1, 4.18, 4.23).
 #include "rigcal/calib/error_model.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Real data: the EuRoC "imu_april" calibration sequence (stereo cam0/cam1, 20 Hz, 72 s, full
 // 6-DoF hand-held motion in front of an AprilGrid). Each camera's poses come from its own PnP
 // on the grid (support/euroc_aprilgrid.h); cam1's positions are then scaled by an arbitrary

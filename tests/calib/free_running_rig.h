@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Simulated rigs whose slave cameras run free: each camera captures at its own rate and phase
 // and stamps with its own clock (slave stamp = master clock + time offset). Shared by the time

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Glitch injection shared by the glitch tests: 1 % of the poses glitched, each in a random
 // camera: a jump by 20-100 % of the trajectory's extent in a random direction, or a rotation by

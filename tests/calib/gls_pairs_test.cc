@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The gls pair policy (PairOptions::Policy::kGls, calib/src/batch/batch_gls.h): auto's result refined
 // by generalised least squares on every consecutive motion, whitened by the fitted pose noise.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A metric master odometry (wheel odometry, INS; RigEstimatorOptions::master_metric, a rig
 // config camera's `metric: true`) in the online estimator: a master re-initialisation (new
 // segment, new frame origin, same unit) keeps the slaves' position statistics, in metres, where

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The choice between the general and the purely translational motion model (thesis 5.2) by the
 // measured rotation noise, on a sewer-like drive (thesis 5.6): the rig advances 6 m along the
 // master's optical axis with a few centimetres of sway and rotations below 10 degrees about

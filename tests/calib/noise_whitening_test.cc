@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The level-noise model of consecutive motions' residuals and its whitening
 // (rigcal/calib/noise_whitening.h): exact identities of the filter and the maximum-likelihood
 // fit on series of known noise, with tolerances from the sampling error.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // OnlineCalibrator with back-pressure (lossless) and refinements on stream time: nothing is lost
 // to a slow estimator and the same pushes give the same estimate bit for bit; without it a full
 // ready queue drops sets, and every camera's share of them is counted where it happens.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A free-running slave whose clock restarts during a drive (simulated rig, OnlineCalibrator):
 // stamps that restart near 0 or step by seconds, beyond the ±0.5 s the offset is searched in,
 // are followed by the SyncBuffer and the offset is re-acquired around the step; a small step

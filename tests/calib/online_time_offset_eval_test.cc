@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Figures of the online clock offsets (label eval): offset error and σ against the truth for
 // offsets -100..+100 ms and phases within a frame, drift and jump, extrinsic errors of
 // free-running slaves against the same rig synchronised, and the cost of the interpolation per

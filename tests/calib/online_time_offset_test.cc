@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cameras that run free, online: the SyncBuffer's interpolation at the master's instants, the
 // ClockOffsetTracker (initial correlation, Kalman refinement, drift, jumps) and the
 // OnlineCalibrator with the offset as a state, against simulated rigs with known clocks.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // OpenCV's hand-eye calibration (cv::calibrateHandEye, all five methods) as a real peer of the
 // rig calibrator on thesis-style synthetic samples (thesis 5.1.2): camera-local poses since
 // start, orientation error level eps on every pose.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Evaluation of the planar-motion handling on a four-camera car rig (front master; left, right,
 // rear): prints rotation, in-plane, vertical and scale errors for
 //   - synthetic flat yaw-only drives,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The planar-motion solver and the general/planar decision, batch (CalibrateRig) and online
 // (RigEstimator), on car rigs: flat yaw-only drives, a drive up a ramp, and the real KITTI 00
 // trajectory (plain and flattened to pure yaw; skipped when the data is absent).

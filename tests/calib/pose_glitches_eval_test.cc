@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Glitch tolerance table (eval): 1 % of the poses glitched (jumps by 20-100 % of the
 // trajectory's extent, rotations by 30-180 degrees, in a random camera) on several simulated
 // recordings, batch and online, against the clean recordings and against the batch without

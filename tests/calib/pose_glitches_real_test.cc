@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Glitch detection (calib/src/motions/pose_glitches.h) on real trajectories: the KITTI 00 car drive
 // and the EuRoC V1_02 drone flight, as recorded and with simulated rigs along them. No pose
 // of these clean recordings may be taken for a glitch, by the batch stage or by the online

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Gross pose outliers (glitches): a pose off by 100 units, a rotated pose, 1 % of the poses off
 // by a large fraction of the trajectory. The batch calibrator drops them before the pairs are
 // chosen (calib/src/motions/pose_glitches.h), the online estimator skips them before the keyframe

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PoseMerge forwards the poses of several VO threads in one canonical order, (frame stamp,
 // camera), whatever the thread timing, holds nothing back once every camera has ended, and
 // keeps the threads within the lead.

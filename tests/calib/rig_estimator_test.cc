@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/calib/rig_estimator.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Thesis 5.6 / issue 4 section 5: the sewer rig of config/sim_sewer.yaml (two 186-degree
 // fisheyes back to back, 35 cm apart, 6 m through a 60 cm pipe with rotations below 10 degrees)
 // through the whole live pipeline (rendering -> VO per camera -> sync -> online estimator with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One meaning per state: names, the rig's combined state and the exit code.
 #include "rigcal/calib/slave_state.h"
 

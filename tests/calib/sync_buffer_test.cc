@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SyncBuffer matching, eviction, clock glitches and interpolation; over 600 lines: one fixture
 // shared by all the buffer's behaviours, which read best side by side.
 #include "rigcal/calib/sync_buffer.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SyncBuffer under concurrency: one producer thread per camera, one consumer thread. Meant to
 // run under ThreadSanitizer too (-DRIGCAL_TSAN_ENABLED=ON).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clock glitches in the SyncBuffer: a pose stamped far in the future (up to INT64_MAX) or in the
 // past, a clock that alone steps by 10 s or by 1 s (the camera's own rate), duplicates: rejected
 // against the other cameras' clocks and counted, warned about once per burst, and matching goes

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clock jumps of free-running slaves in the SyncBuffer (interpolation mode): a slave whose clock
 // restarted (stamps restart near 0, or step by seconds) is followed once its new timeline is
 // persistent and self-consistent, with the step as the offset prior, counted and warned about

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera models: round trips over the image and over random bearings, Jacobians against central
 // differences, field-of-view limits (beyond 90 degrees for fisheye and scaramuzza), the OCamCalib
 // conventions of the scaramuzza model, and spec validation naming the field.

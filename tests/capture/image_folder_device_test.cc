@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ImageFolderDevice: EuRoC camera folders, including the real static EuRoC frames whose cam1
 // index lists 4 images that do not exist, and damaged CSV files / images; plain folders of
 // images stamped by a rate or a timestamps file, in 8 and 16 bits, grey and colour.

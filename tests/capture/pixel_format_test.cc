@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Pixel format conversion to grey (no device needed): every V4L2 layout rigcal reads, with
 // padded rows, short buffers and JPEG decoding.
 

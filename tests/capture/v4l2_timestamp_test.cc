@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Capture times of V4L2 buffers from their stamps and flags (no device needed).
 
 #include "rigcal/capture/v4l2_timestamp.h"

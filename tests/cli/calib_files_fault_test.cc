@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal calib` / `replay` and the files they write, under faults: an --out that is not a
 // regular file, a replaced file's permissions, a run that calibrated nothing, a state file that
 // --resume rejects, and SIGTERM / SIGHUP during a paced replay (result and state written).

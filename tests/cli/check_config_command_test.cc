@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal check-config` and `rigcal devices` on this machine, through the built binary: the
 // installed example rigs are valid, a config naming devices that are not here fails with every
 // camera and the trigger's port named, a typo names the file, line and key; `devices --json`

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One command-line grammar (issue 37 §6): verbosity anywhere, unknown words named with the
 // nearest known one, -o on the commands that write, exit codes that agree, calib refusing a
 // lossy file:// bus.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The harness of the tests that run the built rigcal binary (RIGCAL_BINARY, set by
 // tests/CMakeLists.txt): a fresh temporary directory per test, kept when the test fails, and

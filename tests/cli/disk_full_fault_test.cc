@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A full disk while `rigcal replay` saves its state and result and while `rigcal record` writes a
 // log: a clear error naming the file (exit 1), the files of the previous run intact, no
 // temporary file left. The disk is a 512 KiB tmpfs mounted in a private mount namespace

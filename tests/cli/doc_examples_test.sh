@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # ctest cli/doc_examples: every ```sh block of README.md and docs/*.md runs as written, in the
 # order of its page, in a scratch directory where `rigcal` is on PATH and config/ is the
 # repository's. Blocks that need what a test machine does not have carry a second word:

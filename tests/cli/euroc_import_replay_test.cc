@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Real data through `rigcal import` and a replay (issue 12, section 5):
 //  - the EuRoC "imu_april" AprilGrid poses (PnP per frame, support/euroc_aprilgrid.h; cam1 in an
 //    odometry unit of its own as in the batch test) imported into a pose log and replayed with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal import` and `rigcal solve --slave NAME=FILE` through the built binary: per-camera
 // trajectories (TUM, EuRoC CSV named data.csv) into a pose log that `rigcal calib --log` replays
 // with the rig config written beside it, and a small EuRoC (ASL) image recording into an image

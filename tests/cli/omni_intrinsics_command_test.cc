@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal intrinsics --model scaramuzza` through the built binary: simulated detections of a
 // 200-degree camera (support/omni_views.h, 0.1 px noise) written as AprilGrid-format CSVs for
 // two cameras that see the same views;

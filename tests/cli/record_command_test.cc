@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal record` through the built binary on small simulated rigs: every frame in the log as
 // image_t (raw, PNG, JPEG), the progress line, splitting by size, no silent overwrite, VO poses and
 // extrinsics when VO runs, and a recording cut inside an event (power loss) that still replays up

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal replay` and `rigcal calib --log` through the built binary: the same log gives the same
 // result bit for bit (and the same as calib --log), damage is reported with its byte offset,
 // and the exit codes agree: 0 every slave usable, 3 nothing calibrated (with the reason), 1 bad

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal run` end to end through the built binary: the real static EuRoC frames (the drone
 // stands still: the run must say "insufficient motion" and list the missing images, not
 // crash), and the thesis virtual scene config with --eval.

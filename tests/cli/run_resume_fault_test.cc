@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal run --state --resume` killed with SIGKILL at random times: the state file is always
 // whole, the motion count only grows, and the chain of resumed runs ends with the estimate of an
 // uninterrupted run: the rotation within 3 σ, C within 5 σ (see below; the simulated thesis

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal run` with a live trigger generator: the built binary on a simulated rig whose
 // `trigger.port` is a pseudo-terminal with a generator speaking the firmware's protocol at the
 // other end (pipeline/fake_trigger_generator.h). The rig runs in real time from the next pulse,

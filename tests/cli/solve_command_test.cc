@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // End-to-end tests of `rigcal solve`: runs the built binary on synthetic TUM files of a
 // 3-camera rig drive and checks exit codes, the JSON schema, the written files and accuracy.
 #include <gmock/gmock.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal solve --time-offset`: a rig whose slaves run free (other rates and phases, clock
 // offsets) written as TUM files and solved by the built binary.
 #include <gmock/gmock.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The state file of `rigcal replay` / `calib` under faults, through the built binary: kill -9 at
 // random moments while the state is saved over and over (the file is always a complete version
 // and --resume takes it), replaying the same data after a resume (adds nothing), and a camera

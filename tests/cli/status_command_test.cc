@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal status` as a command: the built binary reads RIGCAL_STATUS / RIGCAL_EXTRINSICS from an
 // LCM log through LCM's file:// provider (no network), prints the JSON snapshot with the health
 // exit code, plain lines when stdout is not a terminal and the dashboard with terminal control

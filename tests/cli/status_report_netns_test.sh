@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # `rigcal status` and `rigcal report` on a live session over real udpm:// LCM: `rigcal calib`
 # listens, lcm-logplayer publishes the poses of a simulated drive, lcm-logger records the bus.
 # While the session runs, `rigcal status` watches it (plain lines, and --once --json with its

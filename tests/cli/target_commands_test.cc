@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal intrinsics`, `rigcal reference-compare` and `rigcal solve --reference target /
 // --metric-target / --master-metric` through the built binary, on OpenCV's 13 real stereo
 // chessboard pairs (../shared/data/opencv_stereo_chessboard).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal trigger --hello` through the built binary: against the firmware under QEMU (its USART1
 // on a pseudo-terminal) it prints the Hello with QEMU's clock status and exits 0; a port that
 // does not exist and a port nobody answers on are errors naming the port (exit 1).

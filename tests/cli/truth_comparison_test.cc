@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One truth comparison for every command (issue 37 §3): the same run's poses and truth give
 // the same master unit and the same true scales through `run --eval` and `solve --truth DIR`,
 // and a truth of mountings alone gives no scale error at all (the slaves' units are unknown).

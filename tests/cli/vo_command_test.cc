@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal vo`: the VO of one camera of a rig config alone. A camera the config does not name is
 // an error; on the real visp_rbt_sequence (config/real_visp_rbt.yaml) the command prints where
 // the VO initialised, the posed share and one scale segment, and writes as many poses as it

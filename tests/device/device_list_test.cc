@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal devices` and `rigcal check-config` on the guest's vivid devices (scripts/vm): the
 // lister finds both vivid capture nodes with their driver, card, bus, formats and sizes; a
 // config naming them by bus is checked ok with the negotiated format in its plan, one naming a

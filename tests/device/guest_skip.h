@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The device tests run inside the QEMU guest of scripts/vm/run-device-tests.sh, where the
 // drivers are loaded. Elsewhere (no such node) they skip with the reason.

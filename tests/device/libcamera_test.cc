@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The libcamera source on vimc (the kernel's virtual media-controller camera, built out of tree
 // by scripts/vm/build-assets.sh; libcamera's vimc pipeline and IPA): the camera by model, the
 // validated configuration, frames with sensor timestamps on CLOCK_MONOTONIC and increasing

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Capture latency and CPU of the V4L2 source per camera, on v4l2loopback. Unlike vivid, which
 // stamps a frame with its nominal schedule (up to a period ahead of its delivery), v4l2loopback
 // takes its stamp when the writer writes the frame; it does not flag the stamp as

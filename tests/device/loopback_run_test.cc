@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The customer's whole path through the real V4L2 API, driven by `rigcal run`: a simulated
 // two-camera rig renders its frames, a writer feeds them to two v4l2loopback devices (GREY and
 // YUYV), and `rigcal run` with `source.type: v4l2` captures them (mmap streaming, kernel stamps),

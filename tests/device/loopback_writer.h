@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The writer side of a v4l2loopback device (scripts/vm/guest-init.sh loads two: /dev/video20 and
 // /dev/video21): S_FMT on the OUTPUT type, then one write() per frame, which the driver stamps

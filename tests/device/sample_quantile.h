@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The q-quantile of a sample (nearest rank), for the device tests' latency figures; 0 when
 // empty.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Figures of a long capture of two vivid devices at once (not part of `make test`: the eval test
 // device/vivid_long_run_eval runs it for RIGCAL_DEVICE_RUN_S seconds, default 300):
 //  - frames dropped (driver sequence gaps) per camera;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The V4L2 source on two vivid devices (the kernel's virtual video driver, loaded by
 // scripts/vm/guest-init.sh with n_devs=2, webcam input): formats, CLOCK_MONOTONIC stamps,
 // sequence continuity, two devices at once, clean stop, device loss (vivid's "Disconnect"

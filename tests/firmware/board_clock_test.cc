@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The board's clock tree and peripheral start-up (firmware/board/stm32f405 clock_tree.cc,
 // peripherals.cc) run against a fake STM32F405 register map (fake_stm32.h): the values written
 // and their order are checked against RM0090 for an 8 MHz and a 25 MHz crystal, the HSE timeout

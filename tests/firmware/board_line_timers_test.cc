@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scheduler -> compare registers: the firmware core (TriggerApp) on the board's timer channels
 // (Stm32LineTimers) against a fake STM32F405 register map. The test plays the timer hardware:
 // it moves TIM2's count to the earliest armed compare, flags its channel and runs the compare

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The 64-bit extension of the board's 32-bit µs counter (firmware/core counter_extension.h):
 // started near 2^32 it crosses the wrap without a jump, as VersaVIS's did not (its issue #37),
 // and NearestTime places 32-bit capture / compare values next to a 64-bit reference.

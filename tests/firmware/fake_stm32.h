@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A fake STM32F405 peripheral map for the board code's host build (register_access.h): every
 // write is logged in order, reads answer as the reference manual says the hardware would for the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The trigger protocol (firmware/protocol): CRC, COBS, every message round trip, and the
 // decoder's behaviour on corrupted, truncated, oversized and misaligned streams.
 #include <gtest/gtest.h>

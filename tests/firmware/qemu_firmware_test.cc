@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The cross-built trigger firmware on an emulated STM32F405 (qemu-system-arm -M netduinoplus2),
 // over its USART1: boot Hello (with the clock status QEMU's missing RCC model leads to), command
 // answers incl. every kind of refused value, then a run of pulse reports checked for continuity,

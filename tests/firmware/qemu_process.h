@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Runs the cross-built trigger firmware under `qemu-system-arm -M netduinoplus2` for a test:
 // its USART1 on the test's pipes (-serial stdio) or on a pseudo-terminal (-serial pty, whose

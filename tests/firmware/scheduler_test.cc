@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The trigger scheduler (firmware/core) on ideal compare timers (IdealLineTimers): tick times,
 // exposure-centred rises, phase offsets, widths, reports (order, seq, never before the tick or a
 // rise), stop/start, edges the compare interrupt re-armed too late, and skipped ticks.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The firmware logic without the board (firmware/core TriggerApp): command answers (Ack, every
 // Nack reason with its field, the link budget), heartbeats, the transmit queue, a run of pulse
 // reports on ideal compare timers, and exposure reports from captured exposure edges, driven

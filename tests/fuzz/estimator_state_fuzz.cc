@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `estimator_state`: ParseEstimatorState (the `--resume` state file) on any bytes, and
 // on the same bytes with the checksum line made right (io::WithEstimatorStateChecksum, as the
 // writer computes it), so that the fuzzer reaches the parser behind the checksum: a hand-edited file.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the fuzz targets of tests/fuzz share: the input as a file for readers that take a path,
 // quiet logs, and the check of a property that must hold for every accepted input.

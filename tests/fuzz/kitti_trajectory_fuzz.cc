@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `kitti_trajectory`: ReadKittiTrajectory on any pose file and time file. The input
 // is the pose file, a NUL byte, then the time file (no NUL: the time file is empty). Accepted
 // trajectories have one finite pose with a unit quaternion per time, times strictly increasing.

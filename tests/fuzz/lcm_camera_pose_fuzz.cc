@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `lcm_camera_pose`: camera_pose_t from any bytes (lcm_decode_fuzz.h), and
 // MessageValidator::DecodeCameraPose, whose accepted poses have a camera index of the rig.
 

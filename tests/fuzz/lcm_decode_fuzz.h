@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The body of the LCM decoder fuzz targets (lcm_<type>_fuzz.cc): MessageValidator::Decode of one
 // message type on any bytes, for the rig of tests/lcm/message_fixtures.h and for an empty name

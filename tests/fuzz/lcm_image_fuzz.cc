@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `lcm_image`: image_t from any bytes (lcm_decode_fuzz.h): sizes that lie (size
 // against data, stride x height, width against the pixel format), then FrameFromImage, the
 // replay's conversion to a grey frame, whose result is width x height when it succeeds.

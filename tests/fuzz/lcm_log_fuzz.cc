@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `lcm_log`: LogReader on any file: every event, then the decoder of its channel's
 // type (RIGCAL_POSE_*, RIGCAL_IMAGE_*, RIGCAL_EXTRINSICS, RIGCAL_STATUS), as `rigcal calib --log`
 // and `rigcal replay` read a log. Events lie within the file and follow each other; a damaged log

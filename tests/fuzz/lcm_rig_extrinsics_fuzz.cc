@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `lcm_rig_extrinsics`: rig_extrinsics_t from any bytes (lcm_decode_fuzz.h).
 
 #include "lcm_decode_fuzz.h"

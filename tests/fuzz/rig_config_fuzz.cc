@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `rig_config`: LoadRigConfig on any bytes (seeds: the shipped config/*.yaml).
 // An accepted config has at least one camera, distinct non-empty camera names, finite nominal
 // and truth mountings with unit quaternions, and positive publishing rates.

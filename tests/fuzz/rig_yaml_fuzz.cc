@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `rig_yaml`: the rig YAML readers on any bytes: ReadRigYaml (truth and result files),
 // ReadTrueMountings (a rig YAML, or a rig config's cameras[].truth) and ReadCamchain. Accepted
 // mountings have finite values, unit quaternions and a positive scale; RigToYaml of them reads

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzz target `trajectory`: ReadTrajectory (TUM, EuRoC CSV, rigcal native, auto-detected) on any
 // bytes. Accepted trajectories keep the reader's promises: one stamp, pose and segment per line,
 // strictly increasing stamps, finite centres, unit quaternions; and MatchTrajectories of an

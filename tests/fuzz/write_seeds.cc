@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Writes the binary seed corpora of the LCM fuzz targets from the fixtures of tests/lcm: a valid
 // message of every type (and a few that lie about their sizes) into
 // <dir>/lcm_<type>/, and small LCM logs into <dir>/lcm_log/.

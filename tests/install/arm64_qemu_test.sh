@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The arm64 build, proven to run: scripts/cross-arm64.sh cross-builds `rigcal` for arm64 into
 # BUILD_DIR/arm64 (Debian's cross compiler, Debian's arm64 libraries in a sysroot), then
 # qemu-aarch64 runs it here with the sysroot as its library root (-L):

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The Debian packages of this build tree (cpack -G DEB, cmake/RigcalPackaging.cmake), installed
 # with dpkg into a private root: dpkg --root=DIR with a copy of this machine's package database,
 # so dpkg checks the Depends against what is really installed here, unpacks into DIR and

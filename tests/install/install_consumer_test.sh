@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # `cmake --install` of this build tree into a temporary prefix, then a small project
 # (tests/install/consumer) configured, built and run against it with find_package(rigcal) only.
 # Fails when a file the install promises is missing, when find_package or the exported

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The watchdog of `rigcal run` (rigcal-run.service) is fed only while frames flow: a Unix
 # datagram socket stands in for systemd (NOTIFY_SOCKET, WATCHDOG_USEC=400000). The simulated
 # thesis rig, paced in real time, loses camera cam1 after 4 s (source.fail_after_s): WATCHDOG=1

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # `rigcal calib` speaks systemd's notify protocol (tools/cli/service_notifier.h) as it would
 # under rigcal.service: a Unix datagram socket stands in for systemd (NOTIFY_SOCKET). With
 # WATCHDOG_USEC=200000 it must send READY=1, then WATCHDOG=1 about every 100 ms (at least 5 in

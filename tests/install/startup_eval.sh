@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Figure (label eval): start-up time of the calibrator to its first published RIGCAL_STATUS, on
 # real udpm:// LCM inside a private network namespace: lcm-logger records the bus, the time from
 # launching `rigcal calib` (what rigcal.service runs) and `rigcal run` (simulated rig) to the

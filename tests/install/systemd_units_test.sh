@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The systemd units (config/systemd) as `cmake --install` writes them: installed with DESTDIR
 # into a private root next to a copy of this machine's system units, then
 # `systemd-analyze verify --root` must accept them without a single remark; a copy with an

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera sections of rig configs and Kalibr camchain files: every model parses, and every error
 // names the file, the line and the key.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The capture sources of a rig config (source.type v4l2 / libcamera / image_folders): defaults
 // at the source, overrides per camera, the camera's size, and errors that name the line and
 // field.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The estimator state file: exact round trip, corrupt, truncated, other-version and foreign
 // files, version-2 files, and a file written before the state left calib (fixtures/).
 #include "rigcal/io/estimator_state_file.h"

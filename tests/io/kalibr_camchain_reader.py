@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Loads a camchain YAML as Kalibr's config reader does (kalibr_common/ConfigReader.py:
 CameraChainParameters over CameraParameters) and exits 1 naming the first violation.
 

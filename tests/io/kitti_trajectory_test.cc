@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // KITTI odometry trajectories: poses and times, errors that name file, line and column, and the
 // KITTI 00 ground truth.
 #include <gmock/gmock.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // "NAME=FILE" camera arguments (rigcal solve, rigcal import tum) and the rig config written for
 // imported logs.
 #include <gtest/gtest.h>

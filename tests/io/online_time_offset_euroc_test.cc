@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The online estimator on the real EuRoC V1_02 trajectory with one camera's clock shifted and
 // the cameras capturing at other phases: the offset is found within its σ and the extrinsics
 // are as accurate as with synchronised stamps.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Output files under hostile conditions: WriteFileAtomically / AtomicFile (the single writer of
 // every file rigcal writes) replace only regular files and keep their permissions.
 #include <gmock/gmock.h>

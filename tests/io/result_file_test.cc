@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading a result back (ReadResultFile): the result YAML and the --json output round-trip the
 // fields the report shows; unknown σ stay unknown; bad files are named with line and field.
 #include "rigcal/io/result_file.h"

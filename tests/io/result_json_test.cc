@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The JSON schema shared by the commands, the text table, the Euler angle and axis-angle
 // helpers (continuous through gimbal lock) and the truth's unit alignment in both views.
 #include "rigcal/io/result_json.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rig config loader: camera order, options, and errors that point at the line.
 #include "rigcal/io/rig_config.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rig YAML (truth / result), Kalibr camchain, and the atomic writer underneath them.
 #include "rigcal/io/rig_files.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Time stamps as text: decimal seconds to exact nanoseconds (rounding, overflow, rejected text)
 // and back.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `source:` section of a simulated rig config, and the shipped simulation configs: every key
 // parsed, errors that name the line and key, and configs whose motion a VO can track.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `source.trigger` of a simulated rig config: the simulated hardware trigger's keys, defaults
 // and range errors that name the key.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Figures for free-running cameras (label eval): the estimated clock offset and its σ against
 // the truth for offsets from -100 to +100 ms and phases within a frame, the extrinsic errors
 // of the free-running rig against the same rig synchronised, and the cost of interpolating a

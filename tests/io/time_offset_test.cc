@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cameras that run free: interpolation at the master's instants (trajectory_interpolation.h)
 // and the clock offsets estimated from the data (time_offset.h), on simulated rigs whose
 // slaves capture at other rates and phases with clock offsets up to ±100 ms, and on the real

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Fixtures of the trajectory file tests in tests/io/: a temporary directory to write files to and
 // read them back, and a synthetic trajectory.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Trajectory files in TUM, EuRoC CSV and native format: format detection, reading and writing
 // (exact stamps, round trips), and every rejected input.
 #include "rigcal/io/trajectory_io.h"

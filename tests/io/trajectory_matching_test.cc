@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Matching the trajectories of several cameras by time stamp: tolerance, different rates, and
 // the errors that name ranges and slaves.
 #include <gmock/gmock.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The hardware trigger of a rig config: the top-level `trigger:` section and the cameras'
 // `trigger:` entries, their defaults per source (where frames are stamped relative to the
 // exposure centre), the sync switching to trigger sequences, and errors naming file:line and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // CheckBusStaysOnHost: which LCM URLs keep rigcal's bus on this host, against routing tables in
 // the format of /proc/net/route (the kernel's hex words of network-order addresses). The URLs
 // are only parsed: no LCM bus is opened and no socket is made, so no namespace is needed (the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rig_extrinsics_t: round trips, the flags and fields from a RigCalibration, and every rule of
 // its CheckMessage.
 #include "rigcal/lcm/extrinsics_message.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // image_t: round trips of raw and compressed images and every rule of its CheckMessage.
 #include "rigcal/lcm/image_message.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rigcal's LCM logs against the real LCM tools (Debian liblcm-bin): a log written by rigcal plays
 // in lcm-logplayer, and what lcm-logger records of it replays in rigcal. udpm:// traffic only
 // inside a private network namespace the test creates (unshare --net, a multicast route on its

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rigcal LCM messages on LCM itself: in-process publish/subscribe (memq://) and LCM log files,
 // written directly and through the file:// provider. Never UDP multicast (docs/architecture.md "LCM").
 #include <gmock/gmock.h>

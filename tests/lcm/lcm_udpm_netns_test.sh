@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Multi-process test over real udpm:// LCM: `rigcal calib` listens, lcm-logplayer publishes the
 # poses of a simulated drive, lcm-logger records the bus. Everything runs inside a private
 # network namespace this script creates (unshare --net), with a multicast route on its own lo;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // LogReader against logs written by ::lcm::LogFile: the same events, and damage (a cut file, a
 // corrupt sync word, an absurd length) reported with its byte offset instead of being skipped or
 // allocated.

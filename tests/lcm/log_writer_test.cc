@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // LogWriter: the bytes of lcm-logger's format, reading back through LCM's own reader, splitting,
 // atomic parts, and what is left readable after a crash cut the file inside an event.
 #include "rigcal/lcm/log_writer.h"

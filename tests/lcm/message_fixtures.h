@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Fixtures of the tests in tests/lcm/: a valid message of every rigcal LCM type with every field
 // set, LCM's unchecked encoding (how a faulty sender makes its bytes), byte offsets to corrupt a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The validator's checks of a received buffer, on every message type: wrong type and schema
 // version, truncated, oversize and malformed buffers, and its counters by cause.
 #include "rigcal/lcm/message_validation.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // camera_pose_t: round trip, normalisation, conversion from and to CameraPose, and every rule of
 // its CheckMessage.
 #include "rigcal/lcm/pose_message.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SharedBus: threads that publish on one file:// bus at once leave a log whose every event is
 // whole (LCM's file provider alone interleaves their bytes and damages the log).
 #include "rigcal/lcm/shared_bus.h"

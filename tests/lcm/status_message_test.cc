@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rig_status_t: round trips and every rule of its CheckMessage.
 #include "rigcal/lcm/status_message.h"
 

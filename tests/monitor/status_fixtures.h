@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A RIGCAL_STATUS and a RIGCAL_EXTRINSICS with every field `rigcal status` shows set, for the
 // monitor's tests (in-process) and the command's (through an LCM log).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal status` in one process: messages published on memq:// reach the monitor, which shows
 // them (dashboard, plain lines, JSON) and decides the health exit code.
 #include "rigcal/monitor/status_monitor.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ChArUco boards: views rendered from a drawn board through a known pinhole camera (no
 // distortion) at varied poses, some showing only part of the board, are detected and calibrate
 // the camera back; bad input gets errors naming what is wrong.

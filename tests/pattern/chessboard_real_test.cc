@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Real images: OpenCV's 13 stereo pairs of a 9x6 chessboard (../shared/data/
 // opencv_stereo_chessboard, README-provenance.txt there), the thesis's experiment 5.5 in
 // miniature. From the images alone: intrinsics per camera, target poses, the target-based

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Chessboard corners on rendered views (no distortion, a known pinhole camera) from near, where
 // a square is ~42 px wide in the image, to far, ~12 px: every detected corner lies within a
 // fraction of a pixel of its true image position at every distance.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Real data: EuRoC's "imu_april" calibration sequence as AprilGrid detections (../shared/data/
 // euroc_calib_aprilgrid, README-provenance.txt there), two synchronised cameras, 1439 frames.
 // Prints and checks the figures of issue 18:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The individual reference pose model (thesis 4.2, two-pattern setup of 5.7) on simulated
 // views: a two-camera rig (slave turned 90 deg about the master's y axis, 0.33 m away, as the
 // thesis's virtual rig of 5.7 at a tenth of its size) moves in front of two fixed chessboards,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The target module on synthetic views: a camera of known intrinsics sees a chessboard from
 // random poses; the corners are projected with OpenCV (the same convention the module uses)
 // plus Gaussian pixel noise of sigma 0.1 px.

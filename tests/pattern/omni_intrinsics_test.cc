@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The omnidirectional (unified / Mei) model through cv::omnidir on simulated views: a wide
 // camera (xi 0.8, fu 650 px) sees a 9x6 chessboard from 24 poses;
 // corners projected with cv::omnidir::projectPoints plus 0.1 px Gaussian noise.

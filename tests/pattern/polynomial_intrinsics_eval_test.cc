@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Evaluation (label eval, `make eval`): the polynomial omnidirectional calibration over 40 seeds
 // at each corner noise sigma = 0.01 and 0.1 px, 24 simulated views of the 200-degree camera of
 // support/omni_views.h each. Prints per sigma the worst over the seeds of: the mapping's RMS

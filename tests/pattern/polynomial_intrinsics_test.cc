@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The polynomial omnidirectional model (scaramuzza) calibrated from simulated views
 // (support/omni_views.h): a 200-degree camera (equidistant-like polynomial of high degree,
 // f 180 px, centre 12 px off the image centre, affine c = 1.004, d = 0.003) sees a 9x6 board in

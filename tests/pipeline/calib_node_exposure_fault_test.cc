@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Exposure of the calibration node: only poses on the configured cameras' channels, naming the
 // camera of their channel, reach the estimator; everything else is counted and dropped.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `rigcal calib` node end to end: in-process over memq://, replaying a file:// log (with
 // garbage and a truncated tail), state persistence and resume.
 #include "rigcal/pipeline/calib_node.h"

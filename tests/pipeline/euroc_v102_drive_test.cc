@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A simulated 3-camera rig flown along the real EuRoC V1_02 ground truth (a drone in a room,
 // 83 s), with VO-like pose noise, odometry scale drift and a VO reset every 30 s with a new
 // scale, replayed through the online path (SyncBuffer + RigEstimator + window refinement).

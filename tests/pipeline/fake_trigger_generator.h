@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A trigger generator speaking the firmware's protocol (firmware/protocol) on the master side of
 // a pseudo-terminal, for tests of the live trigger path without hardware: it acknowledges every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A recorded live session replays to the result the live run gave: a lossless live pipeline on
 // the simulated room rig (room_rig.h) (rendered images -> VO -> sync -> estimator) records its
 // poses on a file:// bus; the rig's images are written as an image log. Replaying the image log

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The live trigger path against the real firmware: `trigger.port` is the pseudo-terminal of
 // QEMU's USART1 (qemu-system-arm -M netduinoplus2 running the cross-built trigger firmware),
 // the source an image-folder replay paced from its pulses. Frames come out with consecutive

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The rig of the live trigger tests: two EuRoC camera folders of kFrames tiny images at 20 Hz
 // and a rig config whose `trigger.port` is `port` (cam0 on line 0, cam1 on line 3). Header-only.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The live trigger path without hardware: a rig config with `trigger.port` on a pseudo-terminal
 // whose other end is a generator speaking the firmware's protocol (fake_trigger_generator.h),
 // and an image-folder source that the capture sources replay in real time from the next pulse.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // LogRecorder and the image codec: frames of tapped devices land in the log as image_t that decode
 // to the same pixels, gaps in a device's frame numbers are counted as drops, other messages are
 // recorded beside them with non-decreasing timestamps, and a log cut by a crash reads back up to

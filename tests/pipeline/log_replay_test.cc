@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal replay` / `calib --log` of pose logs through CalibNode: nothing dropped even with the
 // default small queues, the same log gives the same result and the same published history bit
 // for bit, the timers run on log time (the output log holds the whole history at its rates),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/pipeline/online_replay.h"
 
 #include <gtest/gtest.h>

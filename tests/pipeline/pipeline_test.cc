@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The live pipeline end to end on a short simulated drive: rendered images -> VO per camera ->
 // SyncBuffer -> RigEstimator. Lossless mode (not paced in real time) keeps it deterministic
 // enough to check the estimate against the truth; a camera that dies mid-run must leave the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Replay throughput (figures, no wall-clock asserts): an image log of a 2-camera 752x480 rig
 // through VO (the real-time factor: log seconds per wall second, target >= 4 on 2 cores), and a
 // pose log (sets per second). `ctest -L eval -R pipeline/replay_throughput -V` prints them.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The pipeline tests' rig (room_rig_spec.h): a run of a pipeline to its end; a rig's images as an
 // LCM log.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulated rig of the pipeline tests: three 480x320 pinhole cameras (front, side, up) in the
 // default room, moving and rotating about varied axes (no threads: room_rig.h adds running a

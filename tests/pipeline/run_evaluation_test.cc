@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scoring a run's estimate against the simulated truth: a planar estimate without a prior is
 // scored in the plane (its offset along the axis is unknown, not wrong), a translational one
 // has no position to score, and the table says which figures were not determined; the master

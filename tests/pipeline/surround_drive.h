@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A simulated drive of the 4-camera car rig (config/sim_surround4.yaml) at pose level, through
 // the calibration node over memq:// at a multiple of real time, for the load test (2 minutes,

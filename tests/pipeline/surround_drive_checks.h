@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The checks and figures of a surround drive (surround_drive.h), shared by the load and the soak
 // test.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Load: a 2-minute simulated drive of the 4-camera car rig through the calibration node at 10x
 // real time (pose level, tests/pipeline/surround_drive.h), with a camera that dies at 60 % and
 // one that loses track every 20 s. Memory and queues stay flat (slopes printed), every pose is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Soak: the drive of surround_drive_load_test for 1 hour of drive time (label soak, not in make
 // test: `ctest --test-dir build -L soak -V`), at RIGCAL_SOAK_SPEED times real time (default 10:
 // 6 minutes), with the default pose history (10000 sets per slave, full after 500 s).

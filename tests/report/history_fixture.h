@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A calibration history as `rigcal report` reads it, made by the real online estimator: a
 // synthetic 3-camera drive (DemoRig) is fed set by set to a RigEstimator, and every half second

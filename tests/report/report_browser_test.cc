@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal report`'s page in a real browser: headless Chromium renders it, takes a screenshot,
 // and dumps the DOM after the page's script ran; every plot must have rendered with data and
 // the console must stay empty. A page with a broken plot and a script error proves the check

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal report`'s data and page: a history log made by the online estimator, a pose log, a
 // result file, a truth, damaged and foreign inputs.
 #include <gmock/gmock.h>

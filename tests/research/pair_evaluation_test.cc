@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pair-policy evaluation's noise models, and the auto pair policy on them.
 #include "rigcal/research/pair_evaluation.h"
 

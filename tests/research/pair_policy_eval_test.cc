@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Issue requirement on the whole pair-policy evaluation set (`rigcal experiment pairs`): the
 // default pair policy (gls) within 1.2x of the best fixed span in rotation and in position on
 // every recording, the online estimate within 1.3x of it (rotation, position, scale) with σ as

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Sub-pixel consistency of the simulated rig's images with its camera models, on the rendered
 // sequences of the shipped configs: corners are detected in one frame, the 3D point each one
 // sees is found by casting its ray into the scene at the true pose, and the point is projected

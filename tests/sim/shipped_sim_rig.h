@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulated rig of one of the shipped configs (config/<file>), not paced in real time, for
 // the sim tests that render the rigs users run.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated rig's SIMD texture kernels (SSE2 or NEON, whichever the build has) against the
 // portable scalar ones: the same frames of the shipped simulated rigs rendered both ways must
 // agree in every pixel within one grey level (the report gives the largest difference).

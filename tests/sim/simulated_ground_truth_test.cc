@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated rig's ground truth: the data SimulatedRig::GroundTruth returns, and the files
 // rigcal_io writes of it, read back with the project's own readers (TUM and rig YAML), equal to
 // the rig's truth, consistent with the thesis' rig constraint and laid out as they always were.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated rig: rendering geometry against the camera model, determinism, noise, blur,
 // device behaviour (frame times, drops, jitter, failures, interrupt), spec checks, speed report.
 // The cameras are rigcal_camera's ideal pinhole and equidistant models (support/ideal_cameras.h),

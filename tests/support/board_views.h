@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Simulated views of the 9x6 chessboard (0.04 m squares) by a pinhole (radtan) or equidistant
 // fisheye camera: OpenCV projects the corners (the convention the target module uses), then

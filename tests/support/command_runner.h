@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Tests that run other programs (unshare, lcm-logger, ...) beside the rigcal binary
 // (cli/command_test.h), and the rule for what cannot run here: skipped with the reason, a failure

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Real rig data for tests: the EuRoC "imu_april" calibration sequence as AprilGrid corner
 // detections (no images), turned into per-camera poses with OpenCV PnP.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ideal pinhole and equidistant cameras built by rigcal_camera's factory (ideal_cameras.h).
 #include "support/ideal_cameras.h"
 

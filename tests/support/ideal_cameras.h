@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Ideal (distortion-free) cameras of rigcal_camera for the simulated-rig, VO and benchmark
 // fixtures: a pinhole and an equidistant ("f-theta") fisheye that may see beyond 180 degrees.

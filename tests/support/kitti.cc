@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reads the KITTI 00 ground truth (kitti.h).
 #include "support/kitti.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The real KITTI odometry sequence 00 ground truth as a master trajectory for the planar-motion
 // tests (data, read from the shared data folder; the synthetic car rig that drives along it is

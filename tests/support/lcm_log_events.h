@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The events of an LCM log file as LCM's own reader (::lcm::LogFile) returns them: it stops at the
 // first incomplete or corrupt event. Header-only: for GoogleTest targets that link LCM.

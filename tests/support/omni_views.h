@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Simulated views of a 9x6 board (0.04 spacing) by an omnidirectional camera: rigcal's own
 // scaramuzza model projects the corners, Gaussian pixel noise is added. The board is placed

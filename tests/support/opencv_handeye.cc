@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "support/opencv_handeye.h"
 
 #include <cmath>

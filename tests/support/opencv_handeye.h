@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // OpenCV's hand-eye calibration (cv::calibrateHandEye, AX = XB) as a peer of the rig
 // calibrator in tests and benchmarks.

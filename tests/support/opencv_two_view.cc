@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "support/opencv_two_view.h"
 
 #include <Eigen/Core>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // OpenCV's two-view relative pose as a peer of the VO in tests and evaluations: ORB features
 // (cv::ORB, 1000 per image), brute-force Hamming matching with a cross check, the 5-point

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Gaussian pixel noise for simulated detections: sigma px per axis, x drawn before y (the same
 // draws with every compiler), none at all when sigma is 0 (std::normal_distribution needs

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Sourced at the top of a multi-process LCM test script: runs the script inside a private network
 # namespace (unshare --net) whose only link, lo, gets a multicast route, so udpm:// traffic never
 # leaves it (docs/architecture.md "LCM"); sets `url` to the udpm URL to use there. Also gives the script

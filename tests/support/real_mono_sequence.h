@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The real monocular sequences of ../shared/data/real_mono (README-provenance.txt there), for
 // the VO's tests and evaluations: the frames read by capture's ImageFolderDevice as a plain

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "support/relative_pose_errors.h"
 
 #include <Eigen/Geometry>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Errors of an odometry's relative motions against a reference (AprilTag poses of a real
 // sequence, a renderer's truth): for frame pairs (a, b), the rotation error of b's pose in a's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A camera moving through the simulated rig's room (room_sequence.h).
 #include "support/room_sequence.h"
 

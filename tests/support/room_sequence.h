@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // One camera moving through the textured room of drivers' simulated rig: the rendered image
 // sequences with exact ground truth of the VO tests and the VO benchmark. The images come from

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "support/simulated_rig_config.h"
 
 #include <fstream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A small version of the shipped thesis 5.4 rig (config/sim_thesis_virtual.yaml) for tests that
 // run `rigcal record` / `rigcal run`: two 60-degree pinhole cameras (cam1 looks to the master's

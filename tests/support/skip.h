@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Skipping a test for something the machine lacks (recorded data, a tool, a permission).
 // RIGCAL_SKIP_MISSING() << reason; is GTEST_SKIP() << reason; except under CI=true, where a

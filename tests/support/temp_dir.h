@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // An empty directory for a test's files under GoogleTest's temporary directory. Header-only.
 

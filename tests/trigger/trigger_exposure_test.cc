@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Exposure feedback on the host (drivers TriggerMatcher): a line whose camera reports its
 // measured exposure (ExposureReport, protocol version 2) gets the measured exposure centre instead
 // of the scheduled one (T_k + phase offset); a camera marked exposure_feedback waits for the

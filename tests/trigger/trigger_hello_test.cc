@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal trigger --hello`'s query (drivers trigger_hello.h) against scripted peers: a version-2
 // generator answers with its Hello and clock status; a generator built for protocol version 1 is
 // named as such instead of timing out silently; DescribeClockStatus says what each bit means.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The host trigger link end to end on a simulated link: the real firmware core on an MCU clock
 // that drifts 50 ppm, frames delayed by a USB-like one-sided jitter of 0-2 ms, bytes corrupted,
 // and an MCU reboot half-way. Prints the RMS error of the mapped pulse times (µs), the drift

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The host trigger link against the real firmware on an emulated STM32F405: QEMU's USART1 on a
 // pseudo-terminal, opened by SerialPort (termios) like a USB serial adapter. The receiver thread
 // applies the settings, maps the MCU clock and matches frame stamps to pulses while the test

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The UART wire time of the trigger reports: the MCU stamps a message before its first byte
 // leaves, the host sees it once the last byte is in. TriggerLink stamps every message earlier
 // by the wire time of its frame and of the bytes read after it (set_uart_byte_ns); the clock

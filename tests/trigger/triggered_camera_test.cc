@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Simulated rig + simulated trigger generator: every frame of the externally triggered cameras
 // gets the sequence number of the pulse that exposed it and the mapped exposure-centred time,
 // through the whole trigger path (firmware core -> frames on a jittery link -> clock map ->

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Affine patch alignment: recovers a known affine warp of a textured image, and on the rendered
 // sewer and room sequences it removes the drift of frame-to-frame KLT tracks (tracked position
 // against the projection of the true 3D point).

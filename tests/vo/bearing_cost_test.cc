@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The bundle adjustment's bearing residual: its value is the chord between the observed bearing
 // and the direction to the landmark, and its analytic Jacobians match central differences of
 // the residual for every parameter block, all around the sphere.

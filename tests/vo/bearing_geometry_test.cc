@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Geometry of the VO on unit bearing vectors: 5-point essential matrix, its decomposition and
 // RANSAC, triangulation, P3P, PnP RANSAC and motion-only refinement. Synthetic points seen by
 // a pinhole-like and by a 186-degree field of view (bearings with z <= 0 included).

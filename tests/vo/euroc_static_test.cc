@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo on real images: the 95 static EuRoC V1_01 stereo frames in
 // ../shared/data/euroc_v101_static (the MAV stands on the ground). With no motion the VO must
 // not invent one: it stays initialising (an initialisation would set a unit baseline out of

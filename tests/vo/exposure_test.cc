@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo under exposure and gain changes (rendered room, support/room_sequence.h): every
 // 15 frames the image brightness steps by a factor (auto-exposure), with a gentler flicker in
 // between; the VO keeps tracking in one segment, as accurately as on the unchanged frames.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Local bundle adjustment of the VO map: convergence from perturbed poses and points with
 // bearings all around the sphere, gauge (fixed keyframes, unit baseline) and outlier removal.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The relocalisation's descriptors: upright ORB describes the same texture the same way after a
 // shift of the image (and a small rotation), different features differently, and the matcher
 // keeps only unambiguous matches within the distance limit.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo on image sequences of a camera moving through the textured room of the simulated
 // rig (support/room_sequence.h: drivers' renderer, rigcal_camera's ideal pinhole 60 degrees and
 // equidistant 186-degree fisheye), pure rotation, a static camera, blank frames (tracking loss

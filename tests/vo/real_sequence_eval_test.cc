@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo on the real sequences of ../shared/data/real_mono (support/real_mono_sequence.h):
 //  - visp_rbt_sequence (99 frames, metric AprilTag grid pose per frame): where the VO
 //    initialises, the share of frames with a pose, and for frames 1, 5 and 10 apart the relative

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo relocalisation on rendered sequences of the textured room (support/room_sequence.h):
 // frames removed (gaps of 1, 5, 10 and 30 frames at 20 Hz), the lens covered for 0.5 s (black
 // frames), a shaken camera, and a loss that outlasts relocalisation_timeout_s. The VO must go on

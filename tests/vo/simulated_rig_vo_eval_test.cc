@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo on the simulated rig's rendered sequences (sim/simulated_rig.h) of the
 // example configs, one camera at a time in one thread (deterministic, no pipeline): the thesis
 // 5.4 virtual scene (two 60-degree pinhole cameras, 468 frames), the spherical rig of thesis 5.7

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // TrackNoise: the per-axis noise σ recovered from each residual population it is fed (KLT
 // forward-backward distances, 2-D pose residuals, epipolar distances), with outliers among
 // them, its floor and its running average.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // VoOptions for the VO evaluations, with the overrides of RIGCAL_VO_EVAL_OPTIONS
 // ("field=value,field=value"; integer and floating-point fields by name), to measure what an

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal calib`: the online calibration node on an LCM bus (or replaying an LCM log, as
 // `rigcal replay` does).
 #include <iostream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The part `rigcal run`, `calib` and `replay` share: load the config, run a CalibNode until it
 // ends (Ctrl-C / SIGTERM stop it cleanly), speak the service protocol when live, show the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "camchain_args.h"
 
 #include "rigcal/io/result_camchain.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // `--camchain FILE` of every command that has a result (solve, calib, replay): the Kalibr
 // camchain of io/result_camchain.h with the rig config's intrinsics, in metres when the unit is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal check-config CONFIG`: the config validated, every live camera opened with its format
 // and rate (no capture), the trigger generator's Hello, and what `rigcal run` would run
 // (pipeline::CheckRigConfig). Exit 0 when everything is fine, 1 with every problem named.

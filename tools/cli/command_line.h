@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The grammar every subcommand shares, applied in main() before CLI11 parses:
 //   - verbosity anywhere on the line, before or after the subcommand: -q/--quiet (warnings and

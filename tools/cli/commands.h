@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Subcommands of the rigcal command. Each Register* adds one subcommand to `app`; its
 // callback stores the process exit code in *exit_code (0 every slave usable, 3 some slave not,

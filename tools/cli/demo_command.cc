@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal demo`: pose-level calibration of the built-in simulated 3-camera rig.
 #include <chrono>
 #include <iostream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal devices`: the cameras and serial ports of this computer (capture::ListDevices): every
 // V4L2 capture node with driver, card, bus, stable paths, formats and sizes; libcamera's
 // cameras; the serial ports a trigger generator could be on. Text, or --json.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Exit codes shared by the rigcal subcommands, and their error line.
 #pragma once
 

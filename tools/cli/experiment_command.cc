@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal experiment stability|poses|motion-model|scale-model|all`: the thesis chapter 5.1-5.3
 // experiments (figures 5.1-5.6) with CSV, SVG figures and a printed summary.
 #include <chrono>

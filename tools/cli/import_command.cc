@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal import`: datasets into rigcal LCM logs. `import euroc DIR` writes the images of a EuRoC
 // (ASL) recording as RIGCAL_IMAGE_<camera> events; `import tum NAME=FILE...` writes per-camera
 // trajectories as RIGCAL_POSE_<camera> events. Both also write a rig config naming the cameras

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal intrinsics`: camera intrinsics from target views, written as a rig config, a complete
 // Kalibr camchain and per-camera target poses.
 #include <filesystem>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal intrinsics` from an LCM image log.
 #include "lcm_image_stream.h"
 

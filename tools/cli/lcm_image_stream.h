@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The images of one camera in an LCM log (RIGCAL_IMAGE_<camera>, image_t: raw, PNG or JPEG, as
 // `rigcal record` and `rigcal import euroc` write them) as a target ImageStream for

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Why `rigcal calib` / `replay` calibrated nothing when no pose set reached the estimator: the
 // true reason, not only that nothing usable arrived.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The one progress scheme of every command (replay, calib --log, record, ...): on a terminal one
 // line redrawn in place, and a log line is written above it (the line is cleared, the log line

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "provenance_args.h"
 
 #include "command_line.h"

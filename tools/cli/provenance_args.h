@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The provenance (io/provenance.h) of what a command writes: this rigcal, now, its command line
 // and its input files.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal record`: captures every camera of the configured source into an LCM log
 // (RIGCAL_IMAGE_<camera>; with VO also RIGCAL_POSE_<camera> and RIGCAL_EXTRINSICS), through the
 // same CalibNode capture as `rigcal run` (calib_node.h), with a progress line.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The progress and the summary of `rigcal record`: "  12.0 s | 86.4 MB (7.2 MB/s) | frames
 // 240 240 | drops 0 | 1 file" through the one progress scheme (progress_line.h: in place on a

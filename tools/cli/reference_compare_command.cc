@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal reference-compare`: the motion-based calibration against the target-based reference
 // on the same recording, in the columns of the thesis's Table 5.2.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal replay`: an LCM log through the calibration, losing nothing, timers on log time.
 #include <memory>
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Progress of a replay on stderr: a bar redrawn in place with the ETA on a terminal, a plain
 // line every few seconds otherwise (logs, CI); log lines go above the bar (progress_line.h).

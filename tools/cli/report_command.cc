@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal report`: one self-contained HTML file of a calibration (its history, per-motion
 // residua, camera health, the rig drawn, the final table).
 #include <iostream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rigcal command: parses the command line and hands over to a subcommand.
 #include <CLI/CLI.hpp>
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal run`: the whole live pipeline on the config's source: capture -> VO per camera ->
 // SyncBuffer -> RigEstimator -> LCM, owned by one CalibNode with a capture input (calib_node.h).
 #include <memory>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // ServiceNotifier: the systemd service protocol of the calibrator's unit (config/systemd,
 // Type=notify): READY=1 once start-up is done, WATCHDOG=1 at half the period systemd asks for

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The option table of `rigcal solve` and the parsers of its values.
 #include "solve_args.h"
 

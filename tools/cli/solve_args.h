@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The arguments of `rigcal solve` (solve_command.cc): their struct, the option table with each
 // option's help text, and the parsers of the values that need more than CLI11's checks.

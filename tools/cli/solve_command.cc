@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal solve`: batch calibration of a rig from per-camera trajectory files.
 // The flow that reads, matches, solves and prints; the options are in solve_args.cc, the target
 // and metric parts in solve_target.cc.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal solve --reference target`, `--metric-target`, `--master-metric`.
 #include "solve_target.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The target and metric parts of `rigcal solve`: `--reference target` (the global reference
 // pose model, thesis 4.2, from per-camera target poses), `--metric-target` (lambda_world from

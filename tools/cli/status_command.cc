@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal status`: the headless monitor of a running calibrator (RIGCAL_STATUS and
 // RIGCAL_EXTRINSICS on an LCM bus).
 #include <sys/ioctl.h>

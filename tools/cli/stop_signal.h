@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // StopSignal: while alive, SIGINT, SIGTERM and SIGHUP (the terminal or session went away) set a
 // flag instead of killing the process, so long-running subcommands stop cleanly (flush, publish,

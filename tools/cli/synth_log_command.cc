@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal synth-log`: writes the poses of a simulated drive of a configured rig as an LCM log,
 // to try `rigcal calib` (replay it with `rigcal calib --log` or onto a bus with lcm-logplayer).
 #include <iostream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared options and first step of the target subcommands.
 #include "target_args.h"
 

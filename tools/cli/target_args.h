@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Options shared by the target subcommands (`rigcal intrinsics`, `rigcal reference-compare`):
 // cameras given as NAME=SOURCE, the chessboard, the resolution of AprilGrid detections, the

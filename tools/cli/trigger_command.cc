@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal trigger --hello`: checks the link to a trigger generator (firmware/, docs/firmware.md):
 // opens its serial port, asks for its Hello and prints the firmware's answer, clock status
 // included.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The truth a command compares its estimate with (`--truth` of solve and report, a rig config's
 // cameras[].truth for calib and replay): read once here and compared by io::CompareWithTruth,

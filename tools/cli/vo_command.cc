@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `rigcal vo`: the monocular VO of one camera of a rig config alone, every frame of its source in
 // order (no pacing, no frame dropped), for checking the VO on a single (real) sequence: where it
 // initialises, the share of frames with a pose, its scale segments and relocalisations, its time

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Absolute pose (PnP) from 2D-3D matches given as unit bearing vectors in the camera frame and
 // 3D points in the world frame: a P3P minimal solver on bearings (distances from the law of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Affine patch alignment (inverse-compositional Lucas-Kanade with an affine warp and an
 // intensity offset) of a feature's reference patch into a later image.

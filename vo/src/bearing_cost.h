@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The bundle adjustment's residual of one observation with analytic Jacobians: the chord
 // r = p / |p| - f between the observed unit bearing f and the direction p = R(q)^T (X - C) to

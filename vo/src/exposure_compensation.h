@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Exposure and gain steps between frames, compensated before tracking. KLT and the patch
 // alignment compare grey levels: when a camera's auto exposure or gain steps, every patch

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Grid-bucketed feature detection: FAST corners, at most one per free grid cell (a cell is
 // free when no tracked feature lies in it), strongest first, inside a validity mask (the

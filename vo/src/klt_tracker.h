@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Pyramidal KLT tracking between consecutive images (OpenCV calcOpticalFlowPyrLK on pyramids
 // built once per image) with a forward-backward consistency check.

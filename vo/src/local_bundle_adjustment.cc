@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "local_bundle_adjustment.h"
 
 #include <ceres/ceres.h>

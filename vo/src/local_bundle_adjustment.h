@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Windowed bundle adjustment of the VO map with Ceres: keyframe poses and landmark positions
 // minimise the Huber-robust chord distance between observed unit bearings and the directions

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Binary descriptors for relocalisation: ORB (OpenCV's rBRIEF on a 31-pixel patch) with the
 // orientation held at 0. Between a tracking loss and its relocalisation (a second or two) the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo: the public object and the per-frame dispatch (image checks, initialisation,
 // tracking or relocalisation by state). The stages are in monocular_vo_*.cc, the state in
 // monocular_vo_impl.h.

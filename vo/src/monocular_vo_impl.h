@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Private to vo/: the state of one camera's MonocularVo (MonocularVo::Impl) and its feature
 // tracks. The stages are in monocular_vo_*.cc: setup, tracks, initialise, tracking, keyframe,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo initialisation: reference frame, two-view geometry, triangulation, first BA.
 // Every threshold is a multiple of the measured track noise (monocular_vo_impl.h, gates).
 

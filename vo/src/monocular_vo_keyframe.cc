@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo keyframes: new landmarks by triangulation, windowed local bundle adjustment,
 // the landmarks' descriptors for relocalisation.
 

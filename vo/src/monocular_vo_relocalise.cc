@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo relocalisation: after a tracking loss the frame's ORB features are matched with
 // the descriptors the landmarks got at keyframes, P3P RANSAC on bearings finds the pose, and
 // tracking resumes in the same scale segment. After relocalisation_timeout_s of failures the

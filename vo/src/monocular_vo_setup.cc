@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo set-up: the lens's valid image area, field of view and feature budget.
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo tracking: PnP against the map, the classification of the tracks, the keyframe
 // decision, loss of tracking.
 

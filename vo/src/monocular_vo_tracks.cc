@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MonocularVo feature tracks: detection, KLT tracking and affine patch refinement.
 
 #include <Eigen/Core>

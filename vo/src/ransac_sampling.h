@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Sampling helpers shared by the RANSAC estimators of the VO.
 

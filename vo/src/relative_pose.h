@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Relative pose of two views from bearing-vector correspondences: the minimal 5-point
 // essential-matrix solver (Stewenius/Nister, Groebner basis with an action matrix), its

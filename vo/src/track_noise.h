@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The VO's measurement noise, measured on its own images instead of assumed: the per-axis
 // standard deviation σ of a track's image position, in pixels of the camera's centre

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Triangulation of a 3D point from two rays (camera centre + unit bearing in the world frame),
 // with the checks a VO needs: positive depth along both rays (valid for any bearing, also

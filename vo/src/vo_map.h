@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The sparse map of one VO segment: keyframes (poses and the bearings they observed) and
 // landmarks (3D points with their observations). Ids are never reused within a segment.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // VoOptions::Check and the names of the VO states.
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Private to rigcal_camera: the builders of the three camera models and the numeric helpers they
 // share.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/camera/camera_spec.h"
 
 #include <Eigen/Dense>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Equidistant fisheye, Kannala-Brandt distortion (OpenCV fisheye / Kalibr "equidistant").
 // Field angles beyond 90 degrees (points with z < 0) are valid up to the max field angle.
 #include <Eigen/Dense>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Pinhole camera with radial-tangential distortion (OpenCV / Kalibr "radtan").
 #include <Eigen/Dense>
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scaramuzza polynomial omnidirectional camera (thesis 3.2.2, OCamCalib). Conventions in
 // rigcal/camera/camera_spec.h. `poly` defines the model (unprojection is closed-form); projection
 // inverts it exactly by Newton's method started from `inverse_poly`.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Whether the data support the batch (and online) estimate (batch_acceptance.h).
 #include "batch/batch_acceptance.h"
 

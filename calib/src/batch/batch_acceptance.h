@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 6 of the batch calibrator (CalibrateSlave): whether the data support the estimate
 // (slave_state.h: usable only then). Three criteria, each a statement about the data, not

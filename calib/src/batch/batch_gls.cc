@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The gls pair policy (batch_gls.h).
 #include "batch/batch_gls.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The gls pair policy of the batch calibrator (PairOptions::Policy::kGls): per slave, the
 // auto policy's result (batch_pair_choice.h) refined by generalised least squares on every

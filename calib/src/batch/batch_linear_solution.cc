@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The linear estimate of the batch calibrator with misfit removal (batch_linear_solution.h).
 #include "batch/batch_linear_solution.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 3 of the batch calibrator (CalibrateSlave): the linear estimate (thesis 4.3: rotation
 // 4.9-4.11, position and scales 4.14-4.17; translational model 4.29-4.32; planar model

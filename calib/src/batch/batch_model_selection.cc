@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Motion- and scale-model selection of the batch calibrator (batch_model_selection.h).
 #include "batch/batch_model_selection.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 2 of the batch calibrator (CalibrateSlave): the models. Motion model (thesis 5.2): the
 // purely translational model (4.5) when no motion rotates by the equal-error boundary at the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Motion formation and misfit removal of the batch calibrator (batch_motions.h).
 #include "batch/batch_motions.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 1 of the batch calibrator (CalibrateSlave): the slave's motions in the solvers' working
 // form, and the removal of the motions a model cannot use or that do not fit: too small a

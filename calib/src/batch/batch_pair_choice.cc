@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-slave span choice by the σ a fitted drift model predicts (batch_pair_choice.h).
 #include "batch/batch_pair_choice.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The auto pair policy of the batch calibrator (PairOptions::Policy::kAuto): per slave, the
 // span whose solve reports the most certain estimate.

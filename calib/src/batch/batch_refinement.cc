@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The non-linear refinement of the batch calibrator (batch_refinement.h).
 #include "batch/batch_refinement.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 4 of the batch calibrator (CalibrateSlave): the non-linear refinement of the linear
 // estimate (thesis 4.26-4.27, refinement.h) and its covariance. The linear residuals give the

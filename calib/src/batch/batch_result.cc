@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The result of the batch calibrator: estimate, σ, what is undetermined, message
 // (batch_result.h).
 #include "batch/batch_result.h"

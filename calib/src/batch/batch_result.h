@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 5 of the batch calibrator (CalibrateSlave): the result in the Ceres Summary style
 // (calibration_result.h): the estimate and its σ, what the motions could not determine, the

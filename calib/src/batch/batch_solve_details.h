@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the batch solve of one slave knows beyond its result: the covariance of independent
 // motions beside the reported (cluster-robust) one, which the auto pair choice compares across

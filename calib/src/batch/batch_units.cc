@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The batch calibrator's length unit (batch_units.h).
 #include "batch/batch_units.h"
 

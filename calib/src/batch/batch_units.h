@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The batch calibrator's arithmetic in the data's own length unit: every position divided by a
 // power of two near the RMS distance of the master's centres from their mean, so that the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The batch rig calibrator (thesis chapter 4) as a sequence of named stages (calib/src/batch/
 // unless named with their folder):
 //   motions/pose_glitches (CalibrateRig, before the pairs) -> batch_motions ->

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vec/Kronecker identities of the scale-rotation-translation equations (4.10)-(4.12).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The linear least-squares steps of the decoupled estimation (thesis 4.3, 4.5).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The motion-model explanation of the batch and the online results (model_explanation.h).
 #include "models/model_explanation.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The human explanation of a slave's motion model (thesis 4.5, 5.2 and the planar model of
 // model_selection.h): which model was chosen, why, and what the motions could therefore not

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "models/model_selection.h"
 
 #include <spdlog/fmt/fmt.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // General or planar: the linear solution of a rotating rig from fixed-size statistics, with
 // the figures that decide which parameters the motions determine. Shared by the batch

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Fixed-size sufficient statistics of the linear rig equations of one slave, so that a
 // recursive estimate equals the batch linear least squares of the same motions (thesis

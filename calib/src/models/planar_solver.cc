@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "models/planar_solver.h"
 
 #include <Eigen/Eigenvalues>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The planar-motion solver (a car on a road: every rotation about one axis). The thesis's
 // linear rotation (4.9-4.11) has a two-dimensional solution space there: the rotation about

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Direct scale measurements from single motions (thesis 4.3.3 and 4.5).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Keyframes and motion pairs of the recursive estimator (keyframe_pairing.h).
 #include "motions/keyframe_pairing.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 1 of the recursive estimator (RigEstimator): keyframes and the motion pair of each new
 // keyframe. The rig constraint T_0^{a->b} dT = dT T_i^{a->b} holds for any pair of times, so

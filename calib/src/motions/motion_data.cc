@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "motions/motion_data.h"
 
 #include "rigcal/base/quaternion.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The non-finite values the estimators' internals use for "unknown" and "unbounded".
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/calib/pair_selection.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The online glitch gate of the recursive estimator (pose_glitch_gate.h).
 #include "motions/pose_glitch_gate.h"
 

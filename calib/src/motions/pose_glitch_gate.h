@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 0 of the recursive estimator (RigEstimator::AddSet): the online counterpart of
 // pose_glitches.h. A glitched incoming pose (a jump by far more than the camera moves, a rotated

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Gross pose outliers found from each camera's own trajectory (pose_glitches.h).
 #include "motions/pose_glitches.h"
 

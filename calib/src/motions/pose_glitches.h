@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 0 of the batch calibrator (CalibrateRig): gross pose outliers ("glitches") found from
 // each camera's own trajectory, before the pairs of times are chosen. A glitch — a pose that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Loewner-order maximum of two covariances, for the cluster-robust σ of the refinements.
 #pragma once
 

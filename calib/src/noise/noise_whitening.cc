@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Kalman whitening and maximum-likelihood fit of the level noise (noise_whitening.h).
 #include "rigcal/calib/noise_whitening.h"
 

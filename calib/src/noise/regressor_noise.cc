@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Monte Carlo Gram matrix of the whitened regressor noise of C (regressor_noise.h).
 #include "noise/regressor_noise.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Errors in the variables of C's regressor in (4.14): (I - R_0^k) ΔC with R_0^k measured. The
 // rotation's noise E_k enters the regressor, and the normal matrix of C grows by E[Σ E_kᵀ E_k]

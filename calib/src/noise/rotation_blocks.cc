@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "noise/rotation_blocks.h"
 
 #include <Eigen/Eigenvalues>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The rotation information (4.10) of a slave's motions split into contiguous time blocks, for
 // a cluster-robust σ of the online rotation: motions close in time share their errors

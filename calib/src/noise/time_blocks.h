@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Contiguous time blocks of motions, for covariances that let motions close in time share
 // their errors (overlapping pairs share poses, odometry drifts, pose errors of neighbouring

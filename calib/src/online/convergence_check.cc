@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The state flags of the recursive estimator's published estimate (convergence_check.h).
 #include "online/convergence_check.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 6 of the recursive estimator (RigEstimator): the state of a published estimate
 // (slave_state.h) and its facts (SlaveFlags): initialising until solved, decalibrated while it

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Decalibration detection of the recursive estimator (decalibration_check.h).
 #include "online/decalibration_check.h"
 

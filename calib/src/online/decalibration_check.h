@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 4 of the recursive estimator (RigEstimator): a camera that moved on the rig. The long
 // statistics hold the old mounting for a long time; their short-window twin (forgotten with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The one piece of math of the saved estimator state: direction moments of version-2 states.
 #include "rigcal/calib/estimator_state.h"
 

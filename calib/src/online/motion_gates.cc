@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The motion gates of the recursive estimator (motion_gates.h).
 #include "online/motion_gates.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 2 of the recursive estimator (RigEstimator): which formed motions enter the statistics,
 // and with what weight. The gates are the scale-free invariants of the thesis and the residuals

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The published σ of the recursive estimator (online_uncertainty.h).
 #include "online/online_uncertainty.h"
 

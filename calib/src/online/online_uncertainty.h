@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 5 of the recursive estimator (RigEstimator): the published σ. The linear solution's
 // covariance takes the motions as independent; overlapping pairs and odometry drift make motions

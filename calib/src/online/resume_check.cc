@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Recognising the state's own data after a resume (resume_check.h).
 #include "online/resume_check.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // After a resume (OnlineCalibrator::RestoreState): is the new input the data the state already
 // holds, or another drive? Poses stamped at or before what the state consumed are skipped

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // RigEstimator: the recursive estimator as a sequence of named stages (calib/src/online/ unless
 // named with their folder):
 //   AddSet       motions/pose_glitch_gate, then per slave:

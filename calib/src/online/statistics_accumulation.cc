@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Accumulation and forgetting of the recursive estimator's statistics
 // (statistics_accumulation.h).
 #include "online/statistics_accumulation.h"

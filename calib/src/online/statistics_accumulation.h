@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Stage 3 of the recursive estimator (RigEstimator): an accepted motion enters a slave's
 // statistics. Fixed-size sufficient statistics (motion_statistics.h) hold every motion:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The recursive estimator's linear solution of a slave's statistics (statistics_solution.h).
 #include "online/statistics_solution.h"
 

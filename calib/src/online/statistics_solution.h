@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The recursive estimator's linear solution (RigEstimator): one slave's statistics solved in the
 // motion model that applies, in the batch result schema. Its linear least-squares solution equals

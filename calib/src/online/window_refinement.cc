@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The background refinement of the recursive estimator: the non-linear refinement of a slave's
 // window with the prior of the motions before it, and when its outcome is published.
 #include "online/window_refinement.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The background non-linear refinement of the recursive estimator (RigEstimator): a copy of a
 // slave's window of motions with the statistics of the motions before it as a prior

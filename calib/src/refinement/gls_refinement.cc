@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Generalised least squares on the consecutive motions (gls_refinement.h).
 #include "refinement/gls_refinement.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Generalised least squares on the consecutive motions (k, k+1) of one slave: the rig's
 // residuals of every increment, whitened per component by the pose noise fitted to them

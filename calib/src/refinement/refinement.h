@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Non-linear refinement of all parameters of one slave (thesis 4.4) with Ceres, and the
 // covariance of the refined parameters.

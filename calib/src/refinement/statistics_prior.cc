@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "refinement/statistics_prior.h"
 
 #include <ceres/rotation.h>

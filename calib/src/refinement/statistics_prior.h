@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The prior of a window refinement (RefinementPrior, refinement_prior.h) in the form Ceres
 // minimises: square roots of its quadratic forms as residual blocks, so the refinement of a

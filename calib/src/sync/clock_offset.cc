@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clock offset of a free-running camera: angular-speed correlation, then the hand-eye
 // rotation residuals (batch) or the rotation-angle residuals (online) minimised over the offset.
 #include "rigcal/calib/clock_offset.h"

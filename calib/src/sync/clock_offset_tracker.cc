@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ClockOffsetTracker: per slave, the angular-speed correlation to start, then a Kalman filter on
 // [offset, drift] fed by rotation-angle measurements, and jump detection.
 #include "rigcal/calib/clock_offset_tracker.h"

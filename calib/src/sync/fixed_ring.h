@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // FixedRing: a FIFO over storage allocated once, for the sync buffer's per-camera rings and
 // its ready queue, and the online glitch gate's rings of recent steps

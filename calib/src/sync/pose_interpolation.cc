@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Interpolation of a trajectory at other instants (cameras that run free).
 #include "rigcal/calib/pose_interpolation.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SyncBuffer's public vocabulary (options, push results, the counters' report) and the
 // forwarding to SyncBuffer::Impl (sync_buffer_impl.h), where the state and its mutex live.
 #include "rigcal/calib/sync_buffer.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SyncBuffer::Impl's construction, consumer side (Pop, TryPop), Stop and counter snapshot; the
 // producer side is in sync_matching.cc.
 #include "sync/sync_buffer_impl.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // SyncBuffer::Impl: the state of a SyncBuffer behind its one mutex. Private to rigcal_calib.
 //   sync_matching.cc    producer side: Push and Flush, the classification of a pushed pose and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SyncBuffer: the clock jumps of free-running cameras (a camera whose clock restarted). A run of
 // poses rejected as glitches that keep a steady rate on a new timeline while the other cameras'
 // clocks advance is followed: a slave's by stepping its offset, the master's by stepping every

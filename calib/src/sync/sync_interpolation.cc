@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SyncBuffer's interpolation mode (cameras that run free): the partner of a master entry in a
 // slave is the slave's pose interpolated at the master's instant on the slave's clock. See the
 // rule in rigcal/calib/sync_buffer.h. Runs with the buffer's mutex held; never allocates.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The producer side of SyncBuffer: Push and Flush, the classification of a pushed pose, and the
 // matching rule stated in rigcal/calib/sync_buffer.h. Runs with the buffer's mutex held.
 #include <algorithm>

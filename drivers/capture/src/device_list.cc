@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/capture/device_list.h"
 
 #include <fcntl.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Private to drivers/capture: the frame lists of ImageFolderDevice's two layouts. An ASL (EuRoC)
 // camera folder lists its frames in data.csv; a plain folder is its image files in name order,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The process's one libcamera CameraManager, shared by every LibcameraDevice (libcamera allows
 // a single instance at a time). Started on first use, stopped when the last user lets go.

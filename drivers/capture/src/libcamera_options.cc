@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/capture/libcamera_device.h"
 
 namespace rigcal::capture {

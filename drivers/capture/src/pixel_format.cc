@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/capture/pixel_format.h"
 
 #include <linux/videodev2.h>

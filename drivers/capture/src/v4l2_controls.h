@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Setting a V4L2 node's controls from V4l2Options (private to the V4L2 source).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Finding and querying V4L2 device nodes (private to the V4L2 source).
 

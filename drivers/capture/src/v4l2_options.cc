@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/capture/v4l2_options.h"
 
 namespace rigcal::capture {

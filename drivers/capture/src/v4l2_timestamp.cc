@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/capture/v4l2_timestamp.h"
 
 #include <linux/videodev2.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SimulatedRig::GroundTruth: the simulated rig's true mountings and trajectories as data.
 #include "rigcal/sim/simulated_ground_truth.h"
 #include "rigcal/sim/simulated_rig.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Small, portable, deterministic random numbers for the simulated rig (the same numbers with
 // every standard library), and counter-based hashing so that a frame's randomness does not

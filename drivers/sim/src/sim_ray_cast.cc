@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ray casting of the simulated rig: the first surface along a ray, its texture coordinates and
 // mip level.
 #include <algorithm>

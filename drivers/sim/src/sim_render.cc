@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rendering of the simulated rig: bearing tables, node grids, and a view rendered by ray casting
 // at the nodes and filling texture blocks between them.
 #include "sim_render.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Renderer of the simulated rig: per-camera bearing tables and ray-casting node grids, and the
 // rendering of one view of the scene (ray casting at the nodes, texture blocks between them).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The shared time base of a realtime simulated rig. Private to rigcal_sim.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Frame production of the simulated rig: motion blur, image noise, quantisation, drops and
 // stamp jitter, all deterministic per (seed, camera, frame).
 #include "sim_rig_data.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The immutable data of a simulated rig, shared by the rig and its devices (scene, trajectory,
 // render tables, noise table), and the production of its frames: rendering with motion blur,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scene of the simulated rig: layout from the spec, description and the free-space check.
 #include "sim_scene.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Scene of the simulated rig: axis-aligned textured planes and boxes and a pipe (cylinder along
 // x), built from the spec; ray casting against it (sim_ray_cast.cc) and the free-space check of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Four-lane vectors for the texture kernels of the simulated rig's renderer, one backend per
 // instruction set: Sse2Lanes (x86, `__SSE2__`), NeonLanes (ARM, `__ARM_NEON`) and ScalarLanes

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Procedural textures of the simulated rig.
 #include "sim_texture.h"
 

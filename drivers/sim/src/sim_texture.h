@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Procedural textures of the simulated rig: square, periodic, mip-mapped grey tiles of "dead
 // leaves", stored in the row-pair layout the texture sampler reads. Private to rigcal_sim.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Texture sampling of the simulated rig: the fixed-point row-pair sampler, one sample at a time,
 // and the block kernels, written once for the four-lane backends of sim_simd.h.
 #include "sim_texture_sampling.h"

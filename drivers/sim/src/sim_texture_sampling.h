@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Texture sampling of the simulated rig's renderer: trilinear samples of a mip-mapped texture
 // tile (sim_texture.h), one at a time or for a whole block of pixels whose texture coordinates

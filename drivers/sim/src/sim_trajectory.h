@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Rig trajectories of the simulated rig: a cumulative cubic B-spline through waypoints, or a
 // sampled trajectory (file) interpolated linearly with slerp. Private to rigcal_sim.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SimulatedCamera: one camera of a simulated rig as a capture device (pacing, drops, failures,
 // interruption).
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SimulatedRig: building a simulated rig from its spec (trajectory, scene, free-space check,
 // render tables, noise table), its devices, ground-truth poses and renders (the ground truth as
 // data: sim_ground_truth.cc).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SimulatedRigSpec: scene types, waypoint orientations, defaults in use and the spec's check.
 #include "rigcal/sim/simulated_rig_spec.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SimulatedTriggerTimeline: the simulated trigger generator driven up to each frame's stamp, and
 // the generator of a simulated rig.
 #include "rigcal/sim/simulated_trigger_timeline.h"

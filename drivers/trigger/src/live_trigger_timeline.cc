@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/trigger/live_trigger_timeline.h"
 
 #include <chrono>

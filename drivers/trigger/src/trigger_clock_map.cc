@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/trigger/trigger_clock_map.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/trigger/trigger_receiver.h"
 
 #include "rigcal/base/logging.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // TriggeredCamera: a capture device's frames with their trigger pulse. Its counters matched_ and
 // unmatched_ are std::atomic: the capture thread counts, any thread reads.
 #include "rigcal/trigger/triggered_camera.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The STM32F405 board port of the trigger generator (a real board, or netduinoplus2 under QEMU):
 //   clocks      clock_tree.h: HSE (TRIGGER_HSE_HZ) -> PLL 168 MHz, HSI fallback; clock_config.h

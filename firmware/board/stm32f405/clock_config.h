@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The clock tree of the trigger board and every constant derived from it, computed at compile
 // time from the board's crystal (CMake TRIGGER_HSE_HZ: 8, 12, 16 or 25 MHz) so that no rate is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "clock_tree.h"
 
 #include "register_access.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // SystemInit-style start-up of the clock tree (clock_config.h), and a check of the timers' input
 // clock against the core clock. Runs once, before anything uses a clock-derived rate.

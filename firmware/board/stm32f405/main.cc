@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The trigger generator's main loop on the STM32F405: the firmware core (TriggerApp) fed with
 // TIM2's µs time and USART1's bytes; its frames go out on USART1. The lines are timer channels:
 // their interrupts (below) arm each line's next edge, so no edge waits for this loop.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Start-up of the board's peripherals once the clocks run (clock_tree.h): pins, USART1, the four
 // synchronised timers, SysTick and the interrupt controller. Each takes its rates from the

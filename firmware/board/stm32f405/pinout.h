@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Which timer channel and pin each trigger line and exposure input uses on an STM32F405RG
 // (LQFP64: ports A, B, C; docs/firmware.md has the same table with the wiring). Every pin is

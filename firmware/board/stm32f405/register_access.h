@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // How the board code reaches the peripherals. On the MCU: volatile loads and stores at the
 // RM0090 addresses. In the host build (RIGCAL_BOARD_HOST, the tests' rigcal_trigger_board_host

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The host build's register map (register_access.h): tests install a fake peripheral map.
 #include "register_access.h"
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Prints an image's flash and RAM use against the STM32F405's 1 MB flash and 128 KB SRAM (the
 # 64 KB CCM RAM is not used), from `arm-none-eabi-size -B` output in SIZE_FILE.
 #   cmake -DSIZE_FILE=trigger_firmware.size -DIMAGE=trigger_firmware -P size_report.cmake

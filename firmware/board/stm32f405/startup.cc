@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reset and the vector table of the STM32F405: copies .data, clears .bss, enables the FPU, runs
 // the static constructors (.init_array), calls main. Faults end the program through
 // semihosting with a failure code, so a test sees a crash as QEMU exiting with 1.

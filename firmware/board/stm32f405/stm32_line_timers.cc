@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "stm32_line_timers.h"
 
 #include "pinout.h"

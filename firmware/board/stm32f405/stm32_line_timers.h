@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The trigger lines on the STM32F405's timers (pinout.h): LineTimers for the firmware core, and
 // the interrupt service routines' bodies.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The STM32F405 registers the trigger firmware uses: addresses and fields as RM0090 (the
 // STM32F405/415/407/417 reference manual, rev. 19) and PM0214 (Cortex-M4 core peripherals)

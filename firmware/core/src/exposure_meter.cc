@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/trigger_core/exposure_meter.h"
 
 #include "rigcal/trigger_core/counter_extension.h"

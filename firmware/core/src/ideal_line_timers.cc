@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/trigger_core/ideal_line_timers.h"
 
 namespace rigcal::trigger_core {

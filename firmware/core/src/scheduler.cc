@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/trigger_core/scheduler.h"
 
 namespace rigcal::trigger_core {

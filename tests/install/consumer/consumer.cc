@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Calibrates a synthetic two-camera drive with the installed rigcal::calib, checks VO options
 // (rigcal::vo), makes a Frame (rigcal::capture) and encodes an LCM pose message
 // (rigcal::lcmtypes). Exit 0 when the estimate matches the truth, 1 otherwise.

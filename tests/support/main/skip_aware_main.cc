@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // main() of every GoogleTest binary: like gtest_main, but when no test failed and at least one
 // was skipped it exits 77, which ctest (SKIP_RETURN_CODE 77) reports as "Skipped" rather than
 // "Passed". A failure always wins: the exit code is then 1 whatever was skipped.

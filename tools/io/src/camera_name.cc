@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera names (camera_name.h).
 #include "rigcal/io/camera_name.h"
 

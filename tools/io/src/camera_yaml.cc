@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera intrinsics from YAML: one `cameras:` entry of a rig config (docs/config.md), and the
 // cameras of a Kalibr camchain file. Both fill camera::CameraSpec and check it, so that every error
 // points at the line of the offending key.

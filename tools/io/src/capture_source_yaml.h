@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `source:` sections of live capture devices (docs/config.md "Live sources"):
 //   source: {type: v4l2 | libcamera, <defaults for every camera>}   and per camera

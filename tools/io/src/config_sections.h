@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Parsers of the sections of a rig config file (docs/config.md). yaml-cpp stays inside
 // tools/: each parser fills a plain options struct of its module. Errors read

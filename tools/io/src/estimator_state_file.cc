@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading and writing the estimator state file (estimator_state_file.h).
 #include "rigcal/io/estimator_state_file.h"
 

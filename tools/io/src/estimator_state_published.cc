@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The published part of a slave's state (estimator_state_published.h).
 #include "estimator_state_published.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The published part of a slave's block in the estimator state file (version 6,
 // SlavePublishedState): the estimate as last published and what its σ rest on, after the slave's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "estimator_state_ranges.h"
 
 #include <cmath>

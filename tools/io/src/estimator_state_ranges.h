@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Range checks of a parsed estimator state beyond its checksum: a hand-edited file with a valid
 // checksum must not feed negative counts or absurd sums (1e300) to the estimator.

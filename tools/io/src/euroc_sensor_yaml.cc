@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera intrinsics from a EuRoC / ASL sensor.yaml (camera_files.h).
 #include "rigcal/io/camera_files.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // WriteGroundTruth: a simulated rig's truth files, written atomically by the trajectory and rig
 // YAML writers.
 #include "rigcal/io/ground_truth_files.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The complete Kalibr camchain: intrinsics of every camera and the chain of extrinsics.
 #include "rigcal/io/kalibr_camchain.h"
 

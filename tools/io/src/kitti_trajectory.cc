@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ReadKittiTrajectory: a KITTI odometry pose file (3x4 matrices) and its time file.
 #include <Eigen/Core>
 #include <Eigen/SVD>

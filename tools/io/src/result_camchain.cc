@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The camchain of a result: the slaves' estimates chained, in metres when the unit is known.
 #include "rigcal/io/result_camchain.h"
 

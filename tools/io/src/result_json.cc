@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/io/result_json.h"
 
 #include <spdlog/fmt/fmt.h>

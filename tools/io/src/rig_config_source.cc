@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `source:` section of a rig config (docs/config.md "source"): which devices `rigcal run`
 // captures from, or the simulated rig it renders.
 #include <filesystem>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // WriteRigConfig (rig_config.h): the camera part of a rig config, for configs made by tools
 // (`rigcal import`, `rigcal intrinsics`): every camera model, numbers with 17 digits.
 #include <iomanip>

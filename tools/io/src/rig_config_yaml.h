@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Private to tools/io: the rig config from a YAML document already loaded (rig_config.cc), and
 // the parser of its `source:` section (rig_config_source.cc).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Time stamps as text: decimal seconds to integer nanoseconds and back, exactly (no double in
 // between).
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The unit of every odometry segment of a camera against its true trajectory.
 #include <algorithm>
 #include <map>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `source:` section of type `simulated` (keys documented in
 // drivers/sim/include/rigcal/sim/simulated_rig.h): fills sim::SimulatedRigSpec, with
 // errors that name the line and key. Cameras and their true mounting are the caller's

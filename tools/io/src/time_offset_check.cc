@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // CheckGivenTimeOffsets: what the data say about timing when no offset is estimated
 // (time_offset.h).
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MatchWithTimeOffsets: given or estimated clock offsets, then the matched recording.
 #include <cmath>
 #include <string>

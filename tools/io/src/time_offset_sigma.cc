@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PropagateTimeOffsetSigma: the estimated clock offsets' σ in the extrinsics' and scales' σ
 // (time_offset.h).
 #include <cmath>

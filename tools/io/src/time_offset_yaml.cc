@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `estimator.time_offset` of a rig config: auto, seconds, or per slave.
 #include <cmath>
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The line-per-pose trajectory formats (private to rigcal_io): the column layout of TUM, EuRoC CSV
 // and rigcal native lines (trajectory_io.h describes them), read and written from the same

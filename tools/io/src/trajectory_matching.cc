@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // MatchTrajectories: the poses of several cameras matched by time stamp into a RigRecording.
 #include <algorithm>
 #include <array>

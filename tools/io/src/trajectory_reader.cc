@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ReadTrajectory: a TUM, EuRoC CSV or rigcal native trajectory file, its format detected from the
 // file (trajectory_formats.h), every line checked.
 #include <Eigen/Core>

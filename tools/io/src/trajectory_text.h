@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Line parsing shared by the trajectory readers (private to rigcal_io): splitting a line into
 // fields, strict number parsing, number formatting, and LineParser, whose errors name the file,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // WriteTrajectoryTum and WriteTrajectoryNative: a trajectory as a line-per-pose file, its columns
 // laid out by the same table the reader uses (trajectory_formats.h).
 #include <algorithm>

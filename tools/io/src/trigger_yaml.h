@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The hardware trigger of a rig config (docs/config.md "Hardware trigger"): the top-level
 // `trigger:` section (the generator on a serial port) and each triggered camera's `trigger:`

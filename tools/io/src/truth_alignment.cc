@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/io/truth_alignment.h"
 
 #include <spdlog/fmt/fmt.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The one comparison of an estimate with a truth: the master unit per master segment (from the
 // odometry against the true trajectories) or from the mountings, then every slave scored.
 #include "rigcal/io/truth_comparison.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The printed table of a truth comparison.
 #include <cmath>
 #include <cstdio>

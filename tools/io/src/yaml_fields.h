@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Reading YAML files with errors that point at the user's text: every message reads
 // "<path>:<line>: <field>: <what is wrong>". Used by every YAML reader of tools/ (rig files,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/lcm/bus_exposure.h"
 
 #include <arpa/inet.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/lcm/image_message.h"
 
 #include <algorithm>

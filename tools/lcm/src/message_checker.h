@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The field checks shared by every rigcal LCM message type (private to rigcal_lcm): a Checker
 // keeps the first rule a message fails, as a Rejection that names channel, field and rule.

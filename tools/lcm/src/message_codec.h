@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The decoder and encoder skeleton shared by every rigcal LCM message type (private to
 // rigcal_lcm): the checks of a received buffer before LCM decodes it (fingerprint, version, every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The text views of a MonitorSnapshot: the dashboard and its ANSI frame.
 #include <spdlog/fmt/fmt.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/monitor/status_monitor.h"
 
 #include <lcm/lcm-cpp.hpp>

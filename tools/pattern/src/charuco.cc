@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ChArUco views: OpenCV contrib aruco's marker detection and corner interpolation.
 #include "rigcal/pattern/charuco.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The image half of the target readers (target_views.cc): every image of a source through one
 // detector, with the checks every image target shares (readable, one size, some target).

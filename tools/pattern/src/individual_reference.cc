@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Target-based reference: the individual reference pose model of thesis 4.2 (fig. 4.4).
 #include "rigcal/pattern/individual_reference.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Intrinsic calibration with OpenCV (calibrateCamera, cv::fisheye::calibrate) or the polynomial
 // omnidirectional model (polynomial_calibration.h), outlier views rejected by their RMS
 // reprojection error.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Parameter standard deviations of a calibrated camera (intrinsics_uncertainty.h).
 #include "intrinsics_uncertainty.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The standard deviations of a calibrated camera's parameters: the Gauss-Newton covariance of
 // the reprojection least squares over the parameters and every used view's target pose, the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lambda_world: the master odometry's unit in metres from target poses in some master frames.
 #include "rigcal/pattern/metric_scale.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Omnidirectional (unified / Mei) intrinsics through cv::omnidir.
 #include "rigcal/pattern/omni_intrinsics.h"
 

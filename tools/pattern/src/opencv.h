@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // OpenCV for the target module, with the warnings of its 4.6 headers silenced, and the
 // conversions between Eigen and OpenCV types used here.

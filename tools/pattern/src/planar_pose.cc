@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Pose of a planar target from bearings (DLT) refined on the reprojection error.
 #include "planar_pose.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The pose of a planar target seen by any camera model, from bearings: a direct linear
 // transform b x (H [X Y 1]^T) = 0 on the unit bearings of the corners (valid beyond 90 degrees

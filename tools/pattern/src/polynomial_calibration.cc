@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Polynomial omnidirectional intrinsics: linear initialisation, then Ceres.
 #include "polynomial_calibration.h"
 

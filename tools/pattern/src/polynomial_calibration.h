@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Intrinsic calibration of the polynomial omnidirectional model (thesis 3.2.2, Scaramuzza's
 // OCamCalib [SMS06]; rigcal's `scaramuzza` camera, camera_spec.h) from views of a planar target.

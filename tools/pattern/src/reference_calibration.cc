@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Target-based reference: the global reference pose model of thesis 4.2.
 #include "rigcal/pattern/reference_calibration.h"
 

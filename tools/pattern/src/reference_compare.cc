@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Motion-based calibration against the target-based reference (thesis 5.5, Table 5.2).
 #include "rigcal/pattern/reference_compare.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The stereoCalibrate reference: both cameras' target views jointly, intrinsics fixed.
 #include <map>
 #include <tuple>

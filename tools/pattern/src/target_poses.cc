@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-view PnP poses of a calibrated camera.
 #include "rigcal/pattern/target_poses.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading target views: chessboard detection in images, AprilGrid detection CSVs.
 #include "rigcal/pattern/target_views.h"
 

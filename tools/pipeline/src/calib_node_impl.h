@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // CalibNode::Impl, private to rigcal_pipeline:
 //   calib_node.cc     construction, Open, the bus loop, pose hand-over, publishing, result

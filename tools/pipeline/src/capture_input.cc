@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // CalibNode's live capture input (calib_node.h): the config's source through the pipeline, whose
 // pose sink feeds the node; the capture loop owns the timers of a live source and the watchdog.
 #include <chrono>

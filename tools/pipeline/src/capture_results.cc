@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // CalibNode's end of a live capture (calib_node.h): what happened to the devices and the
 // trigger, the recorded VO poses, and a simulated source's truth and errors.
 #include <filesystem>

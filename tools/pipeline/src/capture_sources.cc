@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/pipeline/capture_sources.h"
 
 #include <chrono>

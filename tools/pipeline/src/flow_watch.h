@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // FlowWatch: whether a live capture is healthy, for the service watchdog (rigcal-run.service):
 // every camera delivered a frame through its VO, and the estimator took a set, within the last

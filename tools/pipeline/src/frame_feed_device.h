@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // FrameFeedDevice: a CameraDevice whose frames are handed in by another thread (the log replay
 // reads every camera's images from one log and feeds them here). Feed waits while the device's

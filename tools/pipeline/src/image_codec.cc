@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/pipeline/image_codec.h"
 
 #include <opencv2/imgcodecs.hpp>

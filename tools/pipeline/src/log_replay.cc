@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // CalibNode's replay of an LCM log (calib_node.h): the reader loop, the time window, pacing,
 // the log-time timers and the image path through the pipeline.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // CalibNode's estimator state (calib_node.h): atomic saves on the schedule and at the end, and
 // --resume, which sets a state it cannot use aside and never overwrites it.
 #include <filesystem>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // PacedReplayDevice: replays a recording (an image folder) in real time on the host clock, so a
 // live trigger generator can expose it: the recording's time runs from `epoch_ns`

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // PeriodicSchedule: deadlines of periodic jobs (publish, status, state save, status lines) on one
 // clock, the wall clock of a live node or the log time of a replay. The clock starts at the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Reading an LCM log for the report: the RIGCAL_EXTRINSICS and RIGCAL_STATUS history and the
 // RIGCAL_POSE_<camera> poses, every message validated (rejected ones counted).

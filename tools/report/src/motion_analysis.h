@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Per-motion residua and measured scales (thesis fig. 5.11, 5.12) of the poses of a log, against
 // the final estimate of the report.

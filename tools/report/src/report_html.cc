@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/report/report_html.h"
 
 #include <spdlog/fmt/fmt.h>

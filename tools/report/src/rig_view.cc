@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rig drawn from the top and from the side: every camera as a frustum (the master at the
 // origin), the truth dashed.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "rigcal/research/cramer_rao.h"
 
 #include <Eigen/Eigenvalues>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Building blocks of the thesis experiments: options, seeding, the parallel sample loop over a
 // grid of generator settings, error statistics and the averaged Cramer-Rao bound.
 #include <algorithm>

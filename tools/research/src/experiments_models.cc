@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Thesis 5.2 and 5.3: general vs purely translational motion model (figure 5.5) and time-fixed
 // vs time-dependent scale model (figure 5.6), with their equal-error boundaries.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Output of the thesis experiments: CSV, SVG figures, the text summary and writing them.
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Thesis 5.1.2 and 5.1.3: stability of the linear (LLS) and non-linear (NL) calibration against
 // the pose orientation error level and against the number of poses (figures 5.1-5.4).
 #include <string>

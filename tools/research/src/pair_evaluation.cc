@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Runs the pair-policy evaluation and formats its table (pair_evaluation.h).
 #include "rigcal/research/pair_evaluation.h"
 

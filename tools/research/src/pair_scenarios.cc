@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The recordings of the pair-policy evaluation and their pose noise (pair_evaluation.h).
 #include <cmath>
 #include <filesystem>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Options of the batch rig calibrator: plain struct, documented defaults, Check().
 

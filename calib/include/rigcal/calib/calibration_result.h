@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Result of the batch rig calibrator, Ceres Summary style: every slave result says whether it
 // is usable and why, never a silent garbage answer.

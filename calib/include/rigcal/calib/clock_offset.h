@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Clock offset of a camera that runs free, from the data (time offset = slave stamp - master
 // clock at the same instant).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // ClockOffsetTracker: the online clock offset of every slave camera that runs free (its own
 // capture instants and its own clock), a state of the online estimator with its σ.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Error model of thesis 5.1.1: compares an estimate with the true rig parameters.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // RigEstimatorState: what a RigEstimator keeps across a restart, as plain data
 // (RigEstimator::SaveState / RestoreState). calib does no I/O: the versioned text file of it is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Options of the motion-model decision, one set for the batch calibrator
 // (CalibrationOptions::model_selection) and the recursive estimator

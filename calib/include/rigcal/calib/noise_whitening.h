@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The pose noise of a series of consecutive motions' residuals, and its whitening for
 // generalised least squares (GLS).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // OnlineCalibrator: owns the estimator thread (SyncBuffer -> RigEstimator) and the background
 // refinement thread. Producers (VO threads, LCM handlers) call Push from any thread; readers

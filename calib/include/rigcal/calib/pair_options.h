@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Options of the pair choice (pair_selection.h): which pairs of times (a, b) of a recording
 // become the batch calibrator's motions. Plain struct, documented defaults, Check().

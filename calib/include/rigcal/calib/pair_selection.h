@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Which pairs of times (a, b) become motions (the policies: pair_options.h). The rig constraint
 // T_0^{a->b} dT = dT T_i^{a->b} holds for any pair, so the choice is free; it changes the

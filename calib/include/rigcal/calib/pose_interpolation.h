@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Poses of a camera that runs free (calib: shared by `rigcal solve` and the online SyncBuffer) (its
 // own capture instants, its own clock) at the master's instants, never across a gap of more than a

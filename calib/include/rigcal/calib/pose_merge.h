@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // PoseMerge: the hand-over from the VO threads to the calibrator in a lossless pipeline. It
 // forwards every camera's poses in one canonical order, by the stamp of the frame that produced

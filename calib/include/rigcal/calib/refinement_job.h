@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The background refinement of the recursive estimator: a job copied from a slave's statistics
 // (RigEstimator::MakeRefinementJob, rig_estimator.h), refined on another thread (RefineWindow)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // RefinementPrior: the motions a refinement does not hold one by one, as the quadratic forms of
 // their linear residuals (made by the recursive estimator's statistics, minimised with a window

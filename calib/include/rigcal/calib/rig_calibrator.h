@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The batch rig calibrator (thesis chapter 4): linear estimate, model selection, misfit
 // removal, non-linear refinement and uncertainty, for N slave cameras at once.

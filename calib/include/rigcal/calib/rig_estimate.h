@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the recursive estimator (RigEstimator, rig_estimator.h) publishes: per slave the result
 // in the batch schema (calibration_result.h) and the online facts beside it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // RigEstimator: the recursive, bounded-memory online counterpart of the batch calibrator.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Options of the recursive estimator (RigEstimator, rig_estimator.h): plain struct, documented
 // defaults, Check().

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // One meaning per state. Every surface that says how far a slave's calibration has got — the
 // batch result, the online estimate, RIGCAL_EXTRINSICS / RIGCAL_STATUS, result files, status

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // SyncBuffer: matches the odometry poses of all cameras of a rig by capture time (or by
 // hardware trigger sequence number) and hands time-corresponding sets to the estimator.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The pose-level synthetic data generator shared by tests, experiments, benchmarks and the demo:
 // rigs, master trajectories, drives with odometry-like errors (thesis samples of chapter 5 and

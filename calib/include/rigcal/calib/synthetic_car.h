@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Synthetic ground vehicle for the planar-motion tests and experiments: a four-camera car rig,
 // car-like master trajectories (a level road, a ramp), the flattening of any trajectory to a

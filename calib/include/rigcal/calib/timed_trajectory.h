@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The poses of one camera with their time stamps, on the camera's own clock: what a trajectory
 // file holds (tools/io trajectory_io.h) and what the clock offset estimation of cameras that run

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The libcamera source of a build without libcamera-dev: every call says so.
 #include "rigcal/capture/libcamera_device.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // MonocularVo: visual odometry of one camera (thesis 3.5, made robust). It turns a stream of
 // grey images into the camera's poses T^k = [R^k | C^k] in its own reference frame (R^0 = I,

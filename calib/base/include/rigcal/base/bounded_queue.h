@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // BoundedQueue: a fixed-capacity multi-producer queue between pipeline threads. Push never
 // blocks: when full, the oldest element is dropped and counted (capture must never wait for

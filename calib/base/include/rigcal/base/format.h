@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Numbers as text, the same way everywhere: files (shortest round-trip), messages and tables
 // (significant digits, fixed decimals).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // One named spdlog logger per module ("calib", "tools", ...), all writing to stderr.
 // The level comes from SetLogLevel (the command line's --log-level) or, before that, from the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Quaternion algebra of the thesis (appendix A.3), quaternions as 4-vectors (w, x, y, z).
 

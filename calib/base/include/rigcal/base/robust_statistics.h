@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Robust statistics shared by every layer: medians, the MAD-based robust standard deviation, RMS.
 // Each function takes its values by value (it reorders a copy) and sums in the order given, so a

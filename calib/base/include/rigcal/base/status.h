@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // rigcal's one error vocabulary, used by every layer:
 //   Status       success, or an error message that names the file, line or field at fault;

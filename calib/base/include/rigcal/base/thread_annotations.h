@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Clang thread-safety annotations and an annotated mutex: which mutex guards which member, and
 // which function needs it, written in the code and checked by clang's -Wthread-safety

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Time stamps as text, the same way everywhere (files, messages).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Value types shared by every layer: poses, trajectories, rig parameters.
 // Notation follows the thesis (chapter 4): camera i's pose at time k is

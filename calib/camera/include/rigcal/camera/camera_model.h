@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Camera models: projection of points in the camera frame to pixels and back to unit bearing
 // vectors, with Jacobians. VO works on bearing vectors only, so the same pipeline runs on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // CameraSpec: a plain description of one camera as written in the rig config (docs/config.md,
 // `cameras:`), and the factory that turns it into a CameraModel. yaml-cpp never gets here: the

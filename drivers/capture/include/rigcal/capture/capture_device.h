@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // CameraDevice: the interface every capture source implements (V4L2, libcamera, image folders,
 // the simulated rig of rigcal_sim, the pipeline's LCM log replay). The pipeline runs one capture

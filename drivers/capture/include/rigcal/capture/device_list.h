@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The cameras and serial ports of this computer, for `rigcal devices` and a config's check:
 // every V4L2 capture node (driver, card, bus, the stable /dev/v4l/by-id and by-path names that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // ImageFolderDevice: a CameraDevice that replays one camera's folder of images, in one of two
 // layouts:

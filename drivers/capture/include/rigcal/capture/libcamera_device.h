@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LibcameraDevice: a CameraDevice reading one camera through libcamera (the `libcamera` source of
 // a rig config). Built only when libcamera-dev was found at configure time; otherwise Open says

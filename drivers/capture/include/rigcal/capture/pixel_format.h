@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Pixel formats a capture device may deliver and their conversion to the CV_8UC1 grey image of
 // a Frame. Pure functions of the buffer bytes (no device needed), so they are unit-tested on any

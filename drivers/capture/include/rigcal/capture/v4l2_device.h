@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // V4l2Device: a CameraDevice reading a Video4Linux2 capture node by mmap streaming.
 //

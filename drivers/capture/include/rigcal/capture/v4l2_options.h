@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The settings of one V4L2 capture device (the `v4l2` source of a rig config: the camera's
 // `device` and its `capture:` options over the source's defaults; docs/config.md).

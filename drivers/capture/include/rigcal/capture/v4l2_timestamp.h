@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The capture time of a dequeued V4L2 buffer in CLOCK_MONOTONIC nanoseconds, from its
 // timestamp and flags (V4L2_BUF_FLAG_TIMESTAMP_MASK, V4L2_BUF_FLAG_TSTAMP_SRC_MASK). Pure, so

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // SimulatedGroundTruth: what a simulated drive truly was, as plain data (SimulatedRig::
 // GroundTruth); rigcal_io writes it as files (rigcal/io/ground_truth_files.h,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulated rig: N cameras rigidly mounted on a moving rig, rendering grey images of a
 // textured 3D scene by ray casting through their camera models, with image noise, motion blur,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // SimulatedRigSpec: what the simulated rig (simulated_rig.h) simulates: its cameras and their
 // true mountings, timing, the rig's trajectory, the scene, imaging and device behaviour; and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A simulated trigger generator on a simulated serial link, for tests and for the simulated
 // rig: the real firmware core (firmware/core TriggerApp) runs on a simulated MCU clock with ideal

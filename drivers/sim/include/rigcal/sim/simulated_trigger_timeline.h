@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulated trigger generator as the TriggerTimeline of externally triggered cameras
 // (rigcal/trigger/triggered_camera.h): a SimulatedTriggerStream (the firmware core, drift, delay

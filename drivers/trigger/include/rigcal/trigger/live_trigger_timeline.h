@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LiveTriggerTimeline: a trigger generator on a serial port (a USB CDC device, a USB-UART
 // adapter, or QEMU's `-serial pty`) as the TriggerTimeline of externally triggered cameras.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The byte stream of the trigger link: a serial port (termios: a USB CDC/UART adapter, or a
 // pseudo-terminal such as QEMU's `-serial pty`), or a simulated stream (rigcal_sim's

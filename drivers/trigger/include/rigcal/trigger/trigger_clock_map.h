@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // TriggerClockMap: maps the trigger MCU's clock (µs since its boot) to the host's
 // CLOCK_MONOTONIC (ns) from (MCU send time, host receive time) samples: every pulse report and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Asking a trigger generator who it is: GetInfo, answered by an Ack and a Hello (firmware
 // version, lines, MCU time, and how its clocks came up: messages.h ClockStatusBit). The link check

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // TriggerLink: the host end of the trigger generator's serial protocol
 // (firmware/protocol, the same header the firmware compiles). Decodes frames from a ByteStream

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // TriggerMatcher: gives a frame of an externally triggered camera the trigger pulse that
 // exposed it: its sequence number and its exposure-centred time on the host clock.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // TriggerSession: a configured trigger generator feeding a TriggerMatcher. It applies the
 // settings, then pumps the link: every message goes to the matcher; a Hello after the start

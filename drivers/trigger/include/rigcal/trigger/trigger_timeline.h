@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // TriggerTimeline: where the trigger messages of externally triggered cameras come from. A live
 // link (LiveTriggerTimeline: TriggerReceiver's thread) delivers them by itself; a simulated link

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Externally triggered cameras: a capture source whose frames are exposed by the trigger
 // generator's pulses gets, for every frame, the pulse's sequence number and its mapped,

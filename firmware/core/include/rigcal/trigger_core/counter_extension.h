@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // CounterExtension: a free-running 32-bit hardware count (the board's µs timer, TIM2) extended to
 // 64 bits in software, so MCU time never wraps (a 32-bit µs count wraps every 71.6 minutes: the

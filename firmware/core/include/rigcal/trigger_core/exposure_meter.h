@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // ExposureMeter: the measured exposure of each wired line's camera (VersaVIS-style exposure
 // feedback). The board's input-capture channel of a wired line latches the µs counter at the

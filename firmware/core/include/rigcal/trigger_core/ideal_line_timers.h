@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // IdealLineTimers: the board's output-compare timers as an ideal model, for host runs of the
 // firmware core (the unit tests, drivers' simulated trigger): an armed edge happens exactly at

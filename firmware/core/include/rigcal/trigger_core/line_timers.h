@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LineTimers: the hardware that drives the trigger lines and listens to the cameras' exposure
 // outputs, as the firmware core sees it. The board implements it with timer output-compare

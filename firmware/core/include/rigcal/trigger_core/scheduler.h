@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Scheduler: the timing of the trigger lines, as compare values programmed ahead into the
 // board's timer channels (LineTimers). Pure logic on a µs time base, so it runs unchanged on the

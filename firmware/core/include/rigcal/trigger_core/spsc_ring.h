@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // SpscRing: a fixed ring of N values from one producer (an interrupt) to one consumer (the main
 // loop). Push and Pop never block; a full ring refuses the value (the caller counts it). The

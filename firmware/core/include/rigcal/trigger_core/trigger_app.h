@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // TriggerApp: the trigger generator's firmware logic without the board: command parsing and
 // answers, the scheduler, the exposure meter, heartbeats and the outgoing byte queue. The board

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The configuration of the trigger generator and its range check, as the MCU applies it from
 // SetRate / SetLine / SetHeartbeat commands (messages.h). Freestanding C++17.

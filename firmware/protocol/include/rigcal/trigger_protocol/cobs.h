@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Consistent Overhead Byte Stuffing (Cheshire & Baker 1999): the framing of the trigger
 // protocol. An encoded frame contains no zero byte, so a single 0x00 delimits frames and a

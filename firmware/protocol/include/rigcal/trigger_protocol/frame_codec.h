@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Frames of the trigger protocol on a byte stream (UART, USB CDC, pty):
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The messages of the trigger protocol between the trigger-generator MCU (firmware/) and the
 // host (drivers/ trigger link), version 2. One definition for both sides, so they cannot drift.

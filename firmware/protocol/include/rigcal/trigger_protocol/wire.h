@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Little-endian field writer and reader of the trigger protocol's message bodies (explicit
 // byte order, no struct copies: the MCU and the host agree whatever their ABI). Freestanding.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Crash-safe file replacement: a reader sees either the old file or the complete new one. Every
 // file rigcal writes goes through here (WriteFileAtomically, or AtomicFile for files another

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Camera intrinsics from the files other tools write: a Kalibr camchain and a EuRoC / ASL
 // sensor.yaml. Errors name the file, line and key.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What can name a camera: a camera's name becomes part of LCM channel names
 // (RIGCAL_POSE_<name>) and of file names (<dir>/<name>.txt), so it is non-empty text of valid

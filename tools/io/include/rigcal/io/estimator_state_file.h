@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The estimator state file: a RigEstimatorState (calib/estimator_state.h) as versioned plain
 // text with a checksum, so that `rigcal calib --resume` continues where a previous run stopped.

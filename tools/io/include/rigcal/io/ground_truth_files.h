@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The ground truth of a simulated rig on disk (`rigcal run --truth-out DIR`):
 //   <camera>.txt        TUM trajectory of the camera at every nominal frame stamp in its own

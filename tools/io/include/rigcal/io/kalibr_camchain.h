@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A complete Kalibr camchain YAML (kalibr_calibrate_cameras' camchain.yaml, read by Kalibr's
 // own config reader): per camera camN camera_model (pinhole), intrinsics [fu, fv, pu, pv],

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Where a result came from: written into every result YAML and JSON and the report, so a file
 // found later says which rigcal made it, when, from which inputs, and in which units.

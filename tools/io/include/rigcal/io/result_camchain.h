@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A Kalibr camchain of a calibration result (`--camchain` of solve, calib, replay, run): cam0 is
 // the master, cam1..camN the slaves; every camera with intrinsics in the rig config gets the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Reading a calibration result back: the result YAML every command writes with --out
 // (ResultToYaml, rig_files.h) or the JSON of --json (ResultToJson, result_json.h), for tools that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Machine-readable (JSON) and human-readable (text table) views of a calibration result.
 

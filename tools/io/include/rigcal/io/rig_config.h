@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The rig configuration file (schema: docs/config.md): cameras, nominal mounting, estimator,
 // sync, publishing and state options, and the capture source of `rigcal run`. This is the one

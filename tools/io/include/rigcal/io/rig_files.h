@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Rig parameter files (YAML): truth files, solve results and Kalibr-style camera chains.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Clock offset of a camera that runs free from the data, matched recordings at those offsets.
 // The math (angular-speed correlation, refinement) is calib's clock_offset.h.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Per-camera trajectory files (one pose per line) and their matching by time stamp into a
 // RigRecording.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Comparing an estimate with a truth in another unit: the least-squares unit of odometry
 // positions against metric ones (`rigcal run --eval`: a VO segment against the true

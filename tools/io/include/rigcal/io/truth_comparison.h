@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The one comparison of an estimate with a truth (thesis 5.1.1 error model), used by
 // `rigcal run --eval`, `solve --truth`, `replay`/`calib` with a truth and `report --truth`.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Whether an LCM URL keeps rigcal's bus on this host. A live calibrator that listens on a bus
 // other hosts reach accepts poses from them (and sends them its results), so rigcal's listeners

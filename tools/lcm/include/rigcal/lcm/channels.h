@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The LCM channels of rigcal (docs/architecture.md): RIGCAL_EXTRINSICS, RIGCAL_STATUS, and a
 // RIGCAL_POSE_<camera> and RIGCAL_IMAGE_<camera> channel per camera.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // rig_extrinsics_t, the rig calibration on RIGCAL_EXTRINSICS: its checks, the flags of
 // slave_extrinsics_t, and its conversion from a RigCalibration.

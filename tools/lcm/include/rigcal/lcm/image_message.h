@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // image_t, one camera image on RIGCAL_IMAGE_<camera> (recording and replay): its checks.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LogReader: reads the events of an LCM log file (the lcm-logger format) one at a time, and
 // stops at the first damage with its byte offset instead of skipping ahead.

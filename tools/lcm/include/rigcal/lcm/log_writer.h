@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LogWriter: writes LCM log files in the format of lcm-logger (read by lcm-logplayer, ::lcm::LogFile
 // and `rigcal calib --log`). Every event is, big-endian:

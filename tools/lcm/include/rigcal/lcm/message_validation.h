@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Validation of the rigcal LCM messages (lcmtypes/*.lcm, generated into namespace rigcal): the
 // rules every message that crosses a process boundary is checked against, the causes of a

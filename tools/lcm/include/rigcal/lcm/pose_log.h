@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LCM logs of camera poses: a recording written as RIGCAL_POSE_<camera> events (camera_pose_t),
 // the input `rigcal calib --log` and lcm-logplayer replay.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // camera_pose_t, one camera's pose on RIGCAL_POSE_<camera>: its checks and its conversion from
 // and to CameraPose.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // CPU and memory use of this process, for RIGCAL_STATUS and the live status line (Linux /proc).
 

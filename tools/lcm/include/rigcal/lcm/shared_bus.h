@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // One LCM bus that several threads publish on. ::lcm::LCM::publish may not be called from two
 // threads at once on every provider: file:// writes an event in several unlocked writes, so two

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A slave_extrinsics_t as the calib types see it: its orientation as a quaternion, its state as
 // a SlaveState, and its flags as the words status lines use for the facts.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // rig_status_t, the health of a running calibration on RIGCAL_STATUS: its checks, and the
 // message built from the estimator, shared by `rigcal calib` (poses from the bus) and `rigcal run`

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // StatusMonitor: listens to a running calibrator on an LCM bus (RIGCAL_STATUS and
 // RIGCAL_EXTRINSICS, validated by MessageValidator; a rejected message is counted, never shown)

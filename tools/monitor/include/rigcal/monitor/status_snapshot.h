@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What `rigcal status` knows of a running calibrator: the newest RIGCAL_STATUS (rig_status_t)
 // and RIGCAL_EXTRINSICS (rig_extrinsics_t) and how old they are, the rig's health decided from

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // ChArUco boards (OpenCV contrib aruco): a chessboard whose white squares hold ArUco markers, so
 // that a view of part of the board still names every corner it shows. Views are found in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Target-based reference rig calibration with the individual reference pose model (thesis 4.2,
 // fig. 4.4; the two-pattern setup of 5.7): every camera sees its own fixed target, so camera i's

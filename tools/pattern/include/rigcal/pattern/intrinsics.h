@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Intrinsic calibration of one camera from its target views (thesis 3.4): pinhole with
 // radial-tangential distortion through OpenCV calibrateCamera (k1, k2, p1, p2; k3 fixed at 0,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The metric scale of the master odometry, lambda_world of thesis 5.5: in some master frames a
 // target of known size is visible, so the master camera's centre is known there in metres

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Omnidirectional intrinsics: Mei's unified model through OpenCV contrib's cv::omnidir (ccalib,
 // Debian's libopencv-contrib-dev), Kalibr's "omni" camera model with radtan distortion. A point

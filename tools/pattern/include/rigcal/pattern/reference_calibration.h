@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Target-based reference rig calibration (thesis 4.2, global reference pose model): every
 // camera's pose in one target frame at the same instants, T_0^k (master) and T_i^k (slave);

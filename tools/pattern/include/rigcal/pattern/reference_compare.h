@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The motion-based calibration against the target-based reference on one recording with
 // target views (thesis 5.5, Table 5.2): from every camera's views and intrinsics, the target

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Per-view target poses (PnP) of a camera with known intrinsics, as a trajectory: the camera's
 // pose in the target frame at every view (q: target_from_cam, C: camera centre in the target

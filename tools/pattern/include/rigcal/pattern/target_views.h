@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Views of a calibration target by one camera: for every image (or detection file) the pixel
 // coordinates of the target's corners and the same corners in the target frame (metres, or the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // CalibNode: the one owner of a running rig (`rigcal run`, `calib`, `replay`;
 // docs/architecture.md). Its input is one of: poses on a bus, an LCM log, or live capture from the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // CaptureLoops: one thread per capture device that grabs frames until the device ends, fails or
 // is interrupted, and discards them: the capture of `rigcal record --no-vo`, where the devices

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The capture devices of a rig config's `source:` section, shared by `rigcal run` and
 // `rigcal record`: the simulated rig (paced in real time unless `fast`) or one EuRoC image folder

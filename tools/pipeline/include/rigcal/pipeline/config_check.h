@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The check of a rig config against this computer before driving (`rigcal check-config`): every
 // live camera opened with its format and rate and closed again (no frame grabbed), the trigger

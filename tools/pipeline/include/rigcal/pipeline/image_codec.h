@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Camera frames <-> image_t (RIGCAL_IMAGE_<camera>, lcmtypes/image_t.lcm): how `rigcal record`
 // and `rigcal import` store images, and how a replay gets them back as the frames (CV_8UC1 grey)

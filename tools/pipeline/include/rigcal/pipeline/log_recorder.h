@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // LogRecorder: records a rig's camera frames (RIGCAL_IMAGE_<camera>, image_t) and any other
 // rigcal message (poses, extrinsics) into an LCM log (LogWriter: lcm-logger's format, split by

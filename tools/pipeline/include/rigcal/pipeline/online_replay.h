@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Replays a recording through the online path (SyncBuffer -> RigEstimator), deterministically
 // in one thread, and records how the estimate converges over stream time.

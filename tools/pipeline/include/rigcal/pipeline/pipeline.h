@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Pipeline: the live data flow of `rigcal run` (docs/architecture.md):
 //

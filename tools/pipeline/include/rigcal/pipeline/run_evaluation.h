@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Scoring a live run on a simulated rig against its ground truth: the one truth comparison of
 // io/truth_comparison.h with the simulated rig's true trajectories, so the master unit is the

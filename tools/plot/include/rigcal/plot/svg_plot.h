@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A small standalone SVG line-plot writer for the experiment figures and the HTML report: one or
 // more panels, each with axes, "nice" ticks, axis labels, a title, a legend, any number of line

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What `rigcal report` shows, gathered from its inputs (report_input.h) before it is drawn
 // (report_html.h): the estimate's history from RIGCAL_EXTRINSICS, the cameras' health from

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // `rigcal report`'s HTML page: one self-contained file (inline SVG and CSS, one small inline
 // script, nothing fetched) that shows a calibration:

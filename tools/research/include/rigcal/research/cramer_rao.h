@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Cramér–Rao lower bound (CRB) of the thesis 5.1.2 calibration problem in its linear-Gaussian
 // approximation: the measurement model is linearised around the true values and the noise is

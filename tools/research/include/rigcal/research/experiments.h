@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The synthetic experiments of thesis chapter 5.1-5.3, reproducing figures 5.1-5.6:
 //   stability     (fig. 5.1 LLS, 5.2 NL): K = 4 poses, orientation error level eps 0..3 deg.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The pair-policy evaluation (`rigcal experiment pairs`): on a wide set of recordings — white
 // pose noise (motion capture, PnP), drifting VO-like noise, hand-held 6-DoF, car drives, slow
