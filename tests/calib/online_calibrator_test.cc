@@ -98,7 +98,7 @@ TEST(OnlineCalibrator, AResumedDriveOnARestartedClockIsNotUsableWithTheOldValues
   restarted.Start();
   feed(&restarted, other.recording);
   restarted.Stop();
-  const SlaveCalibration& s = restarted.Estimate().rig.slaves[0];
+  const SlaveCalibration s = restarted.Estimate().rig.slaves[0];
   EXPECT_FALSE(s.usable()) << s.message;
   EXPECT_NE(s.message.find("another drive on a restarted clock"), std::string::npos) << s.message;
 
@@ -110,7 +110,7 @@ TEST(OnlineCalibrator, AResumedDriveOnARestartedClockIsNotUsableWithTheOldValues
   unmatched.Start();
   feed(&unmatched, shifted);
   unmatched.Stop();
-  const SlaveCalibration& u = unmatched.Estimate().rig.slaves[0];
+  const SlaveCalibration u = unmatched.Estimate().rig.slaves[0];
   EXPECT_FALSE(u.usable()) << u.message;
   EXPECT_NE(u.message.find("none is a pose the state took"), std::string::npos) << u.message;
 }
