@@ -114,6 +114,7 @@ inline camera_status_t MakeCameraStatus(const std::string& name, int k) {
   c.vo_state = camera_status_t::VO_TRACKING;
   c.last_pose_age_ms = 33 + k;
   c.vo_segment = 2 + k;
+  c.relocalisations = 7 + k;
   c.time_offset_std_s = -1.0;  // synchronised stamps: no clock offset
   c.clock_drift_std_ppm = -1.0;
   return c;

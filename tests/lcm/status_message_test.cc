@@ -21,6 +21,7 @@ TEST(StatusMessage, RoundTrip) {
   EXPECT_EQ(back.cameras[1].dropped_never_matched, 6);
   EXPECT_EQ(back.cameras[2].vo_state, camera_status_t::VO_LOST);
   EXPECT_EQ(back.cameras[2].vo_segment, 4);
+  EXPECT_EQ(back.cameras[2].relocalisations, 9);  // version 5
   EXPECT_EQ(back.estimator_state, rig_status_t::ESTIMATOR_DEGRADED);
   EXPECT_EQ(back.estimator_message, "back: insufficient motion");
   EXPECT_EQ(back.rss_bytes, 123'456'789);
@@ -69,6 +70,10 @@ TEST(StatusMessage, RejectsOutOfRange) {
   ExpectRejected<rig_status_t>(&validator, "S", RawEncode(status), RejectCause::kOutOfRange,
                                {"rig_status_t.cameras[0].vo_segment"});
   status = MakeStatusMsg();
+  status.cameras[2].relocalisations = -1;
+  ExpectRejected<rig_status_t>(&validator, "S", RawEncode(status), RejectCause::kOutOfRange,
+                               {"rig_status_t.cameras[2].relocalisations"});
+  status = MakeStatusMsg();
   status.sync_fill = 65;
   ExpectRejected<rig_status_t>(&validator, "S", RawEncode(status), RejectCause::kOutOfRange,
                                {"rig_status_t.sync_fill"});
@@ -96,11 +101,14 @@ TEST(StatusMessage, ConsumerOverflowIsAnOverflowDrop) {
   cameras[1].name = kNames[1];
   cameras[1].dropped_backlog = 1;
   cameras[1].vo_segment = 3;
+  cameras[1].relocalisations = 2;
   const rig_status_t msg = MakeRigStatus(cameras, sync, 64, RigEstimate{}, 0.0, 1);
   EXPECT_EQ(msg.cameras[0].dropped_overflow, 7);
   EXPECT_EQ(msg.cameras[1].dropped_overflow, 5);
   EXPECT_EQ(msg.cameras[0].vo_segment, -1);  // no pose yet
   EXPECT_EQ(msg.cameras[1].vo_segment, 3);
+  EXPECT_EQ(msg.cameras[0].relocalisations, 0);
+  EXPECT_EQ(msg.cameras[1].relocalisations, 2);
 }
 
 // Version 4: every camera's clock (offset, σ, drift, jumps) survives the wire; undefined sources,
@@ -115,7 +123,7 @@ TEST(StatusMessage, ClockFieldsRoundTripAndAreChecked) {
   left.clock_drift_std_ppm = 1.5;
   left.clock_jumps = 2;
   const rig_status_t back = ExpectRoundTrip(kStatusChannel, status);
-  EXPECT_EQ(back.version, 4);
+  EXPECT_EQ(back.version, rig_status_t::VERSION);
   EXPECT_EQ(back.cameras[1].time_offset_source, slave_extrinsics_t::TIME_OFFSET_ESTIMATED);
   EXPECT_EQ(back.cameras[1].time_offset_s, -39.95);
   EXPECT_EQ(back.cameras[1].time_offset_std_s, 2.1e-4);

@@ -26,11 +26,13 @@ inline rig_status_t MakeStatus(int8_t state, int64_t utime = 1000) {
     c.vo_state = camera_status_t::VO_TRACKING;
     c.last_pose_age_ms = 42;
     c.vo_segment = 1;
+    c.relocalisations = 0;
     c.time_offset_std_s = -1.0;  // synchronised stamps: no clock offset
     c.clock_drift_std_ppm = -1.0;
     s.cameras.push_back(c);
   }
   s.cameras[1].vo_state = camera_status_t::VO_LOST;
+  s.cameras[1].relocalisations = 3;
   s.num_cameras = 2;
   s.sync_sets_emitted = 999;
   s.sync_fill = 5;

@@ -78,6 +78,7 @@ TEST(StatusMonitor, OnceJsonShowsTheNewestMessagesAndTheHealth) {
   EXPECT_EQ(j["status"]["estimator_state"], "usable");
   EXPECT_EQ(j["status"]["cameras"][0]["dropped"]["never_matched"], 7);
   EXPECT_EQ(j["status"]["cameras"][1]["vo_state"], "lost");
+  EXPECT_EQ(j["status"]["cameras"][1]["relocalisations"], 3);
   EXPECT_EQ(j["status"]["sync"]["sets_emitted"], 999);
   EXPECT_EQ(j["status"]["process"]["rss_bytes"], 123 << 20);
   EXPECT_GE(j["status"]["age_s"].get<double>(), 0.0);
@@ -102,14 +103,16 @@ TEST(StatusMonitor, HealthCodes) {
     const int8_t s = state;
     const MonitorRun run = RunOnce(&lcm, true, 2.0, [s](::lcm::LCM* bus) {
       Publish(bus, lcm::kStatusChannel, MakeStatus(s));
-      Publish(bus, lcm::kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_CONVERGED, 0.1));
+      Publish(bus, lcm::kExtrinsicsChannel,
+              MakeExtrinsics(slave_extrinsics_t::STATE_CONVERGED, 0.1));
     });
     EXPECT_EQ(run.code, code) << EstimatorStateName(state);
   }
   // Without a status the slaves' states decide.
   ::lcm::LCM lcm("memq://");
   const MonitorRun run = RunOnce(&lcm, false, 0.5, [](::lcm::LCM* bus) {
-    Publish(bus, lcm::kExtrinsicsChannel, MakeExtrinsics(slave_extrinsics_t::STATE_DECALIBRATED, 0.1));
+    Publish(bus, lcm::kExtrinsicsChannel,
+            MakeExtrinsics(slave_extrinsics_t::STATE_DECALIBRATED, 0.1));
   });
   EXPECT_EQ(run.code, 2);
   EXPECT_THAT(run.out, HasSubstr("RIGCAL_STATUS never"));
@@ -194,11 +197,12 @@ TEST(StatusMonitor, DashboardShowsEveryFigure) {
   EXPECT_EQ(clock["jumps"], 2);
   EXPECT_TRUE(SnapshotToJson(s)["status"]["cameras"][0]["clock"]["std_s"].is_null());
   left_status = MakeStatus(rig_status_t::ESTIMATOR_DEGRADED).cameras[1];
-  // Every camera's segment from its camera_status_t (the master's too); none yet: "-".
-  EXPECT_THAT(text, ::testing::ContainsRegex("left +19.5 +1234 +3 .*lost +1 +42 ms"));
-  EXPECT_THAT(text, ::testing::ContainsRegex("front +19.5 .*tracking +1 +42 ms"));
+  // Every camera's segment and relocalisations from its camera_status_t (the master's too); no
+  // segment yet: "-".
+  EXPECT_THAT(text, ::testing::ContainsRegex("left +19.5 +1234 +3 .*lost +1 +3 +42 ms"));
+  EXPECT_THAT(text, ::testing::ContainsRegex("front +19.5 .*tracking +1 +0 +42 ms"));
   s.status->cameras[0].vo_segment = -1;
-  EXPECT_THAT(FormatDashboard(s), ::testing::ContainsRegex("front +19.5 .*tracking +- +42 ms"));
+  EXPECT_THAT(FormatDashboard(s), ::testing::ContainsRegex("front +19.5 .*tracking +- +0 +42 ms"));
   // Cut at the terminal's width; framed for in-place refresh.
   for (size_t pos = 0, next; (next = FormatDashboard(s, 40).find('\n', pos)) != std::string::npos;
        pos = next + 1) {

@@ -125,6 +125,26 @@ TEST(Pipeline, MasterReinitialisationIsScoredInTheEstimatesSegment) {
   EXPECT_GE(scored, 1) << "no slave usable after the re-initialisation";
 }
 
+// Issue 34 §3: a lens covered for 0.5 s (shorter than the relocalisation timeout) is a
+// relocalisation in the same segment, counted in the camera's health and its STATUS view.
+TEST(Pipeline, ShortBlackoutIsCountedAsARelocalisation) {
+  sim::SimulatedRigSpec spec = RoomRigSpec(10.0);
+  spec.blackout_s["side"] = {5.0, 5.5};
+  auto rig = sim::MakeSimulatedRig(spec);
+  ASSERT_TRUE(rig) << rig.error();
+  PipelineOptions options;
+  options.lossless = true;
+  Pipeline pipeline(spec.names, rig->MakeDevices(), spec.cameras, Online(), options);
+  ASSERT_TRUE(RunToEnd(&pipeline));
+  const PipelineSnapshot s = pipeline.Snapshot();
+  const CameraHealth& side = s.cameras[1];
+  EXPECT_GE(side.relocalisations, 1) << side.vo_message;
+  EXPECT_EQ(side.segment, 0) << "the covered lens opened a new segment";
+  EXPECT_EQ(StatusInputOf(side).relocalisations, side.relocalisations);
+  EXPECT_EQ(s.cameras[0].relocalisations, 0);  // the front camera saw every frame
+  EXPECT_EQ(StatusInputOf(s.cameras[0]).relocalisations, 0);
+}
+
 TEST(Pipeline, LosslessRunsAreDeterministic) {
   const sim::SimulatedRigSpec spec = RoomRigSpec(8.0);
   auto rig = sim::MakeSimulatedRig(spec);

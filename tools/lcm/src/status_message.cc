@@ -36,6 +36,7 @@ void CheckCameraStatus(const CameraNames& names, camera_status_t* c, Checker* ch
                          camera_status_t::VO_DEAD);
   check->AtLeast<int64_t>("last_pose_age_ms", c->last_pose_age_ms, -1);
   check->AtLeast<int32_t>("vo_segment", c->vo_segment, -1);
+  check->AtLeast<int32_t>("relocalisations", c->relocalisations, 0);
   check->InRange<int8_t>("time_offset_source", c->time_offset_source,
                          slave_extrinsics_t::TIME_OFFSET_NONE,
                          slave_extrinsics_t::TIME_OFFSET_ESTIMATED);
@@ -171,6 +172,7 @@ rig_status_t MakeRigStatus(const std::vector<CameraStatusInput>& cameras, const 
     cam.vo_state = input.vo_state;
     cam.last_pose_age_ms = input.last_pose_age_ms;
     cam.vo_segment = input.vo_segment;
+    cam.relocalisations = input.relocalisations;
     FillClock(estimate, i, &cam);
     msg.cameras.push_back(cam);
   }

@@ -61,18 +61,18 @@ void AppendCameras(const MonitorSnapshot& snapshot, std::vector<std::string>* li
   const rig_status_t& st = *snapshot.status;
   lines->push_back(
       fmt::format("{:<12} {:>6} {:>8} {:>6} {:>5} {:>5} {:>6} {:>8} {:>7}  {:<12} "
-                  "{:>4} {:>9}",
+                  "{:>4} {:>5} {:>9}",
                   "camera", "fps", "frames", "late", "dup", "order", "ovfl", "unmatch", "invalid",
-                  "VO", "seg", "pose age"));
+                  "VO", "seg", "reloc", "pose age"));
   for (const camera_status_t& c : st.cameras) {
     const std::string segment = c.vo_segment >= 0 ? std::to_string(c.vo_segment) : "-";
     const std::string age =
         c.last_pose_age_ms >= 0 ? std::to_string(c.last_pose_age_ms) + " ms" : "none";
     lines->push_back(fmt::format(
-        "{:<12} {:>6} {:>8} {:>6} {:>5} {:>5} {:>6} {:>8} {:>7}  {:<12} {:>4} {:>9}", c.name,
+        "{:<12} {:>6} {:>8} {:>6} {:>5} {:>5} {:>6} {:>8} {:>7}  {:<12} {:>4} {:>5} {:>9}", c.name,
         FixedText(c.fps, 1), c.frames_received, c.dropped_late, c.dropped_duplicate,
         c.dropped_out_of_order, c.dropped_overflow, c.dropped_never_matched, c.dropped_invalid,
-        VoStateName(c.vo_state), segment, age));
+        VoStateName(c.vo_state), segment, c.relocalisations, age));
   }
   for (const camera_status_t& c : st.cameras) {
     if (c.time_offset_source != slave_extrinsics_t::TIME_OFFSET_NONE || c.clock_jumps > 0) {

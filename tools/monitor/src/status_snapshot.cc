@@ -36,6 +36,7 @@ nlohmann::json CameraJson(const camera_status_t& c) {
         {"invalid", c.dropped_invalid}}},
       {"vo_state", VoStateName(c.vo_state)},
       {"vo_segment", c.vo_segment >= 0 ? nlohmann::json(c.vo_segment) : nullptr},
+      {"relocalisations", c.relocalisations},
       {"last_pose_age_ms", c.last_pose_age_ms >= 0 ? nlohmann::json(c.last_pose_age_ms) : nullptr},
       {"clock",
        {{"source", TimeOffsetSourceName(c.time_offset_source)},

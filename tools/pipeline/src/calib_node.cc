@@ -48,7 +48,8 @@ const char* VoStateShort(vo::VoState state) {
   return "?";
 }
 
-// "cam0 trk s0 12.3ms 240f | cam1 DEAD": every camera of a capture, for the status line.
+// "cam0 trk s0 12.3ms 240f drop2 reloc1 | cam1 DEAD" (drops and relocalisations when any): every
+// camera of a capture, for the status line.
 std::string CameraLine(const PipelineSnapshot& snapshot) {
   std::ostringstream line;
   for (const CameraHealth& h : snapshot.cameras) {
@@ -63,6 +64,7 @@ std::string CameraLine(const PipelineSnapshot& snapshot) {
                   static_cast<long long>(h.frames_processed));
     line << buf;
     if (h.dropped_backlog > 0) line << " drop" << h.dropped_backlog;
+    if (h.relocalisations > 0) line << " reloc" << h.relocalisations;
   }
   return line.str();
 }

@@ -48,6 +48,7 @@ lcm::CameraStatusInput StatusInputOf(const CameraHealth& health) {
   c.frames_received = health.frames_captured;
   c.dropped_backlog = health.dropped_backlog;
   c.vo_state = CameraStatusVoState(health);
+  c.relocalisations = health.relocalisations;
   if (health.last_pose_t_ns >= 0) {
     c.vo_segment = health.segment;
     if (health.last_frame_t_ns >= 0) {
@@ -217,6 +218,7 @@ void Pipeline::VoLoop(int index) {
       h.poses += static_cast<int64_t>(poses.size());
       h.vo_state = result.state;
       h.segment = camera.vo.segment();
+      h.relocalisations = camera.vo.relocalisations();
       h.vo_message = result.message;
       if (result.pose) h.last_pose_t_ns = result.pose->t_ns;
       camera.timings[camera.timing_count++ % kTimingWindow] = result.processing_ms;

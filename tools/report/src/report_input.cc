@@ -105,6 +105,7 @@ Status FillFromLog(const LogContents& log, ReportData* data) {
                          c.dropped_overflow + c.dropped_never_matched + c.dropped_invalid;
         sample.vo_state = c.vo_state;
         sample.last_pose_age_ms = c.last_pose_age_ms;
+        sample.relocalisations = c.relocalisations;
         if (c.time_offset_source == slave_extrinsics_t::TIME_OFFSET_GIVEN ||
             c.time_offset_source == slave_extrinsics_t::TIME_OFFSET_ESTIMATED) {
           sample.time_offset_ms = c.time_offset_s * 1e3;

@@ -381,9 +381,13 @@ ReportFigure HealthFigure(const ReportData& data) {
       panel("frame rate", "fps", [](const CameraHealthSample& h) { return h.fps; }),
       panel("dropped (all causes, cumulative)", "poses",
             [](const CameraHealthSample& h) { return static_cast<double>(h.dropped); }),
-      vo_state, panel("age of the newest pose", "ms", [](const CameraHealthSample& h) {
-        return h.last_pose_age_ms >= 0 ? static_cast<double>(h.last_pose_age_ms) : kUnknown;
-      })};
+      vo_state,
+      panel("age of the newest pose", "ms",
+            [](const CameraHealthSample& h) {
+              return h.last_pose_age_ms >= 0 ? static_cast<double>(h.last_pose_age_ms) : kUnknown;
+            }),
+      panel("relocalisations (cumulative; tracking regained, same segment)", "relocalisations",
+            [](const CameraHealthSample& h) { return static_cast<double>(h.relocalisations); })};
   if (data.free_running && !free_running.empty()) {
     // Cameras that run free: each slave's clock offset (gaps while it is being estimated) and
     // the restarts of its clock.

@@ -41,6 +41,7 @@ struct CameraStatusInput {
   int8_t vo_state = camera_status_t::VO_INITIALISING;
   int64_t last_pose_age_ms = -1;  // -1 when no pose yet
   int32_t vo_segment = -1;        // scale segment of the newest pose, -1 when no pose yet
+  int32_t relocalisations = 0;    // cumulative: tracking regained in the same segment
 };
 
 // camera_status_t.fps: frames (or poses) per second of one camera from their STAMPS between two

@@ -70,6 +70,7 @@ struct CameraHealth {
   int64_t sync_rejected = 0;     // poses the sync buffer refused (late, out of order, ...)
   vo::VoState vo_state = vo::VoState::kInitialising;
   int segment = 0;
+  int relocalisations = 0;  // tracking regained against the VO's map (same segment)
   double vo_ms_median = 0.0;  // over the last 64 frames
   int64_t last_frame_t_ns = -1;
   int64_t last_pose_t_ns = -1;

@@ -40,6 +40,7 @@ struct CameraHealthSample {
   int64_t dropped = 0;  // every cause, cumulative
   int8_t vo_state = 0;  // camera_status_t::VO_*
   int64_t last_pose_age_ms = -1;
+  int32_t relocalisations = 0;  // cumulative (rig_status_t version 5)
   // The camera's clock (rig_status_t version 4): its offset to the master clock when given or
   // estimated (kUnknown otherwise: the master, synchronised stamps, still being estimated), and
   // the restarts of it detected so far.
