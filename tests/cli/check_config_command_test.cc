@@ -40,12 +40,41 @@ TEST_F(CommandTest, MissingDevicesAreEachNamed) {
   std::ofstream(Path("rig.yaml")) << yaml;
   const RunResult r = Run("check-config " + Path("rig.yaml"));
   EXPECT_EQ(r.exit_code, 1) << r.Explain();
-  EXPECT_NE(r.out.find("FAIL " + Path("rig.yaml") + ": cameras[0] 'left'.device: "),
+  // Each names the file and the line of its key (config/stereo_v4l2_trigger.yaml), like the
+  // loader's errors, and the device.
+  const std::string at = "FAIL " + Path("rig.yaml") + ":";
+  EXPECT_NE(r.out.find(at + "23: cameras[0] 'left'.device: camera left: " + absent),
             std::string::npos)
       << r.out;
-  EXPECT_NE(r.out.find("cameras[1] 'right'.device: "), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("trigger.port: " + absent), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(at + "30: cameras[1] 'right'.device: camera right: " + absent),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find(at + "12: trigger.port: " + absent), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("3 problem(s)"), std::string::npos) << r.out;
+}
+
+// A v4l2 rig written by hand with a device path that does not exist: the FAIL line names the
+// file, the line of the camera's `device:` and the key, then the device and why.
+TEST_F(CommandTest, AnAbsentDeviceNamesFileLineAndKey) {
+  std::ofstream(Path("rig.yaml")) << "rig: {name: x, master: a}\n"                     // 1
+                                     "source: {type: v4l2}\n"                          // 2
+                                     "cameras:\n"                                      // 3
+                                     "  - name: a\n"                                   // 4
+                                     "    model: pinhole\n"                            // 5
+                                     "    resolution: [640, 480]\n"                    // 6
+                                     "    intrinsics: [500, 500, 320, 240]\n"          // 7
+                                     "    device: /dev/rigcal-test-no-such-video8\n"   // 8
+                                     "  - name: b\n"                                   // 9
+                                     "    model: pinhole\n"                            // 10
+                                     "    resolution: [640, 480]\n"                    // 11
+                                     "    intrinsics: [500, 500, 320, 240]\n"          // 12
+                                     "    device: /dev/rigcal-test-no-such-video9\n";  // 13
+  const RunResult r = Run("check-config " + Path("rig.yaml"));
+  EXPECT_EQ(r.exit_code, 1) << r.Explain();
+  EXPECT_NE(r.out.find("FAIL " + Path("rig.yaml") +
+                       ":13: cameras[1] 'b'.device: camera b: /dev/rigcal-test-no-such-video9: "),
+            std::string::npos)
+      << r.out;
 }
 
 TEST_F(CommandTest, TypoNamesFileLineAndKey) {

@@ -101,11 +101,10 @@ TEST_F(ImportCommandTest, TumImportReplaysInCalib) {
   ASSERT_EQ(json.at("slaves").size(), 1u);
   EXPECT_EQ(json["slaves"][0].value("name", ""), "side");
 
-  // Existing outputs are not replaced without --force.
+  // Existing outputs are replaced (output_files.h; tests/cli/output_files_test.cc).
   const auto again = Run("import tum front=" + Quote(cam0) + " side=" + Quote(cam1) + " -o " +
                          Quote(Path("poses.lcmlog")));
-  EXPECT_EQ(again.exit_code, 1);
-  EXPECT_NE(again.err.find("exists (use --force to replace it)"), std::string::npos) << again.err;
+  EXPECT_EQ(again.exit_code, 0) << again.err;
 }
 
 TEST_F(ImportCommandTest, SolveTakesNamedTrajectoryFiles) {

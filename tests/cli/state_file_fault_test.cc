@@ -7,6 +7,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include "calib/free_running_rig.h"
 #include "cli/command_test.h"
 #include "rigcal/base/quaternion.h"
+#include "rigcal/calib/rig_estimator.h"
 #include "rigcal/calib/slave_state.h"
 #include "rigcal/calib/synthetic.h"
 #include "rigcal/io/estimator_state_file.h"
@@ -65,6 +67,20 @@ class StateFileFault : public cli_test::CommandTest {
     if (change_frame >= 0) d.changed_rigs = {moved};
     const SyntheticDrive drive = GenerateDrive({"front", "left"}, {kLeft}, d);
     ASSERT_TRUE(lcm::WritePoseLog(Path(name), drive.recording).ok());
+  }
+
+  // The first `frames` sets of `rec` as an LCM pose log.
+  void WriteLogPrefix(const std::string& name, const RigRecording& rec, size_t frames) const {
+    RigRecording prefix = rec;
+    frames = std::min(frames, rec.size());
+    prefix.t_ns.resize(frames);
+    std::vector<CameraTrack*> tracks = {&prefix.master};
+    for (CameraTrack& slave : prefix.slaves) tracks.push_back(&slave);
+    for (CameraTrack* t : tracks) {
+      t->poses.resize(frames);
+      if (!t->segment.empty()) t->segment.resize(frames);
+    }
+    ASSERT_TRUE(lcm::WritePoseLog(Path(name), prefix).ok());
   }
 
   RunResult Replay(const std::string& log, const std::string& extra) const {
@@ -249,6 +265,61 @@ TEST_F(StateFileFault, ACameraMovedBetweenRunsRaisesTheAlarmAndReconverges) {
             << " deg from the old one\n";
   EXPECT_LT(err_deg, 1.0);
   EXPECT_GT(old_deg, 4.0);
+}
+
+// The slave camera moved and the alarm raised before a restart: `calib --log --resume` on the
+// next seconds of the drive still reports the slave decalibrated (result, stderr, exit code 3),
+// as the uninterrupted run does (the alarm holds for short_half_life_s, 20 s); before state
+// version 7 the restarted estimator called it usable on the first new motion.
+TEST_F(StateFileFault, ADecalibrationAlarmRaisedBeforeARestartIsReportedAfterIt) {
+  const Similarity moved{
+      (kLeft.q * Eigen::AngleAxisd(5.0 * M_PI / 180.0, Eigen::Vector3d::UnitY())).normalized(),
+      kLeft.C + Eigen::Vector3d(0.05, 0.0, 0.0), 1.0};
+  DriveOptions d;
+  d.num_frames = 2400;  // 20 Hz: 120 s, the camera moved at 60 s
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.002;
+  d.change_frame = 1200;
+  d.changed_rigs = {moved};
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {kLeft}, d);
+  ASSERT_TRUE(lcm::WritePoseLog(Path("poses.lcmlog"), drive.recording).ok());
+  // When the alarm comes (it depends on the noise): the estimator alone on the same sets.
+  RigEstimator alone({"front", "left"}, RigEstimatorOptions{});
+  int alarm_s = -1;
+  const RigRecording& rec = drive.recording;
+  for (size_t k = 0; k < rec.size() && alarm_s < 0; ++k) {
+    alone.AddSet(rec.t_ns[k], rec.SetAt(k));
+    if (alone.Estimate().rig.slaves[0].state == SlaveState::kDecalibrated) {
+      alarm_s = static_cast<int>((rec.t_ns[k] - rec.t_ns[0]) / 1'000'000'000) + 1;
+    }
+  }
+  ASSERT_GE(alarm_s, 60) << "the move raised no alarm";
+  // The first run stops a few seconds after it (the node's refinements may shift it a little:
+  // the first of these ends that finds the slave decalibrated).
+  const std::string state = " --state " + Path("s.state");
+  int stop_s = 0;
+  SlaveCalibration a;
+  for (int to_s = alarm_s + 1; to_s <= alarm_s + 9 && a.state != SlaveState::kDecalibrated;
+       to_s += 4) {
+    fs::remove(Path("s.state"));
+    const RunResult r =
+        Replay("poses.lcmlog", "--to " + std::to_string(to_s) + " --out " + Path("a.yaml") + state);
+    ASSERT_NE(r.exit_code, 1) << r.Explain();
+    a = Left(Path("a.yaml"));
+    stop_s = to_s;
+  }
+  ASSERT_EQ(a.state, SlaveState::kDecalibrated) << "no alarm by " << stop_s << " s: " << a.message;
+
+  // The restart: the same drive up to 5 s later (the poses consumed before are skipped).
+  WriteLogPrefix("more.lcmlog", drive.recording, static_cast<size_t>(stop_s + 5) * 20);
+  const RunResult r = Run("calib --log " + Path("more.lcmlog") + " --config " + Path("rig.yaml") +
+                          " --resume --out " + Path("b.yaml") + state);
+  EXPECT_EQ(r.exit_code, 3) << r.Explain();
+  EXPECT_NE(r.err.find("resumed from"), std::string::npos) << r.Explain();
+  EXPECT_NE(r.err.find("left: decalibrated"), std::string::npos) << r.Explain();
+  const SlaveCalibration b = Left(Path("b.yaml"));
+  EXPECT_EQ(b.state, SlaveState::kDecalibrated) << b.message;
+  EXPECT_GT(b.motions.used, a.motions.used) << "the resumed run took no new motion";
 }
 
 }  // namespace

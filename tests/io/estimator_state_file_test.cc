@@ -152,6 +152,93 @@ TEST(EstimatorStateFile, ACameraMovedBetweenDrivesEndsAtTheNewMountingWithinSigm
   }
 }
 
+// A drive of front and left in which left is knocked by 2° at frame 2400 (of 4800, 20 Hz) and
+// the first frame at which the estimator fed with it says decalibrated (-1: never).
+struct BumpedDrive {
+  SyntheticDrive drive;
+  int alarm_frame = -1;
+};
+
+BumpedDrive BumpAndRaiseTheAlarm(RigEstimator* est) {
+  DriveOptions d;
+  d.num_frames = 4800;
+  d.rotation_noise_deg = 0.05;
+  d.position_noise = 0.002;
+  Similarity bumped = DemoRig()[0];
+  bumped.q = AxisAngle(Eigen::Vector3d(0.3, 1.0, -0.2), 2.0 * kRadPerDeg) * bumped.q;
+  d.change_frame = 2400;
+  d.changed_rigs = {bumped};
+  BumpedDrive out{GenerateDrive({"front", "left"}, {DemoRig()[0]}, d), -1};
+  const RigRecording& rec = out.drive.recording;
+  for (size_t k = 0; k < rec.size() && out.alarm_frame < 0; ++k) {
+    est->AddSet(rec.t_ns[k], rec.SetAt(k));
+    if (est->Estimate().rig.slaves[0].state == SlaveState::kDecalibrated) {
+      out.alarm_frame = static_cast<int>(k);
+    }
+  }
+  return out;
+}
+
+// A slave found decalibrated before a restart is still decalibrated after it (state version 7):
+// the alarm round-trips through the file, holds on new data exactly as in the uninterrupted
+// run, and on a clock that restarted (a reboot) holds for short_half_life_s of the new clock. A
+// version-6 state resumes without it.
+TEST(EstimatorStateFile, ADecalibrationAlarmSurvivesARestart) {
+  RigEstimator est({"front", "left"}, RigEstimatorOptions{});
+  const BumpedDrive bumped = BumpAndRaiseTheAlarm(&est);
+  ASSERT_GE(bumped.alarm_frame, 2400) << "the bump raised no alarm";
+  const RigRecording& rec = bumped.drive.recording;
+  const std::string state = StateFile(est);
+  const Expected<RigEstimatorState> parsed = ParseEstimatorState(state);
+  ASSERT_TRUE(parsed.ok()) << parsed.error();
+  const DecalibrationAlarmState& alarm = parsed->slaves[0].resume.decalibration;
+  EXPECT_EQ(alarm.decalibrated_at_ns, rec.t_ns[bumped.alarm_frame]);
+  EXPECT_EQ(FormatEstimatorState(*parsed), state);
+
+  // New data on the continuing clock: decalibrated as long as in the uninterrupted run (5 s;
+  // the alarm holds for short_half_life_s, 20 s).
+  RigEstimator resumed({"front", "left"}, RigEstimatorOptions{});
+  std::string error;
+  ASSERT_TRUE(Restore(&resumed, state, &error)) << error;
+  EXPECT_EQ(resumed.Estimate().rig.slaves[0].state, SlaveState::kDecalibrated);
+  const size_t from = static_cast<size_t>(bumped.alarm_frame) + 1;
+  for (size_t k = from; k < from + 100; ++k) {
+    est.AddSet(rec.t_ns[k], rec.SetAt(k));
+    resumed.AddSet(rec.t_ns[k], rec.SetAt(k));
+  }
+  ASSERT_EQ(est.Estimate().rig.slaves[0].state, SlaveState::kDecalibrated);
+  EXPECT_EQ(resumed.Estimate().rig.slaves[0].state, SlaveState::kDecalibrated)
+      << resumed.Estimate().rig.slaves[0].message;
+  EXPECT_GT(resumed.Estimate().rig.slaves[0].motions.used,
+            parsed->slaves[0].resume.published.motions.used);
+
+  // A clock that began again at the first stamp of the drive: still decalibrated 5 s later,
+  // no longer once short_half_life_s of the new clock has passed.
+  RigEstimator rebooted({"front", "left"}, RigEstimatorOptions{});
+  ASSERT_TRUE(Restore(&rebooted, state, &error)) << error;
+  const int64_t back = rec.t_ns[from] - rec.t_ns[0];
+  size_t k = from;
+  for (; k < from + 100; ++k) rebooted.AddSet(rec.t_ns[k] - back, rec.SetAt(k));
+  EXPECT_EQ(rebooted.Estimate().rig.slaves[0].state, SlaveState::kDecalibrated);
+  for (; k < from + 600; ++k) rebooted.AddSet(rec.t_ns[k] - back, rec.SetAt(k));
+  EXPECT_NE(rebooted.Estimate().rig.slaves[0].state, SlaveState::kDecalibrated)
+      << rebooted.Estimate().rig.slaves[0].message;
+
+  // The same state as version 6 (no decalibration line): read, and resumed without the alarm.
+  std::string v6;
+  std::istringstream lines(state);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("checksum ", 0) == 0) continue;
+    if (line.rfind("decalibration ", 0) == 0) continue;
+    v6 += line + '\n';
+  }
+  v6.replace(0, v6.find('\n'), "rigcal-estimator-state 6");
+  RigEstimator old({"front", "left"}, RigEstimatorOptions{});
+  ASSERT_TRUE(Restore(&old, WithEstimatorStateChecksum(v6), &error)) << error;
+  for (size_t j = from; j < from + 100; ++j) old.AddSet(rec.t_ns[j], rec.SetAt(j));
+  EXPECT_NE(old.Estimate().rig.slaves[0].state, SlaveState::kDecalibrated);
+}
+
 // Text after the checksum line is an error naming the line (it is not covered by the checksum).
 TEST(EstimatorStateFile, TextAfterTheChecksumLineIsAnError) {
   DriveOptions d;
@@ -237,8 +324,8 @@ TEST(EstimatorStateFile, ReadsVersionTwoStates) {
   int removed = 0;
   while (std::getline(in, line)) {
     if (line.rfind("checksum ", 0) == 0) break;
-    if (line.rfind("consumed ", 0) == 0) continue;  // version 4
-    if (line.rfind("clocks ", 0) == 0) continue;    // version 5
+    if (line.rfind("consumed ", 0) == 0) continue;    // version 4
+    if (line.rfind("clocks ", 0) == 0) continue;      // version 5
     if (line.rfind("fingerprint", 0) == 0) continue;  // version 6
     if (line == "published") {                        // version 6, up to its "end"
       while (std::getline(in, line) && line != "end") {

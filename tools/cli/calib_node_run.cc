@@ -118,6 +118,13 @@ bool MasterIsMetric(const io::RigConfig& config) {
   return !config.cameras.empty() && config.cameras.front().metric;
 }
 
+// Where the result comes from (io/provenance.h): this rigcal, the command line, the log replayed
+// and the config, with their sizes and hashes. In the JSON and at the end of the result YAML.
+io::Provenance NodeProvenance(const NodeRunArgs& args, const io::RigConfig& config,
+                              const pipeline::CalibNodeOptions& options) {
+  return ProvenanceOf({options.log_path}, args.config, MasterIsMetric(config));
+}
+
 // The result on stdout: JSON (with its provenance) or the table (with the errors against a
 // truth when known).
 void PrintResult(const NodeRunArgs& args, const io::RigConfig& config,
@@ -129,10 +136,7 @@ void PrintResult(const NodeRunArgs& args, const io::RigConfig& config,
   const io::TruthAlignment* alignment = view.alignment ? &*view.alignment : nullptr;
   if (args.json) {
     nlohmann::json json = io::ResultToJson(result, truth_ptr, alignment);
-    const std::vector<std::string> inputs =
-        options.log_path.empty() ? std::vector<std::string>{} : std::vector{options.log_path};
-    json["provenance"] =
-        io::ProvenanceToJson(ProvenanceOf(inputs, args.config, MasterIsMetric(config)));
+    json["provenance"] = io::ProvenanceToJson(NodeProvenance(args, config, options));
     std::cout << json.dump(2) << "\n";
   } else if (args.command == "run") {
     std::cout << io::FormatResultTable(result, nullptr);
@@ -163,9 +167,9 @@ int ExitCode(const NodeRunArgs& args, const io::RigConfig& config,
     std::cerr << prefix << "calibrated nothing: " << kept << " left as it was\n";
   }
   if (!args.camchain.empty()) {
-    if (const Status status = WriteResultCamchain(args.camchain, result, IntrinsicsOf(config),
-                                                  MasterIsMetric(config) ? 1.0 : std::nan(""),
-                                                  "metric master", *log);
+    if (const Status status =
+            WriteResultCamchain(args.camchain, result, IntrinsicsOf(config),
+                                MasterIsMetric(config) ? 1.0 : std::nan(""), "metric master", *log);
         !status.ok()) {
       std::cerr << prefix << status.message() << "\n";
       return kExitError;
@@ -203,6 +207,7 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
     return kExitError;
   }
   const io::RigConfig loaded = *config;
+  options.result_provenance = io::ProvenanceToYaml(NodeProvenance(args, loaded, options));
   if (args.eval && !loaded.simulated_source) {
     std::cerr << prefix << "--eval needs a simulated source (ground truth)\n";
     return kExitError;

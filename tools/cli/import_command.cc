@@ -33,7 +33,7 @@ namespace fs = std::filesystem;
 struct ImportArgs {
   std::string out;
   std::string config_out;
-  bool force = false;
+  bool force = false;  // accepted, no effect: outputs are always replaced (output_files.h)
   // euroc
   std::string dir;
   std::string image_encoding = "png";
@@ -53,13 +53,6 @@ bool ValidCameraName(const std::string& name) {
   return !name.empty() && name.size() <= 40 && std::all_of(name.begin(), name.end(), [](char c) {
     return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' || c == '.';
   });
-}
-
-// Refuses to replace existing files without --force (a recording is not to be lost by a typo).
-std::optional<std::string> ExistingOutput(const ImportArgs& args, const std::string& path) {
-  std::error_code ec;
-  if (!args.force && fs::exists(path, ec)) return path + ": exists (use --force to replace it)";
-  return std::nullopt;
 }
 
 // The mav0 folder of a EuRoC recording given as the recording's folder or mav0 itself, and its
@@ -93,9 +86,6 @@ int RunImportEuroc(const ImportArgs& args) {
   auto folders = EurocCameraFolders(args.dir);
   if (!folders) return PrintCommandError("import", folders.error());
   const std::string config_path = ConfigPath(args);
-  for (const std::string& path : {args.out, config_path}) {
-    if (auto problem = ExistingOutput(args, path)) return PrintCommandError("import", *problem);
-  }
   lcm::CameraNames names;
   std::vector<io::CameraConfig> cameras;
   std::vector<std::unique_ptr<capture::ImageFolderDevice>> devices;
@@ -128,7 +118,7 @@ int RunImportEuroc(const ImportArgs& args) {
   encode.jpeg_quality = args.jpeg_quality;
   lcm::LogWriterOptions log_options;
   log_options.atomic = true;
-  log_options.overwrite = true;  // existing files were checked above
+  log_options.overwrite = true;  // output_files.h
   log_options.split_bytes = static_cast<int64_t>(std::llround(args.split_mb * 1e6));
   auto log = lcm::LogWriter::Open(args.out, log_options);
   if (!log) return PrintCommandError("import", log.error());
@@ -154,8 +144,8 @@ int RunImportEuroc(const ImportArgs& args) {
     const auto camera = static_cast<int>(*next);
     auto bytes = pipeline::EncodeImageEvent(*pending[*next], names, camera, encode);
     if (!bytes) return PrintCommandError("import", bytes.error());
-    if (Status status = (*log)->Write(lcm::ImageChannel(names[*next]),
-                                      pending[*next]->t_ns / 1000, bytes->data(), bytes->size());
+    if (Status status = (*log)->Write(lcm::ImageChannel(names[*next]), pending[*next]->t_ns / 1000,
+                                      bytes->data(), bytes->size());
         !status.ok()) {
       return PrintCommandError("import", status.message());
     }
@@ -173,8 +163,8 @@ int RunImportEuroc(const ImportArgs& args) {
                               " (intrinsics from mav0/camN/sensor.yaml),\nwritten by rigcal "
                               "import euroc with the log " +
                               args.out;
-  if (Status status = io::WriteRigConfig(config_path, fs::path(args.dir).filename().string(),
-                                            cameras, comment);
+  if (Status status =
+          io::WriteRigConfig(config_path, fs::path(args.dir).filename().string(), cameras, comment);
       !status.ok()) {
     return PrintCommandError("import", status.message());
   }
@@ -191,9 +181,6 @@ int RunImportEuroc(const ImportArgs& args) {
 
 int RunImportTum(const ImportArgs& args) {
   const std::string config_path = ConfigPath(args);
-  for (const std::string& path : {args.out, config_path}) {
-    if (auto problem = ExistingOutput(args, path)) return PrintCommandError("import", *problem);
-  }
   lcm::CameraNames names;
   std::vector<io::CameraConfig> cameras;
   std::vector<CameraPose> poses;
@@ -245,7 +232,8 @@ void AddOutputOptions(CLI::App* cmd, ImportArgs* args) {
   cmd->add_option("-o,--out", args->out, "LCM log file to write (atomically)")->required();
   cmd->add_option("--config-out", args->config_out,
                   "Rig config written with the log (cameras, master first); default OUT.yaml");
-  cmd->add_flag("-f,--force", args->force, "Replace existing output files");
+  cmd->add_flag("-f,--force", args->force,
+                "Accepted for older scripts: existing output files are always replaced (below)");
 }
 
 }  // namespace

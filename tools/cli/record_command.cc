@@ -25,6 +25,7 @@ struct RecordArgs {
   pipeline::CalibNodeOptions node;
   std::string image_encoding = "raw";
   double split_mb = 0.0;
+  bool force = false;  // accepted, no effect: logs are always replaced (output_files.h)
 };
 
 int RunRecord(const RecordArgs& args) {
@@ -89,10 +90,10 @@ void AddRecordOptions(CLI::App* cmd, RecordArgs* args) {
   cmd->add_flag("--fast", node.fast,
                 "Do not pace a simulated source in real time: record as fast as possible, "
                 "without dropping frames");
-  cmd->add_flag(
-      "-f,--force", node.recorder.log.overwrite,
-      "Replace existing log files (each with the new log's first event, so a recording that "
-      "records nothing leaves the old one)");
+  // Existing log files are replaced (output_files.h), each with the new log's first event.
+  node.recorder.log.overwrite = true;
+  cmd->add_flag("-f,--force", args->force,
+                "Accepted for older scripts: existing log files are always replaced (below)");
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "command_line.h"
 #include "commands.h"
+#include "output_files.h"
 #include "progress_line.h"
 #include "rigcal/base/logging.h"
 
@@ -57,6 +58,7 @@ int main(int argc, char** argv) {
   rigcal::cli::RegisterVo(app, &exit_code);
   rigcal::cli::RegisterDevices(app, &exit_code);
   rigcal::cli::RegisterCheckConfig(app, &exit_code);
+  rigcal::cli::DocumentOutputFiles(app);
 
   rigcal::cli::SetInvocation(RIGCAL_VERSION, argc, argv);
   // Every module logger writes above a progress line (progress_line.h).

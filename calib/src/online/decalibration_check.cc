@@ -47,6 +47,11 @@ WindowComparison CompareWindows(const RigEstimatorOptions& o, const SlaveCalibra
   return out;
 }
 
+void FollowRestartedClock(int64_t now_ns, DecalibrationState* state) {
+  state->disagree_since_ns = std::min(state->disagree_since_ns, now_ns);
+  state->decalibrated_at_ns = std::min(state->decalibrated_at_ns, now_ns);
+}
+
 bool RecentlyDecalibrated(const RigEstimatorOptions& o, const DecalibrationState& state,
                           int64_t now_ns) {
   return state.decalibrated_at_ns >= 0 &&

@@ -19,15 +19,13 @@
 #include <cstdint>
 
 #include "rigcal/calib/calibration_result.h"
+#include "rigcal/calib/estimator_state.h"
 #include "rigcal/calib/rig_estimator_options.h"
 
 namespace rigcal::internal {
 
-struct DecalibrationState {
-  int disagreements = 0;            // consecutive keyframes at which the windows disagreed
-  int64_t disagree_since_ns = -1;   // stream time of the first of them (-1: none)
-  int64_t decalibrated_at_ns = -1;  // stream time of the last decalibration (-1: never)
-};
+// Saved in the estimator state (estimator_state.h), so that the alarm survives a restart.
+using DecalibrationState = DecalibrationAlarmState;
 
 struct WindowComparison {
   bool compared = false;
@@ -46,6 +44,12 @@ WindowComparison CompareWindows(const RigEstimatorOptions& options,
                                 const SlaveCalibration& long_window,
                                 const SlaveCalibration& short_window, double overlap,
                                 bool model_settled, int64_t now_ns, DecalibrationState* state);
+
+// A stream clock that restarted (a resumed run on a clock that began again, as CLOCK_MONOTONIC
+// after a reboot) is behind the stamps of a restored alarm: they move to now_ns, so that the
+// alarm holds for short_half_life_s of the new clock instead of until the new clock passes the
+// old stamps.
+void FollowRestartedClock(int64_t now_ns, DecalibrationState* state);
 
 // Within short_half_life_s of the last decalibration: the estimate is re-converging.
 bool RecentlyDecalibrated(const RigEstimatorOptions& options, const DecalibrationState& state,

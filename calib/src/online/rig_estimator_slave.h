@@ -105,6 +105,7 @@ struct RigEstimator::Slave {
     out->stable = convergence.stable;
     out->last_q = convergence.last_q;
     out->glitches = glitches;
+    out->decalibration = decalibration;
   }
 
   // The σ inflation's inputs, the forgetting clock and the glitch counts of a saved state (the
@@ -146,6 +147,7 @@ struct RigEstimator::Slave {
                                             const std::optional<Similarity>& nominal,
                                             const internal::MotionModelChoice& choice,
                                             const internal::SigmaInflation& inflation) {
+    internal::FollowRestartedClock(online.last_update_ns, &decalibration);
     bool short_general = general_model;
     const SlaveCalibration short_est =
         linear.observability.planar

@@ -94,6 +94,7 @@ Status RigEstimator::RestoreState(const RigEstimatorState& state) {
     s.refined = r.refined;
     s.refined_from_history = r.refined_from_history;
     s.restored_unchanged = true;
+    s.decalibration = r.decalibration;  // the alarm holds on (none from a version-6 state)
     estimate_.rig.slaves[i] = r.published;
     estimate_.online[i] = r.online;
   }

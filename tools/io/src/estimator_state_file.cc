@@ -139,7 +139,7 @@ bool ReadSums(const std::string& text, MotionSums* out) {
 }
 
 // Reads the slave blocks that follow the master_segment line (`rest`), one per slave camera.
-Status ReadSlaves(std::string rest, RigEstimatorState* state) {
+Status ReadSlaves(std::string rest, int version, RigEstimatorState* state) {
   const std::vector<std::string>& names = state->cameras;
   for (size_t i = 0; i + 1 < names.size(); ++i) {
     const std::string& name = names[i + 1];
@@ -189,7 +189,8 @@ Status ReadSlaves(std::string rest, RigEstimatorState* state) {
       return Error{"malformed statistics of slave " + name};
     }
     if (!published_text.empty()) {
-      if (const Status read = internal::ReadPublished(published_text, &s.resume); !read.ok()) {
+      if (const Status read = internal::ReadPublished(published_text, version, &s.resume);
+          !read.ok()) {
         return Error{"slave " + name + ": " + read.message()};
       }
     }
@@ -383,7 +384,7 @@ Expected<RigEstimatorState> ParseEstimatorState(std::string_view view) {
     if (const Status read = ReadFingerprints(b, &state); !read.ok()) return read;
   }
   const std::string rest((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
-  if (const Status read = ReadSlaves(rest, &state); !read.ok()) return read;
+  if (const Status read = ReadSlaves(rest, version, &state); !read.ok()) return read;
   if (const Status ranges = CheckEstimatorStateRanges(state); !ranges.ok()) return ranges;
   return state;
 }

@@ -243,11 +243,13 @@ void WritePublished(std::ostream& out, const SlavePublishedState& s) {
   const SlaveOnlineState& o = s.online;
   out << "published\nonline " << o.flags << ' ' << o.segment << ' ' << o.last_update_ns << ' '
       << o.short_long_rot_deg << ' ' << o.keyframes << ' ' << o.gated_scale << ' '
-      << o.decalibration_events << "\ndrift " << s.consecutive_angle_var.value << ' '
-      << s.consecutive_angle_var.count << ' ' << s.pair_span.value << ' ' << s.pair_span.count
-      << "\nforget " << s.log_decay << ' ' << s.last_decay_ns << "\nconvergence " << s.stable << ' '
-      << s.last_q.w() << ' ' << s.last_q.x() << ' ' << s.last_q.y() << ' ' << s.last_q.z()
-      << "\nglitches " << s.glitches.position_jump << ' ' << s.glitches.rotation_jump << ' '
+      << o.decalibration_events << "\ndecalibration " << s.decalibration.disagreements << ' '
+      << s.decalibration.disagree_since_ns << ' ' << s.decalibration.decalibrated_at_ns
+      << "\ndrift " << s.consecutive_angle_var.value << ' ' << s.consecutive_angle_var.count << ' '
+      << s.pair_span.value << ' ' << s.pair_span.count << "\nforget " << s.log_decay << ' '
+      << s.last_decay_ns << "\nconvergence " << s.stable << ' ' << s.last_q.w() << ' '
+      << s.last_q.x() << ' ' << s.last_q.y() << ' ' << s.last_q.z() << "\nglitches "
+      << s.glitches.position_jump << ' ' << s.glitches.rotation_jump << ' '
       << s.glitches.angle_mismatch << ' ' << s.glitches.in_master << ' ' << s.glitches.in_slave
       << "\nblocks " << s.block_ns << ' ' << s.blocks.size() << '\n';
   for (const RotationBlockState& b : s.blocks) {
@@ -261,7 +263,7 @@ void WritePublished(std::ostream& out, const SlavePublishedState& s) {
   out << "end\n";
 }
 
-Status ReadPublished(std::string_view text, SlavePublishedState* out) {
+Status ReadPublished(std::string_view text, int version, SlavePublishedState* out) {
   Tokens t(text);
   SlavePublishedState s;
   t.Word("published");
@@ -274,6 +276,12 @@ Status ReadPublished(std::string_view text, SlavePublishedState* out) {
   o.keyframes = t.Count("online keyframes");
   o.gated_scale = t.Count("online gated scale");
   o.decalibration_events = t.Count("online decalibrations");
+  if (version >= 7) {
+    t.Word("decalibration");
+    s.decalibration.disagreements = t.Count("decalibration disagreements");
+    s.decalibration.disagree_since_ns = t.Integer("decalibration since", -1, INT64_MAX);
+    s.decalibration.decalibrated_at_ns = t.Integer("decalibration at", -1, INT64_MAX);
+  }
   ReadInflation(t, &s);
   ReadCalibration(t, &s.published);
   t.Word("refined");

@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// The published part of a slave's block in the estimator state file (version 6,
+// The published part of a slave's block in the estimator state file (version 6 and later,
 // SlavePublishedState): the estimate as last published and what its σ rest on, after the slave's
 // short statistics.
 //
 //   published
 //   online <flags> <segment> <last_update_ns> <short_long_rot_deg> <keyframes> <gated_scale>
 //          <decalibration_events>
+//   decalibration <disagreements> <disagree_since_ns> <decalibrated_at_ns>   (version 7: the
+//          decalibration alarm, DecalibrationAlarmState; a version-6 block has none)
 //   drift <value> <count> <value> <count>         (pairs' consecutive angle variance, span)
 //   forget <log_decay> <last_decay_ns>
 //   convergence <stable> <qw> <qx> <qy> <qz>
@@ -28,8 +30,9 @@ namespace rigcal::io::internal {
 
 void WritePublished(std::ostream& out, const SlavePublishedState& state);
 
-// `text`: the block from "published" to "end". Errors name the field that is malformed or out of
-// range (a rotation that is not a unit quaternion, a negative σ, an unknown state).
-Status ReadPublished(std::string_view text, SlavePublishedState* state);
+// `text`: the block from "published" to "end" of a state file of `version`. Errors name the field
+// that is malformed or out of range (a rotation that is not a unit quaternion, a negative σ, an
+// unknown state).
+Status ReadPublished(std::string_view text, int version, SlavePublishedState* state);
 
 }  // namespace rigcal::io::internal

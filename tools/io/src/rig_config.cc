@@ -270,7 +270,6 @@ std::optional<Error> ParseRate(const FieldReader& r, const YAML::Node& node,
   return std::nullopt;
 }
 
-
 // `rig:` and `cameras:`: fills config->name and config->cameras (the master first, then the
 // others in file order); returns the cameras' YAML entries in that order.
 Expected<std::vector<YAML::Node>> ParseCameras(const FieldReader& r, const YAML::Node& root,
@@ -397,7 +396,26 @@ std::optional<Error> ParseState(const FieldReader& r, const YAML::Node& state,
   return std::nullopt;
 }
 
+// The lines of the keys checked against this computer (RigConfig::key_lines).
+void RecordKeyLines(const YAML::Node& root, const std::vector<YAML::Node>& entries,
+                    RigConfig* config) {
+  const auto record = [config](const YAML::Node& node, const std::string& key) {
+    if (node && !node.Mark().is_null()) config->key_lines[key] = node.Mark().line + 1;
+  };
+  for (size_t i = 0; i < entries.size(); ++i) {
+    record(entries[i]["device"], "cameras[" + std::to_string(i) + "].device");
+  }
+  if (const YAML::Node trigger = root["trigger"]; trigger && trigger.IsMap()) {
+    record(trigger["port"], "trigger.port");
+  }
+}
+
 }  // namespace
+
+std::string RigConfig::Where(const std::string& key) const {
+  const auto it = key_lines.find(key);
+  return it == key_lines.end() ? path + ": " : path + ":" + std::to_string(it->second) + ": ";
+}
 
 std::vector<std::string> RigConfig::CameraNames() const {
   std::vector<std::string> names;
@@ -431,6 +449,7 @@ Expected<RigConfig> RigConfigFromYaml(const YAML::Node& root, const std::string&
   auto source_type = ParseSourceSection(r, root, *entries, &config);
   if (!source_type) return Error{source_type.error()};
   if (auto e = ReadRigTrigger(r, root, *entries, *source_type, &config)) return *e;
+  RecordKeyLines(root, *entries, &config);
   return config;
 }
 

@@ -305,7 +305,8 @@ void CalibNode::Impl::Finish(int64_t utime) {
   }
   if (!options.result_path.empty() &&
       !(CalibratedNothing() && std::filesystem::exists(options.result_path))) {
-    if (const Status status = io::WriteResultYaml(options.result_path, estimate.rig);
+    if (const Status status = io::WriteFileAtomically(
+            options.result_path, io::ResultToYaml(estimate.rig) + options.result_provenance);
         !status.ok()) {
       AddError("result not written: " + status.message());
     } else {

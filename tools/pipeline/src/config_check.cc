@@ -14,8 +14,10 @@ namespace {
 
 constexpr int kHelloTimeoutMs = 2000;
 
-std::string CameraKey(const io::RigConfig& config, size_t i) {
-  return config.path + ": cameras[" + std::to_string(i) + "] '" + config.cameras[i].name + "'";
+// "<path>:<line>: cameras[<i>] '<name>'.device" (the line when the config was read from a file).
+std::string DeviceKey(const io::RigConfig& config, size_t i) {
+  const std::string key = "cameras[" + std::to_string(i) + "]";
+  return config.Where(key + ".device") + key + " '" + config.cameras[i].name + "'.device";
 }
 
 void CheckV4l2(const io::RigConfig& config, bool open, ConfigCheck* check) {
@@ -28,7 +30,7 @@ void CheckV4l2(const io::RigConfig& config, bool open, ConfigCheck* check) {
     if (open) {
       auto device = capture::V4l2Device::Open(config.cameras[i].name, static_cast<int>(i), o);
       if (!device) {
-        check->problems.push_back(CameraKey(config, i) + ".device: " + device.error());
+        check->problems.push_back(DeviceKey(config, i) + ": " + device.error());
         continue;
       }
       const capture::V4l2Negotiated& n = (*device)->negotiated();
@@ -49,7 +51,7 @@ void CheckLibcamera(const io::RigConfig& config, bool open, ConfigCheck* check) 
     if (open) {
       auto device = capture::LibcameraDevice::Open(config.cameras[i].name, static_cast<int>(i), o);
       if (!device) {
-        check->problems.push_back(CameraKey(config, i) + ".device: " + device.error());
+        check->problems.push_back(DeviceKey(config, i) + ": " + device.error());
         continue;
       }
       line << " -> " << (*device)->camera_id() << " " << (*device)->configuration();
@@ -67,13 +69,14 @@ void CheckTrigger(const io::RigConfig& config, bool open, ConfigCheck* check) {
   if (open) {
     auto port = trigger::SerialPort::Open(t.port, t.baud);
     if (!port) {
-      check->problems.push_back(config.path + ": trigger.port: " + port.error());
+      check->problems.push_back(config.Where("trigger.port") + "trigger.port: " + port.error());
       return;
     }
     trigger::TriggerLink link(std::move(*port));
     auto hello = trigger::QueryTriggerHello(&link, kHelloTimeoutMs);
     if (!hello) {
-      check->problems.push_back(config.path + ": trigger.port: " + t.port + ": " + hello.error());
+      check->problems.push_back(config.Where("trigger.port") + "trigger.port: " + t.port + ": " +
+                                hello.error());
       return;
     }
     line << "; Hello: firmware " << hello->hello.firmware_version << ", "

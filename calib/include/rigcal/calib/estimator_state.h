@@ -93,6 +93,15 @@ struct RotationBlockState {
   double weight = 0.0;
 };
 
+// The decalibration alarm of a slave (calib/src/online/decalibration_check.h): the disagreements
+// of its short and long windows being counted, and the last confirmed decalibration, which keeps
+// the slave decalibrated for short_half_life_s of stream time.
+struct DecalibrationAlarmState {
+  int disagreements = 0;            // consecutive keyframes at which the windows disagreed
+  int64_t disagree_since_ns = -1;   // stream time of the first of them (-1: none)
+  int64_t decalibrated_at_ns = -1;  // stream time of the last decalibration (-1: never)
+};
+
 // What a slave's published estimate rests on beyond its statistics (state version 6): the
 // estimate as last published (a refinement's, with its σ), the inputs of the σ inflation
 // (calib/src/online/online_uncertainty.h: the drift of the pairs, the rotation time blocks), the
@@ -114,6 +123,8 @@ struct SlavePublishedState {
   int stable = 0;              // convergence_check's stable count
   Eigen::Quaterniond last_q = Eigen::Quaterniond::Identity();  // ... and the rotation then
   GlitchCounts glitches;
+  // The decalibration alarm (state version 7; none in a version-6 state).
+  DecalibrationAlarmState decalibration;
 };
 
 // One slave's saved state.

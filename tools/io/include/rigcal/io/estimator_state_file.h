@@ -14,7 +14,8 @@
 //   slave <i>            then its counts, noise levels, segment, model and the long and short
 //   ...                  statistics (every sum, 17 significant digits: exact round trip), and
 //                        (version 6) the published estimate and what its σ rest on
-//                        (SlavePublishedState; src/estimator_state_published.h)
+//                        (SlavePublishedState; src/estimator_state_published.h; version 7:
+//                        with the decalibration alarm)
 //   checksum <FNV-1a 64 of the lines between the header and this one, hex>
 //
 // Version 3 holds the translation-direction moments (Ddir, the translational model's σ);
@@ -25,17 +26,20 @@
 // them estimated afresh. Version 6 adds per slave the published estimate (a refinement the
 // statistics cannot reproduce: the batch calibrator's on the pose history), the inputs of its σ
 // inflation and the convergence count, so that a resume without new data publishes the same
-// estimate; an older file resumes with the estimate re-solved from the statistics.
+// estimate; an older file resumes with the estimate re-solved from the statistics. Version 7 adds
+// to it the decalibration alarm (DecalibrationAlarmState), so that a slave found decalibrated
+// before a restart is still reported decalibrated after it; a version-6 file resumes without
+// an alarm.
 
 #include <string>
 #include <string_view>
 
-#include "rigcal/calib/estimator_state.h"
 #include "rigcal/base/status.h"
+#include "rigcal/calib/estimator_state.h"
 
 namespace rigcal::io {
 
-inline constexpr int kEstimatorStateVersion = 6;        // written
+inline constexpr int kEstimatorStateVersion = 7;        // written
 inline constexpr int kOldestEstimatorStateVersion = 2;  // oldest read
 
 // The state as the text of a state file (version kEstimatorStateVersion).

@@ -4,6 +4,7 @@
 // sync, publishing and state options, and the capture source of `rigcal run`. This is the one
 // place where a rig config YAML is read; every module gets plain option structs.
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -72,8 +73,15 @@ struct RigConfig {
   // nullopt for a camera without a `trigger:` entry (free-running).
   std::vector<std::optional<trigger::CameraTriggerSpec>> camera_triggers;
 
+  // Lines (1-based) of the keys whose values are checked only against this computer, for
+  // errors that name them like the loader's: "cameras[<i>].device", "trigger.port". A config
+  // built in code has none.
+  std::map<std::string, int> key_lines;
+
   std::vector<std::string> CameraNames() const;
   const std::string& master() const { return cameras.front().name; }
+  // "<path>:<line>: " of a key of key_lines, "<path>: " when its line is not known.
+  std::string Where(const std::string& key) const;
 };
 
 // Reads and checks a rig config. Errors read "<path>:<line>: <key>: <what>" (unknown keys,

@@ -124,6 +124,9 @@ struct CalibNodeOptions {
   // Recording: called on Run's thread after every pass of the capture loop (about every 20 ms).
   std::function<void(const RecorderStats&)> on_recording;
   std::string result_path;  // result YAML written on exit (atomically); empty = none
+  // Appended to the result YAML: where it came from (the `provenance:` block of
+  // io::ProvenanceToYaml); empty = nothing.
+  std::string result_provenance;
   std::string state_path;   // overrides the config's state.path when not empty
   bool resume = false;      // continue from the state file (ignored with a warning if unusable)
   double duration_s = 0.0;  // wall-clock limit of Run, 0 = none (live input)

@@ -14,7 +14,7 @@ namespace rigcal::pipeline {
 
 struct ConfigCheck {
   std::vector<std::string> plan;      // what `rigcal run` would run, one line each
-  std::vector<std::string> problems;  // "<file>: cameras[1] 'right'.device: <why>"
+  std::vector<std::string> problems;  // "<file>:<line>: cameras[1] 'right'.device: <why>"
   bool ok() const { return problems.empty(); }
 };
 
