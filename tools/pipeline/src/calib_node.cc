@@ -5,7 +5,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <sstream>
+#include <utility>
 
 #include "calib_node_impl.h"
 #include "rigcal/base/format.h"
@@ -183,10 +185,16 @@ void CalibNode::Impl::Publish(const std::string& channel, const Message& msg, in
   int rc = 0;
   {
     MutexLock lock(output_mutex);
+    out = Output();  // again under the lock: CloseOutput may have closed it meanwhile
+    if (out == nullptr) return;
     rc = out->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
+    if (rc == 0 && published_file && out == output.get()) {
+      published_file->Count(channel, static_cast<int64_t>(bytes->size()));
+    }
   }
   if (rc != 0) {
-    AddError(channel + ": LCM publish failed");
+    AddError(channel + ": LCM publish failed" +
+             (options.publish_url.empty() ? std::string() : " on " + options.publish_url));
     return;
   }
   ++*counter;
@@ -283,6 +291,21 @@ void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
   log->info("{}", line.str());
 }
 
+void CalibNode::Impl::CloseOutput() {
+  std::optional<PublishedFileCheck> check;
+  {
+    MutexLock lock(output_mutex);
+    if (!output) return;
+    output.reset();  // LCM's file provider flushes and closes its file here
+    check = std::exchange(published_file, std::nullopt);
+  }
+  if (!check) return;
+  if (const Status status = check->Verify(); !status.ok()) {
+    summary.publish_failed = true;
+    AddError("publishing failed: " + status.message());
+  }
+}
+
 void CalibNode::Impl::Finish(int64_t utime) {
   // Clean stop: everything received is estimated, published, saved and written.
   calibrator->Flush();
@@ -291,6 +314,7 @@ void CalibNode::Impl::Finish(int64_t utime) {
   const RigEstimate estimate = calibrator->Estimate();
   PublishExtrinsics(estimate, utime);
   PublishStatus(estimate, utime);
+  CloseOutput();
   SaveState();
   // A run that calibrated nothing leaves the files of an earlier run as they are.
   for (const std::string& path : {state_path, options.result_path}) {
@@ -338,6 +362,8 @@ int64_t CalibNode::ReceivedPoses() const { return impl_->received_total.load(); 
 Status CalibNode::Open() {
   Impl& m = *impl_;
   if (m.opened) return Error{"CalibNode::Open called twice"};
+  // Before anything is opened: a state path rigcal may not read or replace is refused.
+  if (const Status status = m.CheckStatePath(); !status.ok()) return status;
   if (m.replaying()) {
     if (const Status status = m.OpenLog(); !status.ok()) return status;
   } else if (m.capturing()) {

@@ -78,6 +78,8 @@ Status CalibNode::Impl::OpenLog() {
   if (!options.publish_url.empty()) {
     output = std::make_unique<::lcm::LCM>(options.publish_url);
     if (!output->good()) return Error{options.publish_url + ": cannot open the LCM URL"};
+    MutexLock lock(output_mutex);
+    published_file = PublishedFileCheck::ForUrl(options.publish_url);
   }
   if (options.replay.poses_only) return Status::Ok();
   auto images = LogHasImages(options.log_path, names, reader_options);
