@@ -134,8 +134,25 @@ void CalibNode::Impl::HandlePose(const std::string& channel, const void* data, i
            "' does not match the channel");
     return;
   }
-  if (replaying()) AdvanceLogTime(pose->pose.t_ns);
-  Accept(camera, pose->pose);
+  if (replaying()) {
+    AcceptOnLogTime(camera, pose->pose);
+  } else {
+    Accept(camera, pose->pose);
+  }
+}
+
+bool CalibNode::Impl::IsLeap(int64_t t_ns) const {
+  constexpr int64_t kLeapNs = 2'000'000'000;  // SyncBuffer: the glitch horizon is at least 2 s
+  return clock_ns >= 0 && t_ns > clock_ns && t_ns - clock_ns > kLeapNs;
+}
+
+void CalibNode::Impl::AcceptOnLogTime(int camera, const CameraPose& pose) {
+  if (IsLeap(pose.t_ns)) {
+    if (Accept(camera, pose)) AdvanceLogTime(pose.t_ns);
+    return;
+  }
+  AdvanceLogTime(pose.t_ns);
+  Accept(camera, pose);
 }
 
 void CalibNode::Impl::AddError(const std::string& error) {
@@ -144,29 +161,36 @@ void CalibNode::Impl::AddError(const std::string& error) {
   errors.push_back(error);
 }
 
-void CalibNode::Impl::Accept(int camera, const CameraPose& given) {
+bool CalibNode::Impl::Accept(int camera, const CameraPose& given) {
   CameraPose pose = given;
   if (!segment_offset.empty()) pose.segment += segment_offset[static_cast<size_t>(camera)];
   CameraInputStats& stats = summary.cameras[camera];
   ++stats.received;
   received_total.fetch_add(1);
-  stats.last_t_ns = pose.t_ns;
-  stats.last_segment = pose.segment;
-  last_pose_wall[camera] = Clock::now();
   const PushResult result = calibrator->Push(pose);
+  // A stamp rejected as a clock glitch moves no clock, not even the camera's newest stamp (the
+  // age of its newest pose in RIGCAL_STATUS).
+  if (result != PushResult::kClockGlitch) {
+    stats.last_t_ns = pose.t_ns;
+    stats.last_segment = pose.segment;
+    last_pose_wall[camera] = Clock::now();
+  }
   if (result != PushResult::kAccepted) {
     ++stats.sync_rejected;
     log->debug("{}: pose at {} ns not buffered: {}", names[camera], pose.t_ns, ToString(result));
+    return false;
   }
+  return true;
 }
 
 void CalibNode::Impl::AcceptVoPose(const CameraPose& pose) {
-  if (stream_timers()) AdvanceLogTime(pose.t_ns);
+  const bool leap = stream_timers() && IsLeap(pose.t_ns);
+  if (stream_timers() && !leap) AdvanceLogTime(pose.t_ns);
   if (auto msg = lcm::CameraPoseToLcm(pose, names, pose.t_ns / 1000)) {
     int64_t published = 0;
     Publish(lcm::PoseChannel(names[pose.camera]), *msg, &published, /*record=*/true);
   }
-  Accept(pose.camera, pose);
+  if (Accept(pose.camera, pose) && leap) AdvanceLogTime(pose.t_ns);
 }
 
 template <typename Message>

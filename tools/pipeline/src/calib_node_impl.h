@@ -117,9 +117,16 @@ struct CalibNode::Impl {
 
   // calib_node.cc.
   void HandlePose(const std::string& channel, const void* data, int64_t size);
-  // A decoded pose of `camera` to the calibrator (counted; log time advanced in a replay).
-  void Accept(int camera, const CameraPose& pose);
-  // The pose sink of an image replay (a VO thread): log time, publish the pose, Accept.
+  // A decoded pose of `camera` to the calibrator (counted). True when the calibrator took it.
+  bool Accept(int camera, const CameraPose& pose);
+  // A pose on log time (a replay): the timers due until its stamp, then Accept; a stamp that
+  // leaps ahead of the log clock (IsLeap) is accepted first and moves the clock only when the
+  // calibrator took it, so a rejected glitch (a stamp at INT64_MAX) never moves any clock.
+  void AcceptOnLogTime(int camera, const CameraPose& pose);
+  // More than the SyncBuffer's smallest glitch horizon (2 s) ahead of the log clock.
+  bool IsLeap(int64_t t_ns) const;
+  // The pose sink of an image replay (a VO thread): log time, publish the pose, Accept (log time
+  // after it for a leap, as AcceptOnLogTime).
   void AcceptVoPose(const CameraPose& pose);
   template <typename Message>
   // Publishes on Output(); `record`: also into the recording (a pose, an estimate).

@@ -242,8 +242,7 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
       ++summary.cameras[item.camera].images;
       if (!feeds[item.camera]->Feed(std::move(*item.frame))) break;
     } else {
-      AdvanceLogTime(item.t_ns);
-      Accept(item.camera, *item.pose);
+      AcceptOnLogTime(item.camera, *item.pose);
     }
   }
   if (pipeline) {
