@@ -223,6 +223,20 @@ TEST_F(CalibFilesFault, PublishedLogThatCannotBeWrittenIsAnError) {
   EXPECT_EQ(whole.exit_code, 0) << whole.Explain();
   EXPECT_GT(fs::file_size(log), 16u * 1024u);
 
+  // Without ?mode=w LCM opens the file for reading: refused at once (reading /dev/full, as an
+  // output given without the option, never ended).
+  const pid_t pid =
+      Spawn(binary_,
+            {"replay", Path("poses.lcmlog"), "--config", Path("rig.yaml"), "--no-progress", "--out",
+             Path("r4.yaml"), "--publish-lcm", "file:///dev/full"},
+            Path("err_full.txt"));
+  ASSERT_GT(pid, 0);
+  EXPECT_EQ(WaitExit(pid, std::chrono::seconds(30)), 1);
+  EXPECT_NE(
+      Slurp(Path("err_full.txt")).find("file:///dev/full: an output file:// URL needs ?mode=w"),
+      std::string::npos)
+      << Slurp(Path("err_full.txt"));
+
   const std::string missing = Path("no/such/dir/out.lcmlog");
   const RunResult r =
       Replay(Path("poses.lcmlog"),

@@ -29,6 +29,7 @@ Status CalibNode::Impl::OpenCapture() {
         return status;
       }
     }
+    if (Status status = CheckOutputUrl(options.publish_url); !status.ok()) return status;
     output = std::make_unique<::lcm::LCM>(options.publish_url);
     if (!output->good()) return Error{options.publish_url + ": cannot open LCM"};
     MutexLock lock(output_mutex);

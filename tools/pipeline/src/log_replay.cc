@@ -76,6 +76,7 @@ Status CalibNode::Impl::OpenLog() {
   if (!opened) return opened.status();
   reader = std::move(*opened);
   if (!options.publish_url.empty()) {
+    if (Status status = CheckOutputUrl(options.publish_url); !status.ok()) return status;
     output = std::make_unique<::lcm::LCM>(options.publish_url);
     if (!output->good()) return Error{options.publish_url + ": cannot open the LCM URL"};
     MutexLock lock(output_mutex);

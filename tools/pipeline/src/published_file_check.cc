@@ -26,6 +26,17 @@ int64_t SizeOf(const std::string& path, int* err, bool* regular = nullptr) {
 
 }  // namespace
 
+Status CheckOutputUrl(const std::string& url) {
+  constexpr std::string_view kScheme = "file://";
+  if (url.compare(0, kScheme.size(), kScheme) != 0) return Status::Ok();
+  const size_t options = url.find('?');
+  const std::string query = options == std::string::npos ? "" : "&" + url.substr(options + 1);
+  if (query.find("&mode=w") != std::string::npos || query.find("&mode=a") != std::string::npos) {
+    return Status::Ok();
+  }
+  return Error{url + ": an output file:// URL needs ?mode=w (LCM opens it for reading otherwise)"};
+}
+
 PublishedFileCheck::PublishedFileCheck(std::string path, int64_t start_size)
     : path_(std::move(path)), start_size_(start_size) {}
 

@@ -14,6 +14,11 @@
 
 namespace rigcal::pipeline {
 
+// Ok unless `url` is a file:// URL that LCM would open for reading (no "mode=w" or "mode=a"
+// among its options): an output must be written, and reading a device such as /dev/full never
+// ends. The error names the URL and the option it lacks.
+Status CheckOutputUrl(const std::string& url);
+
 class PublishedFileCheck {
  public:
   // The check of `url` when it is a file:// URL (its path, without "?options"), taken right
