@@ -2,7 +2,10 @@
 // Figures of the online clock offsets (label eval): offset error and σ against the truth for
 // offsets -100..+100 ms and phases within a frame, drift and jump, extrinsic errors of
 // free-running slaves against the same rig synchronised, and the cost of the interpolation per
-// update. Run: ctest --test-dir build -R calib/online_time_offset_eval -V
+// update. Each figure is also checked: errors within their σ (bounds from the χ² of the errors
+// normalised by σ), re-acquisition within the tracker's detection and initialisation windows,
+// jumps counted once; the times per update are printed only.
+// Run: ctest --test-dir build -R calib/online_time_offset_eval -V
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -10,9 +13,9 @@
 #include <cstdio>
 
 #include "../calib/free_running_rig.h"
+#include "rigcal/base/logging.h"
 #include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/error_model.h"
-#include "rigcal/base/logging.h"
 #include "rigcal/calib/online_calibrator.h"
 #include "rigcal/calib/sync_buffer.h"
 
@@ -75,9 +78,32 @@ TEST(OnlineTimeOffsetEval, OffsetErrorAndSigmaAgainstTruth) {
       std::printf("\n");
     }
   }
+  const double rms_z = std::sqrt(sum_z2 / n);
   std::printf(
       "RMS(err/σ) = %.2f over %d estimates (1 = σ consistent), %d beyond 3σ, max σ %.3f ms\n",
-      std::sqrt(sum_z2 / n), n, beyond_3, max_sigma * 1e3);
+      rms_z, n, beyond_3, max_sigma * 1e3);
+  // σ honest or cautious: with a consistent σ, n * RMS² is χ² with n = 72 degrees of freedom,
+  // below 112 (RMS 1.25) with probability 0.999; a σ more than twice too large (RMS < 0.5)
+  // would hide what the data say. Beyond 3σ: 0.19 expected, 2 or more has probability 0.016.
+  EXPECT_LE(rms_z, 1.25);
+  EXPECT_GE(rms_z, 0.5);
+  EXPECT_LE(beyond_3, 1);
+  // A frame period is 50 ms: the offset is measured to a small part of it.
+  EXPECT_LT(max_sigma, 0.5e-3);
+}
+
+// The total rotation error against the largest-axis σ: at most 3 axes of at most that σ, so
+// (err/σ)² is below χ² with 3 degrees of freedom, which exceeds 21.1 (4.6²) with probability
+// 1e-4. The position error's norm against the norm of the per-axis σ: (|e|/|σ|)² is a weighted
+// mean of χ²(1) variables, beyond 15.1 (3.9²) with probability at most 1e-4.
+constexpr double kRotationSigmas = 4.6;
+constexpr double kPositionSigmas = 3.9;
+
+// Within `sigmas` σ of zero (an error against the truth); a NaN σ fails.
+::testing::AssertionResult WithinSigmas(double error, double sigma, double sigmas) {
+  if (std::abs(error) <= sigmas * sigma) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure()
+         << "error " << error << " beyond " << sigmas << " x σ " << sigma;
 }
 
 TEST(OnlineTimeOffsetEval, DriftAndJump) {
@@ -94,8 +120,8 @@ TEST(OnlineTimeOffsetEval, DriftAndJump) {
   o.enabled = true;
   ClockOffsetTracker tracker({"master", "cam1", "cam2"}, o);
   std::printf("\nDrift (cam1, 50 ppm from 20 ms) and jump (cam2, 30 -> -45 ms at 60 s):\n");
-  std::printf("%6s | %10s %9s %9s | %10s %9s %6s %5s\n", "t s", "err1 ms", "σ1 ms", "ppm",
-              "err2 ms", "σ2 ms", "known", "jumps");
+  std::printf("%6s | %10s %9s %9s %7s | %10s %9s %6s %5s\n", "t s", "err1 ms", "σ1 ms", "ppm",
+              "σ ppm", "err2 ms", "σ2 ms", "known", "jumps");
   int64_t next_print = t0 + 10'000'000'000;
   int64_t known_again = -1;
   for (const CameraPose& p : InCaptureOrder(rig, offset)) {
@@ -106,14 +132,30 @@ TEST(OnlineTimeOffsetEval, DriftAndJump) {
     if (p.t_ns < next_print) continue;
     next_print += 10'000'000'000;
     const SlaveClockOffset a = tracker.SlaveOffset(0);
-    std::printf("%6.0f | %10.4f %9.4f %9.1f | %10.4f %9.4f %6s %5d\n",
-                static_cast<double>(p.t_ns - t0) * 1e-9,
-                (a.offset_s - static_cast<double>(offset(0, p.t_ns)) * 1e-9) * 1e3, a.std_s * 1e3,
-                a.drift_ppm, (b.offset_s - static_cast<double>(offset(1, p.t_ns)) * 1e-9) * 1e3,
-                b.std_s * 1e3, b.known ? "yes" : "no", b.jumps);
+    const double err1 = a.offset_s - static_cast<double>(offset(0, p.t_ns)) * 1e-9;
+    const double err2 = b.offset_s - static_cast<double>(offset(1, p.t_ns)) * 1e-9;
+    std::printf("%6.0f | %10.4f %9.4f %9.1f %7.2f | %10.4f %9.4f %6s %5d\n",
+                static_cast<double>(p.t_ns - t0) * 1e-9, err1 * 1e3, a.std_s * 1e3, a.drift_ppm,
+                a.drift_std_ppm, err2 * 1e3, b.std_s * 1e3, b.known ? "yes" : "no", b.jumps);
+    // The drifting clock is followed within 4σ in offset and drift all along.
+    EXPECT_TRUE(a.known);
+    EXPECT_TRUE(WithinSigmas(err1, a.std_s, 4.0)) << "cam1 at " << p.t_ns - t0 << " ns";
+    EXPECT_TRUE(WithinSigmas(a.drift_ppm - 50.0, a.drift_std_ppm, 4.0)) << p.t_ns - t0;
+    // The restarted one: before the jump, and once known again after it (in between, the row
+    // right at the jump has not seen it yet).
+    if (p.t_ns < jump_at || (known_again >= 0 && p.t_ns >= known_again)) {
+      EXPECT_TRUE(b.known);
+      EXPECT_TRUE(WithinSigmas(err2, b.std_s, 4.0)) << "cam2 at " << p.t_ns - t0 << " ns";
+    }
   }
-  std::printf("jump at 60 s: offset known again after %.1f s\n",
-              static_cast<double>(known_again - jump_at) * 1e-9);
+  const double reacquired_s = static_cast<double>(known_again - jump_at) * 1e-9;
+  std::printf("jump at 60 s: offset known again after %.1f s\n", reacquired_s);
+  // Detected after jump_confirmations measurements (one per measure_window_s), plus one window of
+  // doubt, then re-initialised over init_window_s.
+  ASSERT_GE(known_again, jump_at) << "the jump was never detected and the offset re-acquired";
+  EXPECT_EQ(tracker.SlaveOffset(1).jumps, 1);
+  EXPECT_EQ(tracker.SlaveOffset(0).jumps, 0);
+  EXPECT_LE(reacquired_s, (o.jump_confirmations + 1) * o.measure_window_s + o.init_window_s);
 }
 
 // A restart of cam1's clock at 40 s of a 90 s drive (cam2 steady), through the OnlineCalibrator:
@@ -127,16 +169,20 @@ TEST(OnlineTimeOffsetEval, JumpReacquisitionTime) {
   struct Case {
     const char* name;
     double offset_s;
+    bool sync_follows;  // a step the SyncBuffer follows (counted there too), not the tracker
   };
   const std::vector<Case> cases = {
-      {"+0.2 s (tracker)", 0.030 + 0.2},
-      {"-0.4 s (tracker)", 0.030 - 0.4},
-      {"-0.8 s (sync follows)", 0.030 - 0.8},
-      {"+1.5 s (sync follows)", 0.030 + 1.5},
-      {"-3 s (sync follows)", 0.030 - 3.0},
-      {"restart near 0", -49.95},
-      {"+1 h", 3600.0},
+      {"+0.2 s (tracker)", 0.030 + 0.2, false},
+      {"-0.4 s (tracker)", 0.030 - 0.4, false},
+      {"-0.8 s (sync follows)", 0.030 - 0.8, true},
+      {"+1.5 s (sync follows)", 0.030 + 1.5, true},
+      {"-3 s (sync follows)", 0.030 - 3.0, true},
+      {"restart near 0", -49.95, true},
+      {"+1 h", 3600.0, true},
   };
+  const ClockOffsetOptions defaults;
+  const double reacquire_bound_s =
+      (defaults.jump_confirmations + 1) * defaults.measure_window_s + defaults.init_window_s;
   for (const uint64_t seed : {31, 32, 33}) {
     const FreeRunningRig rig = Rig({{20.0, 0.011}, {20.0, 0.023}}, 90.0, seed);
     const int64_t t0 = rig.master.t_ns.front();
@@ -176,6 +222,15 @@ TEST(OnlineTimeOffsetEval, JumpReacquisitionTime) {
           (s.time_offset_s - c.offset_s) * 1e3, s.time_offset_std_s * 1e3, e.online[0].clock_jumps,
           static_cast<unsigned long>(calibrator.sync_stats().cameras[1].clock_jumps), err.rot_deg,
           s.rot_std_deg);
+      // Known again within the detection and re-initialisation (DriftAndJump), the offset and
+      // the rotation within their σ at the end, the restart counted once where it is handled.
+      ASSERT_GE(known_again, restart) << c.name << " seed " << seed << ": never known again";
+      EXPECT_LE(static_cast<double>(known_again - restart) * 1e-9, reacquire_bound_s) << c.name;
+      EXPECT_TRUE(WithinSigmas(s.time_offset_s - c.offset_s, s.time_offset_std_s, 4.0)) << c.name;
+      EXPECT_EQ(e.online[0].clock_jumps, 1) << c.name << " seed " << seed;
+      EXPECT_EQ(calibrator.sync_stats().cameras[1].clock_jumps, c.sync_follows ? 1u : 0u)
+          << c.name << " seed " << seed;
+      EXPECT_TRUE(WithinSigmas(err.rot_deg, s.rot_std_deg, kRotationSigmas)) << c.name;
     }
   }
 }
@@ -197,6 +252,9 @@ TEST(OnlineTimeOffsetEval, MasterRestartFollowTime) {
   };
   const std::vector<Case> cases = {
       {"+0.8 s", 0.8}, {"-1.5 s", -1.5}, {"restart near 0", -49.99}, {"+1 h", 3600.0}};
+  const ClockOffsetOptions defaults;
+  const double follow_bound_s =
+      (defaults.jump_confirmations + 1) * defaults.measure_window_s + defaults.init_window_s;
   for (const uint64_t seed : {31, 32, 33}) {
     const FreeRunningRig rig = Rig({{20.0, 0.011}, {20.0, 0.023}}, 90.0, seed);
     const int64_t restart = rig.master.t_ns.front() + 40'000'000'000;
@@ -238,6 +296,14 @@ TEST(OnlineTimeOffsetEval, MasterRestartFollowTime) {
                             .c_str(),
                   (s.time_offset_s - (0.030 - c.step_s)) * 1e3, s.time_offset_std_s * 1e3,
                   e.master_clock_jumps, err.rot_deg, s.rot_std_deg);
+      // Both offsets known again within a detection and re-initialisation (as a slave's
+      // restart), cam1's offset (now less the step) and rotation within σ, one master jump.
+      ASSERT_GE(known_again, restart) << c.name << " seed " << seed << ": never known again";
+      EXPECT_LE(static_cast<double>(known_again - restart) * 1e-9, follow_bound_s) << c.name;
+      EXPECT_TRUE(WithinSigmas(s.time_offset_s - (0.030 - c.step_s), s.time_offset_std_s, 4.0))
+          << c.name << " seed " << seed;
+      EXPECT_EQ(e.master_clock_jumps, 1) << c.name << " seed " << seed;
+      EXPECT_TRUE(WithinSigmas(err.rot_deg, s.rot_std_deg, kRotationSigmas)) << c.name;
     }
   }
 }
@@ -265,8 +331,8 @@ TEST(OnlineTimeOffsetEval, ExtrinsicsFreeRunningAgainstSynchronised) {
   SetLogLevel("error");
   std::printf("\nOnline extrinsics, 60 s general drive: free-running slaves (offsets estimated)\n");
   std::printf("against the same drive with synchronised cameras (stamp matching)\n");
-  std::printf("%-34s %5s | %9s %9s | %9s %9s | %9s\n", "case", "slave", "rot° err", "rot° σ",
-              "pos err", "pos σ", "offset err ms");
+  std::printf("%-34s %5s | %9s %9s | %9s %9s | %9s %9s\n", "case", "slave", "rot° err", "rot° σ",
+              "pos err", "pos σ", "offset err ms", "σ ms");
   struct Case {
     const char* name;
     std::vector<CameraClock> clocks;
@@ -286,10 +352,23 @@ TEST(OnlineTimeOffsetEval, ExtrinsicsFreeRunningAgainstSynchronised) {
       for (int i = 0; i < 2; ++i) {
         const SlaveCalibration& s = e.rig.slaves[i];
         const CalibrationError err = CompareToTruth(s.estimate, rig.truth[i]);
-        std::printf("%-28s s%-5lu %5d | %9.4f %9.4f | %9.5f %9.5f | %9.4f\n", c.name,
+        const double offset_err = s.time_offset_s - c.offsets[i];
+        std::printf("%-28s s%-5lu %5d | %9.4f %9.4f | %9.5f %9.5f | %9.4f %9.4f\n", c.name,
                     static_cast<unsigned long>(seed), i + 1, err.rot_deg, s.rot_std_deg,
                     err.trans_err, s.pos_std.norm(),
-                    std::isfinite(s.time_offset_s) ? (s.time_offset_s - c.offsets[i]) * 1e3 : 0.0);
+                    std::isfinite(s.time_offset_s) ? offset_err * 1e3 : 0.0,
+                    s.time_offset_std_s * 1e3);
+        // Free-running or not, the extrinsics within their σ (kRotationSigmas, kPositionSigmas),
+        // and an estimated offset within its own.
+        EXPECT_TRUE(s.usable()) << c.name << " seed " << seed << " slave " << i + 1;
+        EXPECT_TRUE(WithinSigmas(err.rot_deg, s.rot_std_deg, kRotationSigmas))
+            << c.name << " seed " << seed << " slave " << i + 1;
+        EXPECT_TRUE(WithinSigmas(err.trans_err, s.pos_std.norm(), kPositionSigmas))
+            << c.name << " seed " << seed << " slave " << i + 1;
+        if (c.free_running) {
+          EXPECT_TRUE(WithinSigmas(offset_err, s.time_offset_std_s, 4.0))
+              << c.name << " seed " << seed << " slave " << i + 1;
+        }
       }
     }
   }
@@ -349,7 +428,15 @@ TEST(OnlineTimeOffsetEval, CostOfInterpolationPerUpdate) {
               static_cast<unsigned long>(sets_interp));
   std::printf("  ClockOffsetTracker::Add, free-running      %8.0f ns per pose (amortised)\n",
               tracker_ns);
-  EXPECT_GT(sets_interp, 0u);
+  // The times are figures, not checks (a busy machine); what they time is checked: snapping
+  // synchronised stamps makes the same sets as stamp matching, one per master pose of 60 s at
+  // 20 Hz, and interpolation loses at most the sets at the ends of the slaves' spans (a cubic
+  // needs two poses on either side: two frames of the slowest camera at each end).
+  EXPECT_EQ(sets_sync_interp, sets_stamp);
+  EXPECT_GE(sets_stamp, 1195u);
+  EXPECT_LE(sets_stamp, 1201u);
+  EXPECT_LE(sets_interp, sets_stamp);
+  EXPECT_GE(sets_interp + 4, sets_stamp);
 }
 
 }  // namespace

@@ -465,6 +465,25 @@ TEST(EstimatorStateFile, ValuesOutOfRangeAreRejectedDespiteTheChecksum) {
   EXPECT_EQ(
       error_of([](SlaveEstimatorState* s) { s->long_stats.max_rotation = 7.0; }).substr(0, 34),
       "slave left: long: maxrot = 7 is ou");
+  // Within range but beyond what motions can sum to (each weighs at most 1): a weight of 9e99
+  // over a few hundred motions would make every σ vanish (1e-51 degrees).
+  const int motions = good->slaves[0].long_stats.motions;
+  ASSERT_GT(motions, 0);
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) { s->long_stats.weight = 9e99; }),
+            "slave left: long: weight = 9e+99 exceeds motions = " + std::to_string(motions) +
+                " (each motion weighs at most 1)");
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) {
+              s->short_stats.weight = s->short_stats.motions + 1.0;
+            }).find("slave left: short: weight = "),
+            0u);
+  EXPECT_NE(error_of([](SlaveEstimatorState* s) {
+              s->long_stats.segments.begin()->second.weight = s->long_stats.weight + 1.0;
+            }).find("exceeds the total weight"),
+            std::string::npos);
+  EXPECT_EQ(error_of([](SlaveEstimatorState* s) {
+              s->long_stats.rotation = 1e50 * Eigen::Matrix4d::Identity();
+            }).find("slave left: long: M: trace 4e+50 is not within [0, 16 x weight"),
+            0u);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The simulated rig: rendering geometry against the camera model, determinism, noise, blur,
-// device behaviour (frame times, drops, jitter, failures, interrupt), spec checks, speed report.
+// device behaviour (frame times, drops, jitter, failures, interrupt), spec checks. The cost per
+// frame is a benchmark (tests/bench/render_bench.cc).
 // The cameras are rigcal_camera's ideal pinhole and equidistant models (support/ideal_cameras.h),
 // whose projections tests/camera/ checks against their equations: here they are the reference
 // the renderer must agree with.
@@ -10,7 +11,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <functional>
 #include <opencv2/imgproc.hpp>
 #include <thread>
@@ -544,46 +544,6 @@ TEST(SimulatedCamera, RealtimeStampsAndInterrupt) {
   grabber.join();
   ASSERT_TRUE(result && *result);
   EXPECT_FALSE((*result)->has_value());
-}
-
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-TEST(SimulatedRig, RenderSpeedReport) {
-  // Not an assertion on time: prints the cost per frame for the record.
-  struct Case {
-    const char* name;
-    SimulatedRigSpec spec;
-  };
-  SimulatedRigSpec pinhole = TwoCameraSpec(752, 480);
-  SimulatedRigSpec fisheye = TwoCameraSpec();
-  fisheye.cameras = {IdealEquidistant(640, 640, 191.0, 93.0),
-                     IdealEquidistant(640, 640, 191.0, 93.0)};
-  SimulatedRigSpec pipe = fisheye;
-  pipe.scene.type = SimulatedRigSpec::SceneType::kPipe;
-  pipe.master_from_camera[1] =
-      Mounting(Eigen::Quaterniond(0, 0, 1, 0), Eigen::Vector3d(0, 0, -0.35));
-  pipe.waypoints = {Waypoint({1, 0, 0}, 0), Waypoint({2, 0.02, 0.01}, 3, 2, 1),
-                    Waypoint({3, 0, 0}, 0), Waypoint({4, 0, 0}, 0)};
-  for (const auto& [name, spec] : std::vector<Case>{{"pinhole 752x480 room", pinhole},
-                                                    {"fisheye 640x640 room", fisheye},
-                                                    {"fisheye 640x640 pipe", pipe}}) {
-    for (int block : {4, 1}) {
-      SimulatedRigSpec s = spec;
-      s.render_block = block;
-      s.noise_sigma = 2;
-      const SimulatedRig rig = Make(s);
-      const int frames = block == 1 ? 5 : 30;
-      // CPU time of this thread (other processes on the machine do not count).
-      const double start = ThreadCpuSeconds();
-      for (int k = 0; k < frames; ++k) (void)rig.RenderFrame(k % 2, k * 2);
-      const double ms = (ThreadCpuSeconds() - start) * 1e3 / frames;
-      std::printf("render %-22s block %d: %.2f ms CPU per frame\n", name, block, ms);
-    }
-  }
 }
 
 }  // namespace

@@ -75,7 +75,7 @@ void LogSummary(const NodeRunArgs& args, const pipeline::CalibNodeOptions& optio
       log->info("channels not replayed: {}", ChannelList(summary.skipped_channels));
     }
   }
-  if (!options.publish_url.empty()) {
+  if (!options.publish_url.empty() && !summary.publish_failed) {
     log->info("published {} RIGCAL_EXTRINSICS, {} RIGCAL_STATUS on {}",
               summary.extrinsics_published, summary.status_published, options.publish_url);
   }

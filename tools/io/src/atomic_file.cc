@@ -36,17 +36,15 @@ const char* KindOf(mode_t mode) {
   return "not a regular file";
 }
 
-constexpr mode_t kNewFileMode = 0644;
-
 // Ok when `path` may be replaced: it does not exist, or it is a regular file (lstat: a symbolic
 // link is not followed). *mode gets the permission bits the new file keeps (the existing file's,
-// else kNewFileMode).
-Status CheckReplaceable(const std::string& path, mode_t* mode) {
+// else `new_file_mode`).
+Status CheckReplaceable(const std::string& path, mode_t new_file_mode, mode_t* mode) {
   struct stat st {};
   if (::lstat(path.c_str(), &st) != 0) {
     const int err = errno;
     if (err == ENOENT) {
-      *mode = kNewFileMode;
+      *mode = new_file_mode;
       return Status::Ok();
     }
     return Error{"cannot write '" + path + "': " + ErrnoText(err)};
@@ -126,10 +124,12 @@ AtomicFile& AtomicFile::operator=(AtomicFile&& other) noexcept {
   return *this;
 }
 
-Expected<AtomicFile> AtomicFile::Create(const std::string& path) {
+Expected<AtomicFile> AtomicFile::Create(const std::string& path, unsigned new_file_mode) {
   if (path.empty()) return Error{"cannot write a file with an empty name"};
   mode_t mode = kNewFileMode;
-  if (Status status = CheckReplaceable(path, &mode); !status.ok()) return status;
+  if (Status status = CheckReplaceable(path, new_file_mode & 07777, &mode); !status.ok()) {
+    return status;
+  }
   const std::filesystem::path dir = DirectoryOf(path);
   RemoveLeftovers(path);
   const std::string tmp_basename = TempPrefix(path) + std::to_string(::getpid()) + ".XXXXXX";
@@ -186,7 +186,7 @@ Expected<int> AtomicFile::CommitAndKeepOpen() {
 Status AtomicFile::RenameOverPath() {
   // Checked again: the path may have become something else while the contents were written.
   mode_t mode = kNewFileMode;
-  if (Status status = CheckReplaceable(path_, &mode); !status.ok()) {
+  if (Status status = CheckReplaceable(path_, kNewFileMode, &mode); !status.ok()) {
     ::unlink(temp_path_.c_str());
     return status;
   }
@@ -204,14 +204,28 @@ Status AtomicFile::RenameOverPath() {
   return Status::Ok();
 }
 
-Status WriteFileAtomically(const std::string& path, std::string_view contents) {
-  Expected<AtomicFile> file = AtomicFile::Create(path);
+Status WriteFileAtomically(const std::string& path, std::string_view contents,
+                           unsigned new_file_mode) {
+  Expected<AtomicFile> file = AtomicFile::Create(path, new_file_mode);
   if (!file.ok()) return file.status();
   if (Status status = file->Write(contents); !status.ok()) return status;
   return file->Commit();
 }
 
-Expected<std::string> KeepAside(const std::string& path, const std::string& tag) {
+Status CheckReplaceable(const std::string& path) {
+  mode_t mode = kNewFileMode;
+  return CheckReplaceable(path, kNewFileMode, &mode);
+}
+
+Expected<KeptAside> KeepAside(const std::string& path, const std::string& tag) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) {
+    return Error{"cannot keep '" + path + "' aside: " + ErrnoText(errno)};
+  }
+  if (!S_ISREG(st.st_mode)) {
+    return Error{"cannot keep '" + path + "' aside: it is " + KindOf(st.st_mode) +
+                 ", not a regular file (rigcal moves only regular files)"};
+  }
   const std::time_t now = std::time(nullptr);
   std::tm utc{};
   ::gmtime_r(&now, &utc);
@@ -223,7 +237,7 @@ Expected<std::string> KeepAside(const std::string& path, const std::string& tag)
   if (::rename(path.c_str(), aside.c_str()) != 0) {
     return Error{"cannot keep '" + path + "' as '" + aside + "': " + ErrnoText(errno)};
   }
-  return aside;
+  return KeptAside{aside, static_cast<unsigned>(st.st_mode & 07777)};
 }
 
 }  // namespace rigcal::io

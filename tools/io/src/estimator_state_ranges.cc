@@ -17,6 +17,12 @@ Status OutOfRange(const std::string& where, const std::string& field, double val
   return Error{text.str()};
 }
 
+std::string Number(double v) {
+  std::ostringstream text;
+  text << v;
+  return text.str();
+}
+
 Status CheckValue(const std::string& where, const std::string& field, double value, double lo,
                   double hi) {
   if (!std::isfinite(value) || value < lo || value > hi) {
@@ -45,6 +51,36 @@ Status CheckMatrix(const std::string& where, const std::string& field,
   return Status::Ok();
 }
 
+// Beyond finiteness, what the sums can be for motions that really happened
+// (calib/src/models/motion_statistics.cc, MotionStatistics::Add): every motion weighs at most 1
+// (the Huber weight) and forgetting only lowers the weights, so the total weight is at most the
+// number of motions, and a segment's at most the total; the rotation system M sums w A^T A with
+// A = L(q0) - R(qi) of unit quaternions (4.7, |A| <= 2), so its diagonal is not negative and its
+// trace at most 16 times the weight. A weight of 9e99 over 40 motions (a hand-edited file with a
+// valid checksum) would otherwise make every σ vanish (1e-51 degrees).
+Status CheckPhysicalBounds(const std::string& where, const MotionSums& s) {
+  constexpr double kRounding = 1e-9;
+  const double motions = static_cast<double>(s.motions);
+  const double max_weight = motions * (1.0 + kRounding) + kRounding;
+  if (s.weight > max_weight) {
+    return Error{where + "weight = " + Number(s.weight) + " exceeds motions = " +
+                 std::to_string(s.motions) + " (each motion weighs at most 1)"};
+  }
+  for (const auto& [id, seg] : s.segments) {
+    if (seg.weight > s.weight * (1.0 + kRounding) + kRounding) {
+      return Error{where + "segment " + std::to_string(id) + ": w = " + Number(seg.weight) +
+                   " exceeds the total weight " + Number(s.weight)};
+    }
+  }
+  const double trace = s.rotation.trace();
+  if (s.rotation.diagonal().minCoeff() < -kRounding * (1.0 + trace) ||
+      trace > 16.0 * s.weight * (1.0 + kRounding) + kRounding) {
+    return Error{where + "M: trace " + Number(trace) + " is not within [0, 16 x weight = " +
+                 Number(16.0 * s.weight) + "] or its diagonal is negative"};
+  }
+  return Status::Ok();
+}
+
 // The file's labels name the fields (estimator_state_file.cc WriteSums).
 Status CheckSums(const std::string& where, const MotionSums& s) {
   // The marginalised constants (c0sqmarg, cplmarg) are differences: rounding may make them
@@ -68,6 +104,7 @@ Status CheckSums(const std::string& where, const MotionSums& s) {
         CheckMatrix(where, "gmarg", s.g_marg)}) {
     if (!st.ok()) return st;
   }
+  if (Status st = CheckPhysicalBounds(where, s); !st.ok()) return st;
   for (const auto& [id, seg] : s.segments) {
     const std::string at = where + "segment " + std::to_string(id) + ": ";
     for (const Status& st :

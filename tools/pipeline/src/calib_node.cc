@@ -5,7 +5,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <sstream>
+#include <utility>
 
 #include "calib_node_impl.h"
 #include "rigcal/base/format.h"
@@ -134,8 +136,25 @@ void CalibNode::Impl::HandlePose(const std::string& channel, const void* data, i
            "' does not match the channel");
     return;
   }
-  if (replaying()) AdvanceLogTime(pose->pose.t_ns);
-  Accept(camera, pose->pose);
+  if (replaying()) {
+    AcceptOnLogTime(camera, pose->pose);
+  } else {
+    Accept(camera, pose->pose);
+  }
+}
+
+bool CalibNode::Impl::IsLeap(int64_t t_ns) const {
+  constexpr int64_t kLeapNs = 2'000'000'000;  // SyncBuffer: the glitch horizon is at least 2 s
+  return clock_ns >= 0 && t_ns > clock_ns && t_ns - clock_ns > kLeapNs;
+}
+
+void CalibNode::Impl::AcceptOnLogTime(int camera, const CameraPose& pose) {
+  if (IsLeap(pose.t_ns)) {
+    if (Accept(camera, pose)) AdvanceLogTime(pose.t_ns);
+    return;
+  }
+  AdvanceLogTime(pose.t_ns);
+  Accept(camera, pose);
 }
 
 void CalibNode::Impl::AddError(const std::string& error) {
@@ -144,29 +163,36 @@ void CalibNode::Impl::AddError(const std::string& error) {
   errors.push_back(error);
 }
 
-void CalibNode::Impl::Accept(int camera, const CameraPose& given) {
+bool CalibNode::Impl::Accept(int camera, const CameraPose& given) {
   CameraPose pose = given;
   if (!segment_offset.empty()) pose.segment += segment_offset[static_cast<size_t>(camera)];
   CameraInputStats& stats = summary.cameras[camera];
   ++stats.received;
   received_total.fetch_add(1);
-  stats.last_t_ns = pose.t_ns;
-  stats.last_segment = pose.segment;
-  last_pose_wall[camera] = Clock::now();
   const PushResult result = calibrator->Push(pose);
+  // A stamp rejected as a clock glitch moves no clock, not even the camera's newest stamp (the
+  // age of its newest pose in RIGCAL_STATUS).
+  if (result != PushResult::kClockGlitch) {
+    stats.last_t_ns = pose.t_ns;
+    stats.last_segment = pose.segment;
+    last_pose_wall[camera] = Clock::now();
+  }
   if (result != PushResult::kAccepted) {
     ++stats.sync_rejected;
     log->debug("{}: pose at {} ns not buffered: {}", names[camera], pose.t_ns, ToString(result));
+    return false;
   }
+  return true;
 }
 
 void CalibNode::Impl::AcceptVoPose(const CameraPose& pose) {
-  if (stream_timers()) AdvanceLogTime(pose.t_ns);
+  const bool leap = stream_timers() && IsLeap(pose.t_ns);
+  if (stream_timers() && !leap) AdvanceLogTime(pose.t_ns);
   if (auto msg = lcm::CameraPoseToLcm(pose, names, pose.t_ns / 1000)) {
     int64_t published = 0;
     Publish(lcm::PoseChannel(names[pose.camera]), *msg, &published, /*record=*/true);
   }
-  Accept(pose.camera, pose);
+  if (Accept(pose.camera, pose) && leap) AdvanceLogTime(pose.t_ns);
 }
 
 template <typename Message>
@@ -185,10 +211,16 @@ void CalibNode::Impl::Publish(const std::string& channel, const Message& msg, in
   int rc = 0;
   {
     MutexLock lock(output_mutex);
+    out = Output();  // again under the lock: CloseOutput may have closed it meanwhile
+    if (out == nullptr) return;
     rc = out->publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
+    if (rc == 0 && published_file && out == output.get()) {
+      published_file->Count(channel, static_cast<int64_t>(bytes->size()));
+    }
   }
   if (rc != 0) {
-    AddError(channel + ": LCM publish failed");
+    AddError(channel + ": LCM publish failed" +
+             (options.publish_url.empty() ? std::string() : " on " + options.publish_url));
     return;
   }
   ++*counter;
@@ -285,6 +317,21 @@ void CalibNode::Impl::ReportLine(const RigEstimate& estimate) {
   log->info("{}", line.str());
 }
 
+void CalibNode::Impl::CloseOutput() {
+  std::optional<PublishedFileCheck> check;
+  {
+    MutexLock lock(output_mutex);
+    if (!output) return;
+    output.reset();  // LCM's file provider flushes and closes its file here
+    check = std::exchange(published_file, std::nullopt);
+  }
+  if (!check) return;
+  if (const Status status = check->Verify(); !status.ok()) {
+    summary.publish_failed = true;
+    AddError("publishing failed: " + status.message());
+  }
+}
+
 void CalibNode::Impl::Finish(int64_t utime) {
   // Clean stop: everything received is estimated, published, saved and written.
   calibrator->Flush();
@@ -293,6 +340,7 @@ void CalibNode::Impl::Finish(int64_t utime) {
   const RigEstimate estimate = calibrator->Estimate();
   PublishExtrinsics(estimate, utime);
   PublishStatus(estimate, utime);
+  CloseOutput();
   SaveState();
   // A run that calibrated nothing leaves the files of an earlier run as they are.
   for (const std::string& path : {state_path, options.result_path}) {
@@ -341,6 +389,8 @@ int64_t CalibNode::ReceivedPoses() const { return impl_->received_total.load(); 
 Status CalibNode::Open() {
   Impl& m = *impl_;
   if (m.opened) return Error{"CalibNode::Open called twice"};
+  // Before anything is opened: a state path rigcal may not read or replace is refused.
+  if (const Status status = m.CheckStatePath(); !status.ok()) return status;
   if (m.replaying()) {
     if (const Status status = m.OpenLog(); !status.ok()) return status;
   } else if (m.capturing()) {

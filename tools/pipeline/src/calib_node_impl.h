@@ -24,8 +24,10 @@
 #include "flow_watch.h"
 #include "frame_feed_device.h"
 #include "periodic_schedule.h"
+#include "published_file_check.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/base/thread_annotations.h"
+#include "rigcal/io/atomic_file.h"
 #include "rigcal/lcm/log_reader.h"
 #include "rigcal/lcm/process_stats.h"
 #include "rigcal/lcm/status_message.h"
@@ -47,11 +49,16 @@ struct CalibNode::Impl {
   ::lcm::LCM* bus = nullptr;  // input + output for live runs (owned or external)
   std::unique_ptr<::lcm::LCM> owned_bus;
   std::unique_ptr<::lcm::LCM> output;  // replay: optional output
+  // A file:// output: the bytes it must hold, checked when it is closed (CloseOutput).
+  std::optional<PublishedFileCheck> published_file RIGCAL_GUARDED_BY(output_mutex);
   // Built with the node, or by OpenCapture once the source says whether it is lossless.
   std::unique_ptr<OnlineCalibrator> calibrator;
   lcm::MessageValidator validator;
   CalibNodeSummary summary;
   std::string state_path;
+  // The permission bits of a state file this run creates: a rejected state's (set aside by
+  // --resume), else the default.
+  unsigned state_new_file_mode = io::kNewFileMode;
   bool opened = false;
   std::atomic<int64_t> received_total{0};  // written by the input thread, read by ReceivedPoses
 
@@ -110,9 +117,16 @@ struct CalibNode::Impl {
 
   // calib_node.cc.
   void HandlePose(const std::string& channel, const void* data, int64_t size);
-  // A decoded pose of `camera` to the calibrator (counted; log time advanced in a replay).
-  void Accept(int camera, const CameraPose& pose);
-  // The pose sink of an image replay (a VO thread): log time, publish the pose, Accept.
+  // A decoded pose of `camera` to the calibrator (counted). True when the calibrator took it.
+  bool Accept(int camera, const CameraPose& pose);
+  // A pose on log time (a replay): the timers due until its stamp, then Accept; a stamp that
+  // leaps ahead of the log clock (IsLeap) is accepted first and moves the clock only when the
+  // calibrator took it, so a rejected glitch (a stamp at INT64_MAX) never moves any clock.
+  void AcceptOnLogTime(int camera, const CameraPose& pose);
+  // More than the SyncBuffer's smallest glitch horizon (2 s) ahead of the log clock.
+  bool IsLeap(int64_t t_ns) const;
+  // The pose sink of an image replay (a VO thread): log time, publish the pose, Accept (log time
+  // after it for a leap, as AcceptOnLogTime).
   void AcceptVoPose(const CameraPose& pose);
   template <typename Message>
   // Publishes on Output(); `record`: also into the recording (a pose, an estimate).
@@ -127,8 +141,14 @@ struct CalibNode::Impl {
   // Saves the state, unless that would replace a saved state with an empty one.
   void SaveState();
   void ReportLine(const RigEstimate& estimate);
+  // Ok, or the error naming the state path when it is there but not a regular file (a directory,
+  // symbolic link, device, FIFO): rigcal neither reads, moves nor replaces it.
+  Status CheckStatePath() const;
   // --resume: a state file that cannot be used is renamed aside (KeepAside), never overwritten.
   void RestoreState();
+  // After the last publication: the output closed and, for a file:// URL, its file checked (an
+  // error naming the file when it does not hold everything published).
+  void CloseOutput() RIGCAL_EXCLUDES(output_mutex);
   // Flush, final refinement, last publication, state and result.
   void Finish(int64_t utime);
   // Moves pose segments past the resumed state's (our own VO restarted).

@@ -29,8 +29,11 @@ Status CalibNode::Impl::OpenCapture() {
         return status;
       }
     }
+    if (Status status = CheckOutputUrl(options.publish_url); !status.ok()) return status;
     output = std::make_unique<::lcm::LCM>(options.publish_url);
     if (!output->good()) return Error{options.publish_url + ": cannot open LCM"};
+    MutexLock lock(output_mutex);
+    published_file = PublishedFileCheck::ForUrl(options.publish_url);
   }
   std::ostringstream opened_text;
   auto opened = OpenCaptureSources(config, options.fast, "", opened_text);

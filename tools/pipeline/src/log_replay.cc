@@ -76,8 +76,11 @@ Status CalibNode::Impl::OpenLog() {
   if (!opened) return opened.status();
   reader = std::move(*opened);
   if (!options.publish_url.empty()) {
+    if (Status status = CheckOutputUrl(options.publish_url); !status.ok()) return status;
     output = std::make_unique<::lcm::LCM>(options.publish_url);
     if (!output->good()) return Error{options.publish_url + ": cannot open the LCM URL"};
+    MutexLock lock(output_mutex);
+    published_file = PublishedFileCheck::ForUrl(options.publish_url);
   }
   if (options.replay.poses_only) return Status::Ok();
   auto images = LogHasImages(options.log_path, names, reader_options);
@@ -240,8 +243,7 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
       ++summary.cameras[item.camera].images;
       if (!feeds[item.camera]->Feed(std::move(*item.frame))) break;
     } else {
-      AdvanceLogTime(item.t_ns);
-      Accept(item.camera, *item.pose);
+      AcceptOnLogTime(item.camera, *item.pose);
     }
   }
   if (pipeline) {

@@ -19,8 +19,8 @@ void CalibNode::Impl::SaveState() {
   if (state_path.empty()) return;
   // An empty state never replaces the one a previous run saved.
   if (CalibratedNothing() && std::filesystem::exists(state_path)) return;
-  if (const Status status =
-          io::WriteFileAtomically(state_path, io::FormatEstimatorState(calibrator->SaveState()));
+  if (const Status status = io::WriteFileAtomically(
+          state_path, io::FormatEstimatorState(calibrator->SaveState()), state_new_file_mode);
       !status.ok()) {
     AddError("state not saved: " + status.message());
     return;
@@ -28,12 +28,20 @@ void CalibNode::Impl::SaveState() {
   ++summary.state_saves;
 }
 
+Status CalibNode::Impl::CheckStatePath() const {
+  if (state_path.empty()) return Status::Ok();
+  if (const Status replaceable = io::CheckReplaceable(state_path); !replaceable.ok()) {
+    return Error{(options.resume ? "--resume: " : "state: ") + replaceable.message()};
+  }
+  return Status::Ok();
+}
+
 void CalibNode::Impl::RestoreState() {
   if (state_path.empty()) {
     log->warn("--resume: no state file configured (state.path or --state); starting afresh");
     return;
   }
-  if (!std::filesystem::exists(state_path)) {
+  if (!std::filesystem::exists(std::filesystem::symlink_status(state_path))) {
     log->warn("--resume: no state file '{}' yet; starting afresh", state_path);
     return;
   }
@@ -58,16 +66,17 @@ void CalibNode::Impl::RestoreState() {
     return;
   }
   // A rejected state (corrupt, newer version, other rig) is kept for a look, never overwritten.
-  const Expected<std::string> aside = io::KeepAside(state_path, "rejected");
+  const Expected<io::KeptAside> aside = io::KeepAside(state_path, "rejected");
   if (!aside) {
     AddError("--resume: " + state_path + ": " + restored.message() + "; " + aside.error() +
              "; the state is not saved in this run");
     state_path.clear();
     return;
   }
-  summary.rejected_state = *aside;
+  summary.rejected_state = aside->path;
+  state_new_file_mode = aside->mode;  // the new state is as private as the rejected one
   log->warn("--resume: {}: {}; kept as {}, starting afresh", state_path, restored.message(),
-            *aside);
+            aside->path);
 }
 
 void CalibNode::Impl::SetSegmentOffsets(const RigEstimatorState& state) {

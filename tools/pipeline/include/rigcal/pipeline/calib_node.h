@@ -160,6 +160,9 @@ struct CalibNodeSummary {
   double log_span_s = 0.0;    // log time replayed (newest minus first message stamp)
   int64_t extrinsics_published = 0;
   int64_t status_published = 0;
+  // The output did not take everything published (a file:// log that came out short: disk full,
+  // write failed); the error is in `errors`.
+  bool publish_failed = false;
   int64_t state_saves = 0;
   bool resumed = false;         // state restored from the state file
   std::string rejected_state;   // --resume rejected the state file: where it was kept

@@ -1,0 +1,128 @@
+// SPDX-License-Identifier: Apache-2.0
+// A pose log with glitched stamps through `rigcal replay` and `rigcal calib --log`: one pose
+// stamped INT64_MAX, or ten at 4e18 ns, in the middle of a drive. They are rejected, move no
+// clock (the publications go on at the log's rate after them) and no schedule walks towards
+// them: the run ends in seconds with the drive's result.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "cli/command_test.h"
+#include "rigcal/calib/synthetic.h"
+#include "rigcal/lcm/pose_log.h"
+
+namespace rigcal {
+namespace {
+
+namespace fs = std::filesystem;
+
+using cli_test::Slurp;
+using cli_test::Spawn;
+using cli_test::WaitExit;
+
+const Similarity kLeft{Eigen::Quaterniond(0.9238795, 0, 0.3826834, 0).normalized(),
+                       Eigen::Vector3d(0.3, 0.05, -0.2), 1.0};
+
+class ReplayClockGlitchFault : public cli_test::CommandTest {
+ protected:
+  void SetUp() override {
+    CommandTest::SetUp();
+    if (HasFatalFailure()) return;
+    std::ofstream(Path("rig.yaml")) << "rig: {name: test, master: front}\n"
+                                       "cameras:\n"
+                                       "  - name: front\n"
+                                       "  - name: left\n"
+                                       "publish: {extrinsics_rate_hz: 2, status_rate_hz: 1}\n"
+                                       "state: {save_interval_s: 1}\n";
+  }
+
+  // A 40 s drive at 20 Hz with `glitches` master poses stamped `glitch_ns` in its middle (in
+  // file order), one after each of as many consecutive frames: the drive's pieces and the
+  // glitches written one after the other (an LCM log is its events in file order).
+  void WriteGlitchedLog(const std::string& name, int64_t glitch_ns, int glitches) const {
+    DriveOptions d;
+    d.num_frames = 800;
+    d.rotation_noise_deg = 0.05;
+    d.position_noise = 0.002;
+    const SyntheticDrive drive = GenerateDrive({"front", "left"}, {kLeft}, d);
+    const RigRecording& rec = drive.recording;
+    const lcm::CameraNames names = {"front", "left"};
+    std::vector<std::vector<CameraPose>> pieces(1);
+    const size_t mid = rec.size() / 2;
+    for (size_t k = 0; k < rec.size(); ++k) {
+      for (int camera = 0; camera < 2; ++camera) pieces.back().push_back(rec.PoseAt(camera, k));
+      if (k >= mid && k < mid + static_cast<size_t>(glitches)) {
+        CameraPose glitch = rec.PoseAt(0, k);
+        glitch.t_ns = glitch_ns - static_cast<int64_t>(k - mid);
+        pieces.push_back({glitch});
+        pieces.emplace_back();
+      }
+    }
+    std::ofstream out(Path(name), std::ios::binary);
+    for (const std::vector<CameraPose>& piece : pieces) {
+      ASSERT_TRUE(lcm::WritePoseEvents(Path("piece.lcmlog"), names, piece).ok());
+      out << Slurp(Path("piece.lcmlog"));
+    }
+  }
+
+  // `rigcal <args>` in the background; its exit code, -1 when it ran longer than 60 s (killed).
+  int RunBounded(const std::vector<std::string>& args, const std::string& err) const {
+    const pid_t pid = Spawn(binary_, args, Path(err));
+    EXPECT_GT(pid, 0);
+    return pid > 0 ? WaitExit(pid, std::chrono::seconds(60)) : -1;
+  }
+};
+
+TEST_F(ReplayClockGlitchFault, GlitchedStampsNeitherHangNorMoveTheClock) {
+  struct Case {
+    const char* name;
+    int64_t stamp_ns;
+    int count;
+  };
+  const std::vector<Case> cases = {{"one at INT64_MAX", std::numeric_limits<int64_t>::max(), 1},
+                                   {"ten at 4e18", 4'000'000'000'000'000'000, 10}};
+  for (const Case& c : cases) {
+    WriteGlitchedLog("g.lcmlog", c.stamp_ns, c.count);
+    for (const std::string command : {"replay", "calib"}) {
+      const std::string out = Path("out.lcmlog");
+      std::vector<std::string> args = {command};
+      if (command == "calib") args.push_back("--log");
+      for (const std::string& a :
+           {Path("g.lcmlog"), std::string("--config"), Path("rig.yaml"), std::string("--out"),
+            Path("r.yaml"), std::string("--state"), Path("s.state"), std::string("--publish-lcm"),
+            "file://" + out + "?mode=w"}) {
+        args.push_back(a);
+      }
+      if (command == "replay") args.push_back("--no-progress");
+      const int code = RunBounded(args, "err.txt");
+      const std::string err = Slurp(Path("err.txt"));
+      ASSERT_NE(code, -1) << c.name << ", " << command << ": still running after 60 s\n"
+                          << err.substr(0, 4000);
+      EXPECT_EQ(code, 0) << c.name << ", " << command << "\n" << err.substr(0, 4000);
+      EXPECT_NE(Slurp(Path("r.yaml")).find("usable: true"), std::string::npos) << c.name;
+      // 40 s of log at 2 Hz: about 80 RIGCAL_EXTRINSICS (the clock went on after the glitch).
+      const std::string log = Slurp(out);
+      int published = 0;
+      for (size_t at = log.find("RIGCAL_EXTRINSICS"); at != std::string::npos;
+           at = log.find("RIGCAL_EXTRINSICS", at + 1)) {
+        ++published;
+      }
+      EXPECT_GE(published, 75) << c.name << ", " << command;
+      EXPECT_LE(published, 85) << c.name << ", " << command;
+      fs::remove(out);
+      fs::remove(Path("r.yaml"));
+      fs::remove(Path("s.state"));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace rigcal
