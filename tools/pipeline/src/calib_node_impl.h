@@ -36,6 +36,7 @@
 #include "rigcal/pipeline/capture_sources.h"
 #include "rigcal/pipeline/log_recorder.h"
 #include "rigcal/pipeline/pipeline.h"
+#include "rigcal/pipeline/replay_frame_order.h"
 
 namespace rigcal::pipeline {
 
@@ -82,6 +83,7 @@ struct CalibNode::Impl {
   std::vector<FrameFeedDevice*> feeds;  // image replay; owned by `pipeline`
   // Image replay: images rejected per camera, counted by the reader, read by the status.
   std::unique_ptr<std::atomic<int64_t>[]> images_invalid;
+  std::unique_ptr<ReplayFrameOrder> frame_order;  // image replay: frames in stamp order
   std::unique_ptr<Pipeline> pipeline;
 
   // Live capture (capture_input.cc).
@@ -173,6 +175,9 @@ struct CalibNode::Impl {
   // log_replay.cc.
   Status OpenLog();
   void ReplayLog(const std::atomic<bool>& stop);
+  bool OrderAndFeed(capture::Frame frame, const std::atomic<bool>& stop);
+  bool FeedInOrder(std::vector<capture::Frame> frames, const std::atomic<bool>& stop);
+  void FeedRest(std::vector<capture::Frame> rest, const std::atomic<bool>& stop);
   // One event of the log for the replay: a frame of a camera or a pose, at its stamp.
   struct ReplayItem {
     int camera = -1;

@@ -63,6 +63,9 @@ Status ReplayOptions::Check() const {
   if (to_s >= 0.0 && to_s < from_s) return Error{"to_s: must be >= from_s (or < 0 = the end)"};
   if (max_event_bytes < 1) return Error{"max_event_bytes: must be >= 1"};
   if (frame_feed_capacity < 1) return Error{"frame_feed_capacity: must be >= 1"};
+  if (!(frame_order_max_mb >= 1.0 && frame_order_max_mb <= 1e6)) {
+    return Error{"frame_order_max_mb: must be in [1, 1e6]"};
+  }
   return Status::Ok();
 }
 
@@ -103,6 +106,9 @@ Status CalibNode::Impl::OpenLog() {
   pipeline = std::make_unique<Pipeline>(names, std::move(devices), std::move(*models),
                                         config.online, pipeline_options);
   images_invalid = std::make_unique<std::atomic<int64_t>[]>(names.size());
+  frame_order = std::make_unique<ReplayFrameOrder>(
+      static_cast<int>(names.size()),
+      static_cast<int64_t>(std::llround(options.replay.frame_order_max_mb * 1e6)));
   summary.image_replay = true;
   log->info("{}: replaying the images through VO (--poses-only replays the poses)",
             options.log_path);
@@ -213,6 +219,56 @@ bool CalibNode::Impl::ReadReplayEvent(lcm::LogEvent* event) {
   return true;
 }
 
+// A frame read from the log, through the frame order to the cameras' feeds; false once stopped.
+bool CalibNode::Impl::OrderAndFeed(capture::Frame frame, const std::atomic<bool>& stop) {
+  const int camera = frame.camera;
+  if (!frame_order->Add(std::move(frame))) {
+    if (++summary.cameras[camera].late_frames == 1) {
+      log->warn(
+          "{}: a frame of {} comes after frames of the other cameras stamped later were "
+          "fed ({:.0f} MB of frames held could not wait for it): late frames are dropped "
+          "and counted",
+          options.log_path, names[static_cast<size_t>(camera)], options.replay.frame_order_max_mb);
+    }
+    return true;
+  }
+  std::vector<capture::Frame> ready;
+  frame_order->TakeReady(&ready);
+  return FeedInOrder(std::move(ready), stop);
+}
+
+// Hands frames (and progress marks) to their feeds, waiting for room but never past a stop.
+bool CalibNode::Impl::FeedInOrder(std::vector<capture::Frame> frames,
+                                  const std::atomic<bool>& stop) {
+  for (capture::Frame& frame : frames) {
+    const int camera = frame.camera;
+    if (!frame.progress_mark) ++summary.cameras[camera].images;
+    while (true) {
+      if (stop.load()) return false;
+      const auto outcome = feeds[camera]->FeedUntil(
+          frame, std::chrono::steady_clock::now() + std::chrono::milliseconds(100));
+      if (outcome == FrameFeedDevice::Fed::kStopped) return false;
+      if (outcome == FrameFeedDevice::Fed::kFed) break;
+    }
+  }
+  return true;
+}
+
+// The frames held at the end of the log, in stamp order; each camera's feed ends after its last
+// one, so that the merge does not wait for a camera that has nothing more.
+void CalibNode::Impl::FeedRest(std::vector<capture::Frame> rest, const std::atomic<bool>& stop) {
+  std::vector<size_t> last(feeds.size(), 0);  // per camera: 1 + index of its last frame in rest
+  for (size_t k = 0; k < rest.size(); ++k) last[static_cast<size_t>(rest[k].camera)] = k + 1;
+  for (size_t c = 0; c < feeds.size(); ++c) {
+    if (last[c] == 0) feeds[c]->End();
+  }
+  for (size_t k = 0; k < rest.size(); ++k) {
+    const auto c = static_cast<size_t>(rest[k].camera);
+    if (!FeedInOrder({std::move(rest[k])}, stop)) return;
+    if (last[c] == k + 1) feeds[c]->End();
+  }
+}
+
 void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
   const ReplayOptions& replay = options.replay;
   if (pipeline) pipeline->Start();
@@ -240,14 +296,21 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
         std::max(summary.log_span_s, static_cast<double>(since_ns - from_ns) * 1e-9);
     PaceReplay(item.t_ns, stop);
     if (item.frame) {
-      ++summary.cameras[item.camera].images;
-      if (!feeds[item.camera]->Feed(std::move(*item.frame))) break;
+      if (!OrderAndFeed(std::move(*item.frame), stop)) break;
     } else {
       AcceptOnLogTime(item.camera, *item.pose);
     }
   }
   if (pipeline) {
     // Every fed frame through the VO and its poses handed over, then the threads joined.
+    std::vector<capture::Frame> rest;
+    if (!stop.load()) frame_order->TakeAll(&rest);
+    FeedRest(std::move(rest), stop);
+    for (size_t c = 0; c < names.size(); ++c) {
+      if (summary.cameras[c].late_frames == 0) continue;
+      log->warn("{}: {} late frames of {} dropped", options.log_path,
+                summary.cameras[c].late_frames, names[c]);
+    }
     for (FrameFeedDevice* feed : feeds) feed->End();
     while (!pipeline->Finished() && !stop.load()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));

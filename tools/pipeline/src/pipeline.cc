@@ -160,7 +160,7 @@ void Pipeline::CaptureLoop(int index) {
     }
     capture::Frame frame = std::move(**grabbed);
     frame.camera = index;
-    {
+    if (!frame.progress_mark) {
       MutexLock lock(camera.mutex);
       ++camera.health.frames_captured;
       camera.health.last_frame_t_ns = frame.t_ns;
@@ -203,6 +203,10 @@ void Pipeline::Forward(const CameraPose& pose) {
 void Pipeline::VoLoop(int index) {
   Camera& camera = *cameras_[static_cast<size_t>(index)];
   while (std::optional<capture::Frame> frame = camera.frames.Pop()) {
+    if (frame->progress_mark) {
+      if (merge_) merge_->Deliver(index, frame->t_ns, {});
+      continue;
+    }
     const vo::VoResult result = camera.vo.Process(frame->t_ns, frame->image);
     std::vector<CameraPose> poses;
     if (result.segment_start) poses.push_back(*result.segment_start);

@@ -2,13 +2,14 @@
 #pragma once
 // BoundedQueue: a fixed-capacity multi-producer queue between pipeline threads. Push never
 // blocks: when full, the oldest element is dropped and counted (capture must never wait for
-// a slow consumer); PushWait waits for room instead (sources that can wait). Pop blocks until
-// an element arrives or the queue is stopped.
+// a slow consumer); PushWait waits for room instead (sources that can wait), PushWaitUntil for
+// at most a deadline. Pop blocks until an element arrives or the queue is stopped.
 //
 // Threads: producers (capture threads) call Push/PushWait, consumers (VO threads) call
 // Pop, any thread calls Stop and the counters. Every member is thread-safe: all state is
 // guarded by mutex_; the queue owns no thread.
 
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -53,6 +54,28 @@ class BoundedQueue {
     }
     ready_.notify_one();
     return true;
+  }
+
+  enum class WaitedPush { kPushed, kStopped, kTimedOut };
+  // As PushWait, but gives up once `deadline` has passed: then `value` is left with the caller
+  // (kTimedOut), so a producer that must also watch for a stop request can try again. Any thread.
+  template <typename Clock, typename Duration>
+  WaitedPush PushWaitUntil(T& value, const std::chrono::time_point<Clock, Duration>& deadline)
+      RIGCAL_EXCLUDES(mutex_) {
+    {
+      MutexLock lock(mutex_);
+      while (!stopped_ && items_.size() >= capacity_) {
+        if (lock.WaitUntil(space_, deadline) == std::cv_status::timeout && !stopped_ &&
+            items_.size() >= capacity_) {
+          return WaitedPush::kTimedOut;
+        }
+      }
+      if (stopped_) return WaitedPush::kStopped;
+      items_.push_back(std::move(value));
+      ++pushed_;
+    }
+    ready_.notify_one();
+    return WaitedPush::kPushed;
   }
 
   // Next element; blocks until one is available. nullopt once stopped and drained. Any thread.

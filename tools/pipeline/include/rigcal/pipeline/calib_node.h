@@ -73,6 +73,10 @@ struct ReplayOptions {
   int64_t max_event_bytes = int64_t{64} << 20;
   // Image replay: frames buffered per camera between the log reader and the pipeline.
   int frame_feed_capacity = 64;
+  // Image replay: image data held to feed the cameras' frames in stamp order when one camera's
+  // frames are ahead of another's in the file (ReplayFrameOrder); beyond it a camera without
+  // frames is taken as stopped up to the frames fed, and its frames that come later are late.
+  double frame_order_max_mb = 256.0;
   // Success, or the first offending field: "<field>: <constraint>".
   Status Check() const;
 };
@@ -143,6 +147,9 @@ struct CameraInputStats {
   int64_t last_t_ns = -1;
   int32_t last_segment = -1;  // scale segment of the newest pose
   int64_t images = 0;         // image replay: frames handed to the camera's VO
+  // Image replay: frames stamped before frames of the other cameras fed long before them
+  // (more than the replay's frame_order_max_mb behind in the file), dropped.
+  int64_t late_frames = 0;
   int64_t sync_rejected = 0;  // poses the sync buffer refused (late, out of order, ...)
 };
 
