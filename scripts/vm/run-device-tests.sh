@@ -2,11 +2,13 @@
 # SPDX-License-Identifier: Apache-2.0
 # Runs the device tests (a GoogleTest binary, tests/device/) inside QEMU on a Debian kernel with
 # real V4L2 drivers: two vivid devices, two v4l2loopback devices, vimc for libcamera.
-#   run-device-tests.sh <test binary> [gtest filter, default: all but the long VividLongRun.* and
-#                       LoopbackRun.*]
+#   run-device-tests.sh <test binary> [gtest filter, default: all but the long VividLongRun.*,
+#                       LoopbackRun.* and ServiceUnitRun.*]
 # Environment variables RIGCAL_DEVICE_* are passed on to the guest's tests. RIGCAL_VM_BINARIES:
 # further programs (paths, space-separated) packed into the guest's /tests/bin, each named to the
-# tests by RIGCAL_DEVICE_<NAME> (rigcal: RIGCAL_DEVICE_RIGCAL=/tests/bin/rigcal).
+# tests by RIGCAL_DEVICE_<NAME> (rigcal: RIGCAL_DEVICE_RIGCAL=/tests/bin/rigcal). RIGCAL_VM_FILES:
+# data files (paths, space-separated) packed into /tests/share, each named to the tests by
+# RIGCAL_DEVICE_FILE_<NAME> (rigcal-run.service: RIGCAL_DEVICE_FILE_RIGCAL_RUN_SERVICE).
 # Builds or reuses the assets (build-assets.sh, under $RIGCAL_VM_DIR, default build/vm), packs
 # the binary into a second initramfs archive and the shared libraries ldd lists (~200 MB: OpenCV
 # brings GDAL and more) into a read-only ext2 disk (mke2fs -d) that the guest mounts on
@@ -18,7 +20,7 @@
 # Exit: 0 passed, 1 failed, 77 skipped ("SKIP: <reason>" first; a failure under CI=true).
 set -uo pipefail
 binary=$(readlink -f "$1")
-filter=${2:--VividLongRun.*:LoopbackRun.*}
+filter=${2:--VividLongRun.*:LoopbackRun.*:ServiceUnitRun.*}
 HERE=$(cd "$(dirname "$0")" && pwd)
 VM_DIR=${RIGCAL_VM_DIR:-$PWD/build/vm}
 TIMEOUT_S=${RIGCAL_VM_TIMEOUT_S:-400}
@@ -40,7 +42,7 @@ dir=$(echo "$assets" | sed -n 's/^vm assets: \([^ ]*\).*/\1/p')
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 root="$work/root"
-mkdir -p "$root/tests/lib" "$root/tests/bin" "$root/lib64"
+mkdir -p "$root/tests/lib" "$root/tests/bin" "$root/tests/share" "$root/lib64"
 cp "$binary" "$root/tests/device_tests"
 extra_env=""
 for program in ${RIGCAL_VM_BINARIES:-}; do
@@ -49,6 +51,13 @@ for program in ${RIGCAL_VM_BINARIES:-}; do
   cp "$program" "$root/tests/bin/$name"
   extra_env="$extra_env
 export RIGCAL_DEVICE_$(echo "$name" | tr 'a-z-' 'A-Z_')=/tests/bin/$name"
+done
+for file in ${RIGCAL_VM_FILES:-}; do
+  [ -f "$file" ] || { echo "RIGCAL_VM_FILES: $file is not a file"; exit 1; }
+  name=$(basename "$file")
+  cp "$file" "$root/tests/share/$name"
+  extra_env="$extra_env
+export RIGCAL_DEVICE_FILE_$(echo "$name" | tr 'a-z.-' 'A-Z__')=/tests/share/$name"
 done
 # Shared libraries of the programs and of libcamera's IPA modules (dlopen'ed).
 libs() { ldd "$1" 2>/dev/null | awk '$2 == "=>" && $3 ~ /^\// {print $3} $1 ~ /^\/lib64\// {print $1}'; }

@@ -115,9 +115,13 @@ TEST_F(RunResumeTest, KilledRunsResumeToTheUninterruptedEstimate) {
             << got.pos_std.transpose() << ")\n";
   EXPECT_LE(rot_deg, 3.0 * rot_sigma) << "seed " << seed;
   // C: every restart is a new scale segment of the master (the VO restarted), so the final C
-  // rests on the motions after the last resume only; its reported σ is then about half of
-  // what the spread shows (measured: 2.8 and 3.8 combined σ on x in two runs, the rotation
-  // within 1 σ), hence 5 σ here until the σ of a restarted segment is fixed in the estimator.
+  // rests on the motions after the last resume only: a subset of the uninterrupted run's (the
+  // simulation restarts at frame 0, the consumed poses are skipped, the VO poses are the same).
+  // Its σ can then not be below the uninterrupted run's, but it is: the published estimate is
+  // the batch calibrator's on the pose history since the restart, whose σ of C was 0.17-0.56
+  // times the uninterrupted run's on x and y (resumed at frame 300 of 468, seeds 1 and 2; 4.5 σ
+  // apart on y for seed 2). The recursive estimator's own σ of C after a restart is right since
+  // state version 8 (position_weight); the batch's on a short history is not yet, hence 5 σ.
   for (int axis = 0; axis < 3; ++axis) {
     const double sigma = std::hypot(ref.pos_std[axis], got.pos_std[axis]);
     const double error = std::abs(got.estimate.C[axis] - ref.estimate.C[axis]);

@@ -50,6 +50,7 @@
 #include <vector>
 
 #include "guest_skip.h"
+#include "loopback_rig.h"
 #include "loopback_writer.h"
 #include "rigcal/capture/v4l2_timestamp.h"
 #include "rigcal/io/result_file.h"
@@ -62,7 +63,6 @@ extern char** environ;
 namespace rigcal {
 namespace {
 
-constexpr double kDriveS = 12.0;  // the trajectory below: 7 waypoints, 2 s apart
 // sqrt of the 99.9 % quantile of chi-square with 3 degrees of freedom: a 3-vector error with the
 // given per-axis sigma stays within this many sigma (Mahalanobis) but once in a thousand runs.
 constexpr double kChi3Sigma999 = 4.03;
@@ -71,58 +71,6 @@ constexpr double kNormal999 = 3.29;  // two-sided 99.9 % of a normal variable, i
 int EnvInt(const char* name, int fallback) {
   const char* v = std::getenv(name);
   return v ? std::atoi(v) : fallback;
-}
-
-std::string SimulatedRigYaml(int width, int height, int frames) {
-  const double f = (width / 2.0) / std::tan(30.0 * M_PI / 180.0);
-  std::ostringstream camera;
-  camera << "model: pinhole, resolution: [" << width << ", " << height << "], intrinsics: [" << f
-         << ", " << f << ", " << (width - 1) / 2.0 << ", " << (height - 1) / 2.0 << "]";
-  std::ostringstream yaml;
-  yaml << "rig: {name: loopback, master: cam0}\n"
-       << "cameras:\n"
-       << "  - {name: cam0, " << camera.str() << "}\n"
-       << "  - {name: cam1, " << camera.str()
-       << ",\n     truth: {q_wxyz: [0.70710678118654752, 0, 0.70710678118654752, 0], "
-          "C: [-1, 1, 3]}}\n"
-       << "source:\n"
-       << "  type: simulated\n"
-       << "  frame_rate_hz: " << frames / kDriveS << "\n"
-       << "  num_frames: " << frames << "\n"
-       << "  seed: 3\n"
-       << "  realtime: false\n"
-       << "  noise_sigma: 1.5\n"
-       << "  scene: {type: room, size: [20, 16, 6], boxes: 10}\n"
-       << "  trajectory:\n"
-       << "    waypoint_interval_s: 2\n"
-       << "    waypoints:\n"
-       << "      - {p: [-3.0, 0.0, 3.0], ypr_deg: [0, 0, 0]}\n"
-       << "      - {p: [-2.3, 0.8, 3.2], ypr_deg: [20, -10, 8]}\n"
-       << "      - {p: [-1.4, 1.5, 3.0], ypr_deg: [38, 5, -6]}\n"
-       << "      - {p: [-0.4, 1.2, 2.8], ypr_deg: [15, 15, -15]}\n"
-       << "      - {p: [0.5, 0.4, 3.1], ypr_deg: [-10, 0, 5]}\n"
-       << "      - {p: [1.2, -0.6, 3.4], ypr_deg: [-35, -15, 12]}\n"
-       << "      - {p: [0.8, -1.6, 3.1], ypr_deg: [-20, 8, 18]}\n";
-  return yaml.str();
-}
-
-// The same cameras, captured from the loopback devices.
-std::string V4l2RigYaml(const std::string& simulated) {
-  std::string yaml = simulated.substr(0, simulated.find("source:"));
-  yaml = std::regex_replace(yaml, std::regex("name: cam0, "), "name: cam0, device: /dev/video20, ");
-  yaml = std::regex_replace(
-      yaml, std::regex("name: cam1, "),
-      "name: cam1, device: /dev/video21, capture: {pixel_formats: [YUYV]},\n     ");
-  // Under emulation the writer feeds about one frame a second where the simulation runs at 20:
-  // the drive plays about 20 times slower, and the stream-time settings say so. Sets are the
-  // writer's frames (both written within milliseconds, frames at least 150 ms apart): a 100 ms
-  // tolerance; a nominal 0.5 Hz rate lets a pose wait 6 s for its partner and a VO segment start
-  // up to 60 s (the clock-glitch horizon) before its first tracked pose. The rotation sigma's
-  // error blocks (10 s of the 20 Hz drive) last 200 s.
-  yaml += "sync: {frame_rate_hz: 0.5, tolerance_ms: 100}\n";
-  yaml += "estimator: {sigma_block_s: 200}\n";
-  yaml += "source: {type: v4l2, pixel_formats: [GREY], buffers: 4}\n";
-  return yaml;
 }
 
 // What rigcal run's status lines say (one a second): VO median per camera, backlog drops.
@@ -308,9 +256,9 @@ TEST(LoopbackRun, RigcalRunOnV4l2SourceCalibratesTheSimulatedRig) {
   const std::string dir = "/tmp/loopback_run";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const std::string simulated = SimulatedRigYaml(width, height, frames);
+  const std::string simulated = device_test::SimulatedLoopbackRigYaml(width, height, frames);
   std::ofstream(dir + "/simulated.yaml") << simulated;
-  std::ofstream(dir + "/v4l2.yaml") << V4l2RigYaml(simulated);
+  std::ofstream(dir + "/v4l2.yaml") << device_test::V4l2LoopbackRigYaml(simulated);
   auto config = io::LoadRigConfig(dir + "/simulated.yaml");
   ASSERT_TRUE(config.ok()) << config.error();
   auto rig = sim::MakeSimulatedRig(*config->simulated_source);

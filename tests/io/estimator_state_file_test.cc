@@ -230,6 +230,7 @@ TEST(EstimatorStateFile, ADecalibrationAlarmSurvivesARestart) {
   for (std::string line; std::getline(lines, line);) {
     if (line.rfind("checksum ", 0) == 0) continue;
     if (line.rfind("decalibration ", 0) == 0) continue;
+    if (line.rfind("posweight ", 0) == 0) continue;  // version 8
     v6 += line + '\n';
   }
   v6.replace(0, v6.find('\n'), "rigcal-estimator-state 6");
@@ -327,6 +328,7 @@ TEST(EstimatorStateFile, ReadsVersionTwoStates) {
     if (line.rfind("consumed ", 0) == 0) continue;    // version 4
     if (line.rfind("clocks ", 0) == 0) continue;      // version 5
     if (line.rfind("fingerprint", 0) == 0) continue;  // version 6
+    if (line.rfind("posweight ", 0) == 0) continue;   // version 8
     if (line == "published") {                        // version 6, up to its "end"
       while (std::getline(in, line) && line != "end") {
       }
@@ -353,7 +355,7 @@ TEST(EstimatorStateFile, ReadsVersionTwoStates) {
   EXPECT_NE(error.find("version 1"), std::string::npos) << error;
 }
 
-// A version-3 text as version `version` (4 or 5) writes it: that header, `consumed_line` after
+// A version-3 text as version `version` (4 to 8) writes it: that header, `consumed_line` after
 // master_segment (and for version 5 `clocks_line` after it), its checksum.
 std::string AsVersion(int version, const std::string& v3, const std::string& consumed_line,
                       const std::string& clocks_line = "clocks 0") {
@@ -363,6 +365,8 @@ std::string AsVersion(int version, const std::string& v3, const std::string& con
   while (std::getline(in, line)) {
     if (line.rfind("checksum ", 0) == 0) break;
     body += line + '\n';
+    // Version 8: the position sums' weight, "weight" when the master never re-initialised.
+    if (version >= 8 && line.rfind("weight ", 0) == 0) body += "pos" + line + '\n';
     if (line.rfind("master_segment ", 0) == 0) {
       body += consumed_line + '\n';
       if (version >= 5) body += clocks_line + '\n';
@@ -412,6 +416,7 @@ TEST(EstimatorStateFile, ReadsAndRewritesEarlierFilesExactly) {
   ASSERT_EQ(state->slaves.size(), 1u);
   EXPECT_EQ(state->slaves[0].long_stats.closed_scales.size(), 2u);
   EXPECT_EQ(state->slaves[0].long_stats.segments.size(), 1u);
+  EXPECT_FALSE(state->slaves[0].long_stats.position_weight) << "none before version 8";
 
   RigEstimatorOptions options;
   options.max_open_segments = 1;

@@ -82,9 +82,10 @@ PlanarCandidate SolvePlanarRotation(const MotionStatistics& stats, MotionModel r
   }
   const PlanarSystemSolution& planar = out.system;
   out.q = planar.ok ? PlanarRotation(frame, planar.gamma) : q_general;
-  out.var_gamma = planar.ok ? Variance(planar.residual_ss, 2.0 * stats.weight(), planar.unknowns) /
-                                  planar.gamma_information
-                            : kInf;
+  out.var_gamma =
+      planar.ok ? Variance(planar.residual_ss, 2.0 * stats.position_weight(), planar.unknowns) /
+                      planar.gamma_information
+                : kInf;
   return out;
 }
 
@@ -116,7 +117,9 @@ GeneralPosition SolveGeneralPosition(const MotionStatistics& stats,
   const PositionSolution& general = out.position;
   obs->position_min_eigenvalue = general.min_eigenvalue;
   obs->tilt_snr = frame.ok ? TiltSignalToNoise(stats.planar(), frame.axis, out.q) : kInf;
-  const double var_pos = Variance(general.residual_ss, 3.0 * stats.weight(), general.unknowns);
+  // The position residuals are of the motions in the position sums only (position_weight).
+  const double var_pos =
+      Variance(general.residual_ss, 3.0 * stats.position_weight(), general.unknowns);
   out.cov = var_pos * general.covariance;
   double axis_std = kInf, plane_std = 0.0;
   if (general.ok && frame.ok) {
@@ -211,8 +214,8 @@ void TakePlanar(const MotionStatistics& stats, const GeneralCandidate& general_r
   if (!in_plane.ok) return;
   out->C = in_plane.C;
   out->scales = in_plane.scales;
-  out->cov_C =
-      Variance(in_plane.residual_ss, 3.0 * stats.weight(), in_plane.unknowns) * in_plane.covariance;
+  out->cov_C = Variance(in_plane.residual_ss, 3.0 * stats.position_weight(), in_plane.unknowns) *
+               in_plane.covariance;
   out->axis_from_prior = has_prior;
   out->axis_std = kNaN;
   if (has_prior && prior.sigma > 0.0) {

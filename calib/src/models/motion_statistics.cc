@@ -36,6 +36,7 @@ void MotionStatistics::Add(const MotionData& m, int segment, double w) {
     D_dir_.noalias() += w * ci * ci.transpose();
   }
   weight_ += w;
+  position_weight_ += w;
   max_rotation_ = std::max(max_rotation_, m.angle0);
   ++motions_;
 }
@@ -52,6 +53,7 @@ void MotionStatistics::Decay(double f) {
   g_marg_ *= f;
   c0_sq_marg_ *= f;
   weight_ *= f;
+  position_weight_ *= f;
   for (auto& [id, s] : segments_) {
     s.P *= f;
     s.n *= f;
@@ -163,6 +165,7 @@ PlanarSystemSolution MotionStatistics::SolvePlanarSystem(const PlanarFrame& fram
 RefinementPrior MotionStatistics::Quadratic() const {
   RefinementPrior prior;
   prior.weight = weight_;
+  prior.position_weight = position_weight_;
   prior.motions = motions_;
   prior.rotation = M_;
   const int n = static_cast<int>(segments_.size());
@@ -218,6 +221,7 @@ void MotionStatistics::ResetPosition() {
   H_marg_.setZero();
   g_marg_.setZero();
   c0_sq_marg_ = 0.0;
+  position_weight_ = 0.0;
   S_dir_.setZero();
   D_dir_.setZero();
   planar_.ResetPosition();
@@ -242,6 +246,7 @@ MotionSums MotionStatistics::Sums() const {
   s.g_marg = g_marg_;
   s.c0_sq_marg = c0_sq_marg_;
   s.weight = weight_;
+  s.position_weight = position_weight_;
   s.max_rotation = max_rotation_;
   s.motions = motions_;
   s.segments = segments_;
@@ -262,6 +267,7 @@ MotionStatistics MotionStatistics::FromSums(const MotionSums& s) {
   m.g_marg_ = s.g_marg;
   m.c0_sq_marg_ = s.c0_sq_marg;
   m.weight_ = s.weight;
+  m.position_weight_ = s.position_weight.value_or(s.weight);
   m.max_rotation_ = s.max_rotation;
   m.motions_ = s.motions;
   m.segments_ = s.segments;

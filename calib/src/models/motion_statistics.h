@@ -85,6 +85,9 @@ class MotionStatistics {
   PlanarFrame SolvePlanarFrame() const;
   PlanarSystemSolution SolvePlanarSystem(const PlanarFrame& frame) const;
   double weight() const { return weight_; }
+  // Sum of the weights of the motions in the position sums: weight() until a ResetPosition,
+  // then only the motions since (their count of position equations, 3 per motion).
+  double position_weight() const { return position_weight_; }
   double max_rotation() const { return max_rotation_; }
   const std::map<int, SegmentSums>& segments() const { return segments_; }
   const std::map<int, double>& closed_scales() const { return closed_scales_; }
@@ -113,7 +116,8 @@ class MotionStatistics {
   std::map<int, SegmentSums> segments_;
   std::map<int, double> closed_scales_;
   double weight_ = 0.0;
-  double max_rotation_ = 0.0;  // largest master rotation angle seen, radians
+  double position_weight_ = 0.0;  // of the motions since the last ResetPosition
+  double max_rotation_ = 0.0;     // largest master rotation angle seen, radians
   int motions_ = 0;
 };
 

@@ -103,9 +103,12 @@ void SetNoiseLevels(const RefinementJob& job, const std::vector<internal::Motion
         prior_scales);
     k += job.prior.weight;
   }
+  // The prior's position sums may hold fewer motions than its rotation's (master re-initialised).
+  const double k_pos =
+      input->prior != nullptr ? k - (job.prior.weight - job.prior.position_weight) : k;
   input->sigma_rotation = std::max(std::sqrt(ss_rot / std::max(1.0, 4 * k - 3)), 1e-12);
   input->sigma_position =
-      std::max(std::sqrt(ss_pos / std::max(1.0, 3 * k - (planar ? 6 : 7))), 1e-12);
+      std::max(std::sqrt(ss_pos / std::max(1.0, 3 * k_pos - (planar ? 6 : 7))), 1e-12);
 }
 
 // The refined estimate `r` of `input` in `out` (the job's start): rotation, C, the scales of

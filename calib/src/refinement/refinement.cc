@@ -332,8 +332,12 @@ void AddOutsidePrior(RefinementProblem* rp) {
   } else {
     delete position;
   }
+  // 4 rotation residuals per motion of the prior, 3 position ones per motion of its position sums
+  // (fewer after a master re-initialisation: 7 w - 3 (w - w_pos)).
+  const double position_gap = prior.weight - prior.position_weight;
   rp->num_residuals +=
-      static_cast<int>(std::lround((input.translational ? 3.0 : 7.0) * prior.weight));
+      static_cast<int>(std::lround(input.translational ? 3.0 * prior.weight - 3.0 * position_gap
+                                                       : 7.0 * prior.weight - 3.0 * position_gap));
 }
 
 // The scale priors of (4.27) and the weighted prior on the axis offset h; scales no residual

@@ -79,8 +79,8 @@ void WriteSums(std::ostream& out, const MotionSums& s) {
   Write(out, "Hmarg", s.h_marg);
   Write(out, "gmarg", s.g_marg);
   out << "c0sqmarg " << s.c0_sq_marg << '\n';
-  out << "weight " << s.weight << "\nmaxrot " << s.max_rotation << "\nmotions " << s.motions
-      << '\n';
+  out << "weight " << s.weight << "\nposweight " << s.position_weight.value_or(s.weight)
+      << "\nmaxrot " << s.max_rotation << "\nmotions " << s.motions << '\n';
   out << "segments " << s.segments.size() << '\n';
   for (const auto& [id, seg] : s.segments) {
     out << "segment " << id << '\n';
@@ -95,8 +95,9 @@ void WriteSums(std::ostream& out, const MotionSums& s) {
 }
 
 // The sums written by WriteSums; false on a malformed text. "Ddir" follows "Sdir" since state
-// version 3; a version-2 text goes on with "Hmarg" and the moments are derived.
-bool ReadSums(const std::string& text, MotionSums* out) {
+// version 3; a version-2 text goes on with "Hmarg" and the moments are derived. "posweight"
+// follows "weight" since version 8; before, the position sums' weight is unknown (none).
+bool ReadSums(const std::string& text, int version, MotionSums* out) {
   std::istringstream in(text);
   MotionSums s;
   const bool has_d = text.find("\nDdir ") != std::string::npos;
@@ -109,8 +110,10 @@ bool ReadSums(const std::string& text, MotionSums* out) {
       !Read(in, "gc", s.g_c) || !ReadScalar(in, "c0sq", &s.c0_sq) || !Read(in, "Sdir", s.s_dir) ||
       (has_d && !Read(in, "Ddir", s.d_dir)) || !Read(in, "Hmarg", s.h_marg) ||
       !Read(in, "gmarg", s.g_marg) || !ReadScalar(in, "c0sqmarg", &s.c0_sq_marg) ||
-      !ReadScalar(in, "weight", &s.weight) || !ReadScalar(in, "maxrot", &s.max_rotation) ||
-      !ReadScalar(in, "motions", &motions) || !ReadScalar(in, "segments", &count)) {
+      !ReadScalar(in, "weight", &s.weight) ||
+      (version >= 8 && !ReadScalar(in, "posweight", &s.position_weight.emplace())) ||
+      !ReadScalar(in, "maxrot", &s.max_rotation) || !ReadScalar(in, "motions", &motions) ||
+      !ReadScalar(in, "segments", &count)) {
     return false;
   }
   if (!has_d) s.d_dir = DirectionMomentsFromCrossMoments(s.s_dir, s.weight);
@@ -185,7 +188,8 @@ Status ReadSlaves(std::string rest, int version, RigEstimatorState* state) {
     const std::string published_text =
         published == std::string::npos ? std::string() : short_text.substr(published + 1);
     if (published != std::string::npos) short_text.resize(published + 1);
-    if (!ReadSums(long_text, &s.long_stats) || !ReadSums(short_text, &s.short_stats)) {
+    if (!ReadSums(long_text, version, &s.long_stats) ||
+        !ReadSums(short_text, version, &s.short_stats)) {
       return Error{"malformed statistics of slave " + name};
     }
     if (!published_text.empty()) {

@@ -66,6 +66,11 @@ Status CheckPhysicalBounds(const std::string& where, const MotionSums& s) {
     return Error{where + "weight = " + Number(s.weight) + " exceeds motions = " +
                  std::to_string(s.motions) + " (each motion weighs at most 1)"};
   }
+  if (s.position_weight && !(*s.position_weight >= 0.0 &&
+                             *s.position_weight <= s.weight * (1.0 + kRounding) + kRounding)) {
+    return Error{where + "posweight = " + Number(*s.position_weight) +
+                 " is not within [0, weight = " + Number(s.weight) + "]"};
+  }
   for (const auto& [id, seg] : s.segments) {
     if (seg.weight > s.weight * (1.0 + kRounding) + kRounding) {
       return Error{where + "segment " + std::to_string(id) + ": w = " + Number(seg.weight) +

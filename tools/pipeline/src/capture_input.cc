@@ -111,7 +111,12 @@ bool CalibNode::Impl::CapturePass(int64_t now_ns, FlowWatch* flow) {
   if (!pipeline) return true;
   std::vector<int64_t> frames;
   for (const CameraHealth& h : pipeline->Snapshot().cameras) frames.push_back(h.frames_processed);
-  const bool healthy = flow->Update(now_ns, frames, calibrator->sets_consumed());
+  // Consumed first: sets matched meanwhile make `waiting` larger, never a stall out of nothing.
+  const uint64_t consumed = calibrator->sets_consumed();
+  const SyncStats sync = calibrator->sync_stats();
+  const uint64_t matched = sync.sets_emitted - sync.consumer_overflow;
+  const bool healthy =
+      flow->Update(now_ns, frames, consumed, matched > consumed ? matched - consumed : 0);
   if (healthy != flow_healthy) {
     if (healthy) log->info("frames flow again from every camera into the estimator");
     if (!healthy) log->error("{}: the service watchdog is no longer fed", flow->problem());

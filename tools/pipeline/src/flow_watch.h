@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // FlowWatch: whether a live capture is healthy, for the service watchdog (rigcal-run.service):
-// every camera delivered a frame through its VO, and the estimator took a set, within the last
-// `timeout_ns` (wall clock). Until the first timeout has passed since the start, the flow is
-// healthy (the cameras open, the VO initialises). A stalled camera or an estimator that stopped
-// consuming starves the watchdog, so systemd restarts the service.
+// every camera delivered a frame through its VO within the last `timeout_ns` (wall clock), and
+// the estimator took a set within it or had none waiting. Sets wait only once every VO tracks:
+// while a VO initialises (a parked vehicle, a slow start) frames flow and nothing is owed to the
+// estimator, so the watchdog is fed. Until the first timeout has passed since the start, the
+// flow is healthy (the cameras open). A stalled camera or an estimator that stopped consuming
+// the sets it is given starves the watchdog, so systemd restarts the service.
 //
 // Not thread-safe: the capture loop's thread owns it.
 
@@ -23,16 +25,16 @@ class FlowWatch {
         frame_progress_ns_(names_.size(), start_ns),
         sets_progress_ns_(start_ns) {}
 
-  // The counters now: frames through each camera's VO, sets the estimator consumed. Returns
-  // whether the flow is healthy.
-  bool Update(int64_t now_ns, const std::vector<int64_t>& frames, uint64_t sets) {
+  // The counters now: frames through each camera's VO, sets the estimator consumed, sets matched
+  // and not consumed yet (waiting). Returns whether the flow is healthy.
+  bool Update(int64_t now_ns, const std::vector<int64_t>& frames, uint64_t sets, uint64_t waiting) {
     for (size_t i = 0; i < frames_.size() && i < frames.size(); ++i) {
       if (frames[i] != frames_[i]) {
         frames_[i] = frames[i];
         frame_progress_ns_[i] = now_ns;
       }
     }
-    if (sets != sets_) {
+    if (sets != sets_ || waiting == 0) {
       sets_ = sets;
       sets_progress_ns_ = now_ns;
     }
@@ -43,7 +45,8 @@ class FlowWatch {
       }
     }
     if (now_ns - sets_progress_ns_ > timeout_ns_) {
-      problem_ += (problem_.empty() ? "" : ", ") + std::string("the estimator takes no sets");
+      problem_ += (problem_.empty() ? "" : ", ") +
+                  std::string("the estimator takes none of the sets waiting");
     }
     return problem_.empty();
   }

@@ -79,7 +79,12 @@ struct MotionSums {
   Eigen::Matrix3d h_marg = Eigen::Matrix3d::Zero();
   Eigen::Vector3d g_marg = Eigen::Vector3d::Zero();
   double c0_sq_marg = 0.0;
-  double weight = 0.0;        // sum of the motions' weights
+  double weight = 0.0;  // sum of the motions' weights
+  // Sum of the weights of the motions in the position sums (h_cc ... segments): `weight` until
+  // the master odometry re-initialised (new master unit: the position sums restart, the
+  // rotation's stay), then only the motions since; the position σ's count of equations.
+  // None in a state before version 8: taken as `weight`.
+  std::optional<double> position_weight;
   double max_rotation = 0.0;  // largest master rotation angle seen, radians
   int motions = 0;
   std::map<int, SegmentSums> segments;  // open scale segments by id

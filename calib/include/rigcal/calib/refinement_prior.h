@@ -20,7 +20,10 @@ namespace rigcal {
 // (or the last reset), not only the window's: the window adds nothing but robust re-weighting.
 struct RefinementPrior {
   double weight = 0.0;  // sum of the motions' weights (0: no prior)
-  int motions = 0;      // how many motions
+  // Sum of the weights of the motions in `position` (the motions since the master odometry
+  // last re-initialised; `weight` when it never did): its count of position equations.
+  double position_weight = 0.0;
+  int motions = 0;  // how many motions
   Eigen::Matrix4d rotation = Eigen::Matrix4d::Zero();
   std::vector<int> segments;
   Eigen::MatrixXd position;  // (4 + 9 * segments.size()) square, positive semi-definite

@@ -29,7 +29,11 @@
 // estimate; an older file resumes with the estimate re-solved from the statistics. Version 7 adds
 // to it the decalibration alarm (DecalibrationAlarmState), so that a slave found decalibrated
 // before a restart is still reported decalibrated after it; a version-6 file resumes without
-// an alarm.
+// an alarm. Version 8 adds to the statistics the weight of the motions in the position sums
+// ("posweight", MotionSums::position_weight: fewer than "weight" once the master odometry
+// re-initialised, as a resumed run's restarted VO does), which the σ of C divides by; an older
+// file resumes with it equal to "weight" (its σ of C too small by sqrt(posweight / weight)
+// until the next re-initialisation).
 
 #include <string>
 #include <string_view>
@@ -39,7 +43,7 @@
 
 namespace rigcal::io {
 
-inline constexpr int kEstimatorStateVersion = 7;        // written
+inline constexpr int kEstimatorStateVersion = 8;        // written
 inline constexpr int kOldestEstimatorStateVersion = 2;  // oldest read
 
 // The state as the text of a state file (version kEstimatorStateVersion).
