@@ -418,6 +418,29 @@ TEST(SimulatedRig, MotionBlurSmoothsMovingImages) {
   EXPECT_LE(cv::norm(still.RenderFrame(0, 3), still_blurred.RenderFrame(0, 3), cv::NORM_INF), 1.0);
 }
 
+// source.blur_burst_s: the camera's frames in the span are blurred over 90 % of the frame
+// period, every other frame (and every other camera) is rendered as without it, bit for bit.
+TEST(SimulatedRig, BlurBurstBlursOnlyItsSpan) {
+  SimulatedRigSpec spec = TwoCameraSpec(320, 240);
+  spec.waypoints = {Waypoint({0, 0, 3}, 0), Waypoint({0, 0, 3}, 40)};  // 40 degrees in 0.5 s
+  spec.waypoint_interval_s = 0.5;
+  const SimulatedRig sharp = Make(spec);
+  const double period_s = 1.0 / spec.frame_rate_hz;
+  spec.blur_burst_s["cam0"] = {4.5 * period_s, 6.5 * period_s};  // frames 5 and 6
+  const SimulatedRig burst = Make(spec);
+  for (int64_t k : {3, 4, 7}) {
+    EXPECT_EQ(cv::norm(sharp.RenderFrame(0, k), burst.RenderFrame(0, k), cv::NORM_INF), 0.0) << k;
+  }
+  for (int64_t k : {5, 6}) {
+    EXPECT_EQ(cv::norm(sharp.RenderFrame(1, k), burst.RenderFrame(1, k), cv::NORM_INF), 0.0) << k;
+    const double e_sharp = GradientEnergy(sharp.RenderFrame(0, k));
+    const double e_burst = GradientEnergy(burst.RenderFrame(0, k));
+    EXPECT_LT(e_burst, 0.7 * e_sharp) << k;
+  }
+  spec.blur_burst_s["cam7"] = {0.0, 1.0};
+  EXPECT_NE(spec.Check().message().find("blur_burst_s.cam7"), std::string::npos);
+}
+
 TEST(SimulatedCamera, FrameTimesDropsAndJitterMatchTheSpec) {
   SimulatedRigSpec spec = TwoCameraSpec(16, 12);
   spec.waypoint_interval_s = 40.0;  // 120 s: 2401 frames at 20 Hz

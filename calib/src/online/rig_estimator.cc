@@ -18,6 +18,7 @@
 #include "motions/keyframe_pairing.h"
 #include "motions/motion_data.h"
 #include "motions/pose_glitch_gate.h"
+#include "motions/pose_quality_gate.h"
 #include "online/convergence_check.h"
 #include "online/decalibration_check.h"
 #include "online/motion_gates.h"
@@ -26,6 +27,7 @@
 #include "online/statistics_accumulation.h"
 #include "online/statistics_solution.h"
 #include "online/window_refinement.h"
+#include "rigcal/base/format.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/base/quaternion.h"
 
@@ -69,6 +71,7 @@ RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOp
     : names_(std::move(camera_names)), options_(std::move(options)) {
   RequireValid(options_.Check(), "RigEstimatorOptions");
   glitch_gate_ = std::make_unique<internal::PoseGlitchGate>(static_cast<int>(names_.size()));
+  quality_gate_ = std::make_unique<internal::PoseQualityGate>(static_cast<int>(names_.size()));
   consumed_t_ns_.assign(names_.size(), -1);
   first_consumed_.assign(names_.size(), PoseFingerprint{});
   last_consumed_.assign(names_.size(), PoseFingerprint{});
@@ -132,6 +135,7 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
   master_segment_ = master.segment;
   have_master_segment_ = true;
   const internal::PoseGlitchGate::Verdict glitches = glitch_gate_->Check(t_ns, poses);
+  const std::vector<bool> poor = quality_gate_->Check(poses);
   for (size_t i = 0; i < slaves_.size() && i + 1 < poses.size(); ++i) {
     const bool glitched =
         internal::CountGlitch(glitches, static_cast<int>(i), &slaves_[i]->glitches);
@@ -140,6 +144,12 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
     if (!slave.pose.q.coeffs().allFinite() || !slave.pose.C.allFinite()) {
       ++slaves_[i]->counts.residual_outlier;
       PublishCounts(static_cast<int>(i));
+      continue;
+    }
+    if (poor[0] || poor[i + 1]) {  // neither a keyframe nor in the history (pose_quality_gate)
+      ++slaves_[i]->online.poorly_tracked;
+      slaves_[i]->online.quality_threshold = quality_gate_->Threshold(poor[0] ? 0 : i + 1);
+      estimate_.online[i].poorly_tracked = slaves_[i]->online.poorly_tracked;
       continue;
     }
     // The history holds every finite set: the batch calibrator finds glitches itself.
@@ -261,6 +271,11 @@ void RigEstimator::Publish(int index) {
   published.message = OnlineMessage(o, published, s.linear.message, nominal);
   if (const std::string g = internal::GlitchText(s.glitches, "set", "skipped"); !g.empty()) {
     published.message += "; " + g;
+  }
+  if (s.online.poorly_tracked > 0) {
+    published.message += "; " + std::to_string(s.online.poorly_tracked) +
+                         " sets of poorly tracked poses not used (quality below " +
+                         FixedText(s.online.quality_threshold, 2) + ")";
   }
   if (unsupported) published.message = "not usable: " + *unsupported + "; " + published.message;
   estimate_.rig.slaves[index] = published;

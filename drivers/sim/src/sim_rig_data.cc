@@ -22,6 +22,12 @@ bool SimulatedRigData::Blackout(int camera, int64_t k) const {
   const double t = StreamTime(k);
   return it != spec.blackout_s.end() && t >= it->second.first && t < it->second.second;
 }
+bool SimulatedRigData::BlurBurst(int camera, int64_t k) const {
+  if (spec.blur_burst_s.empty()) return false;
+  const auto it = spec.blur_burst_s.find(spec.names[static_cast<size_t>(camera)]);
+  const double t = StreamTime(k);
+  return it != spec.blur_burst_s.end() && t >= it->second.first && t < it->second.second;
+}
 int64_t SimulatedRigData::JitterNs(int camera, int64_t k) const {
   if (spec.timestamp_jitter_s <= 0.0) return 0;
   Rng rng(
@@ -36,11 +42,13 @@ cv::Mat SimulatedRigData::Render(int camera, int64_t k, std::vector<float>* acc,
   const NodeGrid* grid = spec.render_block >= 2 ? &grids[camera] : nullptr;
   acc->assign(static_cast<size_t>(tables.width) * tables.height, 0.f);
   const double t = StreamTime(k);
-  if (spec.blur_exposure_s > 0.0) {
-    const int samples = spec.blur_samples;
+  const bool burst = BlurBurst(camera, k);
+  const double exposure_s = burst ? 0.9 / spec.frame_rate_hz : spec.blur_exposure_s;
+  if (exposure_s > 0.0) {
+    const int samples = burst ? std::max(spec.blur_samples, 8) : spec.blur_samples;
     const float weight = 1.f / static_cast<float>(samples);
     for (int s = 0; s < samples; ++s) {
-      const double ts = t + spec.blur_exposure_s * ((s + 0.5) / samples - 0.5);
+      const double ts = t + exposure_s * ((s + 0.5) / samples - 0.5);
       RenderAccumulate(scene, tables, grid, WorldFromCamera(camera, ts), weight, acc->data(), hits,
                        kernel);
     }

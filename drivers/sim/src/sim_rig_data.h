@@ -44,6 +44,8 @@ struct SimulatedRigData {
   bool Dropped(int camera, int64_t k) const;
   // Whether frame k of `camera` is black (spec.blackout_s).
   bool Blackout(int camera, int64_t k) const;
+  // Whether frame k of `camera` is in a blur burst (spec.blur_burst_s).
+  bool BlurBurst(int camera, int64_t k) const;
   // Stamp noise of frame k of `camera`, nanoseconds (spec.timestamp_jitter_s, clipped at 3 sigma).
   int64_t JitterNs(int camera, int64_t k) const;
   // Frame k of `camera`: renders (with motion blur), adds noise, quantises. `acc`, `hits`:

@@ -215,6 +215,16 @@ Status CheckDevices(const SimulatedRigSpec& spec) {
       return Error{e.str()};
     }
   }
+  for (const auto& [name, span] : spec.blur_burst_s) {
+    if (std::find(spec.names.begin(), spec.names.end(), name) == spec.names.end()) {
+      e << "blur_burst_s." << name << ": no camera of that name";
+      return Error{e.str()};
+    }
+    if (!(span.first >= 0 && span.first < span.second && std::isfinite(span.second))) {
+      e << "blur_burst_s." << name << ": must be [from, to) with 0 <= from < to (s)";
+      return Error{e.str()};
+    }
+  }
   for (const auto& [name, t] : spec.fail_after_s) {
     if (std::find(spec.names.begin(), spec.names.end(), name) == spec.names.end()) {
       e << "fail_after_s." << name << ": no camera of that name";

@@ -5,6 +5,7 @@
 // (`cameras:` of the rig config).
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -24,7 +25,8 @@ const std::set<std::string> kSourceKeys = {
     "type",         "frame_rate_hz", "num_frames",       "duration_s",
     "seed",         "realtime",      "trajectory",       "scene",
     "noise_sigma",  "motion_blur",   "drop_probability", "timestamp_jitter_ms",
-    "fail_after_s", "blackout_s",    "render_block",     "trigger"};
+    "fail_after_s", "blackout_s",    "render_block",     "trigger",
+    "blur_burst_s"};
 
 // A number as people write it: "20", "9.95", "8.33333".
 std::string PlainNumber(double v) { return SignificantText(v, 6); }
@@ -346,13 +348,15 @@ std::optional<Error> ReadSimulatedTrigger(const FieldReader& r, const YAML::Node
   return std::nullopt;
 }
 
-// blackout_s: per camera, a span of stream time [from, to) in which it sees nothing.
-std::optional<Error> ReadBlackouts(const FieldReader& r, const YAML::Node& source,
-                                   SimulatedRigSpec* spec) {
-  if (const YAML::Node n = source["blackout_s"]) {
-    if (!n.IsMap()) return r.Fail(n, "source.blackout_s", "expected a map camera: [from, to]");
+// blackout_s (a span of stream time [from, to) in which it sees nothing) or blur_burst_s (in
+// which its frames are blurred): per camera, `name` of `source`, into `spans`.
+std::optional<Error> ReadSpans(const FieldReader& r, const YAML::Node& source,
+                               const std::string& name,
+                               std::map<std::string, std::pair<double, double>>* spans) {
+  if (const YAML::Node n = source[name]) {
+    if (!n.IsMap()) return r.Fail(n, "source." + name, "expected a map camera: [from, to]");
     for (auto it = n.begin(); it != n.end(); ++it) {
-      const std::string key = "source.blackout_s." + it->first.Scalar();
+      const std::string key = "source." + name + "." + it->first.Scalar();
       if (!it->second.IsSequence() || it->second.size() != 2) {
         return r.Fail(it->second, key, "expected [from, to] in seconds");
       }
@@ -362,7 +366,7 @@ std::optional<Error> ReadBlackouts(const FieldReader& r, const YAML::Node& sourc
       auto to = NumberIn(
           r, it->second[1], key, [&](double x) { return x > *from; }, "> from");
       if (!to) return Error{to.error()};
-      spec->blackout_s[it->first.Scalar()] = {*from, *to};
+      (*spans)[it->first.Scalar()] = {*from, *to};
     }
   }
   return std::nullopt;
@@ -438,7 +442,8 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
   if (auto e = ReadImageEffects(r, source, &spec)) return *e;
   if (auto e = ReadSimulatedTrigger(r, source, &spec)) return *e;
   if (auto e = ReadFailuresAndRendering(r, source, &spec)) return *e;
-  if (auto e = ReadBlackouts(r, source, &spec)) return *e;
+  if (auto e = ReadSpans(r, source, "blackout_s", &spec.blackout_s)) return *e;
+  if (auto e = ReadSpans(r, source, "blur_burst_s", &spec.blur_burst_s)) return *e;
   if (auto e = CheckFramesFitTrajectory(r, source, &spec)) return *e;
   return spec;
 }

@@ -13,13 +13,18 @@
 namespace rigcal {
 
 struct SlaveOnlineState {
-  uint32_t flags = 0;  // SlaveFlags (slave_state.h): facts beside the state
+  uint32_t flags = 0;               // SlaveFlags (slave_state.h): facts beside the state
   int segment = 0;                  // current odometry segment of the slave
   int64_t last_update_ns = 0;       // stream time of the last accepted motion
   double short_long_rot_deg = 0.0;  // disagreement of the short and long windows
   int keyframes = 0;
   int gated_scale = 0;  // rejected by the screw-pitch scale gate
   int decalibration_events = 0;
+  // Sets not used because the master's or this slave's pose was poorly tracked (a quality far
+  // below the camera's usual one; motions/pose_quality_gate.h), and the last threshold that
+  // rejected one. Not saved in the state file: a resumed run counts from 0.
+  int poorly_tracked = 0;
+  double quality_threshold = std::numeric_limits<double>::quiet_NaN();
   // Cameras that run free (OnlineOptions::time_offset; set by OnlineCalibrator::Estimate): the
   // clock offset is estimated from the data (else given), it is known (usable), the clock drift
   // dτ/dt in ppm, and the jumps of the offset detected (a camera restarted).

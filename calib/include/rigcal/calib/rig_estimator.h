@@ -27,7 +27,8 @@
 namespace rigcal {
 namespace internal {
 class PoseGlitchGate;
-}
+class PoseQualityGate;
+}  // namespace internal
 
 class RigEstimator {
  public:
@@ -76,7 +77,8 @@ class RigEstimator {
   std::vector<std::string> names_;
   RigEstimatorOptions options_;
   std::vector<std::unique_ptr<Slave>> slaves_;
-  std::unique_ptr<internal::PoseGlitchGate> glitch_gate_;  // pose_glitch_gate
+  std::unique_ptr<internal::PoseGlitchGate> glitch_gate_;    // pose_glitch_gate
+  std::unique_ptr<internal::PoseQualityGate> quality_gate_;  // pose_quality_gate
   RigEstimate estimate_;
   int master_segment_ = 0;
   bool have_master_segment_ = false;

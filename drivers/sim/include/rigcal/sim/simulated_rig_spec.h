@@ -67,6 +67,10 @@
 //     blackout_s: {cam0: [8, 9]}  # the camera sees nothing (lens covered): its images are black
 //                                 # for stream times in [from, to) s; its VO loses tracking and
 //                                 # re-initialises in a new scale segment afterwards
+//     blur_burst_s: {cam0: [8, 9]}  # the camera's frames in [from, to) s are blurred by its
+//                                 # motion over 90 % of the frame period (8 renders, or
+//                                 # motion_blur.samples when more): a burst of poorly tracked
+//                                 # frames (RigEstimator's pose quality gate)
 //     render_block: 4             # 1: ray cast every pixel (exact, ~5x slower). N > 1: cast
 //                                 # every Nth pixel and interpolate texture coordinates and
 //                                 # mip level inside N x N blocks whose corners see the same
@@ -141,6 +145,8 @@ struct SimulatedRigSpec {
   std::map<std::string, double> fail_after_s;  // camera name -> stream time of failure, >= 0
   // camera name -> [from, to) stream seconds of black images, 0 <= from < to
   std::map<std::string, std::pair<double, double>> blackout_s;
+  // camera name -> [from, to) stream seconds of frames blurred over 90 % of the frame period
+  std::map<std::string, std::pair<double, double>> blur_burst_s;
   int render_block = 4;  // [1, 32]
 
   // --- Hardware trigger (`source.trigger`, simulated_trigger_timeline.h) ---------------------
