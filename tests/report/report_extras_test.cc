@@ -12,6 +12,7 @@
 
 #include "report/history_fixture.h"
 #include "rigcal/base/format.h"
+#include "rigcal/io/provenance.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/io/rig_files.h"
 #include "rigcal/report/report_html.h"
@@ -132,6 +133,35 @@ TEST_F(ReportExtrasTest, BaselineIsTheNormOfCInItsUnitAndInMetresWhenKnown) {
   const std::string row = Element(html, "<tr data-slave=\"cam1\">", "</tr>");
   EXPECT_NEAR(ValueAndSigma(Cell(row, "metres")).first, cam1.estimate.C.norm(), 0.5e-4) << row;
   EXPECT_THAT(row, HasSubstr("metric master"));
+}
+
+// A result file whose provenance says C is in metres (a metric master, a target reference,
+// --metric-*): the baseline in metres is |C| itself; without that line, the unit is unknown.
+TEST_F(ReportExtrasTest, ResultInMetresGivesTheBaselineInMetres) {
+  auto history = LoadReport({files_->history_log, "", ""});
+  ASSERT_TRUE(history.ok()) << history.error();
+  io::Provenance provenance;
+  provenance.metric = true;
+  const std::string metric = Write("metric_result.yaml", io::ResultToYaml(history->final_result) +
+                                                             io::ProvenanceToYaml(provenance));
+  auto data = LoadReport({metric, "", ""});
+  ASSERT_TRUE(data.ok()) << data.error();
+  EXPECT_EQ(data->metres_per_unit, 1.0);
+  EXPECT_EQ(data->distance_unit, "m");
+  const std::string html = RenderReportHtml(*data);
+  const SlaveCalibration& cam2 = data->final_result.slaves[1];
+  const std::string row = Element(html, "<tr data-slave=\"cam2\">", "</tr>");
+  EXPECT_NEAR(ValueAndSigma(Cell(row, "metres")).first, cam2.estimate.C.norm(), 0.5e-4) << row;
+  EXPECT_THAT(row, HasSubstr("(the result&apos;s provenance)"));  // XML-escaped
+
+  provenance.metric = false;
+  const std::string odometry =
+      Write("odometry_result.yaml",
+            io::ResultToYaml(history->final_result) + io::ProvenanceToYaml(provenance));
+  auto unknown = LoadReport({odometry, "", ""});
+  ASSERT_TRUE(unknown.ok()) << unknown.error();
+  EXPECT_TRUE(std::isnan(unknown->metres_per_unit));
+  EXPECT_EQ(CountOf(RenderReportHtml(*unknown), "<td class=\"metres\">"), 0);
 }
 
 TEST_F(ReportExtrasTest, HistogramsCountEveryResidualWithItsSigma) {
