@@ -68,4 +68,26 @@ install(FILES ${PROJECT_SOURCE_DIR}/cmake/debian/copyright
         DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rigcal-dev COMPONENT dev)
 set(CPACK_RESOURCE_FILE_LICENSE ${PROJECT_SOURCE_DIR}/LICENSE)
 
+# The Debian changelog every binary package carries (policy 12.7; lintian's no-changelog): one
+# entry for this version pointing to the project's history, dated at configure time (or
+# SOURCE_DATE_EPOCH, which string(TIMESTAMP) honours, for a reproducible package), compressed
+# with gzip -9n as lintian expects.
+find_program(RIGCAL_GZIP gzip)
+if(RIGCAL_GZIP)
+  string(TIMESTAMP rigcal_changelog_date "%a, %d %b %Y %H:%M:%S +0000" UTC)
+  file(WRITE ${PROJECT_BINARY_DIR}/deb/changelog.Debian
+       "rigcal (${PROJECT_VERSION}-1) unstable; urgency=medium\n\n"
+       "  * rigcal ${PROJECT_VERSION} packaged with CPack; the changes are the project's git\n"
+       "    history.\n\n"
+       " -- ${CPACK_PACKAGE_CONTACT}  ${rigcal_changelog_date}\n")
+  execute_process(COMMAND ${RIGCAL_GZIP} -9nf ${PROJECT_BINARY_DIR}/deb/changelog.Debian
+                  RESULT_VARIABLE rigcal_gzip_result)
+  if(rigcal_gzip_result EQUAL 0)
+    install(FILES ${PROJECT_BINARY_DIR}/deb/changelog.Debian.gz
+            DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rigcal COMPONENT runtime)
+    install(FILES ${PROJECT_BINARY_DIR}/deb/changelog.Debian.gz
+            DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rigcal-dev COMPONENT dev)
+  endif()
+endif()
+
 include(CPack)

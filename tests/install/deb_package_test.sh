@@ -67,6 +67,12 @@ check "units in the package" '[ -f "$root/usr/lib/systemd/system/rigcal.service"
    grep -q "^ExecStart=/usr/bin/rigcal calib" "$root/usr/lib/systemd/system/rigcal.service"'
 check "CMake package in rigcal-dev" '[ -f "$root/usr/lib/cmake/rigcal/rigcalConfig.cmake" ] ||
    ls "$root"/usr/lib/*/cmake/rigcal/rigcalConfig.cmake >/dev/null 2>&1'
+for pkg in rigcal rigcal-dev; do
+  check "copyright and changelog.Debian.gz of $pkg (Debian policy 12.5, 12.7)" \
+    '[ -f "$root/usr/share/doc/$pkg/copyright" ] &&
+     gzip -dc "$root/usr/share/doc/$pkg/changelog.Debian.gz" | head -1 |
+       grep -q "^rigcal ($(dpkg-deb -f "$runtime" Version)) "'
+done
 if [ -f "$build/lcmtypes/rigcal_lcmtypes.jar" ]; then
   check "jar in rigcal-dev" '[ -f "$root/usr/share/java/rigcal-lcmtypes.jar" ]'
 fi

@@ -144,5 +144,45 @@ TEST(SvgPlotTest, WriteSvgWritesFileAndReportsErrors) {
   std::filesystem::remove_all(dir);
 }
 
+// Lines told apart without colour: each series' marker shape and dash pattern, in the plot and
+// in its legend entry.
+TEST(SvgPlotTest, MarkersAndDashPatternsAreDrawnInPlotAndLegend) {
+  plot::PlotPanel panel;
+  const plot::Marker shapes[] = {plot::Marker::kSquare, plot::Marker::kTriangle,
+                                 plot::Marker::kDiamond, plot::Marker::kCross};
+  const char* elements[] = {"<rect ", "<polygon ", "<polygon ", "<path "};
+  for (int i = 0; i < 4; ++i) {
+    plot::PlotSeries s;
+    s.label = "s" + std::to_string(i);
+    s.x = {0.0, 1.0, 2.0};
+    s.y = {1.0 * i, 1.0 * i + 1, 1.0 * i};
+    s.marker = shapes[i];
+    s.dash_array = std::to_string(i + 1) + " 3";
+    panel.series.push_back(s);
+  }
+  plot::PlotFigure figure;
+  figure.panels = {panel};
+  const std::string svg = plot::RenderSvg(figure);
+  EXPECT_TRUE(TagsBalanced(svg));
+  for (int i = 0; i < 4; ++i) {
+    const size_t at = svg.find("data-label=\"s" + std::to_string(i) + "\"");
+    ASSERT_NE(at, std::string::npos);
+    const std::string series = svg.substr(at, svg.find("</g>", at) - at);
+    EXPECT_EQ(Count(series, elements[i]), 3) << series;  // one per point
+    EXPECT_EQ(Count(series, "<circle"), 0);
+    const std::string dash = "stroke-dasharray=\"" + std::to_string(i + 1) + " 3\"";
+    EXPECT_EQ(Count(series, dash), 1);
+    // The legend entry: the dashed line and the marker.
+    const size_t legend = svg.find("<g class=\"legend\">");
+    ASSERT_NE(legend, std::string::npos);
+    EXPECT_EQ(Count(svg.substr(legend), dash), 1);
+  }
+  const size_t legend = svg.find("<g class=\"legend\">");
+  const std::string entries = svg.substr(legend, svg.find("</g>", legend) - legend);
+  EXPECT_EQ(Count(entries, "<path "), 1);
+  EXPECT_EQ(Count(entries, "<polygon "), 2);
+  EXPECT_EQ(Count(entries, "<rect "), 2);  // the legend's box and the square
+}
+
 }  // namespace
 }  // namespace rigcal

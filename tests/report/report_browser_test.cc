@@ -94,7 +94,7 @@ TEST_F(ReportBrowserTest, EveryPlotRendersAndTheConsoleIsEmpty) {
   const std::string html = (files.dir / "report.html").string();
   ASSERT_TRUE(WriteReportHtml(html, *data).ok());
   const int plots = CountOf(ReadText(html), "<figure class=\"plot\"");
-  ASSERT_EQ(plots, 8);
+  ASSERT_EQ(plots, 10);
 
   const BrowserRun run = RunBrowser(chromium_, html, (files.dir / "report").string());
   std::cout << "screenshot: " << run.screenshot << "\n";
@@ -104,7 +104,7 @@ TEST_F(ReportBrowserTest, EveryPlotRendersAndTheConsoleIsEmpty) {
   EXPECT_EQ(Attribute(run.dom, "data-plots-expected"), plots) << run.dom.substr(0, 400);
   EXPECT_EQ(Attribute(run.dom, "data-plots-rendered"), plots);
   EXPECT_EQ(CountOf(run.dom, "data-rendered=\"true\""), plots);
-  EXPECT_THAT(run.dom, ::testing::HasSubstr("(8/8 plots rendered)</title>"));
+  EXPECT_THAT(run.dom, ::testing::HasSubstr("(10/10 plots rendered)</title>"));
   EXPECT_EQ(run.console, "");
   std::filesystem::remove_all(files.dir / "report.profile");
 }

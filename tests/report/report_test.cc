@@ -103,8 +103,8 @@ TEST_F(ReportTest, PageHasEveryPlotWithData) {
   auto data = LoadReport({files_->history_log, files_->pose_log, files_->truth});
   ASSERT_TRUE(data.ok()) << data.error();
   const std::string html = RenderReportHtml(*data);
-  // rig view, 2 histories, 2 x (scales, residua), health: 8 plots, none missing.
-  EXPECT_EQ(CountOf(html, "<figure class=\"plot\""), 8);
+  // rig view, 2 histories, 2 x (scales, residua, histograms), health: 10 plots, none missing.
+  EXPECT_EQ(CountOf(html, "<figure class=\"plot\""), 10);
   EXPECT_EQ(CountOf(html, "<figure class=\"plot missing\""), 0);
   // The health figure shows the clock of the free-running cam1.
   EXPECT_GE(CountOf(html, "clock offset to the master"), 1);
@@ -149,7 +149,7 @@ TEST_F(ReportTest, ResultFileGivesTableAndRigButNoHistory) {
   // With the poses the per-motion plots come back.
   auto with_poses = LoadReport({result, files_->pose_log, ""});
   ASSERT_TRUE(with_poses.ok()) << with_poses.error();
-  EXPECT_EQ(CountOf(RenderReportHtml(*with_poses), "<figure class=\"plot\""), 5);
+  EXPECT_EQ(CountOf(RenderReportHtml(*with_poses), "<figure class=\"plot\""), 7);
 }
 
 TEST_F(ReportTest, DamagedLogIsUsedUpToTheDamage) {

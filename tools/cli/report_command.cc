@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // `rigcal report`: one self-contained HTML file of a calibration (its history, per-motion
 // residua, camera health, the rig drawn, the final table).
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -29,7 +30,8 @@ int RunReport(const ReportArgs& args) {
     return kExitBadInput;
   }
   const io::Provenance provenance =
-      ProvenanceOf({args.input.input, args.input.poses_log, args.input.truth}, "", false);
+      ProvenanceOf({args.input.input, args.input.poses_log, args.input.truth}, args.input.config,
+                   std::isfinite(data->metres_per_unit) && data->metres_per_unit == 1.0);
   data->provenance.push_back("rigcal " + provenance.rigcal_version + ", " + provenance.date_utc);
   data->provenance.push_back("command: " + provenance.command);
   for (const io::InputFile& f : provenance.inputs) {
@@ -56,7 +58,9 @@ void RegisterReport(CLI::App& app, int* exit_code) {
       "table in the thesis's error-model columns, the rig from the top and the side with camera\n"
       "frusta, every parameter over time with +-sigma bands and the truth, the measured scales\n"
       "per motion with the rejection threshold (thesis fig. 5.12), the constraint residua over\n"
-      "time (fig. 5.11) and the cameras' VO health.\n"
+      "time (fig. 5.11) and their histograms with their sigma, the baselines |C| +- sigma (in\n"
+      "metres when the unit is known: a metric master or result, or a metric truth), the\n"
+      "cameras' intrinsics (--config) and the cameras' VO health.\n"
       "INPUT is an LCM log holding the RIGCAL_EXTRINSICS / RIGCAL_STATUS history (e.g. written by\n"
       "`rigcal calib --log in.log --publish-lcm file:///tmp/out.log?mode=w`) or a result file\n"
       "(YAML of --out or JSON of --json: the table and the rig only). The per-motion plots need\n"
@@ -70,7 +74,11 @@ void RegisterReport(CLI::App& app, int* exit_code) {
                   "LCM log with RIGCAL_POSE_<camera> events (e.g. the input of `rigcal calib "
                   "--log`) for the per-motion residua and measured scales");
   cmd->add_option("--truth", args->input.truth,
-                  "True mountings: a rig YAML, or a rig config whose cameras carry `truth`");
+                  "True mountings: a rig YAML, a rig config whose cameras carry `truth`, or the "
+                  "directory of `rigcal run --truth-out` (with the poses: the master unit aligned "
+                  "per master segment, as `run --eval`)");
+  cmd->add_option("--config", args->input.config,
+                  "Rig config: the intrinsics table, and C in metres when its master is metric");
   cmd->callback([args, exit_code]() { *exit_code = RunReport(*args); });
 }
 

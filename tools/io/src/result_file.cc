@@ -251,4 +251,15 @@ Expected<RigCalibration> ReadResultFile(const std::string& path) {
   return result;
 }
 
+Expected<std::string> ReadResultDistanceUnit(const std::string& path) {
+  auto root = LoadYaml(path);  // JSON is YAML (ReadResultFile)
+  if (!root) return Error{root.error()};
+  if (!root->IsMap()) return std::string();
+  const YAML::Node provenance = (*root)["provenance"];
+  if (!provenance || !provenance.IsMap()) return std::string();
+  const YAML::Node units = provenance["units"];
+  if (!units || !units.IsMap() || !units["C"] || !units["C"].IsScalar()) return std::string();
+  return units["C"].Scalar();
+}
+
 }  // namespace rigcal::io

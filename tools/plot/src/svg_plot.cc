@@ -80,6 +80,36 @@ std::string SeriesColor(const PlotSeries& s, size_t index) {
   return s.color.empty() ? kPalette[index % kPaletteSize] : s.color;
 }
 
+// The stroke-dasharray attribute of a series' line ("" for a solid one).
+std::string DashAttribute(const PlotSeries& s) {
+  if (!s.dash_array.empty()) return " stroke-dasharray=\"" + XmlEscape(s.dash_array) + "\"";
+  return s.dashed ? " stroke-dasharray=\"6 4\"" : "";
+}
+
+// One marker of shape `marker` centred at (x, y) with radius r (pixels).
+std::string MarkerElement(Marker marker, double x, double y, double r, const std::string& color) {
+  const auto point = [](double px, double py) { return Num(px) + "," + Num(py) + " "; };
+  switch (marker) {
+    case Marker::kSquare:
+      return "<rect x=\"" + Num(x - r) + "\" y=\"" + Num(y - r) + "\" width=\"" + Num(2 * r) +
+             "\" height=\"" + Num(2 * r) + "\" fill=\"" + color + "\"/>\n";
+    case Marker::kTriangle:
+      return "<polygon points=\"" + point(x, y - 1.2 * r) + point(x - 1.1 * r, y + 0.8 * r) +
+             point(x + 1.1 * r, y + 0.8 * r) + "\" fill=\"" + color + "\"/>\n";
+    case Marker::kDiamond:
+      return "<polygon points=\"" + point(x, y - 1.3 * r) + point(x + 1.3 * r, y) +
+             point(x, y + 1.3 * r) + point(x - 1.3 * r, y) + "\" fill=\"" + color + "\"/>\n";
+    case Marker::kCross:
+      return "<path d=\"M" + Num(x - r) + "," + Num(y - r) + "L" + Num(x + r) + "," + Num(y + r) +
+             "M" + Num(x - r) + "," + Num(y + r) + "L" + Num(x + r) + "," + Num(y - r) +
+             "\" stroke=\"" + color + "\" stroke-width=\"1.4\" fill=\"none\"/>\n";
+    case Marker::kCircle:
+      break;
+  }
+  return "<circle cx=\"" + Num(x) + "\" cy=\"" + Num(y) + "\" r=\"" + Num(r) + "\" fill=\"" +
+         color + "\"/>\n";
+}
+
 bool HasBand(const PlotSeries& s) {
   return !s.band_lo.empty() && s.band_lo.size() == s.x.size() && s.band_hi.size() == s.x.size();
 }
@@ -183,8 +213,8 @@ void RenderAxes(const PlotPanel& panel, const PanelFrame& f, double x0, double y
       << "\" height=\"" << Num(f.ph) << "\" fill=\"#ffffff\" stroke=\"#333333\"/>\n";
   for (double t : f.xa.ticks) {
     double x = f.X(t);
-    out << "<line x1=\"" << Num(x) << "\" y1=\"" << Num(f.top) << "\" x2=\"" << Num(x)
-        << "\" y2=\"" << Num(f.top + f.ph) << "\" stroke=\"#e5e5e5\"/>\n";
+    out << "<line x1=\"" << Num(x) << "\" y1=\"" << Num(f.top) << "\" x2=\"" << Num(x) << "\" y2=\""
+        << Num(f.top + f.ph) << "\" stroke=\"#e5e5e5\"/>\n";
     out << "<text x=\"" << Num(x) << "\" y=\"" << Num(f.top + f.ph + 15)
         << "\" text-anchor=\"middle\">" << XmlEscape(TickLabel(t, f.xa.step)) << "</text>\n";
   }
@@ -222,7 +252,7 @@ void RenderSeries(const PlotSeries& s, size_t si, const PanelFrame& f, const std
   auto flush = [&]() {
     if (!points.empty() && s.lines) {
       out << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"1.6\""
-          << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << " points=\"" << points << "\"/>\n";
+          << DashAttribute(s) << " points=\"" << points << "\"/>\n";
     }
     points.clear();
   };
@@ -238,8 +268,7 @@ void RenderSeries(const PlotSeries& s, size_t si, const PanelFrame& f, const std
   if (s.markers) {
     for (size_t i = 0; i < n; ++i) {
       if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-      out << "<circle cx=\"" << Num(px(s.x[i])) << "\" cy=\"" << Num(py(s.y[i]))
-          << "\" r=\"2.2\" fill=\"" << color << "\"/>\n";
+      out << MarkerElement(s.marker, px(s.x[i]), py(s.y[i]), 2.2, color);
     }
   }
   out << "</g>\n";
@@ -271,13 +300,12 @@ void RenderLegend(const PlotPanel& panel, const PanelFrame& f, const LegendSize&
     if (s.label.empty()) continue;
     double ey = by + 11 + 14.0 * row++;
     if (s.lines) {
-      out << "<line x1=\"" << Num(bx + 5) << "\" y1=\"" << Num(ey - 3) << "\" x2=\""
-          << Num(bx + 27) << "\" y2=\"" << Num(ey - 3) << "\" stroke=\"" << SeriesColor(s, si)
-          << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/>\n";
-    } else {
-      out << "<circle cx=\"" << Num(bx + 16) << "\" cy=\"" << Num(ey - 3)
-          << "\" r=\"2.6\" fill=\"" << SeriesColor(s, si) << "\"/>\n";
+      out << "<line x1=\"" << Num(bx + 5) << "\" y1=\"" << Num(ey - 3) << "\" x2=\"" << Num(bx + 27)
+          << "\" y2=\"" << Num(ey - 3) << "\" stroke=\"" << SeriesColor(s, si)
+          << "\" stroke-width=\"1.6\"" << DashAttribute(s) << "/>\n";
     }
+    if (s.markers || !s.lines)
+      out << MarkerElement(s.marker, bx + 16, ey - 3, 2.6, SeriesColor(s, si));
     out << "<text x=\"" << Num(bx + 31) << "\" y=\"" << Num(ey) << "\">" << XmlEscape(s.label)
         << "</text>\n";
   }

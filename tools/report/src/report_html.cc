@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "report_plots.h"
+#include "report_tables.h"
 #include "rigcal/base/format.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/io/atomic_file.h"
@@ -89,7 +90,11 @@ std::string AxisAngleCell(const Eigen::Quaterniond& q) {
 
 void RenderFigure(const ReportFigure& f, std::ostringstream& out) {
   out << "<figure class=\"plot" << (f.svg.empty() ? " missing" : "") << "\" data-plot=\""
-      << Html(f.name) << "\">\n<figcaption>" << Html(f.title) << "</figcaption>\n";
+      << Html(f.name) << "\"";
+  for (const auto& [name, value] : f.attributes) {
+    out << " data-" << Html(name) << "=\"" << Html(value) << "\"";
+  }
+  out << ">\n<figcaption>" << Html(f.title) << "</figcaption>\n";
   if (!f.note.empty()) out << "<p class=\"note\">" << Html(f.note) << "</p>\n";
   if (f.svg.empty()) {
     out << "<div class=\"missing\">" << Html(f.missing) << "</div>\n";
@@ -185,6 +190,10 @@ std::string RenderReportHtml(const ReportData& data) {
   }
   out << "<h2 id=\"final\">Final calibration</h2>\n";
   RenderTable(data, out);
+  out << "<h2 id=\"baseline\">Baselines</h2>\n";
+  RenderBaselineTable(data, out);
+  out << "<h2 id=\"intrinsics\">Intrinsics</h2>\n";
+  RenderIntrinsicsTable(data, out);
   out << "<h2 id=\"rig\">The rig</h2>\n";
   RenderFigure(RigViewFigure(data), out);
   out << "<h2 id=\"history\">Parameters over time</h2>\n";

@@ -7,8 +7,8 @@
 #include "history_log.h"
 #include "motion_analysis.h"
 #include "rigcal/io/result_file.h"
-#include "rigcal/io/rig_files.h"
-#include "rigcal/io/truth_comparison.h"
+#include "rigcal/io/rig_config.h"
+#include "rigcal/io/truth_files.h"
 #include "rigcal/lcm/slave_view.h"
 #include "rigcal/slave_extrinsics_t.hpp"
 
@@ -58,6 +58,10 @@ Status FillFromLog(const LogContents& log, ReportData* data) {
   const rig_extrinsics_t& last = log.extrinsics.back();
   data->master = last.master;
   data->distance_unit = last.distance_unit == rig_extrinsics_t::UNIT_METRE ? "m" : "master units";
+  if (last.distance_unit == rig_extrinsics_t::UNIT_METRE) {
+    data->metres_per_unit = 1.0;
+    data->metres_source = "C in metres (RIGCAL_EXTRINSICS distance_unit)";
+  }
   data->extrinsics_messages = static_cast<int64_t>(log.extrinsics.size());
   data->t0_ns = log.extrinsics.front().t_ns;
   for (const rig_extrinsics_t& msg : log.extrinsics) data->t0_ns = std::min(data->t0_ns, msg.t_ns);
@@ -134,20 +138,80 @@ void AddLogNotes(const LogContents& log, ReportData* data) {
   }
 }
 
-Status AddTruth(const std::string& path, ReportData* data) {
-  auto truth = io::ReadTrueMountings(path, data->final_result.master);
+// The poses of the log as odometry trajectories in rig order (master first); empty when the log
+// has none of some camera.
+std::vector<TimedTrajectory> OdometryOf(const LogContents* log, const ReportData& data) {
+  std::vector<TimedTrajectory> odometry;
+  if (log == nullptr) return odometry;
+  std::vector<std::string> cameras = {data.master};
+  cameras.insert(cameras.end(), data.slaves.begin(), data.slaves.end());
+  for (const std::string& camera : cameras) {
+    const auto it = log->poses.find(camera);
+    if (it == log->poses.end() || it->second.t_ns.empty()) return {};
+    TimedTrajectory trajectory;
+    trajectory.name = camera;
+    trajectory.t_ns = it->second.t_ns;
+    trajectory.poses = it->second.poses;
+    trajectory.segment = it->second.segment;
+    odometry.push_back(std::move(trajectory));
+  }
+  return odometry;
+}
+
+// The truth compared by the one comparison (truth_files.h): per master segment when the truth
+// has trajectories and the poses are given, else from the mountings.
+Status AddTruth(const std::string& path, const LogContents* log, ReportData* data) {
+  std::vector<std::string> cameras = {data->final_result.master};
+  cameras.insert(cameras.end(), data->slaves.begin(), data->slaves.end());
+  auto truth = io::ReadTruthFiles(path, cameras);
   if (!truth) return truth.status();
   for (const std::string& slave : data->slaves) {
-    if (truth->count(slave) == 0) {
+    if (truth->mountings.count(slave) == 0) {
       return Error{path + ": no truth for slave '" + slave + "'"};
     }
   }
-  io::TruthInput input;
-  input.mountings = *truth;
-  auto comparison = io::CompareWithTruth(data->final_result, input);
+  const std::vector<TimedTrajectory> odometry = OdometryOf(log, *data);
+  if (!truth->trajectories.empty() && odometry.empty()) {
+    data->notes.push_back("the true trajectories of " + path +
+                          " are not used: no poses of every camera (RIGCAL_POSE_<camera> events "
+                          "in the log, or --poses LOG)");
+  }
+  auto comparison = io::CompareRunWithTruth(
+      data->final_result, *truth, io::TruthUnit::kAuto,
+      truth->trajectories.empty() ? std::vector<TimedTrajectory>{} : odometry);
   if (!comparison) return Error{path + ": " + comparison.error()};
   data->truth = comparison->truth_master_units;
   data->notes.push_back("truth from " + path + ": " + comparison->alignment.message);
+  if (!comparison->note.empty()) data->notes.push_back(comparison->note);
+  if (!std::isfinite(data->metres_per_unit) && comparison->alignment.applied) {
+    data->metres_per_unit = comparison->alignment.metres_per_unit;
+    data->metres_source = "the master unit fitted to the truth";
+  }
+  return {};
+}
+
+// The config's intrinsics and, for a metric master, metres.
+Status AddConfig(const std::string& path, ReportData* data) {
+  auto config = io::LoadRigConfig(path);
+  if (!config) return Error{config.error()};
+  data->config = path;
+  for (const io::CameraConfig& camera : config->cameras) {
+    if (!camera.spec) continue;
+    camera::CameraSpec spec = *camera.spec;
+    spec.name = camera.name;
+    data->intrinsics.push_back(std::move(spec));
+  }
+  if (!config->cameras.empty() && !data->master.empty() &&
+      config->cameras.front().name != data->master) {
+    return Error{path + ": the config's master is '" + config->cameras.front().name +
+                 "', the result's '" + data->master + "'"};
+  }
+  if (!config->cameras.empty() && config->cameras.front().metric &&
+      !std::isfinite(data->metres_per_unit)) {
+    data->metres_per_unit = 1.0;
+    data->metres_source = "metric master (" + path + ")";
+    data->distance_unit = "m";
+  }
   return {};
 }
 
@@ -173,6 +237,12 @@ Expected<ReportData> LoadReport(const ReportOptions& options) {
     }
     data.final_result = std::move(*result);
     data.master = data.final_result.master;
+    auto unit = io::ReadResultDistanceUnit(options.input);
+    if (unit && unit->rfind("m:", 0) == 0) {
+      data.distance_unit = "m";
+      data.metres_per_unit = 1.0;
+      data.metres_source = "C in metres (the result's provenance)";
+    }
     for (const SlaveCalibration& s : data.final_result.slaves) data.slaves.push_back(s.name);
     data.notes.push_back(
         "no history in a result file: the plots over time need the LCM log of the run "
@@ -208,8 +278,11 @@ Expected<ReportData> LoadReport(const ReportOptions& options) {
         "(RIGCAL_POSE_<camera> events in the log, or --poses LOG) to compute them");
   }
 
+  if (!options.config.empty()) {
+    if (Status s = AddConfig(options.config, &data); !s.ok()) return s;
+  }
   if (!options.truth.empty()) {
-    if (Status s = AddTruth(options.truth, &data); !s.ok()) return s;
+    if (Status s = AddTruth(options.truth, log ? &*log : nullptr, &data); !s.ok()) return s;
   }
   return data;
 }

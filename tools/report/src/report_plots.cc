@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "rigcal/base/format.h"
 #include "rigcal/base/quaternion.h"
@@ -14,6 +15,21 @@ namespace {
 
 constexpr const char* kAxisColors[] = {"#D55E00", "#009E73", "#0072B2"};  // x, y, z
 constexpr const char* kAxisNames[] = {"x", "y", "z"};
+// Besides its colour every line of a camera or an axis has its own dash pattern and marker, so
+// the lines stay apart in grey print and for colour-blind readers.
+constexpr const char* kDashes[] = {"", "7 3", "2 2", "7 2 2 2", "12 3", "4 4"};
+constexpr plot::Marker kMarkers[] = {plot::Marker::kCircle, plot::Marker::kSquare,
+                                     plot::Marker::kTriangle, plot::Marker::kDiamond,
+                                     plot::Marker::kCross};
+constexpr const char* kCameraColors[] = {"#000000", "#0072B2", "#D55E00", "#009E73",
+                                         "#CC79A7", "#E69F00", "#56B4E9"};
+
+// The style of line `index` of a plot whose lines are cameras or axes.
+void StyleLine(size_t index, plot::PlotSeries* s, bool colour = true) {
+  if (colour) s->color = kCameraColors[index % std::size(kCameraColors)];
+  s->dash_array = kDashes[index % std::size(kDashes)];
+  s->marker = kMarkers[index % std::size(kMarkers)];
+}
 
 // The rotation from `reference` to `q` as a rotation vector θ·axis in degrees, expressed in the
 // master frame: small and continuous near the reference, where the components of q's own
@@ -85,6 +101,7 @@ plot::PlotPanel VectorPanel(const std::string& title, const std::string& y_label
   panel.legend = plot::LegendPosition::kOutsideRight;
   for (int i = 0; i < 3; ++i) {
     plot::PlotSeries s = Series(kAxisNames[i], kAxisColors[i]);
+    StyleLine(i, &s, false);
     for (size_t k = 0; k < samples.size(); ++k) {
       const double v = values[k][i];
       const double sd = sigmas[k][i];
@@ -139,6 +156,7 @@ ReportFigure ScaleFigure(const ReportData& data, const std::string& slave,
   scales.legend = plot::LegendPosition::kOutsideRight;
   plot::PlotSeries used = Scatter("used", "#0072B2");
   plot::PlotSeries rejected = Scatter("rejected", "#D55E00");
+  rejected.marker = plot::Marker::kCross;
   std::vector<double> used_values;
   int outside = 0;
   for (const MotionSample& m : motions.samples) {
@@ -166,14 +184,18 @@ ReportFigure ScaleFigure(const ReportData& data, const std::string& slave,
     scales.reference_lines.push_back({truth->scale, "truth", "#009E73", true});
   }
 
+  // C₀ᵀr₀ is in the master's unit, Cᵢᵀrᵢ in the slave odometry's own: the legend says which.
   plot::PlotPanel dots;
-  dots.title = "C₀ᵀr₀ and Cᵢᵀrᵢ per motion";
+  dots.title = "C₀ᵀr₀ and Cᵢᵀrᵢ per motion (4.18)";
   dots.x_label = "time [s]";
-  dots.y_label = "scalar product [units]";
+  dots.y_label = "Cᵀr [odometry unit of each camera]";
   dots.y_from_zero = true;
   dots.legend = plot::LegendPosition::kOutsideRight;
-  plot::PlotSeries master = Scatter("C₀ᵀr₀", "#999999");
-  plot::PlotSeries slave_dot = Scatter("Cᵢᵀrᵢ", "#0072B2");
+  const std::string master_unit = data.distance_unit == "m" ? "m" : "master unit";
+  plot::PlotSeries master = Scatter(data.master + ": C₀ᵀr₀ [" + master_unit + "]", "");
+  plot::PlotSeries slave_dot = Scatter(slave + ": Cᵢᵀrᵢ [" + slave + " unit]", "");
+  StyleLine(0, &master);
+  StyleLine(1, &slave_dot);
   for (const MotionSample& m : motions.samples) {
     master.x.push_back(m.t_s);
     master.y.push_back(m.master_axis_dot);
@@ -196,7 +218,8 @@ ReportFigure ScaleFigure(const ReportData& data, const std::string& slave,
   return Drawn("scales-" + slave, slave + ": measured scales (thesis fig. 5.12)", figure, note);
 }
 
-ReportFigure ResidualFigure(const std::string& slave, const SlaveMotions& motions) {
+ReportFigure ResidualFigure(const std::string& slave, const SlaveMotions& motions,
+                            const std::string& distance_unit) {
   auto panel = [&](const std::string& title, const std::string& y_label,
                    double MotionSample::*field) {
     plot::PlotPanel p;
@@ -216,7 +239,8 @@ ReportFigure ResidualFigure(const std::string& slave, const SlaveMotions& motion
       panel("rotation constraint residuum", "angle [deg]", &MotionSample::rotation_deg),
       panel("position constraint residuum (direction)", "angle [deg]",
             &MotionSample::position_dir_deg),
-      panel("position constraint residuum", "|residual| [units]", &MotionSample::position_abs)};
+      panel("position constraint residuum", "|residual| [" + distance_unit + "]",
+            &MotionSample::position_abs)};
   figure.columns = 3;
   figure.panel_width = 380;
   figure.panel_height = 280;
@@ -326,10 +350,13 @@ std::vector<ReportFigure> MotionFigures(const ReportData& data) {
           Missing("scales-" + slave, slave + ": measured scales (thesis fig. 5.12)", reason));
       out.push_back(
           Missing("residua-" + slave, slave + ": constraint residua (thesis fig. 5.11)", reason));
+      out.push_back(
+          Missing("histograms-" + slave, slave + ": residua per motion (histograms)", reason));
       continue;
     }
     out.push_back(ScaleFigure(data, slave, *motions));
-    out.push_back(ResidualFigure(slave, *motions));
+    out.push_back(ResidualFigure(slave, *motions, data.distance_unit));
+    out.push_back(HistogramFigure(slave, *motions, data.distance_unit));
   }
   return out;
 }
@@ -358,7 +385,9 @@ ReportFigure HealthFigure(const ReportData& data) {
     for (const std::string& camera : clocks ? free_running : data.cameras) {
       plot::PlotSeries s;
       s.label = camera;
-      s.markers = false;
+      s.markers = true;
+      const auto index = std::find(data.cameras.begin(), data.cameras.end(), camera);
+      StyleLine(static_cast<size_t>(index - data.cameras.begin()), &s);
       for (const CameraHealthSample& h : data.health.at(camera)) {
         s.x.push_back(h.t_s);
         s.y.push_back(value(h));

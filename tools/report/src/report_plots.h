@@ -3,6 +3,7 @@
 // The figures of the report, built from its data (report_data.h).
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rigcal/report/report_data.h"
@@ -16,6 +17,8 @@ struct ReportFigure {
   std::string note;     // a sentence under the title (what is shown, what is left out)
   std::string svg;      // the bare <svg> element; empty when missing
   std::string missing;  // why there is no plot (when svg is empty)
+  // data-<name>="value" attributes of the <figure>: the plotted numbers for a reader.
+  std::vector<std::pair<std::string, std::string>> attributes = {};
 };
 
 // Per slave: every parameter over time with ±σ bands and the truth.
@@ -23,6 +26,10 @@ std::vector<ReportFigure> HistoryFigures(const ReportData& data);
 // Per slave: measured scales with the rejection threshold (fig. 5.12), and the constraint
 // residua over time (fig. 5.11).
 std::vector<ReportFigure> MotionFigures(const ReportData& data);
+// Per slave: histograms of the per-motion rotation and position residua with their σ
+// (residual_histograms.cc).
+ReportFigure HistogramFigure(const std::string& slave, const SlaveMotions& motions,
+                             const std::string& distance_unit);
 // The cameras' VO health over time: fps, drops, VO state, pose age.
 ReportFigure HealthFigure(const ReportData& data);
 // The rig from the top and from the side with camera frusta.

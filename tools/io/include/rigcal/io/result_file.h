@@ -6,8 +6,8 @@
 
 #include <string>
 
-#include "rigcal/calib/calibration_result.h"
 #include "rigcal/base/status.h"
+#include "rigcal/calib/calibration_result.h"
 
 namespace rigcal::io {
 
@@ -19,5 +19,11 @@ namespace rigcal::io {
 // Errors name the path and the line (YAML) or byte offset (JSON) and the field: unreadable file,
 // syntax, a missing or malformed field, an unknown state / termination / model, no slaves.
 Expected<RigCalibration> ReadResultFile(const std::string& path);
+
+// The unit of the result's C as its provenance states it: the text of `provenance.units.C`
+// (ResultUnits of provenance.h: "m: ..." for metres, "master odometry unit: ..." otherwise);
+// empty when the file carries no provenance (written before result schema 2). Errors: unreadable
+// file, syntax.
+Expected<std::string> ReadResultDistanceUnit(const std::string& path);
 
 }  // namespace rigcal::io

@@ -14,18 +14,24 @@
 
 namespace rigcal::plot {
 
+// The shape drawn at every point of a series with markers (and in its legend entry).
+enum class Marker { kCircle, kSquare, kTriangle, kDiamond, kCross };
+
 struct PlotSeries {
   std::string label;      // legend text (empty: not in the legend)
   std::vector<double> x;  // same length as y
   std::vector<double> y;  // a non-finite value breaks the line into separate pieces
   std::string color;      // CSS colour; empty = the palette colour of the series index
   bool dashed = false;
-  bool markers = true;  // a small circle at every finite point
+  bool markers = true;  // a small marker (`marker`) at every finite point
   bool lines = true;    // false: markers only (a scatter plot)
   // Optional band around the series (e.g. ±σ), drawn filled in the series colour below it:
   // empty, or the same length as x. A non-finite bound breaks the band.
   std::vector<double> band_lo = {};
   std::vector<double> band_hi = {};
+  Marker marker = Marker::kCircle;
+  // SVG stroke-dasharray of the line (e.g. "2 3"): overrides `dashed` when not empty.
+  std::string dash_array = {};
 };
 
 // A horizontal line across the plot area at y (a truth value, a threshold), in the y range.

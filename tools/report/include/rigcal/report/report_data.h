@@ -13,9 +13,10 @@
 #include <string>
 #include <vector>
 
+#include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_result.h"
 #include "rigcal/calib/slave_state.h"
-#include "rigcal/base/types.h"
+#include "rigcal/camera/camera_spec.h"
 
 namespace rigcal::report {
 
@@ -78,7 +79,15 @@ struct ReportData {
   std::string master;
   std::vector<std::string> slaves;  // table and plot order
   std::string distance_unit = "master units";
-  int64_t t0_ns = 0;  // time origin of the estimate history and the motions
+  // Metres per unit of the final table's C: 1 when C is in metres (a metric master, a target
+  // reference, --metric-*: the log's or result's unit, or the config's metric master), the
+  // master unit fitted to a metric truth, NaN when unknown; `metres_source` says which.
+  double metres_per_unit = kUnknown;
+  std::string metres_source;
+  // The rig config's cameras with intrinsics (rig order), empty without --config.
+  std::vector<camera::CameraSpec> intrinsics;
+  std::string config;  // the rig config's path
+  int64_t t0_ns = 0;   // time origin of the estimate history and the motions
 
   // RIGCAL_EXTRINSICS history (empty for a result file).
   std::map<std::string, std::vector<EstimateSample>> estimates;

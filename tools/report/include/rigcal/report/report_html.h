@@ -7,8 +7,13 @@
 //     and with a truth the rotation, position-direction and distance errors);
 //   - the rig from the top and from the side with camera frusta (the truth dashed);
 //   - per slave every parameter over time with ±σ bands and the truth (RIGCAL_EXTRINSICS);
-//   - per slave the measured scales per motion with the rejection threshold (fig. 5.12) and the
-//     rotation and position constraint residua over time (fig. 5.11);
+//   - the baselines: |C| with its σ, in metres when the unit is known (metric, or fitted to a
+//     truth), else the unit C is in;
+//   - the cameras' intrinsics from the rig config (--config): model, fx fy cx cy, distortion,
+//     resolution;
+//   - per slave the measured scales per motion with the rejection threshold (fig. 5.12), the
+//     rotation and position constraint residua over time (fig. 5.11) and their histograms with
+//     their σ (bins and counts also as data-* attributes of the figure);
 //   - per camera the VO health over time: fps, drops, VO state, pose age (RIGCAL_STATUS).
 // Every plot is a <figure class="plot" data-plot="<name>">; a plot without data is a
 // <figure class="plot missing"> that says why. The inline script counts the plots whose SVG

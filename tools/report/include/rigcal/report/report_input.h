@@ -12,8 +12,12 @@
 // (in the log, or `poses_log`, an LCM pose log such as `rigcal synth-log` writes): the poses
 // matched by time across cameras, the motions of PairOptions' walk pairs (as `rigcal solve
 // --pairs walk`), and for each motion ResidualOf (error_model.h) against the final estimate.
-// The truth: a rig YAML or a rig config whose cameras carry `truth`, aligned to the estimate's
-// unit (AlignTruthUnit, mode auto) and compared on the final result.
+// The truth (io/truth_files.h): a rig YAML or a rig config whose cameras carry `truth`, or the
+// directory of `rigcal run --truth-out` (truth.yaml and a TUM trajectory per camera); compared
+// by the one comparison io::CompareWithTruth: with a directory and the poses, the master unit per
+// master segment (the estimate's segment) and every slave's true scale from its segment's unit,
+// as `run --eval` and `solve --truth DIR`; else the unit fitted from the mountings.
+// The config (optional): the intrinsics table, and C in metres when its master is metric.
 
 #include <string>
 
@@ -25,7 +29,8 @@ namespace rigcal::report {
 struct ReportOptions {
   std::string input;      // LCM log or result file
   std::string poses_log;  // optional LCM log with RIGCAL_POSE_<camera> events
-  std::string truth;      // optional rig YAML or rig config with cameras[].truth
+  std::string truth;      // optional rig YAML, rig config with cameras[].truth, or truth directory
+  std::string config;     // optional rig config: intrinsics, metric master
 };
 
 // The report's data. Errors (bad input) name the file and what is wrong: unreadable, neither an

@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "truth_args.h"
+#include "rigcal/io/truth_files.h"
 
 #include <filesystem>
 
 #include "rigcal/io/rig_files.h"
 #include "rigcal/io/trajectory_io.h"
 
-namespace rigcal::cli {
+namespace rigcal::io {
 namespace {
 
 std::vector<CameraPose> CameraPoses(const TimedTrajectory& trajectory, int camera) {
@@ -31,7 +31,7 @@ Expected<TruthFiles> ReadTruthFiles(const std::string& path,
   const bool directory = std::filesystem::is_directory(path, ec);
   const std::string rig = directory ? (std::filesystem::path(path) / "truth.yaml").string() : path;
   // The first camera is the master: a truth naming another one is an error (rig_files.h).
-  auto mountings = io::ReadTrueMountings(rig, cameras.empty() ? "" : cameras.front());
+  auto mountings = ReadTrueMountings(rig, cameras.empty() ? "" : cameras.front());
   if (!mountings) return Error{mountings.error()};
   files.mountings = std::move(*mountings);
   if (!directory) return files;
@@ -40,28 +40,27 @@ Expected<TruthFiles> ReadTruthFiles(const std::string& path,
     if (!std::filesystem::exists(file, ec)) {
       return Error{path + ": no true trajectory " + camera + ".txt for camera '" + camera + "'"};
     }
-    auto trajectory = io::ReadTrajectory(file);
+    auto trajectory = ReadTrajectory(file);
     if (!trajectory) return Error{trajectory.error()};
-    files.trajectories[camera] = io::SampledTrajectory(std::move(*trajectory));
+    files.trajectories[camera] = SampledTrajectory(std::move(*trajectory));
   }
   return files;
 }
 
-Expected<io::TruthComparison> CompareRunWithTruth(const RigCalibration& result,
-                                                  const TruthFiles& truth, io::TruthUnit unit,
-                                                  const std::vector<TimedTrajectory>& odometry) {
-  io::TruthInput input;
+Expected<TruthComparison> CompareRunWithTruth(const RigCalibration& result, const TruthFiles& truth,
+                                              TruthUnit unit,
+                                              const std::vector<TimedTrajectory>& odometry) {
+  TruthInput input;
   input.mountings = truth.mountings;
   input.unit = unit;
   if (!truth.trajectories.empty()) {
     for (size_t i = 0; i < odometry.size(); ++i) {
       const auto it = truth.trajectories.find(odometry[i].name);
       input.poses.push_back(CameraPoses(odometry[i], static_cast<int>(i)));
-      input.trajectories.push_back(it == truth.trajectories.end() ? io::TrueTrajectory{}
-                                                                  : it->second);
+      input.trajectories.push_back(it == truth.trajectories.end() ? TrueTrajectory{} : it->second);
     }
   }
-  return io::CompareWithTruth(result, input);
+  return CompareWithTruth(result, input);
 }
 
-}  // namespace rigcal::cli
+}  // namespace rigcal::io
