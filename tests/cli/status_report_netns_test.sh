@@ -90,6 +90,6 @@ check "rigcal report on the recording exits 0 (got $report_rc)" '[ "$report_rc" 
 plots=$( (grep -o '<figure class="plot"' "$dir/report.html" || true) | wc -l)
 missing=$( (grep -o '<figure class="plot missing"' "$dir/report.html" || true) | wc -l)
 echo "report: $plots plots, $missing missing"
-check "every plot of the report has data (8 plots, none missing)" \
-  '[ "$plots" -eq 8 ] && [ "$missing" -eq 0 ]'
+check "every plot of the report has data (10 plots with the residual histograms, none missing)" \
+  '[ "$plots" -eq 10 ] && [ "$missing" -eq 0 ]'
 exit $fail
