@@ -69,7 +69,9 @@ TEST_F(RunResumeTest, KilledRunsResumeToTheUninterruptedEstimate) {
 
   const unsigned seed = std::random_device{}();
   std::mt19937 random(seed);
-  std::uniform_real_distribution<double> kill_at(0.2 * full_s, 0.7 * full_s);
+  // Before half of the uninterrupted run's time: a resumed run renders the drive from frame 0
+  // again, and one on a machine less busy than the reference's ended before a kill at 0.7 of it.
+  std::uniform_real_distribution<double> kill_at(0.15 * full_s, 0.5 * full_s);
   std::vector<int> motions;
   int resumed = 0;
   for (int kill = 0; kill < 3; ++kill) {
