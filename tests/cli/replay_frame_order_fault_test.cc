@@ -65,21 +65,30 @@ class ReplayFrameOrderFault : public cli_test::CommandTest {
     }
   }
 
-  // `rigcal replay` of `log`: its exit code, -1 when it still ran after 60 s (then killed).
-  int Replay(const std::string& log, const std::string& result) const {
+  struct Replayed {
+    int code = -1;  // -1: still running after 60 s (then killed)
+    std::string err;
+    std::string Hung() const { return "still running after 60 s\n" + err.substr(0, 4000); }
+  };
+  // `rigcal replay` of `log`: its exit code and stderr.
+  Replayed Replay(const std::string& log, const std::string& result) const {
     const pid_t pid = Spawn(
         binary_,
         {"replay", Path(log), "--config", Path("rig.yaml"), "--out", Path(result), "--no-progress"},
         Path("err.txt"));
     EXPECT_GT(pid, 0);
-    return pid > 0 ? WaitExit(pid, std::chrono::seconds(60)) : -1;
+    Replayed r;
+    r.code = pid > 0 ? WaitExit(pid, std::chrono::seconds(60)) : -1;
+    r.err = Slurp(Path("err.txt"));
+    return r;
   }
 
   std::vector<LoggedEvent> events_;  // the recorded log, each camera in capture order
 };
 
 TEST_F(ReplayFrameOrderFault, ACameraAheadInTheFileGivesTheResultOfTheOrderedLog) {
-  ASSERT_EQ(Replay("ordered.lcmlog", "ordered.yaml"), 0) << Slurp(Path("err.txt"));
+  const Replayed ordered = Replay("ordered.lcmlog", "ordered.yaml");
+  ASSERT_EQ(ordered.code, 0) << ordered.err;
   // cam1's frames written 8 s of log time before cam0's of the same stamp.
   std::vector<LoggedEvent> ahead = events_;
   std::stable_sort(ahead.begin(), ahead.end(), [](const LoggedEvent& a, const LoggedEvent& b) {
@@ -89,9 +98,10 @@ TEST_F(ReplayFrameOrderFault, ACameraAheadInTheFileGivesTheResultOfTheOrderedLog
     return key(a) < key(b);
   });
   WriteLog("ahead.lcmlog", ahead);
-  const int code = Replay("ahead.lcmlog", "ahead.yaml");
-  const std::string err = Slurp(Path("err.txt"));
-  ASSERT_NE(code, -1) << "still running after 60 s\n" << err.substr(0, 4000);
+  const Replayed replayed = Replay("ahead.lcmlog", "ahead.yaml");
+  const int code = replayed.code;
+  const std::string& err = replayed.err;
+  ASSERT_NE(code, -1) << replayed.Hung();
   EXPECT_EQ(code, 0) << err;
   EXPECT_EQ(err.find("late"), std::string::npos) << err;
   EXPECT_EQ(YamlWithoutProvenance(Slurp(Path("ahead.yaml"))),
@@ -108,9 +118,10 @@ TEST_F(ReplayFrameOrderFault, ACameraThatStopsHalfWayDoesNotStopTheReplay) {
     stopped.push_back(e);
   }
   WriteLog("stopped.lcmlog", stopped);
-  const int code = Replay("stopped.lcmlog", "stopped.yaml");
-  const std::string err = Slurp(Path("err.txt"));
-  ASSERT_NE(code, -1) << "still running after 60 s\n" << err.substr(0, 4000);
+  const Replayed replayed = Replay("stopped.lcmlog", "stopped.yaml");
+  const int code = replayed.code;
+  const std::string& err = replayed.err;
+  ASSERT_NE(code, -1) << replayed.Hung();
   EXPECT_TRUE(code == 0 || code == 3) << code << "\n" << err;
   EXPECT_NE(Slurp(Path("stopped.yaml")).find("cam1:"), std::string::npos) << err;
 }
@@ -126,9 +137,10 @@ TEST_F(ReplayFrameOrderFault, LateFramesAreDroppedAndCounted) {
   ASSERT_GE(head.size(), 30u);
   rest.insert(rest.end(), head.begin(), head.end());
   WriteLog("late.lcmlog", rest);
-  const int code = Replay("late.lcmlog", "late.yaml");
-  const std::string err = Slurp(Path("err.txt"));
-  ASSERT_NE(code, -1) << "still running after 60 s\n" << err.substr(0, 4000);
+  const Replayed replayed = Replay("late.lcmlog", "late.yaml");
+  const int code = replayed.code;
+  const std::string& err = replayed.err;
+  ASSERT_NE(code, -1) << replayed.Hung();
   EXPECT_EQ(code, 0) << err;
   EXPECT_NE(err.find("late frames are dropped and counted"), std::string::npos) << err;
   EXPECT_NE(err.find("cam1"), std::string::npos) << err;
