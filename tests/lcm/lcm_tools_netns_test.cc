@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -25,7 +26,8 @@ namespace fs = std::filesystem;
 using cli_test::Quote;
 
 // Plays each log (argument triples IN OUT SPEED) with lcm-logplayer while lcm-logger records the
-// bus. A receive buffer of 4 MB keeps the kernel from dropping datagrams of image bursts.
+// bus. A receive buffer of 4 MB keeps the kernel from dropping datagrams of image bursts where the
+// host's net.core.rmem_max allows it (the limit is the host's; a namespace cannot raise it).
 constexpr char kPlayAndRecordScript[] = R"sh(set -euo pipefail
 links=$(ip -o link show | awk -F': ' '{print $2}' | tr '\n' ' ')
 if [ "$links" != "lo " ]; then echo "FAIL: not a private namespace, links: $links"; exit 1; fi
@@ -49,7 +51,46 @@ while [ $# -ge 3 ]; do
 done
 )sh";
 
-using LcmToolsNetnsTest = cli_test::CommandTest;
+// Whether `received` is `original` with some events left out, the rest in order and whole.
+bool IsInOrderSubset(const std::vector<support::LoggedEvent>& received,
+                     const std::vector<support::LoggedEvent>& original) {
+  size_t next = 0;
+  for (const support::LoggedEvent& event : received) {
+    while (next < original.size() && !(original[next] == event)) ++next;
+    if (next == original.size()) return false;
+    ++next;
+  }
+  return true;
+}
+
+class LcmToolsNetnsTest : public cli_test::CommandTest {
+ protected:
+  // Plays `written` (expected to hold `events` events) in a private namespace while lcm-logger
+  // records it to `bus`, and checks that the recording holds every event, byte for byte, in order.
+  // UDP may drop a datagram of a burst when the host's receive-buffer limit is small (a
+  // transport's loss, not the log's content): an attempt that lost events but kept the rest
+  // whole and in order is repeated, up to three attempts; anything else fails at once.
+  void PlayAndCompare(const std::string& written, const std::string& bus, int speed,
+                      size_t events) {
+    const std::vector<support::LoggedEvent> original = support::ReadLcmLog(Path(written));
+    ASSERT_EQ(original.size(), events) << written;
+    std::vector<support::LoggedEvent> received;
+    for (int attempt = 1; attempt <= 3; ++attempt) {
+      const auto played = support::RunShell("unshare --net --fork bash " + Quote(Path("play.sh")) +
+                                                " " + Quote(Path(written)) + " " +
+                                                Quote(Path(bus)) + " " + std::to_string(speed),
+                                            dir_);
+      ASSERT_EQ(played.exit_code, 0) << played.out << played.err;
+      received = support::ReadLcmLog(Path(bus));
+      ASSERT_TRUE(IsInOrderSubset(received, original))
+          << bus << ": an event that rigcal's log does not hold, or out of order";
+      if (received.size() == original.size()) return;
+      std::cerr << bus << ": attempt " << attempt << " received " << received.size() << " of "
+                << original.size() << " events (UDP loss in a burst); playing again\n";
+    }
+    EXPECT_EQ(received.size(), original.size()) << bus << " after three attempts";
+  }
+};
 
 TEST_F(LcmToolsNetnsTest, RigcalLogsPlayInLcmToolsAndTheirRecordingsReplay) {
   for (const char* tool : {"unshare", "ip", "lcm-logger", "lcm-logplayer"}) {
@@ -73,26 +114,10 @@ TEST_F(LcmToolsNetnsTest, RigcalLogsPlayInLcmToolsAndTheirRecordingsReplay) {
                          Quote(Path("poses.lcmlog")) + " --frames 600");
   ASSERT_EQ(synth.exit_code, 0) << synth.err;
 
-  std::ofstream(Path("play.sh")) << kPlayAndRecordScript;
-  const auto played = support::RunShell(
-      "unshare --net --fork bash " + Quote(Path("play.sh")) + " " + Quote(Path("images.lcmlog")) +
-          " " + Quote(Path("bus_images.lcmlog")) + " 1 " + Quote(Path("poses.lcmlog")) + " " +
-          Quote(Path("bus_poses.lcmlog")) + " 4",
-      dir_);
-  ASSERT_EQ(played.exit_code, 0) << played.out << played.err;
-
   // lcm-logplayer published every event of rigcal's logs, byte for byte, in order.
-  for (const auto& [written, bus] : {std::pair{"images.lcmlog", "bus_images.lcmlog"},
-                                     std::pair{"poses.lcmlog", "bus_poses.lcmlog"}}) {
-    const std::vector<support::LoggedEvent> original = support::ReadLcmLog(Path(written));
-    const std::vector<support::LoggedEvent> received = support::ReadLcmLog(Path(bus));
-    EXPECT_EQ(original.size(), written == std::string("images.lcmlog") ? 80u : 1200u);
-    ASSERT_EQ(received.size(), original.size()) << bus;
-    for (size_t i = 0; i < original.size(); ++i) {
-      ASSERT_TRUE(received[i] == original[i])
-          << bus << " event " << i << " " << original[i].channel;
-    }
-  }
+  std::ofstream(Path("play.sh")) << kPlayAndRecordScript;
+  PlayAndCompare("images.lcmlog", "bus_images.lcmlog", 1, 80);
+  PlayAndCompare("poses.lcmlog", "bus_poses.lcmlog", 4, 1200);
 
   // lcm-logger's recording replays in rigcal: every pose decoded, every stamp matched into a
   // set, the slave in the result. (How well the replay calibrates is the replay tests' subject;
