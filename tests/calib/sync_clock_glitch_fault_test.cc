@@ -204,6 +204,49 @@ TEST(SyncClockGlitch, AClockThatAloneJumpsIsRejectedUntilTheOthersAgree) {
   ExpectCountsAddUp(s);
 }
 
+// Ten master poses stamped 4e18 ns on, at the camera's own rate, back to back (in a log: no other
+// camera's event between them), then the drive goes on on its clock. The run is rejected as
+// clock glitches and named once, and moves no clock: every later pose is matched (the old rule
+// took five such poses in a row while the others were silent as a restart of the stream, and
+// every later pose was then 4e18 ns in the past).
+TEST(SyncClockGlitch, AShortRunOnItsOwnTimelineIsNoRestart) {
+  WarningCapture warnings;
+  SyncBuffer buffer(TwoCameras());
+  std::vector<PushResult> glitches;
+  Feed(&buffer, 200, [&](int k, int c) {
+    if (k != 100 || c != 0) return;
+    for (int i = 0; i < 10; ++i) {
+      glitches.push_back(buffer.Push(Entry(0, 4'000'000'000'000'000'000 + i * kPeriod)));
+    }
+  });
+  EXPECT_EQ(glitches, std::vector<PushResult>(10, PushResult::kClockGlitch));
+  EXPECT_EQ(Sets(&buffer), 200u);
+  const SyncStats s = buffer.stats();
+  EXPECT_EQ(s.cameras[0].clock_glitch, 10u);
+  EXPECT_EQ(s.total.clock_glitch, 10u);
+  EXPECT_EQ(warnings.Count("that no other camera shares: clock glitches"), 1);
+  ExpectCountsAddUp(s);
+}
+
+// A restart of the stream where one camera resumes alone for longer than the glitch horizon at
+// its rate (the other's first poses on the new clock come 3 s later): followed after 40 poses.
+TEST(SyncClockGlitch, ARestartOfOneCameraWhileTheOthersAreSilentIsFollowed) {
+  SyncBuffer buffer(TwoCameras());
+  Feed(&buffer, 100, [](int, int) {});
+  const int64_t resume = kStart + 100 * kPeriod + 10'000'000'000;
+  std::vector<PushResult> master;
+  for (int k = 0; k < 60; ++k) master.push_back(buffer.Push(Entry(0, resume + k * kPeriod)));
+  EXPECT_EQ(std::count(master.begin(), master.end(), PushResult::kClockGlitch), 39);
+  EXPECT_EQ(master[39], PushResult::kAccepted);
+  for (int k = 60; k < 160; ++k) {
+    for (int c = 0; c < 2; ++c) {
+      EXPECT_EQ(buffer.Push(Entry(c, resume + k * kPeriod)), PushResult::kAccepted) << k;
+    }
+  }
+  EXPECT_GE(Sets(&buffer), 200u);
+  ExpectCountsAddUp(buffer.stats());
+}
+
 // A step of 1 s stays within the 2 s horizon of the other cameras' clocks, but is 20 frame
 // intervals beyond the camera's own rate and ahead of every other camera.
 TEST(SyncClockGlitch, AStepBeyondTheCamerasOwnRateIsRejected) {

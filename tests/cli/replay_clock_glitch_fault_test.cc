@@ -45,9 +45,12 @@ class ReplayClockGlitchFault : public cli_test::CommandTest {
   }
 
   // A 40 s drive at 20 Hz with `glitches` master poses stamped `glitch_ns` in its middle (in
-  // file order), one after each of as many consecutive frames: the drive's pieces and the
-  // glitches written one after the other (an LCM log is its events in file order).
-  void WriteGlitchedLog(const std::string& name, int64_t glitch_ns, int glitches) const {
+  // file order), one after each of as many consecutive frames, with stamps stepping back by 1 ns;
+  // or, `back_to_back`, as many consecutive events after the middle frame stepping on at the
+  // drive's rate (a timeline of their own that no other camera shares): the drive's pieces and
+  // the glitches written one after the other (an LCM log is its events in file order).
+  void WriteGlitchedLog(const std::string& name, int64_t glitch_ns, int glitches,
+                        bool back_to_back = false) const {
     DriveOptions d;
     d.num_frames = 800;
     d.rotation_noise_deg = 0.05;
@@ -59,7 +62,15 @@ class ReplayClockGlitchFault : public cli_test::CommandTest {
     const size_t mid = rec.size() / 2;
     for (size_t k = 0; k < rec.size(); ++k) {
       for (int camera = 0; camera < 2; ++camera) pieces.back().push_back(rec.PoseAt(camera, k));
-      if (k >= mid && k < mid + static_cast<size_t>(glitches)) {
+      if (back_to_back && k == mid) {
+        pieces.emplace_back();
+        for (int i = 0; i < glitches; ++i) {
+          CameraPose glitch = rec.PoseAt(0, k);
+          glitch.t_ns = glitch_ns + i * 50'000'000;  // 20 Hz
+          pieces.back().push_back(glitch);
+        }
+        pieces.emplace_back();
+      } else if (!back_to_back && k >= mid && k < mid + static_cast<size_t>(glitches)) {
         CameraPose glitch = rec.PoseAt(0, k);
         glitch.t_ns = glitch_ns - static_cast<int64_t>(k - mid);
         pieces.push_back({glitch});
@@ -86,11 +97,14 @@ TEST_F(ReplayClockGlitchFault, GlitchedStampsNeitherHangNorMoveTheClock) {
     const char* name;
     int64_t stamp_ns;
     int count;
+    bool back_to_back;
   };
-  const std::vector<Case> cases = {{"one at INT64_MAX", std::numeric_limits<int64_t>::max(), 1},
-                                   {"ten at 4e18", 4'000'000'000'000'000'000, 10}};
+  const std::vector<Case> cases = {
+      {"one at INT64_MAX", std::numeric_limits<int64_t>::max(), 1, false},
+      {"ten at 4e18", 4'000'000'000'000'000'000, 10, false},
+      {"ten at 4e18 back to back", 4'000'000'000'000'000'000, 10, true}};
   for (const Case& c : cases) {
-    WriteGlitchedLog("g.lcmlog", c.stamp_ns, c.count);
+    WriteGlitchedLog("g.lcmlog", c.stamp_ns, c.count, c.back_to_back);
     for (const std::string command : {"replay", "calib"}) {
       const std::string out = Path("out.lcmlog");
       std::vector<std::string> args = {command};

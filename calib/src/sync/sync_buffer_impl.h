@@ -84,9 +84,13 @@ class SyncBuffer::Impl {
     SyncKey last_used;            // the member of the last emitted set that had this camera
     SyncCameraStats stats;        // fill is filled in by stats()
     // Clock glitches: the stamp of the last pose held back as a jump ahead, how many poses in a
-    // row have followed it on the new timeline, and whether a burst is being reported.
+    // row have followed it on the new timeline at the camera's steady rate, the other cameras'
+    // pushes when that run began (a run while they are silent), whether the run was named as
+    // unconfirmed, and whether a burst is being reported.
     int64_t jump_t = 0;
     int jump_run = 0;
+    uint64_t jump_others_pushed = 0;
+    bool jump_named = false;
     bool in_glitch_burst = false;
     int accepted_in_row = 0;  // accepted poses since the last rejected stamp
     // The camera's recent frame intervals (a fixed ring of the last kIntervals, in order of
@@ -138,6 +142,14 @@ class SyncBuffer::Impl {
   // Whether `pose` (otherwise acceptable) is a clock glitch: see sync_buffer.h. Updates the
   // camera's jump confirmation.
   bool ClockGlitch(const CameraPose& pose) RIGCAL_REQUIRES(mutex_);
+  // Whether the run of jumps ahead of camera `c` (its jump_run poses up to jump_t) is confirmed
+  // as a new timeline of the stream: see "Clock glitches" in sync_buffer.h.
+  bool JumpConfirmed(int c) const RIGCAL_REQUIRES(mutex_);
+  // Poses of a run of jumps ahead that confirm it while every other camera is silent: the glitch
+  // horizon at the camera's frame `interval` (40 at 20 Hz), at least kJumpConfirmations.
+  int LonePoses(int64_t interval) const;
+  // Pushes of every camera but `c` so far.
+  uint64_t OthersPushed(int c) const RIGCAL_REQUIRES(mutex_);
   // Whether `pose` lies more than the glitch horizon behind its camera's or the stream's clock.
   bool PastGlitch(const CameraPose& pose) const RIGCAL_REQUIRES(mutex_);
   // The median of camera `c`'s recent frame intervals; 0 while fewer than 4 are measured.

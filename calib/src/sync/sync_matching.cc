@@ -163,19 +163,62 @@ bool SyncBuffer::Impl::ClockGlitch(const CameraPose& pose) {
     cam.jump_run = 0;
     return false;
   }
-  // Ahead of the clocks: a glitch unless the camera keeps to the new timeline while no other
-  // camera delivers on the old one (Accept resets the other cameras' runs).
-  if (cam.jump_run > 0 && pose.t_ns > cam.jump_t && pose.t_ns - cam.jump_t <= glitch_horizon_ns_) {
+  // Ahead of the clocks: a glitch unless the camera keeps to the new timeline at its steady rate
+  // and the stream confirms it (Accept resets the other cameras' runs).
+  const int64_t recent = RecentInterval(pose.camera);
+  const int64_t interval = recent > 0 ? recent : options_.frame_period_ns;
+  const int64_t step = pose.t_ns - cam.jump_t;  // own-clock stamps >= 0: no overflow
+  if (cam.jump_run > 0 && step >= interval / 2 && step <= 3 * interval) {
     ++cam.jump_run;
   } else {
     cam.jump_run = 1;
+    cam.jump_others_pushed = OthersPushed(pose.camera);
+    cam.jump_named = false;
   }
   cam.jump_t = pose.t_ns;
-  if (cam.jump_run >= kJumpConfirmations) {
+  if (cam.jump_run >= kJumpConfirmations && JumpConfirmed(pose.camera)) {
     cam.jump_run = 0;
     return false;
   }
+  if (cam.jump_run >= kJumpConfirmations && !cam.jump_named) {
+    cam.jump_named = true;
+    ModuleLogger("calib")->warn(
+        "sync: camera {}: {} poses in a row on a timeline {:.3f} s ahead of the cameras' clocks "
+        "(stamp {} ns) that no other camera shares: clock glitches, not a restart (one is "
+        "followed once another camera's poses reach the new timeline, or after {} poses while "
+        "every other camera is silent)",
+        pose.camera, cam.jump_run, static_cast<double>(SaturatedSub(t, now_ns_)) * 1e-9, pose.t_ns,
+        LonePoses(interval));
+  }
   return true;
+}
+
+int SyncBuffer::Impl::LonePoses(int64_t interval) const {
+  const int64_t poses = glitch_horizon_ns_ / std::max<int64_t>(interval, 1);
+  return static_cast<int>(std::clamp<int64_t>(poses, kJumpConfirmations, 1 << 20));
+}
+
+uint64_t SyncBuffer::Impl::OthersPushed(int c) const {
+  uint64_t pushed = 0;
+  for (int j = 0; j < n_; ++j) {
+    if (j != c) pushed += cameras_[j].stats.pushed;
+  }
+  return pushed;
+}
+
+bool SyncBuffer::Impl::JumpConfirmed(int c) const {
+  const CameraState& cam = cameras_[c];
+  const int64_t t = OnMasterClock(c, cam.jump_t);
+  // Another camera's poses on the same new timeline (its run of jumps ahead, near this one).
+  for (int j = 0; j < n_; ++j) {
+    if (j == c || cameras_[j].jump_run == 0) continue;
+    const int64_t d = SaturatedSub(OnMasterClock(j, cameras_[j].jump_t), t);
+    if (d >= -glitch_horizon_ns_ && d <= glitch_horizon_ns_) return true;
+  }
+  // Every other camera silent (no push at all) for as long as the horizon at the camera's rate.
+  const int64_t recent = RecentInterval(c);
+  const int64_t interval = recent > 0 ? recent : options_.frame_period_ns;
+  return OthersPushed(c) == cam.jump_others_pushed && cam.jump_run >= LonePoses(interval);
 }
 
 void SyncBuffer::Impl::Flush() {

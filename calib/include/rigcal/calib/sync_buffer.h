@@ -68,11 +68,18 @@
 //  * more than the glitch horizon behind its camera's newest stamp or the newest stamp of any
 //    camera (a stamp from the past).
 // One such stamp would otherwise make every later pose of the camera out of order and time out
-// every master entry. A jump ahead is accepted once the camera confirms its new timeline with 5
-// consecutive poses within the horizon of each other while no other camera delivered a pose on
-// the old timeline (every camera paused), or as soon as another camera's clock reaches it: a
-// camera whose clock alone jumped is rejected until the others agree. Duplicates and poses out
-// of order are warned about once per burst too.
+// every master entry. A jump ahead is a new timeline of the stream only when the data confirm
+// it: the camera's poses ahead form a run at its steady rate (each between half and three of
+// its recent frame intervals after the previous; 5 of them at least) while no other camera
+// delivered a pose on the old timeline, and either another camera's poses ahead lie on the same
+// new timeline (its own run, within the glitch horizon of this one: every camera paused and
+// resumed) or every other camera stayed silent (no push at all) for as long as the glitch
+// horizon at the camera's rate (40 poses at 20 Hz: the only camera left after a restart); or
+// as soon as another camera's clock reaches it. A camera whose clock alone jumped is rejected
+// until the others agree, and so are a few poses on a timeline of their own (ten stamped 4e18
+// ns at the camera's rate, back to back in a log): named once in a warning ("... that no other
+// camera shares: clock glitches"), counted clock_glitch, and no clock moves. Duplicates and
+// poses out of order are warned about once per burst too.
 //
 // Clock jumps of free-running slaves (interpolation mode, slaves with follow_clock_jumps). In
 // interpolation mode the rules above compare stamps on the master clock (a slave's stamp minus
