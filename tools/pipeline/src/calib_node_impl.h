@@ -37,6 +37,7 @@
 #include "rigcal/pipeline/log_recorder.h"
 #include "rigcal/pipeline/pipeline.h"
 #include "rigcal/pipeline/replay_frame_order.h"
+#include "rigcal/pipeline/replay_pacer.h"
 
 namespace rigcal::pipeline {
 
@@ -76,10 +77,10 @@ struct CalibNode::Impl {
 
   // Replay (log_replay.cc).
   std::unique_ptr<lcm::LogReader> reader;
-  int64_t first_stamp_ns = -1;  // first message stamp of the log
-  int64_t clock_ns = -1;        // log time: the newest stamp handed on
-  Clock::time_point pace_wall_start;
-  int64_t pace_stamp_start = -1;
+  int64_t first_stamp_ns = -1;   // first message stamp of the log
+  int64_t clock_ns = -1;         // log time: the newest stamp handed on
+  ReplayPacer pacer;             // the log time of --from/--to and --speed, kept from glitches
+  bool pacer_in_glitch = false;  // a burst of stamps far from the log time is being reported
   std::vector<FrameFeedDevice*> feeds;  // image replay; owned by `pipeline`
   // Image replay: images rejected per camera, counted by the reader, read by the status.
   std::unique_ptr<std::atomic<int64_t>[]> images_invalid;
@@ -142,6 +143,8 @@ struct CalibNode::Impl {
   bool CalibratedNothing();
   // Saves the state, unless that would replace a saved state with an empty one.
   void SaveState();
+  // At the end: how many state saves failed (an error when the final one did).
+  void ReportStateSaves();
   void ReportLine(const RigEstimate& estimate);
   // Ok, or the error naming the state path when it is there but not a regular file (a directory,
   // symbolic link, device, FIFO): rigcal neither reads, moves nor replaces it.
@@ -187,8 +190,13 @@ struct CalibNode::Impl {
   };
   bool ReadReplayEvent(lcm::LogEvent* event);
   bool DecodeReplayEvent(const lcm::LogEvent& event, ReplayItem* item);
-  // Waits until the wall clock reaches t_ns at options.replay.speed (no wait when 0).
-  void PaceReplay(int64_t t_ns, const std::atomic<bool>& stop);
+  // Takes the item's stamp into the pacer (warning once per burst of stamps far from the log
+  // time); returns the stamp that decides --from / --to: its own, or the pacer's log time when
+  // it is a glitch.
+  int64_t PacerObserve(const ReplayItem& item);
+  // Waits until the wall clock reaches the pacer's log time at options.replay.speed (no wait
+  // when 0; at most the pacer's cap / speed; never past a stop).
+  void PaceReplay(const std::atomic<bool>& stop);
   // Log time moves on to t_ns: the timers due until then run (after the estimator has caught
   // up, so what they publish does not depend on thread timing).
   void AdvanceLogTime(int64_t t_ns);

@@ -185,16 +185,33 @@ bool CalibNode::Impl::DecodeReplayEvent(const lcm::LogEvent& event, ReplayItem* 
   return true;
 }
 
-void CalibNode::Impl::PaceReplay(int64_t t_ns, const std::atomic<bool>& stop) {
+int64_t CalibNode::Impl::PacerObserve(const ReplayItem& item) {
+  const ReplayPacer::Step step = pacer.Observe(item.camera, item.t_ns, Clock::now());
+  if (step == ReplayPacer::Step::kGlitch && !pacer_in_glitch) {
+    pacer_in_glitch = true;
+    log->warn(
+        "{}: {} event stamped {} ns is {:.3f} s from the log time ({} ns; more than {:.3f} s): "
+        "not paced and moves no clock, unless the events that follow confirm a new timeline "
+        "(warned once per burst)",
+        options.log_path, names[static_cast<size_t>(item.camera)], item.t_ns,
+        static_cast<double>(pacer.last_gap_ns()) * 1e-9, pacer.now_ns(),
+        static_cast<double>(pacer.CapNs()) * 1e-9);
+  } else if (step == ReplayPacer::Step::kNewTime) {
+    pacer_in_glitch = false;
+    log->warn(
+        "{}: the log time jumps by {:.3f} s to {} ns (confirmed by the events after it): "
+        "the gap is not waited for, pacing goes on from the new time",
+        options.log_path, static_cast<double>(pacer.last_gap_ns()) * 1e-9, item.t_ns);
+  } else if (step == ReplayPacer::Step::kOnTime) {
+    pacer_in_glitch = false;
+  }
+  return step == ReplayPacer::Step::kGlitch ? pacer.now_ns() : item.t_ns;
+}
+
+void CalibNode::Impl::PaceReplay(const std::atomic<bool>& stop) {
   const double speed = options.replay.speed;
   if (speed <= 0.0) return;
-  if (pace_stamp_start < 0) {
-    pace_stamp_start = t_ns;
-    pace_wall_start = Clock::now();
-  }
-  const auto due =
-      pace_wall_start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                            static_cast<double>(t_ns - pace_stamp_start) * 1e-9 / speed));
+  const Clock::time_point due = pacer.Due(speed);
   while (!stop.load() && Clock::now() < due) {
     std::this_thread::sleep_for(
         std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(100)));
@@ -287,14 +304,15 @@ void CalibNode::Impl::ReplayLog(const std::atomic<bool>& stop) {
     }
     ReplayItem item;
     if (!DecodeReplayEvent(event, &item)) continue;
-    // The message's stamp decides the window and the pacing.
-    if (window_start < 0) window_start = item.t_ns;
-    const int64_t since_ns = item.t_ns - window_start;
+    // The message's stamp decides the window and the pacing (a glitched one: the log time).
+    const int64_t t_ns = PacerObserve(item);
+    if (window_start < 0) window_start = t_ns;
+    const int64_t since_ns = t_ns - window_start;
     if (since_ns < from_ns) continue;
     if (to_ns >= 0 && since_ns > to_ns) break;
     summary.log_span_s =
         std::max(summary.log_span_s, static_cast<double>(since_ns - from_ns) * 1e-9);
-    PaceReplay(item.t_ns, stop);
+    PaceReplay(stop);
     if (item.frame) {
       if (!OrderAndFeed(std::move(*item.frame), stop)) break;
     } else {
