@@ -342,6 +342,7 @@ void CalibNode::Impl::Finish(int64_t utime) {
   PublishStatus(estimate, utime);
   CloseOutput();
   SaveState();
+  ReportStateSaves();
   // A run that calibrated nothing leaves the files of an earlier run as they are.
   for (const std::string& path : {state_path, options.result_path}) {
     if (!path.empty() && CalibratedNothing() && std::filesystem::exists(path)) {

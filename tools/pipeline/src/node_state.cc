@@ -22,10 +22,36 @@ void CalibNode::Impl::SaveState() {
   if (const Status status = io::WriteFileAtomically(
           state_path, io::FormatEstimatorState(calibrator->SaveState()), state_new_file_mode);
       !status.ok()) {
-    AddError("state not saved: " + status.message());
+    // Reported once (a full disk fails every save alike; one error per save grew without
+    // bound), counted, retried at the next save interval only.
+    summary.state_last_save_failed = true;
+    if (summary.state_save_failures++ == 0) {
+      AddError("state not saved: " + status.message() +
+               " (retried at every save interval, reported once; a state saved before is kept)");
+    }
     return;
   }
+  if (summary.state_last_save_failed) {
+    log->info("state saved to {} again after {} failed saves", state_path,
+              summary.state_save_failures);
+  }
+  summary.state_last_save_failed = false;
   ++summary.state_saves;
+}
+
+void CalibNode::Impl::ReportStateSaves() {
+  if (summary.state_save_failures == 0) return;
+  const std::string counts = std::to_string(summary.state_save_failures) + " of " +
+                             std::to_string(summary.state_save_failures + summary.state_saves) +
+                             " saves of " + state_path + " failed";
+  if (summary.state_last_save_failed) {
+    AddError("state: " + counts + ", the last one too: this run's final state is not saved (" +
+             (summary.state_saves > 0 ? "the state saved last in this run is kept"
+                                      : "the state file, if any, is as it was before the run") +
+             ")");
+  } else {
+    log->warn("state: {} (the final save succeeded)", counts);
+  }
 }
 
 Status CalibNode::Impl::CheckStatePath() const {

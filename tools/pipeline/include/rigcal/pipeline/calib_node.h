@@ -171,9 +171,13 @@ struct CalibNodeSummary {
   // write failed); the error is in `errors`.
   bool publish_failed = false;
   int64_t state_saves = 0;
-  bool resumed = false;         // state restored from the state file
-  std::string rejected_state;   // --resume rejected the state file: where it was kept
-  bool result_written = false;  // the result file was written
+  // State saves that failed (a full disk fails every one): the first is in `errors`, the rest
+  // only counted; each is retried at the next save interval, never sooner.
+  int64_t state_save_failures = 0;
+  bool state_last_save_failed = false;  // the run's last save (its final state) failed
+  bool resumed = false;                 // state restored from the state file
+  std::string rejected_state;           // --resume rejected the state file: where it was kept
+  bool result_written = false;          // the result file was written
   // Calibrated nothing: the existing state / result files left as they were.
   std::vector<std::string> kept_files;
   bool end_of_log = false;          // replay reached the end of the log
