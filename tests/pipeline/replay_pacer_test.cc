@@ -77,9 +77,17 @@ TEST(ReplayPacer, NoWaitIsLongerThanTheCap) {
   // A pause of 0.9 s in the log (within the 1 s cap) is waited for, at half speed 1.8 s.
   EXPECT_EQ(pacer.Observe(0, 9 * kPeriod + 900'000'000, kWall), Step::kOnTime);
   EXPECT_EQ(pacer.Due(0.5) - before, std::chrono::nanoseconds(1'800'000'000));
-  // Events behind the clock within the cap need no wait and move nothing.
+  // Events behind the clock need no wait and move nothing: within the cap, and a camera's
+  // events seconds late in the file (record --fast) too, which are no glitch.
   EXPECT_EQ(pacer.Observe(1, 9 * kPeriod, kWall), Step::kOnTime);
   EXPECT_EQ(pacer.now_ns(), 9 * kPeriod + 900'000'000);
+  for (int k = 0; k < 50; ++k) {
+    const int64_t t = 9 * kPeriod + 900'000'000 + k * kPeriod;
+    EXPECT_EQ(pacer.Observe(0, t, kWall), Step::kOnTime) << k;
+    EXPECT_EQ(pacer.Observe(1, t - 3'000'000'000, kWall), Step::kBehind) << k;
+  }
+  EXPECT_EQ(pacer.glitches(), 0u);
+  EXPECT_EQ(pacer.new_timelines(), 0u);
 }
 
 }  // namespace

@@ -205,6 +205,7 @@ int64_t CalibNode::Impl::PacerObserve(const ReplayItem& item) {
   } else if (step == ReplayPacer::Step::kOnTime) {
     pacer_in_glitch = false;
   }
+  // An event behind the log time (late in the file) keeps its own stamp for --from / --to.
   return step == ReplayPacer::Step::kGlitch ? pacer.now_ns() : item.t_ns;
 }
 

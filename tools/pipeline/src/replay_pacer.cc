@@ -58,6 +58,7 @@ ReplayPacer::Step ReplayPacer::Observe(int camera, int64_t t_ns, Clock::time_poi
     Follow(t_ns, now);
     return Step::kNewTime;
   }
+  if (gap < 0) return Step::kBehind;
   ++glitches_;
   return Step::kGlitch;
 }

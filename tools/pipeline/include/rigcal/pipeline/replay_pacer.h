@@ -3,8 +3,9 @@
 // ReplayPacer: the log time of a replay, kept from glitched stamps, and how long `--speed`
 // waits for an event. The pacer's clock follows the log's stamps while they advance by at most
 // the cap (max(1 s, 20 x the log's normal advance: the median of its last 16 advances)). A stamp
-// further from the clock, ahead or behind (a glitch, e.g. INT64_MAX, or a restart of the clock),
-// is not waited for and moves nothing; it is followed as a new timeline only when confirmed:
+// further from the clock, ahead (a glitch, e.g. INT64_MAX) or behind (a camera's events seconds
+// late in the file, as `record --fast` writes them, or a restart of the clock), is not waited
+// for and moves nothing; it is followed as a new timeline only when confirmed:
 // stamps of at least two cameras on it (each within the cap of the run's newest), or
 // kLoneEvents of one camera with no event of another camera in between. A stamp behind the
 // clock within the cap (another camera's earlier frame) needs no wait. So no single wait is
@@ -27,7 +28,9 @@ class ReplayPacer {
   enum class Step {
     kFirst,    // the first stamp: the clock's origin
     kOnTime,   // within the cap of the clock (moved it when ahead)
-    kGlitch,   // far from the clock, not (yet) a new timeline: moved nothing
+    kBehind,   // further behind the clock than the cap (a camera's events late in the file),
+               // not (yet) a new timeline: needs no wait, moved nothing
+    kGlitch,   // further ahead than the cap, not (yet) a new timeline: moved nothing
     kNewTime,  // confirmed a new timeline: the clock jumped to it
   };
 
@@ -41,7 +44,7 @@ class ReplayPacer {
   Clock::time_point Due(double speed) const;
   // The largest advance of the clock followed without a confirmation [ns].
   int64_t CapNs() const;
-  // Stamps taken as glitches so far, and new timelines followed.
+  // Stamps ahead taken as glitches so far, and new timelines followed.
   uint64_t glitches() const { return glitches_; }
   uint64_t new_timelines() const { return new_timelines_; }
   // The last step's gap from the clock [ns] (kGlitch / kNewTime: how far the stamp was).
