@@ -332,10 +332,16 @@ void CalibNode::Impl::CloseOutput() {
   }
 }
 
-void CalibNode::Impl::Finish(int64_t utime) {
+void CalibNode::Impl::Finish(int64_t utime, bool interrupted) {
   // Clean stop: everything received is estimated, published, saved and written.
   calibrator->Flush();
-  calibrator->RefineNow(/*final=*/true);
+  if (interrupted) {
+    // Within 2 s of a signal: the final history refinement (seconds on a long drive) is left
+    // out; the result is the estimate as last refined.
+    log->info("stopped by a signal: the final history refinement is left out");
+  } else {
+    calibrator->RefineNow(/*final=*/true);
+  }
   calibrator->Stop();
   const RigEstimate estimate = calibrator->Estimate();
   PublishExtrinsics(estimate, utime);
@@ -430,7 +436,7 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
   }
   if (m.replaying()) {
     m.ReplayLog(stop);
-    m.Finish(std::max<int64_t>(m.clock_ns, 0) / 1000);
+    m.Finish(std::max<int64_t>(m.clock_ns, 0) / 1000, stop.load());
     if (m.options.on_progress) {
       ReplayProgress progress = m.Progress();
       progress.done = true;
@@ -457,7 +463,7 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
       break;
     }
   }
-  m.Finish(MonotonicNanos() / 1000);
+  m.Finish(MonotonicNanos() / 1000, stop.load());
   return m.summary;
 }
 

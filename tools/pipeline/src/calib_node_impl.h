@@ -154,8 +154,9 @@ struct CalibNode::Impl {
   // After the last publication: the output closed and, for a file:// URL, its file checked (an
   // error naming the file when it does not hold everything published).
   void CloseOutput() RIGCAL_EXCLUDES(output_mutex);
-  // Flush, final refinement, last publication, state and result.
-  void Finish(int64_t utime);
+  // Flush, final refinement (not when `interrupted`: stopped by a signal, so the run ends
+  // promptly), last publication, state and result.
+  void Finish(int64_t utime, bool interrupted);
   // Moves pose segments past the resumed state's (our own VO restarted).
   void SetSegmentOffsets(const RigEstimatorState& state);
 

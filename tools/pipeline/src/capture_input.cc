@@ -142,7 +142,8 @@ void CalibNode::Impl::RunCapture(const std::atomic<bool>& stop) {
     }
   }
   StopCapture();
-  Finish((lossless_capture ? std::max<int64_t>(clock_ns, 0) : capture::MonotonicNowNs()) / 1000);
+  Finish((lossless_capture ? std::max<int64_t>(clock_ns, 0) : capture::MonotonicNowNs()) / 1000,
+         stop.load());
   FinishCapture();
   log->info("{:.1f} s, {} sets; RSS {:.0f} MB",
             static_cast<double>(capture::MonotonicNowNs() - start_ns) * 1e-9, summary.estimate.sets,
