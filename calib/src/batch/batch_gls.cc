@@ -33,9 +33,8 @@ int ChainSpan(const RigRecording& recording, const SlaveCalibration& r,
   return spans.empty() ? 1 : std::max(1, static_cast<int>(std::lround(Median(spans))));
 }
 
-// The motions (k, k + span) of the slave as `span` chains of consecutive motions (k ≡ j mod
-// span, in time order), with the scale variables of `r` (its scale keys: the segment ids, or
-// one scale); motions of a segment without a scale are left out.
+}  // namespace
+
 std::vector<MotionData> ChainMotions(const RigRecording& recording, int slave, int span,
                                      const SlaveCalibration& r) {
   std::vector<IndexPair> pairs = RelativePairs(recording, span);
@@ -57,7 +56,7 @@ std::vector<MotionData> ChainMotions(const RigRecording& recording, int slave, i
   return out;
 }
 
-GlsInput StartOf(const SlaveCalibration& r, const CalibrationOptions& options) {
+GlsInput GlsStartOf(const SlaveCalibration& r, const CalibrationOptions& options) {
   GlsInput in;
   in.q = r.estimate.q;
   in.C = r.estimate.C;
@@ -80,7 +79,6 @@ GlsInput StartOf(const SlaveCalibration& r, const CalibrationOptions& options) {
   return in;
 }
 
-// The GLS estimate and its σ in `r` (as the refinement's in batch_result.cc).
 void TakeGls(const GlsResult& g, const GlsInput& in, const CalibrationOptions& options,
              SlaveCalibration* out) {
   SlaveCalibration& r = *out;
@@ -116,6 +114,8 @@ void TakeGls(const GlsResult& g, const GlsInput& in, const CalibrationOptions& o
   }
 }
 
+namespace {
+
 // Motions per chain the rotation's chains of a mixture need (below).
 constexpr int kMinMotionsPerChain = 8;
 
@@ -140,7 +140,7 @@ GlsAttempt Refine(const RigRecording& recording, int slave, const SlaveCalibrati
   }
   const int span = ChainSpan(recording, start, options);
   const std::vector<MotionData> motions = ChainMotions(recording, slave, span, start);
-  GlsInput in = StartOf(start, options);
+  GlsInput in = GlsStartOf(start, options);
   in.time_blocks = BlocksForDurations(motions, options.covariance_time_blocks);
   in.rotation_prior = rotation_prior;
   in.rotation_prior_cov = rotation_prior_cov;

@@ -4,7 +4,7 @@
 //   motions/pose_glitches (CalibrateRig, before the pairs) -> batch_motions ->
 //   batch_model_selection -> batch_linear_solution -> batch_refinement -> batch_result (with
 //   models/model_explanation) -> batch_acceptance; the auto and gls pair policies around them
-//   (batch_pair_choice, batch_gls).
+//   (batch_pair_choice, batch_gls) and, last, their σ floor (batch_sigma_floor).
 #include "rigcal/calib/rig_calibrator.h"
 
 #include <algorithm>
@@ -19,6 +19,7 @@
 #include "batch/batch_pair_choice.h"
 #include "batch/batch_refinement.h"
 #include "batch/batch_result.h"
+#include "batch/batch_sigma_floor.h"
 #include "batch/batch_solve_details.h"
 #include "batch/batch_units.h"
 #include "motions/motion_data.h"
@@ -161,6 +162,8 @@ SlaveCalibration CalibratePrepared(const RigPreparation& p, const CalibrationOpt
   if (p.solvable && p.auto_pairs) {
     r = p.gls ? internal::CalibrateSlaveGls(p.recording, p.candidates, slave, options)
               : internal::CalibrateSlaveAutoPairs(p.recording, p.candidates, slave, options);
+    // Last: σ only, after every choice the σ of the candidates made.
+    internal::HoldSigmaToConsecutiveGls(p.recording, slave, options, &r);
   } else {
     r = CalibrateSlave(MotionsForSlave(p.recording, slave, p.pairs), options, r.name);
     r.pairs = PairsText(options.pairs);
@@ -204,8 +207,8 @@ SlaveCalibration CalibrateRigSlave(const RigRecording& recording, const Calibrat
                                    int slave) {
   const double unit = LengthUnitOf(recording);
   const CalibrationOptions options = InLengthUnit(given, unit);
-  SlaveCalibration r = CalibratePrepared(Prepare(InLengthUnit(recording, unit), options), options,
-                                         slave);
+  SlaveCalibration r =
+      CalibratePrepared(Prepare(InLengthUnit(recording, unit), options), options, slave);
   FromLengthUnit(unit, &r);
   return r;
 }
