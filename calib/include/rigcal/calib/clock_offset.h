@@ -8,10 +8,14 @@
 //    sampled on a common grid and cross-correlated over a search window; the peak is refined
 //    to sub-sample by a parabola through it and its neighbours.
 // 2. Refined with the extrinsic rotation X = master_from_slave (the slave's orientation in the
-//    master frame) of a calibration: the hand-eye rotation residuals angle(A X, X B(τ)) of the
-//    motions between master instants, B(τ) interpolated from the slave at the master instants + τ,
-//    are minimised over τ (golden-section search around the correlation peak); σ from the curvature
-//    of that cost (Gauss-Newton: σ² = s² / Σ |∂r/∂τ|², s² the residual variance).
+//    master frame) of a calibration: the hand-eye rotation residuals angle(A X, X B(τ)) of
+//    disjoint motions are minimised over τ (golden-section search around the correlation peak).
+//    Both cameras are interpolated at the motions' ends, whose phases within a master frame cycle
+//    through 8 even steps: an interpolated pose averages its neighbours' noise, so comparing the
+//    master's own frames with the slave interpolated at frame + τ made the cost lowest midway
+//    between frames whatever the truth. σ by a sandwich over the Gauss-Newton step (motions that
+//    share a pose or overlap correlate); where the noise's slope rivals the signal's (slow
+//    drives, noisy poses) from straight-line fits of the residuals over ±2 frames.
 
 #include <Eigen/Geometry>
 #include <limits>
@@ -42,7 +46,8 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
                                                    const TimedTrajectory& slave,
                                                    const TimeOffsetOptions& options = {});
 
-// Step 2, around `initial` (searched within ± one slave frame interval), with X =
+// Step 2, around `initial` (searched within ± one slave frame interval, moved up to 6 times to a
+// minimum at its end: the correlation can be frames off on slow, noisy drives), with X =
 // `master_from_slave` the slave's orientation in the master frame. Returns `initial` unchanged
 // when fewer than 5 motions can be formed.
 TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTrajectory& slave,
