@@ -391,6 +391,38 @@ TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTr
   return initial;
 }
 
+namespace {
+
+// σ of MeasureOffsetFromAngles's τ with the residuals' correlation over the motions (one per
+// master frame: motions k and k + span share a pose, overlapping ones the drift between them):
+// Var = Σ_k Σ_l J_k J_(k+l) γ(l) / (Σ J_k²)², γ(l) the residuals' autocovariance at lag l <=
+// `max_lag` pooled over the window (a sandwich of single products would rest on the window's two
+// or three independent stretches, too noisy for the Kalman filter's weights). `starts`: the
+// motions' first master frames; r, jac: residuals and Jacobians (NaN: not formed); `naive`: the
+// variance without correlation, taken when the sum is not positive.
+double AutocovarianceStd(const std::vector<size_t>& starts, const std::vector<double>& r,
+                         const std::vector<double>& jac, size_t max_lag, double jtj, double naive) {
+  double var = 0.0;
+  int n = 0;
+  for (const double j : jac) n += std::isfinite(j);
+  for (size_t lag = 0; lag <= max_lag; ++lag) {
+    double gamma = 0.0, jj = 0.0;
+    int pairs = 0;
+    for (size_t i = 0; i + lag < r.size(); ++i) {
+      const size_t k = i + lag;
+      if (!std::isfinite(jac[i]) || !std::isfinite(jac[k]) || starts[k] - starts[i] != lag)
+        continue;
+      gamma += r[i] * r[k];
+      jj += jac[i] * jac[k];
+      ++pairs;
+    }
+    if (pairs > 0) var += (lag == 0 ? 1.0 : 2.0) * jj * gamma / pairs;
+  }
+  return std::sqrt(var > 0.0 ? var * n / (n - 1.0) / (jtj * jtj) : naive);
+}
+
+}  // namespace
+
 std::optional<AngleOffsetMeasurement> MeasureOffsetFromAngles(const TimedTrajectory& master,
                                                               const TimedTrajectory& slave,
                                                               int64_t from_ns, int64_t to_ns,
@@ -404,33 +436,46 @@ std::optional<AngleOffsetMeasurement> MeasureOffsetFromAngles(const TimedTraject
   const auto span = static_cast<size_t>(std::max<int64_t>(
       1, std::llround(motion_span_s * 1e9 / static_cast<double>(master_interval))));
   auto segment_of = [&](size_t k) { return master.segment.empty() ? 0 : master.segment[k]; };
-  auto slave_at = [&](size_t k, double tau) {
-    return InterpolatePose(slave, master.t_ns[k] + std::llround(tau * 1e9), max_gap_ns);
+  // Motion k runs from master frame k to k + span, both ends moved on by (k mod kPhases) /
+  // kPhases of a master frame, both cameras interpolated there: the interpolation fractions
+  // are spread over a frame at every τ (as in RefineTimeOffset).
+  const int64_t master_gap_ns =
+      static_cast<int64_t>(kMaxGapIntervals * static_cast<double>(master_interval));
+  auto shift_of = [&](size_t k) {
+    return static_cast<int64_t>(k % kPhases) * (master_interval / kPhases);
   };
-  // Motions (k, k + span) starting in [from_ns, to_ns) whose slave ends can be interpolated
-  // over the whole searched interval, with the master's rotation angle.
+  auto slave_at = [&](size_t k, int64_t shift, double tau) {
+    return InterpolatePose(slave, master.t_ns[k] + shift + std::llround(tau * 1e9), max_gap_ns);
+  };
+  // Motions starting in [from_ns, to_ns) whose slave ends can be interpolated over the whole
+  // searched interval, with the master's rotation angle.
   std::vector<size_t> starts;
+  std::vector<int64_t> shifts;
   std::vector<double> master_angle;
   const auto first = static_cast<size_t>(
       std::lower_bound(master.t_ns.begin(), master.t_ns.end(), from_ns) - master.t_ns.begin());
   for (size_t k = first; k + span < master.size() && master.t_ns[k] < to_ns; ++k) {
     if (segment_of(k) != segment_of(k + span)) continue;
-    bool valid = true;
+    const int64_t shift = shift_of(k);
+    const auto ma = InterpolatePose(master, master.t_ns[k] + shift, master_gap_ns);
+    const auto mb = InterpolatePose(master, master.t_ns[k + span] + shift, master_gap_ns);
+    bool valid = ma && mb && ma->segment == mb->segment;
     for (const double tau : {center_s - half_width_s, center_s + half_width_s}) {
-      const auto a = slave_at(k, tau);
-      const auto b = slave_at(k + span, tau);
+      const auto a = slave_at(k, shift, tau);
+      const auto b = slave_at(k + span, shift, tau);
       valid = valid && a && b && a->segment == b->segment;
     }
     if (!valid) continue;
     starts.push_back(k);
-    master_angle.push_back(RotationAngle(master.poses[k].q.conjugate() * master.poses[k + span].q));
+    shifts.push_back(shift);
+    master_angle.push_back(RotationAngle(ma->pose.q.conjugate() * mb->pose.q));
   }
   if (starts.size() < 5) return std::nullopt;
   auto residuals = [&](double tau, std::vector<double>* r) {
     r->assign(starts.size(), std::numeric_limits<double>::quiet_NaN());
     for (size_t i = 0; i < starts.size(); ++i) {
-      const auto a = slave_at(starts[i], tau);
-      const auto b = slave_at(starts[i] + span, tau);
+      const auto a = slave_at(starts[i], shifts[i], tau);
+      const auto b = slave_at(starts[i] + span, shifts[i], tau);
       if (a && b) (*r)[i] = master_angle[i] - RotationAngle(a->pose.q.conjugate() * b->pose.q);
     }
   };
@@ -451,22 +496,21 @@ std::optional<AngleOffsetMeasurement> MeasureOffsetFromAngles(const TimedTraject
   residuals(out.offset_s, &r0);
   residuals(out.offset_s + e, &rp);
   residuals(out.offset_s - e, &rm);
+  std::vector<double> jac(r0.size(), std::numeric_limits<double>::quiet_NaN());
   double jtj = 0.0;
   double sum = 0.0;
   int n = 0;
   for (size_t i = 0; i < r0.size(); ++i) {
     if (!std::isfinite(r0[i]) || !std::isfinite(rp[i]) || !std::isfinite(rm[i])) continue;
-    const double j = (rp[i] - rm[i]) / (2.0 * e);
-    jtj += j * j;
+    jac[i] = (rp[i] - rm[i]) / (2.0 * e);
+    jtj += jac[i] * jac[i];
     sum += r0[i] * r0[i];
     ++n;
   }
   out.motions = n;
-  if (n < 5) return std::nullopt;
+  if (n < 5 || !(jtj > 0.0)) return std::nullopt;
   out.rms_rad = std::sqrt(sum / n);
-  // Every pose ends one motion and starts another: the residuals of motions k and k + span
-  // share a pose's error, which doubles the variance of the estimate at most.
-  if (jtj > 0.0) out.std_s = std::sqrt(2.0 * sum / (n - 1.0) / jtj);
+  out.std_s = AutocovarianceStd(starts, r0, jac, span + 2, jtj, sum / (n - 1.0) / jtj);
   return out;
 }
 

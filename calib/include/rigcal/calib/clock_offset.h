@@ -60,9 +60,10 @@ TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTr
 // the one that minimises sum_k (angle(A_k) - angle(B_k(τ)))² over the motions (k, k + span)
 // of master poses starting in [from_ns, to_ns) (master clock), B_k(τ) the slave's rotation
 // between the master instants + τ (interpolated, InterpolatePose). Golden-section search in
-// [center_s - half_width_s, center_s + half_width_s]; σ by Gauss-Newton from the curvature,
-// times sqrt(2) as every pose ends one motion and starts the next. nullopt with fewer than 5
-// motions.
+// [center_s - half_width_s, center_s + half_width_s]. Both cameras are interpolated at each
+// motion's ends, moved on by (k mod 8) / 8 of a master frame (as in RefineTimeOffset). σ from
+// the Gauss-Newton step with the residuals' autocovariance over the lags at which motions share
+// a pose or overlap. nullopt with fewer than 5 motions.
 struct AngleOffsetMeasurement {
   double offset_s = 0.0;
   double std_s = std::numeric_limits<double>::quiet_NaN();  // NaN: not determined
