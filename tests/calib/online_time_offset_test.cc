@@ -10,12 +10,12 @@
 #include <memory>
 
 #include "../calib/free_running_rig.h"
+#include "rigcal/base/logging.h"
+#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/clock_offset_tracker.h"
 #include "rigcal/calib/error_model.h"
 #include "rigcal/calib/estimator_state.h"
-#include "rigcal/base/logging.h"
 #include "rigcal/calib/online_calibrator.h"
-#include "rigcal/base/quaternion.h"
 #include "rigcal/calib/sync_buffer.h"
 
 namespace rigcal {
@@ -336,10 +336,23 @@ TEST(OnlineTimeOffset, OffsetsAreSavedAndRestoredWithTheState) {
     EXPECT_TRUE(saved.clock_offsets[i].initialised);
     EXPECT_TRUE(restored.online[i].clock_offset_known);
     // The saved state is the filter's at its last measurement; the estimate before the restart
-    // was predicted to the newest master stamp (at most a measurement window later).
-    EXPECT_NEAR(restored.rig.slaves[i].time_offset_s, before.rig.slaves[i].time_offset_s, 1e-5);
-    EXPECT_NEAR(restored.rig.slaves[i].time_offset_std_s, before.rig.slaves[i].time_offset_std_s,
-                0.2 * before.rig.slaves[i].time_offset_std_s);
+    // was predicted to the newest master stamp, at most dt = two measurement windows and a motion
+    // span later: the offset moved by the drift over dt, the variance grew by the drift's, the
+    // drift walk's and the offset walk's over dt (ClockOffsetTracker's prediction). (A relative
+    // tolerance on σ no longer holds: the offset walk over dt is as large as the honest σ.)
+    const ClockOffsetOptions& o = options.time_offset;
+    const double dt = 2.0 * o.measure_window_s + o.motion_span_s;
+    const double drift = restored.online[i].clock_drift_ppm * 1e-6;
+    const double drift_std = restored.online[i].clock_drift_std_ppm * 1e-6;
+    EXPECT_NEAR(restored.rig.slaves[i].time_offset_s, before.rig.slaves[i].time_offset_s,
+                std::abs(drift) * dt + 1e-9);
+    // Var(dt) = P00 + 2 dt P01 + dt² P11 + walks, |P01| <= sqrt(P00 P11).
+    const double sigma = restored.rig.slaves[i].time_offset_std_s;
+    const double bound = std::pow(sigma + drift_std * dt, 2) +
+                         std::pow(o.drift_walk_ppm_per_sqrt_s * 1e-6, 2) * dt * dt * dt / 3.0 +
+                         std::pow(o.offset_walk_s_per_sqrt_s, 2) * dt;
+    EXPECT_LE(sigma, before.rig.slaves[i].time_offset_std_s * (1.0 + 1e-9));
+    EXPECT_LE(std::pow(before.rig.slaves[i].time_offset_std_s, 2), bound * (1.0 + 1e-9));
     EXPECT_EQ(restored.online[i].clock_drift_ppm, before.online[i].clock_drift_ppm);
   }
   // The second half: every slave in the sets from its first poses on (no initial search).

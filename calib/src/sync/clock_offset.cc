@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -114,6 +116,93 @@ double GoldenSection(const Cost& cost, double lo, double hi, double tolerance) {
   return 0.5 * (lo + hi);
 }
 
+// Motions of the rig between master-clock instants u and u + span whose start phases within a
+// master frame interval cycle through kPhases evenly spaced values, both cameras interpolated
+// there (InterpolatePose). Comparing the master at its own frames with the slave interpolated
+// at frame + τ would make the expected cost depend on τ through the interpolation alone: an
+// interpolated pose averages the noise of its neighbours (a quarter to a third less variance
+// midway), so the cost is lowest between frames whatever the truth (on a slow drive, errors of
+// up to a frame at a σ of 2 ms). With the phases spread evenly, both cameras' interpolation
+// fractions are spread evenly over a frame at every τ, and the expected noise does not depend
+// on τ (to 1/kPhases² of its swing).
+constexpr int kPhases = 8;
+
+struct MotionSet {
+  std::vector<int64_t> from_ns, to_ns;  // master clock
+  std::vector<Eigen::Quaterniond> a;    // master rotation from `from` to `to` (its frame)
+  int64_t slave_max_gap_ns = 0;
+  int64_t reach_ns = 0;  // instants closer than this share a pose of either camera
+};
+
+// Disjoint motions in [from_ns, to_ns], consecutive starts a span and 1/kPhases of a master frame
+// apart, whose slave ends can be interpolated in one segment at every offset of `taus`.
+MotionSet StaggeredMotions(const TimedTrajectory& master, const TimedTrajectory& slave,
+                           int64_t from_ns, int64_t to_ns, int64_t span_ns,
+                           const std::vector<double>& taus) {
+  MotionSet out;
+  const int64_t master_interval = MedianInterval(master.t_ns);
+  const int64_t slave_interval = MedianInterval(slave.t_ns);
+  const auto gap = [](int64_t interval) {
+    return static_cast<int64_t>(kMaxGapIntervals * static_cast<double>(interval));
+  };
+  out.slave_max_gap_ns = gap(slave_interval);
+  out.reach_ns = 2 * std::max(master_interval, slave_interval);
+  const int64_t phase_ns = master_interval / kPhases;
+  auto add = [&](int64_t u, int phase) {
+    const int64_t b = u + phase * phase_ns;
+    const int64_t e = b + span_ns;
+    const auto ma = InterpolatePose(master, b, gap(master_interval));
+    const auto mb = InterpolatePose(master, e, gap(master_interval));
+    if (!ma || !mb || ma->segment != mb->segment) return;
+    for (const double tau : taus) {
+      const auto sa = InterpolatePose(slave, b + std::llround(tau * 1e9), out.slave_max_gap_ns);
+      const auto sb = InterpolatePose(slave, e + std::llround(tau * 1e9), out.slave_max_gap_ns);
+      if (!sa || !sb || sa->segment != sb->segment) return;
+    }
+    out.from_ns.push_back(b);
+    out.to_ns.push_back(e);
+    out.a.push_back(ma->pose.q.conjugate() * mb->pose.q);
+  };
+  // span is a whole number of master frames: the k-th start lies k/kPhases of a frame on.
+  for (int64_t u = from_ns; u + span_ns <= to_ns; u += span_ns + phase_ns) add(u, 0);
+  return out;
+}
+
+// The slave's rotation over motion j at offset tau (nullopt where it cannot be interpolated).
+std::optional<Eigen::Quaterniond> SlaveMotion(const TimedTrajectory& slave, const MotionSet& m,
+                                              size_t j, double tau) {
+  const int64_t shift = std::llround(tau * 1e9);
+  const auto a = InterpolatePose(slave, m.from_ns[j] + shift, m.slave_max_gap_ns);
+  const auto b = InterpolatePose(slave, m.to_ns[j] + shift, m.slave_max_gap_ns);
+  if (!a || !b) return std::nullopt;
+  return a->pose.q.conjugate() * b->pose.q;
+}
+
+// σ of the τ minimising Σ|r_j(τ)|², from the Gauss-Newton step τ̂ - τ ≈ -Σ g_j / Σ|J_j|² (g_j =
+// J_j·r_j): Var = Σ over pairs of motions that share a pose (ends closer than m.reach_ns) or
+// overlap in time (drift) of g_j g_k, over (Σ|J_j|²)² (a sandwich: no assumption on the
+// noise's level, whiteness or how the motions share poses). Falls back to the pairs j = k when
+// the sum is not positive. NaN with fewer than 5 motions.
+double SandwichStd(const MotionSet& m, const std::vector<size_t>& used,
+                   const std::vector<double>& g, double jtj) {
+  if (used.size() < 5 || !(jtj > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  double var = 0.0;
+  double diagonal = 0.0;
+  for (size_t x = 0; x < used.size(); ++x) {
+    diagonal += g[x] * g[x];
+    var += g[x] * g[x];
+    const size_t j = used[x];
+    for (size_t y = x + 1; y < used.size(); ++y) {
+      const size_t k = used[y];
+      if (m.from_ns[k] - m.reach_ns > m.to_ns[j] + m.reach_ns) break;  // starts are increasing
+      var += 2.0 * g[x] * g[y];
+    }
+  }
+  // Residuals at the estimate are smaller than the noise by the fitted parameter's share.
+  const double n = static_cast<double>(used.size());
+  return std::sqrt((var > 0.0 ? var : diagonal) * n / (n - 1.0)) / jtj;
+}
+
 }  // namespace
 
 Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master,
@@ -176,81 +265,163 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
   return out;
 }
 
+namespace {
+
+// One step of the straight-line fit of RefineAround: each residual fitted over ±2 frames (h)
+// around *offset_s in half frames, the offset moved by -Σ J_j·r_j / Σ|J_j|² (at most h). False
+// with fewer than 5 motions.
+template <typename Residual>
+bool FitAround(const MotionSet& m, const Residual& residual, double h, double* offset_s,
+               std::vector<size_t>* used, std::vector<double>* g, double* jtj) {
+  constexpr int kSteps = 4;  // per side
+  constexpr double kN = 2.0 * kSteps + 1.0;
+  constexpr double kKK = kSteps * (kSteps + 1.0) * (2.0 * kSteps + 1.0) / 3.0;  // Σ k²
+  used->clear(), g->clear(), *jtj = 0.0;
+  double step = 0.0;
+  for (size_t j = 0; j < m.a.size(); ++j) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero(), slope = Eigen::Vector3d::Zero();
+    bool ok = true;
+    for (int k = -kSteps; k <= kSteps && ok; ++k) {
+      const auto r = residual(j, *offset_s + 0.5 * k * h);
+      ok = r.has_value();
+      if (ok) sum += *r, slope += k * *r;
+    }
+    if (!ok) continue;
+    const Eigen::Vector3d jac = slope / (kKK * 0.5 * h);
+    *jtj += jac.squaredNorm();
+    g->push_back(jac.dot(sum / kN));
+    step += g->back();
+    used->push_back(j);
+  }
+  if (used->size() < 5 || !(*jtj > 0.0)) return false;
+  *offset_s -= std::clamp(step / *jtj, -h, h);
+  return true;
+}
+
+// RefineTimeOffset within [center - h, center + h] (h the slave's frame interval); nullopt with
+// fewer than 5 motions. `at_bound`: the minimum lies at an end of the interval.
+std::optional<TimeOffsetEstimate> RefineAround(const TimedTrajectory& master,
+                                               const TimedTrajectory& slave,
+                                               const Eigen::Quaterniond& x, double center_s,
+                                               const TimeOffsetOptions& options, bool* at_bound) {
+  const int64_t master_interval = MedianInterval(master.t_ns);
+  const double h = static_cast<double>(MedianInterval(slave.t_ns)) * 1e-9;
+  const int64_t span_ns = std::max<int64_t>(1, std::llround(options.motion_span_s * 1e9 /
+                                                            static_cast<double>(master_interval))) *
+                          master_interval;
+  const MotionSet m = StaggeredMotions(master, slave, master.t_ns.front(), master.t_ns.back(),
+                                       span_ns, {center_s - 1.1 * h, center_s, center_s + 1.1 * h});
+  if (m.a.size() < 5) return std::nullopt;
+  // Rotation-vector residuals of A X = X B(τ) (empty where the slave cannot be interpolated).
+  auto residual = [&](size_t j, double tau) -> std::optional<Eigen::Vector3d> {
+    const auto b = SlaveMotion(slave, m, j, tau);
+    if (!b) return std::nullopt;
+    const Eigen::AngleAxisd e((m.a[j] * x).conjugate() * (x * *b));
+    return Eigen::Vector3d(e.angle() * e.axis());
+  };
+  auto cost = [&](double tau) {
+    double sum = 0.0;
+    for (size_t j = 0; j < m.a.size(); ++j) {
+      if (const auto r = residual(j, tau)) sum += r->squaredNorm();
+    }
+    return sum;
+  };
+  TimeOffsetEstimate out;
+  out.offset_s = GoldenSection(cost, center_s - h, center_s + h, 1e-6);
+  *at_bound = std::abs(out.offset_s - center_s) > 0.98 * h;
+  // The cost is the smooth signal plus the noise of the interpolated poses, which wiggles on the
+  // scale of a frame. Where the signal's slope dominates, the minimum stands and its σ comes from
+  // the local Jacobians (central differences, SandwichStd). Where the noise's slope adds more
+  // than the signal's (slow drives, noisy poses: Σ|J|² locally over twice that of the fit below),
+  // the minimum and its σ are taken from each residual's straight-line fit over ±2 frames around
+  // it (slope J_j, value r_j at the centre): τ = centre - Σ J_j·r_j / Σ|J_j|², twice.
+  std::vector<size_t> used;
+  std::vector<double> g;
+  double jtj = 0.0;
+  const double e = std::max(1e-4, 0.02 * h);
+  for (size_t j = 0; j < m.a.size(); ++j) {
+    const auto r0 = residual(j, out.offset_s);
+    const auto rp = residual(j, out.offset_s + e);
+    const auto rm = residual(j, out.offset_s - e);
+    if (!r0 || !rp || !rm) continue;
+    const Eigen::Vector3d jac = (*rp - *rm) / (2.0 * e);
+    jtj += jac.squaredNorm();
+    g.push_back(jac.dot(*r0));
+    used.push_back(j);
+  }
+  TimeOffsetEstimate fitted = out;
+  std::vector<size_t> fit_used;
+  std::vector<double> fit_g;
+  double fit_jtj = 0.0;
+  for (int pass = 0; pass < 2; ++pass) {
+    if (!FitAround(m, residual, h, &fitted.offset_s, &fit_used, &fit_g, &fit_jtj)) break;
+    if (pass == 0 && !(jtj > 2.0 * fit_jtj)) break;  // the signal's slope dominates
+  }
+  if (jtj > 2.0 * fit_jtj && fit_used.size() >= 5) {
+    out.offset_s = fitted.offset_s;
+    used = fit_used, g = fit_g, jtj = fit_jtj;
+  }
+  out.motions = static_cast<int>(used.size());
+  if (used.size() >= 5) out.std_s = SandwichStd(m, used, g, jtj);
+  return out;
+}
+
+}  // namespace
+
 TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTrajectory& slave,
                                     const Eigen::Quaterniond& master_from_slave,
                                     const TimeOffsetEstimate& initial,
                                     const TimeOffsetOptions& options) {
-  const Eigen::Quaterniond& x = master_from_slave;  // X of the hand-eye residuals A X = X B
-  const int64_t master_interval = MedianInterval(master.t_ns);
-  const int64_t slave_interval = MedianInterval(slave.t_ns);
-  if (master_interval <= 0 || slave_interval <= 0) return initial;
-  const auto max_gap_ns =
-      static_cast<int64_t>(kMaxGapIntervals * static_cast<double>(slave_interval));
-  const double h = static_cast<double>(slave_interval) * 1e-9;
-  const auto span = static_cast<size_t>(std::max<int64_t>(
-      1, std::llround(options.motion_span_s * 1e9 / static_cast<double>(master_interval))));
-  auto segment_of = [&](size_t k) { return master.segment.empty() ? 0 : master.segment[k]; };
-  auto slave_at = [&](size_t k, double tau) {
-    return InterpolatePose(slave, master.t_ns[k] + std::llround(tau * 1e9), max_gap_ns);
-  };
-  // Motions (k, k + span), non-overlapping, valid over the whole search interval.
-  std::vector<size_t> starts;
-  for (size_t k = 0; k + span < master.size(); k += span) {
-    if (segment_of(k) != segment_of(k + span)) continue;
-    bool valid = true;
-    for (const double tau :
-         {initial.offset_s - 1.1 * h, initial.offset_s, initial.offset_s + 1.1 * h}) {
-      const auto a = slave_at(k, tau);
-      const auto b = slave_at(k + span, tau);
-      valid = valid && a && b && a->segment == b->segment;
+  if (MedianInterval(master.t_ns) <= 0 || MedianInterval(slave.t_ns) <= 0) return initial;
+  // The correlation's peak can be frames off on a slow drive with noisy poses: a minimum at an
+  // end of the searched interval moves the interval there, at most kRecentre times.
+  constexpr int kRecentre = 6;
+  double center = initial.offset_s;
+  for (int round = 0; round <= kRecentre; ++round) {
+    bool at_bound = false;
+    const auto refined = RefineAround(master, slave, master_from_slave, center, options, &at_bound);
+    if (!refined) return initial;
+    if (!at_bound || round == kRecentre) {
+      TimeOffsetEstimate out = *refined;
+      out.correlation = initial.correlation;
+      return out;
     }
-    if (valid) starts.push_back(k);
+    center = refined->offset_s;
   }
-  if (starts.size() < 5) return initial;
-  // Rotation-vector residuals of A X = X B at offset tau (empty entries where the slave pose
-  // cannot be interpolated).
-  auto residuals = [&](double tau) {
-    std::vector<std::optional<Eigen::Vector3d>> r;
-    r.reserve(starts.size());
-    for (const size_t k : starts) {
-      const auto a = slave_at(k, tau);
-      const auto b = slave_at(k + span, tau);
-      if (!a || !b) {
-        r.emplace_back();
-        continue;
-      }
-      const Eigen::Quaterniond A = master.poses[k].q.conjugate() * master.poses[k + span].q;
-      const Eigen::Quaterniond B = a->pose.q.conjugate() * b->pose.q;
-      const Eigen::AngleAxisd e((A * x).conjugate() * (x * B));
-      r.emplace_back(e.angle() * e.axis());
-    }
-    return r;
-  };
-  auto cost = [&](double tau) {
-    double sum = 0.0;
-    for (const auto& r : residuals(tau)) sum += r ? r->squaredNorm() : 0.0;
-    return sum;
-  };
-  TimeOffsetEstimate out = initial;
-  out.offset_s = GoldenSection(cost, initial.offset_s - h, initial.offset_s + h, 1e-6);
-  // σ from Gauss-Newton: central differences of the residuals.
-  const double e = std::max(1e-4, 0.02 * h);
-  const auto r0 = residuals(out.offset_s);
-  const auto rp = residuals(out.offset_s + e);
-  const auto rm = residuals(out.offset_s - e);
-  double jtj = 0.0;
-  double sum = 0.0;
-  int n = 0;
-  for (size_t i = 0; i < r0.size(); ++i) {
-    if (!r0[i] || !rp[i] || !rm[i]) continue;
-    jtj += ((*rp[i] - *rm[i]) / (2.0 * e)).squaredNorm();
-    sum += r0[i]->squaredNorm();
-    ++n;
-  }
-  out.motions = n;
-  if (n >= 5 && jtj > 0.0) out.std_s = std::sqrt(sum / (3.0 * n - 1.0) / jtj);
-  return out;
+  return initial;
 }
+
+namespace {
+
+// σ of MeasureOffsetFromAngles's τ with the residuals' correlation over the motions (one per
+// master frame: motions k and k + span share a pose, overlapping ones the drift between them):
+// Var = Σ_k Σ_l J_k J_(k+l) γ(l) / (Σ J_k²)², γ(l) the residuals' autocovariance at lag l <=
+// `max_lag` pooled over the window (a sandwich of single products would rest on the window's two
+// or three independent stretches, too noisy for the Kalman filter's weights). `starts`: the
+// motions' first master frames; r, jac: residuals and Jacobians (NaN: not formed); `naive`: the
+// variance without correlation, taken when the sum is not positive.
+double AutocovarianceStd(const std::vector<size_t>& starts, const std::vector<double>& r,
+                         const std::vector<double>& jac, size_t max_lag, double jtj, double naive) {
+  double var = 0.0;
+  int n = 0;
+  for (const double j : jac) n += std::isfinite(j);
+  for (size_t lag = 0; lag <= max_lag; ++lag) {
+    double gamma = 0.0, jj = 0.0;
+    int pairs = 0;
+    for (size_t i = 0; i + lag < r.size(); ++i) {
+      const size_t k = i + lag;
+      if (!std::isfinite(jac[i]) || !std::isfinite(jac[k]) || starts[k] - starts[i] != lag)
+        continue;
+      gamma += r[i] * r[k];
+      jj += jac[i] * jac[k];
+      ++pairs;
+    }
+    if (pairs > 0) var += (lag == 0 ? 1.0 : 2.0) * jj * gamma / pairs;
+  }
+  return std::sqrt(var > 0.0 ? var * n / (n - 1.0) / (jtj * jtj) : naive);
+}
+
+}  // namespace
 
 std::optional<AngleOffsetMeasurement> MeasureOffsetFromAngles(const TimedTrajectory& master,
                                                               const TimedTrajectory& slave,
@@ -265,33 +436,46 @@ std::optional<AngleOffsetMeasurement> MeasureOffsetFromAngles(const TimedTraject
   const auto span = static_cast<size_t>(std::max<int64_t>(
       1, std::llround(motion_span_s * 1e9 / static_cast<double>(master_interval))));
   auto segment_of = [&](size_t k) { return master.segment.empty() ? 0 : master.segment[k]; };
-  auto slave_at = [&](size_t k, double tau) {
-    return InterpolatePose(slave, master.t_ns[k] + std::llround(tau * 1e9), max_gap_ns);
+  // Motion k runs from master frame k to k + span, both ends moved on by (k mod kPhases) /
+  // kPhases of a master frame, both cameras interpolated there: the interpolation fractions
+  // are spread over a frame at every τ (as in RefineTimeOffset).
+  const int64_t master_gap_ns =
+      static_cast<int64_t>(kMaxGapIntervals * static_cast<double>(master_interval));
+  auto shift_of = [&](size_t k) {
+    return static_cast<int64_t>(k % kPhases) * (master_interval / kPhases);
   };
-  // Motions (k, k + span) starting in [from_ns, to_ns) whose slave ends can be interpolated
-  // over the whole searched interval, with the master's rotation angle.
+  auto slave_at = [&](size_t k, int64_t shift, double tau) {
+    return InterpolatePose(slave, master.t_ns[k] + shift + std::llround(tau * 1e9), max_gap_ns);
+  };
+  // Motions starting in [from_ns, to_ns) whose slave ends can be interpolated over the whole
+  // searched interval, with the master's rotation angle.
   std::vector<size_t> starts;
+  std::vector<int64_t> shifts;
   std::vector<double> master_angle;
   const auto first = static_cast<size_t>(
       std::lower_bound(master.t_ns.begin(), master.t_ns.end(), from_ns) - master.t_ns.begin());
   for (size_t k = first; k + span < master.size() && master.t_ns[k] < to_ns; ++k) {
     if (segment_of(k) != segment_of(k + span)) continue;
-    bool valid = true;
+    const int64_t shift = shift_of(k);
+    const auto ma = InterpolatePose(master, master.t_ns[k] + shift, master_gap_ns);
+    const auto mb = InterpolatePose(master, master.t_ns[k + span] + shift, master_gap_ns);
+    bool valid = ma && mb && ma->segment == mb->segment;
     for (const double tau : {center_s - half_width_s, center_s + half_width_s}) {
-      const auto a = slave_at(k, tau);
-      const auto b = slave_at(k + span, tau);
+      const auto a = slave_at(k, shift, tau);
+      const auto b = slave_at(k + span, shift, tau);
       valid = valid && a && b && a->segment == b->segment;
     }
     if (!valid) continue;
     starts.push_back(k);
-    master_angle.push_back(RotationAngle(master.poses[k].q.conjugate() * master.poses[k + span].q));
+    shifts.push_back(shift);
+    master_angle.push_back(RotationAngle(ma->pose.q.conjugate() * mb->pose.q));
   }
   if (starts.size() < 5) return std::nullopt;
   auto residuals = [&](double tau, std::vector<double>* r) {
     r->assign(starts.size(), std::numeric_limits<double>::quiet_NaN());
     for (size_t i = 0; i < starts.size(); ++i) {
-      const auto a = slave_at(starts[i], tau);
-      const auto b = slave_at(starts[i] + span, tau);
+      const auto a = slave_at(starts[i], shifts[i], tau);
+      const auto b = slave_at(starts[i] + span, shifts[i], tau);
       if (a && b) (*r)[i] = master_angle[i] - RotationAngle(a->pose.q.conjugate() * b->pose.q);
     }
   };
@@ -312,22 +496,21 @@ std::optional<AngleOffsetMeasurement> MeasureOffsetFromAngles(const TimedTraject
   residuals(out.offset_s, &r0);
   residuals(out.offset_s + e, &rp);
   residuals(out.offset_s - e, &rm);
+  std::vector<double> jac(r0.size(), std::numeric_limits<double>::quiet_NaN());
   double jtj = 0.0;
   double sum = 0.0;
   int n = 0;
   for (size_t i = 0; i < r0.size(); ++i) {
     if (!std::isfinite(r0[i]) || !std::isfinite(rp[i]) || !std::isfinite(rm[i])) continue;
-    const double j = (rp[i] - rm[i]) / (2.0 * e);
-    jtj += j * j;
+    jac[i] = (rp[i] - rm[i]) / (2.0 * e);
+    jtj += jac[i] * jac[i];
     sum += r0[i] * r0[i];
     ++n;
   }
   out.motions = n;
-  if (n < 5) return std::nullopt;
+  if (n < 5 || !(jtj > 0.0)) return std::nullopt;
   out.rms_rad = std::sqrt(sum / n);
-  // Every pose ends one motion and starts another: the residuals of motions k and k + span
-  // share a pose's error, which doubles the variance of the estimate at most.
-  if (jtj > 0.0) out.std_s = std::sqrt(2.0 * sum / (n - 1.0) / jtj);
+  out.std_s = AutocovarianceStd(starts, r0, jac, span + 2, jtj, sum / (n - 1.0) / jtj);
   return out;
 }
 

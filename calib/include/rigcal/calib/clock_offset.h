@@ -8,10 +8,14 @@
 //    sampled on a common grid and cross-correlated over a search window; the peak is refined
 //    to sub-sample by a parabola through it and its neighbours.
 // 2. Refined with the extrinsic rotation X = master_from_slave (the slave's orientation in the
-//    master frame) of a calibration: the hand-eye rotation residuals angle(A X, X B(τ)) of the
-//    motions between master instants, B(τ) interpolated from the slave at the master instants + τ,
-//    are minimised over τ (golden-section search around the correlation peak); σ from the curvature
-//    of that cost (Gauss-Newton: σ² = s² / Σ |∂r/∂τ|², s² the residual variance).
+//    master frame) of a calibration: the hand-eye rotation residuals angle(A X, X B(τ)) of
+//    disjoint motions are minimised over τ (golden-section search around the correlation peak).
+//    Both cameras are interpolated at the motions' ends, whose phases within a master frame cycle
+//    through 8 even steps: an interpolated pose averages its neighbours' noise, so comparing the
+//    master's own frames with the slave interpolated at frame + τ made the cost lowest midway
+//    between frames whatever the truth. σ by a sandwich over the Gauss-Newton step (motions that
+//    share a pose or overlap correlate); where the noise's slope rivals the signal's (slow
+//    drives, noisy poses) from straight-line fits of the residuals over ±2 frames.
 
 #include <Eigen/Geometry>
 #include <limits>
@@ -42,7 +46,8 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
                                                    const TimedTrajectory& slave,
                                                    const TimeOffsetOptions& options = {});
 
-// Step 2, around `initial` (searched within ± one slave frame interval), with X =
+// Step 2, around `initial` (searched within ± one slave frame interval, moved up to 6 times to a
+// minimum at its end: the correlation can be frames off on slow, noisy drives), with X =
 // `master_from_slave` the slave's orientation in the master frame. Returns `initial` unchanged
 // when fewer than 5 motions can be formed.
 TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTrajectory& slave,
@@ -55,9 +60,10 @@ TimeOffsetEstimate RefineTimeOffset(const TimedTrajectory& master, const TimedTr
 // the one that minimises sum_k (angle(A_k) - angle(B_k(τ)))² over the motions (k, k + span)
 // of master poses starting in [from_ns, to_ns) (master clock), B_k(τ) the slave's rotation
 // between the master instants + τ (interpolated, InterpolatePose). Golden-section search in
-// [center_s - half_width_s, center_s + half_width_s]; σ by Gauss-Newton from the curvature,
-// times sqrt(2) as every pose ends one motion and starts the next. nullopt with fewer than 5
-// motions.
+// [center_s - half_width_s, center_s + half_width_s]. Both cameras are interpolated at each
+// motion's ends, moved on by (k mod 8) / 8 of a master frame (as in RefineTimeOffset). σ from
+// the Gauss-Newton step with the residuals' autocovariance over the lags at which motions share
+// a pose or overlap. nullopt with fewer than 5 motions.
 struct AngleOffsetMeasurement {
   double offset_s = 0.0;
   double std_s = std::numeric_limits<double>::quiet_NaN();  // NaN: not determined

@@ -14,7 +14,6 @@
 
 namespace rigcal::io {
 
-
 // The recording of a rig whose cameras may run free, matched at the slaves' time offsets
 // (MatchFreeRunning), and those offsets.
 struct OffsetMatch {
@@ -56,11 +55,9 @@ Status PropagateTimeOffsetSigma(const TimedTrajectory& master,
 // is given and whose estimate in `result` is usable, the offset the data prefer
 // (CorrelateAngularSpeed within ±offset_options.search_window_s of the given offset,
 // RefineTimeOffset with the solved rotation), nullopt when it cannot be measured. When it lies
-// beyond 3σ and beyond 0.75 of the slave's frame interval from the given offset (the interpolated
-// measure is biased towards the middle between frames by up to half an interval on synchronised
-// data) the slave's stamps are off (a frame late, a shifted clock): the slave's state becomes
-// initialising, its `contradiction` and message say so and suggest --time-offset auto, and the
-// text is returned for the log. One entry per slave of `result`.
+// beyond 3σ from the given offset the slave's stamps are off (a frame late, a shifted clock):
+// the slave's state becomes initialising, its `contradiction` and message say so and suggest
+// --time-offset auto, and the text is returned for the log. One entry per slave of `result`.
 std::vector<std::string> CheckGivenTimeOffsets(const TimedTrajectory& master,
                                                const std::vector<TimedTrajectory>& slaves,
                                                const std::vector<std::optional<double>>& given_s,
