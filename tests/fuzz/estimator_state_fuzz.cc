@@ -69,6 +69,6 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   ParseAndCheck(text);
-  ParseAndCheck(io::WithEstimatorStateChecksum(text));
+  ParseAndCheck(rigcal::io::WithEstimatorStateChecksum(text));
   return 0;
 }
