@@ -57,6 +57,8 @@ double PrintRoundingNormError(const std::array<std::string_view, 4>& texts) {
 
 // The state of one file's reading, line after line.
 struct Reader {
+  Reader(const std::string& path_in, const TrajectoryReadOptions& options_in)
+      : path(path_in), options(options_in) {}
   const std::string& path;
   const TrajectoryReadOptions& options;
   TimedTrajectory trajectory;
@@ -177,7 +179,7 @@ Expected<TimedTrajectory> ReadTrajectory(const std::string& path,
   if (std::filesystem::is_directory(path, ec)) return Error{path + ": is a directory"};
   std::ifstream in(path);
   if (!in) return Error{path + ": cannot open: " + std::strerror(errno)};
-  Reader reader{path, options};
+  Reader reader(path, options);
   reader.trajectory.name = std::filesystem::path(path).stem().string();
   std::string raw;
   int line = 0;
