@@ -12,7 +12,7 @@
 #include "lcm/message_fixtures.h"
 #include "rigcal/lcm/log_writer.h"
 
-namespace rigcal::lcm_test {
+namespace rigcal::lcm::lcm_test {
 namespace {
 
 void WriteFile(const std::string& path, const std::vector<uint8_t>& bytes) {
@@ -44,12 +44,11 @@ std::vector<uint8_t> Log(const std::vector<std::pair<std::string, std::vector<ui
 }
 
 }  // namespace
-}  // namespace rigcal::lcm_test
+}  // namespace rigcal::lcm::lcm_test
 
 int main(int argc, char** argv) {
   using namespace rigcal;
-  using namespace rigcal::io;
-  using namespace rigcal::lcm_test;
+  using namespace rigcal::lcm::lcm_test;
   if (argc != 2) {
     std::fprintf(stderr, "usage: %s <corpus dir>\n", argv[0]);
     return 2;
