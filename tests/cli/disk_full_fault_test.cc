@@ -72,26 +72,40 @@ class DiskFullFault : public cli_test::SynthLogTest {
         "unshare -m sh -c 'mount -t tmpfs -o size=64k tmpfs " + Quote(Path("")) + "'", dir_);
     return probe.exit_code == 0 ? std::string() : probe.err + " ";
   }
+  // `script` run with unshare -m (arguments: the mount point, the test directory, rigcal), or
+  // why it cannot be (`cannot` not empty: no tmpfs can be mounted here).
+  struct ScriptRun {
+    std::string cannot;
+    RunResult result;
+  };
+  ScriptRun RunOnSmallDisk(const char* script) {
+    ScriptRun run;
+    run.cannot = CannotMount();
+    if (!run.cannot.empty()) return run;
+    std::ofstream(Path("script.sh")) << script;
+    fs::create_directory(Path("mnt"));
+    run.result =
+        cli_test::RunShell("unshare -m sh " + Quote(Path("script.sh")) + " " + Quote(Path("mnt")) +
+                               " " + Quote(dir_.string()) + " " + Quote(binary_),
+                           dir_);
+    return run;
+  }
 };
+
+constexpr char kCannotMount[] =
+    "cannot mount a tmpfs in a private mount namespace (unshare -m, needs root or "
+    "CAP_SYS_ADMIN): ";
 
 // --resume with --state on a full disk: every save fails the same way. The failure is reported
 // once with the path and the errno text (one error per save, 800 here, grew without bound in
 // memory and on stderr), counted, retried on the save schedule; the run ends with exit 1 and
 // a line saying the final state is not saved; the state saved before stays.
 TEST_F(DiskFullFault, ResumeOnAFullDiskReportsTheFailedSavesOnce) {
-  if (const std::string why = CannotMount(); !why.empty()) {
-    RIGCAL_SKIP_MISSING() << "cannot mount a tmpfs in a private mount namespace (unshare -m, "
-                             "needs root or CAP_SYS_ADMIN): "
-                          << why;
-  }
   std::ofstream(Path("fast_saves.yaml"))
       << Slurp(Path("rig.yaml")) << "state: {save_interval_s: 0.05}\n";
-  std::ofstream(Path("script.sh")) << kResumeScript;
-  fs::create_directory(Path("mnt"));
-  const RunResult r =
-      cli_test::RunShell("unshare -m sh " + Quote(Path("script.sh")) + " " + Quote(Path("mnt")) +
-                             " " + Quote(dir_.string()) + " " + Quote(binary_),
-                         dir_);
+  const ScriptRun run = RunOnSmallDisk(kResumeScript);
+  if (!run.cannot.empty()) RIGCAL_SKIP_MISSING() << kCannotMount << run.cannot;
+  const RunResult& r = run.result;
   if (r.exit_code == 77) RIGCAL_SKIP_MISSING() << r.out << r.err;
   ASSERT_EQ(r.exit_code, 0) << r.Explain();
   EXPECT_EQ(r.out, "replay1 0\nresume 1\nstate kept\nresume 1\nstate kept\n")
@@ -114,18 +128,10 @@ TEST_F(DiskFullFault, ResumeOnAFullDiskReportsTheFailedSavesOnce) {
 }
 
 TEST_F(DiskFullFault, SavingAndRecordingOnAFullDiskKeepThePreviousFiles) {
-  if (const std::string why = CannotMount(); !why.empty()) {
-    RIGCAL_SKIP_MISSING() << "cannot mount a tmpfs in a private mount namespace (unshare -m, "
-                             "needs root or CAP_SYS_ADMIN): "
-                          << why;
-  }
   std::ofstream(Path("sim.yaml")) << support::SimulatedRigConfig(160, 120, 5);
-  std::ofstream(Path("script.sh")) << kScript;
-  fs::create_directory(Path("mnt"));
-  const RunResult r =
-      cli_test::RunShell("unshare -m sh " + Quote(Path("script.sh")) + " " + Quote(Path("mnt")) +
-                             " " + Quote(dir_.string()) + " " + Quote(binary_),
-                         dir_);
+  const ScriptRun run = RunOnSmallDisk(kScript);
+  if (!run.cannot.empty()) RIGCAL_SKIP_MISSING() << kCannotMount << run.cannot;
+  const RunResult& r = run.result;
   if (r.exit_code == 77) RIGCAL_SKIP_MISSING() << r.out << r.err;
   ASSERT_EQ(r.exit_code, 0) << r.Explain();
   EXPECT_NE(r.out.find("replay1 0\n"), std::string::npos) << r.out << Slurp(Path("err1.txt"));

@@ -194,21 +194,11 @@ TEST_F(SignalEachCommand, RecordWhileWritingAndReplayOfTheImages) {
 // solve reads its input, solves and writes its result at the end: a signal ends it at once (the
 // default action: killed by the signal, a shell's exit status 128 + N) and nothing is written.
 TEST_F(SignalEachCommand, SolveOfALargeInput) {
-  const Similarity left{Eigen::Quaterniond(0.9238795, 0, 0.3826834, 0).normalized(),
-                        Eigen::Vector3d(0.3, 0.05, -0.2), 1.0};
   DriveOptions d;
   d.num_frames = 40000;
   d.period_s = 60.0;
-  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {left}, d);
-  const RigRecording& rec = drive.recording;
-  for (const CameraTrack* track : {&rec.master, &rec.slaves[0]}) {
-    TimedTrajectory t;
-    t.name = track->name;
-    t.t_ns = rec.t_ns;
-    t.poses = track->poses;
-    t.segment = track->segment;
-    ASSERT_TRUE(io::WriteTrajectoryTum(Path(track->name + ".txt"), t).ok());
-  }
+  cli_test::WriteSynthTrajectories(dir_, d);
+  if (HasFatalFailure()) return;
   const std::vector<std::string> args = {"solve",          "--master", Path("front.txt"), "--slave",
                                          Path("left.txt"), "--out",    Path("r.yaml")};
   for (const int signal : {SIGINT, SIGTERM}) {

@@ -13,11 +13,13 @@
 
 namespace rigcal::cli_test {
 
-// Writes dir/front.txt and dir/left.txt (a default synthetic drive of the rig).
-inline void WriteSynthTrajectories(const std::filesystem::path& dir) {
+// Writes dir/front.txt and dir/left.txt (a synthetic drive of the rig, by default the default
+// one).
+inline void WriteSynthTrajectories(const std::filesystem::path& dir,
+                                   const DriveOptions& options = DriveOptions{}) {
   const Similarity left{Eigen::Quaterniond(0.9238795, 0, 0.3826834, 0).normalized(),
                         Eigen::Vector3d(0.3, 0.05, -0.2), 1.0};
-  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {left}, DriveOptions{});
+  const SyntheticDrive drive = GenerateDrive({"front", "left"}, {left}, options);
   const RigRecording& rec = drive.recording;
   for (const CameraTrack* track : {&rec.master, &rec.slaves[0]}) {
     TimedTrajectory t;
