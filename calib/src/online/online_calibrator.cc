@@ -4,6 +4,8 @@
 #include <pthread.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "online/resume_check.h"
 #include "rigcal/base/logging.h"
@@ -330,18 +332,63 @@ void OnlineCalibrator::RefinementLoop() {
 void OnlineCalibrator::RefineNow(bool final) {
   MutexLock serial(refine_mutex_);
   for (size_t i = 0; i + 1 < names_.size(); ++i) {
-    RefinementJob job;
-    {
-      MutexLock lock(estimator_mutex_);
-      job = estimator_.MakeRefinementJob(static_cast<int>(i), final);
-    }
-    if (!job.start.solved() || static_cast<int>(job.motions.size()) + job.prior.motions < 10) {
-      continue;
-    }
-    const SlaveCalibration refined = RefineWindow(job);
-    MutexLock lock(estimator_mutex_);
-    if (estimator_.ApplyRefinement(job, refined)) ++refinements_applied_;
+    RunRefinementJob(MakeRefinementJob(static_cast<int>(i), final));
   }
+}
+
+void OnlineCalibrator::RefineFinalBefore(std::chrono::steady_clock::time_point deadline) {
+  MutexLock serial(refine_mutex_);
+  for (size_t i = 0; i + 1 < names_.size(); ++i) {
+    const int slave = static_cast<int>(i);
+    RefinementJob job = MakeRefinementJob(slave, /*final=*/true);
+    const size_t sets = job.history.t_ns.size();
+    if (sets > 0) {
+      const double predicted_s = PredictedHistoryRefinementSeconds(slave, sets);
+      const double left_s =
+          std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
+      if (!(2.0 * predicted_s <= left_s)) {
+        ModuleLogger("calib")->info(
+            "{}: the final history refinement ({} sets, {}) left out, {:.2f} s left; the window "
+            "refined instead",
+            names_[i + 1], sets,
+            std::isnan(predicted_s) ? std::string("none timed yet")
+                                    : fmt::format("predicted {:.2f} s", predicted_s),
+            left_s);
+        job.history = RigRecording{};  // the window job it carries
+      }
+    }
+    RunRefinementJob(job);
+  }
+}
+
+RefinementJob OnlineCalibrator::MakeRefinementJob(int slave, bool final) const {
+  MutexLock lock(estimator_mutex_);
+  return estimator_.MakeRefinementJob(slave, final);
+}
+
+double OnlineCalibrator::PredictedHistoryRefinementSeconds(int slave, size_t sets) const {
+  const size_t index = static_cast<size_t>(slave);
+  if (index >= history_timing_.size() || history_timing_[index].sets == 0) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  const HistoryRefinementTiming& last = history_timing_[index];
+  return last.seconds * static_cast<double>(sets) / static_cast<double>(last.sets);
+}
+
+void OnlineCalibrator::RunRefinementJob(const RefinementJob& job) {
+  if (!job.start.solved() || static_cast<int>(job.motions.size()) + job.prior.motions < 10) {
+    return;
+  }
+  const auto started = std::chrono::steady_clock::now();
+  const SlaveCalibration refined = RefineWindow(job);
+  if (!job.history.t_ns.empty()) {
+    if (history_timing_.size() + 1 < names_.size()) history_timing_.resize(names_.size() - 1);
+    history_timing_[static_cast<size_t>(job.slave)] = {
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(),
+        job.history.t_ns.size()};
+  }
+  MutexLock lock(estimator_mutex_);
+  if (estimator_.ApplyRefinement(job, refined)) ++refinements_applied_;
 }
 
 }  // namespace rigcal

@@ -336,12 +336,11 @@ void CalibNode::Impl::Finish(int64_t utime, bool interrupted) {
   // Clean stop: everything received is estimated, published, saved and written.
   calibrator->Flush();
   if (interrupted) {
-    // Within 2 s of a signal: the window refinement of the sets taken since the last one (tens
-    // of ms), not the final history refinement (seconds on a long drive). A live run always ends
-    // this way (SIGTERM from systemd, SIGINT at the terminal): its result is refined and has
-    // every σ.
-    log->info("stopped by a signal: the final window refined, the history refinement left out");
-    calibrator->RefineNow(/*final=*/false);
+    // Within 2 s of a signal: the final history refinement where the last one's duration says
+    // it ends within a second (a live run's, which always ends this way: SIGTERM from systemd,
+    // SIGINT at the terminal), else the window refinement of the sets taken since the last one
+    // (tens of ms). Either way the result is refined and has every σ.
+    calibrator->RefineFinalBefore(std::chrono::steady_clock::now() + std::chrono::seconds(1));
   } else {
     calibrator->RefineNow(/*final=*/true);
   }

@@ -12,6 +12,7 @@
 // refine_mutex_ (serialises RefineNow) is taken before estimator_mutex_.
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <memory>
 #include <string>
@@ -87,6 +88,11 @@ class OnlineCalibrator {
   // even when not due (RigEstimatorOptions::history_refine_period_s). Any thread; refinements
   // are serialised.
   void RefineNow(bool final = false);
+  // The end of a stream stopped early (a signal): as RefineNow(true), but a slave's history
+  // refinement only where the last one's duration, scaled to the history's size now, says it
+  // ends well before `deadline` (twice the prediction must fit); otherwise, or before one was
+  // timed, the window refinement of its statistics (tens of ms).
+  void RefineFinalBefore(std::chrono::steady_clock::time_point deadline);
 
   // Consistent snapshot of the estimate (any thread). With time_offset.enabled, every slave's
   // time_offset_s / time_offset_std_s (NaN σ: given, or not estimated yet) and its online
@@ -110,6 +116,13 @@ class OnlineCalibrator {
   // lossless: waits until one more push cannot overflow the ready queue (or Stop).
   void WaitForRoom() RIGCAL_EXCLUDES(estimator_mutex_);
   void RefinementLoop() RIGCAL_EXCLUDES(stop_mutex_);
+  // Refines one slave's job and applies the result when consistent; times history refinements.
+  void RunRefinementJob(const RefinementJob& job) RIGCAL_REQUIRES(refine_mutex_);
+  RefinementJob MakeRefinementJob(int slave, bool final) const RIGCAL_EXCLUDES(estimator_mutex_);
+  // The wall time of slave's history refinement on `sets` sets, predicted from the last one's
+  // (linear in the sets); NaN before one was timed.
+  double PredictedHistoryRefinementSeconds(int slave, size_t sets) const
+      RIGCAL_REQUIRES(refine_mutex_);
   // Time offsets: feeds an accepted pose to the tracker and passes changed offsets on to the
   // SyncBuffer; leaves out of `set` the slaves whose offset is not known.
   void TrackClock(const CameraPose& pose) RIGCAL_EXCLUDES(offset_mutex_);
@@ -133,6 +146,12 @@ class OnlineCalibrator {
   // Incremented with estimator_mutex_ held; an atomic so that refinements_applied() reads it
   // without the lock.
   std::atomic<int> refinements_applied_{0};
+  // Per slave, the last history refinement's wall time and sets (0 sets: none yet).
+  struct HistoryRefinementTiming {
+    double seconds = 0.0;
+    size_t sets = 0;
+  };
+  std::vector<HistoryRefinementTiming> history_timing_ RIGCAL_GUARDED_BY(refine_mutex_);
   mutable Mutex offset_mutex_;
   // Null unless options_.time_offset.enabled.
   std::unique_ptr<ClockOffsetTracker> clock_ RIGCAL_GUARDED_BY(offset_mutex_);
