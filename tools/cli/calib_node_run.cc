@@ -222,12 +222,14 @@ int RunCalibNode(const NodeRunArgs& args, pipeline::CalibNodeOptions options) {
   ServiceNotifier service;
   const bool live = options.log_path.empty();
   if (live) options.on_tick = [&service] { service.Tick(); };
+  // Before opening (a replay's VO, a device, the log take seconds on a slow machine): a signal
+  // then still ends the command cleanly, with what it has.
+  StopSignal stop_signal;
   pipeline::CalibNode node(std::move(*config), options);
   if (const Status status = node.Open(); !status.ok()) {
     std::cerr << prefix << status.message() << "\n";
     return kExitError;
   }
-  StopSignal stop_signal;
   if (live && !options.capture) {
     log->info("listening for RIGCAL_POSE_<camera>; stop with Ctrl-C (SIGINT), SIGTERM or SIGHUP");
   }
