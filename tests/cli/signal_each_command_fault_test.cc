@@ -49,8 +49,6 @@ struct Stopped {
 
 class SignalEachCommand : public cli_test::SynthLogTest {
  protected:
-  int last_exit_code_ = -1;  // of the last SignalDuring in EachSignal
-
   // `rigcal <args>` in the background, `signal` after `busy`; how and how soon it ended.
   Stopped SignalDuring(const std::vector<std::string>& args, std::chrono::milliseconds busy,
                        int signal) {
@@ -92,8 +90,8 @@ class SignalEachCommand : public cli_test::SynthLogTest {
   }
 
   // The result YAML and the state are whole.
-  void ExpectWholeResultAndState(const std::string& what) {
-    ExpectResultOfExitCode(what);
+  void ExpectWholeResultAndState(const std::string& what, int exit_code) {
+    ExpectResultOfExitCode(what, exit_code);
     auto text = io::ReadWholeFile(Path("s.state"));
     ASSERT_TRUE(text.ok()) << what << ": " << text.status().message();
     EXPECT_TRUE(io::ParseEstimatorState(*text).ok()) << what;
@@ -103,29 +101,28 @@ class SignalEachCommand : public cli_test::SynthLogTest {
   }
 
   // The result YAML is whole and says what the exit code said: 0 every slave usable, 3 not.
-  void ExpectResultOfExitCode(const std::string& what) {
+  void ExpectResultOfExitCode(const std::string& what, int exit_code) {
     const std::string result = Slurp(Path("r.yaml"));
     EXPECT_NE(result.find("usable:"), std::string::npos) << what;
     const bool all_usable = result.find("usable: false") == std::string::npos;
-    EXPECT_EQ(last_exit_code_ == 0, all_usable) << what << ": exit " << last_exit_code_;
+    EXPECT_EQ(exit_code == 0, all_usable) << what << ": exit " << exit_code;
   }
 
   // Each of SIGINT and SIGTERM after `busy`: exit within kExitBoundS with the documented code
-  // (calib, run, replay: 0 every slave usable, 3 not; record: 0).
+  // (calib, run, replay: 0 every slave usable, 3 not; record: 0); then check(what, exit code).
   template <typename Check>
   void EachSignal(const std::string& name, const std::vector<std::string>& args,
                   std::chrono::milliseconds busy, std::vector<int> codes, Check check) {
     for (const int signal : {SIGINT, SIGTERM}) {
       const std::string what = name + (signal == SIGINT ? ", SIGINT" : ", SIGTERM");
       const Stopped s = SignalDuring(args, busy, signal);
-      last_exit_code_ = s.exit_code;
       EXPECT_NE(std::find(codes.begin(), codes.end(), s.exit_code), codes.end())
           << what << ": exit " << s.exit_code << " (signal " << s.term_signal << ")\n"
           << s.err.substr(s.err.size() > 4000 ? s.err.size() - 4000 : 0);
       EXPECT_GE(s.exit_s, 0.0) << what << ": still running 60 s after the signal";
       EXPECT_LE(s.exit_s, kExitBoundS) << what;
       std::cout << what << ": exit " << s.exit_code << " after " << s.exit_s << " s\n";
-      check(what);
+      check(what, s.exit_code);
     }
   }
 
@@ -146,7 +143,7 @@ TEST_F(SignalEachCommand, CalibLogWhileConsuming) {
                                          "--config",     Path("rig.yaml"), "--out",
                                          Path("r.yaml"), "--state",        Path("s.state")};
   EachSignal("calib --log", args, std::chrono::milliseconds(2500), {0, 3},
-             [&](const std::string& what) { ExpectWholeResultAndState(what); });
+             [&](const std::string& what, int code) { ExpectWholeResultAndState(what, code); });
 }
 
 TEST_F(SignalEachCommand, ReplayOfAPoseLog) {
@@ -154,7 +151,7 @@ TEST_F(SignalEachCommand, ReplayOfAPoseLog) {
                                          Path("rig.yaml"), "--out",         Path("r.yaml"),
                                          "--state",        Path("s.state"), "--no-progress"};
   EachSignal("replay (poses)", args, std::chrono::milliseconds(2500), {0, 3},
-             [&](const std::string& what) { ExpectWholeResultAndState(what); });
+             [&](const std::string& what, int code) { ExpectWholeResultAndState(what, code); });
 }
 
 TEST_F(SignalEachCommand, RunDuringVo) {
@@ -162,8 +159,8 @@ TEST_F(SignalEachCommand, RunDuringVo) {
   const std::vector<std::string> args = {"run",          "--config", Path("sim.yaml"), "--out",
                                          Path("r.yaml"), "--state",  Path("s.state")};
   EachSignal("run (simulated)", args, std::chrono::milliseconds(4000), {0, 3},
-             [&](const std::string& what) {
-               ExpectResultOfExitCode(what);
+             [&](const std::string& what, int code) {
+               ExpectResultOfExitCode(what, code);
                ExpectNoTempFile(what);
                fs::remove(Path("r.yaml"));
                fs::remove(Path("s.state"));
@@ -174,18 +171,21 @@ TEST_F(SignalEachCommand, RecordWhileWritingAndReplayOfTheImages) {
   std::ofstream(Path("sim.yaml")) << support::SimulatedRigConfig(320, 240, 460);
   const std::vector<std::string> args = {"record", "--config",           Path("sim.yaml"),
                                          "-o",     Path("drive.lcmlog"), "--no-vo"};
-  EachSignal("record", args, std::chrono::milliseconds(3000), {0}, [&](const std::string& what) {
-    // The recording reads to its end: every event whole.
-    auto reader = lcm::LogReader::Open(Path("drive.lcmlog"));
-    ASSERT_TRUE(reader.ok()) << what << ": " << reader.status().message();
-    lcm::LogEvent event;
-    int events = 0;
-    lcm::LogReader::Outcome outcome;
-    while ((outcome = (*reader)->Next(&event)) == lcm::LogReader::Outcome::kEvent) ++events;
-    EXPECT_EQ(outcome, lcm::LogReader::Outcome::kEnd) << what << ": " << (*reader)->problem();
-    EXPECT_GT(events, 10) << what;
-    std::cout << what << ": " << events << " events recorded\n";
-  });
+  EachSignal("record", args, std::chrono::milliseconds(3000), {0},
+             [&](const std::string& what, int /*code*/) {
+               // The recording reads to its end: every event whole.
+               auto reader = lcm::LogReader::Open(Path("drive.lcmlog"));
+               ASSERT_TRUE(reader.ok()) << what << ": " << reader.status().message();
+               lcm::LogEvent event;
+               int events = 0;
+               lcm::LogReader::Outcome outcome;
+               while ((outcome = (*reader)->Next(&event)) == lcm::LogReader::Outcome::kEvent)
+                 ++events;
+               EXPECT_EQ(outcome, lcm::LogReader::Outcome::kEnd)
+                   << what << ": " << (*reader)->problem();
+               EXPECT_GT(events, 10) << what;
+               std::cout << what << ": " << events << " events recorded\n";
+             });
   // A 23 s recording's images through VO: the busiest replay.
   std::ofstream(Path("sim460.yaml")) << support::SimulatedRigConfig(320, 240, 460);
   const cli_test::RunResult recorded = Run("record --config " + Path("sim460.yaml") + " -o " +
@@ -196,8 +196,8 @@ TEST_F(SignalEachCommand, RecordWhileWritingAndReplayOfTheImages) {
       "--out",        Path("r.yaml"),          "--state",  Path("s.state"),
       "--no-progress"};
   EachSignal("replay (images)", replay, std::chrono::milliseconds(1500), {0, 3},
-             [&](const std::string& what) {
-               ExpectResultOfExitCode(what);
+             [&](const std::string& what, int code) {
+               ExpectResultOfExitCode(what, code);
                ExpectNoTempFile(what);
                fs::remove(Path("r.yaml"));
                fs::remove(Path("s.state"));

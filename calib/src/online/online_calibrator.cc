@@ -64,6 +64,7 @@ OnlineCalibrator::OnlineCalibrator(std::vector<std::string> camera_names, Online
       sync_(options_.sync),
       estimator_(names_, options_.estimator),
       resume_check_(std::make_unique<internal::ResumeCheck>()) {
+  history_timing_.resize(names_.empty() ? 0 : names_.size() - 1);
   if (options_.time_offset.enabled) {
     clock_ = std::make_unique<ClockOffsetTracker>(names_, options_.time_offset);
     clock_jumps_seen_.assign(clock_->num_slaves(), 0);
@@ -367,11 +368,8 @@ RefinementJob OnlineCalibrator::MakeRefinementJob(int slave, bool final) const {
 }
 
 double OnlineCalibrator::PredictedHistoryRefinementSeconds(int slave, size_t sets) const {
-  const size_t index = static_cast<size_t>(slave);
-  if (index >= history_timing_.size() || history_timing_[index].sets == 0) {
-    return std::numeric_limits<double>::quiet_NaN();
-  }
-  const HistoryRefinementTiming& last = history_timing_[index];
+  const HistoryRefinementTiming& last = history_timing_.at(static_cast<size_t>(slave));
+  if (last.sets == 0) return std::numeric_limits<double>::quiet_NaN();
   return last.seconds * static_cast<double>(sets) / static_cast<double>(last.sets);
 }
 
@@ -382,8 +380,7 @@ void OnlineCalibrator::RunRefinementJob(const RefinementJob& job) {
   const auto started = std::chrono::steady_clock::now();
   const SlaveCalibration refined = RefineWindow(job);
   if (!job.history.t_ns.empty()) {
-    if (history_timing_.size() + 1 < names_.size()) history_timing_.resize(names_.size() - 1);
-    history_timing_[static_cast<size_t>(job.slave)] = {
+    history_timing_.at(static_cast<size_t>(job.slave)) = {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(),
         job.history.t_ns.size()};
   }

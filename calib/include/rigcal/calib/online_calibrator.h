@@ -146,7 +146,7 @@ class OnlineCalibrator {
   // Incremented with estimator_mutex_ held; an atomic so that refinements_applied() reads it
   // without the lock.
   std::atomic<int> refinements_applied_{0};
-  // Per slave, the last history refinement's wall time and sets (0 sets: none yet).
+  // Per slave (sized once), the last history refinement's wall time and sets (0 sets: none yet).
   struct HistoryRefinementTiming {
     double seconds = 0.0;
     size_t sets = 0;
