@@ -14,15 +14,17 @@ namespace rigcal::testing {
 
 inline constexpr int kFrames = 40;
 
-// Two EuRoC camera folders of kFrames tiny images at 20 Hz and a rig config naming `port`.
+// Two EuRoC camera folders of kFrames tiny images at 20 Hz and a rig config naming `port`; the
+// last frame of each camera stamped `last_frame_late_ns` later than the rate puts it.
 inline std::string WriteRig(const std::filesystem::path& dir, const std::string& port,
-                            const std::string& options) {
+                            const std::string& options, int64_t last_frame_late_ns = 0) {
   for (const char* cam : {"cam0", "cam1"}) {
     std::filesystem::create_directories(dir / cam / "data");
     std::ofstream csv(dir / cam / "data.csv");
     csv << "#timestamp [ns],filename\n";
     for (int k = 0; k < kFrames; ++k) {
-      const int64_t t = 1'403'636'579'763'555'584 + int64_t{k} * 50'000'000;
+      const int64_t t = 1'403'636'579'763'555'584 + int64_t{k} * 50'000'000 +
+                        (k == kFrames - 1 ? last_frame_late_ns : 0);
       const std::string name = std::to_string(t) + ".png";
       cv::imwrite((dir / cam / "data" / name).string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(k)));
       csv << t << "," << name << "\n";

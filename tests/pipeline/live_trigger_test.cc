@@ -82,6 +82,36 @@ TEST(LiveTrigger, ImageFolderFramesCarryConsecutivePulsesAndTheirMappedTimes) {
       << report.str();
 }
 
+// A glitched stamp far ahead (4e18 ns, about 127 years) in a paced replay: not waited for; the
+// camera's Grab returns, promptly, an error naming the frame and the gap.
+TEST(LiveTrigger, AGlitchedStampFarAheadIsAnErrorNotAWait) {
+  testing::FakeTriggerGenerator generator;
+  std::string error;
+  ASSERT_TRUE(generator.Open(&error)) << error;
+  generator.Start();
+  const fs::path dir = support::FreshTempDir("live_trigger_glitch");
+  const int64_t late_ns = 4'000'000'000'000'000'000 - 1'403'636'579'763'555'584;
+  auto config = io::LoadRigConfig(
+      WriteRig(dir, generator.slave_path(), "uart_wire: false, tolerance_ms: 5", late_ns));
+  ASSERT_TRUE(config.ok()) << config.error();
+  std::ostringstream progress;
+  auto sources = OpenCaptureSources(*config, false, "", progress);
+  ASSERT_TRUE(sources.ok()) << sources.error();
+  for (int k = 0; k + 1 < kFrames; ++k) {
+    auto frame = sources->devices[0]->Grab();
+    ASSERT_TRUE(frame.ok()) << "frame " << k << ": " << frame.error();
+    ASSERT_TRUE(frame->has_value()) << "ended at frame " << k;
+  }
+  auto glitched = sources->devices[0]->Grab();  // waiting for it would not end (ctest timeout)
+  sources->trigger->Stop();
+  ASSERT_FALSE(glitched.ok()) << "the frame stamped 4e18 ns was delivered";
+  EXPECT_NE(glitched.error().find("frame " + std::to_string(kFrames - 1) + " is stamped"),
+            std::string::npos)
+      << glitched.error();
+  EXPECT_NE(glitched.error().find("a paced replay waits at most 10 s"), std::string::npos)
+      << glitched.error();
+}
+
 TEST(LiveTrigger, ADeadPortIsAnErrorNamingIt) {
   const fs::path dir = support::FreshTempDir("live_trigger_dead");
   auto config = io::LoadRigConfig(WriteRig(dir, "/dev/rigcal-no-such-tty", "uart_wire: false"));
@@ -98,7 +128,7 @@ TEST(LiveTrigger, ADeadPortIsAnErrorNamingIt) {
   ASSERT_TRUE(silent.Open(&error)) << error;
   silent.Start(/*answer=*/false);
   auto quiet = io::LoadRigConfig(WriteRig(support::FreshTempDir("live_trigger_silent"),
-                                      silent.slave_path(), "command_timeout_ms: 100"));
+                                          silent.slave_path(), "command_timeout_ms: 100"));
   ASSERT_TRUE(quiet.ok()) << quiet.error();
   auto none = OpenCaptureSources(*quiet, false, "", progress);
   ASSERT_FALSE(none.ok());

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <iomanip>
+#include <sstream>
 #include <thread>
 
 #include "rigcal/capture/v4l2_timestamp.h"
@@ -19,6 +21,9 @@ Expected<std::optional<capture::Frame>> PacedReplayDevice::Grab() {
   Expected<std::optional<capture::Frame>> grabbed = device_->Grab();
   if (!grabbed || !grabbed->has_value()) return grabbed;
   capture::Frame& frame = **grabbed;
+  if (Status gap = CheckGap(frame.t_ns); !gap.ok()) return Error{gap.message()};
+  previous_recorded_ns_ = frame.t_ns;
+  ++frames_;
   frame.t_ns = clock_->HostNs(frame.t_ns);
   // Wait for the frame's time in short steps, so Interrupt is prompt.
   while (!interrupted_.load()) {
@@ -28,6 +33,26 @@ Expected<std::optional<capture::Frame>> PacedReplayDevice::Grab() {
   }
   if (interrupted_.load()) return std::optional<capture::Frame>();
   return grabbed;
+}
+
+int64_t PacedReplayDevice::MaxGapNs() const {
+  const double rate_hz = device_->frame_rate_hz();
+  const double hundred_periods_ns = rate_hz > 0.0 ? 100.0 * 1e9 / rate_hz : 0.0;
+  return static_cast<int64_t>(std::max(10e9, std::min(hundred_periods_ns, 1e12)));
+}
+
+Status PacedReplayDevice::CheckGap(int64_t t_ns) const {
+  if (!previous_recorded_ns_ || t_ns <= *previous_recorded_ns_) return {};
+  // Unsigned: the difference of two int64 stamps may not fit an int64.
+  const uint64_t gap_ns =
+      static_cast<uint64_t>(t_ns) - static_cast<uint64_t>(*previous_recorded_ns_);
+  if (gap_ns <= static_cast<uint64_t>(MaxGapNs())) return {};
+  std::ostringstream message;
+  message << "frame " << frames_ << " is stamped " << std::setprecision(4)
+          << static_cast<double>(gap_ns) * 1e-9 << " s after the previous one (" << t_ns
+          << " ns); a paced replay waits at most " << static_cast<double>(MaxGapNs()) * 1e-9
+          << " s between frames: a glitched stamp?";
+  return Error{message.str()};
 }
 
 void PacedReplayDevice::Interrupt() {

@@ -6,6 +6,10 @@
 // stamp - the first recorded stamp any camera of the replay grabbed) and Grab returns it at that
 // time.
 //
+// A frame stamped more than MaxGapNs() after the previous one of its camera is not waited for:
+// Grab returns an error naming the gap (a glitched stamp, e.g. 4e18 ns, would otherwise be waited
+// for until a signal), and the capture loop reports the camera as dead.
+//
 // Threads: as the wrapped device (one capture thread per device; Interrupt from any thread).
 // The cameras of one replay share a ReplayClock (thread-safe).
 
@@ -14,6 +18,7 @@
 #include <memory>
 #include <optional>
 
+#include "rigcal/base/status.h"
 #include "rigcal/base/thread_annotations.h"
 #include "rigcal/capture/capture_device.h"
 
@@ -42,10 +47,20 @@ class PacedReplayDevice final : public capture::CameraDevice {
   Expected<std::optional<capture::Frame>> Grab() override;
   void Interrupt() override;
 
+  // The longest gap between two consecutive frames that the replay waits through: 100 frame
+  // periods, at least 10 s (a recording paused for a while is replayed as it was; a stamp
+  // further ahead is taken for a glitch).
+  int64_t MaxGapNs() const;
+
  private:
+  // Error when `t_ns` (recorded) lies more than MaxGapNs() after the previous frame's stamp.
+  Status CheckGap(int64_t t_ns) const;
+
   std::unique_ptr<capture::CameraDevice> device_;
   std::shared_ptr<ReplayClock> clock_;
   std::atomic<bool> interrupted_{false};
+  int64_t frames_ = 0;                           // frames grabbed (the capture thread only)
+  std::optional<int64_t> previous_recorded_ns_;  // the previous frame's recorded stamp
 };
 
 }  // namespace rigcal::pipeline
