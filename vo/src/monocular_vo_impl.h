@@ -100,6 +100,12 @@ class MonocularVo::Impl {
   // updates the noise from its epipolar distances. False (and why) when it fails.
   bool EstimateInitialMotion(const InitialViews& views, RelativePoseRansacResult* motion,
                              VoResult* result);
+  // Fits a homography to the views too; when it explains them better than the essential
+  // matrix of *motion (a plane, no depth variation within the noise), *motion becomes the
+  // motion of its decomposition whose epipolar geometry the tracks support in front of both
+  // views (monocular_vo_planar_init.cc). Without one such decomposition *motion is kept.
+  void PreferPlanarMotion(const InitialViews& views, RelativePoseRansacResult* motion,
+                          VoResult* result);
   // False (and why) while the inliers' parallax does not fix their depths.
   bool HasInitialParallax(const InitialViews& views, const RelativePoseRansacResult& motion,
                           VoResult* result) const;
