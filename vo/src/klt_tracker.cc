@@ -10,7 +10,10 @@ void KltTracker::AddImage(const cv::Mat& grey) {
   std::swap(previous_pyramid_, current_pyramid_);
   has_previous_ = has_current_ && grey.size() == size_;
   const cv::Size window(options_.window_px, options_.window_px);
-  cv::buildOpticalFlowPyramid(grey, current_pyramid_, window, options_.pyramid_levels, false);
+  // With the Scharr derivatives of every level: calcOpticalFlowPyrLK would otherwise compute
+  // them for the whole image at each call, and each image is the source of two calls (backward
+  // in its own frame, forward in the next).
+  cv::buildOpticalFlowPyramid(grey, current_pyramid_, window, options_.pyramid_levels, true);
   size_ = grey.size();
   has_current_ = true;
 }
