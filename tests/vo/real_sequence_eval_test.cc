@@ -12,7 +12,8 @@
 // direction error median <= 20 deg, the first pose on visp_rbt_sequence within its first 10
 // frames, on visp_mbt_cube within 2 s (60 frames) of the start of motion with a pose for >= 95 %
 // of the frames after it. Slow (label eval): `ctest -L eval -R vo/real_sequence`.
-// RIGCAL_VO_EVAL_VERBOSE=1 prints every frame's VO result.
+// RIGCAL_VO_EVAL_VERBOSE=1 prints every frame's VO result; RIGCAL_VO_EVAL_POSES=<file> appends
+// every pose with 17 digits (to check that a change meant to be exact keeps the VO's results).
 
 #include <gtest/gtest.h>
 #include <time.h>
@@ -65,6 +66,8 @@ VoRun RunVo(const RealMonoSequence& s, const std::vector<int>& frames,
   cv::setNumThreads(1);
   MonocularVo vo(s.camera, 0, options);
   const bool verbose = std::getenv("RIGCAL_VO_EVAL_VERBOSE") != nullptr;
+  const char* poses_path = std::getenv("RIGCAL_VO_EVAL_POSES");
+  std::FILE* poses_file = poses_path != nullptr ? std::fopen(poses_path, "a") : nullptr;
   std::map<int64_t, int> frame_of;
   bool increasing = true;
   for (size_t i = 1; i < frames.size(); ++i) increasing &= frames[i] > frames[i - 1];
@@ -88,11 +91,18 @@ VoRun RunVo(const RealMonoSequence& s, const std::vector<int>& frames,
     }
     if (r.pose) {
       run.segments[r.pose->segment][k] = r.pose->pose;
+      if (poses_file != nullptr) {
+        const Pose& p = r.pose->pose;
+        std::fprintf(poses_file, "%s %d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                     s.name.c_str(), k, r.pose->segment, p.q.w(), p.q.x(), p.q.y(), p.q.z(),
+                     p.C.x(), p.C.y(), p.C.z());
+      }
       ++run.frames_with_pose;
       if (run.first_pose < 0) run.first_pose = static_cast<int>(i);
     }
     if (run.first_pose >= 0) ++run.frames_after_first;
   }
+  if (poses_file != nullptr) std::fclose(poses_file);
   cv::setNumThreads(opencv_threads);
   return run;
 }
