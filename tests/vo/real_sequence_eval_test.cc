@@ -5,19 +5,22 @@
 //    rotation error, the translation direction error and the scale spread against the tag poses;
 //    the tag poses' own noise floor (each tag's relative motion against the grid's); OpenCV's
 //    ORB + 5-point (support/opencv_two_view.h) on the same pairs;
-//  - visp_mbt_cube (218 frames, low texture, an arm moving through the view): the first pose
-//    after the camera starts moving and the share of frames with a pose after it;
+//  - visp_mbt_cube (218 frames, low texture, a still camera watching a hand move the object):
+//    no false motion;
 //  - the VO's time per frame (wall clock and the thread's CPU time: the machine is shared).
 // Targets (issue 34): rotation error at 10 frames median <= 1 deg and <= half of OpenCV's,
 // direction error median <= 20 deg, the first pose on visp_rbt_sequence within its first 10
-// frames, on visp_mbt_cube within 2 s (60 frames) of the start of motion with a pose for >= 95 %
-// of the frames after it. Slow (label eval): `ctest -L eval -R vo/real_sequence`.
-// RIGCAL_VO_EVAL_VERBOSE=1 prints every frame's VO result.
+// frames; on visp_mbt_cube no turn of the still camera (the issue's "first pose within 2 s of the
+// start of motion" took the data's description for granted: the camera never moves). Slow (label
+// eval): `ctest -L eval -R vo/real_sequence`. RIGCAL_VO_EVAL_VERBOSE=1 prints every frame's VO
+// result; RIGCAL_VO_EVAL_POSES=<file> appends every pose with 17 digits (to check that a change
+// meant to be exact keeps the VO's results).
 
 #include <gtest/gtest.h>
 #include <time.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -27,6 +30,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "rigcal/base/quaternion.h"
 #include "rigcal/vo/monocular_vo.h"
 #include "support/opencv_two_view.h"
 #include "support/real_mono_sequence.h"
@@ -65,6 +69,8 @@ VoRun RunVo(const RealMonoSequence& s, const std::vector<int>& frames,
   cv::setNumThreads(1);
   MonocularVo vo(s.camera, 0, options);
   const bool verbose = std::getenv("RIGCAL_VO_EVAL_VERBOSE") != nullptr;
+  const char* poses_path = std::getenv("RIGCAL_VO_EVAL_POSES");
+  std::FILE* poses_file = poses_path != nullptr ? std::fopen(poses_path, "a") : nullptr;
   std::map<int64_t, int> frame_of;
   bool increasing = true;
   for (size_t i = 1; i < frames.size(); ++i) increasing &= frames[i] > frames[i - 1];
@@ -88,11 +94,18 @@ VoRun RunVo(const RealMonoSequence& s, const std::vector<int>& frames,
     }
     if (r.pose) {
       run.segments[r.pose->segment][k] = r.pose->pose;
+      if (poses_file != nullptr) {
+        const Pose& p = r.pose->pose;
+        std::fprintf(poses_file, "%s %d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                     s.name.c_str(), k, r.pose->segment, p.q.w(), p.q.x(), p.q.y(), p.q.z(),
+                     p.C.x(), p.C.y(), p.C.z());
+      }
       ++run.frames_with_pose;
       if (run.first_pose < 0) run.first_pose = static_cast<int>(i);
     }
     if (run.first_pose >= 0) ++run.frames_after_first;
   }
+  if (poses_file != nullptr) std::fclose(poses_file);
   cv::setNumThreads(opencv_threads);
   return run;
 }
@@ -337,9 +350,17 @@ TEST(RealSequenceVo, AprilTagSequenceWithGaps) {
   }
 }
 
-// The first frame whose corners (of frame 0) moved by a median of more than 2 pixels: where the
-// hand-held camera starts moving. Measured with OpenCV alone, independently of the VO.
-int MotionStart(const RealMonoSequence& s) {
+// The still share of the view, measured with OpenCV alone, independently of the VO: the
+// fraction of frame 0's corners that every later frame shows within 1 px of where they were
+// (the smallest over the frames), and the first frame where the median corner moved by more
+// than 2 px (something in the view moves).
+struct ViewMotion {
+  double still_fraction = 1.0;
+  int first_change = -1;
+};
+
+ViewMotion MeasureViewMotion(const RealMonoSequence& s) {
+  ViewMotion out;
   std::vector<cv::Point2f> corners;
   cv::goodFeaturesToTrack(s.grey[0], corners, 200, 0.01, 10);
   for (size_t k = 1; k < s.grey.size(); ++k) {
@@ -348,35 +369,62 @@ int MotionStart(const RealMonoSequence& s) {
     std::vector<float> err;
     cv::calcOpticalFlowPyrLK(s.grey[0], s.grey[k], corners, moved, ok, err, cv::Size(21, 21), 4);
     std::vector<double> shift;
+    int still = 0;
     for (size_t i = 0; i < corners.size(); ++i) {
-      if (ok[i]) shift.push_back(cv::norm(moved[i] - corners[i]));
+      if (!ok[i]) continue;
+      shift.push_back(cv::norm(moved[i] - corners[i]));
+      still += shift.back() <= 1.0 ? 1 : 0;
     }
-    if (shift.size() < corners.size() / 2 || support::Stats(shift).median > 2.0) {
-      return static_cast<int>(k);
+    out.still_fraction = std::min(out.still_fraction,
+                                  static_cast<double>(still) / static_cast<double>(corners.size()));
+    if (out.first_change < 0 &&
+        (shift.size() < corners.size() / 2 || support::Stats(shift).median > 2.0)) {
+      out.first_change = static_cast<int>(k);
     }
   }
-  return -1;
+  return out;
 }
 
-TEST(RealSequenceVo, LowTextureCubeWithAMovingArm) {
+// visp_mbt_cube is not what its provenance says ("a hand-held camera moving around a textured
+// cube"): the camera stands still for all 218 frames while a hand pushes the sheet that carries
+// the cube and a cylinder across the desk (the desk's edge, the ruler, the telephone and its
+// cable do not move; MeasureViewMotion: a still share of the view in every frame). What a VO must
+// do here is report no motion: no initialisation on the moved object (the still scene gives no
+// parallax), or, if it poses frames, poses that do not turn. The VO before the homography
+// initialisation posed frames from 106 on, from tracks on the moving sheet: a false motion that a
+// rig calibrator would take for the camera's.
+TEST(RealSequenceVo, StillCameraWatchingAMovedObjectReportsNoMotion) {
   if (!support::RealMonoAvailable("visp_mbt_cube")) {
     RIGCAL_SKIP_MISSING() << "no " << support::RealMonoFolder("visp_mbt_cube");
   }
   auto loaded = support::LoadRealMono("visp_mbt_cube");
   ASSERT_TRUE(loaded.ok()) << loaded.error();
   const RealMonoSequence& s = *loaded;
-  const int motion_start = MotionStart(s);
+  const ViewMotion view = MeasureViewMotion(s);
   const VoRun run = RunVo(s, AllFrames(s));
+  double max_turn_deg = 0.0;
+  for (const auto& [segment, poses] : run.segments) {
+    for (const auto& [frame, pose] : poses) {
+      max_turn_deg =
+          std::max(max_turn_deg, AngleBetween(poses.begin()->second.q, pose.q) * kDegPerRad);
+    }
+  }
   std::printf(
-      "visp_mbt_cube: motion from frame %d, first pose at frame %d, %d of %d frames "
-      "after it with a pose, %zu segment(s)\n",
-      motion_start, run.first_pose, run.frames_with_pose, run.frames_after_first,
-      run.segments.size());
+      "visp_mbt_cube: %.0f %% of the view still in every frame, the object moves from frame %d; "
+      "VO: first pose at frame %d, %d frames with a pose, %zu segment(s), largest turn %.3f "
+      "deg\n",
+      100.0 * view.still_fraction, view.first_change, run.first_pose, run.frames_with_pose,
+      run.segments.size(), max_turn_deg);
   PrintTiming("visp_mbt_cube", run);
-  ASSERT_GE(motion_start, 0);
-  ASSERT_GE(run.first_pose, 0);
-  EXPECT_LE(run.first_pose, motion_start + static_cast<int>(2 * support::kRealMonoRateHz));
-  EXPECT_GE(run.frames_with_pose, 0.95 * run.frames_after_first);
+  // The premise: a still camera and a moving object. A camera that moves moves every corner of
+  // the view; here a tenth at least never moves by a pixel (the rest lie on the moved sheet or are
+  // covered by the arm at some frame).
+  ASSERT_GE(view.still_fraction, 0.1) << "the camera moves: this test's premise does not hold";
+  ASSERT_GE(view.first_change, 0) << "nothing in the view moves";
+  // No false motion: the camera turns by 0; the VO's rotation noise on real frames is a few
+  // tenths of a degree at most (vo/real_sequence_eval on visp_rbt: 0.37 deg median at 1 frame).
+  EXPECT_LE(max_turn_deg, 0.5) << "the VO reports a turn of a still camera";
+  EXPECT_LE(run.segments.size(), 1u);
 }
 
 }  // namespace

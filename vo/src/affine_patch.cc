@@ -40,8 +40,12 @@ bool MakePatchTemplate(const cv::Mat& grey, const cv::Point2f& centre, int half_
     }
   }
   patch->values.resize(static_cast<size_t>(n) * n);
-  patch->sd.resize(static_cast<size_t>(n) * n * 7);
-  Eigen::Matrix<double, 7, 7> hessian = Eigen::Matrix<double, 7, 7>::Zero();
+  patch->sd.resize(static_cast<size_t>(n) * n * PatchTemplate::kSdStride);
+  // The Gauss-Newton Hessian over the padded rows (float products, double sums): whole SIMD
+  // registers, the same sums as over the 7 parameters alone; its last row and column are zero.
+  constexpr int kStride = PatchTemplate::kSdStride;
+  Eigen::Matrix<double, kStride, kStride> padded_hessian =
+      Eigen::Matrix<double, kStride, kStride>::Zero();
   for (int v = 0; v < n; ++v) {
     for (int u = 0; u < n; ++u) {
       const size_t g = static_cast<size_t>(v + 1) * m + (u + 1);
@@ -51,7 +55,7 @@ bool MakePatchTemplate(const cv::Mat& grey, const cv::Point2f& centre, int half_
       const float y = static_cast<float>(v - half_size);
       const size_t k = static_cast<size_t>(v) * n + u;
       patch->values[k] = grid[g];
-      float* sd = &patch->sd[7 * k];
+      float* sd = &patch->sd[kStride * k];
       sd[0] = gx * x;
       sd[1] = gx * y;
       sd[2] = gy * x;
@@ -59,10 +63,12 @@ bool MakePatchTemplate(const cv::Mat& grey, const cv::Point2f& centre, int half_
       sd[4] = gx;
       sd[5] = gy;
       sd[6] = 1.f;
-      Eigen::Map<const Eigen::Matrix<float, 7, 1>> j(sd);
-      hessian.noalias() += (j * j.transpose()).cast<double>();
+      sd[7] = 0.f;
+      Eigen::Map<const Eigen::Matrix<float, kStride, 1>> j(sd);
+      padded_hessian.noalias() += (j * j.transpose()).cast<double>();
     }
   }
+  const Eigen::Matrix<double, 7, 7> hessian = padded_hessian.topLeftCorner<7, 7>();
   // Texture enough for the translation (the structure tensor) and the whole warp.
   const Eigen::Matrix2d tensor = hessian.block<2, 2>(4, 4) / (n * n);
   const double min_gradient =
@@ -95,7 +101,8 @@ bool AlignPatch(const PatchTemplate& patch, const cv::Mat& grey, const AffinePat
         if (!(x >= 0.0 && y >= 0.0 && x < grey.cols - 1 && y < grey.rows - 1)) return false;
       }
     }
-    float g[7] = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+    constexpr int kStride = PatchTemplate::kSdStride;
+    Eigen::Matrix<float, kStride, 1> g = Eigen::Matrix<float, kStride, 1>::Zero();
     float sum2_f = 0.f;
     const float step_x = static_cast<float>(a(0, 0)), step_y = static_cast<float>(a(1, 0));
     const float offset_f = static_cast<float>(offset);
@@ -105,8 +112,8 @@ bool AlignPatch(const PatchTemplate& patch, const cv::Mat& grey, const AffinePat
       float px = static_cast<float>(centre->x() + a(0, 0) * (-h) + a(0, 1) * y);
       float py = static_cast<float>(centre->y() + a(1, 0) * (-h) + a(1, 1) * y);
       const float* values = &patch.values[static_cast<size_t>(v) * n];
-      const float* sd = &patch.sd[static_cast<size_t>(v) * n * 7];
-      for (int u = 0; u < n; ++u, px += step_x, py += step_y, sd += 7) {
+      const float* sd = &patch.sd[static_cast<size_t>(v) * n * kStride];
+      for (int u = 0; u < n; ++u, px += step_x, py += step_y, sd += kStride) {
         const int x0 = static_cast<int>(px);
         const int y0 = static_cast<int>(py);
         const float ax = px - static_cast<float>(x0);
@@ -117,12 +124,12 @@ bool AlignPatch(const PatchTemplate& patch, const cv::Mat& grey, const AffinePat
         const float bottom = row1[0] + ax * static_cast<float>(row1[1] - row1[0]);
         const float e = top + ay * (bottom - top) - values[u] - offset_f;
         sum2_f += e * e;
-        for (int i = 0; i < 7; ++i) g[i] += sd[i] * e;
+        // Lane by lane the same float products and sums as one parameter at a time.
+        g += Eigen::Map<const Eigen::Matrix<float, kStride, 1>>(sd) * e;
       }
     }
     sum2 = sum2_f;
-    const Eigen::Matrix<double, 7, 1> dq =
-        patch.inverse_hessian * Eigen::Map<const Eigen::Matrix<float, 7, 1>>(g).cast<double>();
+    const Eigen::Matrix<double, 7, 1> dq = patch.inverse_hessian * g.head<7>().cast<double>();
     Eigen::Matrix2d increment;
     increment << 1.0 + dq[0], dq[1], dq[2], 1.0 + dq[3];
     const double det = increment.determinant();

@@ -29,8 +29,11 @@ struct AffinePatchOptions {
 // A reference patch: intensities and the steepest-descent images of the affine warp, with
 // the inverse of its Gauss-Newton Hessian.
 struct PatchTemplate {
+  // Values per pixel in `sd`: the 7 parameters' and a zero, so that the alignment accumulates
+  // them in whole SIMD registers.
+  static constexpr int kSdStride = 8;
   std::vector<float> values;  // (2 h + 1)^2, row-major
-  std::vector<float> sd;      // 7 per pixel: gx x, gx y, gy x, gy y, gx, gy, 1 (offset)
+  std::vector<float> sd;      // per pixel: gx x, gx y, gy x, gy y, gx, gy, 1 (offset), 0
   Eigen::Matrix<double, 7, 7> inverse_hessian;
   int half_size = 0;
   bool valid = false;

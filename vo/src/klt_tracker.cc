@@ -10,7 +10,10 @@ void KltTracker::AddImage(const cv::Mat& grey) {
   std::swap(previous_pyramid_, current_pyramid_);
   has_previous_ = has_current_ && grey.size() == size_;
   const cv::Size window(options_.window_px, options_.window_px);
-  cv::buildOpticalFlowPyramid(grey, current_pyramid_, window, options_.pyramid_levels, false);
+  // With the Scharr derivatives of every level: calcOpticalFlowPyrLK would otherwise compute
+  // them for the whole image at each call, and each image is the source of two calls (backward
+  // in its own frame, forward in the next).
+  cv::buildOpticalFlowPyramid(grey, current_pyramid_, window, options_.pyramid_levels, true);
   size_ = grey.size();
   has_current_ = true;
 }
@@ -30,16 +33,16 @@ void KltTracker::Track(const std::vector<cv::Point2f>& previous,
   const cv::Size window(options_.window_px, options_.window_px);
   const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
                                   options_.max_iterations, options_.epsilon);
+  // No error output: OpenCV would measure every point's window residual once more for it.
   std::vector<unsigned char> forward_ok, backward_ok;
-  std::vector<float> errors;
   cv::calcOpticalFlowPyrLK(previous_pyramid_, current_pyramid_, previous, *tracked, forward_ok,
-                           errors, window, options_.pyramid_levels, criteria,
+                           cv::noArray(), window, options_.pyramid_levels, criteria,
                            cv::OPTFLOW_USE_INITIAL_FLOW);
   // Back from the tracked points, started where they came from: a consistent track returns to
   // its start at the base level alone (a third of a pyramidal pass); a slipped one does not.
   std::vector<cv::Point2f> back = previous;
-  cv::calcOpticalFlowPyrLK(current_pyramid_, previous_pyramid_, *tracked, back, backward_ok, errors,
-                           window, 0, criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
+  cv::calcOpticalFlowPyrLK(current_pyramid_, previous_pyramid_, *tracked, back, backward_ok,
+                           cv::noArray(), window, 0, criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
   const double max_fb2 = options_.max_fb_error_px * options_.max_fb_error_px;
   const float w = static_cast<float>(size_.width - 1);
   const float h = static_cast<float>(size_.height - 1);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Pyramidal KLT tracking between consecutive images (OpenCV calcOpticalFlowPyrLK on pyramids
-// built once per image) with a forward-backward consistency check.
+// and image derivatives built once per image) with a forward-backward consistency check.
 
 #include <opencv2/core.hpp>
 #include <vector>

@@ -28,6 +28,8 @@ CameraPose MonocularVo::Impl::MakePose(int64_t t_ns, const CameraPoseRC& pose,
 
 VoResult MonocularVo::Impl::Process(int64_t t_ns, const cv::Mat& image) {
   const auto start = std::chrono::steady_clock::now();
+  // Before anything else: the state is then the one the last keyframe left.
+  FinishKeyframeWork();
   VoResult result;
   ++frames_;
   cv::Mat grey;

@@ -51,6 +51,20 @@ struct MapMatches {
   size_t size() const { return track.size(); }
 };
 
+// The landmarks a keyframe observes: track positions and landmark ids, to be described.
+struct LandmarkViews {
+  std::vector<cv::Point2f> px;
+  std::vector<int> landmark;
+};
+
+// Keyframe work left to the start of the next frame (monocular_vo_deferred_keyframe.cc).
+struct DeferredKeyframeWork {
+  bool pending = false;
+  int keyframe = -1;
+  cv::Mat grey;  // the keyframe's image (a copy: the caller may reuse its buffer)
+  LandmarkViews views;
+};
+
 // The bearings of the tracks to the reference frame of an initialisation.
 struct InitialViews {
   std::vector<Eigen::Vector3d> reference;
@@ -100,6 +114,12 @@ class MonocularVo::Impl {
   // updates the noise from its epipolar distances. False (and why) when it fails.
   bool EstimateInitialMotion(const InitialViews& views, RelativePoseRansacResult* motion,
                              VoResult* result);
+  // Fits a homography to the views too; when it explains them better than the essential
+  // matrix of *motion (a plane, no depth variation within the noise), *motion becomes the
+  // motion of its decomposition whose epipolar geometry the tracks support in front of both
+  // views (monocular_vo_planar_init.cc). Without one such decomposition *motion is kept.
+  void PreferPlanarMotion(const InitialViews& views, RelativePoseRansacResult* motion,
+                          VoResult* result);
   // False (and why) while the inliers' parallax does not fix their depths.
   bool HasInitialParallax(const InitialViews& views, const RelativePoseRansacResult& motion,
                           VoResult* result) const;
@@ -156,8 +176,21 @@ class MonocularVo::Impl {
   void CreateKeyframe(int64_t t_ns, const cv::Mat& grey);
   // New landmarks from the tracks without one (anchor keyframe to keyframe `kf`).
   void TriangulateTracks(int kf);
-  // Descriptors of the landmarks that keyframe `kf` (image `grey`) observes.
+  // Descriptors of the landmarks that the keyframe with image `grey` observes.
   void DescribeLandmarks(const cv::Mat& grey);
+  // The landmarks the tracks observe now; hands the tracks' patches to their landmarks.
+  LandmarkViews CollectLandmarkViews();
+  // Adds the descriptors of `views` in `grey` to their landmarks (those still in the map).
+  void AddLandmarkDescriptors(const cv::Mat& grey, const LandmarkViews& views);
+
+  // --- Keyframe work spread over two frames (monocular_vo_deferred_keyframe.cc) ---
+  // A keyframe frame runs the bundle adjustment; the landmarks' descriptors and the new tracks
+  // of keyframe `kf` (image `grey`) are left to the next Process call, which does them first,
+  // on the keyframe's image and before anything else changes: the same results, and a
+  // keyframe frame costs about as much less as the next one costs more.
+  void DeferKeyframeWork(const cv::Mat& grey, int kf);
+  // Does the deferred work, if any.
+  void FinishKeyframeWork();
 
   // --- Helpers (monocular_vo.cc, monocular_vo_setup.cc) ---
   CameraPose MakePose(int64_t t_ns, const CameraPoseRC& pose, double quality) const;
@@ -203,6 +236,8 @@ class MonocularVo::Impl {
 
   // Relocalisation: stream time of the first failed attempt of the current loss (-1: none).
   int64_t lost_since_ns_ = -1;
+
+  DeferredKeyframeWork deferred_;
 };
 
 }  // namespace rigcal::vo

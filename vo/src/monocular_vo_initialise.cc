@@ -51,8 +51,12 @@ void MonocularVo::Impl::StartReference(int64_t t_ns, const cv::Mat& grey) {
 bool MonocularVo::Impl::HasTranslation(const InitialViews& views, VoResult* result) const {
   // With a pure rotation every translation fits the epipolar constraint: no parallax to
   // initialise from, whatever an essential matrix would say.
-  if (RotationResidual(views, nullptr) > PairGateRad()) return true;
-  result->message = "insufficient parallax (rotation only)";
+  const double residual_rad = RotationResidual(views, nullptr);
+  if (residual_rad > PairGateRad()) return true;
+  result->message = fmt::format(
+      "insufficient parallax (rotation only): median track {:.2f} px from the best rotation, "
+      "gate {:.2f} px",
+      residual_rad / pixel_angle_, PairGateRad() / pixel_angle_);
   return false;
 }
 
@@ -78,12 +82,17 @@ bool MonocularVo::Impl::EstimateInitialMotion(const InitialViews& views,
     }
     noise_.AddEpipolarDistances(distances_px);
   }
+  PreferPlanarMotion(views, motion, result);
   if (!motion->success || motion->num_inliers < options_.min_init_inliers) {
-    result->message = "essential matrix: too few inliers";
+    result->message =
+        fmt::format("essential matrix: too few inliers ({} of {}, gate {:.2f} px)",
+                    motion->num_inliers, views.reference.size(), PairGateRad() / pixel_angle_);
     return false;
   }
   if (motion->num_in_front < options_.min_init_cheirality_fraction * motion->num_inliers) {
-    result->message = "essential matrix: degenerate geometry (points behind the cameras)";
+    result->message = fmt::format(
+        "essential matrix: degenerate geometry ({} of {} inliers in front of the cameras)",
+        motion->num_in_front, motion->num_inliers);
     return false;
   }
   if (RotationResidual(views, &motion->inliers) <= PairGateRad()) {
@@ -107,8 +116,10 @@ bool MonocularVo::Impl::HasInitialParallax(const InitialViews& views,
   }
   const double needed = std::max(options_.min_init_parallax_deg * kDegToRad,
                                  std::sqrt(2.0) * NoiseRad() / options_.init_depth_precision);
-  if (UpperMedian(parallax) >= needed) return true;
-  result->message = "insufficient parallax";
+  const double median_rad = UpperMedian(parallax);
+  if (median_rad >= needed) return true;
+  result->message = fmt::format("insufficient parallax ({:.2f} deg of {:.2f} deg, {} inliers)",
+                                median_rad / kDegToRad, needed / kDegToRad, motion.num_inliers);
   return false;
 }
 
@@ -140,7 +151,8 @@ bool MonocularVo::Impl::BuildInitialMap(int64_t t_ns, const InitialViews& views,
     tracks_[i].landmark = lm;
   }
   if (static_cast<int>(map_.landmarks().size()) < options_.min_init_inliers) {
-    result->message = "too few triangulated points";
+    result->message = fmt::format("too few triangulated points ({} of {} inliers)",
+                                  map_.landmarks().size(), motion.num_inliers);
   } else {
     LocalBaOptions ba;
     ba.num_fixed = 1;

@@ -34,25 +34,33 @@ void MonocularVo::Impl::TriangulateTracks(int kf) {
   }
 }
 
-void MonocularVo::Impl::DescribeLandmarks(const cv::Mat& grey) {
-  std::vector<cv::Point2f> points;
-  std::vector<int> landmarks;
+LandmarkViews MonocularVo::Impl::CollectLandmarkViews() {
+  LandmarkViews views;
   for (const Track& t : tracks_) {
     Landmark* lm = t.landmark >= 0 ? map_.landmark(t.landmark) : nullptr;
     if (lm == nullptr) continue;
-    points.push_back(t.px);
-    landmarks.push_back(t.landmark);
+    views.px.push_back(t.px);
+    views.landmark.push_back(t.landmark);
     if (t.patch != nullptr) {
       lm->patch = t.patch;
       lm->warp = t.warp;
     }
   }
+  return views;
+}
+
+void MonocularVo::Impl::AddLandmarkDescriptors(const cv::Mat& grey, const LandmarkViews& views) {
   std::vector<Descriptor> descriptors;
   std::vector<char> ok;
-  describer_->Describe(grey, points, &descriptors, &ok);
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (ok[i]) map_.landmark(landmarks[i])->AddDescriptor(descriptors[i]);
+  describer_->Describe(grey, views.px, &descriptors, &ok);
+  for (size_t i = 0; i < views.px.size(); ++i) {
+    Landmark* lm = map_.landmark(views.landmark[i]);
+    if (ok[i] && lm != nullptr) lm->AddDescriptor(descriptors[i]);
   }
+}
+
+void MonocularVo::Impl::DescribeLandmarks(const cv::Mat& grey) {
+  AddLandmarkDescriptors(grey, CollectLandmarkViews());
 }
 
 void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
@@ -96,8 +104,7 @@ void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
       t.anchor_bearing = t.bearing;
     }
   }
-  DescribeLandmarks(grey);
-  AddNewTracks(grey, kf);
+  DeferKeyframeWork(grey, kf);
   last_keyframe_ = kf;
   frames_since_keyframe_ = 0;
   keyframe_landmarks_ = 0;
