@@ -28,8 +28,9 @@ double Gric(const std::vector<double>& squared_distances_over_sigma2, int manifo
   const double n = static_cast<double>(squared_distances_over_sigma2.size());
   const double cap = 2.0 * (kDataDims - manifold_dims);
   double sum = 0.0;
-  for (double e2 : squared_distances_over_sigma2)
+  for (double e2 : squared_distances_over_sigma2) {
     sum += std::isfinite(e2) ? std::min(e2, cap) : cap;
+  }
   return sum + std::log(kDataDims) * manifold_dims * n +
          std::log(kDataDims * std::max(1.0, n)) * model_params;
 }
