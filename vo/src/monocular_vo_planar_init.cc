@@ -30,11 +30,8 @@ PoseSupport SupportOf(const InitialViews& views, const RelativePose& pose, doubl
     if (EpipolarAngle(e, views.reference[i], views.current[i]) > gate_rad) continue;
     support.inliers[i] = 1;
     ++support.num_inliers;
-    double d1 = 0.0, d2 = 0.0;
-    if (RayDepths(pose, views.reference[i], views.current[i], &d1, &d2) && d1 > 0 && d2 > 0) {
-      ++support.num_in_front;
-    }
   }
+  support.num_in_front = InliersInFront(pose, views.reference, views.current, support.inliers);
   return support;
 }
 
@@ -66,7 +63,7 @@ void MonocularVo::Impl::PreferPlanarMotion(const InitialViews& views,
 
   // The decompositions whose epipolar geometry the tracks support in front of both views (the
   // tracks off the plane count too, which is what tells the two physical decompositions apart
-  // when the plane alone cannot); two such distinct motions are an ambiguity to wait out.
+  // when the plane alone cannot). Exactly one must pass; with two, the essential matrix decides.
   const double gate = PairGateRad();
   const double needed = options_.min_init_cheirality_fraction * h.num_inliers;
   int accepted = 0;

@@ -317,6 +317,17 @@ Eigen::Matrix3d BestRotation(const std::vector<Eigen::Vector3d>& f1,
   return svd.matrixV() * d * svd.matrixU().transpose();
 }
 
+int InliersInFront(const RelativePose& pose, const std::vector<Eigen::Vector3d>& f1,
+                   const std::vector<Eigen::Vector3d>& f2, const std::vector<char>& inliers) {
+  int front = 0;
+  for (size_t i = 0; i < f1.size() && i < inliers.size(); ++i) {
+    if (!inliers[i]) continue;
+    double d1 = 0, d2 = 0;
+    if (RayDepths(pose, f1[i], f2[i], &d1, &d2) && d1 > 0 && d2 > 0) ++front;
+  }
+  return front;
+}
+
 RelativePoseRansacResult EstimateRelativePose(const std::vector<Eigen::Vector3d>& f1,
                                               const std::vector<Eigen::Vector3d>& f2,
                                               const RelativePoseRansacOptions& options,
@@ -373,12 +384,7 @@ RelativePoseRansacResult EstimateRelativePose(const std::vector<Eigen::Vector3d>
   // The decomposition with most inliers in front of both views.
   int best_front = -1;
   for (const RelativePose& candidate : DecomposeEssential(best_E)) {
-    int front = 0;
-    for (int i = 0; i < n; ++i) {
-      if (!result.inliers[i]) continue;
-      double d1 = 0, d2 = 0;
-      if (RayDepths(candidate, f1[i], f2[i], &d1, &d2) && d1 > 0 && d2 > 0) ++front;
-    }
+    const int front = InliersInFront(candidate, f1, f2, result.inliers);
     if (front > best_front) {
       best_front = front;
       result.pose = candidate;
@@ -388,13 +394,7 @@ RelativePoseRansacResult EstimateRelativePose(const std::vector<Eigen::Vector3d>
   RefineRelativePose(f1, f2, result.inliers, options.max_epipolar_angle_rad, 10, &result.pose);
   result.E = EssentialFromPose(result.pose);
   result.num_inliers = count_inliers(result.E, &result.inliers);
-  best_front = 0;
-  for (int i = 0; i < n; ++i) {
-    if (!result.inliers[i]) continue;
-    double d1 = 0, d2 = 0;
-    if (RayDepths(result.pose, f1[i], f2[i], &d1, &d2) && d1 > 0 && d2 > 0) ++best_front;
-  }
-  result.num_in_front = best_front;
+  result.num_in_front = InliersInFront(result.pose, f1, f2, result.inliers);
   result.success = true;
   return result;
 }

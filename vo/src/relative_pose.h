@@ -44,6 +44,11 @@ std::array<RelativePose, 4> DecomposeEssential(const Eigen::Matrix3d& E);
 bool RayDepths(const RelativePose& pose, const Eigen::Vector3d& f1, const Eigen::Vector3d& f2,
                double* d1, double* d2);
 
+// How many of the correspondences marked in `inliers` triangulate in front of both views with
+// `pose` (RayDepths positive).
+int InliersInFront(const RelativePose& pose, const std::vector<Eigen::Vector3d>& f1,
+                   const std::vector<Eigen::Vector3d>& f2, const std::vector<char>& inliers);
+
 // The rotation R (1_from_2) minimising sum ||f1 - R f2||^2 over the given pairs (Kabsch).
 Eigen::Matrix3d BestRotation(const std::vector<Eigen::Vector3d>& f1,
                              const std::vector<Eigen::Vector3d>& f2);
