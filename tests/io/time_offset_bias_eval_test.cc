@@ -96,8 +96,10 @@ std::optional<TimeOffsetEstimate> Preferred(const free_running::FreeRunningRig& 
 // Over a group of kDraws * 9 offsets: the mean normalised error within 4 of its standard errors
 // (its own scatter over sqrt(n)) of 0. On the brisk drive the RMS of error/σ within the 99.9 %
 // bounds of χ² with n degrees of freedom (0.75..1.27 for n = 72) widened by a tenth (the draws of
-// a case share their motion); on the demo drive below 3 (σ too small by up to 2.8x where the
-// noise's slope rivals the signal's: see docs/evaluations.md).
+// a case share their motion), and so the RMS over all cases; on the demo drive below 2.5 (where
+// the noise's slope rivals the signal's, a draw's minimum can still land on a wiggle of the cost
+// a few of its σ away: the worst group, 0.02° at 20 Hz, reaches 2.25 through one draw at 15σ; see
+// docs/evaluations.md).
 TEST(TimeOffsetBiasEval, PreferredOffsetIsUnbiasedWithHonestSigma) {
   SetLogLevel("warn");
   std::printf(
@@ -145,7 +147,7 @@ TEST(TimeOffsetBiasEval, PreferredOffsetIsUnbiasedWithHonestSigma) {
         if (std::abs(group.MeanZ()) > 4.0 * group.RmsZ() / std::sqrt(group.n)) {
           failed.push_back(name + ": mean z " + std::to_string(group.MeanZ()));
         }
-        const double hi = motion == Motion::kBrisk ? 1.27 * 1.1 : 3.0;
+        const double hi = motion == Motion::kBrisk ? 1.27 * 1.1 : 2.5;
         const double lo = motion == Motion::kBrisk ? 0.75 / 1.1 : 0.0;
         if (group.RmsZ() > hi || group.RmsZ() < lo) {
           failed.push_back(name + ": rms z " + std::to_string(group.RmsZ()));
@@ -159,6 +161,9 @@ TEST(TimeOffsetBiasEval, PreferredOffsetIsUnbiasedWithHonestSigma) {
               all.MeanZ(), all.RmsZ(), all.beyond_3, 0.0027 * all.n);
   std::printf("synchronised stamps flagged: %d of %d (%.1f expected at 3σ)\n", false_alarms,
               synchronised, 0.0027 * synchronised);
+  if (all.RmsZ() > 1.27 * 1.1 || all.RmsZ() < 0.75 / 1.1) {
+    failed.push_back("all: rms z " + std::to_string(all.RmsZ()));
+  }
   for (const std::string& f : failed) ADD_FAILURE() << f;
 }
 

@@ -267,34 +267,56 @@ Expected<TimeOffsetEstimate> CorrelateAngularSpeed(const TimedTrajectory& master
 
 namespace {
 
+// The straight-line fits of RefineAround's residuals around an offset: per used motion j,
+// g_j = J_j·r_j (slope J_j over the window, r_j its mean), and Σ|J_j|². `jtj_signal` estimates
+// the smooth signal's share of Σ|J_j|²: Σ J_left·J_right, the slopes of the window's two halves
+// (the samples left and right of the centre), whose noises come from different poses, so that
+// the product's expectation is the signal's slope squared alone. Σ|J_j|² adds the noise's own
+// slope, which (errors in the variables) makes a σ from it too small where the noise's slope
+// rivals the signal's.
+struct LineFits {
+  std::vector<size_t> used;
+  std::vector<double> g;
+  double jtj = 0.0;
+  double jtj_signal = 0.0;
+};
+
 // One step of the straight-line fit of RefineAround: each residual fitted over ±2 frames (h)
 // around *offset_s in half frames, the offset moved by -Σ J_j·r_j / Σ|J_j|² (at most h). False
 // with fewer than 5 motions.
 template <typename Residual>
 bool FitAround(const MotionSet& m, const Residual& residual, double h, double* offset_s,
-               std::vector<size_t>* used, std::vector<double>* g, double* jtj) {
+               LineFits* fits) {
   constexpr int kSteps = 4;  // per side
   constexpr double kN = 2.0 * kSteps + 1.0;
   constexpr double kKK = kSteps * (kSteps + 1.0) * (2.0 * kSteps + 1.0) / 3.0;  // Σ k²
-  used->clear(), g->clear(), *jtj = 0.0;
+  // A half's samples k = 1..kSteps about their middle (kSteps + 1) / 2: Σ (k - middle)².
+  constexpr double kHalfMiddle = (kSteps + 1.0) / 2.0;
+  constexpr double kHalfKK = kSteps * (kSteps * kSteps - 1.0) / 12.0;
+  *fits = LineFits{};
   double step = 0.0;
   for (size_t j = 0; j < m.a.size(); ++j) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero(), slope = Eigen::Vector3d::Zero();
+    Eigen::Vector3d left = Eigen::Vector3d::Zero(), right = Eigen::Vector3d::Zero();
     bool ok = true;
     for (int k = -kSteps; k <= kSteps && ok; ++k) {
       const auto r = residual(j, *offset_s + 0.5 * k * h);
       ok = r.has_value();
-      if (ok) sum += *r, slope += k * *r;
+      if (!ok) break;
+      sum += *r, slope += k * *r;
+      if (k < 0) left += (k + kHalfMiddle) * *r;
+      if (k > 0) right += (k - kHalfMiddle) * *r;
     }
     if (!ok) continue;
     const Eigen::Vector3d jac = slope / (kKK * 0.5 * h);
-    *jtj += jac.squaredNorm();
-    g->push_back(jac.dot(sum / kN));
-    step += g->back();
-    used->push_back(j);
+    fits->jtj += jac.squaredNorm();
+    fits->jtj_signal += left.dot(right) / std::pow(kHalfKK * 0.5 * h, 2);
+    fits->g.push_back(jac.dot(sum / kN));
+    step += fits->g.back();
+    fits->used.push_back(j);
   }
-  if (used->size() < 5 || !(*jtj > 0.0)) return false;
-  *offset_s -= std::clamp(step / *jtj, -h, h);
+  if (fits->used.size() < 5 || !(fits->jtj > 0.0)) return false;
+  *offset_s -= std::clamp(step / fits->jtj, -h, h);
   return true;
 }
 
@@ -350,19 +372,31 @@ std::optional<TimeOffsetEstimate> RefineAround(const TimedTrajectory& master,
     used.push_back(j);
   }
   TimeOffsetEstimate fitted = out;
-  std::vector<size_t> fit_used;
-  std::vector<double> fit_g;
-  double fit_jtj = 0.0;
+  LineFits fits;
+  double fit_jtj_at_minimum = 0.0;  // the first fit's, centred on the cost's minimum
   for (int pass = 0; pass < 2; ++pass) {
-    if (!FitAround(m, residual, h, &fitted.offset_s, &fit_used, &fit_g, &fit_jtj)) break;
-    if (pass == 0 && !(jtj > 2.0 * fit_jtj)) break;  // the signal's slope dominates
+    if (!FitAround(m, residual, h, &fitted.offset_s, &fits)) break;
+    if (pass == 0) fit_jtj_at_minimum = fits.jtj;
+    if (pass == 0 && !(jtj > 2.0 * fits.jtj)) break;  // the signal's slope dominates
   }
-  if (jtj > 2.0 * fit_jtj && fit_used.size() >= 5) {
+  const bool from_fit = jtj > 2.0 * fits.jtj && fits.used.size() >= 5;
+  // How much the slopes in the σ's denominator exceed the signal's (at least 1): the local
+  // slopes include the cost's wiggles on the scale of a frame, which the fit's slope over ±2
+  // frames averages out; the fit's slopes include what noise is left (LineFits::jtj_signal).
+  // Where the fits find no signal slope at all, the offset is known to the searched interval
+  // only (uniform over ±h).
+  double inflation = 1.0;
+  if (from_fit) {
     out.offset_s = fitted.offset_s;
-    used = fit_used, g = fit_g, jtj = fit_jtj;
+    used = fits.used, g = fits.g, jtj = fits.jtj;
+    inflation = fits.jtj_signal > 0.0 ? std::max(1.0, fits.jtj / fits.jtj_signal) : 0.0;
+  } else if (fit_jtj_at_minimum > 0.0) {
+    inflation = std::max(1.0, jtj / fit_jtj_at_minimum);
   }
   out.motions = static_cast<int>(used.size());
-  if (used.size() >= 5) out.std_s = SandwichStd(m, used, g, jtj);
+  if (used.size() >= 5) {
+    out.std_s = inflation > 0.0 ? inflation * SandwichStd(m, used, g, jtj) : h / std::sqrt(3.0);
+  }
   return out;
 }
 
