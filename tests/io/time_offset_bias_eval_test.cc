@@ -142,8 +142,8 @@ TEST(TimeOffsetBiasEval, PreferredOffsetIsUnbiasedWithHonestSigma) {
                       noise.name, rate, fraction, s.MeanE() * 1e3, sum_sigma / kDraws * 1e3,
                       s.MeanZ(), s.RmsZ(), s.beyond_3, flagged);
         }
-        const std::string name =
-            std::string(Name(motion)) + " " + noise.name + " " + std::to_string(static_cast<int>(rate)) + " Hz";
+        const std::string name = std::string(Name(motion)) + " " + noise.name + " " +
+                                 std::to_string(static_cast<int>(rate)) + " Hz";
         if (std::abs(group.MeanZ()) > 4.0 * group.RmsZ() / std::sqrt(group.n)) {
           failed.push_back(name + ": mean z " + std::to_string(group.MeanZ()));
         }
