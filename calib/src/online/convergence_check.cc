@@ -12,7 +12,7 @@ namespace rigcal::internal {
 
 uint32_t ConvergenceCheck(const RigEstimatorOptions& o, SlaveCalibration* out,
                           const SlaveCalibration& linear, double rot_factor, bool decalibrated,
-                          ConvergenceState* s) {
+                          double master_motion_length, ConvergenceState* s) {
   const SlaveCalibration& published = *out;
   if (!published.solved()) {
     out->state = decalibrated ? SlaveState::kDecalibrated : SlaveState::kInitialising;
@@ -24,7 +24,9 @@ uint32_t ConvergenceCheck(const RigEstimatorOptions& o, SlaveCalibration* out,
   s->last_q = linear.estimate.q;
   if (published.motion_model == MotionModel::kTranslational) flags |= kFlagTranslationalOnly;
   if (published.observability.planar) flags |= kFlagPlanar;
-  const double c_ref = std::max(1.0, published.estimate.C.norm());
+  // A length in the master's unit: |C|, or the master's motions where the cameras sit close
+  // together (a fraction of |C| → 0 would never be reached).
+  const double c_ref = std::max(master_motion_length, published.estimate.C.norm());
   // σ must be known (finite): an unknown σ (NaN) has not settled.
   const bool position_ok = !published.position_observable || published.observability.planar ||
                            (published.pos_std.allFinite() &&

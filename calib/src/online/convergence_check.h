@@ -23,9 +23,12 @@ struct ConvergenceState {
 
 // Sets published->state and returns the facts kFlagTranslationalOnly and kFlagPlanar of
 // `published`; counts the stability of `linear` (a refinement being published is no change),
-// whose rotation σ is inflated by `rotation_inflation`.
+// whose rotation σ is inflated by `rotation_inflation`. The position σ is measured against
+// max(|C|, master_motion_length): the median length of the master's motions in the window
+// stands for |C| when the cameras sit close together, in the master's own unit.
 uint32_t ConvergenceCheck(const RigEstimatorOptions& options, SlaveCalibration* published,
                           const SlaveCalibration& linear, double rotation_inflation,
-                          bool decalibrated, ConvergenceState* state);
+                          bool decalibrated, double master_motion_length,
+                          ConvergenceState* state);
 
 }  // namespace rigcal::internal

@@ -261,8 +261,9 @@ void RigEstimator::Publish(int index) {
       internal::RecentlyDecalibrated(o, s.decalibration, s.online.last_update_ns);
 
   SlaveCalibration published = s.Published(o, inflation, names_[index + 1]);
-  s.online.flags |= internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation,
-                                               decalibrated, &s.convergence);
+  s.online.flags |=
+      internal::ConvergenceCheck(o, &published, s.linear, inflation.rotation, decalibrated,
+                                 s.MasterMotionLength(), &s.convergence);
   const std::optional<std::string> unsupported = s.Unsupported(published, generation_);
   if (unsupported) {
     published.state = SlaveState::kInitialising;

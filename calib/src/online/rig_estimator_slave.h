@@ -6,11 +6,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <deque>
 #include <limits>
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "batch/batch_acceptance.h"
 #include "models/model_explanation.h"
@@ -190,6 +192,18 @@ struct RigEstimator::Slave {
     const bool from_history = (online.flags & kFlagRefined) != 0 && refined_from_history;
     if (!from_history) internal::InflateSigmas(inflation, &published);
     return published;
+  }
+
+  // The median length of the master's motions in the window (0 when empty): a length in the
+  // master's own unit, for the position's convergence where the cameras sit close together.
+  double MasterMotionLength() const {
+    if (stats.window.empty()) return 0.0;
+    std::vector<double> lengths;
+    lengths.reserve(stats.window.size());
+    for (const internal::WindowEntry& e : stats.window) lengths.push_back(e.data.C0.norm());
+    const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+    std::nth_element(lengths.begin(), middle, lengths.end());
+    return *middle;
   }
 
   // Why a usable `published` is not supported by the window's motions (batch_acceptance.h) or

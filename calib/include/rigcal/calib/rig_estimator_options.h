@@ -80,7 +80,9 @@ struct RigEstimatorOptions {
   // Convergence: enough motions, small uncertainty, stable over the last keyframes.
   int converged_min_motions = 30;
   double converged_rot_std_deg = 0.3;
-  double converged_pos_std_fraction = 0.05;  // of |C|, or absolute when |C| < 1
+  // of |C|, or of the median length of the master's motions when that is longer (cameras close
+  // together: a fraction of |C| → 0 is never reached; a length in the master's own unit)
+  double converged_pos_std_fraction = 0.05;
   int converged_stable_keyframes = 5;
 
   // Rotation σ, cluster-robust: the motions' rotation information is kept in contiguous time
