@@ -17,6 +17,7 @@
 #include "affine_patch.h"
 #include "exposure_compensation.h"
 #include "feature_grid.h"
+#include "frame_noise_reference.h"
 #include "klt_tracker.h"
 #include "map_descriptors.h"
 #include "relative_pose.h"
@@ -214,6 +215,7 @@ class MonocularVo::Impl {
   std::unique_ptr<FeatureGrid> grid_;
   std::unique_ptr<OrbDescriber> describer_;
   TrackNoise noise_;
+  FrameNoiseReference usual_noise_;
   std::mt19937 rng_;
 
   std::vector<Track> tracks_;
@@ -233,6 +235,8 @@ class MonocularVo::Impl {
   int last_keyframe_ = -1;
   int frames_since_keyframe_ = 0;
   int keyframe_landmarks_ = 0;
+  // The last tracked frame's factor in the pose quality (FrameNoiseReference::Add).
+  double frame_noise_factor_ = 1.0;
 
   // Relocalisation: stream time of the first failed attempt of the current loss (-1: none).
   int64_t lost_since_ns_ = -1;

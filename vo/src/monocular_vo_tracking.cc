@@ -98,6 +98,8 @@ bool MonocularVo::Impl::EstimateFramePose(const MapMatches& matches, const Camer
     residuals_px[k] = AngularResidual(*pose, matches.bearing[k], matches.point[k]) / pixel_angle_;
   }
   noise_.AddPoseResiduals(residuals_px);
+  frame_noise_factor_ =
+      usual_noise_.Add(TrackNoise::RobustSigma(residuals_px, 1.0, 2, options_.inlier_sigmas));
   const double gate_px = PoseGateRad() / pixel_angle_;
   std::vector<char> inliers(matches.size());
   for (size_t k = 0; k < matches.size(); ++k) inliers[k] = residuals_px[k] <= gate_px;
@@ -194,8 +196,11 @@ void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* 
   }
   result->state = state_;
   result->inliers = inliers;
+  // The pose quality: the inlier ratio, the inliers up to 100, and how the frame's track noise
+  // compares with the camera's usual (FrameNoiseReference: blur, darkness, image noise).
   const double ratio = static_cast<double>(inliers) / static_cast<double>(matches.size());
-  result->pose = MakePose(t_ns, pose_, ratio * std::min(1.0, inliers / 100.0));
+  result->pose =
+      MakePose(t_ns, pose_, ratio * std::min(1.0, inliers / 100.0) * frame_noise_factor_);
 }
 
 }  // namespace rigcal::vo

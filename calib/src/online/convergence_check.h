@@ -28,7 +28,6 @@ struct ConvergenceState {
 // stands for |C| when the cameras sit close together, in the master's own unit.
 uint32_t ConvergenceCheck(const RigEstimatorOptions& options, SlaveCalibration* published,
                           const SlaveCalibration& linear, double rotation_inflation,
-                          bool decalibrated, double master_motion_length,
-                          ConvergenceState* state);
+                          bool decalibrated, double master_motion_length, ConvergenceState* state);
 
 }  // namespace rigcal::internal

@@ -45,7 +45,7 @@ struct CameraPose {
   int64_t trigger_seq = -1;  // hardware trigger pulse number, -1 when unknown
   int segment = 0;           // odometry scale segment (a VO re-initialisation opens a new one)
   Pose pose;
-  double quality = 1.0;  // tracking quality in [0, 1]
+  double quality = 1.0;  // tracking quality in [0, 1]: 1 as well tracked as the camera usually is
 };
 
 // Time-corresponding poses of the master and every slave camera: entry k of every vector
