@@ -69,6 +69,8 @@ TEST(SimulatedSourceYaml, ParsesEveryKey) {
                         "  timestamp_jitter_ms: 1.5\n"
                         "  fail_after_s: {cam1: 2.5}\n"
                         "  render_block: 2\n"
+                        "  vignetting: 0.3\n"
+                        "  exposure_steps: {interval_s: 2, max_factor: 1.5}\n"
                         "  scene: {type: yard, size: [40, 30, 7], boxes: 3, texel_m: 0.015}\n") +
             kWaypoints);
   ASSERT_TRUE(spec) << spec.error();
@@ -85,6 +87,9 @@ TEST(SimulatedSourceYaml, ParsesEveryKey) {
   ASSERT_EQ(spec->fail_after_s.count("cam1"), 1u);
   EXPECT_DOUBLE_EQ(spec->fail_after_s.at("cam1"), 2.5);
   EXPECT_EQ(spec->render_block, 2);
+  EXPECT_DOUBLE_EQ(spec->vignetting, 0.3);
+  EXPECT_DOUBLE_EQ(spec->exposure_steps.interval_s, 2.0);
+  EXPECT_DOUBLE_EQ(spec->exposure_steps.max_factor, 1.5);
   EXPECT_EQ(spec->scene.type, SimulatedRigSpec::SceneType::kYard);
   EXPECT_EQ(spec->scene.size, Eigen::Vector3d(40, 30, 7));
   EXPECT_EQ(spec->scene.boxes, 3);
@@ -177,6 +182,15 @@ TEST(SimulatedSourceYaml, ErrorsNameLineAndKey) {
       {"source:\n  fail_after_s: {cam1: -2}\n" + w, ":2: source.fail_after_s.cam1: must be >= 0"},
       {"source:\n  fail_after_s: [cam1]\n" + w, ":2: source.fail_after_s: expected a map"},
       {"source:\n  render_block: 0\n" + w, ":2: source.render_block: must be in [1, 32]"},
+      {"source:\n  vignetting: 1\n" + w, ":2: source.vignetting: must be in [0, 1)"},
+      {"source:\n  exposure_steps: {interval_s: 2}\n" + w,
+       ":2: source.exposure_steps.max_factor: missing"},
+      {"source:\n  exposure_steps: {interval_s: 0, max_factor: 2}\n" + w,
+       ":2: source.exposure_steps.interval_s: must be > 0 s"},
+      {"source:\n  exposure_steps: {interval_s: 1, max_factor: 0.5}\n" + w,
+       ":2: source.exposure_steps.max_factor: must be in [1, 8]"},
+      {"source:\n  exposure_steps: {interval_s: 1, max_factor: 2, step: 1}\n" + w,
+       ":2: source.exposure_steps.step: unknown key"},
       {"source:\n  scene: {type: cave}\n" + w, ":2: source.scene.type: 'cave' is not a scene"},
       {"source:\n  scene:\n    type: room\n    diameter: 0.6\n" + w,
        ":4: source.scene.diameter: only for scene type pipe, not room"},

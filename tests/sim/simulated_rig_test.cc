@@ -441,6 +441,65 @@ TEST(SimulatedRig, BlurBurstBlursOnlyItsSpan) {
   EXPECT_NE(spec.Check().message().find("blur_burst_s.cam7"), std::string::npos);
 }
 
+// source.vignetting: the light falls to 1 - v of the centre's at the corners, quadratically in
+// the radius; the centre is as without it.
+TEST(SimulatedRig, VignettingDarkensTheCornersByItsStrength) {
+  SimulatedRigSpec spec = TwoCameraSpec(320, 240);
+  const SimulatedRig plain = Make(spec);
+  spec.vignetting = 0.4;
+  const SimulatedRig vignetted = Make(spec);
+  const cv::Mat a = plain.RenderFrame(0, 3), b = vignetted.RenderFrame(0, 3);
+  cv::Mat fa, fb;
+  a.convertTo(fa, CV_64F);
+  b.convertTo(fb, CV_64F);
+  // Sums over 20 x 20 patches: at the centre, at a corner and halfway out along the diagonal
+  // (radius² 1/4 of the corner's). Rounding: half a grey level per pixel at most.
+  const auto ratio = [&](int x, int y) {
+    const cv::Rect patch(x - 10, y - 10, 20, 20);
+    return cv::sum(fb(patch))[0] / cv::sum(fa(patch))[0];
+  };
+  const double cx = 159.5, cy = 119.5, r2_corner = cx * cx + cy * cy;
+  const auto expected = [&](int x, int y) {
+    const double dx = x - 0.5 - cx, dy = y - 0.5 - cy;  // the patch's centre
+    return 1.0 - 0.4 * (dx * dx + dy * dy) / r2_corner;
+  };
+  for (const auto& [x, y] : std::vector<std::pair<int, int>>{{160, 120}, {240, 180}, {10, 10}}) {
+    const double mean = cv::sum(fa(cv::Rect(x - 10, y - 10, 20, 20)))[0] / 400.0;
+    EXPECT_NEAR(ratio(x, y), expected(x, y), 0.02 + 0.5 / mean) << x << ", " << y;
+  }
+  spec.vignetting = 1.0;
+  EXPECT_NE(spec.Check().message().find("vignetting"), std::string::npos);
+}
+
+// source.exposure_steps: the gain is 1 in the first interval and a factor within
+// [1/max_factor, max_factor] in each later one, the same for all frames of an interval; the
+// noise scales with it.
+TEST(SimulatedRig, ExposureStepsScaleWholeIntervals) {
+  SimulatedRigSpec spec = TwoCameraSpec(160, 120);
+  spec.waypoints = {Waypoint({0, 0, 3}, 0), Waypoint({0, 0, 3}, 0)};  // at rest
+  spec.waypoint_interval_s = 10.0;
+  const SimulatedRig plain = Make(spec);
+  spec.exposure_steps.interval_s = 0.5;  // 10 frames at 20 Hz
+  spec.exposure_steps.max_factor = 1.5;
+  const SimulatedRig stepped = Make(spec);
+  const auto mean = [](const cv::Mat& m) { return cv::mean(m)[0]; };
+  EXPECT_EQ(cv::norm(plain.RenderFrame(0, 4), stepped.RenderFrame(0, 4), cv::NORM_INF), 0.0);
+  int changed = 0;
+  for (int64_t step = 1; step <= 6; ++step) {
+    const double gain =
+        mean(stepped.RenderFrame(0, 10 * step)) / mean(plain.RenderFrame(0, 10 * step));
+    const double again =
+        mean(stepped.RenderFrame(0, 10 * step + 9)) / mean(plain.RenderFrame(0, 10 * step + 9));
+    EXPECT_GE(gain, 1.0 / 1.5 - 0.01) << step;
+    EXPECT_LE(gain, 1.5 + 0.01) << step;  // (saturation only lowers it)
+    EXPECT_NEAR(again, gain, 0.01) << "one gain per interval, step " << step;
+    changed += std::abs(gain - 1.0) > 0.02;
+  }
+  EXPECT_GE(changed, 4) << "the steps hardly change the gain";
+  spec.exposure_steps.max_factor = 9.0;
+  EXPECT_NE(spec.Check().message().find("exposure_steps.max_factor"), std::string::npos);
+}
+
 TEST(SimulatedCamera, FrameTimesDropsAndJitterMatchTheSpec) {
   SimulatedRigSpec spec = TwoCameraSpec(16, 12);
   spec.waypoint_interval_s = 40.0;  // 120 s: 2401 frames at 20 Hz

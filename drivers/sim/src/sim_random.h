@@ -56,6 +56,7 @@ enum RandomPurpose : uint64_t {
   kPurposeJitter = 5,
   kPurposeNoiseTable = 6,
   kPurposeSurface = 7,
+  kPurposeExposure = 8,
 };
 
 }  // namespace rigcal::sim::internal

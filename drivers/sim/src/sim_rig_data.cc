@@ -59,8 +59,48 @@ cv::Mat SimulatedRigData::Render(int camera, int64_t k, std::vector<float>* acc,
   return Quantise(camera, k, *acc, tables.width, tables.height);
 }
 
+double SimulatedRigData::Gain(int camera, int64_t k) const {
+  const SimulatedRigSpec::ExposureSteps& steps = spec.exposure_steps;
+  if (!(steps.interval_s > 0.0) || !(steps.max_factor > 1.0)) return 1.0;
+  const auto step = static_cast<uint64_t>(std::floor(StreamTime(k) / steps.interval_s));
+  if (step == 0) return 1.0;  // the first interval at the nominal gain
+  Rng rng(HashKey(spec.seed, kPurposeExposure, static_cast<uint64_t>(camera), step));
+  return std::exp(rng.Uniform(-1.0, 1.0) * std::log(steps.max_factor));
+}
+
+cv::Mat SimulatedRigData::QuantiseExposed(int camera, int64_t k, const std::vector<float>& acc,
+                                          int width, int height) const {
+  cv::Mat image(height, width, CV_8UC1);
+  const auto gain = static_cast<float>(Gain(camera, k));
+  const auto sigma = static_cast<float>(spec.noise_sigma) * gain;
+  Rng rng(
+      HashKey(spec.seed, kPurposeNoise, static_cast<uint64_t>(camera), static_cast<uint64_t>(k)));
+  // Light falls off as 1 - v (r / r_corner)², r from the image centre.
+  const float cx = 0.5f * static_cast<float>(width - 1);
+  const float cy = 0.5f * static_cast<float>(height - 1);
+  const float falloff = static_cast<float>(spec.vignetting) / (cx * cx + cy * cy);
+  std::vector<float> dx2(static_cast<size_t>(width));
+  for (int x = 0; x < width; ++x)
+    dx2[x] = (static_cast<float>(x) - cx) * (static_cast<float>(x) - cx);
+  for (int y = 0; y < height; ++y) {
+    const float* in = acc.data() + static_cast<size_t>(y) * width;
+    const float* n = noise.data() + rng.Below(static_cast<uint32_t>(noise.size() - width));
+    const float dy2 = (static_cast<float>(y) - cy) * (static_cast<float>(y) - cy);
+    uint8_t* out = image.ptr<uint8_t>(y);
+    for (int x = 0; x < width; ++x) {
+      const float light = gain * (1.f - falloff * (dx2[x] + dy2));
+      const float v = std::min(std::max(in[x] * light + sigma * n[x] + 0.5f, 0.f), 255.f);
+      out[x] = static_cast<uint8_t>(static_cast<int>(v));
+    }
+  }
+  return image;
+}
+
 cv::Mat SimulatedRigData::Quantise(int camera, int64_t k, const std::vector<float>& acc, int width,
                                    int height) const {
+  if (spec.vignetting > 0.0 || Gain(camera, k) != 1.0) {
+    return QuantiseExposed(camera, k, acc, width, height);
+  }
   cv::Mat image(height, width, CV_8UC1);
   const auto sigma = static_cast<float>(spec.noise_sigma);
   Rng rng(

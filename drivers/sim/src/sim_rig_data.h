@@ -46,6 +46,8 @@ struct SimulatedRigData {
   bool Blackout(int camera, int64_t k) const;
   // Whether frame k of `camera` is in a blur burst (spec.blur_burst_s).
   bool BlurBurst(int camera, int64_t k) const;
+  // The gain of frame k of `camera` (spec.exposure_steps; 1 when off).
+  double Gain(int camera, int64_t k) const;
   // Stamp noise of frame k of `camera`, nanoseconds (spec.timestamp_jitter_s, clipped at 3 sigma).
   int64_t JitterNs(int camera, int64_t k) const;
   // Frame k of `camera`: renders (with motion blur), adds noise, quantises. `acc`, `hits`:
@@ -57,6 +59,9 @@ struct SimulatedRigData {
   // Adds frame k's noise to `acc` (width x height), rounds and saturates to 8 bit.
   cv::Mat Quantise(int camera, int64_t k, const std::vector<float>& acc, int width,
                    int height) const;
+  // Quantise with vignetting and the frame's gain (which scales the noise too).
+  cv::Mat QuantiseExposed(int camera, int64_t k, const std::vector<float>& acc, int width,
+                          int height) const;
 };
 
 }  // namespace rigcal::sim::internal

@@ -189,6 +189,18 @@ Status CheckImaging(const SimulatedRigSpec& spec) {
     e << "motion_blur.samples: " << spec.blur_samples << " outside [2, 32]";
     return Error{e.str()};
   }
+  if (!(spec.vignetting >= 0 && spec.vignetting < 1)) {
+    e << "vignetting: " << spec.vignetting << " outside [0, 1)";
+    return Error{e.str()};
+  }
+  if (!(spec.exposure_steps.interval_s >= 0 && std::isfinite(spec.exposure_steps.interval_s))) {
+    e << "exposure_steps.interval_s: " << spec.exposure_steps.interval_s << " must be >= 0";
+    return Error{e.str()};
+  }
+  if (!(spec.exposure_steps.max_factor >= 1 && spec.exposure_steps.max_factor <= 8)) {
+    e << "exposure_steps.max_factor: " << spec.exposure_steps.max_factor << " outside [1, 8]";
+    return Error{e.str()};
+  }
   return Status::Ok();
 }
 

@@ -26,7 +26,7 @@ const std::set<std::string> kSourceKeys = {
     "seed",         "realtime",      "trajectory",       "scene",
     "noise_sigma",  "motion_blur",   "drop_probability", "timestamp_jitter_ms",
     "fail_after_s", "blackout_s",    "render_block",     "trigger",
-    "blur_burst_s"};
+    "blur_burst_s", "vignetting",    "exposure_steps"};
 
 // A number as people write it: "20", "9.95", "8.33333".
 std::string PlainNumber(double v) { return SignificantText(v, 6); }
@@ -315,6 +315,34 @@ std::optional<Error> ReadImageEffects(const FieldReader& r, const YAML::Node& so
   return std::nullopt;
 }
 
+// vignetting, exposure_steps: the light the camera gathers.
+std::optional<Error> ReadExposure(const FieldReader& r, const YAML::Node& source,
+                                  SimulatedRigSpec* spec) {
+  if (const YAML::Node n = source["vignetting"]) {
+    auto v = NumberIn(
+        r, n, "source.vignetting", [](double x) { return x >= 0 && x < 1; },
+        "in [0, 1) (the corner's light falls to 1 - x of the centre's)");
+    if (!v) return Error{v.error()};
+    spec->vignetting = *v;
+  }
+  if (const YAML::Node n = source["exposure_steps"]) {
+    if (auto e = r.CheckKeys(n, "source.exposure_steps.", {"interval_s", "max_factor"})) return *e;
+    if (!n["interval_s"]) return r.Fail(n, "source.exposure_steps.interval_s", "missing");
+    if (!n["max_factor"]) return r.Fail(n, "source.exposure_steps.max_factor", "missing");
+    auto interval = NumberIn(
+        r, n["interval_s"], "source.exposure_steps.interval_s", [](double x) { return x > 0; },
+        "> 0 s");
+    if (!interval) return Error{interval.error()};
+    auto factor = NumberIn(
+        r, n["max_factor"], "source.exposure_steps.max_factor",
+        [](double x) { return x >= 1 && x <= 8; }, "in [1, 8]");
+    if (!factor) return Error{factor.error()};
+    spec->exposure_steps.interval_s = *interval;
+    spec->exposure_steps.max_factor = *factor;
+  }
+  return std::nullopt;
+}
+
 // `trigger:`: the simulated hardware trigger.
 std::optional<Error> ReadSimulatedTrigger(const FieldReader& r, const YAML::Node& source,
                                           SimulatedRigSpec* spec) {
@@ -440,6 +468,7 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
     if (auto e = ReadSceneSection(r, n, &spec)) return *e;
   }
   if (auto e = ReadImageEffects(r, source, &spec)) return *e;
+  if (auto e = ReadExposure(r, source, &spec)) return *e;
   if (auto e = ReadSimulatedTrigger(r, source, &spec)) return *e;
   if (auto e = ReadFailuresAndRendering(r, source, &spec)) return *e;
   if (auto e = ReadSpans(r, source, "blackout_s", &spec.blackout_s)) return *e;

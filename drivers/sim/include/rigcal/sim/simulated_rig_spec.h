@@ -71,6 +71,12 @@
 //                                 # motion over 90 % of the frame period (8 renders, or
 //                                 # motion_blur.samples when more): a burst of poorly tracked
 //                                 # frames (RigEstimator's pose quality gate)
+//     vignetting: 0.3             # [0, 1): the light at the image corner falls to (1 - x) of
+//                                 # the centre's, quadratically with the radius
+//     exposure_steps:             # auto-exposure: every interval_s (> 0) the camera's gain
+//       interval_s: 2             # jumps to a factor in [1/max_factor, max_factor] (log-
+//       max_factor: 1.5           # uniform, drawn per camera and step; [1, 8]), which scales
+//                                 # the image and its noise (gain noise); absent: gain 1
 //     render_block: 4             # 1: ray cast every pixel (exact, ~5x slower). N > 1: cast
 //                                 # every Nth pixel and interpolate texture coordinates and
 //                                 # mip level inside N x N blocks whose corners see the same
@@ -147,6 +153,11 @@ struct SimulatedRigSpec {
   std::map<std::string, std::pair<double, double>> blackout_s;
   // camera name -> [from, to) stream seconds of frames blurred over 90 % of the frame period
   std::map<std::string, std::pair<double, double>> blur_burst_s;
+  double vignetting = 0.0;  // [0, 1): corner light 1 - vignetting of the centre's (quadratic)
+  struct ExposureSteps {
+    double interval_s = 0.0;  // 0: off; else > 0
+    double max_factor = 1.0;  // [1, 8]
+  } exposure_steps;
   int render_block = 4;  // [1, 32]
 
   // --- Hardware trigger (`source.trigger`, simulated_trigger_timeline.h) ---------------------
