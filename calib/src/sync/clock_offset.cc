@@ -320,6 +320,17 @@ bool FitAround(const MotionSet& m, const Residual& residual, double h, double* o
   return true;
 }
 
+// How much the slopes in the σ's denominator exceed the signal's (at least 1; 0 when the fits
+// find no signal slope at all). The local slopes (`local_jtj`, central differences at the cost's
+// minimum) include the cost's wiggles on the scale of a frame, which the fit's slopes over ±2
+// frames there (`fit_jtj_at_minimum`) average out; the fit's slopes include what noise is left
+// (LineFits::jtj_signal).
+double SlopeInflation(bool from_fit, const LineFits& fits, double local_jtj,
+                      double fit_jtj_at_minimum) {
+  if (from_fit) return fits.jtj_signal > 0.0 ? std::max(1.0, fits.jtj / fits.jtj_signal) : 0.0;
+  return fit_jtj_at_minimum > 0.0 ? std::max(1.0, local_jtj / fit_jtj_at_minimum) : 1.0;
+}
+
 // RefineTimeOffset within [center - h, center + h] (h the slave's frame interval); nullopt with
 // fewer than 5 motions. `at_bound`: the minimum lies at an end of the interval.
 std::optional<TimeOffsetEstimate> RefineAround(const TimedTrajectory& master,
@@ -380,20 +391,13 @@ std::optional<TimeOffsetEstimate> RefineAround(const TimedTrajectory& master,
     if (pass == 0 && !(jtj > 2.0 * fits.jtj)) break;  // the signal's slope dominates
   }
   const bool from_fit = jtj > 2.0 * fits.jtj && fits.used.size() >= 5;
-  // How much the slopes in the σ's denominator exceed the signal's (at least 1): the local
-  // slopes include the cost's wiggles on the scale of a frame, which the fit's slope over ±2
-  // frames averages out; the fit's slopes include what noise is left (LineFits::jtj_signal).
-  // Where the fits find no signal slope at all, the offset is known to the searched interval
-  // only (uniform over ±h).
-  double inflation = 1.0;
+  const double inflation = SlopeInflation(from_fit, fits, jtj, fit_jtj_at_minimum);
   if (from_fit) {
     out.offset_s = fitted.offset_s;
     used = fits.used, g = fits.g, jtj = fits.jtj;
-    inflation = fits.jtj_signal > 0.0 ? std::max(1.0, fits.jtj / fits.jtj_signal) : 0.0;
-  } else if (fit_jtj_at_minimum > 0.0) {
-    inflation = std::max(1.0, jtj / fit_jtj_at_minimum);
   }
   out.motions = static_cast<int>(used.size());
+  // Without a signal slope the offset is known to the searched interval only (uniform, ±h).
   if (used.size() >= 5) {
     out.std_s = inflation > 0.0 ? inflation * SandwichStd(m, used, g, jtj) : h / std::sqrt(3.0);
   }
