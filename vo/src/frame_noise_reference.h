@@ -13,6 +13,7 @@
 // in (0, 1]: 1 for a frame that tracked as usual or better, about 1/4 for one whose tracks are
 // twice as noisy.
 
+#include <cstddef>
 #include <vector>
 
 namespace rigcal::vo {
@@ -31,7 +32,7 @@ class FrameNoiseReference {
 
  private:
   std::vector<double> ring_;  // the last kFrames σ_f, oldest at next_
-  size_t next_ = 0;
+  std::size_t next_ = 0;
 };
 
 }  // namespace rigcal::vo

@@ -80,8 +80,9 @@ cv::Mat SimulatedRigData::QuantiseExposed(int camera, int64_t k, const std::vect
   const float cy = 0.5f * static_cast<float>(height - 1);
   const float falloff = static_cast<float>(spec.vignetting) / (cx * cx + cy * cy);
   std::vector<float> dx2(static_cast<size_t>(width));
-  for (int x = 0; x < width; ++x)
+  for (int x = 0; x < width; ++x) {
     dx2[x] = (static_cast<float>(x) - cx) * (static_cast<float>(x) - cx);
+  }
   for (int y = 0; y < height; ++y) {
     const float* in = acc.data() + static_cast<size_t>(y) * width;
     const float* n = noise.data() + rng.Below(static_cast<uint32_t>(noise.size() - width));

@@ -183,8 +183,9 @@ std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& no
     auto size = r.NumbersOf(n, prefix + ".size", 3);
     if (!size) return Error{size.error()};
     for (double v : *size) {
-      if (!(v > 0 && v <= 100000))
+      if (!(v > 0 && v <= 100000)) {
         return r.Fail(n, prefix + ".size", "extents must be in (0, 100000] m");
+      }
     }
     scene.size = Eigen::Vector3d((*size)[0], (*size)[1], (*size)[2]);
   }
