@@ -2,9 +2,10 @@
 // The VO's robustness matrix (label eval): the thesis 5.4 virtual scene
 // (config/sim_thesis_virtual.yaml, two 60-degree pinhole cameras, 468 frames at 20 Hz) rendered
 // with one imaging effect at a time, at two strengths: motion blur over a fraction of the frame
-// period, vignetting, auto-exposure steps with gain noise, image noise and dropped frames. Per
-// cell and camera: when the VO gives its first pose (stream seconds), the fraction of frames with
-// a pose, scale segments, relocalisations and the RMS frame-to-frame rotation error; then the
+// period, vignetting, auto-exposure steps with gain noise, image noise, barrel lens distortion
+// (rendered through and undone by the camera model) and dropped frames. Per cell and camera:
+// when the VO gives its first pose (stream seconds), the fraction of frames with a pose, scale
+// segments, relocalisations and the RMS frame-to-frame rotation error; then the
 // calibration of the two VO trajectories (RigEstimator over the synchronised sets, the history
 // refinement at the end as `rigcal run` publishes it): state, rotation error and its σ, and the
 // direction error of C (scale-free).
@@ -28,6 +29,7 @@
 #include "rigcal/base/quaternion.h"
 #include "rigcal/calib/refinement_job.h"
 #include "rigcal/calib/rig_estimator.h"
+#include "rigcal/camera/camera_spec.h"
 #include "rigcal/io/rig_config.h"
 #include "rigcal/sim/simulated_rig.h"
 #include "rigcal/vo/monocular_vo.h"
@@ -60,6 +62,23 @@ std::vector<Cell> Cells() {
     return [sigma](sim::SimulatedRigSpec* s) { s->noise_sigma = sigma; };
   };
   auto none = [](sim::SimulatedRigSpec*) {};
+  // Barrel distortion in both cameras' lens model (radial-tangential k1, k2), which the renderer
+  // images through and the VO undoes with the same model.
+  auto distortion = [](double k1) {
+    return [k1](sim::SimulatedRigSpec* s) {
+      for (auto& camera : s->cameras) {
+        camera::CameraSpec lens;
+        lens.model = camera::CameraSpec::Model::kPinhole;
+        lens.width = camera->width();
+        lens.height = camera->height();
+        lens.intrinsics = {651.2511, 651.2511, 375.5, 239.5};  // the config's
+        lens.distortion = {k1, 0.2 * k1 * k1, 0.0, 0.0};
+        auto model = camera::MakeCameraModel(lens);
+        EXPECT_TRUE(model.ok()) << model.error();
+        if (model.ok()) camera = std::shared_ptr<const camera::CameraModel>(std::move(*model));
+      }
+    };
+  };
   return {{"none", "-", none},
           {"motion blur", "40% of period", blur(0.4)},
           {"motion blur", "80% of period", blur(0.8)},
@@ -69,6 +88,8 @@ std::vector<Cell> Cells() {
           {"exposure steps", "x1.6 / 2 s", exposure(1.6)},
           {"image noise", "6 grey", noise(6.0)},
           {"image noise", "12 grey", noise(12.0)},
+          {"lens distortion", "k1 -0.15", distortion(-0.15)},
+          {"lens distortion", "k1 -0.3", distortion(-0.3)},
           {"dropped frames", "10%", none, 0.1},
           {"dropped frames", "30%", none, 0.3}};
 }
