@@ -20,8 +20,9 @@ namespace rigcal::vo {
 
 class FrameNoiseReference {
  public:
-  static constexpr int kFrames = 201;           // about 10 s at 20 Hz
-  static constexpr double kSpreadSigmas = 3.0;  // a usual frame's σ_f lies within
+  static constexpr int kFrames = 201;  // about 10 s at 20 Hz
+  // A usual frame's σ_f lies within this many robust spreads above the median.
+  static constexpr double kSpreadSigmas = 3.0;
 
   // One frame's σ_f in pixels (ignored when not positive and finite); returns the frame's
   // factor, against the usual σ before this frame (1 for the first frame).
