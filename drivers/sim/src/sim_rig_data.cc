@@ -68,18 +68,19 @@ double SimulatedRigData::Gain(int camera, int64_t k) const {
   return std::exp(rng.Uniform(-1.0, 1.0) * std::log(steps.max_factor));
 }
 
-cv::Mat SimulatedRigData::QuantiseExposed(int camera, int64_t k, const std::vector<float>& acc,
-                                          int width, int height) const {
+cv::Mat SimulatedRigData::Quantise(int camera, int64_t k, const std::vector<float>& acc, int width,
+                                   int height) const {
   cv::Mat image(height, width, CV_8UC1);
   const auto gain = static_cast<float>(Gain(camera, k));
-  const auto sigma = static_cast<float>(spec.noise_sigma) * gain;
+  const auto sigma = static_cast<float>(spec.noise_sigma) * gain;  // the gain amplifies the noise
   Rng rng(
       HashKey(spec.seed, kPurposeNoise, static_cast<uint64_t>(camera), static_cast<uint64_t>(k)));
-  // Light falls off as 1 - v (r / r_corner)², r from the image centre.
+  // Light gathered per pixel: gain (1 - v (r / r_corner)²), r from the image centre; exactly 1
+  // without vignetting and exposure steps.
   const float cx = 0.5f * static_cast<float>(width - 1);
   const float cy = 0.5f * static_cast<float>(height - 1);
   const float falloff = static_cast<float>(spec.vignetting) / (cx * cx + cy * cy);
-  std::vector<float> dx2(static_cast<size_t>(width));
+  std::vector<float> dx2(static_cast<size_t>(width)), light(static_cast<size_t>(width));
   for (int x = 0; x < width; ++x) {
     dx2[x] = (static_cast<float>(x) - cx) * (static_cast<float>(x) - cx);
   }
@@ -87,40 +88,12 @@ cv::Mat SimulatedRigData::QuantiseExposed(int camera, int64_t k, const std::vect
     const float* in = acc.data() + static_cast<size_t>(y) * width;
     const float* n = noise.data() + rng.Below(static_cast<uint32_t>(noise.size() - width));
     const float dy2 = (static_cast<float>(y) - cy) * (static_cast<float>(y) - cy);
-    uint8_t* out = image.ptr<uint8_t>(y);
-    for (int x = 0; x < width; ++x) {
-      const float light = gain * (1.f - falloff * (dx2[x] + dy2));
-      const float v = std::min(std::max(in[x] * light + sigma * n[x] + 0.5f, 0.f), 255.f);
-      out[x] = static_cast<uint8_t>(static_cast<int>(v));
-    }
-  }
-  return image;
-}
-
-cv::Mat SimulatedRigData::Quantise(int camera, int64_t k, const std::vector<float>& acc, int width,
-                                   int height) const {
-  if (spec.vignetting > 0.0 || Gain(camera, k) != 1.0) {
-    return QuantiseExposed(camera, k, acc, width, height);
-  }
-  cv::Mat image(height, width, CV_8UC1);
-  const auto sigma = static_cast<float>(spec.noise_sigma);
-  Rng rng(
-      HashKey(spec.seed, kPurposeNoise, static_cast<uint64_t>(camera), static_cast<uint64_t>(k)));
-  for (int y = 0; y < height; ++y) {
-    const float* in = acc.data() + static_cast<size_t>(y) * width;
+    for (int x = 0; x < width; ++x) light[x] = gain * (1.f - falloff * (dx2[x] + dy2));
     uint8_t* out = image.ptr<uint8_t>(y);
     // Rounds and saturates (a loop the compiler vectorises).
-    if (sigma > 0.f) {
-      const float* n = noise.data() + rng.Below(static_cast<uint32_t>(noise.size() - width));
-      for (int x = 0; x < width; ++x) {
-        const float v = std::min(std::max(in[x] + sigma * n[x] + 0.5f, 0.f), 255.f);
-        out[x] = static_cast<uint8_t>(static_cast<int>(v));
-      }
-    } else {
-      for (int x = 0; x < width; ++x) {
-        const float v = std::min(std::max(in[x] + 0.5f, 0.f), 255.f);
-        out[x] = static_cast<uint8_t>(static_cast<int>(v));
-      }
+    for (int x = 0; x < width; ++x) {
+      const float v = std::min(std::max(in[x] * light[x] + sigma * n[x] + 0.5f, 0.f), 255.f);
+      out[x] = static_cast<uint8_t>(static_cast<int>(v));
     }
   }
   return image;

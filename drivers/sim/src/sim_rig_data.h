@@ -56,12 +56,10 @@ struct SimulatedRigData {
                  RenderKernel kernel) const;
 
  private:
-  // Adds frame k's noise to `acc` (width x height), rounds and saturates to 8 bit.
+  // Applies frame k's light (vignetting, exposure gain) and noise (scaled by the gain) to `acc`
+  // (width x height), rounds and saturates to 8 bit.
   cv::Mat Quantise(int camera, int64_t k, const std::vector<float>& acc, int width,
                    int height) const;
-  // Quantise with vignetting and the frame's gain (which scales the noise too).
-  cv::Mat QuantiseExposed(int camera, int64_t k, const std::vector<float>& acc, int width,
-                          int height) const;
 };
 
 }  // namespace rigcal::sim::internal
