@@ -8,8 +8,8 @@
 #include <fstream>
 #include <limits>
 
-#include "rigcal/calib/error_model.h"
 #include "rigcal/base/quaternion.h"
+#include "rigcal/calib/error_model.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/calib/synthetic.h"
 
@@ -689,19 +689,39 @@ TEST(RigEstimatorHistory, AnotherSlavesGlitchDropsTheSameSetsAsTheBatch) {
   }
 }
 
-TEST(RigEstimatorHistory, LongerRecordingsFallBackToTheWindow) {
-  const SyntheticDrive drive = NoisyDrive(1200, 6, 1);
-  RigEstimatorOptions o;
-  o.history_sets = 500;  // fewer than the recording's sets
-  RigEstimator est(Names(drive.recording), o);
-  Feed(&est, drive.recording);
-  const RefinementJob job = est.MakeRefinementJob(0, /*final=*/true);
-  EXPECT_TRUE(job.history.t_ns.empty());
-  ASSERT_TRUE(job.start.solved());
-  EXPECT_FALSE(job.motions.empty());
-  const SlaveCalibration refined = RefineWindow(job);
-  EXPECT_TRUE(refined.pairs.empty());  // the window refinement, not a batch result
-  RigEstimatorOptions bad = o;
+// A drive longer than the history: the history halves its density instead of dropping the
+// drive's start, so the final refinement is still the batch on sets spanning the whole drive
+// (its pair choice, its cluster-robust σ), and the other slave's poses at the same sets come
+// with it. It has a quarter of the poses here, so its σ is about twice the batch's on every
+// set (white pose noise: information grows with the number of poses), and its estimate must
+// be within 3σ of the truth.
+TEST(RigEstimatorHistory, LongerRecordingsThinTheHistory) {
+  for (const uint64_t seed : {1u, 2u, 3u}) {
+    const SyntheticDrive drive = NoisyDrive(1200, seed, 2);
+    const RigRecording& rec = drive.recording;
+    RigEstimatorOptions o;
+    o.history_sets = 500;  // fewer than the recording's sets: the history thins to every 4th
+    RigEstimator est(Names(rec), o);
+    Feed(&est, rec);
+    const RefinementJob job = est.MakeRefinementJob(0, /*final=*/true);
+    ASSERT_EQ(job.history.size(), 300u) << seed;  // sets 0, 4, ..., 1196
+    EXPECT_EQ(job.history.t_ns.front(), rec.t_ns.front());
+    EXPECT_EQ(job.history.t_ns[1], rec.t_ns[4]);
+    EXPECT_EQ(job.history.t_ns.back(), rec.t_ns[1196]);
+    ASSERT_EQ(job.history.slaves.size(), 2u);  // the other slave kept the same sets
+    const SlaveCalibration refined = RefineWindow(job);
+    ASSERT_TRUE(est.ApplyRefinement(job, refined)) << refined.message;
+    EXPECT_FALSE(refined.pairs.empty());  // the batch's result, not the window's
+    const SlaveCalibration& online = est.Estimate().rig.slaves[0];
+    ASSERT_TRUE(online.usable()) << online.message;
+    EXPECT_NE(refined.message.find("batch on the 300 sets since the start (every 4th set"),
+              std::string::npos)
+        << refined.message;
+    const double rot_err_deg = AngleBetween(online.estimate.q, drive.truth[0].q) * kDegPerRad;
+    EXPECT_LT(rot_err_deg, 3.0 * online.rot_std_deg) << seed;
+    EXPECT_LT((online.estimate.C - drive.truth[0].C).norm(), 3.0 * online.pos_std.norm()) << seed;
+  }
+  RigEstimatorOptions bad;
   bad.history_sets = -1;
   EXPECT_NE(bad.Check().message().find("history_sets"), std::string::npos);
 }

@@ -32,6 +32,7 @@ struct ExperimentArgs {
   std::string only;
   int repeats = 3;
   bool no_online = false;
+  int history_sets = -1;  // pairs: the online estimator's pose history; -1 = its default
   bool held_out = false;  // pairs: the held-out rigs (HeldOutPairScenarios) instead
 };
 
@@ -66,6 +67,7 @@ int RunPairs(const ExperimentArgs& args) {
   options.seed = args.seed;
   options.threads = args.threads;
   options.online = !args.no_online;
+  options.online_history_sets = args.history_sets;
   options.only = args.only;
   options.progress = StderrProgress("pairs", QuietRequested());
   const auto start = std::chrono::steady_clock::now();
@@ -168,6 +170,10 @@ void RegisterExperiment(CLI::App& app, int* exit_code) {
       ->default_val(3)
       ->check(CLI::Range(1, 1000));
   cmd->add_flag("--no-online", args->no_online, "pairs: skip the online estimator");
+  cmd->add_option("--history-sets", args->history_sets,
+                  "pairs: the online estimator's pose history (sets per slave; default 10000): "
+                  "fewer than a drive's sets make it thin its history as on a longer drive")
+      ->check(CLI::Range(0, 100000000));
   cmd->add_flag("--held-out", args->held_out,
                 "pairs: the held-out rigs (a four-camera layout, scales 0.1-4, 5-50 Hz, 40-600 s)\n"
                 "instead of the evaluation set");

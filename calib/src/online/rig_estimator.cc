@@ -153,7 +153,7 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
       continue;
     }
     // The history holds every finite set: the batch calibrator finds glitches itself.
-    slaves_[i]->RecordHistory(options_.history_sets, t_ns, master, slave);
+    slaves_[i]->RecordHistory(options_.history_sets, estimate_.sets - 1, t_ns, master, slave);
     if (glitched) {
       PublishCounts(static_cast<int>(i));
       continue;
@@ -329,6 +329,7 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
       if (camera.poses.size() == h.t_ns.size()) h.slaves.push_back(std::move(camera));
     }
     job.history_t_ns = newest;
+    job.history_stride = s.history_stride;
     job.history_options = HistoryCalibrationOptions(options_);
     if (const std::optional<Similarity> nominal = NominalOf(slave)) {
       job.history_options.nominal[names_[slave + 1]] = *nominal;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <limits>
 #include <optional>
@@ -51,9 +52,10 @@ struct RigEstimator::Slave {
   int64_t model_changed_ns = -1;  // stream time of the last change of the motion model
   SlaveCalibration linear;        // latest linear solution of the long statistics
   std::optional<SlaveCalibration> refined;
-  // The pose history (RigEstimatorOptions::history_sets): every set since the last restart
-  // while `history_complete`.
+  // The pose history (RigEstimatorOptions::history_sets): the sets since the last restart
+  // while `history_complete`, every `history_stride`-th of them (ThinHistory).
   struct HistorySet {
+    uint64_t index = 0;  // the estimator's count of sets before this one
     int64_t t_ns = 0;
     Pose master;
     Pose slave;
@@ -62,6 +64,7 @@ struct RigEstimator::Slave {
   };
   std::deque<HistorySet> history;
   bool history_complete = true;
+  uint64_t history_stride = 1;  // a power of two: the history keeps the sets whose index it divides
   int64_t last_history_refine_ns = std::numeric_limits<int64_t>::min();
   bool refined_from_history = false;  // `refined` is the batch calibrator's on the history
   // Restored from a state and no motion accepted since: the published estimate is the saved
@@ -73,18 +76,30 @@ struct RigEstimator::Slave {
   int acceptance_age = -1;  // updates since the test; -1 = not tested
   int64_t acceptance_generation = -1;
 
-  void RecordHistory(int capacity, int64_t t_ns, const CameraPose& master,
+  void RecordHistory(int capacity, uint64_t index, int64_t t_ns, const CameraPose& master,
                      const CameraPose& slave) {
-    if (capacity <= 0) return;
-    history.push_back({t_ns, master.pose, slave.pose, master.segment, slave.segment});
-    if (static_cast<int>(history.size()) > capacity) {
-      history.pop_front();
-      history_complete = false;
-    }
+    if (capacity <= 0 || index % history_stride != 0) return;
+    history.push_back({index, t_ns, master.pose, slave.pose, master.segment, slave.segment});
+    while (static_cast<int>(history.size()) > capacity) ThinHistory();
+  }
+
+  // A full history halves its density instead of dropping its oldest sets: it keeps the sets
+  // whose index is a multiple of twice the stride, so it still spans the whole drive since the
+  // restart (the batch refinement on it sees every part of the drive; with white pose noise a
+  // motion between sets further apart carries the same noise over more motion). Slaves that
+  // were offered the same sets keep the same times at the same stride, and a slave at a larger
+  // stride keeps a subset of the times of one at a smaller stride.
+  void ThinHistory() {
+    history_stride *= 2;
+    const uint64_t stride = history_stride;
+    history.erase(std::remove_if(history.begin(), history.end(),
+                                 [stride](const HistorySet& h) { return h.index % stride != 0; }),
+                  history.end());
   }
 
   void RestartHistory() {
     history.clear();
+    history_stride = 1;
     history_complete = true;
     last_history_refine_ns = std::numeric_limits<int64_t>::min();
     refined_from_history = false;

@@ -29,8 +29,13 @@ std::optional<SlaveCalibration> RefineHistory(const RefinementJob& job) {
   if (job.history.t_ns.empty() || !job.start.solved()) return std::nullopt;
   SlaveCalibration batch = internal::CalibrateRigSlave(job.history, job.history_options, 0);
   if (!batch.solved()) return std::nullopt;  // not solvable yet
-  batch.message = "batch on the " + std::to_string(job.history.size()) +
-                  " sets since the start: " + batch.message;
+  const std::string thinned = job.history_stride > 1
+                                  ? " (every " + std::to_string(job.history_stride) +
+                                        (job.history_stride == 2 ? "nd" : "th") +
+                                        " set of a longer drive)"
+                                  : "";
+  batch.message = "batch on the " + std::to_string(job.history.size()) + " sets since the start" +
+                  thinned + ": " + batch.message;
   return batch;
 }
 

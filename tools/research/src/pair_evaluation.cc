@@ -10,8 +10,8 @@
 #include <sstream>
 #include <thread>
 
-#include "rigcal/calib/error_model.h"
 #include "rigcal/base/format.h"
+#include "rigcal/calib/error_model.h"
 #include "rigcal/calib/rig_calibrator.h"
 #include "rigcal/pipeline/online_replay.h"
 
@@ -116,6 +116,9 @@ void RunDraw(const PairScenario& scenario, uint64_t seed, const PairEvaluationOp
     for (size_t i = 0; i < scenario.rig.size(); ++i) truth[scenario.names[i + 1]] = scenario.rig[i];
     pipeline::OnlineReplayOptions replay;
     replay.report_every_s = 0.0;
+    if (options.online_history_sets >= 0) {
+      replay.estimator.history_sets = options.online_history_sets;
+    }
     results.push_back(pipeline::ReplayOnline(rec, replay, &truth).estimate.rig);
   }
   const std::lock_guard<std::mutex> lock(*mutex);

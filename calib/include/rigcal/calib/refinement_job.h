@@ -33,7 +33,7 @@ struct RefinementJob {
   RefinementPrior prior;
   // Huber loss (at 3 sigma) on the window's residuals; the prior has none.
   bool robust_loss = true;
-  // Every set since the last restart (master and this slave, slaves[0], then every other slave
+  // The sets since the last restart (master and this slave, slaves[0], then every other slave
   // whose history holds those sets), when the pose history holds them and a history refinement
   // is due: RefineWindow then runs the batch calibrator on it with `history_options` instead of
   // refining the window, and solves this slave (the others' poses tell glitches apart, as in
@@ -42,6 +42,9 @@ struct RefinementJob {
   CalibrationOptions history_options;
   // Stream time of the newest set in `history` (when the refinement was made).
   int64_t history_t_ns = 0;
+  // `history` holds every history_stride-th set of the drive (a history thinned on a drive
+  // longer than it holds; RigEstimatorOptions::history_sets).
+  uint64_t history_stride = 1;
 };
 
 // Runs the non-linear refinement (thesis 4.26/4.27 with Ceres) of a job. Pure function:

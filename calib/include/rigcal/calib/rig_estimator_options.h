@@ -97,13 +97,14 @@ struct RigEstimatorOptions {
   // Motions kept per slave for the background non-linear refinement window.
   int window_size = 400;
 
-  // Pose history for the background refinement: the poses of the last history_sets sets are
-  // kept per slave (about 130 bytes each). While they hold every set since the last restart
-  // (start, master re-initialisation, decalibration), the background refinement is the batch
+  // Pose history for the background refinement: at most history_sets sets are kept per slave
+  // (about 140 bytes each), spanning the drive since the last restart (start, master
+  // re-initialisation, decalibration): every set until the history is full, then every 2nd,
+  // 4th, ... set (a full history halves its density). The background refinement is the batch
   // calibrator's on them (CalibrateRig: its pair choice, time-block σ), at most every
   // history_refine_period_s of stream time, so the online estimate ends where the batch one
-  // does. Once the history has dropped sets (a longer recording), the refinement is the window
-  // refinement of the statistics. 0 = off.
+  // does. After a resume (no poses before it) the refinement is the window refinement of the
+  // statistics. 0 = off.
   int history_sets = 10000;
   double history_refine_period_s = 30.0;
   int history_min_sets = 50;  // fewer sets: the window refinement

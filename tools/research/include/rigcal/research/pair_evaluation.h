@@ -71,6 +71,7 @@ struct PairEvaluationOptions {
   int threads = 2;  // 0 = all cores; results do not depend on it
   std::vector<int> spans = {1, 2, 5, 10, 20, 50, 100, 200, 400};  // fixed spans compared
   bool online = true;              // also replay through the online estimator
+  int online_history_sets = -1;    // its pose history (RigEstimatorOptions); -1 = the default
   bool gls = true;                 // also the gls pair policy
   std::string only;                // run the scenarios whose name contains this
   CalibrationOptions calibration;  // everything but the pairs
