@@ -11,10 +11,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rigcal/base/robust_statistics.h"
 #include "../../tools/io/src/config_sections.h"
-#include "rigcal/io/rig_config.h"
 #include "../../tools/io/src/yaml_fields.h"
+#include "rigcal/base/robust_statistics.h"
+#include "rigcal/io/rig_config.h"
 
 namespace rigcal::io {
 namespace {
@@ -70,6 +70,7 @@ TEST(SimulatedSourceYaml, ParsesEveryKey) {
                         "  fail_after_s: {cam1: 2.5}\n"
                         "  render_block: 2\n"
                         "  vignetting: 0.3\n"
+                        "  rolling_shutter_ms: 12.5\n"
                         "  exposure_steps: {interval_s: 2, max_factor: 1.5}\n"
                         "  scene: {type: yard, size: [40, 30, 7], boxes: 3, texel_m: 0.015}\n") +
             kWaypoints);
@@ -88,6 +89,7 @@ TEST(SimulatedSourceYaml, ParsesEveryKey) {
   EXPECT_DOUBLE_EQ(spec->fail_after_s.at("cam1"), 2.5);
   EXPECT_EQ(spec->render_block, 2);
   EXPECT_DOUBLE_EQ(spec->vignetting, 0.3);
+  EXPECT_DOUBLE_EQ(spec->rolling_shutter_s, 0.0125);
   EXPECT_DOUBLE_EQ(spec->exposure_steps.interval_s, 2.0);
   EXPECT_DOUBLE_EQ(spec->exposure_steps.max_factor, 1.5);
   EXPECT_EQ(spec->scene.type, SimulatedRigSpec::SceneType::kYard);
@@ -183,6 +185,15 @@ TEST(SimulatedSourceYaml, ErrorsNameLineAndKey) {
       {"source:\n  fail_after_s: [cam1]\n" + w, ":2: source.fail_after_s: expected a map"},
       {"source:\n  render_block: 0\n" + w, ":2: source.render_block: must be in [1, 32]"},
       {"source:\n  vignetting: 1\n" + w, ":2: source.vignetting: must be in [0, 1)"},
+      {"source:\n  rolling_shutter_ms: -1\n" + w,
+       ":2: source.rolling_shutter_ms: must be in [0, 50) ms"},
+      {"source:\n  rolling_shutter_ms: 50\n" + w,
+       ":2: source.rolling_shutter_ms: must be in [0, 50) ms"},
+      {"source:\n  frame_rate_hz: 40\n  rolling_shutter_ms: 30\n" + w,
+       ":3: source.rolling_shutter_ms: must be in [0, 25) ms"},
+      {"source:\n  rolling_shutter_ms: slow\n" + w,
+       ":2: source.rolling_shutter_ms: 'slow' is not a number"},
+      {"source:\n  rolling_shutter_ms: [10]\n" + w, ":2: source.rolling_shutter_ms: "},
       {"source:\n  exposure_steps: {interval_s: 2}\n" + w,
        ":2: source.exposure_steps.max_factor: missing"},
       {"source:\n  exposure_steps: {interval_s: 0, max_factor: 2}\n" + w,

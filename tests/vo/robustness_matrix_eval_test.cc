@@ -3,7 +3,8 @@
 // (config/sim_thesis_virtual.yaml, two 60-degree pinhole cameras, 468 frames at 20 Hz) rendered
 // with one imaging effect at a time, at two strengths: motion blur over a fraction of the frame
 // period, vignetting, auto-exposure steps with gain noise, image noise, barrel lens distortion
-// (rendered through and undone by the camera model), coarser texture and dropped frames. Per
+// (rendered through and undone by the camera model), coarser texture, dropped frames and a
+// rolling shutter of 15 and 30 ms readout (which the VO does not compensate). Per
 // cell and camera: when the VO gives its first pose (stream seconds), the fraction of frames
 // with a pose, scale segments, relocalisations and the RMS frame-to-frame rotation error; then
 // the calibration of the two VO trajectories (RigEstimator over the synchronised sets, the
@@ -11,7 +12,9 @@
 // and the direction error of C (scale-free).
 // Checked: without an effect both cameras track >= 90 % of the frames in one segment and the
 // calibration is usable; in every cell, a usable calibration's rotation error is within 3 of its
-// σ (an effect may cost accuracy, but the σ must say so) or the calibration is not usable.
+// σ (an effect may cost accuracy, but the σ must say so) or the calibration is not usable; except
+// in the rolling-shutter cells, whose error is a model error the σ cannot know of (measured
+// there: up to 7σ, docs/evaluations.md).
 // Run: ctest --test-dir build -L eval -R vo/robustness_matrix -V (~3.5 min).
 
 #include <gtest/gtest.h>
@@ -42,6 +45,9 @@ struct Cell {
   std::string strength;
   std::function<void(sim::SimulatedRigSpec*)> apply;
   double drop_probability = 0.0;  // each camera's frames not fed to its VO
+  // A model error the VO does not know of (a rolling shutter it takes for a global one): the
+  // σ cannot cover it, so the 3σ check does not apply; the cell measures what it costs.
+  bool unmodelled = false;
 };
 
 std::vector<Cell> Cells() {
@@ -82,6 +88,11 @@ std::vector<Cell> Cells() {
       }
     };
   };
+  // Rolling shutter: rows read out over `readout_ms` top to bottom (the stamp is the top
+  // row's); the VO takes the frames for global-shutter ones.
+  auto rolling = [](double readout_ms) {
+    return [readout_ms](sim::SimulatedRigSpec* s) { s->rolling_shutter_s = readout_ms * 1e-3; };
+  };
   return {{"none", "-", none},
           {"motion blur", "40% of period", blur(0.4)},
           {"motion blur", "80% of period", blur(0.8)},
@@ -96,7 +107,9 @@ std::vector<Cell> Cells() {
           {"low texture", "texel 4 cm", texel(0.04)},
           {"low texture", "texel 8 cm", texel(0.08)},
           {"dropped frames", "10%", none, 0.1},
-          {"dropped frames", "30%", none, 0.3}};
+          {"dropped frames", "30%", none, 0.3},
+          {"rolling shutter", "15 ms", rolling(15.0), 0.0, true},
+          {"rolling shutter", "30 ms", rolling(30.0), 0.0, true}};
 }
 
 struct CameraFigures {
@@ -229,7 +242,7 @@ TEST(VoRobustnessMatrix, EffectsCostAccuracyHonestly) {
       }
       EXPECT_TRUE(r.slave.usable()) << r.slave.message;
     }
-    if (r.slave.usable()) {
+    if (r.slave.usable() && !cell.unmodelled) {
       EXPECT_LE(z, 3.0) << cell.effect << " " << cell.strength << ": " << r.slave.message;
     }
   }

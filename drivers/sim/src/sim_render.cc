@@ -59,14 +59,34 @@ Transform WorldFromCameraTransform(const Pose& world_from_camera) {
   return xf;
 }
 
+// world_from_camera per pixel row: one transform for every row (global shutter), or one per
+// row of [0, num_rows) (rolling shutter).
+class RowTransforms {
+ public:
+  explicit RowTransforms(const Pose& world_from_camera)
+      : rows_{WorldFromCameraTransform(world_from_camera)} {}
+  RowTransforms(const RowPose& world_from_camera_at_row, int num_rows) {
+    rows_.reserve(static_cast<size_t>(num_rows));
+    for (int y = 0; y < num_rows; ++y) {
+      rows_.push_back(WorldFromCameraTransform(world_from_camera_at_row(y)));
+    }
+  }
+  const Transform& operator[](int row) const {
+    return rows_.size() == 1 ? rows_[0] : rows_[static_cast<size_t>(row)];
+  }
+
+ private:
+  std::vector<Transform> rows_;
+};
+
 // Casts single pixels of one camera's view: the pixel's bearing (CameraTables) turned into the
 // world, its local pixel angle, and the intensity of what it hits.
 class PixelCaster {
  public:
-  PixelCaster(const Scene& scene, const CameraTables& camera, const Transform& world_from_camera)
+  PixelCaster(const Scene& scene, const CameraTables& camera,
+              const RowTransforms& world_from_camera)
       : scene_(scene), camera_(camera), xf_(world_from_camera) {}
 
-  const Transform& world_from_camera() const { return xf_; }
   int width() const { return camera_.width; }
   int height() const { return camera_.height; }
 
@@ -87,10 +107,11 @@ class PixelCaster {
       pixel_angle = std::max(pixel_angle, std::sqrt(dx * dx + dy * dy + dz * dz));
     }
     if (pixel_angle <= 0.f) pixel_angle = 1e-3f;
+    const Transform& xf = xf_[y];
     float d[3];
-    xf_.Apply(b, d);
-    return Shade(boxes != nullptr ? scene_.CastAmong(xf_.o, d, pixel_angle, boxes, num_boxes)
-                                  : scene_.Cast(xf_.o, d, pixel_angle));
+    xf.Apply(b, d);
+    return Shade(boxes != nullptr ? scene_.CastAmong(xf.o, d, pixel_angle, boxes, num_boxes)
+                                  : scene_.Cast(xf.o, d, pixel_angle));
   }
 
   // Adds weight * intensity of every pixel of columns [x0, x1) and rows [y0, y1) to acc (rows
@@ -112,12 +133,12 @@ class PixelCaster {
 
   const Scene& scene_;
   const CameraTables& camera_;
-  Transform xf_;
+  const RowTransforms& xf_;
 };
 
 // Casts the ray of every node of `grid` into `hits` (node order; kInvalid where a node has no
-// bearing).
-void CastNodes(const Scene& scene, const NodeGrid& grid, const Transform& xf,
+// bearing); node row j from the transform of pixel row j * block.
+void CastNodes(const Scene& scene, const NodeGrid& grid, const RowTransforms& xf,
                std::vector<Hit>* hits) {
   hits->resize(static_cast<size_t>(grid.nodes_x) * grid.nodes_y);
   for (size_t k = 0; k < hits->size(); ++k) {
@@ -126,9 +147,10 @@ void CastNodes(const Scene& scene, const NodeGrid& grid, const Transform& xf,
       (*hits)[k].surface = kInvalid;
       continue;
     }
+    const Transform& row_xf = xf[static_cast<int>(k / grid.nodes_x) * grid.block];
     float d[3];
-    xf.Apply(b, d);
-    (*hits)[k] = scene.Cast(xf.o, d, grid.pixel_angle[k]);
+    row_xf.Apply(b, d);
+    (*hits)[k] = scene.Cast(row_xf.o, d, grid.pixel_angle[k]);
   }
 }
 
@@ -193,6 +215,7 @@ void RenderBlock(const Scene& scene, const PixelCaster& caster, const NodeGrid& 
   FillBlock(scene, h00, h10, h01, h11, block, x1 - x0, y1 - y0, weight,
             acc + static_cast<size_t>(y0) * caster.width() + x0, caster.width(), kernel);
 }
+
 }  // namespace
 
 CameraTables MakeCameraTables(std::shared_ptr<const camera::CameraModel> model) {
@@ -254,20 +277,39 @@ NodeGrid MakeNodeGrid(const CameraTables& camera, int block) {
   return grid;
 }
 
-void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
-                      const Pose& world_from_camera, float weight, float* acc,
-                      std::vector<Hit>* hits, RenderKernel kernel) {
-  const PixelCaster caster(scene, camera, WorldFromCameraTransform(world_from_camera));
+namespace {
+// Renders the view of `camera` from the row transforms `xf` (RenderAccumulate).
+void RenderWith(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
+                const RowTransforms& xf, float weight, float* acc, std::vector<Hit>* hits,
+                RenderKernel kernel) {
+  const PixelCaster caster(scene, camera, xf);
   if (grid == nullptr || grid->block < 2) {
     caster.AddRays(0, camera.width, 0, camera.height, nullptr, 0, weight, acc);
     return;
   }
-  CastNodes(scene, *grid, caster.world_from_camera(), hits);
+  CastNodes(scene, *grid, xf, hits);
   for (int bj = 0; bj + 1 < grid->nodes_y; ++bj) {
     for (int bi = 0; bi + 1 < grid->nodes_x; ++bi) {
       RenderBlock(scene, caster, *grid, *hits, bi, bj, weight, acc, kernel);
     }
   }
+}
+}  // namespace
+
+void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
+                      const Pose& world_from_camera, float weight, float* acc,
+                      std::vector<Hit>* hits, RenderKernel kernel) {
+  RenderWith(scene, camera, grid, RowTransforms(world_from_camera), weight, acc, hits, kernel);
+}
+
+void RenderAccumulateRows(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
+                          const RowPose& world_from_camera_at_row, float weight, float* acc,
+                          std::vector<Hit>* hits, RenderKernel kernel) {
+  const bool nodes = grid != nullptr && grid->block >= 2;
+  const int num_rows =
+      nodes ? std::max(camera.height, (grid->nodes_y - 1) * grid->block + 1) : camera.height;
+  RenderWith(scene, camera, grid, RowTransforms(world_from_camera_at_row, num_rows), weight, acc,
+             hits, kernel);
 }
 
 }  // namespace rigcal::sim::internal

@@ -4,6 +4,7 @@
 // rendering of one view of the scene (ray casting at the nodes, texture blocks between them).
 // Private to rigcal_sim.
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -40,5 +41,17 @@ NodeGrid MakeNodeGrid(const CameraTables& camera, int block);
 void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
                       const Pose& world_from_camera, float weight, float* acc,
                       std::vector<Hit>* hits, RenderKernel kernel);
+
+// world_from_camera while the camera exposes image row `row` (0 = top). Rows up to the node
+// grid's last row are asked for, which may lie one block beyond the image's last row.
+using RowPose = std::function<Pose(int row)>;
+
+// As above for a rolling shutter: every pixel row is cast from its own row's pose, and each
+// node row of the grid from the pose of the pixel row it sits on, so that texture coordinates
+// inside a block are interpolated between the poses of its top and bottom rows (no seams
+// between bands). The row poses are evaluated once per row, not per pixel.
+void RenderAccumulateRows(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
+                          const RowPose& world_from_camera_at_row, float weight, float* acc,
+                          std::vector<Hit>* hits, RenderKernel kernel);
 
 }  // namespace rigcal::sim::internal

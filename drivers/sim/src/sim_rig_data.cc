@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// Frame production of the simulated rig: motion blur, image noise, quantisation, drops and
-// stamp jitter, all deterministic per (seed, camera, frame).
+// Frame production of the simulated rig: motion blur, rolling shutter, image noise, quantisation,
+// drops and stamp jitter, all deterministic per (seed, camera, frame).
 #include "sim_rig_data.h"
 
 #include <algorithm>
@@ -36,10 +36,30 @@ int64_t SimulatedRigData::JitterNs(int camera, int64_t k) const {
   return std::llround(z * spec.timestamp_jitter_s * 1e9);
 }
 
+double SimulatedRigData::RowDelay(int camera, int row) const {
+  if (spec.rolling_shutter_s <= 0.0) return 0.0;
+  const int last_row = std::max(1, cameras[camera].height - 1);
+  return spec.rolling_shutter_s * static_cast<double>(row) / last_row;
+}
+
+void SimulatedRigData::RenderAt(int camera, double t_s, float weight, std::vector<float>* acc,
+                                std::vector<Hit>* hits, RenderKernel kernel) const {
+  const CameraTables& tables = cameras[camera];
+  const NodeGrid* grid = spec.render_block >= 2 ? &grids[camera] : nullptr;
+  if (spec.rolling_shutter_s > 0.0) {
+    const RowPose at_row = [&](int row) {
+      return WorldFromCamera(camera, t_s + RowDelay(camera, row));
+    };
+    RenderAccumulateRows(scene, tables, grid, at_row, weight, acc->data(), hits, kernel);
+  } else {
+    RenderAccumulate(scene, tables, grid, WorldFromCamera(camera, t_s), weight, acc->data(), hits,
+                     kernel);
+  }
+}
+
 cv::Mat SimulatedRigData::Render(int camera, int64_t k, std::vector<float>* acc,
                                  std::vector<Hit>* hits, RenderKernel kernel) const {
   const CameraTables& tables = cameras[camera];
-  const NodeGrid* grid = spec.render_block >= 2 ? &grids[camera] : nullptr;
   acc->assign(static_cast<size_t>(tables.width) * tables.height, 0.f);
   const double t = StreamTime(k);
   const bool burst = BlurBurst(camera, k);
@@ -48,13 +68,10 @@ cv::Mat SimulatedRigData::Render(int camera, int64_t k, std::vector<float>* acc,
     const int samples = burst ? std::max(spec.blur_samples, 8) : spec.blur_samples;
     const float weight = 1.f / static_cast<float>(samples);
     for (int s = 0; s < samples; ++s) {
-      const double ts = t + exposure_s * ((s + 0.5) / samples - 0.5);
-      RenderAccumulate(scene, tables, grid, WorldFromCamera(camera, ts), weight, acc->data(), hits,
-                       kernel);
+      RenderAt(camera, t + exposure_s * ((s + 0.5) / samples - 0.5), weight, acc, hits, kernel);
     }
   } else {
-    RenderAccumulate(scene, tables, grid, WorldFromCamera(camera, t), 1.f, acc->data(), hits,
-                     kernel);
+    RenderAt(camera, t, 1.f, acc, hits, kernel);
   }
   return Quantise(camera, k, *acc, tables.width, tables.height);
 }

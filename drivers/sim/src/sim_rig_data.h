@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The immutable data of a simulated rig, shared by the rig and its devices (scene, trajectory,
-// render tables, noise table), and the production of its frames: rendering with motion blur,
-// image noise, quantisation, drops and stamp jitter. Private to rigcal_sim.
+// render tables, noise table), and the production of its frames: rendering with motion blur and
+// rolling shutter, image noise, quantisation, drops and stamp jitter. Private to rigcal_sim.
 
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -40,6 +40,10 @@ struct SimulatedRigData {
   Pose WorldFromCamera(int camera, double t_s) const {
     return trajectory.At(t_s) * spec.master_from_camera[camera];
   }
+  // Time from a frame's stamp to the exposure of image row `row` of `camera`, seconds:
+  // row / (height - 1) of spec.rolling_shutter_s (0 with a global shutter). Rows beyond the
+  // last one (the node grid's closing row) continue the line.
+  double RowDelay(int camera, int row) const;
   // Whether frame k of `camera` is dropped (spec.drop_probability).
   bool Dropped(int camera, int64_t k) const;
   // Whether frame k of `camera` is black (spec.blackout_s).
@@ -50,12 +54,16 @@ struct SimulatedRigData {
   double Gain(int camera, int64_t k) const;
   // Stamp noise of frame k of `camera`, nanoseconds (spec.timestamp_jitter_s, clipped at 3 sigma).
   int64_t JitterNs(int camera, int64_t k) const;
-  // Frame k of `camera`: renders (with motion blur), adds noise, quantises. `acc`, `hits`:
-  // scratch buffers.
+  // Frame k of `camera`: renders (with motion blur and rolling shutter), adds noise, quantises.
+  // `acc`, `hits`: scratch buffers.
   cv::Mat Render(int camera, int64_t k, std::vector<float>* acc, std::vector<Hit>* hits,
                  RenderKernel kernel) const;
 
  private:
+  // Adds weight x the view of `camera` whose top row is exposed at stream time t_s (the later
+  // rows at t_s + RowDelay) to `acc`.
+  void RenderAt(int camera, double t_s, float weight, std::vector<float>* acc,
+                std::vector<Hit>* hits, RenderKernel kernel) const;
   // Applies frame k's light (vignetting, exposure gain) and noise (scaled by the gain) to `acc`
   // (width x height), rounds and saturates to 8 bit.
   cv::Mat Quantise(int camera, int64_t k, const std::vector<float>& acc, int width,

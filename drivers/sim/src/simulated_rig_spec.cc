@@ -172,7 +172,7 @@ Status CheckScene(const SimulatedRigSpec& spec) {
   return Status::Ok();
 }
 
-// Image noise and motion blur.
+// Image noise, motion blur, rolling shutter and light.
 Status CheckImaging(const SimulatedRigSpec& spec) {
   std::ostringstream e;
   const double period = 1.0 / spec.frame_rate_hz;
@@ -187,6 +187,11 @@ Status CheckImaging(const SimulatedRigSpec& spec) {
   }
   if (spec.blur_exposure_s > 0 && (spec.blur_samples < 2 || spec.blur_samples > 32)) {
     e << "motion_blur.samples: " << spec.blur_samples << " outside [2, 32]";
+    return Error{e.str()};
+  }
+  if (!(spec.rolling_shutter_s >= 0 && spec.rolling_shutter_s < period)) {
+    e << "rolling_shutter_ms: " << spec.rolling_shutter_s * 1e3
+      << " must be >= 0 and shorter than the frame period (" << period * 1e3 << " ms)";
     return Error{e.str()};
   }
   if (!(spec.vignetting >= 0 && spec.vignetting < 1)) {

@@ -26,7 +26,7 @@ const std::set<std::string> kSourceKeys = {
     "seed",         "realtime",      "trajectory",       "scene",
     "noise_sigma",  "motion_blur",   "drop_probability", "timestamp_jitter_ms",
     "fail_after_s", "blackout_s",    "render_block",     "trigger",
-    "blur_burst_s", "vignetting",    "exposure_steps"};
+    "blur_burst_s", "vignetting",    "exposure_steps",   "rolling_shutter_ms"};
 
 // A number as people write it: "20", "9.95", "8.33333".
 std::string PlainNumber(double v) { return SignificantText(v, 6); }
@@ -260,7 +260,7 @@ std::optional<Error> ReadTiming(const FieldReader& r, const YAML::Node& source,
   return std::nullopt;
 }
 
-// noise_sigma, motion_blur, drop_probability, timestamp_jitter_ms.
+// noise_sigma, motion_blur, rolling_shutter_ms, drop_probability, timestamp_jitter_ms.
 std::optional<Error> ReadImageEffects(const FieldReader& r, const YAML::Node& source,
                                       SimulatedRigSpec* spec) {
   const double period_s = 1.0 / spec->frame_rate_hz;
@@ -297,6 +297,13 @@ std::optional<Error> ReadImageEffects(const FieldReader& r, const YAML::Node& so
         spec->blur_samples = *samples;
       }
     }
+  }
+  if (const YAML::Node n = source["rolling_shutter_ms"]) {
+    auto v = NumberIn(
+        r, n, "source.rolling_shutter_ms", [&](double x) { return x >= 0 && x * 1e-3 < period_s; },
+        "in [0, " + PlainNumber(period_s * 1e3) + ") ms (row readout shorter than a frame period)");
+    if (!v) return Error{v.error()};
+    spec->rolling_shutter_s = *v * 1e-3;
   }
   if (const YAML::Node n = source["drop_probability"]) {
     auto v = NumberIn(

@@ -59,6 +59,14 @@
 //     motion_blur:                # absent or `false`: off
 //       exposure_ms: 8            # (0, frame period); images average `samples` renders
 //       samples: 4                # spread over the exposure, [2, 32] (cost: samples x)
+//     rolling_shutter_ms: 0       # row readout time of the whole frame (top row to bottom
+//                                 # row), [0, frame period); 0: global shutter. Row r of an
+//                                 # H-row image is exposed (r / (H - 1)) x readout after the
+//                                 # frame's stamp: the stamp is the top row's exposure time (as
+//                                 # a trigger pulse or a V4L2 start-of-frame stamp). Combines
+//                                 # with motion_blur (each row's exposure is blurred around its
+//                                 # own time). A VO compensates it with the camera's
+//                                 # `rolling_shutter_ms` (docs/config.md)
 //     drop_probability: 0.0       # each frame of each camera is dropped with this probability
 //     timestamp_jitter_ms: 0.0    # sigma of Gaussian stamp noise (clipped at 3 sigma; 3 sigma
 //                                 # must stay below half a frame period)
@@ -143,9 +151,13 @@ struct SimulatedRigSpec {
   } scene;
 
   // --- Imaging and device behaviour -----------------------------------------------------------
-  double noise_sigma = 2.0;                    // grey levels, [0, 100]
-  double blur_exposure_s = 0.0;                // 0: no motion blur; else (0, frame period)
-  int blur_samples = 4;                        // [2, 32] when blurring
+  double noise_sigma = 2.0;      // grey levels, [0, 100]
+  double blur_exposure_s = 0.0;  // 0: no motion blur; else (0, frame period)
+  int blur_samples = 4;          // [2, 32] when blurring
+  // Rolling shutter: time from the exposure of the top row to the bottom row's; row r is
+  // exposed r / (height - 1) of it after the frame's stamp. 0: global shutter; else
+  // [0, frame period).
+  double rolling_shutter_s = 0.0;
   double drop_probability = 0.0;               // [0, 1)
   double timestamp_jitter_s = 0.0;             // sigma; 3 sigma < half a frame period
   std::map<std::string, double> fail_after_s;  // camera name -> stream time of failure, >= 0
