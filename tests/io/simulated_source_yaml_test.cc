@@ -10,6 +10,10 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
 
 #include "../../tools/io/src/config_sections.h"
 #include "../../tools/io/src/yaml_fields.h"
@@ -155,6 +159,47 @@ struct BadCase {
   std::string text;
   std::string expected;  // substring of the error, with the line number
 };
+
+TEST(SimulatedSourceYaml, TexturePhotographsRelativeToTheConfig) {
+  cv::Mat colour(30, 50, CV_8UC3, cv::Scalar(30, 60, 90));
+  ASSERT_TRUE(cv::imwrite((TempDir() / "wall.png").string(), colour));
+  cv::Mat deep(20, 20, CV_16U, cv::Scalar(40000));
+  ASSERT_TRUE(cv::imwrite((TempDir() / "box.png").string(), deep));
+  auto spec =
+      Parse("source:\n  scene:\n    textures: [wall.png, box.png]\n" + std::string(kWaypoints));
+  ASSERT_TRUE(spec) << spec.error();
+  ASSERT_EQ(spec->scene.textures.size(), 2u);
+  const SimulatedRigSpec::GreyImage& wall = spec->scene.textures[0];
+  EXPECT_EQ(wall.width, 50);
+  EXPECT_EQ(wall.height, 30);
+  ASSERT_EQ(wall.pixels.size(), 1500u);
+  EXPECT_NEAR(wall.pixels[0], 0.114 * 30 + 0.587 * 60 + 0.299 * 90, 1.0);  // BGR to grey
+  EXPECT_NE(wall.name.find("wall.png"), std::string::npos);
+  EXPECT_NEAR(spec->scene.textures[1].pixels[0], 40000.0 / 257.0, 1.0);  // 16 bit to 8 bit
+
+  ASSERT_TRUE(cv::imwrite((TempDir() / "tiny.png").string(), cv::Mat(8, 8, CV_8U, 7)));
+  Write("not_an_image.png", "text\n");
+  const std::string w = kWaypoints;
+  const std::vector<BadCase> cases = {
+      {"source:\n  scene:\n    textures: [missing.png]\n" + w, ":3: source.scene.textures[0]: "},
+      {"source:\n  scene:\n    textures:\n      - wall.png\n      - not_an_image.png\n" + w,
+       ":5: source.scene.textures[1]: "},
+      {"source:\n  scene:\n    textures: [tiny.png]\n" + w, ":3: source.scene.textures[0]: "},
+      {"source:\n  scene:\n    textures: []\n" + w,
+       ":3: source.scene.textures: must be a non-empty list"},
+      {"source:\n  scene:\n    textures: wall.png\n" + w,
+       ":3: source.scene.textures: must be a non-empty list"},
+  };
+  for (const BadCase& c : cases) {
+    auto bad = Parse(c.text);
+    ASSERT_FALSE(bad) << c.text;
+    EXPECT_NE(bad.error().find(c.expected), std::string::npos) << bad.error();
+  }
+  EXPECT_NE(Parse(cases[0].text).error().find("missing.png: no such file"), std::string::npos);
+  EXPECT_NE(Parse(cases[1].text).error().find("not_an_image.png: not a readable image"),
+            std::string::npos);
+  EXPECT_NE(Parse(cases[2].text).error().find("needs at least 16 px"), std::string::npos);
+}
 
 TEST(SimulatedSourceYaml, ErrorsNameLineAndKey) {
   const std::string w = kWaypoints;  // lines 2..7 after "source:"

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -472,6 +473,56 @@ TEST(SimulatedRig, VignettingDarkensTheCornersByItsStrength) {
   }
   spec.vignetting = 1.0;
   EXPECT_NE(spec.Check().message().find("vignetting"), std::string::npos);
+}
+
+// source.scene.textures: the surfaces take their tiles from the photographs in turn. Constant
+// photographs make the proof exact: every level of a constant tile's mip pyramid, every
+// bilinear sample of it and so every rendered pixel (no noise, no light effects) is that
+// constant, while the procedural dead leaves show dozens of grey levels.
+SimulatedRigSpec::GreyImage ConstantPhoto(uint8_t grey, int width = 40, int height = 24) {
+  SimulatedRigSpec::GreyImage photo;
+  photo.name = "grey " + std::to_string(grey);
+  photo.width = width;
+  photo.height = height;
+  photo.pixels.assign(static_cast<size_t>(width) * height, grey);
+  return photo;
+}
+
+int DistinctGreyLevels(const cv::Mat& image) {
+  std::vector<bool> seen(256, false);
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) seen[image.at<uint8_t>(y, x)] = true;
+  }
+  return static_cast<int>(std::count(seen.begin(), seen.end(), true));
+}
+
+TEST(SimulatedRig, PhotoTexturesReplaceTheProceduralOnes) {
+  EXPECT_GT(DistinctGreyLevels(Make(TwoCameraSpec()).RenderFrame(0, 3)), 50);
+
+  SimulatedRigSpec one = TwoCameraSpec();
+  one.scene.textures = {ConstantPhoto(90)};
+  const cv::Mat flat = Make(one).RenderFrame(0, 3);
+  EXPECT_EQ(cv::countNonZero(flat != 90), 0) << "every surface shows the one photograph";
+
+  SimulatedRigSpec two = TwoCameraSpec();
+  two.scene.textures = {ConstantPhoto(60), ConstantPhoto(180, 17, 33)};
+  const SimulatedRig rig = Make(two);
+  int dark = 0, bright = 0, total = 0;
+  for (int k = 0; k < 40; k += 13) {
+    const cv::Mat image = rig.RenderFrame(0, k);
+    dark += cv::countNonZero(image == 60);
+    bright += cv::countNonZero(image == 180);
+    total += static_cast<int>(image.total());
+  }
+  EXPECT_EQ(dark + bright, total) << "each surface shows one of the two photographs";
+  EXPECT_GT(dark, 0);
+  EXPECT_GT(bright, 0);
+
+  SimulatedRigSpec tiny = TwoCameraSpec();
+  tiny.scene.textures = {ConstantPhoto(90, 8, 8)};
+  const auto refused = MakeSimulatedRig(tiny);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().find("scene.textures[0]"), std::string::npos) << refused.error();
 }
 
 // A camera turning about its vertical axis at a constant rate: a sampled trajectory between two

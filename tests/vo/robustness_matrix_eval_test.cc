@@ -3,7 +3,8 @@
 // (config/sim_thesis_virtual.yaml, two 60-degree pinhole cameras, 468 frames at 20 Hz) rendered
 // with one imaging effect at a time, at two strengths: motion blur over a fraction of the frame
 // period, vignetting, auto-exposure steps with gain noise, image noise, barrel lens distortion
-// (rendered through and undone by the camera model), coarser texture, dropped frames and a
+// (rendered through and undone by the camera model), coarser texture, dropped frames, real
+// photographs of ../shared/data/real_mono as the textures (skipped without them) and a
 // rolling shutter of 15 and 30 ms readout (which the VO does not compensate). Per
 // cell and camera: when the VO gives its first pose (stream seconds), the fraction of frames
 // with a pose, scale segments, relocalisations and the RMS frame-to-frame rotation error; then
@@ -24,6 +25,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <random>
 #include <string>
@@ -36,6 +38,7 @@
 #include "rigcal/io/rig_config.h"
 #include "rigcal/sim/simulated_rig.h"
 #include "rigcal/vo/monocular_vo.h"
+#include "support/skip.h"
 
 namespace rigcal::vo {
 namespace {
@@ -49,6 +52,25 @@ struct Cell {
   // σ cannot cover it, so the 3σ check does not apply; the cell measures what it costs.
   bool unmodelled = false;
 };
+
+// A real photograph of ../shared/data/real_mono as a grey texture (empty pixels when missing:
+// the rig's spec check then names it).
+sim::SimulatedRigSpec::GreyImage RealPhoto(const std::string& relative) {
+  const std::string file = std::string(RIGCAL_SHARED_DATA_DIR) + "/real_mono/" + relative;
+  const cv::Mat grey = cv::imread(file, cv::IMREAD_GRAYSCALE);
+  sim::SimulatedRigSpec::GreyImage photo;
+  photo.name = file;
+  if (grey.empty() || !grey.isContinuous()) return photo;
+  photo.width = grey.cols;
+  photo.height = grey.rows;
+  photo.pixels.assign(grey.datastart, grey.dataend);
+  return photo;
+}
+
+const std::vector<std::string> kPhotoFiles = {"visp_rbt_sequence/images/color_image_0000.png",
+                                              "visp_rbt_sequence/images/color_image_0050.png",
+                                              "visp_mbt_cube/images/image0000.png",
+                                              "visp_mbt_cube/images/image0150.png"};
 
 std::vector<Cell> Cells() {
   auto blur = [](double fraction) {
@@ -88,6 +110,14 @@ std::vector<Cell> Cells() {
       }
     };
   };
+  // Real photographs as the walls' and boxes' textures (real texture statistics: smooth shading,
+  // large plain areas, repeated structure), at the room's 1 cm per texel and at 2 cm.
+  auto photos = [](double texel_m) {
+    return [texel_m](sim::SimulatedRigSpec* s) {
+      for (const std::string& file : kPhotoFiles) s->scene.textures.push_back(RealPhoto(file));
+      s->scene.texel_m = texel_m;
+    };
+  };
   // Rolling shutter: rows read out over `readout_ms` top to bottom (the stamp is the top
   // row's); the VO takes the frames for global-shutter ones.
   auto rolling = [](double readout_ms) {
@@ -108,6 +138,8 @@ std::vector<Cell> Cells() {
           {"low texture", "texel 8 cm", texel(0.08)},
           {"dropped frames", "10%", none, 0.1},
           {"dropped frames", "30%", none, 0.3},
+          {"real-photo textures", "1 cm / texel", photos(0.01)},
+          {"real-photo textures", "2 cm / texel", photos(0.02)},
           {"rolling shutter", "15 ms", rolling(15.0), 0.0, true},
           {"rolling shutter", "30 ms", rolling(30.0), 0.0, true}};
 }
@@ -212,6 +244,11 @@ TEST(VoRobustnessMatrix, EffectsCostAccuracyHonestly) {
       io::LoadRigConfig(std::string(RIGCAL_SOURCE_DIR) + "/config/sim_thesis_virtual.yaml");
   ASSERT_TRUE(config.ok()) << config.error();
   ASSERT_TRUE(config->simulated_source.has_value());
+  for (const std::string& file : kPhotoFiles) {
+    if (RealPhoto(file).pixels.empty()) {
+      RIGCAL_SKIP_MISSING() << "the real-photo cells need " << RealPhoto(file).name;
+    }
+  }
   sim::SimulatedRigSpec base = *config->simulated_source;
   base.realtime = false;
   std::printf("\n%-15s %-14s | %-34s | %-34s | %-10s %9s %8s %7s %8s\n", "effect", "strength",

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <sstream>
 
 #include "sim_random.h"
@@ -19,9 +20,13 @@ Scene Scene::Build(const SimulatedRigSpec& spec) {
   Scene scene;
   const double texel = spec.TexelSize();
   scene.inv_texel_ = static_cast<float>(1.0 / texel);
+  const std::vector<SimulatedRigSpec::GreyImage>& photos = spec.scene.textures;
   for (int i = 0; i < kNumTiles; ++i) {
     scene.tiles_.push_back(
-        SharedDeadLeavesTile(kTextureTileLog2, HashKey(spec.seed, kPurposeTexture, i)));
+        photos.empty()
+            ? SharedDeadLeavesTile(kTextureTileLog2, HashKey(spec.seed, kPurposeTexture, i))
+            : std::make_shared<const TextureTile>(
+                  MakePhotoTile(photos[static_cast<size_t>(i) % photos.size()], kTextureTileLog2)));
   }
   for (const auto& tile : scene.tiles_) scene.tile_views_.push_back(MakeTileView(*tile));
   Rng rng(HashKey(spec.seed, kPurposeLayout));
@@ -101,6 +106,7 @@ Scene Scene::Build(const SimulatedRigSpec& spec) {
                 << size.z() << " m with " << spec.scene.boxes << " boxes";
   }
   description << ", texel " << texel * 1000.0 << " mm";
+  if (!photos.empty()) description << ", textures from " << photos.size() << " photograph(s)";
   scene.description_ = description.str();
   return scene;
 }

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Procedural textures of the simulated rig.
+// Textures of the simulated rig: procedural dead leaves and photographs.
 #include "sim_texture.h"
 
 #include <algorithm>
@@ -77,38 +77,10 @@ void PaintShape(std::vector<int8_t>* layer, int log2_size, Rng& rng, double half
   }
 }
 
-}  // namespace
-
-TextureTile MakeDeadLeavesTile(int log2_size, uint64_t seed) {
+// The mip pyramid (2x2 box filter) of an n x n CV_8U level 0 (n = 2^log2_size), in the sampler's
+// row-pair layout.
+TextureTile TileFromFinestLevel(const cv::Mat& level0, int log2_size) {
   const int n = 1 << log2_size;
-  const size_t texels = static_cast<size_t>(n) * n;
-  Rng rng(seed);
-  // Dead leaves (Matheron; Lee, Mumford & Huang 2001): opaque shapes of random grey fall on
-  // the tile one after the other. Half sizes follow a density ~ r^-3 between 1.5 texels and
-  // n / 16, which makes the visible pattern scale invariant: every scale, and so every mip level
-  // and viewing distance, shows edges and corners. Five coverages leave < 1% uncovered.
-  std::vector<int8_t> layer(texels, 0);
-  constexpr double kCoverage = 5.0;
-  const double r_min = 1.5, r_max = n / 16.0;
-  const double inv_min2 = 1.0 / (r_min * r_min), inv_max2 = 1.0 / (r_max * r_max);
-  const double mean_r2 = std::log(r_max / r_min) / (0.5 * (inv_min2 - inv_max2));
-  const int count = static_cast<int>(kCoverage * static_cast<double>(texels) / (3.7 * mean_r2));
-  for (int c = 0; c < count; ++c) {
-    const double half = 1.0 / std::sqrt(inv_min2 - rng.Uniform() * (inv_min2 - inv_max2));
-    const auto value = static_cast<int8_t>(static_cast<int>(rng.Below(226)) - 113);
-    PaintShape(&layer, log2_size, rng, half, value);
-  }
-  std::vector<float> sum(texels);
-  for (size_t i = 0; i < texels; ++i) sum[i] = 128.f + static_cast<float>(layer[i]);
-  cv::Mat image(n, n, CV_32F, sum.data());
-  // A light blur (periodic border) so that edges are a texel wide rather than aliased steps.
-  cv::Mat padded, blurred;
-  constexpr int kPad = 4;
-  cv::copyMakeBorder(image, padded, kPad, kPad, kPad, kPad, cv::BORDER_WRAP);
-  cv::GaussianBlur(padded, blurred, cv::Size(0, 0), 0.5, 0.5, cv::BORDER_REFLECT);
-  cv::Mat level0;
-  blurred(cv::Rect(kPad, kPad, n, n)).convertTo(level0, CV_8U);  // rounds and saturates
-
   std::vector<std::vector<uint8_t>> levels;
   levels.emplace_back(level0.datastart, level0.dataend);
   for (int l = 1; l <= log2_size; ++l) {
@@ -145,6 +117,59 @@ TextureTile MakeDeadLeavesTile(int log2_size, uint64_t seed) {
     tile.pairs.push_back(std::move(pairs));
   }
   return tile;
+}
+
+}  // namespace
+
+TextureTile MakeDeadLeavesTile(int log2_size, uint64_t seed) {
+  const int n = 1 << log2_size;
+  const size_t texels = static_cast<size_t>(n) * n;
+  Rng rng(seed);
+  // Dead leaves (Matheron; Lee, Mumford & Huang 2001): opaque shapes of random grey fall on
+  // the tile one after the other. Half sizes follow a density ~ r^-3 between 1.5 texels and
+  // n / 16, which makes the visible pattern scale invariant: every scale, and so every mip level
+  // and viewing distance, shows edges and corners. Five coverages leave < 1% uncovered.
+  std::vector<int8_t> layer(texels, 0);
+  constexpr double kCoverage = 5.0;
+  const double r_min = 1.5, r_max = n / 16.0;
+  const double inv_min2 = 1.0 / (r_min * r_min), inv_max2 = 1.0 / (r_max * r_max);
+  const double mean_r2 = std::log(r_max / r_min) / (0.5 * (inv_min2 - inv_max2));
+  const int count = static_cast<int>(kCoverage * static_cast<double>(texels) / (3.7 * mean_r2));
+  for (int c = 0; c < count; ++c) {
+    const double half = 1.0 / std::sqrt(inv_min2 - rng.Uniform() * (inv_min2 - inv_max2));
+    const auto value = static_cast<int8_t>(static_cast<int>(rng.Below(226)) - 113);
+    PaintShape(&layer, log2_size, rng, half, value);
+  }
+  std::vector<float> sum(texels);
+  for (size_t i = 0; i < texels; ++i) sum[i] = 128.f + static_cast<float>(layer[i]);
+  cv::Mat image(n, n, CV_32F, sum.data());
+  // A light blur (periodic border) so that edges are a texel wide rather than aliased steps.
+  cv::Mat padded, blurred;
+  constexpr int kPad = 4;
+  cv::copyMakeBorder(image, padded, kPad, kPad, kPad, kPad, cv::BORDER_WRAP);
+  cv::GaussianBlur(padded, blurred, cv::Size(0, 0), 0.5, 0.5, cv::BORDER_REFLECT);
+  cv::Mat level0;
+  blurred(cv::Rect(kPad, kPad, n, n)).convertTo(level0, CV_8U);  // rounds and saturates
+  return TileFromFinestLevel(level0, log2_size);
+}
+
+TextureTile MakePhotoTile(const SimulatedRigSpec::GreyImage& photo, int log2_size) {
+  // The centre square, scaled to half a tile (area averaging), mirrored across both axes: a
+  // tile that repeats without seams, whatever the photograph's edges.
+  const int half = 1 << (log2_size - 1);
+  const cv::Mat image(photo.height, photo.width, CV_8U,
+                      const_cast<uint8_t*>(photo.pixels.data()));  // read only
+  const int side = std::min(photo.width, photo.height);
+  const cv::Rect square((photo.width - side) / 2, (photo.height - side) / 2, side, side);
+  cv::Mat scaled;
+  cv::resize(image(square), scaled, cv::Size(half, half), 0, 0,
+             side > half ? cv::INTER_AREA : cv::INTER_LINEAR);
+  cv::Mat top, bottom, level0;
+  cv::hconcat(scaled, scaled.clone(), top);
+  cv::flip(scaled, top(cv::Rect(half, 0, half, half)), 1);
+  cv::flip(top, bottom, 0);
+  cv::vconcat(top, bottom, level0);
+  return TileFromFinestLevel(level0, log2_size);
 }
 
 // The process-wide tile cache of SharedDeadLeavesTile; scenes may be built on any thread.

@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Procedural textures of the simulated rig: square, periodic, mip-mapped grey tiles of "dead
-// leaves", stored in the row-pair layout the texture sampler reads. Private to rigcal_sim.
+// Textures of the simulated rig: square, periodic, mip-mapped grey tiles of procedural "dead
+// leaves" or of a photograph, stored in the row-pair layout the texture sampler reads. Private to
+// rigcal_sim.
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
+
+#include "rigcal/sim/simulated_rig_spec.h"
 
 namespace rigcal::sim::internal {
 
@@ -39,6 +42,10 @@ inline uint32_t PairOffset(int log2n, uint32_t x0, uint32_t y0) {
 // discs of random grey with sizes from 1.5 to size/8 texels (density ~ r^-3), lightly blurred.
 // Periodic (tiles seamlessly), deterministic for `seed`.
 TextureTile MakeDeadLeavesTile(int log2_size, uint64_t seed);
+
+// A tile of a photograph (source.scene.textures): its centre square scaled to half the tile
+// and mirrored across both axes, so that the tile repeats without seams.
+TextureTile MakePhotoTile(const SimulatedRigSpec::GreyImage& photo, int log2_size);
 
 // MakeDeadLeavesTile through a process-wide cache: tiles are immutable and deterministic for
 // their seed, so rigs built with the same seed (tests, a rig rebuilt with other options) share

@@ -169,6 +169,16 @@ Status CheckScene(const SimulatedRigSpec& spec) {
     e << "scene.texel_m: must be in (0, 10] m";
     return Error{e.str()};
   }
+  for (size_t i = 0; i < scene.textures.size(); ++i) {
+    const SimulatedRigSpec::GreyImage& t = scene.textures[i];
+    if (t.width < kMinTextureImagePx || t.height < kMinTextureImagePx ||
+        t.pixels.size() != static_cast<size_t>(t.width) * static_cast<size_t>(t.height)) {
+      e << "scene.textures[" << i << "] (" << t.name << "): " << t.width << "x" << t.height
+        << " with " << t.pixels.size() << " pixels; needs at least " << kMinTextureImagePx << "x"
+        << kMinTextureImagePx;
+      return Error{e.str()};
+    }
+  }
   return Status::Ok();
 }
 

@@ -3,9 +3,12 @@
 // drivers/sim/include/rigcal/sim/simulated_rig.h): fills sim::SimulatedRigSpec, with
 // errors that name the line and key. Cameras and their true mounting are the caller's
 // (`cameras:` of the rig config).
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
 #include <string>
@@ -152,11 +155,54 @@ std::optional<Error> ReadTrajectorySection(const FieldReader& r, const YAML::Nod
   return std::nullopt;
 }
 
+// One photograph of source.scene.textures, as 8-bit grey (colour averaged, 16 bit scaled).
+Expected<SimulatedRigSpec::GreyImage> ReadTexturePhoto(const std::string& file) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) return Error{file + ": no such file"};
+  const cv::Mat image = cv::imread(file, cv::IMREAD_GRAYSCALE);
+  if (image.empty()) return Error{file + ": not a readable image"};
+  if (image.cols < sim::kMinTextureImagePx || image.rows < sim::kMinTextureImagePx) {
+    return Error{file + ": " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                 " px, needs at least " + std::to_string(sim::kMinTextureImagePx) + " px a side"};
+  }
+  SimulatedRigSpec::GreyImage photo;
+  photo.name = file;
+  photo.width = image.cols;
+  photo.height = image.rows;
+  photo.pixels.resize(image.total());
+  for (int y = 0; y < image.rows; ++y) {
+    std::copy(image.ptr<uint8_t>(y), image.ptr<uint8_t>(y) + image.cols,
+              photo.pixels.begin() + static_cast<std::ptrdiff_t>(y) * image.cols);
+  }
+  return photo;
+}
+
+// source.scene.textures: a list of image files, relative to the config file's folder.
+std::optional<Error> ReadTextures(const FieldReader& r, const YAML::Node& node,
+                                  const std::string& path, SimulatedRigSpec::Scene* scene) {
+  const std::string field = "source.scene.textures";
+  if (!node.IsSequence() || node.size() == 0) {
+    return r.Fail(node, field, "must be a non-empty list of image files");
+  }
+  for (size_t i = 0; i < node.size(); ++i) {
+    const std::string item = field + "[" + std::to_string(i) + "]";
+    auto name = r.String(node[i], item);
+    if (!name) return Error{name.error()};
+    std::filesystem::path file(*name);
+    if (file.is_relative()) file = std::filesystem::path(path).parent_path() / file;
+    auto photo = ReadTexturePhoto(file.string());
+    if (!photo) return r.Fail(node[i], item, photo.error());
+    scene->textures.push_back(std::move(*photo));
+  }
+  return std::nullopt;
+}
+
 std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& node,
-                                      SimulatedRigSpec* spec) {
+                                      const std::string& path, SimulatedRigSpec* spec) {
   const std::string prefix = "source.scene";
-  if (auto e = r.CheckKeys(node, prefix + ".",
-                           {"type", "size", "boxes", "diameter", "length", "texel_m"})) {
+  if (auto e =
+          r.CheckKeys(node, prefix + ".",
+                      {"type", "size", "boxes", "diameter", "length", "texel_m", "textures"})) {
     return *e;
   }
   SimulatedRigSpec::Scene& scene = spec->scene;
@@ -216,6 +262,9 @@ std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& no
         r, n, prefix + ".texel_m", [](double x) { return x > 0 && x <= 10; }, "in (0, 10] m");
     if (!v) return Error{v.error()};
     scene.texel_m = *v;
+  }
+  if (const YAML::Node n = node["textures"]) {
+    if (auto e = ReadTextures(r, n, path, &scene)) return *e;
   }
   return std::nullopt;
 }
@@ -473,7 +522,7 @@ Expected<sim::SimulatedRigSpec> ParseSimulatedSource(const YAML::Node& source,
   if (!trajectory) return r.Fail(source, "source.trajectory", "missing (waypoints or a file)");
   if (auto e = ReadTrajectorySection(r, trajectory, path, &spec)) return *e;
   if (const YAML::Node n = source["scene"]) {
-    if (auto e = ReadSceneSection(r, n, &spec)) return *e;
+    if (auto e = ReadSceneSection(r, n, path, &spec)) return *e;
   }
   if (auto e = ReadImageEffects(r, source, &spec)) return *e;
   if (auto e = ReadExposure(r, source, &spec)) return *e;

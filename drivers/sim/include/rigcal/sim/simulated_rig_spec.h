@@ -55,6 +55,11 @@
 //       texel_m: 0.01             # texture resolution (finest level), m per texel; default
 //                                 # room 0.01, yard/street 0.02, pipe 0.002 (a texture tile
 //                                 # is 1024 texels wide and repeats)
+//       textures: [wall.png, box.jpg]  # optional: real photographs (any format OpenCV reads,
+//                                 # colour or grey, 8 or 16 bit; paths relative to the config
+//                                 # file) as the surfaces' textures, in turn, instead of the
+//                                 # procedural ones: each is cropped to its centre square,
+//                                 # scaled to half a tile and mirrored into a seamless tile
 //     noise_sigma: 2.0            # Gaussian image noise, grey levels, [0, 100]
 //     motion_blur:                # absent or `false`: off
 //       exposure_ms: 8            # (0, frame period); images average `samples` renders
@@ -108,6 +113,9 @@
 
 namespace rigcal::sim {
 
+// The smallest texture photograph (px per side): smaller ones hold too little texture to tile.
+inline constexpr int kMinTextureImagePx = 16;
+
 struct SimulatedRigSpec {
   // --- Cameras (from `cameras:`); index 0 is the master. ---------------------------------
   std::vector<std::string> names;
@@ -138,6 +146,15 @@ struct SimulatedRigSpec {
   std::vector<Pose> trajectory_world_from_body;
   Pose body_from_master;  // master camera pose in the file's body frame
 
+  // An 8-bit grey image, row-major (a texture photograph; `name` says where it came from), at
+  // least kMinTextureImagePx on each side.
+  struct GreyImage {
+    std::string name;
+    int width = 0;
+    int height = 0;
+    std::vector<uint8_t> pixels;
+  };
+
   // --- Scene --------------------------------------------------------------------------------
   enum class SceneType { kRoom, kYard, kStreet, kPipe };
   struct Scene {
@@ -148,6 +165,9 @@ struct SimulatedRigSpec {
     double pipe_diameter = 0.6;  // m
     double pipe_length = 40.0;   // m
     double texel_m = 0.0;        // m per texel; zero = the type's default
+    // Real-photo textures (source.scene.textures): the surfaces take their texture tiles from
+    // these grey images in turn instead of the procedural dead leaves; empty = procedural.
+    std::vector<GreyImage> textures;
   } scene;
 
   // --- Imaging and device behaviour -----------------------------------------------------------
