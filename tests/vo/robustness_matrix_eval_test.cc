@@ -16,7 +16,7 @@
 // σ (an effect may cost accuracy, but the σ must say so) or the calibration is not usable; except
 // in the rolling-shutter cells, whose error is a model error the σ cannot know of (measured
 // there: up to 7σ, docs/evaluations.md).
-// Run: ctest --test-dir build -L eval -R vo/robustness_matrix -V (~3.5 min).
+// Run: ctest --test-dir build -L eval -R vo/robustness_matrix -V (~5 min).
 
 #include <gtest/gtest.h>
 

@@ -63,8 +63,8 @@ struct RigEstimator::Slave {
     int slave_segment = 0;
   };
   std::deque<HistorySet> history;
-  bool history_complete = true;
   uint64_t history_stride = 1;  // a power of two: the history keeps the sets whose index it divides
+  bool history_complete = true;
   int64_t last_history_refine_ns = std::numeric_limits<int64_t>::min();
   bool refined_from_history = false;  // `refined` is the batch calibrator's on the history
   // Restored from a state and no motion accepted since: the published estimate is the saved
