@@ -36,9 +36,8 @@ Eigen::Vector3d RollingShutter::ToStamp(const Eigen::Vector3d& bearing_row, doub
   const double delay_s = RowDelayS(v);
   if (!active_ || delay_s == 0.0) return bearing_row;
   const Eigen::Vector3d rotated = ExpSO3(twist_.angular_rad_s * delay_s) * bearing_row;
-  const double distance = distance_row > 0.0 ? distance_row : typical_distance_;
-  if (!(distance > 0.0)) return rotated;
-  return (rotated * distance + twist_.linear_per_s * delay_s).normalized();
+  if (!(distance_row > 0.0)) return rotated;
+  return (rotated * distance_row + twist_.linear_per_s * delay_s).normalized();
 }
 
 Eigen::Vector3d RollingShutter::FromStamp(const Eigen::Vector3d& p_in_stamp_cam, double v) const {
@@ -51,6 +50,19 @@ Eigen::Vector3d RollingShutter::FromStamp(const Eigen::Vector3d& p_in_stamp_cam,
 double RollingShutter::DistanceAtRow(const Eigen::Vector3d& p_in_stamp_cam, double v) const {
   if (!active_) return p_in_stamp_cam.norm();
   return (p_in_stamp_cam - twist_.linear_per_s * RowDelayS(v)).norm();
+}
+
+Eigen::Vector3d RollingShutter::RayOrigin(double v) const {
+  if (!active_) return Eigen::Vector3d::Zero();
+  return twist_.linear_per_s * RowDelayS(v);
+}
+
+Eigen::Vector3d BearingFromStamp(const Eigen::Vector3d& ray_origin,
+                                 const Eigen::Vector3d& ray_direction,
+                                 const Eigen::Vector3d& p_in_cam) {
+  if (ray_origin.isZero(0.0)) return ray_direction;
+  const double along = ray_direction.dot(p_in_cam - ray_origin);
+  return (ray_origin + along * ray_direction).normalized();
 }
 
 }  // namespace rigcal::vo

@@ -13,8 +13,10 @@
 // in the camera frame at the stamp. ToStamp moves a measured bearing by this map, given the
 // point's distance from the row's camera; FromStamp is its inverse, for predicting where a map
 // point is seen. The map is exact for the VO's motion model (a straight line at a constant
-// turn rate) and a known distance; a point of unknown distance gets the rotation exactly and
-// the translation with a typical scene distance. Without motion (initialisation, after a loss)
+// turn rate) and a known distance. Without the distance, the observation is exactly the ray
+// from the row's camera centre (u δ in the stamp's camera frame) along Exp(ω δ) b_row: the VO
+// triangulates new points from such rays (BearingFromStamp then gives the bearing at the
+// stamp of a point on one). Without motion (initialisation, after a loss)
 // or with a readout of 0 every method returns its input unchanged, bit for bit.
 
 #include <Eigen/Core>
@@ -46,27 +48,36 @@ class RollingShutter {
   // No motion estimate: nothing is corrected.
   void ClearMotion() { active_ = false; }
   const CameraTwist& twist() const { return twist_; }
-  // The distance used for points of unknown distance (map units; <= 0: rotation only).
-  void set_typical_distance(double distance) { typical_distance_ = distance; }
-  double typical_distance() const { return typical_distance_; }
 
   // Time from the stamp to the exposure of (fractional) pixel row v, seconds.
   double RowDelayS(double v) const { return readout_s_ * v * inv_last_row_; }
   // The unit bearing of a point seen along unit `bearing_row` in row v, at `distance_row` from
-  // the camera at the row's time, in the camera at the stamp. distance_row <= 0 (unknown): the
-  // typical distance.
+  // the camera at the row's time, in the camera at the stamp. distance_row <= 0: the rotation
+  // only (the ray's direction).
   Eigen::Vector3d ToStamp(const Eigen::Vector3d& bearing_row, double v, double distance_row) const;
   // A point in the stamp's camera frame, in the camera frame of row v's time (the inverse map).
   Eigen::Vector3d FromStamp(const Eigen::Vector3d& p_in_stamp_cam, double v) const;
   // The distance of a point given in the stamp's camera frame from the camera at row v's time.
   double DistanceAtRow(const Eigen::Vector3d& p_in_stamp_cam, double v) const;
+  // The ray of an observation in row v, in the camera frame at the stamp: its origin (the row's
+  // camera centre, u δ, map units) and its unit direction (Exp(ω δ) b_row).
+  Eigen::Vector3d RayOrigin(double v) const;
+  Eigen::Vector3d RayDirection(const Eigen::Vector3d& bearing_row, double v) const {
+    return ToStamp(bearing_row, v, 0.0);
+  }
 
  private:
   double readout_s_ = 0.0;
   double inv_last_row_ = 0.0;
   bool active_ = false;
   CameraTwist twist_;
-  double typical_distance_ = 0.0;
 };
+
+// The unit bearing, from the camera centre at the stamp, of the point of the ray (origin, unit
+// direction; camera frame at the stamp) closest to p_in_cam; the direction itself, bit for bit,
+// when the origin is 0.
+Eigen::Vector3d BearingFromStamp(const Eigen::Vector3d& ray_origin,
+                                 const Eigen::Vector3d& ray_direction,
+                                 const Eigen::Vector3d& p_in_cam);
 
 }  // namespace rigcal::vo
