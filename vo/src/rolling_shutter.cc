@@ -35,7 +35,7 @@ Eigen::Vector3d RollingShutter::ToStamp(const Eigen::Vector3d& bearing_row, doub
                                         double distance_row) const {
   const double delay_s = RowDelayS(v);
   if (!active_ || delay_s == 0.0) return bearing_row;
-  const Eigen::Vector3d rotated = ExpSO3(twist_.angular_rad_s * delay_s) * bearing_row;
+  Eigen::Vector3d rotated = ExpSO3(twist_.angular_rad_s * delay_s) * bearing_row;
   if (!(distance_row > 0.0)) return rotated;
   return (rotated * distance_row + twist_.linear_per_s * delay_s).normalized();
 }
