@@ -172,7 +172,7 @@ void RegisterExperiment(CLI::App& app, int* exit_code) {
   cmd->add_flag("--no-online", args->no_online, "pairs: skip the online estimator");
   cmd->add_option("--history-sets", args->history_sets,
                   "pairs: the online estimator's pose history (sets per slave; default 10000): "
-                  "fewer than a drive's sets make it thin its history as on a longer drive")
+                  "fewer than a drive's sets make it merge its history into group means as on a longer drive")
       ->check(CLI::Range(0, 100000000));
   cmd->add_flag("--held-out", args->held_out,
                 "pairs: the held-out rigs (a four-camera layout, scales 0.1-4, 5-50 Hz, 40-600 s)\n"

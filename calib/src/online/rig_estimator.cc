@@ -290,11 +290,11 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
   job.generation = generation_;
   const Slave& s = *slaves_.at(slave);
   if (options_.history_sets > 0 && s.history_complete &&
-      static_cast<int>(s.history.size()) >= options_.history_min_sets && s.linear.solved()) {
+      static_cast<int>(s.history.sets().size()) >= options_.history_min_sets && s.linear.solved()) {
     // The batch calibrator on every set since the restart, when due; until then no job (an
     // unsolved start), so a window refinement does not replace the history's result.
     const int64_t period = static_cast<int64_t>(options_.history_refine_period_s * 1e9);
-    const int64_t newest = s.history.back().t_ns;
+    const int64_t newest = s.history.sets().back().t_ns;
     if (!final && s.last_history_refine_ns != std::numeric_limits<int64_t>::min() &&
         newest - s.last_history_refine_ns < period) {
       return job;
@@ -303,7 +303,7 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
     h.master.name = names_[0];
     h.slaves.resize(1);
     h.slaves[0].name = names_[slave + 1];
-    for (const auto& set : s.history) {
+    for (const auto& set : s.history.sets()) {
       h.t_ns.push_back(set.t_ns);
       h.master.poses.push_back(set.master);
       h.master.segment.push_back(set.master_segment);
@@ -315,7 +315,7 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
     // the others) and drops their times, as it does on the whole recording.
     for (size_t other = 0; other < slaves_.size(); ++other) {
       if (static_cast<int>(other) == slave) continue;
-      const std::deque<Slave::HistorySet>& oh = slaves_[other]->history;
+      const std::deque<Slave::HistorySet>& oh = slaves_[other]->history.sets();
       CameraTrack camera;
       camera.name = names_[other + 1];
       auto it = oh.begin();
@@ -329,7 +329,7 @@ RefinementJob RigEstimator::MakeRefinementJob(int slave, bool final) const {
       if (camera.poses.size() == h.t_ns.size()) h.slaves.push_back(std::move(camera));
     }
     job.history_t_ns = newest;
-    job.history_stride = s.history_stride;
+    job.history_stride = s.history.stride();
     job.history_options = HistoryCalibrationOptions(options_);
     if (const std::optional<Similarity> nominal = NominalOf(slave)) {
       job.history_options.nominal[names_[slave + 1]] = *nominal;

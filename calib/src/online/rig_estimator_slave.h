@@ -4,7 +4,6 @@
 // states and what the published estimate rests on; rig_estimator.cc runs the stages on it,
 // rig_estimator_state.cc saves and restores it.
 
-#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -22,6 +21,7 @@
 #include "online/decalibration_check.h"
 #include "online/motion_gates.h"
 #include "online/online_uncertainty.h"
+#include "online/pose_history.h"
 #include "online/statistics_accumulation.h"
 #include "online/statistics_solution.h"
 #include "online/window_refinement.h"
@@ -52,18 +52,10 @@ struct RigEstimator::Slave {
   int64_t model_changed_ns = -1;  // stream time of the last change of the motion model
   SlaveCalibration linear;        // latest linear solution of the long statistics
   std::optional<SlaveCalibration> refined;
-  // The pose history (RigEstimatorOptions::history_sets): the sets since the last restart
-  // while `history_complete`, every `history_stride`-th of them (ThinHistory).
-  struct HistorySet {
-    uint64_t index = 0;  // the estimator's count of sets before this one
-    int64_t t_ns = 0;
-    Pose master;
-    Pose slave;
-    int master_segment = 0;
-    int slave_segment = 0;
-  };
-  std::deque<HistorySet> history;
-  uint64_t history_stride = 1;  // a power of two: the history keeps the sets whose index it divides
+  // The pose history (RigEstimatorOptions::history_sets): the sets since the last restart while
+  // `history_complete`, merged into group means once the drive is longer than it (pose_history.h).
+  using HistorySet = internal::HistorySet;
+  internal::PoseHistory history;
   bool history_complete = true;
   int64_t last_history_refine_ns = std::numeric_limits<int64_t>::min();
   bool refined_from_history = false;  // `refined` is the batch calibrator's on the history
@@ -78,29 +70,12 @@ struct RigEstimator::Slave {
 
   void RecordHistory(int capacity, uint64_t index, int64_t t_ns, const CameraPose& master,
                      const CameraPose& slave) {
-    if (capacity <= 0 || index % history_stride != 0) return;
-    history.push_back({index, t_ns, master.pose, slave.pose, master.segment, slave.segment});
-    while (static_cast<int>(history.size()) > capacity) ThinHistory();
-  }
-
-  // A full history halves its density instead of dropping its oldest sets: it keeps the sets
-  // whose index is a multiple of twice the stride, so it still spans the whole drive since the
-  // restart (the batch refinement on it sees every part of the drive). What it drops costs
-  // about √stride in accuracy on white pose noise (the information grows with the number of
-  // poses) and little on drifting noise (docs/evaluations.md, "Long drives"). Slaves that were
-  // offered the same sets keep the same times at the same stride, and a slave at a larger
-  // stride keeps a subset of the times of one at a smaller stride.
-  void ThinHistory() {
-    history_stride *= 2;
-    const uint64_t stride = history_stride;
-    history.erase(std::remove_if(history.begin(), history.end(),
-                                 [stride](const HistorySet& h) { return h.index % stride != 0; }),
-                  history.end());
+    history.Record(capacity,
+                   {index, t_ns, master.pose, slave.pose, master.segment, slave.segment, 1});
   }
 
   void RestartHistory() {
-    history.clear();
-    history_stride = 1;
+    history.Restart();
     history_complete = true;
     last_history_refine_ns = std::numeric_limits<int64_t>::min();
     refined_from_history = false;

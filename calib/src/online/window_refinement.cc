@@ -29,13 +29,12 @@ std::optional<SlaveCalibration> RefineHistory(const RefinementJob& job) {
   if (job.history.t_ns.empty() || !job.start.solved()) return std::nullopt;
   SlaveCalibration batch = internal::CalibrateRigSlave(job.history, job.history_options, 0);
   if (!batch.solved()) return std::nullopt;  // not solvable yet
-  const std::string thinned = job.history_stride > 1
-                                  ? " (every " + std::to_string(job.history_stride) +
-                                        (job.history_stride == 2 ? "nd" : "th") +
-                                        " set of a longer drive)"
-                                  : "";
-  batch.message = "batch on the " + std::to_string(job.history.size()) + " sets since the start" +
-                  thinned + ": " + batch.message;
+  const std::string sets =
+      job.history_stride > 1
+          ? std::to_string(job.history.size()) + " means of " + std::to_string(job.history_stride) +
+                " consecutive sets since the start (a drive " + "longer than the history)"
+          : std::to_string(job.history.size()) + " sets since the start";
+  batch.message = "batch on the " + sets + ": " + batch.message;
   return batch;
 }
 

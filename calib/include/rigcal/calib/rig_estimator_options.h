@@ -99,8 +99,10 @@ struct RigEstimatorOptions {
 
   // Pose history for the background refinement: at most history_sets sets are kept per slave
   // (about 140 bytes each), spanning the drive since the last restart (start, master
-  // re-initialisation, decalibration): every set until the history is full, then every 2nd,
-  // 4th, ... set (a full history halves its density). The background refinement is the batch
+  // re-initialisation, decalibration): every set until the drive outgrows it, then the group
+  // means of 2, 4, ... consecutive sets (each the mean in the group of rigid motions, which
+  // keeps the rig's relation between the poses and, on white pose noise, the information of
+  // every set). The background refinement is the batch
   // calibrator's on them (CalibrateRig: its pair choice, time-block σ), at most every
   // history_refine_period_s of stream time, so the online estimate ends where the batch one
   // does. After a resume (no poses before it) the refinement is the window refinement of the
