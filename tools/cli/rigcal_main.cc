@@ -12,6 +12,7 @@
 #include "output_files.h"
 #include "progress_line.h"
 #include "rigcal/base/logging.h"
+#include "rigcal_version.h"  // generated: RIGCAL_VERSION
 
 int main(int argc, char** argv) {
   CLI::App app{
