@@ -122,4 +122,27 @@ TEST_F(ReplayCommandTest, ExitCodesAgreeAcrossCommands) {
   EXPECT_EQ(r.out.rfind("rigcal 0.", 0), 0u) << r.out;
 }
 
+// The version names the commit the binary was built from (taken at every build, not when the
+// build was configured): in a git checkout, `git describe`'s hash is a prefix of HEAD's.
+TEST_F(ReplayCommandTest, VersionNamesTheCheckedOutCommit) {
+  const RunResult head = rigcal::cli_test::RunShell(
+      "git -C " + rigcal::cli_test::Quote(RIGCAL_SOURCE_DIR) + " rev-parse HEAD", dir_);
+  if (head.exit_code != 0 || head.out.size() < 40) {
+    GTEST_SKIP() << "not built from a git checkout (or no git): the version has no commit";
+  }
+  const RunResult r = Run("--version");
+  ASSERT_EQ(r.exit_code, 0);
+  const size_t open = r.out.find('(');
+  const size_t close = r.out.find(')', open);
+  ASSERT_NE(close, std::string::npos) << "no `git describe` in " << r.out;
+  std::string describe = r.out.substr(open + 1, close - open - 1);  // [tag-N-g]HASH[-dirty]
+  if (describe.size() > 6 && describe.compare(describe.size() - 6, 6, "-dirty") == 0) {
+    describe.resize(describe.size() - 6);
+  }
+  const size_t g = describe.rfind("-g");
+  const std::string hash = g == std::string::npos ? describe : describe.substr(g + 2);
+  ASSERT_GE(hash.size(), 7u) << r.out;
+  EXPECT_EQ(head.out.rfind(hash, 0), 0u) << "version " << r.out << " but HEAD is " << head.out;
+}
+
 }  // namespace
