@@ -59,28 +59,46 @@ Transform WorldFromCameraTransform(const Pose& world_from_camera) {
   return xf;
 }
 
-// world_from_camera per pixel row: one transform for every row (global shutter), or one per
-// row of [0, num_rows) (rolling shutter).
+// world_from_camera and the moving boxes' centres per pixel row: one of each for every row
+// (global shutter), or one per row of [0, num_rows) (rolling shutter).
 class RowTransforms {
  public:
-  explicit RowTransforms(const Pose& world_from_camera)
-      : rows_{WorldFromCameraTransform(world_from_camera)} {}
-  RowTransforms(const RowPose& world_from_camera_at_row, int num_rows) {
+  RowTransforms(const Pose& world_from_camera, const float* moving)
+      : rows_{WorldFromCameraTransform(world_from_camera)}, moving_(moving) {}
+  RowTransforms(const RowPose& world_from_camera_at_row, const RowMoving& moving_at_row,
+                int num_moving, int num_rows)
+      : num_moving_(moving_at_row ? num_moving : 0) {
     rows_.reserve(static_cast<size_t>(num_rows));
     for (int y = 0; y < num_rows; ++y) {
       rows_.push_back(WorldFromCameraTransform(world_from_camera_at_row(y)));
     }
+    if (num_moving_ == 0) return;
+    moving_rows_.resize(3 * static_cast<size_t>(num_moving_) * num_rows);
+    for (int y = 0; y < num_rows; ++y) moving_at_row(y, MovingRow(y));
+    moving_ = moving_rows_.data();
   }
   const Transform& operator[](int row) const {
     return rows_.size() == 1 ? rows_[0] : rows_[static_cast<size_t>(row)];
   }
+  // The moving boxes' centres while row `row` is exposed; null without moving boxes.
+  const float* Moving(int row) const {
+    return moving_rows_.empty() ? moving_ : moving_ + 3 * static_cast<size_t>(num_moving_) * row;
+  }
 
  private:
+  float* MovingRow(int row) {
+    return moving_rows_.data() + 3 * static_cast<size_t>(num_moving_) * row;
+  }
+
   std::vector<Transform> rows_;
+  const float* moving_ = nullptr;
+  int num_moving_ = 0;
+  std::vector<float> moving_rows_;
 };
 
 // Casts single pixels of one camera's view: the pixel's bearing (CameraTables) turned into the
-// world, its local pixel angle, and the intensity of what it hits.
+// world, its local pixel angle, and the intensity of what it hits (with the scene's moving boxes
+// where the row transforms place them).
 class PixelCaster {
  public:
   PixelCaster(const Scene& scene, const CameraTables& camera,
@@ -110,6 +128,11 @@ class PixelCaster {
     const Transform& xf = xf_[y];
     float d[3];
     xf.Apply(b, d);
+    if (const float* moving = xf_.Moving(y); moving != nullptr) {
+      return Shade(boxes != nullptr
+                       ? scene_.CastAmong(xf.o, d, pixel_angle, boxes, num_boxes, moving)
+                       : scene_.Cast(xf.o, d, pixel_angle, moving));
+    }
     return Shade(boxes != nullptr ? scene_.CastAmong(xf.o, d, pixel_angle, boxes, num_boxes)
                                   : scene_.Cast(xf.o, d, pixel_angle));
   }
@@ -147,10 +170,13 @@ void CastNodes(const Scene& scene, const NodeGrid& grid, const RowTransforms& xf
       (*hits)[k].surface = kInvalid;
       continue;
     }
-    const Transform& row_xf = xf[static_cast<int>(k / grid.nodes_x) * grid.block];
+    const int row = static_cast<int>(k / grid.nodes_x) * grid.block;
+    const Transform& row_xf = xf[row];
     float d[3];
     row_xf.Apply(b, d);
-    (*hits)[k] = scene.Cast(row_xf.o, d, grid.pixel_angle[k]);
+    const float* moving = xf.Moving(row);
+    (*hits)[k] = moving != nullptr ? scene.Cast(row_xf.o, d, grid.pixel_angle[k], moving)
+                                   : scene.Cast(row_xf.o, d, grid.pixel_angle[k]);
   }
 }
 
@@ -298,18 +324,23 @@ void RenderWith(const Scene& scene, const CameraTables& camera, const NodeGrid* 
 
 void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
                       const Pose& world_from_camera, float weight, float* acc,
-                      std::vector<Hit>* hits, RenderKernel kernel) {
-  RenderWith(scene, camera, grid, RowTransforms(world_from_camera), weight, acc, hits, kernel);
+                      std::vector<Hit>* hits, RenderKernel kernel, const float* moving) {
+  if (scene.MovingBoxCount() == 0) moving = nullptr;
+  RenderWith(scene, camera, grid, RowTransforms(world_from_camera, moving), weight, acc, hits,
+             kernel);
 }
 
 void RenderAccumulateRows(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
                           const RowPose& world_from_camera_at_row, float weight, float* acc,
-                          std::vector<Hit>* hits, RenderKernel kernel) {
+                          std::vector<Hit>* hits, RenderKernel kernel,
+                          const RowMoving& moving_at_row) {
   const bool nodes = grid != nullptr && grid->block >= 2;
   const int num_rows =
       nodes ? std::max(camera.height, (grid->nodes_y - 1) * grid->block + 1) : camera.height;
-  RenderWith(scene, camera, grid, RowTransforms(world_from_camera_at_row, num_rows), weight, acc,
-             hits, kernel);
+  RenderWith(
+      scene, camera, grid,
+      RowTransforms(world_from_camera_at_row, moving_at_row, scene.MovingBoxCount(), num_rows),
+      weight, acc, hits, kernel);
 }
 
 }  // namespace rigcal::sim::internal
