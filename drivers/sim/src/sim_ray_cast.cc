@@ -158,27 +158,29 @@ Hit Scene::CastAmong(const float o[3], const float d[3], float pixel_angle, cons
   return Shade(o, d, pixel_angle, s, t);
 }
 
-Hit Scene::Cast(const float o[3], const float d[3], float pixel_angle, const float* moving) const {
+Hit Scene::Cast(const float o[3], const float d[3], float pixel_angle,
+                const MovingBoxes& moving) const {
   float t = 0.f;
   const int32_t s = Intersect(o, d, &t);
   return ShadeWithMoving(o, d, pixel_angle, s, t, moving);
 }
 
 Hit Scene::CastAmong(const float o[3], const float d[3], float pixel_angle, const int* boxes,
-                     int num_boxes, const float* moving) const {
+                     int num_boxes, const MovingBoxes& moving) const {
   float t = 0.f;
   const int32_t s = Intersect(o, d, &t, boxes, num_boxes);
   return ShadeWithMoving(o, d, pixel_angle, s, t, moving);
 }
 
-int Scene::IntersectMoving(const float o[3], const float d[3], const float* moving, float* best,
-                           int32_t* surface) const {
+int Scene::IntersectMoving(const float o[3], const float d[3], const MovingBoxes& moving,
+                           float* best, int32_t* surface) const {
   const float inv[3] = {1.f / d[0], 1.f / d[1], 1.f / d[2]};
   const float half[3] = {static_cast<float>(moving_half_.x()), static_cast<float>(moving_half_.y()),
                          static_cast<float>(moving_half_.z())};
   int nearest = -1;
-  for (int b = 0; b < num_moving_; ++b) {
-    const float* centre = moving + 3 * static_cast<ptrdiff_t>(b);
+  for (int i = 0; i < moving.num_visible; ++i) {
+    const int b = moving.visible[i];
+    const float* centre = moving.centres + 3 * static_cast<ptrdiff_t>(b);
     float t_near = -std::numeric_limits<float>::infinity();
     float t_far = std::numeric_limits<float>::infinity();
     int axis = 0;
@@ -203,11 +205,11 @@ int Scene::IntersectMoving(const float o[3], const float d[3], const float* movi
 }
 
 Hit Scene::ShadeWithMoving(const float o[3], const float d[3], float pixel_angle, int32_t surface,
-                           float t, const float* moving) const {
+                           float t, const MovingBoxes& moving) const {
   const int b = IntersectMoving(o, d, moving, &t, &surface);
   // A moving box's hit in the box's own frame (centred on its centre), so that its texture
   // moves with it.
-  const float* centre = b >= 0 ? moving + 3 * static_cast<ptrdiff_t>(b) : nullptr;
+  const float* centre = b >= 0 ? moving.centres + 3 * static_cast<ptrdiff_t>(b) : nullptr;
   const float origin[3] = {centre ? o[0] - centre[0] : o[0], centre ? o[1] - centre[1] : o[1],
                            centre ? o[2] - centre[2] : o[2]};
   return Shade(origin, d, pixel_angle, surface, t);

@@ -21,6 +21,7 @@ struct CameraTables {
   int width = 0;
   int height = 0;
   std::vector<float> bearings;  // 3 per pixel, row-major
+  float max_axis_angle = 0.f;   // largest angle of a bearing from the optical axis, radians
 };
 CameraTables MakeCameraTables(std::shared_ptr<const camera::CameraModel> model);
 
@@ -32,6 +33,7 @@ struct NodeGrid {
   int nodes_y = 0;
   std::vector<float> bearings;     // 3 per node, NaN x when invalid
   std::vector<float> pixel_angle;  // per node, radians per pixel
+  float max_axis_angle = 0.f;      // largest angle of a node's bearing from the optical axis
 };
 NodeGrid MakeNodeGrid(const CameraTables& camera, int block);
 

@@ -33,6 +33,14 @@ struct Hit {
   float lod = 0.f;
 };
 
+// The moving boxes a view casts against: every box's centre at the ray's time (3 floats per box,
+// world, m) and the boxes that may be in view (indices into them; the others are not tested).
+struct MovingBoxes {
+  const float* centres = nullptr;
+  const int* visible = nullptr;
+  int num_visible = 0;
+};
+
 class Scene {
  public:
   // Builds the scene of spec.scene (layout and textures from spec.seed).
@@ -41,23 +49,25 @@ class Scene {
   // Casts ray o + t d (d unit, world frame) into the static scene. `pixel_angle`: angle
   // subtended by one pixel along the ray, radians (selects the mip level).
   Hit Cast(const float o[3], const float d[3], float pixel_angle) const;
-  // The same with the MovingBoxCount() moving boxes centred on `moving` (3 floats each, world,
-  // m: where they are at the ray's time); a moving box's texture moves with it.
-  Hit Cast(const float o[3], const float d[3], float pixel_angle, const float* moving) const;
+  // The same with the moving boxes `moving` (where they are at the ray's time); a moving box's
+  // texture moves with it.
+  Hit Cast(const float o[3], const float d[3], float pixel_angle, const MovingBoxes& moving) const;
   // The same, testing only the static boxes listed in `boxes` (indices, -1 ends the list early)
   // besides the enclosure or pipe (and every moving box): for rays between rays known to hit
   // only those static boxes.
   Hit CastAmong(const float o[3], const float d[3], float pixel_angle, const int* boxes,
                 int num_boxes) const;
   Hit CastAmong(const float o[3], const float d[3], float pixel_angle, const int* boxes,
-                int num_boxes, const float* moving) const;
+                int num_boxes, const MovingBoxes& moving) const;
   // The static box a surface belongs to, or -1 (enclosure faces, pipe, moving boxes, sky).
   int BoxOfSurface(int32_t surface) const {
     return has_enclosure_ && surface >= 6 && surface < first_moving_surface_ ? (surface - 6) / 6
                                                                              : -1;
   }
-  // Number of moving boxes (spec.scene.moving_objects.count).
+  // Number of moving boxes (spec.scene.moving_objects.count) and the radius of the sphere
+  // around each (m).
   int MovingBoxCount() const { return num_moving_; }
+  double MovingBoxRadius() const { return moving_half_.norm(); }
   // First hit distance in units of |d|, double precision; nullopt when the ray hits nothing.
   std::optional<double> Distance(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
   // Ok when p is in free space at least `clearance` away from every surface; else an error
@@ -104,13 +114,13 @@ class Scene {
                       T* best, int32_t* surface) const;
   template <typename T>
   void IntersectPipe(const T o[3], const T d[3], T* best, int32_t* surface) const;
-  // The nearest moving box along o + t d nearer than *best, at centres `moving`: lowers *best,
-  // sets *surface and returns the box's index; -1 when none is nearer.
-  int IntersectMoving(const float o[3], const float d[3], const float* moving, float* best,
+  // The nearest of the moving boxes along o + t d nearer than *best: lowers *best, sets
+  // *surface and returns the box's index; -1 when none is nearer.
+  int IntersectMoving(const float o[3], const float d[3], const MovingBoxes& moving, float* best,
                       int32_t* surface) const;
   // Shade of the nearer of the static hit (surface, t) and the moving boxes.
   Hit ShadeWithMoving(const float o[3], const float d[3], float pixel_angle, int32_t surface,
-                      float t, const float* moving) const;
+                      float t, const MovingBoxes& moving) const;
   Hit Shade(const float o[3], const float d[3], float pixel_angle, int32_t surface, float t) const;
   // Build's step for spec.scene.moving_objects: their surfaces after every static one.
   void AddMovingBoxes(const SimulatedRigSpec& spec, std::ostringstream* description);
