@@ -60,24 +60,25 @@ const char kWaypoints[] =
     "      - {p: [2, 0, 3], q_wxyz: [1, 0, 0, 0]}\n";
 
 TEST(SimulatedSourceYaml, ParsesEveryKey) {
-  auto spec =
-      Parse(std::string("source:\n"
-                        "  type: simulated\n"
-                        "  frame_rate_hz: 25\n"
-                        "  duration_s: 3.5\n"
-                        "  seed: 42\n"
-                        "  realtime: true\n"
-                        "  noise_sigma: 2.5\n"
-                        "  motion_blur: {exposure_ms: 8, samples: 5}\n"
-                        "  drop_probability: 0.1\n"
-                        "  timestamp_jitter_ms: 1.5\n"
-                        "  fail_after_s: {cam1: 2.5}\n"
-                        "  render_block: 2\n"
-                        "  vignetting: 0.3\n"
-                        "  rolling_shutter_ms: 12.5\n"
-                        "  exposure_steps: {interval_s: 2, max_factor: 1.5}\n"
-                        "  scene: {type: yard, size: [40, 30, 7], boxes: 3, texel_m: 0.015}\n") +
-            kWaypoints);
+  auto spec = Parse(
+      std::string("source:\n"
+                  "  type: simulated\n"
+                  "  frame_rate_hz: 25\n"
+                  "  duration_s: 3.5\n"
+                  "  seed: 42\n"
+                  "  realtime: true\n"
+                  "  noise_sigma: 2.5\n"
+                  "  motion_blur: {exposure_ms: 8, samples: 5}\n"
+                  "  drop_probability: 0.1\n"
+                  "  timestamp_jitter_ms: 1.5\n"
+                  "  fail_after_s: {cam1: 2.5}\n"
+                  "  render_block: 2\n"
+                  "  vignetting: 0.3\n"
+                  "  rolling_shutter_ms: 12.5\n"
+                  "  exposure_steps: {interval_s: 2, max_factor: 1.5}\n"
+                  "  scene: {type: yard, size: [40, 30, 7], boxes: 3, texel_m: 0.015,\n"
+                  "          moving_objects: {count: 5, size: [4, 1.8, 1.5], speed_mps: 8}}\n") +
+      kWaypoints);
   ASSERT_TRUE(spec) << spec.error();
   EXPECT_DOUBLE_EQ(spec->frame_rate_hz, 25.0);
   EXPECT_DOUBLE_EQ(spec->duration_s, 3.5);
@@ -100,6 +101,9 @@ TEST(SimulatedSourceYaml, ParsesEveryKey) {
   EXPECT_EQ(spec->scene.size, Eigen::Vector3d(40, 30, 7));
   EXPECT_EQ(spec->scene.boxes, 3);
   EXPECT_DOUBLE_EQ(spec->scene.texel_m, 0.015);
+  EXPECT_EQ(spec->scene.moving_objects.count, 5);
+  EXPECT_EQ(spec->scene.moving_objects.size_m, Eigen::Vector3d(4, 1.8, 1.5));
+  EXPECT_DOUBLE_EQ(spec->scene.moving_objects.speed_mps, 8.0);
   EXPECT_DOUBLE_EQ(spec->waypoint_interval_s, 2.0);
   ASSERT_EQ(spec->waypoints.size(), 3u);
   EXPECT_EQ(spec->waypoints[1].position, Eigen::Vector3d(1, 0.5, 3));
@@ -128,6 +132,7 @@ TEST(SimulatedSourceYaml, DefaultsAndPipe) {
   EXPECT_DOUBLE_EQ(spec->scene.pipe_diameter, 0.8);
   EXPECT_DOUBLE_EQ(spec->scene.pipe_length, 25.0);
   EXPECT_DOUBLE_EQ(spec->TexelSize(), 0.002);
+  EXPECT_EQ(spec->scene.moving_objects.count, 0);  // none unless asked for
 }
 
 TEST(SimulatedSourceYaml, TrajectoryFileRelativeToTheConfig) {
@@ -254,6 +259,22 @@ TEST(SimulatedSourceYaml, ErrorsNameLineAndKey) {
        ":4: source.scene.size: only for scene type room, yard or street, not pipe"},
       {"source:\n  scene: {size: [10, 0, 3]}\n" + w, ":2: source.scene.size: extents"},
       {"source:\n  scene: {boxes: 65}\n" + w, ":2: source.scene.boxes: must be in [0, 64]"},
+      {"source:\n  scene:\n    moving_objects:\n      count: 65\n" + w,
+       ":4: source.scene.moving_objects.count: must be in [0, 64]"},
+      {"source:\n  scene:\n    moving_objects:\n      count: two\n" + w,
+       ":4: source.scene.moving_objects.count: "},
+      {"source:\n  scene:\n    moving_objects:\n      size: [1, 0, 2]\n" + w,
+       ":4: source.scene.moving_objects.size: extents must be in (0, 100] m"},
+      {"source:\n  scene:\n    moving_objects:\n      size: [1, 2]\n" + w,
+       ":4: source.scene.moving_objects.size: expected 3 numbers, got 2"},
+      {"source:\n  scene:\n    moving_objects:\n      speed_mps: 0\n" + w,
+       ":4: source.scene.moving_objects.speed_mps: must be in (0, 100] m/s"},
+      {"source:\n  scene:\n    moving_objects:\n      speed: 2\n" + w,
+       ":4: source.scene.moving_objects.speed: unknown key"},
+      {"source:\n  scene:\n    moving_objects: 3\n" + w,
+       ":3: source.scene.moving_objects: expected {count"},
+      {"source:\n  scene:\n    type: pipe\n    moving_objects: {count: 2}\n" + w,
+       ":4: source.scene.moving_objects: only for scene type room, yard or street, not pipe"},
       {"source:\n  num_frames: 5\n", ":2: source.trajectory: missing"},
       {"source:\n  trajectory: {waypoint_interval_s: 1}\n",
        ":2: source.trajectory: give either `waypoints` or `file`"},

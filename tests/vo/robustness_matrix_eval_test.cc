@@ -4,8 +4,10 @@
 // with one imaging effect at a time, at two strengths: motion blur over a fraction of the frame
 // period, vignetting, auto-exposure steps with gain noise, image noise, barrel lens distortion
 // (rendered through and undone by the camera model), coarser texture, dropped frames, real
-// photographs of ../shared/data/real_mono as the textures (skipped without them) and a
-// rolling shutter of 15 and 30 ms readout (which the VO does not compensate). Per
+// photographs of ../shared/data/real_mono as the textures (skipped without them), a rolling
+// shutter of 15 and 30 ms readout (which the VO does not compensate); and moving objects at
+// three strengths (8 and 48 people, 20 cars crossing the room, whose features the VO must
+// reject; the fraction of each view they cover is printed under their rows). Per
 // cell and camera: when the VO gives its first pose (stream seconds), the fraction of frames
 // with a pose, scale segments, relocalisations and the RMS frame-to-frame rotation error; then
 // the calibration of the two VO trajectories (RigEstimator over the synchronised sets, the
@@ -16,7 +18,9 @@
 // σ (an effect may cost accuracy, but the σ must say so) or the calibration is not usable; except
 // in the rolling-shutter cells, whose error is a model error the σ cannot know of (measured
 // there: up to 7σ, docs/evaluations.md).
-// Run: ctest --test-dir build -L eval -R vo/robustness_matrix -V (~5 min).
+// Run: ctest --test-dir build -L eval -R vo/robustness_matrix -V (~6 min). With
+// RIGCAL_MATRIX_EFFECT=<text> set, only the effects whose name contains it run (and "none");
+// RIGCAL_MATRIX_SEED=<n> renders another scene (textures, layout, noise, objects) than seed 1.
 
 #include <gtest/gtest.h>
 
@@ -24,7 +28,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <random>
@@ -123,6 +129,17 @@ std::vector<Cell> Cells() {
   auto rolling = [](double readout_ms) {
     return [readout_ms](sim::SimulatedRigSpec* s) { s->rolling_shutter_s = readout_ms * 1e-3; };
   };
+  // Moving objects crossing the room on their own lines: people (0.6 x 0.6 x 1.8 m, 1.4 m/s) or
+  // cars (4 x 1.8 x 1.5 m, 6 m/s).
+  auto moving = [](int count, const Eigen::Vector3d& size_m, double speed_mps) {
+    return [=](sim::SimulatedRigSpec* s) {
+      s->scene.moving_objects.count = count;
+      s->scene.moving_objects.size_m = size_m;
+      s->scene.moving_objects.speed_mps = speed_mps;
+    };
+  };
+  const Eigen::Vector3d person(0.6, 0.6, 1.8);
+  const Eigen::Vector3d car(4.0, 1.8, 1.5);
   return {{"none", "-", none},
           {"motion blur", "40% of period", blur(0.4)},
           {"motion blur", "80% of period", blur(0.8)},
@@ -141,7 +158,10 @@ std::vector<Cell> Cells() {
           {"real-photo textures", "1 cm / texel", photos(0.01)},
           {"real-photo textures", "2 cm / texel", photos(0.02)},
           {"rolling shutter", "15 ms", rolling(15.0), 0.0, true},
-          {"rolling shutter", "30 ms", rolling(30.0), 0.0, true}};
+          {"rolling shutter", "30 ms", rolling(30.0), 0.0, true},
+          {"moving objects", "8 people", moving(8, person, 1.4)},
+          {"moving objects", "48 people", moving(48, person, 1.4)},
+          {"moving objects", "20 cars", moving(20, car, 6.0)}};
 }
 
 struct CameraFigures {
@@ -155,6 +175,9 @@ struct CameraFigures {
 
 struct CellResult {
   std::vector<CameraFigures> cameras;
+  // Per camera: mean and largest fraction of the pixels on moving objects (MovingCover).
+  std::vector<double> moving_cover;
+  std::vector<double> moving_cover_max;
   SlaveCalibration slave;
   double rotation_error_deg = NAN;
   double direction_error_deg = NAN;
@@ -208,6 +231,32 @@ std::vector<std::optional<CameraPose>> RunVo(const sim::SimulatedRig& rig, int c
   return poses;
 }
 
+// Per camera: the mean fraction of the pixels that show a moving object (where the frame differs
+// from the same rig's without them) over every 10th frame, into `cover`, and the largest one
+// into `cover_max`.
+void MovingCover(const sim::SimulatedRig& rig, std::vector<double>* cover,
+                 std::vector<double>* cover_max) {
+  sim::SimulatedRigSpec still_spec = rig.spec();
+  still_spec.scene.moving_objects.count = 0;
+  auto still = sim::MakeSimulatedRig(still_spec);
+  EXPECT_TRUE(still.ok()) << still.error();
+  if (!still.ok()) return;
+  for (int camera = 0; camera < rig.num_cameras(); ++camera) {
+    double sum = 0.0, largest = 0.0;
+    int n = 0;
+    for (int64_t k = 0; k < rig.num_frames(); k += 10, ++n) {
+      const cv::Mat a = rig.RenderFrame(camera, k);
+      const double fraction =
+          static_cast<double>(cv::countNonZero(a != still->RenderFrame(camera, k))) /
+          static_cast<double>(a.total());
+      sum += fraction;
+      largest = std::max(largest, fraction);
+    }
+    cover->push_back(sum / std::max(1, n));
+    cover_max->push_back(largest);
+  }
+}
+
 CellResult RunCell(const sim::SimulatedRigSpec& base, const Cell& cell) {
   sim::SimulatedRigSpec spec = base;
   cell.apply(&spec);
@@ -215,6 +264,9 @@ CellResult RunCell(const sim::SimulatedRigSpec& base, const Cell& cell) {
   EXPECT_TRUE(rig.ok()) << rig.error();
   CellResult out;
   if (!rig.ok()) return out;
+  if (spec.scene.moving_objects.count > 0) {
+    MovingCover(*rig, &out.moving_cover, &out.moving_cover_max);
+  }
   std::vector<std::vector<std::optional<CameraPose>>> poses;
   for (int camera = 0; camera < rig->num_cameras(); ++camera) {
     out.cameras.emplace_back();
@@ -251,11 +303,19 @@ TEST(VoRobustnessMatrix, EffectsCostAccuracyHonestly) {
   }
   sim::SimulatedRigSpec base = *config->simulated_source;
   base.realtime = false;
+  if (const char* seed = std::getenv("RIGCAL_MATRIX_SEED")) {
+    base.seed = std::stoull(seed);
+    std::printf("\nseed %llu\n", static_cast<unsigned long long>(base.seed));
+  }
   std::printf("\n%-15s %-14s | %-34s | %-34s | %-10s %9s %8s %7s %8s\n", "effect", "strength",
               "cam0: first s, tracked, seg, reloc, rot rms",
               "cam1: first s, tracked, seg, reloc, rot rms", "state", "rot deg", "σ deg", "rot/σ",
               "dir deg");
+  const char* only = std::getenv("RIGCAL_MATRIX_EFFECT");
   for (const Cell& cell : Cells()) {
+    if (only != nullptr && cell.effect != "none" && cell.effect.find(only) == std::string::npos) {
+      continue;
+    }
     const CellResult r = RunCell(base, cell);
     ASSERT_EQ(r.cameras.size(), 2u);
     std::string vo_text[2];
@@ -272,6 +332,13 @@ TEST(VoRobustnessMatrix, EffectsCostAccuracyHonestly) {
                 cell.effect.c_str(), cell.strength.c_str(), vo_text[0].c_str(), vo_text[1].c_str(),
                 std::string(ToString(r.slave.state)).c_str(), r.rotation_error_deg,
                 r.slave.rot_std_deg, z, r.direction_error_deg);
+    if (r.moving_cover.size() == 2) {
+      std::printf(
+          "%-15s %-14s   (moving objects cover %.1f%% of cam0's view, %.1f%% of cam1's; at most "
+          "%.0f%%, %.0f%%)\n",
+          "", "", 100.0 * r.moving_cover[0], 100.0 * r.moving_cover[1],
+          100.0 * r.moving_cover_max[0], 100.0 * r.moving_cover_max[1]);
+    }
     if (cell.effect == "none") {
       for (const CameraFigures& f : r.cameras) {
         EXPECT_GE(f.tracked, f.frames * 9 / 10);

@@ -57,6 +57,8 @@ enum RandomPurpose : uint64_t {
   kPurposeNoiseTable = 6,
   kPurposeSurface = 7,
   kPurposeExposure = 8,
+  kPurposeMovingTexture = 9,  // the moving objects' texture offsets
+  kPurposeMovingPath = 10,    // the moving objects' lines and phases
 };
 
 }  // namespace rigcal::sim::internal

@@ -3,6 +3,7 @@
 // mip level.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 
@@ -155,6 +156,63 @@ Hit Scene::CastAmong(const float o[3], const float d[3], float pixel_angle, cons
   float t = 0.f;
   const int32_t s = Intersect(o, d, &t, boxes, num_boxes);
   return Shade(o, d, pixel_angle, s, t);
+}
+
+Hit Scene::Cast(const float o[3], const float d[3], float pixel_angle,
+                const MovingBoxes& moving) const {
+  float t = 0.f;
+  const int32_t s = Intersect(o, d, &t);
+  return ShadeWithMoving(o, d, pixel_angle, s, t, moving);
+}
+
+Hit Scene::CastAmong(const float o[3], const float d[3], float pixel_angle, const int* boxes,
+                     int num_boxes, const MovingBoxes& moving) const {
+  float t = 0.f;
+  const int32_t s = Intersect(o, d, &t, boxes, num_boxes);
+  return ShadeWithMoving(o, d, pixel_angle, s, t, moving);
+}
+
+int Scene::IntersectMoving(const float o[3], const float d[3], const MovingBoxes& moving,
+                           float* best, int32_t* surface) const {
+  const float inv[3] = {1.f / d[0], 1.f / d[1], 1.f / d[2]};
+  const float half[3] = {static_cast<float>(moving_half_.x()), static_cast<float>(moving_half_.y()),
+                         static_cast<float>(moving_half_.z())};
+  int nearest = -1;
+  for (int i = 0; i < moving.num_visible; ++i) {
+    const int b = moving.visible[i];
+    const float* centre = moving.centres + 3 * static_cast<ptrdiff_t>(b);
+    float t_near = -std::numeric_limits<float>::infinity();
+    float t_far = std::numeric_limits<float>::infinity();
+    int axis = 0;
+    for (int a = 0; a < 3; ++a) {
+      const float local = o[a] - centre[a];
+      const float t1 = (-half[a] - local) * inv[a];
+      const float t2 = (half[a] - local) * inv[a];
+      const float t_min = std::min(t1, t2);
+      if (t_min > t_near) {
+        t_near = t_min;
+        axis = a;
+      }
+      t_far = std::min(t_far, std::max(t1, t2));
+    }
+    if (t_near <= t_far && t_near > 0.f && t_near < *best) {
+      *best = t_near;
+      *surface = first_moving_surface_ + 6 * b + 2 * axis + (d[axis] > 0.f ? 0 : 1);
+      nearest = b;
+    }
+  }
+  return nearest;
+}
+
+Hit Scene::ShadeWithMoving(const float o[3], const float d[3], float pixel_angle, int32_t surface,
+                           float t, const MovingBoxes& moving) const {
+  const int b = IntersectMoving(o, d, moving, &t, &surface);
+  // A moving box's hit in the box's own frame (centred on its centre), so that its texture
+  // moves with it.
+  const float* centre = b >= 0 ? moving.centres + 3 * static_cast<ptrdiff_t>(b) : nullptr;
+  const float origin[3] = {centre ? o[0] - centre[0] : o[0], centre ? o[1] - centre[1] : o[1],
+                           centre ? o[2] - centre[2] : o[2]};
+  return Shade(origin, d, pixel_angle, surface, t);
 }
 
 Hit Scene::Shade(const float o[3], const float d[3], float pixel_angle, int32_t s, float t) const {

@@ -59,28 +59,77 @@ Transform WorldFromCameraTransform(const Pose& world_from_camera) {
   return xf;
 }
 
-// world_from_camera per pixel row: one transform for every row (global shutter), or one per
-// row of [0, num_rows) (rolling shutter).
+// world_from_camera and the moving boxes' centres per pixel row: one of each for every row
+// (global shutter), or one per row of [0, num_rows) (rolling shutter); and the moving boxes the
+// camera may see.
 class RowTransforms {
  public:
-  explicit RowTransforms(const Pose& world_from_camera)
-      : rows_{WorldFromCameraTransform(world_from_camera)} {}
-  RowTransforms(const RowPose& world_from_camera_at_row, int num_rows) {
+  RowTransforms(const Pose& world_from_camera, const float* moving, int num_moving)
+      : rows_{WorldFromCameraTransform(world_from_camera)},
+        num_moving_(moving != nullptr ? num_moving : 0),
+        moving_(moving) {}
+  RowTransforms(const RowPose& world_from_camera_at_row, const RowMoving& moving_at_row,
+                int num_moving, int num_rows)
+      : num_moving_(moving_at_row ? num_moving : 0) {
     rows_.reserve(static_cast<size_t>(num_rows));
     for (int y = 0; y < num_rows; ++y) {
       rows_.push_back(WorldFromCameraTransform(world_from_camera_at_row(y)));
     }
+    if (num_moving_ == 0) return;
+    moving_rows_.resize(3 * static_cast<size_t>(num_moving_) * num_rows);
+    for (int y = 0; y < num_rows; ++y) moving_at_row(y, MovingRow(y));
+    moving_ = moving_rows_.data();
   }
   const Transform& operator[](int row) const {
     return rows_.size() == 1 ? rows_[0] : rows_[static_cast<size_t>(row)];
   }
+  bool has_moving() const { return num_moving_ > 0; }
+  // The moving boxes while row `row` is exposed (has_moving()).
+  MovingBoxes Moving(int row) const {
+    const size_t offset = rows_.size() == 1 ? 0 : 3 * static_cast<size_t>(num_moving_) * row;
+    return {moving_ + offset, visible_.data(), static_cast<int>(visible_.size())};
+  }
+  // Keeps the moving boxes whose bounding sphere (`radius`, m) reaches into the cone of
+  // `max_axis_angle` (radians) around the optical axis, or holds the camera centre, at some row.
+  void CullMoving(double radius, double max_axis_angle) {
+    visible_.clear();
+    for (int b = 0; b < num_moving_; ++b) {
+      for (size_t y = 0; y < rows_.size(); ++y) {
+        if (MaySee(rows_[y], moving_ + 3 * (num_moving_ * y + b), radius, max_axis_angle)) {
+          visible_.push_back(b);
+          break;
+        }
+      }
+    }
+  }
 
  private:
+  float* MovingRow(int row) {
+    return moving_rows_.data() + 3 * static_cast<size_t>(num_moving_) * row;
+  }
+  // Whether a sphere at `centre` of `radius` reaches into the camera's cone: its angle from the
+  // axis less its angular radius is at most the cone's.
+  static bool MaySee(const Transform& xf, const float* centre, double radius,
+                     double max_axis_angle) {
+    const Eigen::Vector3d v(centre[0] - xf.o[0], centre[1] - xf.o[1], centre[2] - xf.o[2]);
+    const double distance = v.norm();
+    if (distance <= radius) return true;
+    const double sphere = std::asin(radius / distance);
+    if (max_axis_angle + sphere >= M_PI) return true;
+    const Eigen::Vector3d axis(xf.r[2], xf.r[5], xf.r[8]);  // the camera's z in the world
+    return v.dot(axis) >= distance * std::cos(max_axis_angle + sphere);
+  }
+
   std::vector<Transform> rows_;
+  int num_moving_ = 0;
+  const float* moving_ = nullptr;
+  std::vector<float> moving_rows_;
+  std::vector<int> visible_;
 };
 
 // Casts single pixels of one camera's view: the pixel's bearing (CameraTables) turned into the
-// world, its local pixel angle, and the intensity of what it hits.
+// world, its local pixel angle, and the intensity of what it hits (with the scene's moving boxes
+// where the row transforms place them).
 class PixelCaster {
  public:
   PixelCaster(const Scene& scene, const CameraTables& camera,
@@ -110,6 +159,12 @@ class PixelCaster {
     const Transform& xf = xf_[y];
     float d[3];
     xf.Apply(b, d);
+    if (xf_.has_moving()) {
+      const MovingBoxes moving = xf_.Moving(y);
+      return Shade(boxes != nullptr
+                       ? scene_.CastAmong(xf.o, d, pixel_angle, boxes, num_boxes, moving)
+                       : scene_.Cast(xf.o, d, pixel_angle, moving));
+    }
     return Shade(boxes != nullptr ? scene_.CastAmong(xf.o, d, pixel_angle, boxes, num_boxes)
                                   : scene_.Cast(xf.o, d, pixel_angle));
   }
@@ -147,10 +202,12 @@ void CastNodes(const Scene& scene, const NodeGrid& grid, const RowTransforms& xf
       (*hits)[k].surface = kInvalid;
       continue;
     }
-    const Transform& row_xf = xf[static_cast<int>(k / grid.nodes_x) * grid.block];
+    const int row = static_cast<int>(k / grid.nodes_x) * grid.block;
+    const Transform& row_xf = xf[row];
     float d[3];
     row_xf.Apply(b, d);
-    (*hits)[k] = scene.Cast(row_xf.o, d, grid.pixel_angle[k]);
+    (*hits)[k] = xf.has_moving() ? scene.Cast(row_xf.o, d, grid.pixel_angle[k], xf.Moving(row))
+                                 : scene.Cast(row_xf.o, d, grid.pixel_angle[k]);
   }
 }
 
@@ -223,6 +280,7 @@ CameraTables MakeCameraTables(std::shared_ptr<const camera::CameraModel> model) 
   tables.width = model->width();
   tables.height = model->height();
   tables.bearings.resize(static_cast<size_t>(tables.width) * tables.height * 3);
+  double min_axis_cos = 1.0;
   for (int y = 0; y < tables.height; ++y) {
     for (int x = 0; x < tables.width; ++x) {
       float* b = &tables.bearings[3 * (static_cast<size_t>(y) * tables.width + x)];
@@ -232,11 +290,13 @@ CameraTables MakeCameraTables(std::shared_ptr<const camera::CameraModel> model) 
         b[0] = static_cast<float>(unit.x());
         b[1] = static_cast<float>(unit.y());
         b[2] = static_cast<float>(unit.z());
+        min_axis_cos = std::min(min_axis_cos, unit.z());
       } else {
         b[0] = b[1] = b[2] = kNaN;
       }
     }
   }
+  tables.max_axis_angle = static_cast<float>(std::acos(std::clamp(min_axis_cos, -1.0, 1.0)));
   tables.model = std::move(model);
   return tables;
 }
@@ -264,6 +324,8 @@ NodeGrid MakeNodeGrid(const CameraTables& camera, int block) {
       grid.bearings[3 * k] = static_cast<float>(b->x());
       grid.bearings[3 * k + 1] = static_cast<float>(b->y());
       grid.bearings[3 * k + 2] = static_cast<float>(b->z());
+      grid.max_axis_angle = std::max(grid.max_axis_angle,
+                                     static_cast<float>(std::acos(std::clamp(b->z(), -1.0, 1.0))));
       // Local pixel angle: the larger of the angles to the next pixel right and down.
       double angle = 0.0;
       for (const Eigen::Vector2d& step : {Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1)}) {
@@ -278,6 +340,12 @@ NodeGrid MakeNodeGrid(const CameraTables& camera, int block) {
 }
 
 namespace {
+// The largest angle from the optical axis of a ray the view casts (pixels and nodes), radians.
+double MaxAxisAngle(const CameraTables& camera, const NodeGrid* grid) {
+  const bool nodes = grid != nullptr && grid->block >= 2;
+  return std::max(camera.max_axis_angle, nodes ? grid->max_axis_angle : 0.f) + 1e-3;  // rounding
+}
+
 // Renders the view of `camera` from the row transforms `xf` (RenderAccumulate).
 void RenderWith(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
                 const RowTransforms& xf, float weight, float* acc, std::vector<Hit>* hits,
@@ -298,18 +366,23 @@ void RenderWith(const Scene& scene, const CameraTables& camera, const NodeGrid* 
 
 void RenderAccumulate(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
                       const Pose& world_from_camera, float weight, float* acc,
-                      std::vector<Hit>* hits, RenderKernel kernel) {
-  RenderWith(scene, camera, grid, RowTransforms(world_from_camera), weight, acc, hits, kernel);
+                      std::vector<Hit>* hits, RenderKernel kernel, const float* moving) {
+  if (scene.MovingBoxCount() == 0) moving = nullptr;
+  RowTransforms xf(world_from_camera, moving, scene.MovingBoxCount());
+  if (xf.has_moving()) xf.CullMoving(scene.MovingBoxRadius(), MaxAxisAngle(camera, grid));
+  RenderWith(scene, camera, grid, xf, weight, acc, hits, kernel);
 }
 
 void RenderAccumulateRows(const Scene& scene, const CameraTables& camera, const NodeGrid* grid,
                           const RowPose& world_from_camera_at_row, float weight, float* acc,
-                          std::vector<Hit>* hits, RenderKernel kernel) {
+                          std::vector<Hit>* hits, RenderKernel kernel,
+                          const RowMoving& moving_at_row) {
   const bool nodes = grid != nullptr && grid->block >= 2;
   const int num_rows =
       nodes ? std::max(camera.height, (grid->nodes_y - 1) * grid->block + 1) : camera.height;
-  RenderWith(scene, camera, grid, RowTransforms(world_from_camera_at_row, num_rows), weight, acc,
-             hits, kernel);
+  RowTransforms xf(world_from_camera_at_row, moving_at_row, scene.MovingBoxCount(), num_rows);
+  if (xf.has_moving()) xf.CullMoving(scene.MovingBoxRadius(), MaxAxisAngle(camera, grid));
+  RenderWith(scene, camera, grid, xf, weight, acc, hits, kernel);
 }
 
 }  // namespace rigcal::sim::internal

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "sim_random.h"
 
@@ -50,10 +51,19 @@ void SimulatedRigData::RenderAt(int camera, double t_s, float weight, std::vecto
     const RowPose at_row = [&](int row) {
       return WorldFromCamera(camera, t_s + RowDelay(camera, row));
     };
-    RenderAccumulateRows(scene, tables, grid, at_row, weight, acc->data(), hits, kernel);
+    RowMoving moving_at_row;
+    if (!moving.empty()) {
+      moving_at_row = [&](int row, float* centres) {
+        moving.CentresAt(t_s + RowDelay(camera, row), centres);
+      };
+    }
+    RenderAccumulateRows(scene, tables, grid, at_row, weight, acc->data(), hits, kernel,
+                         moving_at_row);
   } else {
+    std::vector<float> centres(3 * static_cast<size_t>(moving.size()));
+    moving.CentresAt(t_s, centres.data());
     RenderAccumulate(scene, tables, grid, WorldFromCamera(camera, t_s), weight, acc->data(), hits,
-                     kernel);
+                     kernel, moving.empty() ? nullptr : centres.data());
   }
 }
 

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The immutable data of a simulated rig, shared by the rig and its devices (scene, trajectory,
-// render tables, noise table), and the production of its frames: rendering with motion blur and
-// rolling shutter, image noise, quantisation, drops and stamp jitter. Private to rigcal_sim.
+// render tables, noise table), and the production of its frames: rendering with motion blur,
+// rolling shutter and moving objects, image noise, quantisation, drops and stamp jitter. Private to
+// rigcal_sim.
 
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -11,6 +12,7 @@
 
 #include "rigcal/base/types.h"
 #include "rigcal/sim/simulated_rig.h"
+#include "sim_moving_objects.h"
 #include "sim_render.h"
 #include "sim_scene.h"
 #include "sim_trajectory.h"
@@ -25,6 +27,7 @@ struct SimulatedRigData {
   int64_t num_frames = 0;
   Trajectory trajectory;
   Scene scene;
+  MovingObjects moving;  // where the scene's moving boxes are when
   std::vector<CameraTables> cameras;
   std::vector<NodeGrid> grids;  // per camera, for spec.render_block (unused when 1)
   std::vector<float> noise;     // standard normal samples
@@ -61,7 +64,7 @@ struct SimulatedRigData {
 
  private:
   // Adds weight x the view of `camera` whose top row is exposed at stream time t_s (the later
-  // rows at t_s + RowDelay) to `acc`.
+  // rows at t_s + RowDelay; the moving objects where they are at each row's time) to `acc`.
   void RenderAt(int camera, double t_s, float weight, std::vector<float>* acc,
                 std::vector<Hit>* hits, RenderKernel kernel) const;
   // Applies frame k's light (vignetting, exposure gain) and noise (scaled by the gain) to `acc`

@@ -104,11 +104,37 @@ Scene Scene::Build(const SimulatedRigSpec& spec) {
     }
     description << ToString(spec.scene.type) << " " << size.x() << " x " << size.y() << " x "
                 << size.z() << " m with " << spec.scene.boxes << " boxes";
+    scene.AddMovingBoxes(spec, &description);
   }
   description << ", texel " << texel * 1000.0 << " mm";
   if (!photos.empty()) description << ", textures from " << photos.size() << " photograph(s)";
   scene.description_ = description.str();
   return scene;
+}
+
+void Scene::AddMovingBoxes(const SimulatedRigSpec& spec, std::ostringstream* description) {
+  const SimulatedRigSpec::Scene::MovingObjects& m = spec.scene.moving_objects;
+  if (m.count <= 0) return;
+  num_moving_ = m.count;
+  moving_half_ = 0.5 * m.size_m;
+  first_moving_surface_ = static_cast<int32_t>(surfaces_.size());
+  // Their own random numbers, so that the static layout is the same with and without them.
+  Rng rng(HashKey(spec.seed, kPurposeMovingTexture));
+  const float tile_texels = static_cast<float>(1 << kTextureTileLog2);
+  const Kind kinds[3] = {Kind::kPlaneX, Kind::kPlaneY, Kind::kPlaneZ};
+  for (int b = 0; b < m.count; ++b) {
+    const int tile = static_cast<int>(rng.Below(kNumTiles));
+    for (int face = 0; face < 6; ++face) {
+      Surface f;
+      f.kind = kinds[face / 2];
+      f.tile = (tile + face) % kNumTiles;
+      f.offset_u = static_cast<float>(rng.Uniform(0, tile_texels));
+      f.offset_v = static_cast<float>(rng.Uniform(0, tile_texels));
+      surfaces_.push_back(f);
+    }
+  }
+  *description << " and " << m.count << " moving objects " << m.size_m.x() << " x " << m.size_m.y()
+               << " x " << m.size_m.z() << " m at " << m.speed_mps << " m/s";
 }
 
 std::string Scene::Describe() const { return description_; }

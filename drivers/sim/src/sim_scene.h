@@ -2,12 +2,15 @@
 #pragma once
 // Scene of the simulated rig: axis-aligned textured planes and boxes and a pipe (cylinder along
 // x), built from the spec; ray casting against it (sim_ray_cast.cc) and the free-space check of
-// the trajectory. Private to rigcal_sim.
+// the trajectory. The moving objects' boxes (their shape and texture; where they are when:
+// sim_moving_objects.h) are cast against when the caller says where they are. Private to
+// rigcal_sim.
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -30,22 +33,41 @@ struct Hit {
   float lod = 0.f;
 };
 
+// The moving boxes a view casts against: every box's centre at the ray's time (3 floats per box,
+// world, m) and the boxes that may be in view (indices into them; the others are not tested).
+struct MovingBoxes {
+  const float* centres = nullptr;
+  const int* visible = nullptr;
+  int num_visible = 0;
+};
+
 class Scene {
  public:
   // Builds the scene of spec.scene (layout and textures from spec.seed).
   static Scene Build(const SimulatedRigSpec& spec);
 
-  // Casts ray o + t d (d unit, world frame). `pixel_angle`: angle subtended by one pixel along
-  // the ray, radians (selects the mip level).
+  // Casts ray o + t d (d unit, world frame) into the static scene. `pixel_angle`: angle
+  // subtended by one pixel along the ray, radians (selects the mip level).
   Hit Cast(const float o[3], const float d[3], float pixel_angle) const;
-  // The same, testing only the boxes listed in `boxes` (indices, -1 ends the list early) besides
-  // the enclosure or pipe: for rays between rays known to hit only those boxes.
+  // The same with the moving boxes `moving` (where they are at the ray's time); a moving box's
+  // texture moves with it.
+  Hit Cast(const float o[3], const float d[3], float pixel_angle, const MovingBoxes& moving) const;
+  // The same, testing only the static boxes listed in `boxes` (indices, -1 ends the list early)
+  // besides the enclosure or pipe (and every moving box): for rays between rays known to hit
+  // only those static boxes.
   Hit CastAmong(const float o[3], const float d[3], float pixel_angle, const int* boxes,
                 int num_boxes) const;
-  // The box a surface belongs to, or -1 (enclosure faces, pipe, sky).
+  Hit CastAmong(const float o[3], const float d[3], float pixel_angle, const int* boxes,
+                int num_boxes, const MovingBoxes& moving) const;
+  // The static box a surface belongs to, or -1 (enclosure faces, pipe, moving boxes, sky).
   int BoxOfSurface(int32_t surface) const {
-    return has_enclosure_ && surface >= 6 ? (surface - 6) / 6 : -1;
+    return has_enclosure_ && surface >= 6 && surface < first_moving_surface_ ? (surface - 6) / 6
+                                                                             : -1;
   }
+  // Number of moving boxes (spec.scene.moving_objects.count) and the radius of the sphere
+  // around each (m).
+  int MovingBoxCount() const { return num_moving_; }
+  double MovingBoxRadius() const { return moving_half_.norm(); }
   // First hit distance in units of |d|, double precision; nullopt when the ray hits nothing.
   std::optional<double> Distance(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
   // Ok when p is in free space at least `clearance` away from every surface; else an error
@@ -92,7 +114,16 @@ class Scene {
                       T* best, int32_t* surface) const;
   template <typename T>
   void IntersectPipe(const T o[3], const T d[3], T* best, int32_t* surface) const;
+  // The nearest of the moving boxes along o + t d nearer than *best: lowers *best, sets
+  // *surface and returns the box's index; -1 when none is nearer.
+  int IntersectMoving(const float o[3], const float d[3], const MovingBoxes& moving, float* best,
+                      int32_t* surface) const;
+  // Shade of the nearer of the static hit (surface, t) and the moving boxes.
+  Hit ShadeWithMoving(const float o[3], const float d[3], float pixel_angle, int32_t surface,
+                      float t, const MovingBoxes& moving) const;
   Hit Shade(const float o[3], const float d[3], float pixel_angle, int32_t surface, float t) const;
+  // Build's step for spec.scene.moving_objects: their surfaces after every static one.
+  void AddMovingBoxes(const SimulatedRigSpec& spec, std::ostringstream* description);
 
   std::string description_;
   float inv_texel_ = 100.f;
@@ -109,6 +140,12 @@ class Scene {
   double radius_ = 0.3;
   double x0_ = 0.0;
   double x1_ = 1.0;
+  // Moving boxes: num_moving_ boxes of half extent moving_half_, centred on the centres the
+  // caller gives; box i's faces are surfaces first_moving_surface_ + 6 i + 2 axis + (0: lo,
+  // 1: hi), textured in the box's own frame.
+  int num_moving_ = 0;
+  Eigen::Vector3d moving_half_ = Eigen::Vector3d::Zero();
+  int32_t first_moving_surface_ = INT32_MAX;
   std::vector<Surface> surfaces_;
   std::vector<std::shared_ptr<const TextureTile>> tiles_;
   std::vector<TileView> tile_views_;  // per tile: level pointers, for the sampler

@@ -99,10 +99,43 @@ cv::Mat SimulatedRig::RenderView(int camera, const Pose& world_from_camera, int 
   return image;
 }
 
+std::vector<Eigen::AlignedBox3d> SimulatedRig::MovingObjectsAt(double t_s) const {
+  const internal::MovingObjects& moving = data_->moving;
+  std::vector<Eigen::AlignedBox3d> boxes;
+  boxes.reserve(static_cast<size_t>(moving.size()));
+  for (int i = 0; i < moving.size(); ++i) {
+    const Eigen::Vector3d centre = moving.CentreAt(i, t_s);
+    boxes.emplace_back(centre - moving.half_size(), centre + moving.half_size());
+  }
+  return boxes;
+}
+
 std::optional<double> SimulatedRig::CastRay(const Eigen::Vector3d& origin,
                                             const Eigen::Vector3d& direction) const {
   return data_->scene.Distance(origin, direction);
 }
+
+namespace {
+
+// The moving objects' paths, kept kMovingObjectClearance away from every camera centre from
+// frame 0 to one frame period after the last frame (the last rows of a rolling shutter), taken
+// a quarter frame period apart.
+Expected<internal::MovingObjects> BuildMovingObjects(const internal::SimulatedRigData& data) {
+  const SimulatedRigSpec& s = data.spec;
+  if (s.scene.moving_objects.count <= 0) return internal::MovingObjects();
+  const double step_s = 0.25 / s.frame_rate_hz;
+  std::vector<internal::TimedPoint> cameras;
+  cameras.reserve(static_cast<size_t>(4 * data.num_frames + 1) * s.names.size());
+  for (int64_t q = 0; q <= 4 * data.num_frames; ++q) {
+    const double t_s = static_cast<double>(q) * step_s;
+    for (size_t c = 0; c < s.names.size(); ++c) {
+      cameras.push_back({t_s, data.WorldFromCamera(static_cast<int>(c), t_s).C});
+    }
+  }
+  return internal::MovingObjects::Build(s, cameras, step_s, kMovingObjectClearance);
+}
+
+}  // namespace
 
 Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec) {
   if (Status status = spec.Check(); !status.ok()) return status;
@@ -148,6 +181,10 @@ Expected<SimulatedRig> MakeSimulatedRig(SimulatedRigSpec spec) {
       }
     }
   }
+
+  auto moving = BuildMovingObjects(*data);
+  if (!moving.ok()) return Error{moving.error()};
+  data->moving = std::move(*moving);
 
   for (size_t c = 0; c < s.cameras.size(); ++c) {
     data->cameras.push_back(internal::MakeCameraTables(s.cameras[c]));

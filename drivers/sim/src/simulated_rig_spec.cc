@@ -143,6 +143,29 @@ Status CheckFrames(const SimulatedRigSpec& spec) {
   return Status::Ok();
 }
 
+// Moving objects: count, size and speed in range; none in a pipe.
+Status CheckMovingObjects(const SimulatedRigSpec& spec) {
+  const SimulatedRigSpec::Scene::MovingObjects& m = spec.scene.moving_objects;
+  std::ostringstream e;
+  if (m.count < 0 || m.count > 64) {
+    e << "scene.moving_objects.count: " << m.count << " outside [0, 64]";
+    return Error{e.str()};
+  }
+  if (m.count > 0 && spec.scene.type == SimulatedRigSpec::SceneType::kPipe) {
+    e << "scene.moving_objects: only in a room, yard or street, not in a pipe";
+    return Error{e.str()};
+  }
+  if (!(m.size_m.allFinite() && m.size_m.minCoeff() > 0 && m.size_m.maxCoeff() <= 100)) {
+    e << "scene.moving_objects.size: every extent must be in (0, 100] m";
+    return Error{e.str()};
+  }
+  if (!(m.speed_mps > 0 && m.speed_mps <= 100)) {
+    e << "scene.moving_objects.speed_mps: " << m.speed_mps << " outside (0, 100] m/s";
+    return Error{e.str()};
+  }
+  return Status::Ok();
+}
+
 Status CheckScene(const SimulatedRigSpec& spec) {
   const SimulatedRigSpec::Scene& scene = spec.scene;
   std::ostringstream e;
@@ -169,6 +192,7 @@ Status CheckScene(const SimulatedRigSpec& spec) {
     e << "scene.texel_m: must be in (0, 10] m";
     return Error{e.str()};
   }
+  if (Status moving = CheckMovingObjects(spec); !moving.ok()) return moving;
   for (size_t i = 0; i < scene.textures.size(); ++i) {
     const SimulatedRigSpec::GreyImage& t = scene.textures[i];
     if (t.width < kMinTextureImagePx || t.height < kMinTextureImagePx ||

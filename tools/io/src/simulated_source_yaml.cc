@@ -197,12 +197,43 @@ std::optional<Error> ReadTextures(const FieldReader& r, const YAML::Node& node,
   return std::nullopt;
 }
 
+// source.scene.moving_objects: {count, size, speed_mps}, each optional.
+std::optional<Error> ReadMovingObjects(const FieldReader& r, const YAML::Node& node,
+                                       SimulatedRigSpec::Scene::MovingObjects* moving) {
+  const std::string prefix = "source.scene.moving_objects";
+  if (!node.IsMap()) {
+    return r.Fail(node, prefix, "expected {count: ..., size: ..., speed_mps: ...}");
+  }
+  if (auto e = r.CheckKeys(node, prefix + ".", {"count", "size", "speed_mps"})) return *e;
+  if (const YAML::Node n = node["count"]) {
+    auto count = r.Integer(n, prefix + ".count");
+    if (!count) return Error{count.error()};
+    if (*count < 0 || *count > 64) return r.Fail(n, prefix + ".count", "must be in [0, 64]");
+    moving->count = *count;
+  }
+  if (const YAML::Node n = node["size"]) {
+    auto size = r.NumbersOf(n, prefix + ".size", 3);
+    if (!size) return Error{size.error()};
+    for (double v : *size) {
+      if (!(v > 0 && v <= 100)) return r.Fail(n, prefix + ".size", "extents must be in (0, 100] m");
+    }
+    moving->size_m = Eigen::Vector3d((*size)[0], (*size)[1], (*size)[2]);
+  }
+  if (const YAML::Node n = node["speed_mps"]) {
+    auto v = NumberIn(
+        r, n, prefix + ".speed_mps", [](double x) { return x > 0 && x <= 100; }, "in (0, 100] m/s");
+    if (!v) return Error{v.error()};
+    moving->speed_mps = *v;
+  }
+  return std::nullopt;
+}
+
 std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& node,
                                       const std::string& path, SimulatedRigSpec* spec) {
   const std::string prefix = "source.scene";
-  if (auto e =
-          r.CheckKeys(node, prefix + ".",
-                      {"type", "size", "boxes", "diameter", "length", "texel_m", "textures"})) {
+  if (auto e = r.CheckKeys(node, prefix + ".",
+                           {"type", "size", "boxes", "diameter", "length", "texel_m", "textures",
+                            "moving_objects"})) {
     return *e;
   }
   SimulatedRigSpec::Scene& scene = spec->scene;
@@ -265,6 +296,10 @@ std::optional<Error> ReadSceneSection(const FieldReader& r, const YAML::Node& no
   }
   if (const YAML::Node n = node["textures"]) {
     if (auto e = ReadTextures(r, n, path, &scene)) return *e;
+  }
+  if (const YAML::Node n = node["moving_objects"]) {
+    if (auto e = only("moving_objects", !pipe, "room, yard or street")) return *e;
+    if (auto e = ReadMovingObjects(r, n, &scene.moving_objects)) return *e;
   }
   return std::nullopt;
 }

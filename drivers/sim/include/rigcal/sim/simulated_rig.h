@@ -15,6 +15,7 @@
 // SimulatedRigSpec (simulated_rig_spec.h).
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -122,12 +123,17 @@ class SimulatedRig {
   // Frame k of camera `camera` exactly as its device returns it (noise, blur; ignores drops,
   // jitter and failures). `kernel`: the texture kernels to render with. Thread-safe.
   cv::Mat RenderFrame(int camera, int64_t k, RenderKernel kernel = RenderKernel::kSimd) const;
-  // A noise-free, blur-free image of camera `camera` at pose world_from_camera. `block`:
+  // A noise-free, blur-free image of camera `camera` at pose world_from_camera, of the static
+  // scene (a view has no time, so no moving objects). `block`:
   // render_block to use (0 = the spec's). Thread-safe.
   cv::Mat RenderView(int camera, const Pose& world_from_camera, int block = 0,
                      RenderKernel kernel = RenderKernel::kSimd) const;
+  // The moving objects (spec().scene.moving_objects) at stream time t_s: their world boxes
+  // (axis-aligned, m), in a fixed order; empty without them.
+  std::vector<Eigen::AlignedBox3d> MovingObjectsAt(double t_s) const;
   // Distance along the ray origin + t * direction (world, direction need not be unit: t is in
-  // units of |direction|) to the first surface, or nullopt (sky). Double precision.
+  // units of |direction|) to the first surface of the static scene (moving objects are not
+  // cast against), or nullopt (sky). Double precision.
   std::optional<double> CastRay(const Eigen::Vector3d& origin,
                                 const Eigen::Vector3d& direction) const;
 

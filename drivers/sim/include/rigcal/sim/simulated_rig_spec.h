@@ -15,7 +15,8 @@
 //   pipe    a pipe (cylinder seen from inside) along world x through y = z = 0, from x = 0 to
 //           x = length, with textured end caps.
 // MakeSimulatedRig checks that every camera stays in the free space for the whole run (inside
-// the room/pipe, outside every box, at least kMinClearance from any surface).
+// the room/pipe, outside every static box, at least kMinClearance from any surface); moving
+// objects instead keep clear of the cameras (kMovingObjectClearance) by the choice of their lines.
 //
 // `source:` section of a rig config (docs/config.md) for `type: simulated`. Every key is
 // optional except `trajectory`; unknown keys are errors.
@@ -60,6 +61,16 @@
 //                                 # file) as the surfaces' textures, in turn, instead of the
 //                                 # procedural ones: each is cropped to its centre square,
 //                                 # scaled to half a tile and mirrored into a seamless tile
+//       moving_objects:           # optional (room, yard, street): textured boxes standing on
+//         count: 6                # the floor that slide back and forth at a constant speed
+//         size: [0.6, 0.6, 1.8]   # along straight lines across the free floor (the inner 70%),
+//         speed_mps: 1.4          # each on its own line and phase from the seed; size: x, y, z
+//                                 # extent in m (axis-aligned; they do not turn). count [0, 64]
+//                                 # (default 0), size each (0, 100] m, speed (0, 100] m/s.
+//                                 # Rendered at each frame's (each row's, each blur sample's)
+//                                 # time; the free-space check keeps every camera clear of the
+//                                 # static scene, and each object's line is redrawn (up to 100
+//                                 # times) until the object keeps 0.5 m clear of every camera
 //     noise_sigma: 2.0            # Gaussian image noise, grey levels, [0, 100]
 //     motion_blur:                # absent or `false`: off
 //       exposure_ms: 8            # (0, frame period); images average `samples` renders
@@ -168,6 +179,14 @@ struct SimulatedRigSpec {
     // Real-photo textures (source.scene.textures): the surfaces take their texture tiles from
     // these grey images in turn instead of the procedural dead leaves; empty = procedural.
     std::vector<GreyImage> textures;
+    // Moving objects (source.scene.moving_objects; room, yard, street): textured boxes that
+    // slide back and forth along straight lines across the free floor, independently of the
+    // rig (people, cars: features a VO must reject as outliers).
+    struct MovingObjects {
+      int count = 0;                             // [0, 64]; 0: none
+      Eigen::Vector3d size_m = {0.6, 0.6, 1.8};  // x, y, z extent, each (0, 100] m
+      double speed_mps = 1.4;                    // (0, 100] m/s
+    } moving_objects;
   } scene;
 
   // --- Imaging and device behaviour -----------------------------------------------------------
@@ -221,6 +240,9 @@ struct SimulatedRigSpec {
 
 // Smallest distance between any camera centre and any surface that MakeSimulatedRig accepts, m.
 inline constexpr double kMinClearance = 0.05;
+// Smallest distance between any camera centre and any moving object's box, m (their lines are
+// drawn until they keep it).
+inline constexpr double kMovingObjectClearance = 0.5;
 
 std::string ToString(SimulatedRigSpec::SceneType type);  // "room", "yard", "street", "pipe"
 std::optional<SimulatedRigSpec::SceneType> SceneTypeFromString(const std::string& name);
