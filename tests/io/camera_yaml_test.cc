@@ -10,9 +10,9 @@
 #include <sstream>
 #include <string>
 
+#include "../../tools/io/src/config_sections.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/io/camera_files.h"
-#include "../../tools/io/src/config_sections.h"
 
 namespace rigcal::io {
 namespace {
@@ -109,6 +109,24 @@ TEST(CameraYaml, PinholeWithK3AndWithoutDistortion) {
   spec = Parse(text);
   ASSERT_TRUE(spec) << spec.error();
   EXPECT_TRUE(spec->distortion.empty());
+}
+
+TEST(CameraYaml, RollingShutterReadout) {
+  auto spec = Parse(kPinhole + "rolling_shutter_ms: 30\n");
+  ASSERT_TRUE(spec) << spec.error();
+  EXPECT_DOUBLE_EQ(spec->rolling_shutter_s, 0.03);
+  auto model = camera::MakeCameraModel(*spec);
+  ASSERT_TRUE(model) << model.error();
+  EXPECT_DOUBLE_EQ((*model)->rolling_shutter_s(), 0.03);
+  EXPECT_DOUBLE_EQ((*model)->Clone()->rolling_shutter_s(), 0.03);
+  // Without the key: a global shutter.
+  spec = Parse(kPinhole);
+  ASSERT_TRUE(spec) << spec.error();
+  EXPECT_EQ(spec->rolling_shutter_s, 0.0);
+  ExpectError(kPinhole + "rolling_shutter_ms: -1\n",
+              "rolling_shutter_ms:", "cam0.rolling_shutter_ms", "[0, 1000) ms");
+  ExpectError(kPinhole + "rolling_shutter_ms: slow\n",
+              "rolling_shutter_ms:", "cam0.rolling_shutter_ms", "not a number");
 }
 
 TEST(CameraYaml, Fisheye) {

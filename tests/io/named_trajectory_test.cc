@@ -60,6 +60,7 @@ TEST(WriteRigConfig, RoundTripsThroughTheLoader) {
   spec.height = 480;
   spec.intrinsics = {300.1234567890123, 301.5, 319.5, 239.25};
   spec.distortion = {0.01, -0.002, 0.0003, -4e-05};
+  spec.rolling_shutter_s = 0.0125;
   cameras[0].spec = spec;
   cameras[1].name = "cam-1.b";
   const std::string path = (dir / "rig.yaml").string();
@@ -72,6 +73,7 @@ TEST(WriteRigConfig, RoundTripsThroughTheLoader) {
   EXPECT_EQ(config->cameras[0].spec->model, camera::CameraSpec::Model::kFisheye);
   EXPECT_EQ(config->cameras[0].spec->intrinsics, spec.intrinsics);
   EXPECT_EQ(config->cameras[0].spec->distortion, spec.distortion);
+  EXPECT_DOUBLE_EQ(config->cameras[0].spec->rolling_shutter_s, 0.0125);
   EXPECT_FALSE(config->cameras[1].spec.has_value());
 
   // The polynomial omnidirectional model, with a given field of view.
@@ -92,6 +94,7 @@ TEST(WriteRigConfig, RoundTripsThroughTheLoader) {
   EXPECT_EQ(read.center, omni->center);
   EXPECT_EQ(read.affine, omni->affine);
   EXPECT_EQ(read.max_field_angle_deg, 100.0);
+  EXPECT_EQ(read.rolling_shutter_s, 0.0);  // a global shutter writes no key
 
   const Status none = WriteRigConfig(path, "x", {}, "");
   ASSERT_FALSE(none.ok());

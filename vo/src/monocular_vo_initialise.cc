@@ -37,6 +37,7 @@ double RotationResidual(const InitialViews& views, const std::vector<char>* mask
 void MonocularVo::Impl::StartReference(int64_t t_ns, const cv::Mat& grey) {
   tracks_.clear();
   has_reference_ = false;
+  rolling_shutter_.ClearMotion();  // BuildInitialMap corrects both views
   if (grey.empty()) return;
   AddNewTracks(grey, -1);
   if (static_cast<int>(tracks_.size()) >= options_.min_init_tracks) {
@@ -134,11 +135,14 @@ bool MonocularVo::Impl::BuildInitialMap(int64_t t_ns, const InitialViews& views,
   const int kf0 =
       map_.AddKeyframe(reference_t_ns_, Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero());
   const int kf1 = map_.AddKeyframe(t_ns, Eigen::Quaterniond(r1), c1);
+  const InitialViews corrected = ViewsAtStamps(t_ns, views, motion);
   for (size_t i = 0; i < tracks_.size(); ++i) {
     tracks_[i].anchor_keyframe = kf0;
     if (!motion.inliers[i]) continue;
-    const Eigen::Vector3d& f0 = views.reference[i];
-    const Eigen::Vector3d& f1 = views.current[i];
+    const Eigen::Vector3d& f0 = corrected.reference[i];
+    const Eigen::Vector3d& f1 = corrected.current[i];
+    tracks_[i].anchor_bearing = f0;
+    tracks_[i].bearing = f1;
     const auto tri = TriangulateMidpoint(Eigen::Vector3d::Zero(), f0, c1, r1 * f1);
     if (!tri || tri->ray_angle_rad < min_angle ||
         BearingAngle(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), f0, tri->point) > gate ||
@@ -168,9 +172,13 @@ bool MonocularVo::Impl::BuildInitialMap(int64_t t_ns, const InitialViews& views,
     result->message = "initial bundle adjustment rejected the points";
   }
   map_.Clear();
-  for (Track& t : tracks_) {
-    t.landmark = -1;
-    t.anchor_keyframe = -1;
+  // The tracks keep their views as measured: the next attempt corrects them with its motion.
+  rolling_shutter_.ClearMotion();
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    tracks_[i].landmark = -1;
+    tracks_[i].anchor_keyframe = -1;
+    tracks_[i].anchor_bearing = views.reference[i];
+    tracks_[i].bearing = views.current[i];
   }
   return false;
 }
@@ -183,6 +191,9 @@ void MonocularVo::Impl::OpenSegment(int64_t t_ns, const cv::Mat& grey, int inlie
   pose_.C = k1->C;
   pose_t_ns_ = t_ns;
   has_velocity_ = false;
+  ResetRollingShutterPoses();
+  RecordRollingShutterPose(reference_t_ns_, CameraPoseRC());
+  RecordRollingShutterPose(t_ns, pose_);
   last_keyframe_ = kf1;
   frames_since_keyframe_ = 0;
   DescribeLandmarks(grey);

@@ -21,14 +21,22 @@ void MonocularVo::Impl::TriangulateTracks(int kf) {
     const Keyframe* anchor = map_.keyframe(t.anchor_keyframe);
     if (anchor == nullptr || t.anchor_keyframe == kf) continue;
     const Eigen::Matrix3d ra = anchor->R();
-    const auto tri = TriangulateMidpoint(anchor->C, ra * t.anchor_bearing, pose_.C, r * t.bearing);
+    // Rays from the cameras' centres at the rows' times (rolling shutter; else the centres).
+    const Eigen::Vector3d anchor_origin = anchor->C + ra * t.anchor_ray_origin;
+    const Eigen::Vector3d origin = pose_.C + r * t.ray_origin;
+    const auto tri =
+        TriangulateMidpoint(anchor_origin, ra * t.anchor_bearing, origin, r * t.bearing);
     if (!tri || tri->ray_angle_rad < min_angle ||
-        BearingAngle(ra, anchor->C, t.anchor_bearing, tri->point) > gate ||
-        BearingAngle(r, pose_.C, t.bearing, tri->point) > gate) {
+        BearingAngle(ra, anchor_origin, t.anchor_bearing, tri->point) > gate ||
+        BearingAngle(r, origin, t.bearing, tri->point) > gate) {
       continue;
     }
     const int lm = map_.AddLandmark(tri->point);
-    map_.AddObservation(lm, t.anchor_keyframe, t.anchor_bearing);
+    map_.AddObservation(lm, t.anchor_keyframe,
+                        BearingFromStamp(t.anchor_ray_origin, t.anchor_bearing,
+                                         ra.transpose() * (tri->point - anchor->C)));
+    t.bearing = BearingFromStamp(t.ray_origin, t.bearing, r.transpose() * (tri->point - pose_.C));
+    t.ray_origin.setZero();
     map_.AddObservation(lm, kf, t.bearing);
     t.landmark = lm;
   }
@@ -73,6 +81,7 @@ void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
       t.landmark = -1;
       t.anchor_keyframe = kf;
       t.anchor_bearing = t.bearing;
+      t.anchor_ray_origin = t.ray_origin;
     }
   }
   TriangulateTracks(kf);
@@ -102,6 +111,7 @@ void MonocularVo::Impl::CreateKeyframe(int64_t t_ns, const cv::Mat& grey) {
     if (map_.keyframe(t.anchor_keyframe) == nullptr) {
       t.anchor_keyframe = kf;
       t.anchor_bearing = t.bearing;
+      t.anchor_ray_origin = t.ray_origin;
     }
   }
   DeferKeyframeWork(grey, kf);

@@ -101,6 +101,8 @@ void MonocularVo::Impl::ResumeTracking(int64_t t_ns, const cv::Mat& grey,
   pose_ = pose;
   pose_t_ns_ = t_ns;
   has_velocity_ = false;
+  ResetRollingShutterPoses();
+  RecordRollingShutterPose(t_ns, pose_);
   state_ = VoState::kTracking;
   lost_since_ns_ = -1;
   ++relocalisations_;

@@ -14,6 +14,8 @@ MonocularVo::Impl::Impl(std::shared_ptr<const camera::CameraModel> camera, int c
     : options_(options),
       camera_(std::move(camera)),
       camera_index_(camera_index),
+      rolling_shutter_(camera_ != nullptr ? camera_->rolling_shutter_s() : 0.0,
+                       camera_ != nullptr ? camera_->height() : 0),
       exposure_(options.inlier_sigmas, options.noise_window_frames),
       noise_(options.noise_floor_px, options.inlier_sigmas, options.noise_window_frames) {
   RequireValid(options_.Check(), "VoOptions");

@@ -51,6 +51,9 @@ void MonocularVo::Impl::Lose(const std::string& reason, int64_t t_ns, const cv::
              reason);
   tracks_.clear();
   has_velocity_ = false;
+  // No motion until two poses are tracked again: the relocalisation's frame is taken as is.
+  ResetRollingShutterPoses();
+  rolling_shutter_.ClearMotion();
   has_reference_ = false;
   state_ = VoState::kLost;
   lost_since_ns_ = -1;
@@ -140,7 +143,9 @@ int MonocularVo::Impl::ClassifyTracks(const MapMatches& matches, const CameraPos
     const Track& t = tracks_[i];
     const Keyframe* anchor = t.landmark < 0 ? map_.keyframe(t.anchor_keyframe) : nullptr;
     if (anchor == nullptr) continue;
-    const Eigen::Vector3d normal = (pose.C - anchor->C).cross(anchor->R() * t.anchor_bearing);
+    const Eigen::Vector3d baseline = (pose.C + pose.R_world_from_cam * t.ray_origin) -
+                                     (anchor->C + anchor->R() * t.anchor_ray_origin);
+    const Eigen::Vector3d normal = baseline.cross(anchor->R() * t.anchor_bearing);
     if (normal.norm() < 1e-12) continue;  // no baseline yet
     const double off_plane = std::asin(
         std::min(1.0, std::abs(normal.normalized().dot(pose.R_world_from_cam * t.bearing))));
@@ -163,7 +168,9 @@ bool MonocularVo::Impl::NeedKeyframe(int inliers, int linked,
 
 void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* result) {
   const CameraPoseRC predicted = PredictPose(t_ns);
+  SetRollingShutterMotion(predicted);
   TrackFeatures(grey, &predicted);
+  CorrectTracksToStamp(predicted);
   ++frames_since_keyframe_;
   const MapMatches matches = CollectMapMatches();
   const std::string matched = std::to_string(matches.size());
@@ -194,6 +201,7 @@ void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* 
     CreateKeyframe(t_ns, grey);
     result->keyframe = true;
   }
+  RecordRollingShutterPose(t_ns, pose_);
   result->state = state_;
   result->inliers = inliers;
   // The pose quality: the inlier ratio, the inliers up to 100, and how the frame's track noise

@@ -18,9 +18,11 @@ void MonocularVo::Impl::AddNewTracks(const cv::Mat& grey, int anchor_keyframe) {
     Track t;
     t.px = px;
     if (!Unproject(px, &t.bearing)) continue;
+    SetRayAtStamp(&t);
     t.patch = MakePatch(grey, px);
     t.anchor_keyframe = anchor_keyframe;
     t.anchor_bearing = t.bearing;
+    t.anchor_ray_origin = t.ray_origin;
     tracks_.push_back(t);
   }
 }
@@ -78,7 +80,7 @@ void MonocularVo::Impl::TrackFeatures(const cv::Mat& grey, const CameraPoseRC* p
     for (size_t i = 0; i < tracks_.size(); ++i) {
       const Landmark* lm = tracks_[i].landmark >= 0 ? map_.landmark(tracks_[i].landmark) : nullptr;
       if (lm == nullptr) continue;
-      const auto px = camera_->Project(rt * (lm->point - predicted->C));
+      const auto px = ProjectFromStamp(rt * (lm->point - predicted->C));
       if (px.has_value() && px->allFinite()) {
         const cv::Point2f guess(static_cast<float>(px->x()), static_cast<float>(px->y()));
         if (InMask(guess)) guesses[i] = guess;

@@ -35,8 +35,8 @@ bool InsideImage(double u, double v, int width, int height) {
   return u >= -0.5 && u <= width - 0.5 && v >= -0.5 && v <= height - 0.5;
 }
 
-// Ranges, sizes and finiteness; the lens analysis is done by the builders.
-Status CheckStructure(const CameraSpec& spec) {
+// The image's size, the field angle and the rolling shutter's readout.
+Status CheckImage(const CameraSpec& spec) {
   using Model = CameraSpec::Model;
   if (!(spec.width > 0 && spec.width <= kMaxImageSide && spec.height > 0 &&
         spec.height <= kMaxImageSide)) {
@@ -51,6 +51,17 @@ Status CheckStructure(const CameraSpec& spec) {
                                             ") for " + std::string(ModelName(spec.model)) +
                                             " (got " + Str(max_angle) + ")");
   }
+  if (!(spec.rolling_shutter_s >= 0.0 && spec.rolling_shutter_s < 1.0)) {
+    return Issue("rolling_shutter_ms",
+                 "must be in [0, 1000) ms (got " + Str(spec.rolling_shutter_s * 1e3) + ")");
+  }
+  return Status::Ok();
+}
+
+// Ranges, sizes and finiteness; the lens analysis is done by the builders.
+Status CheckStructure(const CameraSpec& spec) {
+  using Model = CameraSpec::Model;
+  if (Status status = CheckImage(spec); !status.ok()) return status;
   const std::string model_name(ModelName(spec.model));
   if (spec.model == Model::kPinhole || spec.model == Model::kFisheye) {
     const auto& k = spec.intrinsics;
@@ -177,6 +188,7 @@ Expected<std::unique_ptr<CameraModel>> MakeCameraModel(const CameraSpec& spec) {
   if (Status status = CheckStructure(spec); !status.ok()) return status;
   Expected<std::unique_ptr<CameraModel>> model = Build(spec);
   if (!model.ok()) return model;
+  (*model)->set_rolling_shutter_s(spec.rolling_shutter_s);
   ModuleLogger("vo")->debug("camera '{}': {} {}x{}, max field angle {:.3f} deg, {:.4f} deg/px",
                             spec.name, ModelName(spec.model), spec.width, spec.height,
                             (*model)->MaxFieldAngleDeg(),

@@ -23,10 +23,24 @@ using camera::CameraSpec;
 // Keys of a camera entry: read here, or owned by the rig config parser (nominal, truth, device,
 // metric).
 const std::set<std::string> kCameraKeys = {
-    "name",    "model",        "resolution", "intrinsics", "distortion",
-    "poly",    "inverse_poly", "center",     "affine",     "max_field_angle_deg",
-    "nominal", "truth",        "device",     "capture",    "trigger",
-    "metric"};
+    "name",
+    "model",
+    "resolution",
+    "intrinsics",
+    "distortion",
+    "poly",
+    "inverse_poly",
+    "center",
+    "affine",
+    "max_field_angle_deg",
+    "rolling_shutter_ms",
+    "nominal",
+    "truth",
+    "device",
+    "capture",
+    "trigger",
+    "metric",
+};
 // Keys that only some models use.
 const std::set<std::string> kProjectiveKeys = {"intrinsics", "distortion"};  // pinhole, fisheye
 const std::set<std::string> kScaramuzzaKeys = {"poly", "inverse_poly", "center", "affine"};
@@ -163,6 +177,11 @@ Expected<CameraSpec> ParseCameraSection(const YAML::Node& camera, const std::str
     auto angle = r.Number(node, prefix + "max_field_angle_deg");
     if (!angle) return Error{angle.error()};
     spec.max_field_angle_deg = *angle;
+  }
+  if (const YAML::Node node = camera["rolling_shutter_ms"]) {
+    auto readout = r.Number(node, prefix + "rolling_shutter_ms");
+    if (!readout) return Error{readout.error()};
+    spec.rolling_shutter_s = *readout * 1e-3;
   }
   if (auto e = CheckSpec(r, spec, camera, camera, prefix)) return *e;
   return spec;

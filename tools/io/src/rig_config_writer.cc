@@ -56,6 +56,11 @@ Status WriteRigConfig(const std::string& path, const std::string& rig_name,
       angle << std::setprecision(17) << spec.max_field_angle_deg;
       out << "    max_field_angle_deg: " << angle.str() << "\n";
     }
+    if (spec.rolling_shutter_s != 0.0) {
+      std::ostringstream readout;
+      readout << std::setprecision(17) << spec.rolling_shutter_s * 1e3;
+      out << "    rolling_shutter_ms: " << readout.str() << "\n";
+    }
   }
   return WriteFileAtomically(path, out.str());
 }

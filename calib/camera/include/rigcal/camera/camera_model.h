@@ -8,7 +8,7 @@
 // Pixels: (u, v) = (column, row); (0, 0) is the centre of the top-left pixel, so the image
 // covers [-0.5, width - 0.5] x [-0.5, height - 0.5].
 // Models are built from a CameraSpec by MakeCameraModel (camera_spec.h, which documents the
-// three models' equations). A model is immutable after construction: every const method may be
+// three models' equations). A model is immutable once shared: every const method may be
 // called concurrently from any thread; Project and Unproject do not allocate.
 
 #include <Eigen/Core>
@@ -47,6 +47,15 @@ class CameraModel {
 
   virtual std::unique_ptr<CameraModel> Clone() const = 0;
 
+  // Rolling shutter: time from the exposure of the top row to the bottom row's, seconds (0 =
+  // global shutter). Row v is exposed v / (height - 1) of it after the frame's stamp, which is
+  // the top row's exposure time. Not part of the projection: the VO, which knows the camera's
+  // motion, moves the observations of later rows to the stamp (vo/src/rolling_shutter.h). Set
+  // once by MakeCameraModel (or whoever builds the model) before the model is shared; Clone
+  // keeps it.
+  double rolling_shutter_s() const { return rolling_shutter_s_; }
+  void set_rolling_shutter_s(double readout_s) { rolling_shutter_s_ = readout_s; }
+
   // True when `pixel` lies inside the image shrunk by `border` pixels on every side.
   bool InImage(const Eigen::Vector2d& pixel, double border = 0.0) const {
     return pixel.x() >= border - 0.5 && pixel.x() <= width_ - 0.5 - border &&
@@ -61,6 +70,7 @@ class CameraModel {
  private:
   int width_ = 0;
   int height_ = 0;
+  double rolling_shutter_s_ = 0.0;
 };
 
 }  // namespace rigcal::camera

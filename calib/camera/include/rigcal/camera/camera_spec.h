@@ -83,6 +83,12 @@ struct CameraSpec {
   // corners see nothing (a 186-degree lens: 93).
   double max_field_angle_deg = 0.0;
 
+  // Rolling shutter (config `rolling_shutter_ms`): the time from the exposure of the top image
+  // row to the bottom row's, seconds; row v is exposed v / (height - 1) of it after the frame's
+  // stamp (the stamp is the top row's). 0 = global shutter. In [0, 1 s). The VO moves each
+  // observation to the stamp's time with its own motion estimate (camera_model.h).
+  double rolling_shutter_s = 0.0;
+
   // Success when MakeCameraModel will succeed, else the first problem of the spec as
   // "<field>: <what>", <field> being the config key at fault (`resolution`, `intrinsics`,
   // `distortion`, `poly`, ...). Besides the ranges above this checks the lens model itself:
