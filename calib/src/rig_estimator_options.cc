@@ -11,8 +11,8 @@ Status RigEstimatorOptions::Check() const {
   std::ostringstream e;
   if (!(keyframe_min_angle_deg >= 0.0))
     e << "keyframe_min_angle_deg: must be >= 0";
-  else if (!(keyframe_min_translation >= 0.0))
-    e << "keyframe_min_translation: must be >= 0";
+  else if (!(keyframe_min_travel_s >= 0.0 && keyframe_min_travel_s <= 3600.0))
+    e << "keyframe_min_travel_s: must be in [0, 3600] s";
   else if (keyframe_max_interval_ns <= 0)
     e << "keyframe_max_interval_ns: must be > 0";
   else if (keyframe_history < 2)

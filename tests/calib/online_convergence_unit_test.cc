@@ -8,7 +8,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <string>
 
 #include "rigcal/base/quaternion.h"
@@ -18,14 +17,13 @@
 namespace rigcal {
 namespace {
 
-// The drive with every master and slave position multiplied by `unit`; keyframes by angle and
-// time only, so that they do not depend on the unit either.
+// The drive with every master and slave position multiplied by `unit` (the keyframes do not
+// depend on it: motions/master_travel.h).
 RigEstimate RunInUnit(const SyntheticDrive& drive, double unit) {
   const RigRecording& rec = drive.recording;
   std::vector<std::string> names = {rec.master.name};
   for (const auto& s : rec.slaves) names.push_back(s.name);
   RigEstimatorOptions options;
-  options.keyframe_min_translation = std::numeric_limits<double>::infinity();
   RigEstimator estimator(names, options);
   for (size_t k = 0; k < rec.size(); ++k) {
     std::vector<std::optional<CameraPose>> set = rec.SetAt(k);

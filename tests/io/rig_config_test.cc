@@ -67,7 +67,7 @@ TEST(RigConfig, OptionSections) {
                           "            max_axis_std_ratio: 50, planar_hysteresis: 1.5,\n"
                           "            general_axis_spread_deg: 12,\n"
                           "            alpha_maxrot_noise_deg: 0, sigma_block_s: 5,\n"
-                          "            sigma_blocks: 30}\n"
+                          "            sigma_blocks: 30, keyframe_min_travel_s: 0.25}\n"
                           "sync: {frame_rate_hz: 10, tolerance_ms: 7.5, required: [left]}\n"
                           "publish: {extrinsics_rate_hz: 5, status_rate_hz: 0.5}\n"
                           "state: {path: /tmp/x.state, save_interval_s: 12}\n"));
@@ -84,6 +84,7 @@ TEST(RigConfig, OptionSections) {
   EXPECT_DOUBLE_EQ(config->online.estimator.model_selection.alpha_maxrot_noise_deg, 0.0);
   EXPECT_DOUBLE_EQ(config->online.estimator.sigma_block_s, 5.0);
   EXPECT_EQ(config->online.estimator.sigma_blocks, 30);
+  EXPECT_DOUBLE_EQ(config->online.estimator.keyframe_min_travel_s, 0.25);
   EXPECT_EQ(config->online.sync.frame_period_ns, 100'000'000);
   EXPECT_EQ(config->online.sync.tolerance_ns, 7'500'000);
   EXPECT_EQ(config->online.sync.required, (std::vector<bool>{true, true, false}));
@@ -126,6 +127,10 @@ TEST(RigConfig, ErrorsNameFileLineAndKey) {
        ":5: estimatr: unknown key"},
       {"rig: {master: top}\ncameras:\n  - name: front\n  - name: left\n",
        ":1: rig.master: 'top' is not in cameras"},
+      // A length in the master's arbitrary unit: removed, the error names its successor.
+      {"rig: {master: front}\ncameras:\n  - name: front\n  - name: left\nestimator:\n"
+       "  keyframe_min_translation: 0.05\n",
+       ":6: estimator.keyframe_min_translation: removed: a length in the master's units"},
       {"rig: {master: front}\ncameras:\n  - name: front\n  - name: front\n",
        ":4: cameras[1].name: duplicate camera name 'front'"},
       // A name becomes a file name and part of LCM channel names.

@@ -9,8 +9,9 @@
 
 namespace rigcal::internal {
 
-bool OfferKeyframe(const RigEstimatorOptions& o, int64_t t_ns, const CameraPose& master,
-                   const CameraPose& slave, std::deque<Keyframe>* keyframes) {
+bool OfferKeyframe(const RigEstimatorOptions& o, double min_translation, int64_t t_ns,
+                   const CameraPose& master, const CameraPose& slave,
+                   std::deque<Keyframe>* keyframes) {
   if (!keyframes->empty() && keyframes->back().segment != slave.segment) {
     keyframes->clear();  // pairs never cross a scale segment
   }
@@ -18,7 +19,7 @@ bool OfferKeyframe(const RigEstimatorOptions& o, int64_t t_ns, const CameraPose&
     const Keyframe& last = keyframes->back();
     const double angle = AngleBetween(last.master.q, master.pose.q) * kDegPerRad;
     const double trans = (master.pose.C - last.master.C).norm();
-    if (angle < o.keyframe_min_angle_deg && trans < o.keyframe_min_translation &&
+    if (angle < o.keyframe_min_angle_deg && trans < min_translation &&
         t_ns - last.t_ns < o.keyframe_max_interval_ns) {
       return false;
     }

@@ -22,12 +22,13 @@ struct Keyframe {
 };
 
 // Makes the set (master and slave pose at t_ns) a keyframe when the master has rotated by
-// keyframe_min_angle_deg or moved by keyframe_min_translation since the last keyframe, or
-// keyframe_max_interval_ns has passed; keeps the last keyframe_history keyframes. A new slave
-// odometry segment drops the older keyframes (pairs never cross a scale segment). Returns
-// whether the set became a keyframe.
-bool OfferKeyframe(const RigEstimatorOptions& options, int64_t t_ns, const CameraPose& master,
-                   const CameraPose& slave, std::deque<Keyframe>* keyframes);
+// keyframe_min_angle_deg or moved by `min_translation` (master units: MasterTravel's distance
+// in keyframe_min_travel_s) since the last keyframe, or keyframe_max_interval_ns has passed;
+// keeps the last keyframe_history keyframes. A new slave odometry segment drops the older
+// keyframes (pairs never cross a scale segment). Returns whether the set became a keyframe.
+bool OfferKeyframe(const RigEstimatorOptions& options, double min_translation, int64_t t_ns,
+                   const CameraPose& master, const CameraPose& slave,
+                   std::deque<Keyframe>* keyframes);
 
 // The motion from an older keyframe a to the newest one b.
 struct KeyframePair {

@@ -16,6 +16,7 @@
 #include "batch/batch_acceptance.h"
 #include "models/model_explanation.h"
 #include "motions/keyframe_pairing.h"
+#include "motions/master_travel.h"
 #include "motions/motion_data.h"
 #include "motions/pose_glitch_gate.h"
 #include "motions/pose_quality_gate.h"
@@ -72,6 +73,7 @@ RigEstimator::RigEstimator(std::vector<std::string> camera_names, RigEstimatorOp
   RequireValid(options_.Check(), "RigEstimatorOptions");
   glitch_gate_ = std::make_unique<internal::PoseGlitchGate>(static_cast<int>(names_.size()));
   quality_gate_ = std::make_unique<internal::PoseQualityGate>(static_cast<int>(names_.size()));
+  master_travel_ = std::make_unique<internal::MasterTravel>(2 * options_.keyframe_max_interval_ns);
   consumed_t_ns_.assign(names_.size(), -1);
   first_consumed_.assign(names_.size(), PoseFingerprint{});
   last_consumed_.assign(names_.size(), PoseFingerprint{});
@@ -134,6 +136,9 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
   }
   master_segment_ = master.segment;
   have_master_segment_ = true;
+  master_travel_->Add(t_ns, master.pose, master.segment);
+  const double keyframe_min_translation =
+      master_travel_->DistanceIn(options_.keyframe_min_travel_s);
   const internal::PoseGlitchGate::Verdict glitches = glitch_gate_->Check(t_ns, poses);
   const std::vector<bool> poor = quality_gate_->Check(poses);
   for (size_t i = 0; i < slaves_.size() && i + 1 < poses.size(); ++i) {
@@ -158,18 +163,19 @@ void RigEstimator::AddSet(int64_t t_ns, const std::vector<std::optional<CameraPo
       PublishCounts(static_cast<int>(i));
       continue;
     }
-    UpdateSlave(static_cast<int>(i), t_ns, master, slave);
+    UpdateSlave(static_cast<int>(i), t_ns, master, slave, keyframe_min_translation);
   }
 }
 
 void RigEstimator::UpdateSlave(int index, int64_t t_ns, const CameraPose& master,
-                               const CameraPose& slave) {
+                               const CameraPose& slave, double keyframe_min_translation) {
   Slave& s = *slaves_[index];
   const RigEstimatorOptions& o = options_;
   s.online.segment = slave.segment;
 
   // Keyframes, and the motion pair of a new one.
-  if (!internal::OfferKeyframe(o, t_ns, master, slave, &s.keyframes)) return;
+  if (!internal::OfferKeyframe(o, keyframe_min_translation, t_ns, master, slave, &s.keyframes))
+    return;
   ++s.online.keyframes;
   const std::optional<internal::KeyframePair> pair = internal::PairNewestKeyframe(o, s.keyframes);
   if (!pair) return;

@@ -131,7 +131,7 @@ const std::map<std::string, FieldSetter>& EstimatorFields() {
   using M = ModelSelectionOptions;
   static const std::map<std::string, FieldSetter> fields = {
       {"keyframe_min_angle_deg", Double(&O::keyframe_min_angle_deg)},
-      {"keyframe_min_translation", Double(&O::keyframe_min_translation)},
+      {"keyframe_min_travel_s", Double(&O::keyframe_min_travel_s)},
       {"keyframe_max_interval_s", Seconds(&O::keyframe_max_interval_ns)},
       {"keyframe_history", Int(&O::keyframe_history)},
       {"pair_target_angle_deg", Double(&O::pair_target_angle_deg)},
@@ -186,6 +186,12 @@ std::optional<Error> ParseEstimator(const FieldReader& r, const YAML::Node& node
   std::set<std::string> known;
   for (const auto& [key, setter] : EstimatorFields()) known.insert(key);
   known.insert("time_offset");  // needs the cameras: ParseTimeOffsetSection
+  if (node.IsMap() && node["keyframe_min_translation"]) {
+    return r.Fail(node["keyframe_min_translation"], "estimator.keyframe_min_translation",
+                  "removed: a length in the master's units depends on the unit its odometry "
+                  "happened to set; use keyframe_min_travel_s (the master's median speed times "
+                  "this many seconds)");
+  }
   if (auto e = r.CheckKeys(node, "estimator.", known)) return e;
   for (auto it = node.begin(); it != node.end(); ++it) {
     const std::string key = it->first.Scalar();

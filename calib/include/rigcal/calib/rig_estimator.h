@@ -28,6 +28,7 @@ namespace rigcal {
 namespace internal {
 class PoseGlitchGate;
 class PoseQualityGate;
+class MasterTravel;
 }  // namespace internal
 
 class RigEstimator {
@@ -65,7 +66,9 @@ class RigEstimator {
   struct Slave;
   // The stages of one slave's update (calib/src/motions/keyframe_pairing,
   // calib/src/online/: motion_gates, statistics_accumulation), then Publish.
-  void UpdateSlave(int index, int64_t t_ns, const CameraPose& master, const CameraPose& slave);
+  // `keyframe_min_translation`: the master's travel in keyframe_min_travel_s (master_travel.h).
+  void UpdateSlave(int index, int64_t t_ns, const CameraPose& master, const CameraPose& slave,
+                   double keyframe_min_translation);
   // Solves and publishes a slave's estimate (calib/src/online/: statistics_solution,
   // decalibration_check, window_refinement, online_uncertainty, convergence_check; then
   // models/model_explanation).
@@ -79,6 +82,7 @@ class RigEstimator {
   std::vector<std::unique_ptr<Slave>> slaves_;
   std::unique_ptr<internal::PoseGlitchGate> glitch_gate_;    // pose_glitch_gate
   std::unique_ptr<internal::PoseQualityGate> quality_gate_;  // pose_quality_gate
+  std::unique_ptr<internal::MasterTravel> master_travel_;    // master_travel
   RigEstimate estimate_;
   int master_segment_ = 0;
   bool have_master_segment_ = false;

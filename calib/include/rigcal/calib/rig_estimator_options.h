@@ -16,10 +16,14 @@ namespace rigcal {
 
 struct RigEstimatorOptions {
   // Keyframes (per slave): a set becomes a keyframe when the master has rotated by
-  // keyframe_min_angle_deg or moved by keyframe_min_translation (master units) since the last
-  // keyframe, or keyframe_max_interval_ns has passed.
+  // keyframe_min_angle_deg since the last keyframe, or moved as far as its median speed (over
+  // the last 2 keyframe_max_interval_ns) carries it in keyframe_min_travel_s (a distance in
+  // the master's own unit, which a monocular VO sets arbitrarily: motions/master_travel.h), or
+  // keyframe_max_interval_ns has passed. 0.04 s: at 20-25 Hz a keyframe at every set while the
+  // master moves at 80-100 % of its median speed or faster, every other one while slower (as
+  // the former 0.05 master units did in a VO's usual unit, without depending on it).
   double keyframe_min_angle_deg = 2.0;
-  double keyframe_min_translation = 0.05;
+  double keyframe_min_travel_s = 0.04;
   int64_t keyframe_max_interval_ns = 1'000'000'000;
   int keyframe_history = 64;  // keyframes kept per slave to pair with
 
