@@ -146,15 +146,20 @@ std::vector<PoseNoise> Noises() {
 // a 99th percentile of |z| of 2.6; over 40 draws x 2 slaves the RMS of one cell is known to about
 // ±0.15 and its p99 to about ±0.7 (the three components of a result share its σ and errors).
 // The bounds are what the σ floor of batch_sigma_floor.h reaches, not that target: on drifting
-// drives of 100-170 sets the RMS of C and scale is 1.2-1.6 and their p99 3.6-5.4 (docs/
-// evaluations.md, "σ on short histories"). Without the floor: C RMS 3.9 and p99 11-13 at 100
-// sets, scale p99 29 at 100 and 8-11 at 170 and 460.
-constexpr double kMaxRms = 1.7;
+// drives of 100-170 sets the RMS of C is 1.1-1.24 and of the scale 1.37-1.45, their p99 3.2-5.4
+// (docs/evaluations.md, "σ on short histories"); the floor with one d per parameter alone (no
+// per-block factor) gave C 1.28-1.41 and scale 1.50-1.60 there, beyond these bounds. Without the
+// floor: C RMS 3.9 and p99 11-13 at 100 sets, scale p99 29 at 100 and 8-11 at 170 and 460. The
+// draws are seeded, so a change of the σ is seen on the same drives.
+constexpr double kMaxRmsRotation = 1.2;
+constexpr double kMaxRmsPosition = 1.35;
+constexpr double kMaxRmsScale = 1.55;
 constexpr double kMaxP99 = 6.0;
 
-void ExpectCovered(const std::string& what, const Coverage& c, const std::string& cell) {
+void ExpectCovered(const std::string& what, const Coverage& c, double max_rms,
+                   const std::string& cell) {
   EXPECT_FALSE(c.z.empty()) << cell << ": no " << what;
-  EXPECT_LE(c.Rms(), kMaxRms) << cell << ": " << what << " z RMS";
+  EXPECT_LE(c.Rms(), max_rms) << cell << ": " << what << " z RMS";
   EXPECT_LE(c.P99(), kMaxP99) << cell << ": " << what << " z p99";
 }
 
@@ -171,9 +176,9 @@ TEST(ShortHistorySigma, CoverageAtEveryLength) {
       std::fflush(stdout);
       const std::string cell = noise.name + ", " + std::to_string(length) + " sets";
       EXPECT_GE(c.solved, c.results * 9 / 10) << cell;
-      ExpectCovered("rotation", c.rotation, cell);
-      ExpectCovered("C", c.position, cell);
-      ExpectCovered("scale", c.scale, cell);
+      ExpectCovered("rotation", c.rotation, kMaxRmsRotation, cell);
+      ExpectCovered("C", c.position, kMaxRmsPosition, cell);
+      ExpectCovered("scale", c.scale, kMaxRmsScale, cell);
     }
   }
 }

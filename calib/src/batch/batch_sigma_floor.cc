@@ -2,6 +2,7 @@
 // The σ floor of auto and gls batch results (batch_sigma_floor.h).
 #include "batch/batch_sigma_floor.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -14,14 +15,34 @@
 namespace rigcal::internal {
 namespace {
 
-// Raises a known (finite) `*sigma` to sqrt(sigma_gls² + d²) when that is larger; an unknown σ
-// stays unknown.
-bool Raise(double sigma_gls, double difference, double* sigma) {
-  const double floor = std::hypot(sigma_gls, difference);
+// Raises a known (finite) `*sigma` to `floor` when that is larger; an unknown σ stays unknown.
+bool RaiseTo(double floor, double* sigma) {
   if (!std::isfinite(*sigma) || !std::isfinite(floor) || !(floor > *sigma)) return false;
   *sigma = floor;
   return true;
 }
+
+// The difference d of one block of parameters in the metric of its GLS covariance: the sum of
+// d_i² / λ_i over the covariance's eigenvalues λ_i (those above 1e-12 of the largest: a fixed
+// direction has none), and how many terms.
+struct Mahalanobis {
+  double sum = 0.0;
+  int terms = 0;
+  void Add(const Eigen::MatrixXd& cov, const Eigen::VectorXd& d) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(cov);
+    const double largest = eig.eigenvalues().maxCoeff();
+    if (!(largest > 0.0) || !std::isfinite(largest)) return;
+    for (Eigen::Index i = 0; i < d.size(); ++i) {
+      const double lambda = eig.eigenvalues()(i);
+      if (!(lambda > 1e-12 * largest)) continue;
+      const double along = eig.eigenvectors().col(i).dot(d);
+      sum += along * along / lambda;
+      ++terms;
+    }
+  }
+  // The factor sqrt(1 + dᵀ Σ⁻¹ d / terms) the block's σ are raised by (1 without terms).
+  double Factor() const { return terms > 0 ? std::sqrt(1.0 + sum / terms) : 1.0; }
+};
 
 }  // namespace
 
@@ -38,18 +59,43 @@ void HoldSigmaToConsecutiveGls(const RigRecording& recording, int slave,
   if (!g.ok) return;
   SlaveCalibration efficient = *r;
   TakeGls(g, in, options, &efficient);
+  // Per parameter, sqrt(σ_gls² + d²) (the one observed d for its expectation), and per block
+  // (rotation; C with the scales) σ_gls sqrt(1 + dᵀ Σ_gls⁻¹ d / k): Var(d) taken proportional
+  // to the GLS's covariance, its factor from the block's k differences together, so that a d
+  // that happens to be small in one parameter does not leave its σ at the GLS's alone.
   bool raised = false;
+  // The GLS's rotation parameter: dR = Exp(δ) dR about its estimate (gls_refinement.cc).
+  const Eigen::Vector3d d_rotation =
+      RotationVector(r->estimate.q * efficient.estimate.q.conjugate());
+  Mahalanobis rotation;
+  rotation.Add(g.cov_rotation, d_rotation);
   const double d_deg = AngleBetween(efficient.estimate.q, r->estimate.q) * kDegPerRad;
-  raised |= Raise(efficient.rot_std_deg, d_deg, &r->rot_std_deg);
-  if (!in.translational) {
-    const Eigen::Vector3d d = efficient.estimate.C - r->estimate.C;
-    for (int a = 0; a < 3; ++a) raised |= Raise(efficient.pos_std[a], d[a], &r->pos_std[a]);
-    const Eigen::Vector3d& axis = r->observability.planar_axis;
-    raised |= Raise(efficient.axis_offset_std, axis.dot(d), &r->axis_offset_std);
+  raised |= RaiseTo(
+      std::max(std::hypot(efficient.rot_std_deg, d_deg), efficient.rot_std_deg * rotation.Factor()),
+      &r->rot_std_deg);
+  Mahalanobis translation;  // C and the scales
+  const Eigen::Vector3d d_c = efficient.estimate.C - r->estimate.C;
+  if (!in.translational) translation.Add(g.cov_position, d_c);
+  const size_t scales = std::min(r->scales.size(), efficient.scales.size());
+  for (size_t s = 0; s < scales; ++s) {
+    const double sigma = efficient.scales[s].std;
+    if (sigma > 0.0 && std::isfinite(sigma)) {
+      translation.Add(Eigen::MatrixXd::Constant(1, 1, sigma * sigma),
+                      Eigen::VectorXd::Constant(1, efficient.scales[s].scale - r->scales[s].scale));
+    }
   }
-  for (size_t s = 0; s < r->scales.size() && s < efficient.scales.size(); ++s) {
+  const double factor = translation.Factor();
+  auto raise = [&](double sigma_gls, double d, double* sigma) {
+    return RaiseTo(std::max(std::hypot(sigma_gls, d), sigma_gls * factor), sigma);
+  };
+  if (!in.translational) {
+    for (int a = 0; a < 3; ++a) raised |= raise(efficient.pos_std[a], d_c[a], &r->pos_std[a]);
+    const Eigen::Vector3d& axis = r->observability.planar_axis;
+    raised |= raise(efficient.axis_offset_std, axis.dot(d_c), &r->axis_offset_std);
+  }
+  for (size_t s = 0; s < scales; ++s) {
     const double d = efficient.scales[s].scale - r->scales[s].scale;
-    raised |= Raise(efficient.scales[s].std, d, &r->scales[s].std);
+    raised |= raise(efficient.scales[s].std, d, &r->scales[s].std);
   }
   if (raised) {
     r->message += "; sigma raised to that of generalised least squares on the " +
