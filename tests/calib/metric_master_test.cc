@@ -76,8 +76,9 @@ TEST(MetricMaster, RestartKeepsPositionsOnlyForAMetricMaster) {
   ASSERT_TRUE(std::isfinite(metric.sigma_before));
   EXPECT_DOUBLE_EQ(metric.sigma_before, mono.sigma_before);  // identical until the restart
   // Kept: 20 frames of new motions add information and re-estimate the noise level from the
-  // residuals, which moves σ by far less than 1 %.
-  EXPECT_NEAR(metric.sigma_after, metric.sigma_before, 0.01 * metric.sigma_before);
+  // residuals, which moves σ by about 1 % (1.3 % with a keyframe at every set of this drive);
+  // a restart would at least double it (below).
+  EXPECT_NEAR(metric.sigma_after, metric.sigma_before, 0.02 * metric.sigma_before);
   // Restarted: no position yet (σ 0 or NaN), or a much less certain one.
   EXPECT_TRUE(!(mono.sigma_after > 0.0) || mono.sigma_after > 2.0 * mono.sigma_before);
   ASSERT_TRUE(metric.end.usable()) << metric.end.message;

@@ -40,8 +40,9 @@ struct Mahalanobis {
       ++terms;
     }
   }
-  // The factor sqrt(1 + dᵀ Σ⁻¹ d / terms) the block's σ are raised by (1 without terms).
-  double Factor() const { return terms > 0 ? std::sqrt(1.0 + sum / terms) : 1.0; }
+  // λ = dᵀ Σ⁻¹ d / terms: Var(d) = λ Σ when d's covariance is proportional to Σ (0 without
+  // terms).
+  double Lambda() const { return terms > 0 ? sum / terms : 0.0; }
 };
 
 }  // namespace
@@ -59,43 +60,56 @@ void HoldSigmaToConsecutiveGls(const RigRecording& recording, int slave,
   if (!g.ok) return;
   SlaveCalibration efficient = *r;
   TakeGls(g, in, options, &efficient);
-  // Per parameter, sqrt(σ_gls² + d²) (the one observed d for its expectation), and per block
-  // (rotation; C with the scales) σ_gls sqrt(1 + dᵀ Σ_gls⁻¹ d / k): Var(d) taken proportional
-  // to the GLS's covariance, its factor from the block's k differences together, so that a d
-  // that happens to be small in one parameter does not leave its σ at the GLS's alone.
-  bool raised = false;
+  // Var(d) per parameter of C and per scale: the mean of d² (the one observed d for its
+  // expectation, one degree of freedom) and λ σ_gls² (Var(d) proportional to the GLS's
+  // covariance, λ from the k differences of C and the scales together), so that a d small by
+  // chance does not leave σ at the GLS's alone, nor one large d inflate the whole block. The
+  // rotation's d is already the angle of three differences: there Var(d) is the larger of d²
+  // and λ σ_gls² (λ from the rotation vector's three).
   // The GLS's rotation parameter: dR = Exp(δ) dR about its estimate (gls_refinement.cc).
   const Eigen::Vector3d d_rotation =
       RotationVector(r->estimate.q * efficient.estimate.q.conjugate());
   Mahalanobis rotation;
   rotation.Add(g.cov_rotation, d_rotation);
-  const double d_deg = AngleBetween(efficient.estimate.q, r->estimate.q) * kDegPerRad;
-  raised |= RaiseTo(
-      std::max(std::hypot(efficient.rot_std_deg, d_deg), efficient.rot_std_deg * rotation.Factor()),
-      &r->rot_std_deg);
   Mahalanobis translation;  // C and the scales
   const Eigen::Vector3d d_c = efficient.estimate.C - r->estimate.C;
   if (!in.translational) translation.Add(g.cov_position, d_c);
-  const size_t scales = std::min(r->scales.size(), efficient.scales.size());
+  const size_t scales = std::min({r->scales.size(), efficient.scales.size(), g.scale_std.size()});
   for (size_t s = 0; s < scales; ++s) {
-    const double sigma = efficient.scales[s].std;
+    const double sigma = g.scale_std[s];
     if (sigma > 0.0 && std::isfinite(sigma)) {
       translation.Add(Eigen::MatrixXd::Constant(1, 1, sigma * sigma),
                       Eigen::VectorXd::Constant(1, efficient.scales[s].scale - r->scales[s].scale));
     }
   }
-  const double factor = translation.Factor();
-  auto raise = [&](double sigma_gls, double d, double* sigma) {
-    return RaiseTo(std::max(std::hypot(sigma_gls, d), sigma_gls * factor), sigma);
+  // `sigma_efficient`: the GLS result's σ (with a nominal prior's part); `variance_gls`: the
+  // GLS's own variance of the parameter, from the data alone.
+  auto raise = [](double sigma_efficient, double var_d, double* sigma) {
+    return RaiseTo(std::hypot(sigma_efficient, std::sqrt(std::max(0.0, var_d))), sigma);
   };
+  auto mean = [](double d, double lambda, double variance_gls) {
+    return 0.5 * (d * d + lambda * std::max(0.0, variance_gls));
+  };
+  bool raised = false;
+  const double d_deg = AngleBetween(efficient.estimate.q, r->estimate.q) * kDegPerRad;
+  const double rot_var_gls = efficient.rot_std_deg * efficient.rot_std_deg;
+  raised |= raise(efficient.rot_std_deg, std::max(d_deg * d_deg, rotation.Lambda() * rot_var_gls),
+                  &r->rot_std_deg);
+  const double lambda = translation.Lambda();
   if (!in.translational) {
-    for (int a = 0; a < 3; ++a) raised |= raise(efficient.pos_std[a], d_c[a], &r->pos_std[a]);
+    for (int a = 0; a < 3; ++a) {
+      raised |=
+          raise(efficient.pos_std[a], mean(d_c[a], lambda, g.cov_position(a, a)), &r->pos_std[a]);
+    }
     const Eigen::Vector3d& axis = r->observability.planar_axis;
-    raised |= raise(efficient.axis_offset_std, axis.dot(d_c), &r->axis_offset_std);
+    raised |=
+        raise(efficient.axis_offset_std,
+              mean(axis.dot(d_c), lambda, axis.dot(g.cov_position * axis)), &r->axis_offset_std);
   }
   for (size_t s = 0; s < scales; ++s) {
     const double d = efficient.scales[s].scale - r->scales[s].scale;
-    raised |= raise(efficient.scales[s].std, d, &r->scales[s].std);
+    raised |= raise(efficient.scales[s].std, mean(d, lambda, g.scale_std[s] * g.scale_std[s]),
+                    &r->scales[s].std);
   }
   if (raised) {
     r->message += "; sigma raised to that of generalised least squares on the " +

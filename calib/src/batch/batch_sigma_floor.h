@@ -19,9 +19,10 @@
 // that is larger (per axis of C, per scale; the rotation angle between the two estimates for
 // the rotation's largest-axis σ). A result whose error is mostly d is then covered by d itself:
 // (e_gls + d)² / (σ_gls² + d²) ≤ (e_gls / σ_gls)² + 1. One d per parameter has one degree of
-// freedom (a small d by chance left σ at σ_gls), so Var(d) is also taken as λ Σ_gls per block
-// (the rotation vector; C with the scales), λ = dᵀ Σ_gls⁻¹ d / k from the block's k
-// differences together, and each σ of the block is at least σ_gls sqrt(1 + λ).
+// freedom (a small d by chance left σ at σ_gls), so Var(d) is also taken as λ Σ_gls per block,
+// λ = dᵀ Σ_gls⁻¹ d / k from the block's k differences together: for C and the scales Var(d)
+// is the mean of d² and λ σ_gls², for the rotation (its d the angle of three differences) the
+// larger of d² and λ σ_gls².
 
 #include "rigcal/base/types.h"
 #include "rigcal/calib/calibration_options.h"
