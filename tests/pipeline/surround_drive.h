@@ -9,8 +9,9 @@
 // Pose level, not images: rendering and VO of 4 cameras run at ~1/4 real time on 2 cores; the
 // node, sync buffer and estimator are what a long drive can wear out.
 //
-// Sampled every 5 s of drive time: RSS, the poses published but not yet received by the node
-// (the LCM queue), the sync buffer's fill (RIGCAL_STATUS) and the CPU of every named thread.
+// Sampled every second of drive time: the heap in use and RSS, the poses published but not yet
+// received by the node (the LCM queue) and the sync buffer's fill (RIGCAL_STATUS); at the end the
+// CPU of every named thread.
 
 #include <dirent.h>
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@
 #include <pthread.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -44,6 +46,7 @@ namespace rigcal::pipeline::surround_drive {
 struct Sample {
   double drive_s = 0.0;  // drive time
   double rss_mb = 0.0;
+  double heap_mb = 0.0;     // bytes the allocator has handed out and not had back
   int64_t lcm_backlog = 0;  // poses published, not yet received by the node
   int32_t sync_fill = -1;   // from the newest RIGCAL_STATUS (-1: none yet)
 };
@@ -73,6 +76,29 @@ inline double Slope(const std::vector<double>& x, const std::vector<double>& y) 
   double sxy = 0, sxx = 0;
   for (size_t i = 0; i < n; ++i) sxy += (x[i] - mx) * (y[i] - my), sxx += (x[i] - mx) * (x[i] - mx);
   return sxx > 0 ? sxy / sxx : 0.0;
+}
+
+// Least-squares slope of the lower envelope of y over x: the minimum of every `window` of x. A
+// sample taken while the batch refinement holds its work (a transient peak of a megabyte or two)
+// drops out; what stays is the floor a leak would raise.
+inline double FloorSlope(const std::vector<double>& x, const std::vector<double>& y,
+                         double window) {
+  std::vector<double> fx, fy;
+  for (size_t i = 0; i < x.size();) {
+    const double begin = x[i];
+    double lowest = y[i];
+    for (; i < x.size() && x[i] < begin + window; ++i) lowest = std::min(lowest, y[i]);
+    fx.push_back(begin + 0.5 * window);
+    fy.push_back(lowest);
+  }
+  return Slope(fx, fy);
+}
+
+// The heap in use (every arena, and the chunks malloc maps on their own): what a leak grows,
+// without the pages the allocator keeps or returns, which make RSS move by a megabyte either way.
+inline double HeapInUseMb() {
+  const struct mallinfo2 m = ::mallinfo2();
+  return static_cast<double>(m.uordblks + m.hblkhd) / 1048576.0;
 }
 
 // The memory the process holds: free heap pages go back to the system first (malloc_trim), so a
@@ -206,9 +232,10 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
       ++report.published;
     }
     if (t_s >= next_sample_s) {
-      next_sample_s += 5.0;
+      next_sample_s += 1.0;
       Sample s;
       s.drive_s = t_s;
+      s.heap_mb = HeapInUseMb();
       s.rss_mb = RssMb();
       s.lcm_backlog = report.published - node.ReceivedPoses();
       std::lock_guard<std::mutex> lock(sink.mutex);
