@@ -5,8 +5,9 @@
 //    rotation error, the translation direction error and the scale spread against the tag poses;
 //    the tag poses' own noise floor (each tag's relative motion against the grid's); OpenCV's
 //    ORB + 5-point (support/opencv_two_view.h) on the same pairs; the rotation error per camera
-//    axis; the same figures over 16 runs of its frames fed from other starts, backwards and
-//    every second frame (AprilTagSequenceVariants: the spread of a one-sequence figure);
+//    axis, and per axis the tags' and each estimator's own share of it (SplitRotationErrors); the
+//    same figures over 16 runs of its frames fed from other starts, backwards and every second
+//    frame (AprilTagSequenceVariants: the spread of a one-sequence figure);
 //  - visp_mbt_cube (218 frames, low texture, a still camera watching a hand move the object):
 //    no false motion;
 //  - the VO's time per frame (wall clock and the thread's CPU time: the machine is shared).
@@ -17,6 +18,8 @@
 // no turn of the still camera (the "first pose within 2 s of the start of motion" took the
 // data's description for granted: the camera never moves). Slow (label eval): `ctest -L eval -R
 // vo/real_sequence`. RIGCAL_VO_EVAL_VERBOSE=1 prints every frame's VO result;
+// RIGCAL_VO_EVAL_READOUT_S=<s> gives the camera a rolling-shutter readout time (the sequence's is
+// not known: 0.01-0.04 s raise the errors at 10 frames from 1.29 to 1.34-1.63 deg);
 // RIGCAL_VO_EVAL_POSES=<file> appends every pose with 17 digits (to check that a change meant to be
 // exact keeps the VO's results).
 
@@ -34,6 +37,8 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
+#include <random>
+#include <string>
 
 #include "rigcal/base/quaternion.h"
 #include "rigcal/vo/monocular_vo.h"
@@ -72,7 +77,13 @@ VoRun RunVo(const RealMonoSequence& s, const std::vector<int>& frames,
   // work over threads whose time the thread's CPU clock does not see.
   const int opencv_threads = cv::getNumThreads();
   cv::setNumThreads(1);
-  MonocularVo vo(s.camera, 0, options);
+  std::shared_ptr<const camera::CameraModel> model = s.camera;
+  if (const char* readout = std::getenv("RIGCAL_VO_EVAL_READOUT_S")) {
+    std::shared_ptr<camera::CameraModel> copy = s.camera->Clone();
+    copy->set_rolling_shutter_s(std::atof(readout));
+    model = copy;
+  }
+  MonocularVo vo(model, 0, options);
   const bool verbose = std::getenv("RIGCAL_VO_EVAL_VERBOSE") != nullptr;
   const char* poses_path = std::getenv("RIGCAL_VO_EVAL_POSES");
   std::FILE* poses_file = poses_path != nullptr ? std::fopen(poses_path, "a") : nullptr;
@@ -263,10 +274,11 @@ enum class Peer { kOrb, kKlt };
 
 // OpenCV's relative pose of every pair of `pairs` (ORB matches or KLT tracks through the frames
 // between), against the tags. *failures counts the pairs OpenCV found no pose for (they are
-// left out of the errors).
+// left out of the errors). *motions (may be null) gets OpenCV's motion of every pair it posed,
+// by the pair's first frame.
 std::vector<RelativePoseError> OpenCvErrors(const RealMonoSequence& s,
                                             const std::vector<RelativePoseError>& pairs, Peer peer,
-                                            int* failures) {
+                                            int* failures, std::map<int, Pose>* motions = nullptr) {
   const cv::Matx33d K = Intrinsics(*s.camera);
   std::vector<RelativePoseError> out;
   *failures = 0;
@@ -282,6 +294,7 @@ std::vector<RelativePoseError> OpenCvErrors(const RealMonoSequence& s,
       ++*failures;
       continue;
     }
+    if (motions != nullptr) (*motions)[pair.a] = *b_in_a;
     RelativePoseError e = support::CompareRelativeMotion(Pose{}, *b_in_a, s.grid_from_cam[pair.a],
                                                          s.grid_from_cam[pair.b]);
     e.a = pair.a;
@@ -289,6 +302,90 @@ std::vector<RelativePoseError> OpenCvErrors(const RealMonoSequence& s,
     out.push_back(e);
   }
   return out;
+}
+
+// The rotation error of a motion against the tags' as a rotation vector in the first camera's
+// axes, deg.
+Eigen::Vector3d RotationErrorDeg(const Pose& motion, const Pose& reference_motion) {
+  const Eigen::AngleAxisd e(reference_motion.q.conjugate() * motion.q);
+  return e.axis() * e.angle() * 180.0 / M_PI;
+}
+
+// The tags' own share of the rotation errors, by the three-cornered hat: the VO and OpenCV's KLT
+// + 5-point or ORB + 5-point measure the same motions with errors v and k independent of each
+// other and of the tags' error t; against the tags they show v - t and k - t, and
+// E[(v - t)(k - t)] = E[t^2]. Per camera axis: the tags' error from the mean of that product
+// with either peer (the two peers share OpenCV's 5-point solver, so not their product), and each
+// estimator's own error as its error against the tags with the tags' share taken out. An error
+// common to the VO and the peers (of the images, not of the tags: rolling shutter, the
+// intrinsics) counts as the tags'. The median of an estimator's own error is that of a Gaussian
+// with those per-axis σ (the errors' own distribution cannot be separated).
+struct ErrorShares {
+  int pairs = 0;
+  Eigen::Vector3d tags_deg = Eigen::Vector3d::Zero();  // per axis: RMS
+  Eigen::Vector3d vo_deg = Eigen::Vector3d::Zero();
+  Eigen::Vector3d klt_deg = Eigen::Vector3d::Zero();
+  Eigen::Vector3d orb_deg = Eigen::Vector3d::Zero();
+};
+
+ErrorShares SplitRotationErrors(const VoRun& run, const std::map<int, Pose>& klt,
+                                const std::map<int, Pose>& orb, const RealMonoSequence& s,
+                                int step) {
+  std::vector<Eigen::Vector3d> v, k, o;
+  for (const auto& [segment, poses] : run.segments) {
+    for (const auto& [a, pose_a] : poses) {
+      const auto b = poses.find(a + step);
+      if (b == poses.end() || !klt.count(a) || !orb.count(a)) continue;
+      const Pose reference = s.grid_from_cam[a].Between(s.grid_from_cam[a + step]);
+      v.push_back(RotationErrorDeg(pose_a.Between(b->second), reference));
+      k.push_back(RotationErrorDeg(klt.at(a), reference));
+      o.push_back(RotationErrorDeg(orb.at(a), reference));
+    }
+  }
+  ErrorShares shares;
+  shares.pairs = static_cast<int>(v.size());
+  if (v.size() < 3) return shares;
+  const double n = static_cast<double>(v.size());
+  for (int i = 0; i < 3; ++i) {
+    double vv = 0, kk = 0, oo = 0, vk = 0, vo = 0;
+    for (size_t j = 0; j < v.size(); ++j) {
+      vv += v[j][i] * v[j][i] / n, kk += k[j][i] * k[j][i] / n, oo += o[j][i] * o[j][i] / n;
+      vk += v[j][i] * k[j][i] / n, vo += v[j][i] * o[j][i] / n;
+    }
+    const double tags = std::max(0.0, (vk + vo) / 2.0);
+    shares.tags_deg[i] = std::sqrt(tags);
+    shares.vo_deg[i] = std::sqrt(std::max(0.0, vv - tags));
+    shares.klt_deg[i] = std::sqrt(std::max(0.0, kk - tags));
+    shares.orb_deg[i] = std::sqrt(std::max(0.0, oo - tags));
+  }
+  return shares;
+}
+
+// The median angle of a rotation error whose axes are independent Gaussians with RMS sigma_deg.
+double GaussianMedianAngleDeg(const Eigen::Vector3d& sigma_deg) {
+  std::mt19937 rng(34);
+  std::normal_distribution<double> normal;
+  std::vector<double> angles(100000);
+  for (double& angle : angles) {
+    angle = Eigen::Vector3d(sigma_deg.x() * normal(rng), sigma_deg.y() * normal(rng),
+                            sigma_deg.z() * normal(rng))
+                .norm();
+  }
+  return support::Stats(angles).median;
+}
+
+void PrintErrorShares(const ErrorShares& e, int step) {
+  auto axes = [](const Eigen::Vector3d& d) {
+    char text[96];
+    std::snprintf(text, sizeof(text), "x %.2f, y %.2f, z %.2f deg (median %.2f)", d.x(), d.y(),
+                  d.z(), GaussianMedianAngleDeg(d));
+    return std::string(text);
+  };
+  std::printf(
+      "step %2d: rotation error shares over %d pairs (three-cornered hat): tags %s; VO %s; KLT + "
+      "5-point %s; ORB + 5-point %s\n",
+      step, e.pairs, axes(e.tags_deg).c_str(), axes(e.vo_deg).c_str(), axes(e.klt_deg).c_str(),
+      axes(e.orb_deg).c_str());
 }
 
 double Median(const std::vector<RelativePoseError>& errors, double RelativePoseError::*field) {
@@ -349,8 +446,11 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
   for (const int step : {1, 5, 10}) {
     const std::vector<RelativePoseError> vo = RunErrors(run, truth, step);
     int cv_failures = 0, klt_failures = 0;
-    const std::vector<RelativePoseError> cv = OpenCvErrors(s, vo, Peer::kOrb, &cv_failures);
-    const std::vector<RelativePoseError> klt = OpenCvErrors(s, vo, Peer::kKlt, &klt_failures);
+    std::map<int, Pose> cv_motions, klt_motions;
+    const std::vector<RelativePoseError> cv =
+        OpenCvErrors(s, vo, Peer::kOrb, &cv_failures, &cv_motions);
+    const std::vector<RelativePoseError> klt =
+        OpenCvErrors(s, vo, Peer::kKlt, &klt_failures, &klt_motions);
     const TagFloor floor = TagNoiseFloor(s, step);
     std::vector<double> lengths;
     for (const RelativePoseError& e : vo) lengths.push_back(e.reference_length);
@@ -369,6 +469,7 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
                 support::Describe(cv).c_str(), cv_failures);
     std::printf("step %2d: OpenCV KLT + 5-point %s, %d failed\n", step,
                 support::Describe(klt).c_str(), klt_failures);
+    PrintErrorShares(SplitRotationErrors(run, klt_motions, cv_motions, s, step), step);
     if (step == 10) {
       const double vo_rotation = Median(vo, &RelativePoseError::rotation_deg);
       const double cv_rotation = Median(cv, &RelativePoseError::rotation_deg);
