@@ -328,29 +328,39 @@ struct ErrorShares {
   Eigen::Vector3d orb_deg = Eigen::Vector3d::Zero();
 };
 
-ErrorShares SplitRotationErrors(const VoRun& run, const std::map<int, Pose>& klt,
-                                const std::map<int, Pose>& orb, const RealMonoSequence& s,
-                                int step) {
-  std::vector<Eigen::Vector3d> v, k, o;
+// The rotation errors against the tags of the VO and the two peers, for the pairs `step` frames
+// apart that all three posed, in frame order.
+struct PairErrors {
+  std::vector<Eigen::Vector3d> vo, klt, orb;
+};
+
+PairErrors CollectPairErrors(const VoRun& run, const std::map<int, Pose>& klt,
+                             const std::map<int, Pose>& orb, const RealMonoSequence& s, int step) {
+  PairErrors e;
   for (const auto& [segment, poses] : run.segments) {
     for (const auto& [a, pose_a] : poses) {
       const auto b = poses.find(a + step);
       if (b == poses.end() || !klt.count(a) || !orb.count(a)) continue;
       const Pose reference = s.grid_from_cam[a].Between(s.grid_from_cam[a + step]);
-      v.push_back(RotationErrorDeg(pose_a.Between(b->second), reference));
-      k.push_back(RotationErrorDeg(klt.at(a), reference));
-      o.push_back(RotationErrorDeg(orb.at(a), reference));
+      e.vo.push_back(RotationErrorDeg(pose_a.Between(b->second), reference));
+      e.klt.push_back(RotationErrorDeg(klt.at(a), reference));
+      e.orb.push_back(RotationErrorDeg(orb.at(a), reference));
     }
   }
+  return e;
+}
+
+// The shares over the pairs `chosen` (indices into e, repeats allowed).
+ErrorShares SplitRotationErrors(const PairErrors& e, const std::vector<size_t>& chosen) {
   ErrorShares shares;
-  shares.pairs = static_cast<int>(v.size());
-  if (v.size() < 3) return shares;
-  const double n = static_cast<double>(v.size());
+  shares.pairs = static_cast<int>(chosen.size());
+  if (chosen.size() < 3) return shares;
+  const double n = static_cast<double>(chosen.size());
   for (int i = 0; i < 3; ++i) {
     double vv = 0, kk = 0, oo = 0, vk = 0, vo = 0;
-    for (size_t j = 0; j < v.size(); ++j) {
-      vv += v[j][i] * v[j][i] / n, kk += k[j][i] * k[j][i] / n, oo += o[j][i] * o[j][i] / n;
-      vk += v[j][i] * k[j][i] / n, vo += v[j][i] * o[j][i] / n;
+    for (const size_t j : chosen) {
+      const double v = e.vo[j][i], k = e.klt[j][i], o = e.orb[j][i];
+      vv += v * v / n, kk += k * k / n, oo += o * o / n, vk += v * k / n, vo += v * o / n;
     }
     const double tags = std::max(0.0, (vk + vo) / 2.0);
     shares.tags_deg[i] = std::sqrt(tags);
@@ -362,10 +372,10 @@ ErrorShares SplitRotationErrors(const VoRun& run, const std::map<int, Pose>& klt
 }
 
 // The median angle of a rotation error whose axes are independent Gaussians with RMS sigma_deg.
-double GaussianMedianAngleDeg(const Eigen::Vector3d& sigma_deg) {
+double GaussianMedianAngleDeg(const Eigen::Vector3d& sigma_deg, int samples = 100000) {
   std::mt19937 rng(34);
   std::normal_distribution<double> normal;
-  std::vector<double> angles(100000);
+  std::vector<double> angles(static_cast<size_t>(samples));
   for (double& angle : angles) {
     angle = Eigen::Vector3d(sigma_deg.x() * normal(rng), sigma_deg.y() * normal(rng),
                             sigma_deg.z() * normal(rng))
@@ -386,6 +396,33 @@ void PrintErrorShares(const ErrorShares& e, int step) {
       "5-point %s; ORB + 5-point %s\n",
       step, e.pairs, axes(e.tags_deg).c_str(), axes(e.vo_deg).c_str(), axes(e.klt_deg).c_str(),
       axes(e.orb_deg).c_str());
+}
+
+// The 10th and 90th percentiles of the VO's and the tags' median error over block-bootstrap
+// resamples of the pairs: blocks of `step` consecutive pairs (pairs within a block share frames
+// and errors), drawn with replacement.
+void PrintShareSpread(const PairErrors& e, int step) {
+  const size_t n = e.vo.size();
+  if (n < static_cast<size_t>(2 * step)) return;
+  std::mt19937 rng(34);
+  std::uniform_int_distribution<size_t> start(0, n - static_cast<size_t>(step));
+  std::vector<double> vo, tags;
+  for (int draw = 0; draw < 200; ++draw) {
+    std::vector<size_t> chosen;
+    while (chosen.size() < n) {
+      const size_t first = start(rng);
+      for (int j = 0; j < step; ++j) chosen.push_back(first + static_cast<size_t>(j));
+    }
+    const ErrorShares shares = SplitRotationErrors(e, chosen);
+    vo.push_back(GaussianMedianAngleDeg(shares.vo_deg, 10000));
+    tags.push_back(GaussianMedianAngleDeg(shares.tags_deg, 10000));
+  }
+  std::sort(vo.begin(), vo.end());
+  std::sort(tags.begin(), tags.end());
+  std::printf(
+      "step %2d: over 200 block-bootstrap resamples, the median of the VO's own error %.2f to "
+      "%.2f deg, of the tags' %.2f to %.2f deg (10th to 90th percentile)\n",
+      step, vo[20], vo[179], tags[20], tags[179]);
 }
 
 double Median(const std::vector<RelativePoseError>& errors, double RelativePoseError::*field) {
@@ -469,7 +506,11 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
                 support::Describe(cv).c_str(), cv_failures);
     std::printf("step %2d: OpenCV KLT + 5-point %s, %d failed\n", step,
                 support::Describe(klt).c_str(), klt_failures);
-    PrintErrorShares(SplitRotationErrors(run, klt_motions, cv_motions, s, step), step);
+    const PairErrors pair_errors = CollectPairErrors(run, klt_motions, cv_motions, s, step);
+    std::vector<size_t> all(pair_errors.vo.size());
+    for (size_t j = 0; j < all.size(); ++j) all[j] = j;
+    PrintErrorShares(SplitRotationErrors(pair_errors, all), step);
+    PrintShareSpread(pair_errors, step);
     if (step == 10) {
       const double vo_rotation = Median(vo, &RelativePoseError::rotation_deg);
       const double cv_rotation = Median(cv, &RelativePoseError::rotation_deg);
