@@ -86,9 +86,14 @@ inline double FloorSlope(const std::vector<double>& x, const std::vector<double>
   std::vector<double> fx, fy;
   for (size_t i = 0; i < x.size();) {
     const double begin = x[i];
-    double lowest = y[i];
-    for (; i < x.size() && x[i] < begin + window; ++i) lowest = std::min(lowest, y[i]);
-    fx.push_back(begin + 0.5 * window);
+    const size_t first = i;
+    double lowest = y[i], sum_x = 0.0;
+    for (; i < x.size() && x[i] < begin + window; ++i) {
+      lowest = std::min(lowest, y[i]);
+      sum_x += x[i];
+    }
+    fx.push_back(sum_x /
+                 static_cast<double>(i - first));  // the window's middle, a short last one's too
     fy.push_back(lowest);
   }
   return Slope(fx, fy);
