@@ -9,9 +9,9 @@
 // Pose level, not images: rendering and VO of 4 cameras run at ~1/4 real time on 2 cores; the
 // node, sync buffer and estimator are what a long drive can wear out.
 //
-// Sampled every second of drive time: the heap in use and RSS, the poses published but not yet
-// received by the node (the LCM queue) and the sync buffer's fill (RIGCAL_STATUS); at the end the
-// CPU of every named thread.
+// Sampled every second of drive time: the heap in use (also at a moment between refinement
+// passes) and RSS, the poses published but not yet received by the node (the LCM queue) and the
+// sync buffer's fill (RIGCAL_STATUS); at the end the CPU of every named thread.
 
 #include <dirent.h>
 #include <gtest/gtest.h>
@@ -25,8 +25,10 @@
 #include <cmath>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -46,7 +48,11 @@ namespace rigcal::pipeline::surround_drive {
 struct Sample {
   double drive_s = 0.0;  // drive time
   double rss_mb = 0.0;
-  double heap_mb = 0.0;     // bytes the allocator has handed out and not had back
+  double heap_mb = 0.0;  // bytes the allocator has handed out and not had back
+  // The heap in use at a moment of this second of drive when no refinement pass was in flight
+  // (its working copy of the pose history and its solver's memory are transient); NaN when the
+  // refinement was in flight at every moment tried.
+  double quiet_heap_mb = std::numeric_limits<double>::quiet_NaN();
   int64_t lcm_backlog = 0;  // poses published, not yet received by the node
   int32_t sync_fill = -1;   // from the newest RIGCAL_STATUS (-1: none yet)
 };
@@ -104,6 +110,17 @@ inline double FloorSlope(const std::vector<double>& x, const std::vector<double>
 inline double HeapInUseMb() {
   const struct mallinfo2 m = ::mallinfo2();
   return static_cast<double>(m.uordblks + m.hblkhd) / 1048576.0;
+}
+
+// The heap in use when no refinement pass of the node is in flight, read between two reads of
+// the passes that show none began or ended; nullopt when one was in flight.
+inline std::optional<double> HeapBetweenRefinements(const CalibNode& node) {
+  const OnlineCalibrator::RefinementPasses before = node.RefinementPasses();
+  if (before.begun != before.ended) return std::nullopt;
+  const double heap_mb = HeapInUseMb();
+  const OnlineCalibrator::RefinementPasses after = node.RefinementPasses();
+  if (after.begun != before.begun || after.ended != before.ended) return std::nullopt;
+  return heap_mb;
 }
 
 // The memory the process holds: free heap pages go back to the system first (malloc_trim), so a
@@ -236,11 +253,20 @@ inline Report Drive(double drive_s, double speed, int history_sets) {
       bus.publish(channel, bytes->data(), static_cast<unsigned int>(bytes->size()));
       ++report.published;
     }
+    // Every publish step (5 ms of wall time at 10x) until the second has a quiet heap sample.
+    if (!report.samples.empty() && std::isnan(report.samples.back().quiet_heap_mb)) {
+      if (const std::optional<double> heap_mb = HeapBetweenRefinements(node)) {
+        report.samples.back().quiet_heap_mb = *heap_mb;
+      }
+    }
     if (t_s >= next_sample_s) {
       next_sample_s += 1.0;
       Sample s;
       s.drive_s = t_s;
       s.heap_mb = HeapInUseMb();
+      if (const std::optional<double> heap_mb = HeapBetweenRefinements(node)) {
+        s.quiet_heap_mb = *heap_mb;
+      }
       s.rss_mb = RssMb();
       s.lcm_backlog = report.published - node.ReceivedPoses();
       std::lock_guard<std::mutex> lock(sink.mutex);

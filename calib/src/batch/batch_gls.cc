@@ -76,6 +76,7 @@ GlsInput GlsStartOf(const SlaveCalibration& r, const CalibrationOptions& options
     }
   }
   in.time_blocks = options.covariance_time_blocks;
+  in.cancel = options.cancel;
   return in;
 }
 
@@ -224,7 +225,7 @@ SlaveCalibration CalibrateSlaveGls(const RigRecording& recording,
                                    const CalibrationOptions& options) {
   AutoPairRanking ranking;
   SlaveCalibration r = CalibrateSlaveAutoPairs(recording, candidates, slave, options, &ranking);
-  if (!r.solved()) return r;
+  if (!r.solved() || options.cancelled()) return r;
   // A model the data contradict on some span (auto's check of every candidate) makes any
   // estimate of it not usable: auto's result says so, and is refined alone.
   std::optional<SlaveCalibration> mixed;

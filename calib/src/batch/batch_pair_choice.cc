@@ -8,6 +8,7 @@
 #include <limits>
 #include <vector>
 
+#include "batch/batch_result.h"
 #include "batch/batch_solve_details.h"
 #include "rigcal/base/logging.h"
 #include "rigcal/base/quaternion.h"
@@ -227,6 +228,11 @@ SlaveCalibration CalibrateSlaveAutoPairs(const RigRecording& recording,
   std::vector<Candidate> candidates;
   candidates.reserve(choices.policies.size());
   for (size_t k = 0; k < choices.policies.size(); ++k) {
+    if (options.cancelled()) {
+      SlaveCalibration cancelled;
+      cancelled.name = recording.slaves[slave].name;
+      return Failed(cancelled, Termination::kCancelled, "cancelled");
+    }
     candidates.push_back(Solve(recording, slave, options, choices.policies[k], choices.pairs[k]));
   }
 

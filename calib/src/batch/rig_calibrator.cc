@@ -76,6 +76,7 @@ SlaveCalibration SolveSlave(const std::vector<RigMotion>& motions,
     return *undetermined;
   }
 
+  if (options.cancelled()) return internal::Failed(r, Termination::kCancelled, "cancelled");
   // Non-linear refinement and covariance (4.26-4.27), then the result.
   const internal::BatchRefinement refinement =
       internal::RefineBatch(options, setting, data, linear, r.observability.planar_axis,
@@ -159,6 +160,7 @@ SlaveCalibration CalibratePrepared(const RigPreparation& p, const CalibrationOpt
   if (!p.invalid.empty()) {
     return internal::Failed(r, Termination::kInvalidInput, "invalid recording: " + p.invalid);
   }
+  if (options.cancelled()) return internal::Failed(r, Termination::kCancelled, "cancelled");
   if (p.solvable && p.auto_pairs) {
     r = p.gls ? internal::CalibrateSlaveGls(p.recording, p.candidates, slave, options)
               : internal::CalibrateSlaveAutoPairs(p.recording, p.candidates, slave, options);
@@ -227,6 +229,8 @@ std::string ToString(Termination t) {
       return "degenerate";
     case Termination::kInvalidInput:
       return "invalid_input";
+    case Termination::kCancelled:
+      return "cancelled";
   }
   return "?";
 }

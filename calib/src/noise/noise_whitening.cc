@@ -167,7 +167,8 @@ double IncrementLogLikelihood(const std::vector<Eigen::VectorXd>& runs, const Le
   return ll;
 }
 
-LevelNoise FitLevelNoise(const std::vector<Eigen::VectorXd>& runs) {
+LevelNoise FitLevelNoise(const std::vector<Eigen::VectorXd>& runs,
+                         const std::atomic<bool>* cancel) {
   // Variance and lag-1 autocovariance of the increments, for the scale and the first start.
   double s0 = 0.0, s1 = 0.0;
   long n0 = 0, n1 = 0;
@@ -189,7 +190,10 @@ LevelNoise FitLevelNoise(const std::vector<Eigen::VectorXd>& runs) {
   const double scale = s0 / n0;
   const double lag1 = n1 > 0 ? s1 / n1 / scale : 0.0;  // -1/2 for white levels, 0 for a walk
   const double white = std::clamp(-lag1, 0.02, 0.5);
+  auto cancelled = [&] { return cancel != nullptr && cancel->load(std::memory_order_relaxed); };
   auto cost = [&](const Point& u) {
+    // Cancelled: every evaluation costs nothing and the simplex stops moving.
+    if (cancelled()) return 0.0;
     const double ll = IncrementLogLikelihood(runs, FromPoint(u, scale));
     return std::isfinite(ll) ? -ll : std::numeric_limits<double>::max();
   };
@@ -202,6 +206,7 @@ LevelNoise FitLevelNoise(const std::vector<Eigen::VectorXd>& runs) {
   Point best = starts[0];
   double best_cost = std::numeric_limits<double>::infinity();
   for (const Point& start : starts) {
+    if (cancelled()) break;
     const Point p = NelderMead(cost, start, 400);
     const double c = cost(p);
     if (c < best_cost) {

@@ -133,11 +133,17 @@ void OnlineCalibrator::WithholdUnknownClocks(MatchedSet* set) const {
   }
 }
 
+void OnlineCalibrator::CancelIfStopped() {
+  const std::atomic<bool>* stop = cancel_when_.load();
+  if (stop != nullptr && stop->load()) CancelRefinements();
+}
+
 void OnlineCalibrator::WaitForRoom() {
   const auto limit = static_cast<uint64_t>(options_.sync.ready_capacity);
   if (sync_.ReadyBound() <= limit) return;
   MutexLock lock(estimator_mutex_);
   while (sync_.ReadyBound() > limit && !sync_.stopped()) {
+    CancelIfStopped();
     lock.WaitUntil(consumed_, std::chrono::steady_clock::now() + kWaitSlice);
   }
 }
@@ -148,6 +154,7 @@ void OnlineCalibrator::Drain() {
   while (!sync_.stopped()) {
     const SyncStats stats = sync_.stats();
     if (sets_consumed_ + stats.consumer_overflow >= stats.sets_emitted) break;
+    CancelIfStopped();
     lock.WaitUntil(consumed_, std::chrono::steady_clock::now() + kWaitSlice);
   }
 }
@@ -297,7 +304,7 @@ void OnlineCalibrator::EstimatorLoop() {
     }
     // Before the set counts as consumed, so that Drain also waits for a refinement it is due.
     if (stream_refinement && set.t_ns >= next_refine_ns) {
-      RefineNow();
+      RefinePeriodic();
       while (next_refine_ns <= set.t_ns) next_refine_ns += refine_period_ns;
     }
     {
@@ -325,20 +332,33 @@ void OnlineCalibrator::RefinementLoop() {
     }
     if (stopping_) break;
     stop_lock.Unlock();
-    RefineNow();
+    RefinePeriodic();
     stop_lock.Lock();
   }
 }
 
 void OnlineCalibrator::RefineNow(bool final) {
   MutexLock serial(refine_mutex_);
+  const PassCount pass(this);
   for (size_t i = 0; i + 1 < names_.size(); ++i) {
     RunRefinementJob(MakeRefinementJob(static_cast<int>(i), final));
   }
 }
 
+void OnlineCalibrator::RefinePeriodic() {
+  if (cancel_refinements_.load()) return;
+  MutexLock serial(refine_mutex_);
+  const PassCount pass(this);
+  for (size_t i = 0; i + 1 < names_.size() && !cancel_refinements_.load(); ++i) {
+    RefinementJob job = MakeRefinementJob(static_cast<int>(i), /*final=*/false);
+    job.cancel = &cancel_refinements_;
+    RunRefinementJob(job);
+  }
+}
+
 void OnlineCalibrator::RefineFinalBefore(std::chrono::steady_clock::time_point deadline) {
   MutexLock serial(refine_mutex_);
+  const PassCount pass(this);
   for (size_t i = 0; i + 1 < names_.size(); ++i) {
     const int slave = static_cast<int>(i);
     RefinementJob job = MakeRefinementJob(slave, /*final=*/true);
@@ -379,6 +399,17 @@ void OnlineCalibrator::RunRefinementJob(const RefinementJob& job) {
   }
   const auto started = std::chrono::steady_clock::now();
   const SlaveCalibration refined = RefineWindow(job);
+  // Cancelled: ended early, neither applied nor timed.
+  if (job.cancel != nullptr && job.cancel->load()) {
+    ModuleLogger("calib")->info(
+        "{}: the periodic {} in flight cancelled by the stop after {:.2f} s",
+        names_[static_cast<size_t>(job.slave) + 1],
+        job.history.t_ns.empty()
+            ? std::string("window refinement")
+            : fmt::format("history refinement ({} sets)", job.history.t_ns.size()),
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    return;
+  }
   if (!job.history.t_ns.empty()) {
     history_timing_.at(static_cast<size_t>(job.slave)) = {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(),

@@ -27,7 +27,9 @@ namespace {
 // holds them and it solves; else nullopt (the window refinement then).
 std::optional<SlaveCalibration> RefineHistory(const RefinementJob& job) {
   if (job.history.t_ns.empty() || !job.start.solved()) return std::nullopt;
-  SlaveCalibration batch = internal::CalibrateRigSlave(job.history, job.history_options, 0);
+  CalibrationOptions options = job.history_options;
+  options.cancel = job.cancel;
+  SlaveCalibration batch = internal::CalibrateRigSlave(job.history, options, 0);
   if (!batch.solved()) return std::nullopt;  // not solvable yet
   const std::string sets =
       job.history_stride > 1
@@ -169,6 +171,7 @@ SlaveCalibration RefineWindow(const RefinementJob& job) {
   SetNoiseLevels(job, data, prior_scales, &input);
   CalibrationOptions options;
   options.robust_loss = job.robust_loss ? RobustLoss::kHuber : RobustLoss::kNone;
+  options.cancel = job.cancel;
   const internal::RefinementResult r = internal::RefineNonlinear(data, input, options);
   if (!r.q.coeffs().allFinite() || !r.C.allFinite()) return out;
   TakeRefined(job, input, index, r, &out);

@@ -151,15 +151,18 @@ System Whitened(const std::vector<MotionData>& motions, const Frames& frames, co
   return sys;
 }
 
-std::vector<LevelNoise> FitNoise(const Eigen::MatrixXd& residuals, const Frames& frames) {
+// Per component; empty when `cancel` is set before the last one is fitted.
+std::vector<LevelNoise> FitNoise(const Eigen::MatrixXd& residuals, const Frames& frames,
+                                 const std::atomic<bool>* cancel) {
   std::vector<LevelNoise> noise;
   for (Eigen::Index c = 0; c < residuals.cols(); ++c) {
+    if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return {};
     std::vector<Eigen::VectorXd> runs;
     for (size_t r = 0; r + 1 < frames.run_start.size(); ++r) {
       const int first = frames.run_start[r], count = frames.run_start[r + 1] - first;
       runs.push_back(residuals.col(c).segment(first, count));
     }
-    noise.push_back(FitLevelNoise(runs));
+    noise.push_back(FitLevelNoise(runs, cancel));
   }
   return noise;
 }
@@ -363,15 +366,21 @@ System WhitenedWithPriors(const std::vector<MotionData>& motions, const Frames& 
   return sys;
 }
 
+// Whether input.cancel is set.
+bool Cancelled(const GlsInput& input) {
+  return input.cancel != nullptr && input.cancel->load(std::memory_order_relaxed);
+}
+
 // Gauss-Newton on the corrected normal equations at fixed noise, from `p`: at most 20 steps,
 // until a step is below 1e-10 of the point's size; whether to correct for the regressor noise
 // is decided at the first. The last system in `sys`. False when a step is not finite (singular
-// normal equations).
+// normal equations) or it was cancelled.
 bool GaussNewton(const std::vector<MotionData>& motions, const Frames& frames, const Layout& layout,
                  const std::vector<LevelNoise>& noise, const GlsInput& input,
                  Attenuation* attenuation, GlsPoint* p, System* sys) {
   const int params = layout.Size();
   for (int iteration = 0; iteration < 20; ++iteration) {
+    if (Cancelled(input)) return false;
     *sys = WhitenedWithPriors(motions, frames, layout, *p, noise, input);
     const Eigen::MatrixXd h = sys->a.transpose() * sys->a;
     if (iteration == 0) attenuation->Decide(layout, h);
@@ -484,12 +493,17 @@ GlsResult RefineGls(const std::vector<MotionData>& motions, const GlsInput& inpu
       out.outliers += DropOutliers(sys, input.outlier_factor, &kept);
       frames = RunFrames(kept);
     }
-    noise = FitNoise(Increments(kept, frames, layout, p), frames);
+    noise = FitNoise(Increments(kept, frames, layout, p), frames, input.cancel);
+    if (Cancelled(input)) break;
     attenuation.terms = AttenuationTerms(kept, frames, layout, noise, round);
     if (!GaussNewton(kept, frames, layout, noise, input, &attenuation, &p, &sys)) {
-      out.message = "singular GLS normal equations";
+      out.message = Cancelled(input) ? "cancelled" : "singular GLS normal equations";
       return out;
     }
+  }
+  if (Cancelled(input)) {
+    out.message = "cancelled";
+    return out;
   }
   if (!TakeEstimate(kept, frames, layout, noise, input, attenuation, p, &out)) return out;
   out.ok = out.cov_rotation.allFinite() && out.cov_position.allFinite();

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,9 @@ struct GlsInput {
   // After the first round, motions with a whitened residual beyond this many robust σ are
   // dropped (0: none).
   double outlier_factor = 6.0;
+  // Set by another thread to end the refinement early (CalibrationOptions::cancel): checked
+  // between the noise fits of the components; the result is then not ok ("cancelled").
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct GlsResult {

@@ -362,6 +362,18 @@ void AddScaleAndAxisPriors(RefinementProblem* rp) {
   }
 }
 
+// Ends the solve at the next iteration once options.cancel is set.
+class CancelCallback : public ceres::IterationCallback {
+ public:
+  explicit CancelCallback(const CalibrationOptions& options) : options_(options) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& /*summary*/) override {
+    return options_.cancelled() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const CalibrationOptions& options_;
+};
+
 // Solves the problem (or not: `solve` false) and returns the estimate, σ of the scales unknown.
 RefinementResult SolveProblem(const CalibrationOptions& options, bool solve,
                               RefinementProblem* rp) {
@@ -374,6 +386,8 @@ RefinementResult SolveProblem(const CalibrationOptions& options, bool solve,
     solver_options.parameter_tolerance = 1e-12;
     solver_options.gradient_tolerance = 1e-14;
     solver_options.num_threads = 1;
+    CancelCallback cancel(options);
+    if (options.cancel != nullptr) solver_options.callbacks.push_back(&cancel);
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &rp->problem, &summary);
     out.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -523,6 +537,11 @@ RefinementResult RefineNonlinear(const std::vector<MotionData>& motions,
   AddOutsidePrior(&rp);
   AddScaleAndAxisPriors(&rp);
   RefinementResult out = SolveProblem(options, solve, &rp);
+  if (options.cancelled()) {
+    out.converged = false;
+    out.message = "cancelled";
+    return out;
+  }
   if (!options.compute_covariance || !ComputeCovariance(&rp, &out)) return out;
   if (out.covariance_ok && input.blocks.size() == motions.size()) {
     RaiseToClusteredCovariance(&rp, &out);

@@ -333,7 +333,10 @@ void CalibNode::Impl::CloseOutput() {
 }
 
 void CalibNode::Impl::Finish(int64_t utime, bool interrupted) {
-  // Clean stop: everything received is estimated, published, saved and written.
+  // Clean stop: everything received is estimated, published, saved and written. After a
+  // signal, a periodic refinement in flight (a history refinement takes seconds) ends early and
+  // none follows, so that neither Flush nor the final refinement waits for one.
+  if (interrupted) calibrator->CancelRefinements();
   calibrator->Flush();
   if (interrupted) {
     // Within 2 s of a signal: the final history refinement where the last one's duration says
@@ -395,6 +398,11 @@ void CalibNode::HandlePose(const std::string& channel, const void* data, int64_t
 
 int64_t CalibNode::ReceivedPoses() const { return impl_->received_total.load(); }
 
+OnlineCalibrator::RefinementPasses CalibNode::RefinementPasses() const {
+  if (!impl_->calibrator) return {};
+  return impl_->calibrator->refinement_passes();
+}
+
 Status CalibNode::Open() {
   Impl& m = *impl_;
   if (m.opened) return Error{"CalibNode::Open called twice"};
@@ -432,11 +440,13 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
     m.summary.errors.push_back("CalibNode::Run before a successful Open");
     return m.summary;
   }
+  // A wait of the input thread for the estimator (a lossless push, a drain on log time) that
+  // sees the stop cancels a periodic refinement in flight; the flag is the caller's, so it is
+  // let go before Run returns.
+  m.calibrator->CancelRefinementsWhen(&stop);
   if (m.capturing()) {
     m.RunCapture(stop);
-    return m.summary;
-  }
-  if (m.replaying()) {
+  } else if (m.replaying()) {
     m.ReplayLog(stop);
     m.Finish(std::max<int64_t>(m.clock_ns, 0) / 1000, stop.load());
     if (m.options.on_progress) {
@@ -444,29 +454,33 @@ CalibNodeSummary CalibNode::Run(const std::atomic<bool>& stop) {
       progress.done = true;
       m.options.on_progress(progress);
     }
-    return m.summary;
+  } else {
+    m.RunLcm(stop);
   }
+  m.calibrator->CancelRefinementsWhen(nullptr);
+  return m.summary;
+}
+
+void CalibNode::Impl::RunLcm(const std::atomic<bool>& stop) {
   const int64_t start = MonotonicNanos();
   while (!stop.load()) {
     errno = 0;
-    const int rc = m.bus->handleTimeout(50);
+    const int rc = bus->handleTimeout(50);
     // A signal interrupts the wait (EINTR): the loop condition decides.
     if (rc < 0 && errno != EINTR && !stop.load()) {
-      m.AddError("LCM receive failed; stopping");
+      AddError("LCM receive failed; stopping");
       break;
     }
     const int64_t now = MonotonicNanos();
     int job = 0;
     int64_t deadline = 0;
-    while (m.schedule.NextDue(now, &job, &deadline)) m.RunJob(job, now / 1000);
-    if (m.options.on_tick) m.options.on_tick();
-    if (m.options.duration_s > 0 &&
-        static_cast<double>(now - start) * 1e-9 >= m.options.duration_s) {
+    while (schedule.NextDue(now, &job, &deadline)) RunJob(job, now / 1000);
+    if (options.on_tick) options.on_tick();
+    if (options.duration_s > 0 && static_cast<double>(now - start) * 1e-9 >= options.duration_s) {
       break;
     }
   }
-  m.Finish(MonotonicNanos() / 1000, stop.load());
-  return m.summary;
+  Finish(MonotonicNanos() / 1000, stop.load());
 }
 
 }  // namespace rigcal::pipeline

@@ -163,6 +163,8 @@ struct CalibNode::Impl {
   // capture_input.cc.
   Status OpenCapture();
   void RunCapture(const std::atomic<bool>& stop);
+  // Poses from LCM until `stop` or options.duration_s, then Finish.
+  void RunLcm(const std::atomic<bool>& stop);
   // The recorder tapped into every device (options.record_path); the devices without VO go to
   // CaptureLoops.
   Status OpenRecording(std::vector<std::unique_ptr<capture::CameraDevice>>* devices);

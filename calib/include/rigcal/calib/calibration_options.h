@@ -2,6 +2,7 @@
 #pragma once
 // Options of the batch rig calibrator: plain struct, documented defaults, Check().
 
+#include <atomic>
 #include <map>
 #include <string>
 
@@ -77,6 +78,13 @@ struct CalibrationOptions {
 
   // Needs at least this many usable motions per slave.
   int min_motions = 2;
+
+  // Set by another thread to end the solve early (a periodic refinement in flight when the run
+  // is stopped by a signal): the stages check it between their steps, the noise fit between its
+  // components and the non-linear solver at every iteration. A cancelled solve returns a result
+  // that is not solved (Termination::kCancelled), only to be dropped. Null: never cancelled.
+  const std::atomic<bool>* cancel = nullptr;
+  bool cancelled() const { return cancel != nullptr && cancel->load(std::memory_order_relaxed); }
 
   // The first violated constraint as "<field>: <constraint>" (pairs: PairOptions's message;
   // model_selection: ModelSelectionOptions's).

@@ -20,6 +20,7 @@ enum class Termination {
   kInsufficientMotion,  // too few usable motions; no estimate
   kDegenerate,          // the motions do not determine the parameters (see message)
   kInvalidInput,
+  kCancelled,  // ended early by CalibrationOptions::cancel; no estimate, only to be dropped
 };
 
 // The scale of one segment (or partition) of the slave's odometry.

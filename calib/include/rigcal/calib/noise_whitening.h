@@ -18,6 +18,7 @@
 // frequencies where the calibration signal lies; the state-space filter is exact there.
 
 #include <Eigen/Core>
+#include <atomic>
 #include <vector>
 
 namespace rigcal {
@@ -41,7 +42,9 @@ double IncrementLogLikelihood(const std::vector<Eigen::VectorXd>& runs, const Le
 
 // Maximum-likelihood noise of runs of increments (Nelder-Mead on the logarithms of the
 // variances and atanh(phi), from a few starts). Variances are at least 1e-8 of the increments'
-// variance, so the filter never divides by zero.
-LevelNoise FitLevelNoise(const std::vector<Eigen::VectorXd>& runs);
+// variance, so the filter never divides by zero. `cancel` (CalibrationOptions::cancel) set: the
+// fit ends within a few evaluations of the likelihood, its result of no use.
+LevelNoise FitLevelNoise(const std::vector<Eigen::VectorXd>& runs,
+                         const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace rigcal

@@ -7,7 +7,8 @@
 // Threads: the owner calls Start, Flush, Stop and RefineNow (Start/Stop from one thread);
 // producers call Push; any thread calls Estimate, SerializeState, RestoreState and the
 // counters. The estimator thread (EstimatorLoop) pops matched sets and adds them to the
-// estimator; the refinement thread (RefinementLoop) calls RefineNow every refine_period_s.
+// estimator; the refinement thread (RefinementLoop) refines every refine_period_s
+// (RefinePeriodic: RefineNow, cancelled by CancelRefinements).
 // estimator_mutex_ guards the estimator and is never held during a refinement;
 // refine_mutex_ (serialises RefineNow) is taken before estimator_mutex_.
 
@@ -93,6 +94,17 @@ class OnlineCalibrator {
   // ends well before `deadline` (twice the prediction must fit); otherwise, or before one was
   // timed, the window refinement of its statistics (tens of ms).
   void RefineFinalBefore(std::chrono::steady_clock::time_point deadline);
+  // The stream is being stopped early (a signal): the periodic refinement in flight ends at its
+  // next check (CalibrationOptions::cancel; a history refinement within tenths of a second) and
+  // its outcome is dropped, and no periodic refinement runs after it. RefineNow and
+  // RefineFinalBefore still run in full. Any thread; call before Flush, so that neither Flush
+  // nor the final refinement waits for a periodic one.
+  void CancelRefinements() { cancel_refinements_.store(true); }
+  // The caller's stop flag (set by a signal handler; it must outlive the calibrator): a wait for
+  // the estimator thread (a lossless Push, Drain, Flush) that sees it set cancels the periodic
+  // refinements, so that it ends within tenths of a second even when the estimator thread is
+  // in a history refinement. Any thread.
+  void CancelRefinementsWhen(const std::atomic<bool>* stop) { cancel_when_.store(stop); }
 
   // Consistent snapshot of the estimate (any thread). With time_offset.enabled, every slave's
   // time_offset_s / time_offset_std_s (NaN σ: given, or not estimated yet) and its online
@@ -110,12 +122,31 @@ class OnlineCalibrator {
   uint64_t sets_consumed() const RIGCAL_EXCLUDES(estimator_mutex_);
   // Number of background refinements applied so far.
   int refinements_applied() const { return refinements_applied_.load(); }
+  // Refinement passes (RefineNow, RefineFinalBefore, the periodic ones) begun and ended so far:
+  // none is in flight while the two are equal (read `begun` first). A load test samples the
+  // heap between passes, without their transient working memory.
+  struct RefinementPasses {
+    uint64_t begun = 0;
+    uint64_t ended = 0;
+  };
+  RefinementPasses refinement_passes() const {
+    RefinementPasses p;
+    p.begun = passes_begun_.load();
+    p.ended = passes_ended_.load();
+    return p;
+  }
 
  private:
   void EstimatorLoop() RIGCAL_EXCLUDES(estimator_mutex_);
   // lossless: waits until one more push cannot overflow the ready queue (or Stop).
   void WaitForRoom() RIGCAL_EXCLUDES(estimator_mutex_);
+  // In a wait for the estimator thread: CancelRefinements once the CancelRefinementsWhen flag is
+  // set.
+  void CancelIfStopped();
   void RefinementLoop() RIGCAL_EXCLUDES(stop_mutex_);
+  // The refinement of every slave the refinement thread (or, on stream time, the estimator
+  // thread) runs every refine_period_s: as RefineNow(), cancelled by CancelRefinements.
+  void RefinePeriodic();
   // Refines one slave's job and applies the result when consistent; times history refinements.
   void RunRefinementJob(const RefinementJob& job) RIGCAL_REQUIRES(refine_mutex_);
   RefinementJob MakeRefinementJob(int slave, bool final) const RIGCAL_EXCLUDES(estimator_mutex_);
@@ -146,6 +177,21 @@ class OnlineCalibrator {
   // Incremented with estimator_mutex_ held; an atomic so that refinements_applied() reads it
   // without the lock.
   std::atomic<int> refinements_applied_{0};
+  std::atomic<bool> cancel_refinements_{false};                 // CancelRefinements
+  std::atomic<const std::atomic<bool>*> cancel_when_{nullptr};  // CancelRefinementsWhen
+  std::atomic<uint64_t> passes_begun_{0};                       // refinement_passes
+  std::atomic<uint64_t> passes_ended_{0};
+  // Counts one refinement pass over its scope (refinement_passes).
+  class PassCount {
+   public:
+    explicit PassCount(OnlineCalibrator* c) : c_(c) { c_->passes_begun_.fetch_add(1); }
+    ~PassCount() { c_->passes_ended_.fetch_add(1); }
+    PassCount(const PassCount&) = delete;
+    PassCount& operator=(const PassCount&) = delete;
+
+   private:
+    OnlineCalibrator* c_;
+  };
   // Per slave (sized once), the last history refinement's wall time and sets (0 sets: none yet).
   struct HistoryRefinementTiming {
     double seconds = 0.0;

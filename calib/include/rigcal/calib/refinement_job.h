@@ -4,6 +4,7 @@
 // (RigEstimator::MakeRefinementJob, rig_estimator.h), refined on another thread (RefineWindow)
 // and handed back (RigEstimator::ApplyRefinement).
 
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -45,6 +46,9 @@ struct RefinementJob {
   // `history` holds every history_stride-th set of the drive (a history thinned on a drive
   // longer than it holds; RigEstimatorOptions::history_sets).
   uint64_t history_stride = 1;
+  // Set by another thread to end the refinement early (CalibrationOptions::cancel): its result
+  // is then not solved, only to be dropped. Null: never cancelled.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 // Runs the non-linear refinement (thesis 4.26/4.27 with Ceres) of a job. Pure function:

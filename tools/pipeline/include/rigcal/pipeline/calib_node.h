@@ -215,6 +215,9 @@ class CalibNode {
 
   // Poses accepted by the decoder so far, all cameras (any thread).
   int64_t ReceivedPoses() const;
+  // The estimator's refinement passes begun and ended so far (any thread, after Open;
+  // OnlineCalibrator::refinement_passes): none in flight while they are equal.
+  OnlineCalibrator::RefinementPasses RefinementPasses() const;
 
   // The channel handler (public for LCM's C-style callback; not part of the API).
   void HandlePose(const std::string& channel, const void* data, int64_t size);
