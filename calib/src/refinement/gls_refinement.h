@@ -39,8 +39,8 @@ struct GlsInput {
   // After the first round, motions with a whitened residual beyond this many robust σ are
   // dropped (0: none).
   double outlier_factor = 6.0;
-  // Set by another thread to end the refinement early (CalibrationOptions::cancel): checked
-  // between the noise fits of the components; the result is then not ok ("cancelled").
+  // Set by another thread to end the refinement early (CalibrationOptions::cancel): checked by
+  // the noise fit and at every Gauss-Newton step; the result is then not ok ("cancelled").
   const std::atomic<bool>* cancel = nullptr;
 };
 
