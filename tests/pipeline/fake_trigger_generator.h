@@ -5,19 +5,25 @@
 // command, sends heartbeats, and once started reports tick k at its MCU time
 // T_k = t_start + k * period as soon as the host clock passes it (the delay is the poll loop's,
 // 0-1 ms). Its MCU clock is the host's CLOCK_MONOTONIC since `boot`, so the true host time of
-// a pulse is known (TrueHostNs). Header-only.
+// a pulse is known (TrueHostNs). set_late_start(late, span) makes every report and heartbeat
+// from Start until `span` after the trigger's start reach the host `late` late, then on time
+// (those still held back then are dropped, so that no arrival is partly late): what a loaded host
+// sees at the start, on which the host's clock map is first fitted, then restarts. Header-only.
 
 #include <fcntl.h>
 #include <poll.h>
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <cstdlib>
+#include <deque>
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "rigcal/capture/v4l2_timestamp.h"
 #include "rigcal/trigger_protocol/frame_codec.h"
@@ -47,6 +53,21 @@ class FakeTriggerGenerator {
     tcsetattr(slave_, TCSANOW, &tio);
     boot_ns_ = capture::MonotonicNowNs() - 1'000'000'000;
     return true;
+  }
+  // Before Start: the reports and heartbeats reach the host `late_ns` late until `span_ns` after
+  // the trigger starts.
+  void set_late_start(int64_t late_ns, int64_t span_ns) {
+    late_ns_ = late_ns;
+    late_span_ns_ = span_ns;
+    late_until_ns_ = INT64_MAX;  // until the trigger starts
+  }
+  // Host time from which messages are on time again (INT64_MIN without a late start, INT64_MAX
+  // before the trigger starts).
+  int64_t late_until_ns() const { return late_until_ns_.load(); }
+  // late_until_ns() + `settle_ns` (>= 0), saturated.
+  int64_t settled_from_ns(int64_t settle_ns) const {
+    const int64_t until = late_until_ns();
+    return until > INT64_MAX - settle_ns ? INT64_MAX : until + settle_ns;
   }
   // Answers commands (`answer` false: stays silent, a dead generator).
   void Start(bool answer = true) {
@@ -78,6 +99,24 @@ class FakeTriggerGenerator {
     const size_t n = trigger_protocol::EncodeFrame(m, frame, sizeof(frame));
     if (write(master_, frame, n) != static_cast<ssize_t>(n)) failed_writes_++;
   }
+  // A report or heartbeat: held back `late_ns_` during the late start.
+  void SendTimed(const trigger_protocol::Message& m) {
+    const int64_t now = capture::MonotonicNowNs();
+    if (late_ns_ > 0 && now < late_until_ns_.load()) {
+      held_.emplace_back(now + late_ns_, m);
+    } else {
+      Send(m);
+    }
+  }
+  // Sends the held messages that are due; once the late start is over, drops the others.
+  void ReleaseHeld() {
+    const int64_t now = capture::MonotonicNowNs();
+    while (!held_.empty() && held_.front().first <= now) {
+      Send(held_.front().second);
+      held_.pop_front();
+    }
+    if (now >= late_until_ns_.load()) held_.clear();
+  }
   void OnCommand(const trigger_protocol::Message& c) {
     using trigger_protocol::MessageType;
     uint16_t id = c.simple.command_id;
@@ -101,6 +140,7 @@ class FakeTriggerGenerator {
       case MessageType::kStart: {
         std::lock_guard<std::mutex> lock(mutex_);
         running_ = started_ = true;
+        if (late_ns_ > 0) late_until_ns_ = capture::MonotonicNowNs() + late_span_ns_;
         period_us_ = trigger_protocol::PeriodUs(rate_mhz_);
         start_us_ = McuUs() + 10'000;
         next_seq_ = 0;
@@ -136,6 +176,7 @@ class FakeTriggerGenerator {
         }
       }
       if (!answer_) continue;
+      ReleaseHeld();
       const uint64_t now = McuUs();
       std::lock_guard<std::mutex> lock(mutex_);
       // Pulses first: a heartbeat stamped now must not precede a pulse report of an earlier
@@ -146,7 +187,7 @@ class FakeTriggerGenerator {
         r.pulse.line_mask = line_mask_;
         r.pulse.seq = next_seq_;
         r.pulse.mcu_time_us = start_us_ + next_seq_ * uint64_t{period_us_};
-        Send(r);
+        SendTimed(r);
         ++next_seq_;
       }
       if (heartbeat_ms_ > 0 && now >= next_heartbeat_us) {
@@ -155,7 +196,7 @@ class FakeTriggerGenerator {
         h.heartbeat.mcu_time_us = now;
         h.heartbeat.running = running_ ? 1 : 0;
         h.heartbeat.next_seq = next_seq_;
-        Send(h);
+        SendTimed(h);
         next_heartbeat_us = now + heartbeat_ms_ * 1000ull;
       }
     }
@@ -169,6 +210,10 @@ class FakeTriggerGenerator {
   std::atomic<bool> stop_{false};
   bool answer_ = true;
   int failed_writes_ = 0;
+  int64_t late_ns_ = 0;                                             // set_late_start
+  int64_t late_span_ns_ = 0;                                        // set_late_start
+  std::atomic<int64_t> late_until_ns_{INT64_MIN};                   // set at kStart
+  std::deque<std::pair<int64_t, trigger_protocol::Message>> held_;  // release time, message
   // The loop thread's configuration.
   uint32_t rate_mhz_ = 20'000;
   uint8_t line_mask_ = 0;

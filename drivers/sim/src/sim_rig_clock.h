@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
+#include <utility>
 
 #include "rigcal/base/thread_annotations.h"
 
@@ -17,11 +19,15 @@ inline int64_t MonotonicNs() {
 }
 
 // The shared time base of a realtime rig: CLOCK_MONOTONIC (std::chrono::steady_clock on
-// Linux) at the first Grab of any of its devices.
+// Linux) at the first Grab of any of its devices, a given epoch, or a given clock (the host time
+// of a time since frame 0, asked at every frame: a trigger generator's, see StartOn).
 struct RigClock {
+  using HostNsSince = std::function<int64_t(int64_t since_frame0_ns)>;
+
   Mutex mutex;
   bool started RIGCAL_GUARDED_BY(mutex) = false;
   int64_t epoch_ns RIGCAL_GUARDED_BY(mutex) = 0;
+  HostNsSince host_ns_since RIGCAL_GUARDED_BY(mutex);  // empty: epoch_ns + the time
 
   int64_t StartOnce() RIGCAL_EXCLUDES(mutex) {
     MutexLock lock(mutex);
@@ -39,9 +45,28 @@ struct RigClock {
     }
     return epoch_ns;
   }
+  void StartOn(HostNsSince clock) RIGCAL_EXCLUDES(mutex) {
+    MutexLock lock(mutex);
+    if (!started) {
+      started = true;
+      epoch_ns = clock(0);
+      host_ns_since = std::move(clock);
+    }
+  }
   int64_t Epoch() RIGCAL_EXCLUDES(mutex) {
     MutexLock lock(mutex);
     return epoch_ns;
+  }
+  // Host time of `since_frame0_ns` after frame 0 (started).
+  int64_t HostNs(int64_t since_frame0_ns) RIGCAL_EXCLUDES(mutex) {
+    HostNsSince clock;
+    int64_t epoch = 0;
+    {
+      MutexLock lock(mutex);
+      clock = host_ns_since;
+      epoch = epoch_ns;
+    }
+    return clock ? clock(since_frame0_ns) : epoch + since_frame0_ns;
   }
 };
 

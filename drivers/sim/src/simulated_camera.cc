@@ -71,11 +71,15 @@ Expected<std::optional<capture::Frame>> SimulatedCamera::Grab() {
   };
   if (failed_) return failure();
   const int64_t epoch = spec.realtime ? clock_->StartOnce() : spec.start_time_ns;
+  // Frame k's nominal stamp (in realtime on the rig clock, which may follow a trigger's).
+  auto due_ns = [&](int64_t k) {
+    return spec.realtime ? clock_->HostNs(d.OffsetNs(k)) : epoch + d.OffsetNs(k);
+  };
   const int64_t period_ns = std::llround(1e9 / spec.frame_rate_hz);
   while (next_frame_ < d.num_frames) {
     int64_t k = next_frame_;
     if (spec.realtime) {
-      const int64_t late = MonotonicNs() - (epoch + d.OffsetNs(k));
+      const int64_t late = MonotonicNs() - due_ns(k);
       if (late > period_ns) {
         // The frames that were due meanwhile are gone, as from an overflowing driver buffer.
         const int64_t newest = std::min<int64_t>(
@@ -94,7 +98,7 @@ Expected<std::optional<capture::Frame>> SimulatedCamera::Grab() {
       }
     }
     if (fail_after && d.StreamTime(k) >= *fail_after) {
-      if (spec.realtime && !wait_until(epoch + d.OffsetNs(k))) {
+      if (spec.realtime && !wait_until(due_ns(k))) {
         return std::optional<capture::Frame>();
       }
       failed_ = true;
@@ -109,10 +113,10 @@ Expected<std::optional<capture::Frame>> SimulatedCamera::Grab() {
     capture::Frame frame;
     frame.camera = camera_;
     frame.seq = k;
-    frame.t_ns = epoch + d.OffsetNs(k) + d.JitterNs(camera_, k);
     frame.image = d.Render(camera_, k, &state_->acc, &state_->hits, RenderKernel::kSimd);
     if (d.Blackout(camera_, k)) frame.image.setTo(0);
-    if (spec.realtime && !wait_until(epoch + d.OffsetNs(k))) return std::optional<capture::Frame>();
+    if (spec.realtime && !wait_until(due_ns(k))) return std::optional<capture::Frame>();
+    frame.t_ns = due_ns(k) + d.JitterNs(camera_, k);  // after the wait: the clock may move
     return std::optional<capture::Frame>(std::move(frame));
   }
   return std::optional<capture::Frame>();

@@ -39,11 +39,18 @@ void SimulatedRig::StartAt(int64_t epoch_ns) const {
   if (data_->spec.realtime) clock_->StartAt(epoch_ns);
 }
 
+void SimulatedRig::StartOn(std::function<int64_t(int64_t)> host_ns_since) const {
+  if (data_->spec.realtime) clock_->StartOn(std::move(host_ns_since));
+}
+
 int64_t SimulatedRig::epoch_ns() const {
   return data_->spec.realtime ? clock_->Epoch() : data_->spec.start_time_ns;
 }
 
-int64_t SimulatedRig::FrameTimeNs(int64_t k) const { return epoch_ns() + data_->OffsetNs(k); }
+int64_t SimulatedRig::FrameTimeNs(int64_t k) const {
+  return data_->spec.realtime ? clock_->HostNs(data_->OffsetNs(k))
+                              : data_->spec.start_time_ns + data_->OffsetNs(k);
+}
 
 double SimulatedRig::FrameStreamTime(int64_t k) const { return data_->StreamTime(k); }
 

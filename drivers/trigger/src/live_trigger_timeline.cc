@@ -98,7 +98,8 @@ std::string LiveTriggerTimeline::problem() const {
   return p.empty() ? p : options_.port + ": " + p;
 }
 
-Expected<int64_t> LiveTriggerTimeline::NextTickAt(int64_t not_before_ns, int64_t timeout_ns) const {
+Expected<LiveTriggerTimeline::Tick> LiveTriggerTimeline::NextTick(int64_t not_before_ns,
+                                                                  int64_t timeout_ns) const {
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::nanoseconds(timeout_ns);
   const double period_us = 1e6 / options_.settings.rate_hz;
   while (true) {
@@ -119,7 +120,7 @@ Expected<int64_t> LiveTriggerTimeline::NextTickAt(int64_t not_before_ns, int64_t
                                                  (period_us * 1000.0)));
         const auto tick_us = last.mcu_us + static_cast<uint64_t>(std::llround(k * period_us));
         const std::optional<int64_t> tick_ns = matcher_.MapMcuTime(tick_us);
-        if (tick_ns) return *tick_ns;
+        if (tick_ns) return Tick{tick_us, *tick_ns};
       }
     }
     if (std::chrono::steady_clock::now() >= give_up) {

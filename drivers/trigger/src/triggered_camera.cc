@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// TriggeredCamera: a capture device's frames with their trigger pulse. Its counters matched_ and
-// unmatched_ are std::atomic: the capture thread counts, any thread reads.
+// TriggeredCamera: a capture device's frames with their trigger pulse. Its counters matched_,
+// unmatched_, late_reports_ and unsynced_ are std::atomic: the capture thread counts, any thread
+// reads.
 #include "rigcal/trigger/triggered_camera.h"
 
 #include <algorithm>
@@ -21,15 +22,20 @@ Expected<std::optional<capture::Frame>> TriggeredCamera::Grab() {
   // Reports arrive after their pulse: let the link catch up past the frame's stamp.
   trigger_->AdvanceTo(frame.t_ns + wait_ns_);
   TriggerMatch m;
-  if (trigger_->matcher().WaitMatch(spec_, frame.t_ns, wait_ns_, &m) == MatchOutcome::kMatched) {
+  const MatchOutcome outcome = trigger_->matcher().WaitMatch(spec_, frame.t_ns, wait_ns_, &m);
+  if (outcome == MatchOutcome::kMatched) {
     frame.seq = m.seq;
     frame.t_ns = m.centre_ns;
     ++matched_;
   } else {
     frame.seq = -1;
+    if (outcome == MatchOutcome::kNotYet) ++late_reports_;
+    if (outcome == MatchOutcome::kNotSynced) ++unsynced_;
     if (++unmatched_ == 1 || unmatched_ % 100 == 0) {
-      ModuleLogger("trigger")->warn("{}: {} frames without a trigger pulse", name(),
-                                    unmatched_.load());
+      ModuleLogger("trigger")->warn(
+          "{}: {} frames without a trigger pulse ({} because the pulse report came more than {} "
+          "ms after the frame, {} while the clock map was not synced)",
+          name(), unmatched_.load(), late_reports_.load(), wait_ns_ / 1'000'000, unsynced_.load());
     }
   }
   return grabbed;

@@ -3,11 +3,14 @@
 
 #include <chrono>
 #include <cmath>
+#include <functional>
+#include <memory>
 
 #include "paced_replay_device.h"
 #include "rigcal/camera/camera_spec.h"
 #include "rigcal/capture/v4l2_timestamp.h"
 #include "rigcal/sim/simulated_trigger_timeline.h"
+#include "rigcal/trigger/tick_clock.h"
 #include "rigcal/trigger/triggered_camera.h"
 
 namespace rigcal::pipeline {
@@ -18,8 +21,16 @@ namespace {
 constexpr int64_t kPacedStartLeadNs = 300'000'000;
 constexpr int64_t kTriggerSyncTimeoutNs = 5'000'000'000;
 
-Expected<int64_t> PacedStart(const trigger::LiveTriggerTimeline& trigger) {
-  return trigger.NextTickAt(capture::MonotonicNowNs() + kPacedStartLeadNs, kTriggerSyncTimeoutNs);
+// The clock of a source paced from a live trigger (a simulated rig, an image-folder replay): the
+// host time of a time since the trigger's next tick, on the generator's clock (TickClock).
+Expected<std::function<int64_t(int64_t)>> PacedClock(const trigger::LiveTriggerTimeline& trigger) {
+  Expected<trigger::LiveTriggerTimeline::Tick> tick =
+      trigger.NextTick(capture::MonotonicNowNs() + kPacedStartLeadNs, kTriggerSyncTimeoutNs);
+  if (!tick) return Error{tick.error()};
+  auto clock =
+      std::make_shared<const trigger::TickClock>(&trigger.matcher(), tick->mcu_us, tick->host_ns);
+  return std::function<int64_t(int64_t)>(
+      [clock](int64_t since_tick_ns) { return clock->HostNs(since_tick_ns); });
 }
 
 // The simulated rig of `source: {type: simulated}` (with its own simulated trigger when
@@ -53,9 +64,9 @@ Expected<CaptureSources> OpenSimulatedRig(const io::RigConfig& config, bool fast
   sources.devices = sources.rig->MakeDevices();
   sources.models = spec.cameras;
   if (live) {
-    auto start = PacedStart(*live);
-    if (!start) return Error{config.path + ": " + start.error()};
-    sources.rig->StartAt(*start);
+    auto clock = PacedClock(*live);
+    if (!clock) return Error{config.path + ": " + clock.error()};
+    sources.rig->StartOn(std::move(*clock));
     progress << prefix << "simulated rig paced by the trigger generator: frame 0 at its pulse\n";
   }
   if (trigger) {
@@ -126,9 +137,9 @@ Expected<CaptureSources> OpenImageFolders(const io::RigConfig& config, const std
   // With a live trigger the folders are replayed in real time from its next pulse.
   std::shared_ptr<ReplayClock> replay_clock;
   if (live) {
-    auto start = PacedStart(*live);
-    if (!start) return Error{config.path + ": " + start.error()};
-    replay_clock = std::make_shared<ReplayClock>(*start);
+    auto clock = PacedClock(*live);
+    if (!clock) return Error{config.path + ": " + clock.error()};
+    replay_clock = std::make_shared<ReplayClock>(std::move(*clock));
     sources.realtime = true;
     progress << prefix << "image folders replayed in real time from the trigger's next pulse\n";
   }
@@ -225,7 +236,13 @@ void ReportTrigger(const CaptureSources& sources, const std::string& prefix, std
   }
   for (const trigger::TriggeredCamera* camera : sources.triggered) {
     out << prefix << "camera '" << camera->name() << "': " << camera->matched()
-        << " frames with their trigger pulse, " << camera->unmatched() << " without\n";
+        << " frames with their trigger pulse, " << camera->unmatched() << " without";
+    if (camera->late_reports() + camera->unsynced() > 0) {
+      out << " (" << camera->late_reports() << " because the pulse report came more than "
+          << camera->wait_ns() / 1'000'000 << " ms after the frame: a busy host or a slow link; "
+          << camera->unsynced() << " while the clock map was not synced)";
+    }
+    out << "\n";
   }
 }
 

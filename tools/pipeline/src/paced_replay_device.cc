@@ -12,9 +12,13 @@
 namespace rigcal::pipeline {
 
 int64_t ReplayClock::HostNs(int64_t t_ns) {
-  MutexLock lock(mutex_);
-  if (!origin_ns_) origin_ns_ = t_ns;
-  return epoch_ns_ + (t_ns - *origin_ns_);
+  int64_t since_origin_ns = 0;
+  {
+    MutexLock lock(mutex_);
+    if (!origin_ns_) origin_ns_ = t_ns;
+    since_origin_ns = t_ns - *origin_ns_;
+  }
+  return host_ns_since_(since_origin_ns);
 }
 
 Expected<std::optional<capture::Frame>> PacedReplayDevice::Grab() {
@@ -24,11 +28,13 @@ Expected<std::optional<capture::Frame>> PacedReplayDevice::Grab() {
   if (Status gap = CheckGap(frame.t_ns); !gap.ok()) return Error{gap.message()};
   previous_recorded_ns_ = frame.t_ns;
   ++frames_;
-  frame.t_ns = clock_->HostNs(frame.t_ns);
-  // Wait for the frame's time in short steps, so Interrupt is prompt.
-  while (!interrupted_.load()) {
+  const int64_t recorded_ns = frame.t_ns;
+  // Wait for the frame's time in short steps, so Interrupt is prompt; the time is asked again at
+  // each step (a clock on the trigger's pulses moves with the clock map).
+  while (true) {
+    frame.t_ns = clock_->HostNs(recorded_ns);
     const int64_t left = frame.t_ns - capture::MonotonicNowNs();
-    if (left <= 0) break;
+    if (left <= 0 || interrupted_.load()) break;
     std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<int64_t>(left, 20'000'000)));
   }
   if (interrupted_.load()) return std::optional<capture::Frame>();

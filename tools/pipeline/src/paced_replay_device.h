@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // PacedReplayDevice: replays a recording (an image folder) in real time on the host clock, so a
-// live trigger generator can expose it: the recording's time runs from `epoch_ns`
-// (CLOCK_MONOTONIC, e.g. the next trigger pulse), each frame is stamped epoch + (its recorded
-// stamp - the first recorded stamp any camera of the replay grabbed) and Grab returns it at that
-// time.
+// live trigger generator can expose it: each frame is stamped at the ReplayClock's host time of
+// (its recorded stamp - the first recorded stamp any camera of the replay grabbed) and Grab
+// returns it at that time. The clock runs from a host epoch, or on the trigger generator's clock
+// from a tick (trigger::TickClock: the frames move with the pulses when the clock map moves).
 //
 // A frame stamped more than MaxGapNs() after the previous one of its camera is not waited for:
 // Grab returns an error naming the gap (a glitched stamp, e.g. 4e18 ns, would otherwise be waited
@@ -15,6 +15,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 
@@ -26,12 +27,20 @@ namespace rigcal::pipeline {
 
 class ReplayClock {
  public:
-  explicit ReplayClock(int64_t epoch_ns) : epoch_ns_(epoch_ns) {}
+  // The host time of a time since the recording's origin (e.g. a trigger::TickClock's).
+  using HostNsSince = std::function<int64_t(int64_t since_origin_ns)>;
+
+  // The recording's time runs from host time `epoch_ns`.
+  explicit ReplayClock(int64_t epoch_ns)
+      : host_ns_since_([epoch_ns](int64_t since_ns) { return epoch_ns + since_ns; }) {}
+  // The recording's time runs on `host_ns_since`, asked at every frame.
+  explicit ReplayClock(HostNsSince host_ns_since) : host_ns_since_(std::move(host_ns_since)) {}
+
   // Host time of recorded stamp `t_ns`; the first call fixes the recording's origin.
   int64_t HostNs(int64_t t_ns) RIGCAL_EXCLUDES(mutex_);
 
  private:
-  const int64_t epoch_ns_;
+  const HostNsSince host_ns_since_;
   Mutex mutex_;
   std::optional<int64_t> origin_ns_ RIGCAL_GUARDED_BY(mutex_);
 };

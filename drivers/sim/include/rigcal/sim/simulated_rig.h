@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -105,9 +106,14 @@ class SimulatedRig {
   // near future: the first Grab then waits for it), e.g. the first pulse of a trigger generator;
   // no effect once started.
   void StartAt(int64_t epoch_ns) const;
+  // Realtime: starts the rig clock on `host_ns_since` (the host time of a time since frame 0,
+  // asked at every frame: a trigger generator's clock, trigger::TickClock); no effect once
+  // started.
+  void StartOn(std::function<int64_t(int64_t since_frame0_ns)> host_ns_since) const;
   // Stamp of frame 0: spec().start_time_ns, or in realtime the clock's start (0 before).
   int64_t epoch_ns() const;
-  // Nominal (jitter-free) stamp of frame k: epoch_ns() + round(k * 1e9 / frame_rate_hz).
+  // Nominal (jitter-free) stamp of frame k: epoch_ns() + round(k * 1e9 / frame_rate_hz), or on
+  // the clock of StartOn.
   int64_t FrameTimeNs(int64_t k) const;
   // Stream time of frame k in seconds (frame 0 at 0): the time the image is rendered at.
   double FrameStreamTime(int64_t k) const;

@@ -9,7 +9,7 @@
 // How a frame's stamp relates to its exposure centre depends on the source (FrameStamp):
 // CameraTriggerSpec::stamp_offset_ns is StampOffsetNs(stamp, exposure, readout).
 //
-// Threads: the owner calls Start/Stop; matcher(), problem(), stats() and NextTickAt() any
+// Threads: the owner calls Start/Stop; matcher(), problem(), stats() and NextTick() any
 // thread.
 
 #include <cstdint>
@@ -65,11 +65,15 @@ class LiveTriggerTimeline final : public TriggerTimeline {
   void AdvanceTo(int64_t) override {}  // the receiver thread delivers the messages
   const TriggerMatcher& matcher() const override { return matcher_; }
 
-  // The mapped host time (ns) of the first trigger tick whose exposure centre (phase offset 0)
-  // lies at or after `not_before_ns`, once the clock map is synced: where a source paced from
-  // the trigger (a simulated rig in real time) puts its frame 0. Waits up to `timeout_ns` for
-  // sync; errors name the port (the link failed, no pulse within the time).
-  Expected<int64_t> NextTickAt(int64_t not_before_ns, int64_t timeout_ns) const;
+  // The first trigger tick whose exposure centre (phase offset 0) lies at or after
+  // `not_before_ns`, once the clock map is synced: where a source paced from the trigger (a
+  // simulated rig in real time, an image-folder replay) puts its frame 0. Waits up to
+  // `timeout_ns` for sync; errors name the port (the link failed, no pulse within the time).
+  struct Tick {
+    uint64_t mcu_us = 0;  // its time on the generator's clock
+    int64_t host_ns = 0;  // mapped to the host clock as the map is now
+  };
+  Expected<Tick> NextTick(int64_t not_before_ns, int64_t timeout_ns) const;
 
   // Ends the receiver thread and stops the generator. Idempotent.
   void Stop();

@@ -29,7 +29,10 @@ namespace rigcal::trigger {
 // A CameraDevice whose frames get their trigger pulse: seq = the pulse's continuous sequence
 // number, t_ns = the mapped exposure centre (plus the line's phase offset). A frame without a
 // pulse within the matcher's tolerance (or whose pulse did not arrive within `wait_ns`) keeps
-// its stamp and gets seq -1 (counted by unmatched()).
+// its stamp and gets seq -1 (counted by unmatched()). Of those, late_reports() counts the frames
+// whose pulse report had not arrived `wait_ns` after the frame (no later pulse was known either:
+// a busy host or a slow link, not a spurious frame), unsynced() those that came while the clock
+// map had too few samples to map a pulse (after the start, an MCU reset or a map restart).
 // Threads: as the wrapped device (one capture thread; Interrupt from any thread).
 class TriggeredCamera final : public capture::CameraDevice {
  public:
@@ -44,6 +47,9 @@ class TriggeredCamera final : public capture::CameraDevice {
 
   int64_t matched() const { return matched_.load(); }
   int64_t unmatched() const { return unmatched_.load(); }
+  int64_t late_reports() const { return late_reports_.load(); }
+  int64_t unsynced() const { return unsynced_.load(); }
+  int64_t wait_ns() const { return wait_ns_; }
 
  private:
   std::unique_ptr<capture::CameraDevice> device_;
@@ -52,6 +58,8 @@ class TriggeredCamera final : public capture::CameraDevice {
   int64_t wait_ns_;
   std::atomic<int64_t> matched_{0};
   std::atomic<int64_t> unmatched_{0};
+  std::atomic<int64_t> late_reports_{0};
+  std::atomic<int64_t> unsynced_{0};
 };
 
 }  // namespace rigcal::trigger
