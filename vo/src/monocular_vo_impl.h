@@ -176,9 +176,10 @@ class MonocularVo::Impl {
   // number is returned, their rotation-free angles to the last keyframe go to *parallax), those
   // within the two-view gate keep their landmark (counted in *linked), the others lose it;
   // tracks without a landmark that contradict their anchor's epipolar geometry (moving
-  // objects, KLT slips) are dropped.
+  // objects, KLT slips) are dropped. The inliers' pixels go to *inlier_px.
   int ClassifyTracks(const MapMatches& matches, const CameraPoseRC& pose,
-                     std::vector<double>* parallax, int* linked);
+                     std::vector<double>* parallax, int* linked,
+                     std::vector<Eigen::Vector2f>* inlier_px);
   bool NeedKeyframe(int inliers, int linked, const std::vector<double>& parallax) const;
   // Tracking failed: starts relocalising against the map (at once with `grey` if not empty).
   void Lose(const std::string& reason, int64_t t_ns, const cv::Mat& grey, VoResult* result);

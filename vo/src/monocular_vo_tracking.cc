@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "monocular_vo_impl.h"
@@ -111,7 +112,8 @@ bool MonocularVo::Impl::EstimateFramePose(const MapMatches& matches, const Camer
 }
 
 int MonocularVo::Impl::ClassifyTracks(const MapMatches& matches, const CameraPoseRC& pose,
-                                      std::vector<double>* parallax, int* linked) {
+                                      std::vector<double>* parallax, int* linked,
+                                      std::vector<Eigen::Vector2f>* inlier_px) {
   // A landmark's residual against a pose estimated from the others carries the track's noise,
   // the landmark's own position error (it was triangulated from tracks as noisy) and the
   // pose's: about twice the variance of the noise alone. Within the pose gate it is an inlier;
@@ -131,6 +133,8 @@ int MonocularVo::Impl::ClassifyTracks(const MapMatches& matches, const CameraPos
     ++*linked;
     if (residual > inlier_gate) continue;
     ++inliers;
+    const cv::Point2f& px = tracks_[matches.track[k]].px;
+    inlier_px->emplace_back(px.x, px.y);
     if (last_kf != nullptr) {
       parallax->push_back(VectorAngle(matches.point[k] - last_kf->C, matches.point[k] - pose.C));
     }
@@ -185,7 +189,8 @@ void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* 
   }
   std::vector<double> parallax;
   int linked = 0;
-  const int inliers = ClassifyTracks(matches, pose, &parallax, &linked);
+  std::vector<Eigen::Vector2f> inlier_px;
+  const int inliers = ClassifyTracks(matches, pose, &parallax, &linked, &inlier_px);
   if (inliers < options_.min_tracking_inliers ||
       inliers < options_.min_inlier_ratio * static_cast<double>(matches.size())) {
     Lose("PnP: too few inliers (" + std::to_string(inliers) + " of " + matched + ")", t_ns, grey,
@@ -204,6 +209,7 @@ void MonocularVo::Impl::TrackFrame(int64_t t_ns, const cv::Mat& grey, VoResult* 
   RecordRollingShutterPose(t_ns, pose_);
   result->state = state_;
   result->inliers = inliers;
+  result->inlier_px = std::move(inlier_px);
   // The pose quality: the inlier ratio, the inliers up to 100, and how the frame's track noise
   // compares with the camera's usual (FrameNoiseReference: blur, darkness, image noise).
   const double ratio = static_cast<double>(inliers) / static_cast<double>(matches.size());

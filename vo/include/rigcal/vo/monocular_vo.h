@@ -26,11 +26,13 @@
 // Thread: a MonocularVo is used by one thread at a time (the pipeline's VO thread of its
 // camera); it starts no thread itself.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "rigcal/base/status.h"
 #include "rigcal/base/types.h"
@@ -169,7 +171,11 @@ struct VoResult {
   VoState state = VoState::kInitialising;
   int tracked_features = 0;  // KLT tracks alive after this frame
   int inliers = 0;           // PnP (tracking) or essential-matrix (initialisation) inliers
-  bool keyframe = false;     // this frame became a keyframe
+  // A tracked frame: the image positions (pixels) of the tracks whose landmark is a pose
+  // inlier, the `inliers` features its pose rests on (overlays, evaluations); empty otherwise
+  // (initialising, lost, relocalised).
+  std::vector<Eigen::Vector2f> inlier_px;
+  bool keyframe = false;  // this frame became a keyframe
   // This frame's pose came from relocalising against the map after a loss (same segment).
   bool relocalised = false;
   // Relocalisations since the VO was made (all segments), this one included.
