@@ -3,8 +3,8 @@
 // PacedReplayDevice: replays a recording (an image folder) in real time on the host clock, so a
 // live trigger generator can expose it: each frame is stamped at the ReplayClock's host time of
 // (its recorded stamp - the first recorded stamp any camera of the replay grabbed) and Grab
-// returns it at that time. The clock runs from a host epoch, or on the trigger generator's clock
-// from a tick (trigger::TickClock: the frames move with the pulses when the clock map moves).
+// returns it at that time. The clock is the trigger generator's from a tick (trigger::TickClock:
+// the frames move with the pulses when the clock map moves).
 //
 // A frame stamped more than MaxGapNs() after the previous one of its camera is not waited for:
 // Grab returns an error naming the gap (a glitched stamp, e.g. 4e18 ns, would otherwise be waited
@@ -30,9 +30,6 @@ class ReplayClock {
   // The host time of a time since the recording's origin (e.g. a trigger::TickClock's).
   using HostNsSince = std::function<int64_t(int64_t since_origin_ns)>;
 
-  // The recording's time runs from host time `epoch_ns`.
-  explicit ReplayClock(int64_t epoch_ns)
-      : host_ns_since_([epoch_ns](int64_t since_ns) { return epoch_ns + since_ns; }) {}
   // The recording's time runs on `host_ns_since`, asked at every frame.
   explicit ReplayClock(HostNsSince host_ns_since) : host_ns_since_(std::move(host_ns_since)) {}
 
