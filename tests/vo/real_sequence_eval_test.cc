@@ -6,6 +6,10 @@
 //    the tag poses' own noise floor (each tag's relative motion against the grid's); OpenCV's
 //    ORB + 5-point (support/opencv_two_view.h) on the same pairs; the rotation error per camera
 //    axis, and per axis the tags' and each estimator's own share of it (SplitRotationErrors); the
+//    same against the tag poses refined with the tags' real layout on the board
+//    (support/tag_grid_refinement.h), whose Cramér-Rao σ is the reference's own floor; the VO's
+//    figure over RANSAC seeds 1-8; an offline bundle adjustment of all frames
+//    (support/offline_bundle_adjustment.h: what the images allow, against the refined poses); the
 //    same figures over 16 runs of its frames fed from other starts, backwards and every second
 //    frame (AprilTagSequenceVariants: the spread of a one-sequence figure);
 //  - visp_mbt_cube (218 frames, low texture, a still camera watching a hand move the object):
@@ -42,10 +46,12 @@
 
 #include "rigcal/base/quaternion.h"
 #include "rigcal/vo/monocular_vo.h"
+#include "support/offline_bundle_adjustment.h"
 #include "support/opencv_two_view.h"
 #include "support/real_mono_sequence.h"
 #include "support/relative_pose_errors.h"
 #include "support/skip.h"
+#include "support/tag_grid_refinement.h"
 #include "vo_eval_options.h"
 
 namespace rigcal::vo {
@@ -433,6 +439,135 @@ double Median(const std::vector<RelativePoseError>& errors, double RelativePoseE
   return support::Stats(v).median;
 }
 
+// The second reference (support/tag_grid_refinement.h): the camera poses re-estimated with
+// the tags' real layout on the board, and their Cramér-Rao σ.
+std::map<int, Pose> RefinedTruth(const support::RefinedTagGrid& g) {
+  std::map<int, Pose> truth;
+  for (size_t k = 0; k < g.grid_from_cam.size(); ++k) {
+    truth[static_cast<int>(k)] = g.grid_from_cam[k];
+  }
+  return truth;
+}
+
+// The errors of a peer's motions (by the pair's first frame) against `reference`.
+std::vector<RelativePoseError> MotionErrors(const std::map<int, Pose>& motions,
+                                            const std::map<int, Pose>& reference, int step) {
+  std::vector<RelativePoseError> out;
+  for (const auto& [a, motion] : motions) {
+    if (reference.count(a) == 0 || reference.count(a + step) == 0) continue;
+    RelativePoseError e =
+        support::CompareRelativeMotion(Pose{}, motion, reference.at(a), reference.at(a + step));
+    e.a = a;
+    e.b = a + step;
+    out.push_back(e);
+  }
+  return out;
+}
+
+// The median rotation error of the refined poses themselves over `pairs`: per camera axis the
+// RMS over the pairs of the two frames' Cramér-Rao σ, as a Gaussian. The bound holds the
+// layout fixed; on rendered boards the motions' errors are 0.8-1.5 times it
+// (vo/tag_grid_refinement).
+double RefinedFloorDeg(const support::RefinedTagGrid& g,
+                       const std::vector<RelativePoseError>& pairs) {
+  if (pairs.empty()) return 0.0;
+  Eigen::Vector3d sum2 = Eigen::Vector3d::Zero();
+  for (const RelativePoseError& p : pairs) {
+    sum2 += g.rotation_sigma_deg[static_cast<size_t>(p.a)].cwiseAbs2() +
+            g.rotation_sigma_deg[static_cast<size_t>(p.b)].cwiseAbs2();
+  }
+  return GaussianMedianAngleDeg((sum2 / static_cast<double>(pairs.size())).cwiseSqrt());
+}
+
+void PrintRefinedReference(const support::RefinedTagGrid& g) {
+  std::vector<double> x, y, z;
+  for (const Eigen::Vector3d& s : g.rotation_sigma_deg) {
+    x.push_back(s.x()), y.push_back(s.y()), z.push_back(s.z());
+  }
+  std::printf(
+      "refined tag poses (the tags' layout on the board estimated with them): corner sigma %.3f "
+      "px, corners vs pose RMS median %.2f px (recorded poses on the grid: %.2f px); Cramer-Rao "
+      "sigma of a frame's rotation median x %.3f, y %.3f, z %.3f deg\n",
+      g.corner_sigma_px, support::Stats(g.residual_rms_px).median,
+      support::Stats(g.recorded_residual_rms_px).median, support::Stats(x).median,
+      support::Stats(y).median, support::Stats(z).median);
+}
+
+void PrintAgainstRefined(int step, const VoRun& run, const std::map<int, Pose>& orb,
+                         const std::map<int, Pose>& klt, const support::RefinedTagGrid& g,
+                         const std::map<int, Pose>& recorded) {
+  const std::map<int, Pose> refined = RefinedTruth(g);
+  const std::vector<RelativePoseError> vo = RunErrors(run, refined, step);
+  std::printf("step %2d: against the refined tag poses: VO %s\n", step,
+              support::Describe(vo).c_str());
+  std::printf("step %2d: against the refined tag poses: ORB + 5-point %s; KLT + 5-point %s\n", step,
+              support::Describe(MotionErrors(orb, refined, step)).c_str(),
+              support::Describe(MotionErrors(klt, refined, step)).c_str());
+  std::printf(
+      "step %2d: the refined poses' own rotation error (Cramer-Rao) median %.3f deg; the recorded "
+      "poses against them: %s\n",
+      step, RefinedFloorDeg(g, vo),
+      support::Describe(support::RelativePoseErrors(recorded, refined, step)).c_str());
+}
+
+// The images' own estimate (support/offline_bundle_adjustment.h): every pose from the motion's
+// onset adjusted with the KLT tracks that fit the refined tag poses within `gate_px`. Where it
+// misses the tags by more than both their noise, the images (a pinhole without distortion, a
+// rigid scene) and the tags disagree, and no VO can come closer to the tags than that; the VO's
+// own error is its distance from this estimate.
+void PrintOfflineBa(const RealMonoSequence& s, const VoRun& run, const std::map<int, Pose>& refined,
+                    int onset, double gate_px) {
+  std::map<int, Pose> initial;
+  for (const auto& [k, pose] : refined) {
+    if (k >= onset) initial[k] = pose;
+  }
+  support::OfflineBaOptions options;
+  options.initial_gate_px = gate_px;
+  const auto ba = support::OfflineBundleAdjustment(s.grey, initial, *s.camera, options);
+  ASSERT_TRUE(ba.ok()) << ba.error();
+  std::printf(
+      "offline BA of frames %d-%d (KLT tracks within %.0f px of the refined tag poses): %d of %d "
+      "tracks, residual sigma %.3f px\n",
+      initial.begin()->first, initial.rbegin()->first, gate_px, ba->points, ba->tracks,
+      ba->residual_sigma_px);
+  for (const int step : {1, 5, 10}) {
+    std::printf(
+        "step %2d: offline BA (%.0f px) against the refined tag poses: %s; the VO against it: %s\n",
+        step, gate_px,
+        support::Describe(support::RelativePoseErrors(ba->world_from_cam, refined, step)).c_str(),
+        support::Describe(RunErrors(run, ba->world_from_cam, step)).c_str());
+  }
+}
+
+// The VO's figure over RANSAC seeds (the same frames, other random samples: other inlier sets,
+// keyframes a frame earlier or later), against both references.
+void PrintSeedSpread(const RealMonoSequence& s, const std::map<int, Pose>& recorded,
+                     const std::map<int, Pose>& refined) {
+  std::map<int, std::vector<double>> on_recorded, on_refined;
+  for (uint32_t seed = 1; seed <= 8; ++seed) {
+    VoOptions options = EvalOptions();
+    options.seed = seed;
+    const VoRun run = RunVo(s, AllFrames(s), options);
+    for (const int step : {1, 5, 10}) {
+      on_recorded[step].push_back(
+          Median(RunErrors(run, recorded, step), &RelativePoseError::rotation_deg));
+      on_refined[step].push_back(
+          Median(RunErrors(run, refined, step), &RelativePoseError::rotation_deg));
+    }
+  }
+  for (const int step : {1, 5, 10}) {
+    const auto [a_min, a_max] =
+        std::minmax_element(on_recorded[step].begin(), on_recorded[step].end());
+    const auto [b_min, b_max] =
+        std::minmax_element(on_refined[step].begin(), on_refined[step].end());
+    std::printf(
+        "step %2d over RANSAC seeds 1-8: VO rotation error median of the medians %.3f deg (%.3f "
+        "to %.3f) against the recorded tag poses, %.3f deg (%.3f to %.3f) against the refined\n",
+        step, support::Stats(on_recorded[step]).median, *a_min, *a_max,
+        support::Stats(on_refined[step]).median, *b_min, *b_max);
+  }
+}
+
 TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
   if (!support::RealMonoAvailable("visp_rbt_sequence")) {
     RIGCAL_SKIP_MISSING() << "no " << support::RealMonoFolder("visp_rbt_sequence");
@@ -480,6 +615,9 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
     PrintAxisErrors(run, sharp_truth, step);
   }
   if (std::getenv("RIGCAL_VO_EVAL_QUICK") != nullptr) return;
+  const auto refined = support::RefineTagGrid(s);
+  ASSERT_TRUE(refined.ok()) << refined.error();
+  PrintRefinedReference(*refined);
   for (const int step : {1, 5, 10}) {
     const std::vector<RelativePoseError> vo = RunErrors(run, truth, step);
     int cv_failures = 0, klt_failures = 0;
@@ -511,6 +649,7 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
     for (size_t j = 0; j < all.size(); ++j) all[j] = j;
     PrintErrorShares(SplitRotationErrors(pair_errors, all), step);
     PrintShareSpread(pair_errors, step);
+    PrintAgainstRefined(step, run, cv_motions, klt_motions, *refined, truth);
     if (step == 10) {
       const double vo_rotation = Median(vo, &RelativePoseError::rotation_deg);
       const double cv_rotation = Median(cv, &RelativePoseError::rotation_deg);
@@ -519,6 +658,10 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
       EXPECT_LE(Median(vo, &RelativePoseError::direction_deg), 20.0);
       EXPECT_GE(vo.size(), s.grey.size() - run.first_pose - 10);
     }
+  }
+  PrintSeedSpread(s, truth, RefinedTruth(*refined));
+  for (const double gate_px : {3.0, 10.0}) {
+    PrintOfflineBa(s, run, RefinedTruth(*refined), onset, gate_px);
   }
 }
 
