@@ -204,6 +204,28 @@ double ResidualSigma(const Adjustment& a, const PinholeIntrinsics& k) {
   return 1.4826 * Median(std::move(r));  // σ of zero-mean Gaussian residuals, robustly
 }
 
+// Drops the tracks whose residuals together do not fit σ (OfflineBaOptions::prune_rounds).
+void PruneTracks(const PinholeIntrinsics& k, double sigma_px, Adjustment* a) {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<const Track*> tracks;
+  for (size_t i = 0; i < a->points.size(); ++i) {
+    double sum2 = 0.0;
+    for (const Observation& obs : *a->tracks[i]) {
+      double e[2];
+      const Camera& c = a->cams.at(obs.frame);
+      ReprojectionCost{obs.px, k}(c.q.data(), c.t.data(), a->points[i].data(), e);
+      sum2 += e[0] * e[0] + e[1] * e[1];
+    }
+    const double rms_px = std::sqrt(sum2 / (2.0 * static_cast<double>(a->tracks[i]->size())));
+    if (rms_px <= 2.0 * sigma_px) {
+      points.push_back(a->points[i]);
+      tracks.push_back(a->tracks[i]);
+    }
+  }
+  a->points.swap(points);
+  a->tracks.swap(tracks);
+}
+
 }  // namespace
 
 Expected<OfflineBaResult> OfflineBundleAdjustment(const std::vector<cv::Mat>& grey,
@@ -236,6 +258,15 @@ Expected<OfflineBaResult> OfflineBundleAdjustment(const std::vector<cv::Mat>& gr
       (a.cams.rbegin()->second.Centre() - a.cams.begin()->second.Centre()).norm();
   Solve(1.0, baseline, *pinhole, &a);
   Solve(1.345 * ResidualSigma(a, *pinhole), baseline, *pinhole, &a);
+  // σ of the residuals before pruning: measured again after each round it would shrink with the
+  // tracks it drops, and the pruning would run away.
+  const double sigma_px = ResidualSigma(a, *pinhole);
+  for (int round = 0; round < options.prune_rounds; ++round) {
+    PruneTracks(*pinhole, sigma_px, &a);
+    if (a.points.size() < 20) return Error{"OfflineBundleAdjustment: pruning left too few tracks"};
+    Solve(1.345 * sigma_px, baseline, *pinhole, &a);
+  }
+  result.points = static_cast<int>(a.points.size());
   result.residual_sigma_px = ResidualSigma(a, *pinhole);
   for (const auto& [frame, c] : a.cams) {
     Pose cam_from_world;

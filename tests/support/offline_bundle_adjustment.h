@@ -32,12 +32,19 @@ struct OfflineBaOptions {
   int min_observations = 8;
   double min_ray_angle_deg = 1.0;
   double initial_gate_px = 3.0;
+  // Rounds of track pruning after the adjustment (0: none). Each round drops every track whose
+  // RMS residual (per image axis, over its whole life) is above twice the robust σ of all
+  // residuals, and adjusts again: a track that slips or sits on something that moves fits no
+  // rigid scene over its life, though each of its residuals may look ordinary. (A χ² test of
+  // each track at σ would take its residuals as independent; a KLT track's errors are not, they
+  // add up along it, and such a test prunes nearly every long track.)
+  int prune_rounds = 0;
 };
 
 struct OfflineBaResult {
   std::map<int, Pose> world_from_cam;  // every frame of `initial`, in its frame and scale
   int tracks = 0;                      // KLT tracks found
-  int points = 0;                      // tracks in the adjustment
+  int points = 0;                      // tracks in the adjustment (after pruning)
   double residual_sigma_px = 0.0;      // robust σ of one pixel coordinate at the solution
 };
 

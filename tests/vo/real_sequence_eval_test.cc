@@ -9,7 +9,8 @@
 //    same against the tag poses refined with the tags' real layout on the board
 //    (support/tag_grid_refinement.h), whose Cramér-Rao σ is the reference's own floor; the VO's
 //    figure over RANSAC seeds 1-8; an offline bundle adjustment of all frames
-//    (support/offline_bundle_adjustment.h: what the images allow, against the refined poses); the
+//    (support/offline_bundle_adjustment.h: what the images allow, against the refined poses; and
+//    from the VO's own poses with the tracks pruned by their fit over their life); the
 //    same figures over 16 runs of its frames fed from other starts, backwards and every second
 //    frame (AprilTagSequenceVariants: the spread of a one-sequence figure);
 //  - visp_mbt_cube (218 frames, low texture, a still camera watching a hand move the object):
@@ -540,6 +541,34 @@ void PrintOfflineBa(const RealMonoSequence& s, const VoRun& run, const std::map<
   }
 }
 
+// The same adjustment started from the VO's own poses (no reference in it), with the tracks
+// pruned by their fit over their whole life: what a VO that kept every frame of a track and
+// tested the track as a whole could reach on these images.
+void PrintOfflineBaFromVo(const RealMonoSequence& s, const VoRun& run,
+                          const std::map<int, Pose>& refined) {
+  if (run.segments.empty()) return;
+  support::OfflineBaOptions options;
+  options.initial_gate_px = 10.0;
+  options.prune_rounds = 4;
+  std::map<int, Pose> initial;  // the frames posed in a row from the first (not the
+                                // initialisation's reference frame before them)
+  for (const auto& [k, pose] : run.segments.begin()->second) {
+    if (k >= run.first_pose) initial[k] = pose;
+  }
+  const auto ba = support::OfflineBundleAdjustment(s.grey, initial, *s.camera, options);
+  ASSERT_TRUE(ba.ok()) << ba.error();
+  std::printf(
+      "offline BA from the VO's poses, tracks within 10 px of them, %d rounds of pruning: %d of "
+      "%d tracks kept, residual sigma %.3f px\n",
+      options.prune_rounds, ba->points, ba->tracks, ba->residual_sigma_px);
+  for (const int step : {1, 5, 10}) {
+    std::printf(
+        "step %2d: offline BA from the VO's poses, pruned, against the refined tag poses: %s\n",
+        step,
+        support::Describe(support::RelativePoseErrors(ba->world_from_cam, refined, step)).c_str());
+  }
+}
+
 // The VO's figure over RANSAC seeds (the same frames, other random samples: other inlier sets,
 // keyframes a frame earlier or later), against both references.
 void PrintSeedSpread(const RealMonoSequence& s, const std::map<int, Pose>& recorded,
@@ -670,6 +699,7 @@ TEST(RealSequenceVo, AprilTagSequenceAgainstTagsAndOpenCv) {
   for (const double gate_px : {3.0, 10.0}) {
     PrintOfflineBa(s, run, RefinedTruth(*refined), onset, gate_px);
   }
+  PrintOfflineBaFromVo(s, run, RefinedTruth(*refined));
 }
 
 // One sequence gives one figure, and a VO's figure on one short sequence moves by tenths of a
