@@ -14,6 +14,7 @@
 #include <string>
 
 #include "rigcal/base/robust_statistics.h"
+#include "support/ceres_transform.h"
 #include "support/pinhole_intrinsics.h"
 
 namespace rigcal::support {
@@ -72,21 +73,13 @@ std::vector<Track> TrackCorners(const std::vector<cv::Mat>& grey, int first, int
   return tracks;
 }
 
-struct Camera {  // camera from world as Ceres parameter blocks, Eigen's (x, y, z, w) order
-  std::array<double, 4> q{0.0, 0.0, 0.0, 1.0};
-  std::array<double, 3> t{0.0, 0.0, 0.0};
-
-  Eigen::Quaterniond Q() const { return Eigen::Quaterniond(q[3], q[0], q[1], q[2]); }
-  Eigen::Vector3d T() const { return Eigen::Vector3d(t[0], t[1], t[2]); }
+// Camera from world.
+struct Camera : CeresTransform {
   Eigen::Vector3d Centre() const { return -(Q().conjugate() * T()); }
 };
 
 Camera CameraFrom(const Pose& world_from_cam) {
-  const Pose cam_from_world = world_from_cam.Inverse();
-  Camera c;
-  Eigen::Map<Eigen::Quaterniond>(c.q.data()) = cam_from_world.q.normalized();
-  Eigen::Map<Eigen::Vector3d>(c.t.data()) = cam_from_world.C;
-  return c;
+  return Camera{CeresTransform::FromPose(world_from_cam.Inverse())};
 }
 
 struct ReprojectionCost {
@@ -182,12 +175,7 @@ void Solve(double huber_px, double baseline, const PinholeIntrinsics& k, Adjustm
   }
   problem.SetParameterBlockConstant(first.q.data());
   problem.SetParameterBlockConstant(first.t.data());
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_SCHUR;
-  options.max_num_iterations = 100;
-  options.num_threads = 2;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  SolveAdjustment(&problem);
 }
 
 double ResidualSigma(const Adjustment& a, const PinholeIntrinsics& k) {
@@ -269,10 +257,7 @@ Expected<OfflineBaResult> OfflineBundleAdjustment(const std::vector<cv::Mat>& gr
   result.points = static_cast<int>(a.points.size());
   result.residual_sigma_px = ResidualSigma(a, *pinhole);
   for (const auto& [frame, c] : a.cams) {
-    Pose cam_from_world;
-    cam_from_world.q = c.Q().normalized();
-    cam_from_world.C = c.T();
-    result.world_from_cam[frame] = cam_from_world.Inverse();
+    result.world_from_cam[frame] = c.ToPose().Inverse();
   }
   return result;
 }

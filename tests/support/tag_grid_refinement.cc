@@ -10,6 +10,7 @@
 #include <string>
 
 #include "rigcal/base/robust_statistics.h"
+#include "support/ceres_transform.h"
 #include "support/pinhole_intrinsics.h"
 
 namespace rigcal::support {
@@ -35,22 +36,6 @@ struct CornerCost {
     residual[1] = T(k.fy) * p.y() / p.z() + T(k.cy) - T(corner_px.y());
     return true;
   }
-};
-
-// A rigid transform as Ceres parameter blocks: the quaternion in Eigen's (x, y, z, w) memory
-// order, and the translation.
-struct Transform {
-  std::array<double, 4> q{0.0, 0.0, 0.0, 1.0};
-  std::array<double, 3> t{0.0, 0.0, 0.0};
-
-  static Transform FromPose(const Pose& to_from) {  // the transform that maps into `to`
-    Transform out;
-    Eigen::Map<Eigen::Quaterniond>(out.q.data()) = to_from.q.normalized();
-    Eigen::Map<Eigen::Vector3d>(out.t.data()) = to_from.C;
-    return out;
-  }
-  Eigen::Quaterniond Q() const { return Eigen::Quaterniond(q[3], q[0], q[1], q[2]); }
-  Eigen::Vector3d T() const { return Eigen::Vector3d(t[0], t[1], t[2]); }
 };
 
 // Each tag's pose on the board as the recording's poses imply it (grid_from_cam * cam_from_tag),
@@ -81,8 +66,8 @@ std::map<int, Pose> RecordedLayout(const RealMonoSequence& s) {
 }
 
 struct Problem {
-  std::vector<Transform> cam_from_grid;  // per frame
-  std::map<int, Transform> grid_from_tag;
+  std::vector<CeresTransform> cam_from_grid;  // per frame
+  std::map<int, CeresTransform> grid_from_tag;
 };
 
 void Solve(const RealMonoSequence& s, const PinholeIntrinsics& k, double huber_px, int fixed_tag,
@@ -90,9 +75,9 @@ void Solve(const RealMonoSequence& s, const PinholeIntrinsics& k, double huber_p
   ceres::Problem problem;
   const auto in_tag = s.TagCornersInTag();
   for (size_t f = 0; f < s.tag_corners_px.size(); ++f) {
-    Transform& cam = p->cam_from_grid[f];
+    CeresTransform& cam = p->cam_from_grid[f];
     for (const auto& [id, corners] : s.tag_corners_px[f]) {
-      Transform& tag = p->grid_from_tag.at(id);
+      CeresTransform& tag = p->grid_from_tag.at(id);
       for (int c = 0; c < 4; ++c) {
         auto* cost = new ceres::AutoDiffCostFunction<CornerCost, 2, 4, 3, 4, 3>(
             new CornerCost{in_tag[c], corners[c], k});
@@ -112,12 +97,7 @@ void Solve(const RealMonoSequence& s, const PinholeIntrinsics& k, double huber_p
       problem.SetParameterBlockConstant(tag.t.data());
     }
   }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_SCHUR;
-  options.max_num_iterations = 100;
-  options.num_threads = 2;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  SolveAdjustment(&problem);
 }
 
 // Every corner's residual (x and y) and the RMS per frame at the solution.
@@ -130,7 +110,7 @@ std::vector<double> Residuals(const RealMonoSequence& s, const PinholeIntrinsics
     double sum2 = 0.0;
     int n = 0;
     for (const auto& [id, corners] : s.tag_corners_px[f]) {
-      const Transform& tag = p.grid_from_tag.at(id);
+      const CeresTransform& tag = p.grid_from_tag.at(id);
       for (int c = 0; c < 4; ++c) {
         const CornerCost cost{in_tag[c], corners[c], k};
         double r[2];
@@ -166,9 +146,9 @@ Eigen::Vector3d RotationSigmaDeg(const RealMonoSequence& s, const PinholeIntrins
                                  const Problem& p, size_t f, double sigma_px) {
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   const auto in_tag = s.TagCornersInTag();
-  const Transform& cam = p.cam_from_grid[f];
+  const CeresTransform& cam = p.cam_from_grid[f];
   for (const auto& [id, corners] : s.tag_corners_px[f]) {
-    const Transform& tag = p.grid_from_tag.at(id);
+    const CeresTransform& tag = p.grid_from_tag.at(id);
     for (int c = 0; c < 4; ++c) {
       const Eigen::Vector3d x = cam.Q() * (tag.Q() * in_tag[c] + tag.T()) + cam.T();
       Eigen::Matrix<double, 2, 3> d_projection;
@@ -204,9 +184,9 @@ Expected<RefinedTagGrid> RefineTagGrid(const RealMonoSequence& s) {
       if (++seen[id] > most_seen) most_seen = seen[id], fixed_tag = id;
     }
   }
-  for (const auto& [id, pose] : recorded) p.grid_from_tag[id] = Transform::FromPose(pose);
+  for (const auto& [id, pose] : recorded) p.grid_from_tag[id] = CeresTransform::FromPose(pose);
   for (const Pose& grid_from_cam : s.grid_from_cam) {
-    p.cam_from_grid.push_back(Transform::FromPose(grid_from_cam.Inverse()));
+    p.cam_from_grid.push_back(CeresTransform::FromPose(grid_from_cam.Inverse()));
   }
   for (const auto& [id, n] : seen) {
     if (p.grid_from_tag.count(id) == 0) {
@@ -224,17 +204,11 @@ Expected<RefinedTagGrid> RefineTagGrid(const RealMonoSequence& s) {
   out.recorded_residual_rms_px = TagGridResidualsPx(s);
 
   for (size_t f = 0; f < p.cam_from_grid.size(); ++f) {
-    Pose cam_from_grid;
-    cam_from_grid.q = p.cam_from_grid[f].Q().normalized();
-    cam_from_grid.C = p.cam_from_grid[f].T();
-    out.grid_from_cam.push_back(cam_from_grid.Inverse());
+    out.grid_from_cam.push_back(p.cam_from_grid[f].ToPose().Inverse());
     out.rotation_sigma_deg.push_back(RotationSigmaDeg(s, k, p, f, out.corner_sigma_px));
   }
   for (const auto& [id, tag] : p.grid_from_tag) {
-    Pose pose;
-    pose.q = tag.Q().normalized();
-    pose.C = tag.T();
-    out.grid_from_tag[id] = pose;
+    out.grid_from_tag[id] = tag.ToPose();
   }
   return out;
 }
