@@ -113,9 +113,10 @@ struct BaselineCost {
 
 double Reprojection(const Camera& c, const Eigen::Vector3d& x, const Observation& o,
                     const PinholeIntrinsics& k) {
-  const Eigen::Vector3d p = c.Q() * x + c.T();
-  if (p.z() <= 0.0) return 1e9;
-  return (Eigen::Vector2d(k.fx * p.x() / p.z() + k.cx, k.fy * p.y() / p.z() + k.cy) - o.px).norm();
+  if ((c.Q() * x + c.T()).z() <= 0.0) return 1e9;  // behind the camera
+  double e[2];
+  ReprojectionCost{o.px, k}(c.q.data(), c.t.data(), x.data(), e);
+  return std::hypot(e[0], e[1]);
 }
 
 // Linear (DLT) triangulation of a track at the cameras, if it passes the options' gates.
